@@ -1,0 +1,87 @@
+// ArduCopter-like flight-controller emulation for one vehicle (seed ch. 4.1): seeded sensor models, an
+// estimator, the cascade position -> velocity -> acceleration -> attitude -> rate -> mixer, ArduCopter
+// modes, arming checks, take-off, landing detection with auto-disarm, GCS-loss and battery failsafes,
+// and a live parameter table with ArduPilot names.
+//
+// A pure library: no MuJoCo, no sockets, no clocks (time is passed in). One instance per vehicle; all
+// methods are loop-thread only (the sim loop calls them at control-step boundaries, in vehicle order).
+// Commands are the one path that both the in-process API and the MAVLink endpoint drive.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "airframe/airframe.hpp"
+#include "fc/fc_types.hpp"
+
+namespace uavsim::server::fc {
+
+class FlightController {
+ public:
+  // Builds the controller for an airframe (the mixer is derived from its rotor layout); seed feeds the
+  // sensor-noise generators, so equal seeds give equal noise sequences.
+  FlightController(const airframe::AirframeParams& airframe, uint64_t seed);
+  ~FlightController();
+  FlightController(FlightController&&) noexcept;
+  FlightController& operator=(FlightController&&) noexcept;
+
+  // One control step at sim time time_s: sample the sensors from truth, update the estimator, run the
+  // mode logic and the cascade, write one motor command in [0, 1] per rotor into motor_cmd.
+  // Disarmed: all commands 0.
+  void update(double time_s, const TruthState& truth, const airframe::BatteryState& battery,
+              double* motor_cmd);
+
+  // --- commands (ArduCopter semantics; see shared mavlink/behaviour.md) ---
+  CommandResult arm(bool force);     // force skips the pre-arm checks (MAVLink param2 = 21196)
+  CommandResult disarm(bool force);  // not forced: only on the ground
+  CommandResult set_mode(Mode mode);
+  CommandResult takeoff(double altitude_above_home_m);  // GUIDED and armed, on the ground
+  CommandResult set_guided_target(const GuidedTarget& target);  // GUIDED only; velocity targets time out
+  CommandResult set_attitude_target(const AttitudeTarget& target);  // GUIDED only
+  // MAV_CMD_CONDITION_YAW: angle (deg, 0 = north, clockwise), rate (deg/s, 0 = default), direction
+  // (-1 ccw, 0 shortest, +1 cw), relative to the current heading or absolute.
+  CommandResult condition_yaw(double angle_deg, double rate_deg_s, int direction, bool relative);
+  CommandResult change_speed(int speed_type, double speed_m_s);  // MAV_CMD_DO_CHANGE_SPEED
+  CommandResult land();  // = set_mode(kLand)
+  CommandResult rtl();   // = set_mode(kRtl)
+
+  // --- mission (AUTO) ---
+  void set_mission(std::vector<MissionItem> items);  // item 0 is home, as in ArduPilot
+  const std::vector<MissionItem>& mission() const;
+  CommandResult mission_start(int first_item, int last_item);  // MAV_CMD_MISSION_START
+  CommandResult set_mission_current(int seq);
+  int mission_current() const;
+  std::vector<int> drain_reached_items();  // seqs reached since the last call (MISSION_ITEM_REACHED)
+
+  // --- parameters (ArduPilot names where one exists, e.g. WPNAV_SPEED, PSC_POSXY_P, ATC_RAT_RLL_P) ---
+  std::optional<double> param(std::string_view name) const;
+  CommandResult set_param(std::string_view name, double value);  // kInvalid: unknown name or bad value
+  const std::vector<std::string>& param_names() const;  // a fixed order: the MAVLink param_index
+
+  // --- link supervision and faults ---
+  void on_gcs_heartbeat(double time_s);  // arms the GCS-loss failsafe (FS_GCS_ENABLE) once seen
+  void set_gps_denied(bool denied);      // no fixes until cleared
+  void set_gps_glitch(const Eigen::Vector3d& offset_enu_m);  // adds an offset to every fix
+
+  // --- state for telemetry ---
+  Mode mode() const;
+  bool armed() const;
+  LandedState landed_state() const;
+  const EstimatedState& estimate() const;
+  Eigen::Vector3d home_enu_m() const;      // set when arming (or first GPS fix)
+  bool home_set() const;
+  std::optional<GuidedTarget> current_target() const;  // what the position controller chases
+  double yaw_target_enu_rad() const;
+  bool prearm_ok() const;                  // all pre-arm checks pass now
+  std::vector<StatusText> drain_status_texts();  // "Arming motors", "Mode change failed", ...
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace uavsim::server::fc
