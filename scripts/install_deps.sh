@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config ninja-build
-  libmujoco-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
+  libmujoco-dev libqhull-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev python3 ffmpeg
 )

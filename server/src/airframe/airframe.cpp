@@ -28,16 +28,28 @@ MotorState make_motor_state(const AirframeParams& params) {
   return s;
 }
 
-void step_motors(const AirframeParams& params, const double* motor_cmd, double dt_s,
-                 MotorState* state) {
+std::vector<double> motor_lag_alpha(const AirframeParams& params, double dt_s) {
+  std::vector<double> alpha;
+  for (const RotorParams& r : params.rotors) {
+    alpha.push_back(1.0 - std::exp(-dt_s / std::max(r.time_const_s, 1e-4)));
+  }
+  return alpha;
+}
+
+void step_motors_alpha(const AirframeParams& params, const double* motor_cmd, const double* lag_alpha,
+                       MotorState* state) {
   for (size_t k = 0; k < params.rotors.size(); ++k) {
     // clamp the command to [0, 1]; a failed motor is commanded to 0
-    double cmd = std::clamp(motor_cmd[k], 0.0, 1.0);
-    if (state->failed[k]) cmd = 0.0;
+    const double cmd = state->failed[k] ? 0.0 : std::clamp(motor_cmd[k], 0.0, 1.0);
     // exact discretisation of the first-order lag: s += (cmd - s) * (1 - exp(-dt/tau))
-    const double tau = std::max(params.rotors[k].time_const_s, 1e-4);
-    state->speed[k] += (cmd - state->speed[k]) * (1.0 - std::exp(-dt_s / tau));
+    state->speed[k] += (cmd - state->speed[k]) * lag_alpha[k];
   }
+}
+
+void step_motors(const AirframeParams& params, const double* motor_cmd, double dt_s,
+                 MotorState* state) {
+  const std::vector<double> alpha = motor_lag_alpha(params, dt_s);
+  step_motors_alpha(params, motor_cmd, alpha.data(), state);
 }
 
 void rotor_thrusts(const AirframeParams& params, const MotorState& state, double* thrust_n) {

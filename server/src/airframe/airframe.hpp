@@ -77,6 +77,12 @@ double battery_remaining(const AirframeParams& params, const BatteryState& state
 void step_motors(const AirframeParams& params, const double* motor_cmd, double dt_s,
                  MotorState* state);
 
+// The per-rotor factor 1 - exp(-dt/tau) of the exact first-order discretisation, for a fixed dt.
+std::vector<double> motor_lag_alpha(const AirframeParams& params, double dt_s);
+// step_motors with the factors precomputed (the hot path: no exp per step).
+void step_motors_alpha(const AirframeParams& params, const double* motor_cmd, const double* lag_alpha,
+                       MotorState* state);
+
 // Per-rotor thrust from the current rotor speeds; writes params.rotors.size() values.
 void rotor_thrusts(const AirframeParams& params, const MotorState& state, double* thrust_n);
 

@@ -1,0 +1,408 @@
+#include "physics/world_composer.hpp"
+
+#include <tinyxml2.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <vector>
+
+namespace uavsim::server::physics {
+
+namespace fs = std::filesystem;
+using tinyxml2::XMLDocument;
+using tinyxml2::XMLElement;
+using tinyxml2::XMLNode;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+[[noreturn]] void fail(const std::string& file, int line, const std::string& what) {
+  std::ostringstream s;
+  s << file << ":" << line << ": " << what;
+  throw WorldError(s.str());
+}
+
+std::unique_ptr<XMLDocument> load_xml(const std::string& path) {
+  auto doc = std::make_unique<XMLDocument>();
+  if (!fs::exists(path)) fail(path, 0, "file not found");
+  if (doc->LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) {
+    fail(path, doc->ErrorLineNum(), std::string("malformed XML: ") + doc->ErrorStr());
+  }
+  XMLElement* root = doc->RootElement();
+  if (root == nullptr || std::string(root->Name()) != "mujoco") {
+    fail(path, root ? root->GetLineNum() : 1, "the root element must be <mujoco>");
+  }
+  return doc;
+}
+
+XMLElement* child_or_create(XMLDocument& doc, XMLElement* parent, const char* name,
+                            bool at_front = false) {
+  XMLElement* e = parent->FirstChildElement(name);
+  if (e != nullptr) return e;
+  e = doc.NewElement(name);
+  if (at_front) {
+    parent->InsertFirstChild(e);
+  } else {
+    parent->InsertEndChild(e);
+  }
+  return e;
+}
+
+std::string compiler_attr(XMLElement* root, const char* attr, const char* fallback) {
+  for (XMLElement* c = root->FirstChildElement("compiler"); c; c = c->NextSiblingElement("compiler")) {
+    if (const char* v = c->Attribute(attr)) return v;
+  }
+  return fallback;
+}
+
+// make every asset file path absolute: meshes and height fields resolve against meshdir, textures
+// against texturedir, both relative to the file that declares them (MuJoCo's rules)
+void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir) {
+  const fs::path mesh_dir = base_dir / compiler_attr(root, "meshdir", "");
+  const fs::path texture_dir = base_dir / compiler_attr(root, "texturedir", "");
+  for (XMLElement* asset = root->FirstChildElement("asset"); asset;
+       asset = asset->NextSiblingElement("asset")) {
+    for (XMLElement* e = asset->FirstChildElement(); e; e = e->NextSiblingElement()) {
+      const char* file = e->Attribute("file");
+      if (file == nullptr || fs::path(file).is_absolute()) continue;
+      const std::string kind = e->Name();
+      const fs::path dir = (kind == "texture") ? texture_dir : mesh_dir;
+      e->SetAttribute("file", fs::weakly_canonical(dir / file).string().c_str());
+    }
+  }
+  for (XMLElement* c = root->FirstChildElement("compiler"); c; c = c->NextSiblingElement("compiler")) {
+    c->DeleteAttribute("meshdir");
+    c->DeleteAttribute("texturedir");
+  }
+}
+
+// replace each <include file=.../> with the children of the included file's <mujoco>, recursively
+void inline_includes(XMLDocument& doc, XMLElement* element, const fs::path& base_dir,
+                     const std::string& file, int depth) {
+  if (depth > 16) fail(file, element->GetLineNum(), "includes nested more than 16 deep");
+  for (XMLElement* e = element->FirstChildElement(); e;) {
+    XMLElement* next = e->NextSiblingElement();
+    if (std::string(e->Name()) != "include") {
+      inline_includes(doc, e, base_dir, file, depth);
+      e = next;
+      continue;
+    }
+    const char* inc = e->Attribute("file");
+    if (inc == nullptr) fail(file, e->GetLineNum(), "<include> without file=");
+    const fs::path inc_path = base_dir / inc;
+    if (!fs::exists(inc_path)) fail(file, e->GetLineNum(), "included file not found: " + inc_path.string());
+    auto inc_doc = load_xml(inc_path.string());
+    XMLElement* inc_root = inc_doc->RootElement();
+    absolutize_asset_paths(inc_root, inc_path.parent_path());
+    inline_includes(*inc_doc, inc_root, inc_path.parent_path(), inc_path.string(), depth + 1);
+    // copy the included children in place of the <include>, keeping their order
+    XMLNode* anchor = e->PreviousSibling();
+    for (XMLNode* n = inc_root->FirstChild(); n; n = n->NextSibling()) {
+      XMLNode* copy = n->DeepClone(&doc);
+      anchor = anchor ? element->InsertAfterChild(anchor, copy) : element->InsertFirstChild(copy);
+    }
+    element->DeleteChild(e);
+    e = next;
+  }
+}
+
+void split3(const char* text, double out[3]) {
+  std::istringstream s(text ? text : "");
+  for (int i = 0; i < 3; ++i) {
+    if (!(s >> out[i])) out[i] = 0.0;
+  }
+}
+
+std::string join3(const double v[3]) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v[0] << " " << v[1] << " " << v[2];
+  return s.str();
+}
+
+// a vehicle or object template: its root body and the global parts it brings
+struct Template {
+  std::string path;
+  std::unique_ptr<XMLDocument> doc;
+  XMLElement* body = nullptr;  // the first <body> of <worldbody>
+  std::string name;            // the root body's name, replaced by the instance name
+  std::string angle;           // compiler angle unit
+  int nuser_site = 0;
+  bool globals_merged = false;  // defaults and assets are copied once per type
+};
+
+class Composer {
+ public:
+  Composer(std::string world_path, ComposeOptions options)
+      : world_path_(std::move(world_path)), options_(std::move(options)) {}
+
+  std::string compose() {
+    world_ = load_xml(world_path_);
+    XMLElement* root = world_->RootElement();
+    const fs::path base = fs::absolute(world_path_).parent_path();
+    absolutize_asset_paths(root, base);
+    inline_includes(*world_, root, base, world_path_, 0);
+    world_angle_ = compiler_attr(root, "angle", "degree");
+
+    // includes may leave several <worldbody> sections, as MuJoCo allows
+    if (root->FirstChildElement("worldbody") == nullptr) {
+      fail(world_path_, root->GetLineNum(), "no <worldbody>");
+    }
+    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb;
+         wb = wb->NextSiblingElement("worldbody")) {
+      expand(wb);
+    }
+    check_nested(root);
+    finish(root);
+
+    tinyxml2::XMLPrinter printer;
+    world_->Print(&printer);
+    return printer.CStr();
+  }
+
+ private:
+  // expand the uavsim_* elements that are direct children of <worldbody>
+  void expand(XMLElement* worldbody) {
+    for (XMLElement* e = worldbody->FirstChildElement(); e;) {
+      XMLElement* next = e->NextSiblingElement();
+      const std::string tag = e->Name();
+      if (tag == "uavsim_vehicle") {
+        instantiate(worldbody, e, "vehicles", required(e, "name"), offset(e), yaw(e));
+        worldbody->DeleteChild(e);
+      } else if (tag == "uavsim_object") {
+        instantiate(worldbody, e, "objects", required(e, "name"), offset(e), yaw(e));
+        worldbody->DeleteChild(e);
+      } else if (tag == "uavsim_grid") {
+        expand_grid(worldbody, e);
+        worldbody->DeleteChild(e);
+      }
+      e = next;
+    }
+  }
+
+  void expand_grid(XMLElement* worldbody, XMLElement* e) {
+    const int rows = e->IntAttribute("rows", 1);
+    const int cols = e->IntAttribute("cols", 1);
+    const double spacing = e->DoubleAttribute("spacing", 3.0);
+    if (rows < 1 || cols < 1 || rows * cols > 100000 || !(spacing > 0.0)) {
+      fail(world_path_, e->GetLineNum(), "uavsim_grid needs rows, cols >= 1 and spacing > 0");
+    }
+    const std::string prefix = e->Attribute("prefix") ? e->Attribute("prefix") : "uav";
+    double origin[3];
+    split3(e->Attribute("pos"), origin);
+    int index = 0;
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        const double pos[3] = {origin[0] + c * spacing, origin[1] + r * spacing, origin[2]};
+        instantiate(worldbody, e, "vehicles", prefix + std::to_string(index++), pos, yaw(e));
+      }
+    }
+  }
+
+  const char* required(XMLElement* e, const char* attr) {
+    const char* v = e->Attribute(attr);
+    if (v == nullptr || *v == '\0') {
+      fail(world_path_, e->GetLineNum(), std::string("<") + e->Name() + "> needs " + attr + "=");
+    }
+    return v;
+  }
+
+  static std::vector<double> offset(XMLElement* e) {
+    double p[3];
+    split3(e->Attribute("pos"), p);
+    return {p[0], p[1], p[2]};
+  }
+  static double yaw(XMLElement* e) { return e->DoubleAttribute("yaw_deg", 0.0) * kPi / 180.0; }
+
+  void instantiate(XMLElement* worldbody, XMLElement* at, const std::string& kind,
+                   const std::string& name, const std::vector<double>& pos, double yaw_rad) {
+    instantiate(worldbody, at, kind, name, pos.data(), yaw_rad);
+  }
+
+  Template& load_template(XMLElement* at, const std::string& kind) {
+    const char* type = required(at, "type");
+    const std::string key = kind + "/" + type;
+    auto it = templates_.find(key);
+    if (it != templates_.end()) return it->second;
+
+    const fs::path path = fs::path(options_.models_dir) / kind / (std::string(type) + ".xml");
+    if (!fs::exists(path)) {
+      std::string known;
+      if (fs::is_directory(fs::path(options_.models_dir) / kind)) {
+        for (const auto& f : fs::directory_iterator(fs::path(options_.models_dir) / kind)) {
+          if (f.path().extension() == ".xml") known += " " + f.path().stem().string();
+        }
+      }
+      fail(world_path_, at->GetLineNum(),
+           "unknown " + kind.substr(0, kind.size() - 1) + " type '" + type + "' (known:" + known + ")");
+    }
+    Template t;
+    t.path = path.string();
+    t.doc = load_xml(t.path);
+    XMLElement* root = t.doc->RootElement();
+    absolutize_asset_paths(root, path.parent_path());
+    XMLElement* wb = root->FirstChildElement("worldbody");
+    t.body = wb ? wb->FirstChildElement("body") : nullptr;
+    if (t.body == nullptr || t.body->Attribute("name") == nullptr) {
+      fail(t.path, root->GetLineNum(), "a template needs a named <body> in its <worldbody>");
+    }
+    t.name = t.body->Attribute("name");
+    t.angle = compiler_attr(root, "angle", "degree");
+    if (XMLElement* size = root->FirstChildElement("size")) t.nuser_site = size->IntAttribute("nuser_site", 0);
+    if (t.angle != world_angle_) {
+      fail(world_path_, at->GetLineNum(),
+           "the world uses <compiler angle=\"" + world_angle_ + "\"> but " + t.path + " uses \"" +
+               t.angle + "\": declare <compiler angle=\"" + t.angle + "\"/> in the world");
+    }
+    return templates_.emplace(key, std::move(t)).first->second;
+  }
+
+  void instantiate(XMLElement* worldbody, XMLElement* at, const std::string& kind,
+                   const std::string& name, const double pos[3], double yaw_rad) {
+    if (name.find('/') != std::string::npos || name.find(':') != std::string::npos) {
+      fail(world_path_, at->GetLineNum(), "name '" + name + "' may not contain '/' or ':'");
+    }
+    if (!names_.insert(name).second) {
+      fail(world_path_, at->GetLineNum(), "duplicate vehicle or object name '" + name + "'");
+    }
+    Template& t = load_template(at, kind);
+    merge_globals(t);
+
+    // clone the body, prefix every name inside it, and place it
+    XMLElement* body = t.body->DeepClone(world_.get())->ToElement();
+    prefix_names(body, name + "/");
+    body->SetAttribute("name", name.c_str());
+    double base[3];
+    split3(t.body->Attribute("pos"), base);
+    const double p[3] = {pos[0] + base[0], pos[1] + base[1], pos[2] + base[2]};
+    body->SetAttribute("pos", join3(p).c_str());
+    if (yaw_rad != 0.0) {
+      std::ostringstream q;
+      q.precision(12);
+      q << std::cos(yaw_rad / 2) << " 0 0 " << std::sin(yaw_rad / 2);
+      body->DeleteAttribute("euler");
+      body->SetAttribute("quat", q.str().c_str());
+    }
+    // insert where the uavsim_* element stands, so the world keeps its order
+    if (XMLNode* prev = at->PreviousSibling()) {
+      worldbody->InsertAfterChild(prev, body);
+    } else {
+      worldbody->InsertFirstChild(body);
+    }
+
+    // per-instance custom elements: the template's name in uavsim:* names becomes the instance name
+    XMLElement* custom_src = t.doc->RootElement()->FirstChildElement("custom");
+    if (custom_src != nullptr) {
+      XMLElement* custom = child_or_create(*world_, world_->RootElement(), "custom");
+      for (XMLElement* c = custom_src->FirstChildElement(); c; c = c->NextSiblingElement()) {
+        XMLElement* copy = c->DeepClone(world_.get())->ToElement();
+        if (const char* n = copy->Attribute("name")) {
+          copy->SetAttribute("name", rename_custom(n, t.name, name).c_str());
+        }
+        custom->InsertEndChild(copy);
+      }
+    }
+  }
+
+  static void prefix_names(XMLElement* e, const std::string& prefix) {
+    if (const char* n = e->Attribute("name")) e->SetAttribute("name", (prefix + n).c_str());
+    for (XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      prefix_names(c, prefix);
+    }
+  }
+
+  // "uavsim:quad:drag_lin" -> "uavsim:uav0:drag_lin"; "uavsim:vehicle:quad" -> "uavsim:vehicle:uav0"
+  static std::string rename_custom(const std::string& n, const std::string& from,
+                                   const std::string& to) {
+    std::string out;
+    std::istringstream s(n);
+    std::string part;
+    bool first = true;
+    while (std::getline(s, part, ':')) {
+      out += (first ? "" : ":") + (part == from ? to : part);
+      first = false;
+    }
+    return out;
+  }
+
+  // copy a template's default classes and assets into the world, once per template
+  void merge_globals(Template& t) {
+    if (t.globals_merged) return;
+    t.globals_merged = true;
+    XMLElement* root = world_->RootElement();
+    XMLElement* troot = t.doc->RootElement();
+    if (XMLElement* tdef = troot->FirstChildElement("default")) {
+      XMLElement* def = child_or_create(*world_, root, "default", true);
+      for (XMLElement* c = tdef->FirstChildElement("default"); c; c = c->NextSiblingElement("default")) {
+        def->InsertEndChild(c->DeepClone(world_.get()));
+      }
+    }
+    for (XMLElement* tasset = troot->FirstChildElement("asset"); tasset;
+         tasset = tasset->NextSiblingElement("asset")) {
+      XMLElement* asset = child_or_create(*world_, root, "asset");
+      for (XMLElement* c = tasset->FirstChildElement(); c; c = c->NextSiblingElement()) {
+        asset->InsertEndChild(c->DeepClone(world_.get()));
+      }
+    }
+    nuser_site_ = std::max(nuser_site_, t.nuser_site);
+  }
+
+  // uavsim_* elements anywhere but directly under <worldbody> are errors, not silently ignored
+  void check_nested(XMLElement* e) {
+    for (XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      if (e == world_->RootElement() && std::string(c->Name()) != "worldbody") continue;
+      if (std::string(c->Name()).rfind("uavsim_", 0) == 0) {
+        fail(world_path_, c->GetLineNum(),
+             std::string("<") + c->Name() + "> must be a direct child of <worldbody>");
+      }
+      check_nested(c);
+    }
+  }
+
+  // sizes the composed model needs: user data slots of the rotor sites, the offscreen buffer
+  void finish(XMLElement* root) {
+    if (nuser_site_ > 0) {
+      XMLElement* size = child_or_create(*world_, root, "size", true);
+      size->SetAttribute("nuser_site", std::max(nuser_site_, size->IntAttribute("nuser_site", 0)));
+    }
+    XMLElement* visual = child_or_create(*world_, root, "visual");
+    XMLElement* global = child_or_create(*world_, visual, "global");
+    global->SetAttribute("offwidth",
+                         std::max(options_.offscreen_width_px, global->IntAttribute("offwidth", 0)));
+    global->SetAttribute("offheight",
+                         std::max(options_.offscreen_height_px, global->IntAttribute("offheight", 0)));
+  }
+
+  std::string world_path_;
+  ComposeOptions options_;
+  std::unique_ptr<XMLDocument> world_;
+  std::string world_angle_;
+  std::map<std::string, Template> templates_;
+  std::set<std::string> names_;
+  int nuser_site_ = 0;
+};
+
+}  // namespace
+
+std::string compose_world(const std::string& world_path, const ComposeOptions& options) {
+  ComposeOptions o = options;
+  if (o.models_dir.empty()) o.models_dir = default_models_dir();
+  return Composer(world_path, o).compose();
+}
+
+std::string default_models_dir() {
+  if (const char* env = std::getenv("UAVSIM_MODELS_DIR")) return env;
+#ifdef UAVSIM_MODELS_DIR
+  return UAVSIM_MODELS_DIR;
+#else
+  return "models";
+#endif
+}
+
+}  // namespace uavsim::server::physics

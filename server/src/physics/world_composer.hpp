@@ -1,0 +1,38 @@
+// World composition: turns a uavsim world file into plain MuJoCo 2.2 MJCF.
+// MuJoCo 2.2 has no <replicate>, <attach> or mjSpec, so vehicles and objects are templates (models/vehicles,
+// models/objects) that the composer instantiates with tinyxml2, prefixing every name. A world file is MJCF
+// plus these elements inside <worldbody>:
+//   <uavsim_vehicle type="quad" name="uav0" pos="0 0 0" yaw_deg="0"/>            one vehicle
+//   <uavsim_grid type="quad" prefix="uav" rows="10" cols="10" spacing="4" pos="0 0 0"/>   rows*cols vehicles
+//   <uavsim_object type="balloon" name="balloon0" pos="..."/>                   one object from models/objects
+// <include file="..."/> is inlined here (MuJoCo would resolve it relative to the composed file otherwise), and
+// every asset file path is made absolute, so the composed text loads from anywhere (--write-world).
+// This is the one place that would change on MuJoCo 3.x (mjSpec and <attach> replace it).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace uavsim::server::physics {
+
+// A startup error in a world or template file; what() names the file and line.
+class WorldError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ComposeOptions {
+  std::string models_dir;  // where vehicles/ and objects/ templates live
+  int offscreen_width_px = 1280;   // <visual><global offwidth/offheight>: the largest camera frame
+  int offscreen_height_px = 960;
+};
+
+// Reads world_path, expands includes, vehicles and objects, and returns standalone MJCF text.
+// Throws WorldError naming the file and line for malformed XML, an unknown vehicle or object type,
+// a missing or duplicate name, or a bad attribute.
+std::string compose_world(const std::string& world_path, const ComposeOptions& options);
+
+// The directory that holds the shipped models, from UAVSIM_MODELS_DIR in the environment or the build.
+std::string default_models_dir();
+
+}  // namespace uavsim::server::physics

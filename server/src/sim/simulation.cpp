@@ -1,0 +1,199 @@
+#include "sim/simulation.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+namespace uavsim::server::sim {
+
+namespace {
+
+// splitmix64: decorrelates per-vehicle seeds derived from one world seed
+uint64_t mix_seed(uint64_t seed, uint64_t index) {
+  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+void fnv1a(uint64_t* h, const void* data, size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < n; ++i) {
+    *h ^= p[i];
+    *h *= 0x100000001B3ull;
+  }
+}
+
+}  // namespace
+
+Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& config)
+    : world_(std::move(world)), config_(config) {
+  if (!(config.physics_hz > 0) || !(config.control_hz > 0) || config.control_hz > config.physics_hz) {
+    throw std::invalid_argument("physics_hz and control_hz must be positive, control_hz <= physics_hz");
+  }
+  physics_dt_s_ = 1.0 / config.physics_hz;
+  control_decimation_ = std::max(1, static_cast<int>(std::lround(config.physics_hz / config.control_hz)));
+  world_->set_timestep_s(physics_dt_s_);
+
+  const auto& bindings = world_->vehicles();
+  vehicles_.reserve(bindings.size());
+  for (size_t i = 0; i < bindings.size(); ++i) {
+    const airframe::AirframeParams& a = bindings[i].airframe;
+    VehicleRuntime rt{fc::FlightController(a, mix_seed(config.seed, i)), airframe::make_motor_state(a),
+                      airframe::BatteryState{}, {}, {}, {}, false, true};
+    rt.battery.voltage_v = a.battery.voltage_full_v;
+    rt.motor_cmd.assign(a.rotors.size(), 0.0);
+    rt.thrust_n.assign(a.rotors.size(), 0.0);
+    rt.motor_lag_alpha = airframe::motor_lag_alpha(a, physics_dt_s_);
+    vehicles_.push_back(std::move(rt));
+  }
+  pending_tasks_.resize(vehicles_.size());
+  running_tasks_.resize(vehicles_.size());
+}
+
+Simulation::~Simulation() = default;
+
+double Simulation::time_s() const { return world_->time_s(); }
+const std::string& Simulation::vehicle_name(size_t i) const { return world_->vehicles()[i].name; }
+const airframe::AirframeParams& Simulation::airframe(size_t i) const {
+  return world_->vehicles()[i].airframe;
+}
+
+fc::TruthState Simulation::truth(size_t i) const {
+  fc::TruthState t = world_->truth(i);
+  t.on_ground = vehicles_[i].on_ground;
+  return t;
+}
+
+void Simulation::step() {
+  if (steps_ % static_cast<uint64_t>(control_decimation_) == 0) control_step();
+
+  // motors -> rotor thrusts -> wrench about the body origin -> qfrc_applied
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRuntime& v = vehicles_[i];
+    const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
+    airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
+    airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
+    const fc::TruthState t = world_->truth(i);
+    world_->apply_wrench(i, airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body,
+                                                     t.velocity_enu_m_s));
+  }
+  world_->step();
+  ++steps_;
+  check_contacts();
+}
+
+void Simulation::run_until(double time_s) {
+  // whole steps: stop at the first step boundary at or after time_s
+  while (world_->time_s() + 0.5 * physics_dt_s_ < time_s) step();
+}
+
+void Simulation::control_step() {
+  // queued tasks, in vehicle order
+  {
+    std::lock_guard<std::mutex> lock(tasks_mutex_);
+    if (tasks_pending_) {
+      std::swap(pending_tasks_, running_tasks_);
+      tasks_pending_ = false;
+    }
+  }
+  for (size_t i = 0; i < running_tasks_.size(); ++i) {
+    for (VehicleTask& task : running_tasks_[i]) task(vehicles_[i].fc);
+    running_tasks_[i].clear();
+  }
+
+  const double now = world_->time_s();
+  const double dt = control_dt_s();
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    VehicleRuntime& v = vehicles_[i];
+    const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
+    const bool was_armed = v.fc.armed();
+    const fc::Mode old_mode = v.fc.mode();
+    v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
+    if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
+    airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
+
+    if (v.fc.armed() != was_armed) {
+      record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, i, "");
+    }
+    if (v.fc.mode() != old_mode) record(EventType::kModeChange, i, fc::mode_name(v.fc.mode()));
+  }
+  for (ControlObserver& observer : observers_) observer(*this);
+}
+
+void Simulation::check_contacts() {
+  std::vector<char> touching(vehicles_.size(), 0);
+  world_->vehicle_contacts(&contacts_);
+  for (const physics::VehicleContact& c : contacts_) {
+    VehicleRuntime& v = vehicles_[c.vehicle];
+    touching[c.vehicle] = 1;
+    if (v.crashed) continue;
+    if (c.other_vehicle >= 0) {
+      kill_vehicle(c.vehicle, "collision with " + vehicle_name(c.other_vehicle));
+    } else if (!c.landing_gear) {
+      kill_vehicle(c.vehicle, "hard impact: " + world_->geom_name(c.geom) + " hit " +
+                                  world_->geom_name(c.other_geom));
+    } else {
+      const double speed = world_->truth(c.vehicle).velocity_enu_m_s.norm();
+      if (speed > config_.crash_speed_m_s) {
+        kill_vehicle(c.vehicle, "hard landing at " + std::to_string(speed) + " m/s");
+      }
+    }
+  }
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    const bool now = touching[i] != 0;
+    if (now != vehicles_[i].on_ground) {
+      vehicles_[i].on_ground = now;
+      record(now ? EventType::kTouchdown : EventType::kTakeoff, i, "");
+    }
+  }
+}
+
+void Simulation::kill_vehicle(size_t vehicle, const std::string& reason) {
+  VehicleRuntime& v = vehicles_[vehicle];
+  if (v.crashed) return;
+  v.crashed = true;
+  v.fc.disarm(true);
+  std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
+  record(EventType::kCrash, vehicle, reason);
+}
+
+void Simulation::set_motor_failed(size_t vehicle, size_t rotor, bool failed) {
+  VehicleRuntime& v = vehicles_[vehicle];
+  if (rotor >= v.motors.failed.size()) return;
+  v.motors.failed[rotor] = failed;
+  record(EventType::kMotorFailure, vehicle,
+         "rotor " + std::to_string(rotor) + (failed ? " failed" : " restored"));
+}
+
+bool Simulation::post(size_t vehicle, VehicleTask task) {
+  if (vehicle >= vehicles_.size()) return false;
+  std::lock_guard<std::mutex> lock(tasks_mutex_);
+  pending_tasks_[vehicle].push_back(std::move(task));
+  tasks_pending_ = true;
+  return true;
+}
+
+void Simulation::add_control_observer(ControlObserver observer) {
+  observers_.push_back(std::move(observer));
+}
+
+void Simulation::record(EventType type, size_t vehicle, std::string detail) {
+  events_.add(world_->time_s(), type, static_cast<int>(vehicle), std::move(detail));
+}
+
+uint64_t Simulation::state_hash() const {
+  uint64_t h = 0xCBF29CE484222325ull;
+  const double t = world_->time_s();
+  fnv1a(&h, &t, sizeof(t));
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    const fc::TruthState s = world_->truth(i);
+    fnv1a(&h, s.position_enu_m.data(), 3 * sizeof(double));
+    fnv1a(&h, s.q_enu_body.coeffs().data(), 4 * sizeof(double));
+    fnv1a(&h, s.velocity_enu_m_s.data(), 3 * sizeof(double));
+    fnv1a(&h, s.rate_body_rad_s.data(), 3 * sizeof(double));
+  }
+  return h;
+}
+
+}  // namespace uavsim::server::sim

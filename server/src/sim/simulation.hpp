@@ -1,0 +1,111 @@
+// The simulation loop: one world, one clock, every vehicle's flight controller, motors and battery.
+// step() advances physics by one timestep; every control period (an integer number of physics steps) it
+// first runs the queued vehicle tasks (commands) in vehicle order, then each vehicle's flight controller,
+// so inputs take effect at control-step boundaries in a fixed order, never in arrival order (DESIGN.md:
+// determinism). The same world, seed and inputs give bit-identical trajectories.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "airframe/airframe.hpp"
+#include "fc/flight_controller.hpp"
+#include "physics/world.hpp"
+#include "sim/events.hpp"
+
+namespace uavsim::server::sim {
+
+struct SimConfig {
+  double physics_hz = 1000.0;
+  double control_hz = 500.0;  // rounded to an integer divisor of physics_hz (400 Hz does not divide 1 kHz)
+  uint64_t seed = 1;
+  double crash_speed_m_s = 3.0;  // landing-gear contact faster than this is a hard impact
+};
+
+// A vehicle's runtime state on the loop thread.
+struct VehicleRuntime {
+  fc::FlightController fc;
+  airframe::MotorState motors;
+  airframe::BatteryState battery;
+  std::vector<double> motor_cmd;
+  std::vector<double> motor_lag_alpha;  // per rotor, 1 - exp(-dt/tau) for the physics step
+  std::vector<double> thrust_n;
+  bool crashed = false;
+  bool on_ground = true;
+};
+
+// A command or query for one vehicle, run on the loop thread at the next control boundary.
+using VehicleTask = std::function<void(fc::FlightController&)>;
+
+class Simulation {
+ public:
+  // Takes ownership of a loaded world. Throws std::invalid_argument for unusable rates.
+  Simulation(std::unique_ptr<physics::World> world, const SimConfig& config);
+  ~Simulation();
+
+  // Advances one physics step. Loop thread only.
+  void step();
+  // Advances whole physics steps until sim time reaches time_s. Loop thread only.
+  void run_until(double time_s);
+
+  double time_s() const;            // Loop thread only.
+  uint64_t step_count() const { return steps_; }
+  double physics_dt_s() const { return physics_dt_s_; }
+  double control_dt_s() const { return physics_dt_s_ * control_decimation_; }
+  int control_decimation() const { return control_decimation_; }
+  const SimConfig& config() const { return config_; }
+
+  size_t vehicle_count() const { return vehicles_.size(); }
+  const std::string& vehicle_name(size_t i) const;
+  const airframe::AirframeParams& airframe(size_t i) const;
+  fc::FlightController& fc(size_t i) { return vehicles_[i].fc; }  // Loop thread only.
+  const fc::FlightController& fc(size_t i) const { return vehicles_[i].fc; }
+  const VehicleRuntime& runtime(size_t i) const { return vehicles_[i]; }
+  fc::TruthState truth(size_t i) const;  // Loop thread only.
+  physics::World& world() { return *world_; }
+  const physics::World& world() const { return *world_; }
+
+  // Queues a task for vehicle i; it runs on the loop thread before the next control step, after the
+  // tasks queued for lower vehicle indices. Thread-safe. Unknown vehicle: returns false.
+  bool post(size_t vehicle, VehicleTask task);
+
+  // Faults. Loop thread only.
+  void set_motor_failed(size_t vehicle, size_t rotor, bool failed);
+  void kill_vehicle(size_t vehicle, const std::string& reason);
+
+  // Called on the loop thread after every control step (telemetry publishers, lockstep).
+  using ControlObserver = std::function<void(Simulation&)>;
+  void add_control_observer(ControlObserver observer);
+
+  // Events recorded so far (crashes, landings, failures, ...). Loop thread only.
+  EventLog& events() { return events_; }
+
+  // A hash of the full physical state (time, qpos, qvel) for determinism checks. Loop thread only.
+  uint64_t state_hash() const;
+
+ private:
+  void control_step();
+  void check_contacts();
+  void record(EventType type, size_t vehicle, std::string detail);
+
+  std::unique_ptr<physics::World> world_;
+  SimConfig config_;
+  double physics_dt_s_ = 0.001;
+  int control_decimation_ = 2;
+  uint64_t steps_ = 0;
+  std::vector<VehicleRuntime> vehicles_;
+  std::vector<physics::VehicleContact> contacts_;
+  std::vector<ControlObserver> observers_;
+  EventLog events_;
+
+  std::mutex tasks_mutex_;
+  std::vector<std::vector<VehicleTask>> pending_tasks_;  // per vehicle, guarded by tasks_mutex_
+  std::vector<std::vector<VehicleTask>> running_tasks_;  // loop thread's swap buffer
+  bool tasks_pending_ = false;                           // guarded by tasks_mutex_
+};
+
+}  // namespace uavsim::server::sim

@@ -1,0 +1,153 @@
+#include "physics/world_composer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "physics/world.hpp"
+
+namespace uavsim::server::physics {
+namespace {
+
+namespace fs = std::filesystem;
+
+// writes text into a fresh file under the test's temp dir and returns its path
+std::string write_temp(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "uavsim_composer_test";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+ComposeOptions options() {
+  ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  return o;
+}
+
+TEST(WorldComposer, MalformedXmlNamesFileAndLine) {
+  const std::string path = write_temp("malformed.xml", "<mujoco>\n<worldbody>\n<body>\n</worldbody>\n");
+  try {
+    compose_world(path, options());
+    FAIL() << "expected WorldError";
+  } catch (const WorldError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find(":3:"), std::string::npos) << what;  // the <body> left open
+  }
+}
+
+TEST(WorldComposer, UnknownVehicleTypeNamesFileLineAndKnownTypes) {
+  const std::string path = write_temp("unknown.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <uavsim_vehicle type="octo" name="uav0"/>
+  </worldbody>
+</mujoco>)");
+  try {
+    compose_world(path, options());
+    FAIL() << "expected WorldError";
+  } catch (const WorldError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path + ":4:"), std::string::npos) << what;
+    EXPECT_NE(what.find("octo"), std::string::npos) << what;
+    EXPECT_NE(what.find("quad"), std::string::npos) << what;  // lists the known types
+  }
+}
+
+TEST(WorldComposer, DuplicateNameIsRejected) {
+  const std::string path = write_temp("dup.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <uavsim_vehicle type="quad" name="a"/>
+    <uavsim_vehicle type="hexa" name="a" pos="3 0 0"/>
+  </worldbody>
+</mujoco>)");
+  EXPECT_THROW(compose_world(path, options()), WorldError);
+}
+
+TEST(WorldComposer, AngleUnitMismatchIsExplained) {
+  const std::string path = write_temp("degree.xml", R"(<mujoco>
+  <worldbody><uavsim_vehicle type="quad" name="a"/></worldbody>
+</mujoco>)");
+  try {
+    compose_world(path, options());
+    FAIL() << "expected WorldError";
+  } catch (const WorldError& e) {
+    EXPECT_NE(std::string(e.what()).find("angle"), std::string::npos) << e.what();
+  }
+}
+
+TEST(WorldComposer, NestedUavsimElementIsAnError) {
+  const std::string path = write_temp("nested.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody><body name="b"><uavsim_vehicle type="quad" name="a"/></body></worldbody>
+</mujoco>)");
+  EXPECT_THROW(compose_world(path, options()), WorldError);
+}
+
+TEST(WorldComposer, GridMakesRowsTimesColsVehiclesWithPrefixedNames) {
+  const std::string path = write_temp("grid.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <geom name="ground" type="plane" size="50 50 0.1"/>
+    <uavsim_grid type="quad" prefix="q" rows="2" cols="3" spacing="5" pos="1 2 0"/>
+    <uavsim_vehicle type="hexa" name="big" pos="-10 0 0" yaw_deg="90"/>
+  </worldbody>
+</mujoco>)");
+  auto world = World::load(path, options());
+  ASSERT_EQ(world->vehicles().size(), 7u);
+  EXPECT_EQ(world->vehicles()[0].name, "q0");
+  EXPECT_EQ(world->vehicles()[5].name, "q5");
+  EXPECT_EQ(world->vehicles()[6].name, "big");
+  EXPECT_EQ(world->vehicles()[6].airframe.frame, "hexa");
+  EXPECT_EQ(world->vehicles()[6].airframe.rotors.size(), 6u);
+  // q4 is row 1, col 1: (1 + 5, 2 + 5); the template's own z offset (0.16 m) is kept
+  const auto t = world->truth(4);
+  EXPECT_NEAR(t.position_enu_m.x(), 6.0, 1e-9);
+  EXPECT_NEAR(t.position_enu_m.y(), 7.0, 1e-9);
+  EXPECT_NEAR(t.position_enu_m.z(), 0.16, 1e-9);
+  // yaw 90 deg: body x points north (ENU y)
+  const Eigen::Vector3d x_enu = world->truth(6).q_enu_body * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(x_enu.y(), 1.0, 1e-9);
+  EXPECT_GE(world->body_id("q3"), 0);
+  const std::string mjcf = compose_world(path, options());
+  EXPECT_NE(mjcf.find("\"q3/hull\""), std::string::npos);  // names inside templates are prefixed
+}
+
+TEST(WorldComposer, IncludeIsInlinedRelativeToTheIncludingFile) {
+  fs::create_directories(fs::temp_directory_path() / "uavsim_composer_test" / "sub");
+  write_temp("sub/part.xml", R"(<mujoco><worldbody><geom name="from_include" type="sphere" size="1"/></worldbody></mujoco>)");
+  const std::string path = write_temp("with_include.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody><include file="sub/part.xml"/></worldbody>
+</mujoco>)");
+  const std::string mjcf = compose_world(path, options());
+  EXPECT_NE(mjcf.find("from_include"), std::string::npos);
+  EXPECT_EQ(mjcf.find("<include"), std::string::npos);
+}
+
+TEST(WorldComposer, MissingIncludeNamesTheIncludingFile) {
+  const std::string path = write_temp("bad_include.xml", R"(<mujoco>
+  <worldbody><include file="nope.xml"/></worldbody>
+</mujoco>)");
+  try {
+    compose_world(path, options());
+    FAIL();
+  } catch (const WorldError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":2:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(WorldComposer, ComposedTextLoadsFromAnywhere) {
+  const std::string mjcf =
+      compose_world(std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", options());
+  auto world = World::from_mjcf(mjcf, "composed");
+  EXPECT_EQ(world->vehicles().size(), 1u);
+}
+
+}  // namespace
+}  // namespace uavsim::server::physics
