@@ -1,0 +1,40 @@
+#include "render/osmesa_context.hpp"
+
+#include <GL/osmesa.h>
+
+#include <stdexcept>
+
+namespace uavsim::server::render {
+
+OsmesaContext::OsmesaContext(int window_width, int window_height)
+    : window_width_(window_width),
+      window_height_(window_height),
+      window_buffer_(static_cast<size_t>(window_width) * window_height) {
+  // RGBA, 24-bit depth, 8-bit stencil, no accumulation buffer, no shared lists
+  context_ = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr);
+  if (context_ == nullptr) {
+    throw std::runtime_error(
+        "osmesa: OSMesaCreateContextExt(OSMESA_RGBA, depth 24, stencil 8) failed");
+  }
+}
+
+OsmesaContext::~OsmesaContext() {
+  release();
+  OSMesaDestroyContext(static_cast<OSMesaContext>(context_));
+}
+
+bool OsmesaContext::make_current() {
+  auto* ctx = static_cast<OSMesaContext>(context_);
+  if (OSMesaGetCurrentContext() == ctx) return true;
+  return OSMesaMakeCurrent(ctx, window_buffer_.data(), GL_UNSIGNED_BYTE, window_width_,
+                           window_height_) == GL_TRUE;
+}
+
+void OsmesaContext::release() {
+  // a null context and buffer unbind whatever is current on this thread
+  if (OSMesaGetCurrentContext() == static_cast<OSMesaContext>(context_)) {
+    OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
+  }
+}
+
+}  // namespace uavsim::server::render
