@@ -1,0 +1,107 @@
+#include "app/options.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+
+namespace uavsim::server::app {
+
+const char* usage() {
+  return R"(usage: uavsim-server WORLD.xml [options]
+
+Simulates the world and its vehicles. WORLD.xml is MuJoCo MJCF plus uavsim's <uavsim_vehicle>,
+<uavsim_grid> and <uavsim_object> elements (models/README.md).
+
+options:
+  --seed N            seed of every random generator (sensor noise, ...); default 1
+  --physics-hz HZ     physics rate; default 1000
+  --control-hz HZ     flight-control rate, rounded to a divisor of the physics rate; default 500
+  --rate X            clock: X times real time (default 1); --rate 0 or --fast: as fast as possible
+  --fast              same as --rate 0
+  --duration S        stop after S seconds of sim time (default: run until interrupted)
+  --demo              fly vehicle 0 through take-off, three waypoints and landing, print what happened,
+                      and exit with 0 if the flight succeeded
+  --write-world FILE  write the composed MJCF (plain MuJoCo, opens in mujoco-simulate) and exit
+  --models-dir DIR    where vehicles/ and objects/ templates live (default: the source tree's models/)
+  --quiet             print only errors and the result
+  --help              this text
+)";
+}
+
+namespace {
+
+bool parse_double(const std::string& flag, const char* text, double* out) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v)) {
+    std::cerr << "uavsim-server: " << flag << " needs a number, got '" << text << "'\n";
+    return false;
+  }
+  *out = v;
+  return true;
+}
+
+}  // namespace
+
+std::optional<Options> parse_options(int argc, char** argv, int* exit_code) {
+  Options o;
+  *exit_code = 2;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](const char** out) {
+      if (i + 1 >= argc) {
+        std::cerr << "uavsim-server: " << a << " needs a value\n";
+        return false;
+      }
+      *out = argv[++i];
+      return true;
+    };
+    const char* v = nullptr;
+    double number = 0.0;
+    if (a == "--help" || a == "-h") {
+      std::cout << usage();
+      *exit_code = 0;
+      return std::nullopt;
+    } else if (a == "--seed") {
+      if (!value(&v) || !parse_double(a, v, &number) || number < 0) return std::nullopt;
+      o.seed = static_cast<uint64_t>(number);
+    } else if (a == "--physics-hz") {
+      if (!value(&v) || !parse_double(a, v, &o.physics_hz) || o.physics_hz <= 0) return std::nullopt;
+    } else if (a == "--control-hz") {
+      if (!value(&v) || !parse_double(a, v, &o.control_hz) || o.control_hz <= 0) return std::nullopt;
+    } else if (a == "--rate") {
+      if (!value(&v) || !parse_double(a, v, &o.rate) || o.rate < 0) return std::nullopt;
+    } else if (a == "--fast") {
+      o.rate = 0.0;
+    } else if (a == "--duration") {
+      if (!value(&v) || !parse_double(a, v, &o.duration_s) || o.duration_s < 0) return std::nullopt;
+    } else if (a == "--demo") {
+      o.demo = true;
+    } else if (a == "--write-world") {
+      if (!value(&v)) return std::nullopt;
+      o.write_world_path = v;
+    } else if (a == "--models-dir") {
+      if (!value(&v)) return std::nullopt;
+      o.models_dir = v;
+    } else if (a == "--quiet") {
+      o.quiet = true;
+    } else if (!a.empty() && a[0] == '-') {
+      std::cerr << "uavsim-server: unknown option " << a << " (see --help)\n";
+      return std::nullopt;
+    } else if (o.world_path.empty()) {
+      o.world_path = a;
+    } else {
+      std::cerr << "uavsim-server: more than one world file given (" << o.world_path << ", " << a << ")\n";
+      return std::nullopt;
+    }
+  }
+  if (o.world_path.empty()) {
+    std::cerr << "uavsim-server: no world file given\n" << usage();
+    return std::nullopt;
+  }
+  *exit_code = 0;
+  return o;
+}
+
+}  // namespace uavsim::server::app

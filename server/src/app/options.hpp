@@ -1,0 +1,27 @@
+// Command-line options of uavsim-server.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace uavsim::server::app {
+
+struct Options {
+  std::string world_path;
+  std::string models_dir;             // empty: the built-in default
+  std::optional<std::string> write_world_path;
+  uint64_t seed = 1;
+  double physics_hz = 1000.0;
+  double control_hz = 500.0;
+  double rate = 1.0;                  // real time x rate; 0 = as fast as possible
+  double duration_s = 0.0;            // 0 = run until interrupted
+  bool demo = false;                  // fly the scripted demo on vehicle 0 and exit
+  bool quiet = false;
+};
+
+// Parses argv. Returns std::nullopt after printing --help or an error (exit_code says which).
+std::optional<Options> parse_options(int argc, char** argv, int* exit_code);
+const char* usage();
+
+}  // namespace uavsim::server::app

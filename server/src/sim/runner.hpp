@@ -1,0 +1,51 @@
+// Drives a Simulation's clock on the calling thread (the loop thread): real time x factor, or as fast as
+// possible; pause, resume and single-stepping; and a gate before each control step where the lockstep
+// contract (sim socket API) can hold the clock. Wall-clock time is read here and nowhere in physics or fc.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::sim {
+
+class Runner {
+ public:
+  // rate_factor: 1 = real time, 10 = ten times faster, 0 = as fast as possible.
+  Runner(Simulation& sim, double rate_factor);
+
+  // Runs until sim time reaches end_time_s (infinity: until stop()). Loop thread only.
+  void run_until(double end_time_s);
+
+  void stop();                             // Thread-safe: run_until returns at the next step.
+  void set_rate(double rate_factor);       // Thread-safe.
+  double rate() const { return rate_.load(); }
+  void pause();                            // Thread-safe.
+  void resume();                           // Thread-safe.
+  void step_while_paused(uint64_t steps);  // Thread-safe: advance N physics steps, then pause again.
+  bool paused() const { return paused_.load(); }
+
+  // Called on the loop thread before every control step with the sim time it will run at; the lockstep
+  // contract blocks in it until every joined client is done. Set before run_until.
+  using Gate = std::function<void(double time_s)>;
+  void set_control_gate(Gate gate) { gate_ = std::move(gate); }
+
+ private:
+  void wait_while_paused();
+
+  Simulation& sim_;
+  std::atomic<double> rate_;
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> paused_{false};
+  std::atomic<uint64_t> steps_allowed_{0};  // single steps granted while paused
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  Gate gate_;
+  bool rebase_ = true;  // re-anchor wall time after a pause or a rate change
+};
+
+}  // namespace uavsim::server::sim

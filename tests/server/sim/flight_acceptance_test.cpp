@@ -1,0 +1,167 @@
+// Issue 2's acceptance flights, in the full MuJoCo simulation with the flight-controller emulation,
+// driven through Simulation::post (the path the MAVLink endpoint uses). Tolerances are the issue's.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "sim_fixture.hpp"
+
+namespace uavsim::server::sim {
+namespace {
+
+using testing::goto_enu;
+using testing::make_sim;
+using testing::take_off;
+using testing::wrap_pi;
+using testing::yaw_of;
+
+constexpr double kHoldTolM = 0.2;
+constexpr double kSettleTolM = 1.0;
+constexpr double kMaxOvershootM = 1.5;
+constexpr double kPassTolM = 1.0;
+
+class EveryFrame : public ::testing::TestWithParam<const char*> {};
+
+// take off to 10 m and hold within +-0.2 m (truth) for 60 s of sim time
+TEST_P(EveryFrame, TakesOffAndHoldsAltitudeFor60s) {
+  auto sim = make_sim(GetParam());
+  take_off(*sim, 10.0);
+  sim->run_until(sim->time_s() + 5.0);  // settle
+  double worst = 0.0;
+  const double end = sim->time_s() + 60.0;
+  while (sim->time_s() < end) {
+    sim->step();
+    worst = std::max(worst, std::abs(sim->truth(0).position_enu_m.z() - 10.0));
+  }
+  EXPECT_LT(worst, kHoldTolM) << GetParam();
+  EXPECT_EQ(sim->events().count(EventType::kCrash), 0u);
+}
+
+// a 20 m step in x settles within 1 m with at most 1.5 m overshoot
+TEST_P(EveryFrame, StepOf20mSettlesWithLimitedOvershoot) {
+  auto sim = make_sim(GetParam());
+  take_off(*sim, 10.0);
+  sim->run_until(sim->time_s() + 3.0);
+  const Eigen::Vector3d start = sim->truth(0).position_enu_m;
+  const Eigen::Vector3d goal = start + Eigen::Vector3d(20.0, 0.0, 0.0);
+  goto_enu(*sim, Eigen::Vector3d(goal.x(), goal.y(), 10.0));
+  double max_x = -1e9;
+  const double end = sim->time_s() + 30.0;
+  while (sim->time_s() < end) {
+    sim->step();
+    max_x = std::max(max_x, sim->truth(0).position_enu_m.x());
+  }
+  EXPECT_LT((sim->truth(0).position_enu_m - Eigen::Vector3d(goal.x(), goal.y(), 10.0)).norm(), kSettleTolM);
+  EXPECT_LE(max_x - goal.x(), kMaxOvershootM);
+}
+
+// a 90 deg yaw (CONDITION_YAW semantics: heading clockwise from north) settles
+TEST_P(EveryFrame, YawOf90DegSettles) {
+  auto sim = make_sim(GetParam());
+  take_off(*sim, 10.0);
+  const double yaw0 = yaw_of(sim->truth(0).q_enu_body);
+  sim->post(0, [](fc::FlightController& f) {
+    EXPECT_EQ(f.condition_yaw(90.0, 0.0, 1, true), fc::CommandResult::kAccepted);
+  });
+  sim->run_until(sim->time_s() + 15.0);
+  // clockwise seen from above is negative ENU yaw
+  const double turned = wrap_pi(yaw_of(sim->truth(0).q_enu_body) - yaw0);
+  EXPECT_NEAR(turned, -M_PI / 2, 3.0 * M_PI / 180.0);
+  EXPECT_LT(sim->truth(0).rate_body_rad_s.norm(), 0.05);
+}
+
+INSTANTIATE_TEST_SUITE_P(QuadAndHexa, EveryFrame, ::testing::Values("empty.xml", "hexa.xml"));
+
+TEST(Flight, GuidedGotoPassesWithin1mOfTheTarget) {
+  auto sim = make_sim("empty.xml");
+  take_off(*sim, 10.0);
+  const Eigen::Vector3d target(-15.0, 25.0, 15.0);
+  goto_enu(*sim, target);
+  double closest = 1e9;
+  const double end = sim->time_s() + 40.0;
+  while (sim->time_s() < end) {
+    sim->step();
+    closest = std::min(closest, (sim->truth(0).position_enu_m - target).norm());
+  }
+  EXPECT_LT(closest, kPassTolM);
+}
+
+TEST(Flight, AutoMissionPassesWithin1mOfEveryWaypointThenLandsAndDisarms) {
+  auto sim = make_sim("empty.xml");
+  take_off(*sim, 10.0);
+  const std::vector<Eigen::Vector3d> wps = {{15, 0, 10}, {15, 15, 12}, {0, 15, 10}};
+  std::vector<fc::MissionItem> items(1);  // item 0: home
+  for (const auto& p : wps) {
+    fc::MissionItem it;
+    it.kind = fc::MissionItem::Kind::kWaypoint;
+    it.position_enu_m = p;
+    items.push_back(it);
+  }
+  fc::MissionItem land;
+  land.kind = fc::MissionItem::Kind::kLand;
+  land.position_valid = false;
+  items.push_back(land);
+  sim->post(0, [items](fc::FlightController& f) {
+    f.set_mission(items);
+    EXPECT_EQ(f.set_mode(fc::Mode::kAuto), fc::CommandResult::kAccepted);
+  });
+  std::vector<double> closest(wps.size(), 1e9);
+  std::vector<int> reached;
+  const double end = sim->time_s() + 120.0;
+  while (sim->time_s() < end && (sim->fc(0).armed() || sim->time_s() < 5.0)) {
+    sim->step();
+    for (size_t i = 0; i < wps.size(); ++i) {
+      closest[i] = std::min(closest[i], (sim->truth(0).position_enu_m - wps[i]).norm());
+    }
+    for (int seq : sim->fc(0).drain_reached_items()) reached.push_back(seq);
+  }
+  for (size_t i = 0; i < wps.size(); ++i) EXPECT_LT(closest[i], kPassTolM) << "waypoint " << i + 1;
+  EXPECT_GE(reached.size(), 3u);
+  EXPECT_FALSE(sim->fc(0).armed()) << "did not land and disarm";
+  EXPECT_LT(sim->truth(0).position_enu_m.z(), 0.3);
+  EXPECT_EQ(sim->events().count(EventType::kCrash), 0u);
+}
+
+TEST(Flight, LandLandsAndDisarms) {
+  auto sim = make_sim("empty.xml");
+  take_off(*sim, 10.0);
+  sim->post(0, [](fc::FlightController& f) { EXPECT_EQ(f.land(), fc::CommandResult::kAccepted); });
+  const double end = sim->time_s() + 60.0;
+  while (sim->time_s() < end && sim->fc(0).armed()) sim->step();
+  EXPECT_FALSE(sim->fc(0).armed());
+  EXPECT_LT(sim->truth(0).position_enu_m.z(), 0.3);
+  EXPECT_EQ(sim->events().count(EventType::kCrash), 0u);
+}
+
+TEST(Flight, RtlReturnsHomeAndLands) {
+  auto sim = make_sim("empty.xml");
+  take_off(*sim, 10.0);
+  const Eigen::Vector3d home = sim->fc(0).home_enu_m();
+  goto_enu(*sim, Eigen::Vector3d(30, 10, 10));
+  sim->run_until(sim->time_s() + 20.0);
+  ASSERT_GT((sim->truth(0).position_enu_m - home).head<2>().norm(), 25.0);
+  sim->post(0, [](fc::FlightController& f) { EXPECT_EQ(f.rtl(), fc::CommandResult::kAccepted); });
+  const double end = sim->time_s() + 120.0;
+  while (sim->time_s() < end && sim->fc(0).armed()) sim->step();
+  EXPECT_FALSE(sim->fc(0).armed());
+  EXPECT_LT((sim->truth(0).position_enu_m - home).head<2>().norm(), 1.0);
+  EXPECT_LT(sim->truth(0).position_enu_m.z(), 0.3);
+}
+
+// stretch: a hexa that loses one rotor in flight still lands under control (no crash event)
+TEST(Flight, HexaWithOneDeadRotorStillLands) {
+  auto sim = make_sim("hexa.xml");
+  take_off(*sim, 10.0);
+  sim->run_until(sim->time_s() + 2.0);
+  sim->set_motor_failed(0, 0, true);
+  sim->post(0, [](fc::FlightController& f) { f.land(); });
+  const double end = sim->time_s() + 60.0;
+  while (sim->time_s() < end && sim->fc(0).armed()) sim->step();
+  EXPECT_EQ(sim->events().count(EventType::kCrash), 0u);
+  EXPECT_LT(sim->truth(0).position_enu_m.z(), 0.5);
+}
+
+}  // namespace
+}  // namespace uavsim::server::sim
