@@ -35,11 +35,20 @@ Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& c
   control_decimation_ = std::max(1, static_cast<int>(std::lround(config.physics_hz / config.control_hz)));
   world_->set_timestep_s(physics_dt_s_);
 
+  init_vehicles();
+  pending_tasks_.resize(vehicles_.size());
+  running_tasks_.resize(vehicles_.size());
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::init_vehicles() {
+  vehicles_.clear();
   const auto& bindings = world_->vehicles();
   vehicles_.reserve(bindings.size());
   for (size_t i = 0; i < bindings.size(); ++i) {
     const airframe::AirframeParams& a = bindings[i].airframe;
-    VehicleRuntime rt{fc::FlightController(a, mix_seed(config.seed, i)), airframe::make_motor_state(a),
+    VehicleRuntime rt{fc::FlightController(a, mix_seed(config_.seed, i)), airframe::make_motor_state(a),
                       airframe::BatteryState{}, {}, {}, {}, false, true};
     rt.battery.voltage_v = a.battery.voltage_full_v;
     rt.motor_cmd.assign(a.rotors.size(), 0.0);
@@ -47,11 +56,21 @@ Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& c
     rt.motor_lag_alpha = airframe::motor_lag_alpha(a, physics_dt_s_);
     vehicles_.push_back(std::move(rt));
   }
-  pending_tasks_.resize(vehicles_.size());
-  running_tasks_.resize(vehicles_.size());
 }
 
-Simulation::~Simulation() = default;
+void Simulation::reset(uint64_t seed) {
+  config_.seed = seed;
+  world_->reset();
+  steps_ = 0;
+  init_vehicles();
+  {
+    std::lock_guard<std::mutex> lock(tasks_mutex_);
+    for (auto& q : pending_tasks_) q.clear();
+    tasks_pending_ = false;
+  }
+  events_.clear();
+  for (auto& object : objects_) object->reset(seed);
+}
 
 double Simulation::time_s() const { return world_->time_s(); }
 const std::string& Simulation::vehicle_name(size_t i) const { return world_->vehicles()[i].name; }
@@ -67,6 +86,8 @@ fc::TruthState Simulation::truth(size_t i) const {
 
 void Simulation::step() {
   if (steps_ % static_cast<uint64_t>(control_decimation_) == 0) control_step();
+
+  for (auto& object : objects_) object->before_step(*this);
 
   // motors -> rotor thrusts -> wrench about the body origin -> qfrc_applied
   for (size_t i = 0; i < vehicles_.size(); ++i) {
@@ -114,9 +135,9 @@ void Simulation::control_step() {
     airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
 
     if (v.fc.armed() != was_armed) {
-      record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, i, "");
+      record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");
     }
-    if (v.fc.mode() != old_mode) record(EventType::kModeChange, i, fc::mode_name(v.fc.mode()));
+    if (v.fc.mode() != old_mode) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
   }
   for (ControlObserver& observer : observers_) observer(*this);
 }
@@ -126,6 +147,9 @@ void Simulation::check_contacts() {
   world_->vehicle_contacts(&contacts_);
   for (const physics::VehicleContact& c : contacts_) {
     VehicleRuntime& v = vehicles_[c.vehicle];
+    bool handled = false;
+    for (auto& object : objects_) handled = handled || object->on_contact(*this, c);
+    if (handled) continue;
     touching[c.vehicle] = 1;
     if (v.crashed) continue;
     if (c.other_vehicle >= 0) {
@@ -144,7 +168,7 @@ void Simulation::check_contacts() {
     const bool now = touching[i] != 0;
     if (now != vehicles_[i].on_ground) {
       vehicles_[i].on_ground = now;
-      record(now ? EventType::kTouchdown : EventType::kTakeoff, i, "");
+      record(now ? EventType::kTouchdown : EventType::kTakeoff, static_cast<int>(i), "");
     }
   }
 }
@@ -155,14 +179,14 @@ void Simulation::kill_vehicle(size_t vehicle, const std::string& reason) {
   v.crashed = true;
   v.fc.disarm(true);
   std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
-  record(EventType::kCrash, vehicle, reason);
+  record(EventType::kCrash, static_cast<int>(vehicle), reason);
 }
 
 void Simulation::set_motor_failed(size_t vehicle, size_t rotor, bool failed) {
   VehicleRuntime& v = vehicles_[vehicle];
   if (rotor >= v.motors.failed.size()) return;
   v.motors.failed[rotor] = failed;
-  record(EventType::kMotorFailure, vehicle,
+  record(EventType::kMotorFailure, static_cast<int>(vehicle),
          "rotor " + std::to_string(rotor) + (failed ? " failed" : " restored"));
 }
 
@@ -178,9 +202,11 @@ void Simulation::add_control_observer(ControlObserver observer) {
   observers_.push_back(std::move(observer));
 }
 
-void Simulation::record(EventType type, size_t vehicle, std::string detail) {
-  events_.add(world_->time_s(), type, static_cast<int>(vehicle), std::move(detail));
+void Simulation::record(EventType type, int vehicle, std::string detail) {
+  events_.add(world_->time_s(), type, vehicle, std::move(detail));
 }
+
+void Simulation::add_object(std::unique_ptr<WorldObject> object) { objects_.push_back(std::move(object)); }
 
 uint64_t Simulation::state_hash() const {
   uint64_t h = 0xCBF29CE484222325ull;

@@ -41,6 +41,22 @@ struct VehicleRuntime {
 // A command or query for one vehicle, run on the loop thread at the next control boundary.
 using VehicleTask = std::function<void(fc::FlightController&)>;
 
+class Simulation;
+
+// Something in the world with behaviour of its own (the truck on its track, balloons that pop). Objects
+// are stepped on the loop thread before every physics step and see every vehicle contact first.
+class WorldObject {
+ public:
+  virtual ~WorldObject() = default;
+  // Before each physics step (move kinematic bodies, carry landed vehicles).
+  virtual void before_step(Simulation& sim) = 0;
+  // A contact of a vehicle; return true if the object handled it (e.g. a blade popped a balloon), so that
+  // it is not judged as a crash.
+  virtual bool on_contact(Simulation& sim, const physics::VehicleContact& contact) = 0;
+  // Back to the initial state after a reset (seeded randomness restarts from seed).
+  virtual void reset(uint64_t seed) = 0;
+};
+
 class Simulation {
  public:
   // Takes ownership of a loaded world. Throws std::invalid_argument for unusable rates.
@@ -51,6 +67,9 @@ class Simulation {
   void step();
   // Advances whole physics steps until sim time reaches time_s. Loop thread only.
   void run_until(double time_s);
+  // Back to time 0 with a new seed: initial world state, fresh flight controllers, motors and batteries,
+  // objects reset, event log cleared, queued tasks dropped. Loop thread only.
+  void reset(uint64_t seed);
 
   double time_s() const;            // Loop thread only.
   uint64_t step_count() const { return steps_; }
@@ -77,6 +96,11 @@ class Simulation {
   void set_motor_failed(size_t vehicle, size_t rotor, bool failed);
   void kill_vehicle(size_t vehicle, const std::string& reason);
 
+  // Adds a world object; it is stepped before physics and consulted on contacts. Loop thread only.
+  void add_object(std::unique_ptr<WorldObject> object);
+  // Records an event at the current sim time. Loop thread only.
+  void record(EventType type, int vehicle, std::string detail);
+
   // Called on the loop thread after every control step (telemetry publishers, lockstep).
   using ControlObserver = std::function<void(Simulation&)>;
   void add_control_observer(ControlObserver observer);
@@ -88,9 +112,9 @@ class Simulation {
   uint64_t state_hash() const;
 
  private:
+  void init_vehicles();
   void control_step();
   void check_contacts();
-  void record(EventType type, size_t vehicle, std::string detail);
 
   std::unique_ptr<physics::World> world_;
   SimConfig config_;
@@ -100,6 +124,7 @@ class Simulation {
   std::vector<VehicleRuntime> vehicles_;
   std::vector<physics::VehicleContact> contacts_;
   std::vector<ControlObserver> observers_;
+  std::vector<std::unique_ptr<WorldObject>> objects_;
   EventLog events_;
 
   std::mutex tasks_mutex_;

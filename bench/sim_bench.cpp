@@ -1,0 +1,88 @@
+// Physics + flight control per vehicle-step, beside bare mj_step on the same world (issue 2's benchmark).
+//   BM_BareMjStep/N      N hovering quads, constant hover force written into qfrc_applied, mj_step only
+//   BM_SimStep/N         N quads hovering under their flight controllers: Simulation::step (motors, wrench,
+//                        FC at 500 Hz with sensors and estimator, mj_step, contact checks)
+// items/s = vehicle-steps per second; compare the two at the same N in one run.
+#include <benchmark/benchmark.h>
+#include <mujoco/mujoco.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "physics/world.hpp"
+#include "sim/simulation.hpp"
+
+namespace {
+
+using namespace uavsim::server;
+
+std::string grid_world(int n) {
+  // the most square grid of exactly n: rows = the largest divisor of n not above sqrt(n)
+  int rows = 1;
+  for (int r = 1; r * r <= n; ++r) {
+    if (n % r == 0) rows = r;
+  }
+  const int cols = n / rows;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("uavsim_bench_grid" + std::to_string(n) + ".xml")).string();
+  std::ofstream(path) << "<mujoco><compiler angle=\"radian\"/><option timestep=\"0.001\"/>"
+                      << "<worldbody><geom name=\"ground\" type=\"plane\" size=\"500 500 0.1\"/>"
+                      << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\""
+                      << cols << "\" spacing=\"4\"/></worldbody></mujoco>";
+  return path;
+}
+
+std::unique_ptr<physics::World> load(int n) {
+  physics::ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  return physics::World::load(grid_world(n), o);
+}
+
+void BM_BareMjStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  auto world = load(n);
+  // lift every quad off the ground and hold it there with a constant force m*g
+  for (size_t i = 0; i < world->vehicles().size(); ++i) {
+    const auto t = world->truth(i);
+    const double pos[3] = {t.position_enu_m.x(), t.position_enu_m.y(), 5.0};
+    const double quat[4] = {1, 0, 0, 0};
+    world->set_pose(i, pos, quat);
+    airframe::Wrench w;
+    w.force_enu_n.z() = world->vehicles()[i].airframe.mass_kg * 9.81;
+    world->apply_wrench(i, w);
+  }
+  for (int i = 0; i < 100; ++i) world->step();
+  for (auto _ : state) world->step();
+  state.SetItemsProcessed(state.iterations() * n);
+  state.counters["realtime_x"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * world->timestep_s(), benchmark::Counter::kIsRate);
+}
+
+void BM_SimStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  sim::Simulation s(load(n), sim::SimConfig{});
+  // warm-up: every quad takes off to 5 m and settles into a hover
+  while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
+  for (size_t i = 0; i < s.vehicle_count(); ++i) {
+    s.post(i, [](fc::FlightController& f) {
+      f.set_mode(fc::Mode::kGuided);
+      f.arm(true);
+      f.takeoff(5.0);
+    });
+  }
+  s.run_until(s.time_s() + 10.0);
+  for (auto _ : state) s.step();
+  state.SetItemsProcessed(state.iterations() * n);
+  state.counters["realtime_x"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * s.physics_dt_s(), benchmark::Counter::kIsRate);
+}
+
+BENCHMARK(BM_BareMjStep)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SimStep)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
