@@ -187,7 +187,7 @@ std::optional<Interception> TrackKalman::intercept(int64_t now_us,
   // gap(tau) = |truck(tau) - uav| - v tau; the first sign change is the earliest meeting
   auto truck_at = [&](double tau_s) {
     const double s = x_now(0) + x_now(1) * tau_s;
-    const double l = x_now(2) + x_now(3) * tau_s;
+    const double l = x_now(2) + x_now(3) * std::min(tau_s, params_.lateral_extrapolation_limit_s);
     return track_.point_enu(TrackCoordinates{s, l});
   };
   auto gap = [&](double tau_s) {

@@ -28,6 +28,8 @@ struct TrackKalmanParams {
   double projection_window_m = 15.0;       // branch choice near the crossing, see EightTrack::project
   double gate_m = 5.0;                     // innovations larger than this are rejected as outliers
   int history_size = 32;                   // snapshots kept for out-of-order measurements
+  // intercept() extrapolates the lateral rate for at most this long: weaving is not a trend
+  double lateral_extrapolation_limit_s = 1.0;
 };
 
 // Filter state at one time.
