@@ -226,6 +226,31 @@ TEST(Signing, UnsignedFramesAreRefusedOnlyWhenAsked) {
   EXPECT_EQ(parse_all(plain.view(), lenient).size(), 1u);
 }
 
+TEST(Signing, ReplayedOrStaleTimestampsAreRejected) {
+  const SecretKey key = test::reference_key();
+  auto signed_frame = [&](std::uint8_t link_id, std::uint64_t ts) {
+    FrameHeader h = signed_header(key, ts);
+    h.signing->link_id = link_id;
+    return encode(h, msg::Heartbeat{});
+  };
+  Parser parser(ParserConfig{key, false});
+  EXPECT_EQ(parse_all(signed_frame(1, 1000).view(), parser).size(), 1u);
+  // the very same frame again: a replay
+  EXPECT_TRUE(parse_all(signed_frame(1, 1000).view(), parser).empty());
+  EXPECT_EQ(parser.stats().replayed, 1u);
+  EXPECT_EQ(parse_all(signed_frame(1, 1001).view(), parser).size(), 1u);
+  // another link is another stream with its own history
+  EXPECT_EQ(parse_all(signed_frame(2, 500).view(), parser).size(), 1u);
+
+  // a new stream more than one minute (6,000,000 ticks of 10 us) behind the newest timestamp is refused
+  const std::uint64_t now = 10'000'000;
+  EXPECT_EQ(parse_all(signed_frame(3, now).view(), parser).size(), 1u);
+  EXPECT_TRUE(parse_all(signed_frame(4, now - 6'000'001).view(), parser).empty());
+  EXPECT_EQ(parser.stats().replayed, 2u);
+  EXPECT_EQ(parse_all(signed_frame(5, now - 5'999'999).view(), parser).size(), 1u);
+  EXPECT_EQ(parser.stats().bad_signature, 0u);
+}
+
 TEST(Signing, TimestampsStrictlyIncrease) {
   TimestampSource ts;
   EXPECT_EQ(ts.next(100), 100u);

@@ -11,6 +11,10 @@ namespace {
 
 constexpr bool is_start_byte(std::uint8_t b) { return b == kStxV2 || b == kStxV1; }
 
+// a new signing stream may start this far behind the newest timestamp seen: one minute in 10 us units
+// (the MAVLink spec's and the reference library's limit)
+constexpr std::uint64_t kNewStreamWindow10us = 60ull * 100000;
+
 }  // namespace
 
 Parser::Parser(const ParserConfig& config) : config_(config) {}
@@ -137,6 +141,13 @@ Parser::Step Parser::evaluate() {
         ++stats_.bad_signature;
         return Step::kSkip;
       }
+      const std::uint8_t* block = buf_.data() + header_len + payload_len + kChecksumLen;
+      std::uint64_t ts = 0;
+      for (int i = 0; i < 6; ++i) ts |= std::uint64_t{block[1 + i]} << (8 * i);
+      if (!accept_timestamp(block[0], buf_[5], buf_[6], ts)) {
+        ++stats_.replayed;
+        return Step::kSkip;
+      }
     } else if (!config_.accept_unsigned) {
       ++stats_.unsigned_rejected;
       return Step::kSkip;
@@ -145,6 +156,33 @@ Parser::Step Parser::evaluate() {
 
   fill_frame(*info, header_len, frame_len);
   return Step::kEmit;
+}
+
+bool Parser::accept_timestamp(std::uint8_t link_id, std::uint8_t sysid, std::uint8_t compid,
+                              std::uint64_t ts) {
+  SigningStream* stream = nullptr;
+  for (std::size_t i = 0; i < stream_count_; ++i) {
+    SigningStream& s = streams_[i];
+    if (s.link_id == link_id && s.sysid == sysid && s.compid == compid) stream = &s;
+  }
+  if (stream != nullptr) {
+    // a known stream must move forward
+    if (ts <= stream->timestamp_10us) return false;
+  } else {
+    // a new stream must not be much older than what we have seen
+    if (ts + kNewStreamWindow10us < newest_timestamp_10us_) return false;
+    if (stream_count_ < streams_.size()) {
+      stream = &streams_[stream_count_++];
+    } else {
+      stream = &*std::min_element(streams_.begin(), streams_.end(), [](const auto& a, const auto& b) {
+        return a.timestamp_10us < b.timestamp_10us;
+      });
+    }
+    *stream = SigningStream{link_id, sysid, compid, 0};
+  }
+  stream->timestamp_10us = ts;
+  newest_timestamp_10us_ = std::max(newest_timestamp_10us_, ts);
+  return true;
 }
 
 void Parser::fill_frame(const MessageInfo& info, std::size_t header_len, std::size_t frame_len) {

@@ -23,10 +23,13 @@ struct ParserStats {
   std::uint64_t bad_length = 0;          // payload length impossible for the message id
   std::uint64_t bad_signature = 0;       // signed frame whose signature does not match the configured key
   std::uint64_t unsigned_rejected = 0;   // unsigned frame while a key is configured and unsigned is refused
+  std::uint64_t replayed = 0;            // correctly signed, but its timestamp is not newer (replay)
 };
 
 struct ParserConfig {
-  // when set, signed frames are verified against it, and unsigned frames are refused unless accept_unsigned
+  // when set, signed frames are verified against it, and unsigned frames are refused unless accept_unsigned.
+  // Replays are refused too (MAVLink spec "Message Signing"): per stream (link id, sysid, compid) timestamps
+  // must increase, and a new stream may start at most one minute before the newest timestamp seen.
   std::optional<SecretKey> signing_key;
   bool accept_unsigned = false;
 };
@@ -52,7 +55,8 @@ class Parser {
     }
   }
 
-  // Replaces the signing configuration (e.g. after SETUP_SIGNING); buffered bytes are kept.
+  // Replaces the signing configuration (e.g. after SETUP_SIGNING); buffered bytes and the replay history
+  // are kept.
   void configure(const ParserConfig& config) { config_ = config; }
 
   // Counters since construction or the last reset_stats().
@@ -73,6 +77,20 @@ class Parser {
   // drops the first n buffered bytes (counting them as dropped unless they were emitted)
   void discard_front(std::size_t n, bool count_dropped);
   void fill_frame(const MessageInfo& info, std::size_t header_len, std::size_t frame_len);
+  // (stream, timestamp) => false for a replay; records the timestamp otherwise
+  bool accept_timestamp(std::uint8_t link_id, std::uint8_t sysid, std::uint8_t compid, std::uint64_t ts);
+
+  // replay history of signed streams: a fixed table (no allocation), the stalest stream is evicted when full
+  struct SigningStream {
+    std::uint8_t link_id = 0;
+    std::uint8_t sysid = 0;
+    std::uint8_t compid = 0;
+    std::uint64_t timestamp_10us = 0;
+  };
+  static constexpr std::size_t kMaxSigningStreams = 16;
+  std::array<SigningStream, kMaxSigningStreams> streams_{};
+  std::size_t stream_count_ = 0;
+  std::uint64_t newest_timestamp_10us_ = 0;
 
   ParserConfig config_;
   ParserStats stats_;
