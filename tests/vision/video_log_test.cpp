@@ -1,1 +1,162 @@
+#include "uavsim/vision/video_log.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <unistd.h>
+
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "uavsim/vision/synthetic_scene.hpp"
+
+namespace uavsim::vision {
+namespace {
+
+constexpr double kMinPsnrDb = 30.0;  // JPEG at quality 90 on smooth synthetic frames
+
+namespace fs = std::filesystem;
+
+// a fresh directory per test, removed afterwards
+class VideoLogTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           (std::string("uavsim_vlog_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+cv::Mat frame_image(int i) {
+  const auto k = PinholeIntrinsics::from_fovy(320, 240, 1.0);
+  cv::Mat image = synthetic::sky_sand_background(k, 60 + 4 * i, 100 + i);
+  synthetic::render_sphere(k, {0.2 * (i - 5), 0.0, 6.0}, 0.6, {40, 170, 50}, {0, -1, 0}, &image);
+  return image;
+}
+
+std::vector<Overlay> frame_overlays(int i) {
+  return {Overlay::circle({100.5f + i, 80.25f}, 12.5f, {0, 255, 0}, 2.0f),
+          Overlay::line({0, 0}, {319, 239}, {255, 0, 0}),
+          Overlay::rectangle({10, 20, 30.5f, 40}, {0, 0, 255}, 3.0f),
+          Overlay::label({5, 230}, "balloon #" + std::to_string(i), {255, 255, 255}, 0.4f)};
+}
+
+TEST_F(VideoLogTest, RoundTripKeepsFramesStampsOverlaysAndText) {
+  constexpr int kFrames = 12;
+  {
+    auto writer = VideoLogWriter::open(dir_ / "a.vlog", {90, 64});
+    ASSERT_TRUE(writer.ok());
+    for (int i = 0; i < kFrames; ++i) {
+      VideoLogFrame f{1'000'000 + 142'857LL * i, frame_image(i), frame_overlays(i),
+                      "range=" + std::to_string(10 - i) + " m\nstate=APPROACH"};
+      ASSERT_TRUE((*writer)->submit(f));
+    }
+    ASSERT_TRUE((*writer)->close().ok());
+    EXPECT_EQ((*writer)->frames_written(), static_cast<uint64_t>(kFrames));
+    EXPECT_EQ((*writer)->frames_dropped(), 0u);
+  }
+  auto reader = VideoLogReader::open(dir_ / "a.vlog");
+  ASSERT_TRUE(reader.ok());
+  VideoLogReader& log = *reader.value();
+  ASSERT_EQ(log.frame_count(), static_cast<size_t>(kFrames));
+  // seek backwards first: random access works by index
+  for (int i = kFrames - 1; i >= 0; --i) {
+    auto rec = log.read(i);
+    ASSERT_TRUE(rec.ok()) << to_string(rec.error());
+    EXPECT_EQ(rec->stamp_us, 1'000'000 + 142'857LL * i);
+    EXPECT_TRUE(rec->keyframe);
+    EXPECT_EQ(rec->overlays, frame_overlays(i));
+    EXPECT_EQ(rec->text, "range=" + std::to_string(10 - i) + " m\nstate=APPROACH");
+    EXPECT_GT(cv::PSNR(rec->image, frame_image(i)), kMinPsnrDb);
+  }
+  EXPECT_EQ(log.index_at(1'000'000 + 142'857LL * 5 + 1), 5u);
+  EXPECT_FALSE(log.read(kFrames).ok());
+  EXPECT_EQ(log.read(kFrames).error(), VideoLogError::kOutOfRange);
+}
+
+TEST_F(VideoLogTest, FullQueueDropsAndCountsInsteadOfBlocking) {
+  auto writer = VideoLogWriter::open(dir_ / "b.vlog", {95, 2});
+  ASSERT_TRUE(writer.ok());
+  // 1280x960 noise is slow to encode: submitting 100 back to back must overflow a 2-frame queue
+  cv::Mat big(960, 1280, CV_8UC3);
+  cv::randu(big, 0, 255);
+  int accepted = 0;
+  for (int i = 0; i < 100; ++i) accepted += (*writer)->submit({i * 1000LL, big, {}, ""});
+  ASSERT_TRUE((*writer)->close().ok());
+  EXPECT_GT((*writer)->frames_dropped(), 0u);
+  EXPECT_EQ((*writer)->frames_written() + (*writer)->frames_dropped(), 100u);
+  EXPECT_EQ((*writer)->frames_written(), static_cast<uint64_t>(accepted));
+  auto reader = VideoLogReader::open(dir_ / "b.vlog");
+  ASSERT_TRUE(reader.ok());
+  EXPECT_EQ((*reader)->frame_count(), static_cast<size_t>(accepted));
+  // submit after close is a drop, not a crash
+  EXPECT_FALSE((*writer)->submit({0, big, {}, ""}));
+}
+
+TEST_F(VideoLogTest, TruncatedLogReadsUpToLastWholeFrame) {
+  {
+    auto writer = VideoLogWriter::open(dir_ / "c.vlog");
+    ASSERT_TRUE(writer.ok());
+    for (int i = 0; i < 5; ++i) (*writer)->submit({i * 100'000LL, frame_image(i), {}, "x"});
+    ASSERT_TRUE((*writer)->close().ok());
+  }
+  // a crash mid-write: cut the last record in half
+  const auto size = fs::file_size(dir_ / "c.vlog");
+  ASSERT_EQ((*VideoLogReader::open(dir_ / "c.vlog"))->frame_count(), 5u);
+  fs::resize_file(dir_ / "c.vlog", size - 500);  // a JPEG record is several kB
+  auto reader = VideoLogReader::open(dir_ / "c.vlog");
+  ASSERT_TRUE(reader.ok());
+  EXPECT_EQ((*reader)->frame_count(), 4u);
+  EXPECT_TRUE((*reader)->read(3).ok());
+}
+
+TEST_F(VideoLogTest, RejectsForeignFiles) {
+  std::ofstream(dir_ / "junk.vlog") << "this is not a video log at all";
+  auto reader = VideoLogReader::open(dir_ / "junk.vlog");
+  ASSERT_FALSE(reader.ok());
+  EXPECT_EQ(reader.error(), VideoLogError::kBadFormat);
+  EXPECT_EQ(VideoLogReader::open(dir_ / "missing.vlog").error(), VideoLogError::kOpenFailed);
+}
+
+TEST_F(VideoLogTest, ExportPaintsOverlaysIntoPngsAndMp4) {
+  {
+    auto writer = VideoLogWriter::open(dir_ / "d.vlog");
+    ASSERT_TRUE(writer.ok());
+    for (int i = 0; i < 6; ++i) {
+      (*writer)->submit({i * 100'000LL, frame_image(i), frame_overlays(i), "frame " + std::to_string(i)});
+    }
+    ASSERT_TRUE((*writer)->close().ok());
+  }
+  VideoLogExportOptions options;
+  options.png_dir = dir_ / "png";
+  options.mp4_path = dir_ / "d.mp4";
+  auto exported = export_video_log(dir_ / "d.vlog", options);
+  ASSERT_TRUE(exported.ok()) << to_string(exported.error());
+  EXPECT_EQ(exported.value(), 6u);
+  EXPECT_TRUE(fs::exists(dir_ / "png" / "frame_000005.png"));
+  EXPECT_GT(fs::file_size(dir_ / "d.mp4"), 1000u);
+  // the red rectangle (BGR 0,0,255) of frame 0 is painted: its left edge at x = 10, y = 20..60
+  const cv::Mat png = cv::imread((dir_ / "png" / "frame_000000.png").string());
+  const cv::Vec3b px = png.at<cv::Vec3b>(40, 10);
+  EXPECT_GT(px[2], 200);
+  EXPECT_LT(px[1], 60);
+  // without overlays the same pixel is the sky again
+  options.draw_overlays = false;
+  options.draw_text = false;
+  options.mp4_path.clear();
+  options.png_dir = dir_ / "raw";
+  ASSERT_TRUE(export_video_log(dir_ / "d.vlog", options).ok());
+  const cv::Mat raw = cv::imread((dir_ / "raw" / "frame_000000.png").string());
+  EXPECT_GT(raw.at<cv::Vec3b>(40, 10)[0], 200);  // sky: blue channel high
+}
+
+}  // namespace
+}  // namespace uavsim::vision

@@ -26,6 +26,8 @@ class Result {
     assert(ok());
     return std::get<0>(v_);
   }
+  T& operator*() { return value(); }
+  const T& operator*() const { return value(); }
   T* operator->() { return &value(); }
   const T* operator->() const { return &value(); }
 
