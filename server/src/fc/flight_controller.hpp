@@ -78,6 +78,9 @@ class FlightController {
   double yaw_target_enu_rad() const;
   bool prearm_ok() const;                  // all pre-arm checks pass now
   std::vector<StatusText> drain_status_texts();  // "Arming motors", "Mode change failed", ...
+  // How many update() calls got non-finite truth or battery input (they were skipped, the previous
+  // motor commands were repeated); telemetry exposes it as a warning counter.
+  uint64_t nonfinite_input_count() const;
 
  private:
   struct Impl;

@@ -1,0 +1,202 @@
+// Private state of FlightController, shared by its implementation files (flight_controller.cpp:
+// commands and the control step; modes.cpp: mode and mission logic; safety.cpp: arming checks, land
+// detector, failsafes). Not part of the public API.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+#include "airframe/airframe.hpp"
+#include "fc/attitude_control.hpp"
+#include "fc/estimator.hpp"
+#include "fc/fc_types.hpp"
+#include "fc/flight_controller.hpp"
+#include "fc/mixer.hpp"
+#include "fc/params.hpp"
+#include "fc/position_control.hpp"
+#include "fc/sensors.hpp"
+#include "fc/waypoint_nav.hpp"
+
+namespace uavsim::server::fc {
+
+// A fixed-capacity FIFO that drops the oldest entry when full: events raised inside update() are
+// queued without allocating.
+template <typename T, std::size_t N>
+class EventRing {
+ public:
+  void push(const T& v) {
+    items_[(head_ + size_) % N] = v;
+    if (size_ < N) {
+      ++size_;
+    } else {
+      head_ = (head_ + 1) % N;
+    }
+  }
+  template <typename F>
+  void drain(F&& f) {
+    for (std::size_t k = 0; k < size_; ++k) f(items_[(head_ + k) % N]);
+    head_ = 0;
+    size_ = 0;
+  }
+
+ private:
+  std::array<T, N> items_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+};
+
+// STATUSTEXT payload: at most 50 characters, as in MAVLink.
+struct FixedText {
+  int severity = 6;
+  std::array<char, 51> text{};
+};
+
+// How the cascade is driven this step.
+enum class ControlKind {
+  kIdle,            // armed on the ground: motors at MOT_SPIN_ARM, controllers reset
+  kPosition,        // position controller -> attitude -> rates
+  kAttitude,        // attitude given (STABILIZE level, GUIDED attitude target), climb rate or thrust
+  kBodyRate,        // GUIDED attitude target with body rates only
+};
+
+enum class GuidedSub { kHold, kTakeoff, kWp, kPosVelAccel, kVelAccel, kAccel, kAttitude };
+enum class RtlState { kClimb, kReturn, kLoiter, kLand };
+enum class AutoPhase { kNav, kHold, kLandApproach, kLandDescend, kRtl, kYaw, kDone };
+
+struct FlightController::Impl {
+  explicit Impl(const airframe::AirframeParams& airframe, uint64_t seed);
+
+  // --- flight_controller.cpp ---
+  void update(double time_s, const TruthState& truth, const airframe::BatteryState& battery,
+              double* motor_cmd);
+  void run_cascade(double dt_s);
+  void update_yaw(double dt_s);
+  void status(int severity, std::string_view text) const;
+  void set_home(const Eigen::Vector3d& home);
+  double now() const { return last_time_s_; }
+  NavLimits nav_limits() const;
+
+  // --- modes.cpp ---
+  bool enter_mode(Mode mode, bool from_failsafe);
+  void run_mode(double dt_s);
+  void start_hold();                      // carrot to the stopping point
+  void start_nav_to(const Eigen::Vector3d& destination);
+  void start_takeoff(double target_z_enu_m);
+  void run_nav(double dt_s, const NavLimits& limits);
+  void run_land_descent(bool hold_xy);
+  void run_rtl(double dt_s);
+  void start_rtl();
+  void run_guided(double dt_s);
+  void run_auto(double dt_s);
+  void start_mission_item(int seq);
+  void complete_mission_item();
+  void face_destination();
+  Eigen::Vector3d stopping_point() const;
+  bool gps_mode(Mode mode) const;
+
+  // --- safety.cpp ---
+  bool prearm_checks(bool report) const;
+  void init_mode_state();
+  void run_land_detector(double dt_s);
+  void run_failsafes();
+  void do_disarm(std::string_view why);
+  void on_touchdown();
+
+  // configuration
+  airframe::AirframeParams airframe_;
+  double mass_kg_ = 0.0;
+  double hover_thrust_n_ = 0.0;
+  Eigen::Matrix3d inertia_ = Eigen::Matrix3d::Identity();
+  ParamTable params_;
+  Mixer mixer_;
+
+  // sensing and estimation
+  Sensors sensors_;
+  SensorFrame frame_;
+  Estimator estimator_;
+  airframe::BatteryState battery_;
+
+  // controllers
+  PositionController pos_ctrl_;
+  AttitudeController att_ctrl_;
+  WaypointNav nav_;
+  PositionSetpoint sp_;
+  ControlKind control_ = ControlKind::kIdle;
+  Eigen::Quaterniond q_attitude_target_ = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d rate_target_body_rad_s_ = Eigen::Vector3d::Zero();
+  double fixed_thrust_n_ = 0.0;   // STABILIZE: collective held from entry
+  bool attitude_climb_ = false;   // kAttitude: collective from the climb-rate controller
+  MixerStatus mixer_status_;
+  std::array<double, kMaxRotors> motor_cmd_{};
+  std::array<double, kMaxRotors> rotor_thrust_n_{};
+
+  // time
+  double last_time_s_ = 0.0;
+  bool have_time_ = false;
+
+  // vehicle state
+  Mode mode_ = Mode::kStabilize;
+  bool armed_ = false;
+  bool landed_ = true;          // ArduCopter's land_complete
+  bool takeoff_active_ = false;
+  double landed_since_s_ = 0.0;
+  double land_detect_s_ = 0.0;  // how long the land-detector conditions have held
+  Eigen::Vector3d home_enu_m_ = Eigen::Vector3d::Zero();
+  bool home_set_ = false;
+
+  // yaw
+  double yaw_target_rad_ = 0.0;  // where yaw should end up
+  double yaw_cmd_rad_ = 0.0;     // slewed toward the target; what the attitude controller gets
+  double yaw_rate_ff_rad_s_ = 0.0;
+  double yaw_rate_cmd_rad_s_ = 0.0;  // GUIDED yaw-rate target
+  bool yaw_rate_mode_ = false;
+  bool yaw_fixed_ = false;          // a commanded heading overrides "face the waypoint"
+  double yaw_slew_override_rad_s_ = 0.0;  // CONDITION_YAW rate; 0: ATC_SLEW_YAW
+
+  // speeds set by DO_CHANGE_SPEED (0: parameter)
+  double speed_xy_override_m_s_ = 0.0;
+  double speed_up_override_m_s_ = 0.0;
+  double speed_dn_override_m_s_ = 0.0;
+
+  // GUIDED
+  GuidedSub guided_sub_ = GuidedSub::kHold;
+  GuidedTarget guided_target_;
+  AttitudeTarget attitude_target_;
+  double guided_cmd_time_s_ = 0.0;
+  bool guided_new_ = false;  // a target arrived since the last step
+  bool nav_active_ = false;  // the carrot drives the position setpoint
+  Eigen::Vector3d hold_position_enu_m_ = Eigen::Vector3d::Zero();
+
+  // BRAKE, LAND, RTL
+  bool brake_holding_ = false;
+  Eigen::Vector3d land_xy_enu_m_ = Eigen::Vector3d::Zero();
+  RtlState rtl_state_ = RtlState::kClimb;
+  double rtl_loiter_start_s_ = 0.0;
+  double rtl_alt_enu_m_ = 0.0;
+
+  // AUTO
+  std::vector<MissionItem> mission_;
+  int mission_current_ = 1;
+  int mission_last_ = -1;  // MISSION_START last item; -1: to the end
+  AutoPhase auto_phase_ = AutoPhase::kDone;
+  double auto_hold_start_s_ = 0.0;
+  EventRing<int, 64> reached_;
+
+  // link and failsafes
+  bool gcs_seen_ = false;
+  double last_gcs_heartbeat_s_ = 0.0;
+  bool fs_gcs_active_ = false;
+  bool fs_batt_triggered_ = false;
+  double gps_lost_since_s_ = -1.0;
+  bool fs_ekf_active_ = false;
+  bool estimator_converged_ = false;
+
+  mutable EventRing<FixedText, 32> texts_;  // mutable: const checks may report
+  uint64_t nonfinite_inputs_ = 0;
+};
+
+}  // namespace uavsim::server::fc

@@ -1,0 +1,525 @@
+#include "fc/flight_controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "fc/fc_impl.hpp"
+
+namespace uavsim::server::fc {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// control steps longer than this (a paused sim) are treated as this long
+constexpr double kMaxDtS = 0.05;
+// GUIDED velocity sanity limit, as ArduCopter's SET_POSITION_TARGET handler
+constexpr double kMaxGuidedSpeedM_S = 1000.0;
+
+double wrap_pi(double a) {
+  while (a > kPi) a -= 2.0 * kPi;
+  while (a < -kPi) a += 2.0 * kPi;
+  return a;
+}
+
+bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+bool finite(const TruthState& t) {
+  return t.position_enu_m.allFinite() && t.velocity_enu_m_s.allFinite() &&
+         t.q_enu_body.coeffs().allFinite() && t.rate_body_rad_s.allFinite() &&
+         t.accel_enu_m_s2.allFinite() && t.q_enu_body.norm() > 0.5;
+}
+
+}  // namespace
+
+const char* mode_name(Mode mode) {
+  switch (mode) {
+    case Mode::kStabilize: return "STABILIZE";
+    case Mode::kAltHold: return "ALT_HOLD";
+    case Mode::kAuto: return "AUTO";
+    case Mode::kGuided: return "GUIDED";
+    case Mode::kLoiter: return "LOITER";
+    case Mode::kRtl: return "RTL";
+    case Mode::kLand: return "LAND";
+    case Mode::kBrake: return "BRAKE";
+  }
+  return "UNKNOWN";
+}
+
+std::optional<Mode> mode_from_number(uint32_t custom_mode) {
+  switch (custom_mode) {
+    case 0: return Mode::kStabilize;
+    case 2: return Mode::kAltHold;
+    case 3: return Mode::kAuto;
+    case 4: return Mode::kGuided;
+    case 5: return Mode::kLoiter;
+    case 6: return Mode::kRtl;
+    case 9: return Mode::kLand;
+    case 17: return Mode::kBrake;
+    default: return std::nullopt;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Impl: construction and the control step
+
+FlightController::Impl::Impl(const airframe::AirframeParams& airframe, uint64_t seed)
+    : airframe_(airframe),
+      mass_kg_(airframe.mass_kg),
+      inertia_(airframe.inertia_body_kgm2),
+      params_(airframe.battery.capacity_mah),
+      mixer_(airframe),
+      sensors_(seed) {
+  if (!(mass_kg_ > 0.0)) mass_kg_ = 1.0;
+  hover_thrust_n_ = mass_kg_ * kGravityM_S2;
+  mission_.reserve(16);
+  mission_.push_back(MissionItem{});  // item 0: home
+}
+
+void FlightController::Impl::status(int severity, std::string_view text) const {
+  FixedText t;
+  t.severity = severity;
+  const std::size_t n = std::min(text.size(), t.text.size() - 1);
+  std::memcpy(t.text.data(), text.data(), n);
+  t.text[n] = '\0';
+  texts_.push(t);
+}
+
+void FlightController::Impl::set_home(const Eigen::Vector3d& home) {
+  home_enu_m_ = home;
+  home_set_ = true;
+  // mission item 0 is home, as in ArduPilot
+  if (!mission_.empty()) mission_[0].position_enu_m = home;
+}
+
+NavLimits FlightController::Impl::nav_limits() const {
+  const DerivedParams& d = params_.derived();
+  NavLimits lim;
+  lim.speed_xy_m_s = speed_xy_override_m_s_ > 0.0 ? speed_xy_override_m_s_ : d.wp_speed_m_s;
+  lim.speed_up_m_s = speed_up_override_m_s_ > 0.0 ? speed_up_override_m_s_ : d.wp_speed_up_m_s;
+  lim.speed_dn_m_s = speed_dn_override_m_s_ > 0.0 ? speed_dn_override_m_s_ : d.wp_speed_dn_m_s;
+  lim.accel_xy_m_s2 = d.wp_accel_m_s2;
+  lim.accel_z_m_s2 = d.wp_accel_z_m_s2;
+  return lim;
+}
+
+void FlightController::Impl::update(double time_s, const TruthState& truth,
+                                    const airframe::BatteryState& battery, double* motor_cmd) {
+  const std::size_t n = mixer_.rotor_count();
+  // reject non-finite input: repeat the previous commands, count it
+  if (!std::isfinite(time_s) || !finite(truth) || !std::isfinite(battery.consumed_mah)) {
+    ++nonfinite_inputs_;
+    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = armed_ ? motor_cmd_[k] : 0.0;
+    return;
+  }
+  // dt from successive sim times
+  double dt_s = have_time_ ? std::clamp(time_s - last_time_s_, 0.0, kMaxDtS) : 0.0;
+  last_time_s_ = time_s;
+  have_time_ = true;
+  battery_ = battery;
+
+  // sense and estimate
+  sensors_.sample(time_s, truth, params_.values(), &frame_);
+  estimator_.update(time_s, dt_s, frame_);
+  const EstimatedState& est = estimator_.state();
+  estimator_converged_ = estimator_.converged(time_s);
+  // home at the first good fix, until arming sets it again
+  if (!home_set_ && est.gps_ok && estimator_converged_) set_home(est.position_enu_m);
+
+  if (dt_s <= 0.0) {
+    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = armed_ ? motor_cmd_[k] : 0.0;
+    return;
+  }
+
+  // failsafes, then the mode's setpoints, then the cascade
+  run_failsafes();
+  if (armed_) {
+    run_mode(dt_s);
+    update_yaw(dt_s);
+    run_land_detector(dt_s);
+  }
+  if (!armed_) {
+    pos_ctrl_.reset();
+    att_ctrl_.reset();
+    for (std::size_t k = 0; k < n; ++k) motor_cmd_[k] = 0.0;
+  } else if (control_ == ControlKind::kIdle) {
+    // on the ground: spin at MOT_SPIN_ARM, keep the controllers fresh for take-off
+    pos_ctrl_.reset();
+    att_ctrl_.reset();
+    yaw_target_rad_ = estimator_.yaw_enu_rad();
+    yaw_cmd_rad_ = yaw_target_rad_;
+    for (std::size_t k = 0; k < n; ++k) motor_cmd_[k] = params_.values().mot_spin_arm;
+    mixer_status_ = MixerStatus{};
+    mixer_status_.thrust_n = 0.0;
+  } else {
+    run_cascade(dt_s);
+  }
+  for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = motor_cmd_[k];
+}
+
+void FlightController::Impl::update_yaw(double dt_s) {
+  // yaw-rate mode integrates the rate; otherwise slew the command toward the target
+  if (yaw_rate_mode_) {
+    yaw_target_rad_ = wrap_pi(yaw_target_rad_ + yaw_rate_cmd_rad_s_ * dt_s);
+    yaw_cmd_rad_ = yaw_target_rad_;
+    yaw_rate_ff_rad_s_ = yaw_rate_cmd_rad_s_;
+    return;
+  }
+  const double slew = yaw_slew_override_rad_s_ > 0.0 ? yaw_slew_override_rad_s_
+                                                     : params_.derived().slew_yaw_rad_s;
+  const double err = wrap_pi(yaw_target_rad_ - yaw_cmd_rad_);
+  const double step = std::clamp(err, -slew * dt_s, slew * dt_s);
+  yaw_cmd_rad_ = wrap_pi(yaw_cmd_rad_ + step);
+  yaw_rate_ff_rad_s_ = step / dt_s;
+}
+
+void FlightController::Impl::run_cascade(double dt_s) {
+  const ParamValues& p = params_.values();
+  const DerivedParams& d = params_.derived();
+  const EstimatedState& est = estimator_.state();
+
+  // outer loops: a thrust vector and an attitude target
+  Eigen::Vector3d torque_body_nm;
+  double collective_n = 0.0;
+  const RateLimits rate_limits{mixer_status_.roll_pitch_scale < 1.0, mixer_status_.yaw_scale < 1.0};
+  const ThrustLimits thrust_limits{mixer_status_.limit_thrust_up, mixer_status_.limit_thrust_down};
+  const Eigen::Vector3d z_body_enu = est.q_enu_body * Eigen::Vector3d::UnitZ();
+  // the collective that gives the demanded vertical thrust at the current tilt
+  const double cos_tilt = std::max(z_body_enu.z(), 0.5);
+  if (control_ == ControlKind::kPosition) {
+    const Eigen::Vector3d thrust_enu = pos_ctrl_.update(
+        est, estimator_.accel_z_filtered_m_s2(), sp_, p, d, mass_kg_, dt_s, thrust_limits);
+    q_attitude_target_ = attitude_from_thrust(thrust_enu, yaw_cmd_rad_, d.angle_max_rad);
+    collective_n = thrust_enu.z() / cos_tilt;
+    torque_body_nm = att_ctrl_.update(q_attitude_target_, yaw_rate_ff_rad_s_, est.q_enu_body,
+                                      est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
+  } else {
+    // attitude or body rates given; collective from the climb-rate controller or held fixed
+    if (attitude_climb_) {
+      const Eigen::Vector3d thrust_enu = pos_ctrl_.update(
+          est, estimator_.accel_z_filtered_m_s2(), sp_, p, d, mass_kg_, dt_s, thrust_limits);
+      collective_n = thrust_enu.z() / cos_tilt;
+    } else {
+      collective_n = fixed_thrust_n_;
+    }
+    if (control_ == ControlKind::kBodyRate) {
+      torque_body_nm = att_ctrl_.update_rate(rate_target_body_rad_s_, est.rate_body_rad_s,
+                                             inertia_, p, dt_s, rate_limits);
+    } else {
+      torque_body_nm = att_ctrl_.update(q_attitude_target_, yaw_rate_ff_rad_s_, est.q_enu_body,
+                                        est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
+    }
+  }
+  // mixer: per-rotor thrust, then the inverse square law
+  collective_n = std::clamp(collective_n, 0.0, mixer_.max_total_thrust_n());
+  mixer_status_ = mixer_.mix(torque_body_nm, collective_n, rotor_thrust_n_.data(), motor_cmd_.data());
+}
+
+// ---------------------------------------------------------------------------------------------------
+// FlightController: thin forwarding and commands
+
+FlightController::FlightController(const airframe::AirframeParams& airframe, uint64_t seed)
+    : impl_(std::make_unique<Impl>(airframe, seed)) {}
+FlightController::~FlightController() = default;
+FlightController::FlightController(FlightController&&) noexcept = default;
+FlightController& FlightController::operator=(FlightController&&) noexcept = default;
+
+void FlightController::update(double time_s, const TruthState& truth,
+                              const airframe::BatteryState& battery, double* motor_cmd) {
+  impl_->update(time_s, truth, battery, motor_cmd);
+}
+
+CommandResult FlightController::arm(bool force) {
+  Impl& s = *impl_;
+  if (s.armed_) return CommandResult::kAccepted;
+  // modes that cannot arm refuse even a forced arm (ArduCopter's allows_arming)
+  if (s.mode_ == Mode::kAuto || s.mode_ == Mode::kRtl || s.mode_ == Mode::kLand ||
+      s.mode_ == Mode::kBrake) {
+    s.status(2, std::string("Arm: Mode not armable (") + mode_name(s.mode_) + ")");
+    return CommandResult::kDenied;
+  }
+  if (!force && s.params_.values().arming_check > 0.0 && !s.prearm_checks(true)) {
+    return CommandResult::kDenied;
+  }
+  s.armed_ = true;
+  s.landed_ = true;
+  s.takeoff_active_ = false;
+  s.landed_since_s_ = s.now();
+  s.land_detect_s_ = 0.0;
+  s.fs_gcs_active_ = false;
+  s.fs_batt_triggered_ = false;
+  s.fs_ekf_active_ = false;
+  s.control_ = ControlKind::kIdle;
+  s.yaw_target_rad_ = s.estimator_.yaw_enu_rad();
+  s.yaw_cmd_rad_ = s.yaw_target_rad_;
+  // home where we arm (ArduCopter sets home at arming)
+  if (s.estimator_.position_ok()) s.set_home(s.estimator_.state().position_enu_m);
+  s.init_mode_state();
+  s.status(6, "Arming motors");
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::disarm(bool force) {
+  Impl& s = *impl_;
+  if (!s.armed_) return CommandResult::kAccepted;
+  if (!force && !s.landed_) {
+    s.status(4, "Disarm: vehicle not landed");
+    return CommandResult::kDenied;
+  }
+  s.do_disarm("Disarming motors");
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::set_mode(Mode mode) {
+  return impl_->enter_mode(mode, false) ? CommandResult::kAccepted : CommandResult::kFailed;
+}
+
+CommandResult FlightController::takeoff(double altitude_above_home_m) {
+  Impl& s = *impl_;
+  if (!std::isfinite(altitude_above_home_m)) return CommandResult::kInvalid;
+  if (altitude_above_home_m <= 0.0) altitude_above_home_m = s.params_.derived().pilot_tkoff_alt_m;
+  if (altitude_above_home_m <= 0.0) return CommandResult::kInvalid;
+  if (!s.armed_) return CommandResult::kDenied;
+  // user take-off: GUIDED, LOITER, ALT_HOLD, only from the ground, only upward
+  if (s.mode_ != Mode::kGuided && s.mode_ != Mode::kLoiter && s.mode_ != Mode::kAltHold) {
+    return CommandResult::kFailed;
+  }
+  if (!s.landed_) return CommandResult::kFailed;
+  const double base_z = s.home_set_ ? s.home_enu_m_.z() : s.estimator_.state().position_enu_m.z();
+  const double target_z = base_z + altitude_above_home_m;
+  if (target_z <= s.estimator_.state().position_enu_m.z()) return CommandResult::kFailed;
+  s.start_takeoff(target_z);
+  if (s.mode_ == Mode::kGuided) s.guided_sub_ = GuidedSub::kTakeoff;
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::set_guided_target(const GuidedTarget& t) {
+  Impl& s = *impl_;
+  // reject non-finite values and absurd speeds
+  if ((t.position_enu_m && !finite(*t.position_enu_m)) ||
+      (t.velocity_enu_m_s && !finite(*t.velocity_enu_m_s)) ||
+      (t.accel_enu_m_s2 && !finite(*t.accel_enu_m_s2)) ||
+      (t.yaw_enu_rad && !std::isfinite(*t.yaw_enu_rad)) ||
+      (t.yaw_rate_rad_s && !std::isfinite(*t.yaw_rate_rad_s))) {
+    return CommandResult::kInvalid;
+  }
+  if (t.velocity_enu_m_s && t.velocity_enu_m_s->norm() > kMaxGuidedSpeedM_S) {
+    return CommandResult::kInvalid;
+  }
+  if (s.mode_ != Mode::kGuided) return CommandResult::kDenied;
+  s.guided_target_ = t;
+  s.guided_cmd_time_s_ = s.now();
+  s.guided_new_ = true;
+  // yaw: a heading, a rate, or keep the current behaviour
+  if (t.yaw_enu_rad) {
+    s.yaw_target_rad_ = wrap_pi(*t.yaw_enu_rad);
+    s.yaw_fixed_ = true;
+    s.yaw_rate_mode_ = false;
+    s.yaw_slew_override_rad_s_ = 0.0;
+  } else if (t.yaw_rate_rad_s) {
+    s.yaw_rate_cmd_rad_s_ = *t.yaw_rate_rad_s;
+    s.yaw_rate_mode_ = true;
+    s.yaw_fixed_ = true;
+  }
+  // dispatch as ArduCopter: pos+vel(+acc), vel(+acc), acc, pos, else hold
+  const bool landed = s.landed_ || !s.armed_;
+  if (t.position_enu_m && (t.velocity_enu_m_s || t.accel_enu_m_s2)) {
+    s.guided_sub_ = GuidedSub::kPosVelAccel;
+    s.nav_active_ = false;
+  } else if (t.velocity_enu_m_s) {
+    s.guided_sub_ = GuidedSub::kVelAccel;
+    s.nav_active_ = false;
+  } else if (t.accel_enu_m_s2) {
+    s.guided_sub_ = GuidedSub::kAccel;
+    s.nav_active_ = false;
+    s.sp_.velocity_enu_m_s = s.estimator_.state().velocity_enu_m_s;
+  } else if (t.position_enu_m) {
+    s.guided_sub_ = GuidedSub::kWp;
+    s.takeoff_active_ = s.takeoff_active_ && landed;
+    if (!landed) s.start_nav_to(*t.position_enu_m);
+  } else if (!t.yaw_enu_rad && !t.yaw_rate_rad_s) {
+    s.guided_sub_ = GuidedSub::kHold;
+    if (!landed) s.start_hold();
+  }
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::set_attitude_target(const AttitudeTarget& t) {
+  Impl& s = *impl_;
+  if ((t.q_enu_body && (!t.q_enu_body->coeffs().allFinite() || t.q_enu_body->norm() < 0.5)) ||
+      (t.rate_body_rad_s && !finite(*t.rate_body_rad_s)) || !std::isfinite(t.thrust) ||
+      t.thrust < 0.0 || t.thrust > 1.0) {
+    return CommandResult::kInvalid;
+  }
+  if (!t.q_enu_body && !t.rate_body_rad_s) return CommandResult::kInvalid;
+  if (s.mode_ != Mode::kGuided) return CommandResult::kDenied;
+  s.attitude_target_ = t;
+  if (t.q_enu_body) s.attitude_target_.q_enu_body = t.q_enu_body->normalized();
+  s.guided_cmd_time_s_ = s.now();
+  s.guided_sub_ = GuidedSub::kAttitude;
+  s.nav_active_ = false;
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::condition_yaw(double angle_deg, double rate_deg_s, int direction,
+                                              bool relative) {
+  Impl& s = *impl_;
+  if (!std::isfinite(angle_deg) || !std::isfinite(rate_deg_s) || rate_deg_s < 0.0 ||
+      direction < -1 || direction > 1) {
+    return CommandResult::kInvalid;
+  }
+  if (!s.armed_) return CommandResult::kFailed;
+  // compass heading (0 north, clockwise) <-> ENU yaw (0 east, counter-clockwise): yaw = 90 deg - hdg
+  const double deg = kPi / 180.0;
+  double target;
+  if (relative) {
+    const int dir = direction == 0 ? 1 : direction;
+    target = s.yaw_target_rad_ - dir * angle_deg * deg;
+  } else {
+    target = kPi / 2.0 - angle_deg * deg;
+  }
+  s.yaw_target_rad_ = wrap_pi(target);
+  s.yaw_fixed_ = true;
+  s.yaw_rate_mode_ = false;
+  s.yaw_slew_override_rad_s_ = rate_deg_s * deg;
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::change_speed(int speed_type, double speed_m_s) {
+  Impl& s = *impl_;
+  if (!std::isfinite(speed_m_s) || speed_m_s <= 0.0 || speed_m_s > 50.0) {
+    return CommandResult::kInvalid;
+  }
+  switch (speed_type) {
+    case 0:  // airspeed: no wind here, the same as ground speed
+    case 1: s.speed_xy_override_m_s_ = speed_m_s; break;
+    case 2: s.speed_up_override_m_s_ = speed_m_s; break;
+    case 3: s.speed_dn_override_m_s_ = speed_m_s; break;
+    default: return CommandResult::kInvalid;
+  }
+  return CommandResult::kAccepted;
+}
+
+CommandResult FlightController::land() { return set_mode(Mode::kLand); }
+CommandResult FlightController::rtl() { return set_mode(Mode::kRtl); }
+
+void FlightController::set_mission(std::vector<MissionItem> items) {
+  Impl& s = *impl_;
+  s.mission_ = std::move(items);
+  if (s.mission_.empty()) s.mission_.push_back(MissionItem{});
+  if (s.home_set_) s.mission_[0].position_enu_m = s.home_enu_m_;
+  s.mission_current_ = 1;
+  s.mission_last_ = -1;
+  // a new mission under a flying AUTO: ArduCopter restarts it from item 1
+  if (s.mode_ == Mode::kAuto && s.armed_ && !s.landed_) s.start_mission_item(1);
+}
+
+const std::vector<MissionItem>& FlightController::mission() const { return impl_->mission_; }
+
+CommandResult FlightController::mission_start(int first_item, int last_item) {
+  Impl& s = *impl_;
+  const int size = static_cast<int>(s.mission_.size());
+  if (first_item < 0 || last_item < 0 || first_item >= size || last_item >= size) {
+    return CommandResult::kInvalid;
+  }
+  if (size < 2) return CommandResult::kFailed;
+  s.mission_current_ = first_item > 0 ? first_item : 1;
+  s.mission_last_ = last_item > 0 ? last_item : -1;
+  if (s.mode_ == Mode::kAuto) {
+    s.start_mission_item(s.mission_current_);
+    return CommandResult::kAccepted;
+  }
+  return set_mode(Mode::kAuto);
+}
+
+CommandResult FlightController::set_mission_current(int seq) {
+  Impl& s = *impl_;
+  if (seq < 0 || seq >= static_cast<int>(s.mission_.size())) return CommandResult::kInvalid;
+  s.mission_current_ = std::max(seq, 1);
+  if (s.mode_ == Mode::kAuto && s.armed_) s.start_mission_item(s.mission_current_);
+  return CommandResult::kAccepted;
+}
+
+int FlightController::mission_current() const { return impl_->mission_current_; }
+
+std::vector<int> FlightController::drain_reached_items() {
+  std::vector<int> out;
+  impl_->reached_.drain([&out](int seq) { out.push_back(seq); });
+  return out;
+}
+
+std::optional<double> FlightController::param(std::string_view name) const {
+  return impl_->params_.get(name);
+}
+
+CommandResult FlightController::set_param(std::string_view name, double value) {
+  return impl_->params_.set(name, value) ? CommandResult::kAccepted : CommandResult::kInvalid;
+}
+
+const std::vector<std::string>& FlightController::param_names() const {
+  return impl_->params_.names();
+}
+
+void FlightController::on_gcs_heartbeat(double time_s) {
+  Impl& s = *impl_;
+  if (!std::isfinite(time_s)) return;
+  s.gcs_seen_ = true;
+  s.last_gcs_heartbeat_s_ = time_s;
+  if (s.fs_gcs_active_) {
+    s.fs_gcs_active_ = false;
+    s.status(6, "GCS Failsafe Cleared");
+  }
+}
+
+void FlightController::set_gps_denied(bool denied) { impl_->sensors_.set_gps_denied(denied); }
+
+void FlightController::set_gps_glitch(const Eigen::Vector3d& offset_enu_m) {
+  if (offset_enu_m.allFinite()) impl_->sensors_.set_gps_glitch(offset_enu_m);
+}
+
+Mode FlightController::mode() const { return impl_->mode_; }
+bool FlightController::armed() const { return impl_->armed_; }
+
+LandedState FlightController::landed_state() const {
+  const Impl& s = *impl_;
+  if (!s.armed_ || s.landed_) return LandedState::kOnGround;
+  if (s.takeoff_active_) return LandedState::kTakeoff;
+  const bool descending_to_land =
+      s.mode_ == Mode::kLand || (s.mode_ == Mode::kRtl && s.rtl_state_ == RtlState::kLand) ||
+      (s.mode_ == Mode::kAuto && (s.auto_phase_ == AutoPhase::kLandDescend ||
+                                  (s.auto_phase_ == AutoPhase::kRtl && s.rtl_state_ == RtlState::kLand)));
+  return descending_to_land ? LandedState::kLanding : LandedState::kInAir;
+}
+
+const EstimatedState& FlightController::estimate() const { return impl_->estimator_.state(); }
+Eigen::Vector3d FlightController::home_enu_m() const { return impl_->home_enu_m_; }
+bool FlightController::home_set() const { return impl_->home_set_; }
+
+std::optional<GuidedTarget> FlightController::current_target() const {
+  const Impl& s = *impl_;
+  if (!s.armed_ || s.control_ == ControlKind::kIdle) return std::nullopt;
+  if (s.control_ != ControlKind::kPosition && !s.attitude_climb_) return std::nullopt;
+  GuidedTarget t;
+  if (s.control_ == ControlKind::kPosition && s.sp_.use_pos_xy && s.sp_.use_pos_z) {
+    t.position_enu_m = s.sp_.position_enu_m;
+  }
+  t.velocity_enu_m_s = s.pos_ctrl_.velocity_target();
+  t.accel_enu_m_s2 = s.pos_ctrl_.accel_target();
+  t.yaw_enu_rad = s.yaw_cmd_rad_;
+  return t;
+}
+
+double FlightController::yaw_target_enu_rad() const { return impl_->yaw_target_rad_; }
+bool FlightController::prearm_ok() const { return impl_->prearm_checks(false); }
+
+std::vector<StatusText> FlightController::drain_status_texts() {
+  std::vector<StatusText> out;
+  impl_->texts_.drain([&out](const FixedText& t) {
+    out.push_back(StatusText{t.severity, std::string(t.text.data())});
+  });
+  return out;
+}
+
+uint64_t FlightController::nonfinite_input_count() const { return impl_->nonfinite_inputs_; }
+
+}  // namespace uavsim::server::fc

@@ -1,0 +1,153 @@
+#include "fc/params.hpp"
+
+#include <cmath>
+
+namespace uavsim::server::fc {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegToRad = kPi / 180.0;
+
+// One row of the table: name, field, accepted range. The order of kTable is the MAVLink param_index;
+// append new rows at the end so indices stay stable.
+struct ParamDef {
+  const char* name;
+  double ParamValues::*field;
+  double min;
+  double max;
+};
+
+constexpr ParamDef kTable[] = {
+    {"SYSID_THISMAV", &ParamValues::sysid_thismav, 1, 255},
+    {"PSC_POSXY_P", &ParamValues::psc_posxy_p, 0, 10},
+    {"PSC_VELXY_P", &ParamValues::psc_velxy_p, 0, 20},
+    {"PSC_VELXY_I", &ParamValues::psc_velxy_i, 0, 20},
+    {"PSC_VELXY_D", &ParamValues::psc_velxy_d, 0, 10},
+    {"PSC_VELXY_IMAX", &ParamValues::psc_velxy_imax, 0, 5000},
+    {"PSC_POSZ_P", &ParamValues::psc_posz_p, 0, 10},
+    {"PSC_VELZ_P", &ParamValues::psc_velz_p, 0, 30},
+    {"PSC_ACCZ_P", &ParamValues::psc_accz_p, 0, 10},
+    {"PSC_ACCZ_I", &ParamValues::psc_accz_i, 0, 10},
+    {"PSC_ACCZ_IMAX", &ParamValues::psc_accz_imax, 0, 2000},
+    {"ATC_ANG_RLL_P", &ParamValues::atc_ang_rll_p, 0, 30},
+    {"ATC_ANG_PIT_P", &ParamValues::atc_ang_pit_p, 0, 30},
+    {"ATC_ANG_YAW_P", &ParamValues::atc_ang_yaw_p, 0, 30},
+    {"ATC_RAT_RLL_P", &ParamValues::atc_rat_rll_p, 0, 200},
+    {"ATC_RAT_RLL_I", &ParamValues::atc_rat_rll_i, 0, 200},
+    {"ATC_RAT_RLL_D", &ParamValues::atc_rat_rll_d, 0, 10},
+    {"ATC_RAT_RLL_IMAX", &ParamValues::atc_rat_rll_imax, 0, 200},
+    {"ATC_RAT_RLL_FLTD", &ParamValues::atc_rat_rll_fltd, 1, 200},
+    {"ATC_RAT_PIT_P", &ParamValues::atc_rat_pit_p, 0, 200},
+    {"ATC_RAT_PIT_I", &ParamValues::atc_rat_pit_i, 0, 200},
+    {"ATC_RAT_PIT_D", &ParamValues::atc_rat_pit_d, 0, 10},
+    {"ATC_RAT_PIT_IMAX", &ParamValues::atc_rat_pit_imax, 0, 200},
+    {"ATC_RAT_PIT_FLTD", &ParamValues::atc_rat_pit_fltd, 1, 200},
+    {"ATC_RAT_YAW_P", &ParamValues::atc_rat_yaw_p, 0, 200},
+    {"ATC_RAT_YAW_I", &ParamValues::atc_rat_yaw_i, 0, 200},
+    {"ATC_RAT_YAW_IMAX", &ParamValues::atc_rat_yaw_imax, 0, 200},
+    {"ATC_RATE_RP_MAX", &ParamValues::atc_rate_rp_max, 10, 1080},
+    {"ATC_RATE_Y_MAX", &ParamValues::atc_rate_y_max, 5, 1080},
+    {"ATC_SLEW_YAW", &ParamValues::atc_slew_yaw, 500, 18000},
+    {"ANGLE_MAX", &ParamValues::angle_max, 1000, 8000},
+    {"WPNAV_SPEED", &ParamValues::wpnav_speed, 20, 2000},
+    {"WPNAV_SPEED_UP", &ParamValues::wpnav_speed_up, 10, 1000},
+    {"WPNAV_SPEED_DN", &ParamValues::wpnav_speed_dn, 10, 500},
+    {"WPNAV_ACCEL", &ParamValues::wpnav_accel, 50, 500},
+    {"WPNAV_ACCEL_Z", &ParamValues::wpnav_accel_z, 50, 500},
+    {"WPNAV_RADIUS", &ParamValues::wpnav_radius, 5, 1000},
+    {"WP_YAW_BEHAVIOR", &ParamValues::wp_yaw_behavior, 0, 3},
+    {"LAND_SPEED", &ParamValues::land_speed, 30, 200},
+    {"LAND_SPEED_HIGH", &ParamValues::land_speed_high, 0, 500},
+    {"RTL_ALT", &ParamValues::rtl_alt, 200, 300000},
+    {"RTL_SPEED", &ParamValues::rtl_speed, 0, 2000},
+    {"RTL_LOIT_TIME", &ParamValues::rtl_loit_time, 0, 60000},
+    {"PILOT_TKOFF_ALT", &ParamValues::pilot_tkoff_alt, 0, 1000},
+    {"PILOT_SPEED_UP", &ParamValues::pilot_speed_up, 50, 500},
+    {"PILOT_SPEED_DN", &ParamValues::pilot_speed_dn, 0, 500},
+    {"FS_GCS_ENABLE", &ParamValues::fs_gcs_enable, 0, 1},
+    {"FS_GCS_TIMEOUT", &ParamValues::fs_gcs_timeout, 2, 120},
+    {"FS_BATT_ENABLE", &ParamValues::fs_batt_enable, 0, 2},
+    {"BATT_CAPACITY", &ParamValues::batt_capacity, 0, 1e6},
+    {"BATT_LOW_MAH", &ParamValues::batt_low_mah, 0, 1e6},
+    {"FS_EKF_ACTION", &ParamValues::fs_ekf_action, 0, 1},
+    {"ARMING_CHECK", &ParamValues::arming_check, 0, 1},
+    {"DISARM_DELAY", &ParamValues::disarm_delay, 0, 127},
+    {"MOT_SPIN_ARM", &ParamValues::mot_spin_arm, 0, 0.2},
+    {"GUID_TIMEOUT", &ParamValues::guid_timeout, 0.1, 5},
+    {"SIM_GPS_HZ", &ParamValues::sim_gps_hz, 1, 50},
+    {"SIM_GPS_POS_H_SD", &ParamValues::sim_gps_pos_h_sd, 0, 100},
+    {"SIM_GPS_POS_V_SD", &ParamValues::sim_gps_pos_v_sd, 0, 100},
+    {"SIM_GPS_VEL_SD", &ParamValues::sim_gps_vel_sd, 0, 10},
+    {"SIM_GPS_NUMSATS", &ParamValues::sim_gps_numsats, 0, 50},
+    {"SIM_GPS_HDOP", &ParamValues::sim_gps_hdop, 0.1, 99.99},
+    {"SIM_BARO_HZ", &ParamValues::sim_baro_hz, 1, 500},
+    {"SIM_BARO_SD", &ParamValues::sim_baro_sd, 0, 10},
+    {"SIM_MAG_HZ", &ParamValues::sim_mag_hz, 1, 500},
+    {"SIM_MAG_SD", &ParamValues::sim_mag_sd, 0, 1},
+    {"SIM_GYRO_SD", &ParamValues::sim_gyro_sd, 0, 1},
+    {"SIM_ACCEL_SD", &ParamValues::sim_accel_sd, 0, 10},
+};
+
+const ParamDef* find(std::string_view name) {
+  for (const ParamDef& def : kTable) {
+    if (name == def.name) return &def;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+ParamTable::ParamTable(double battery_capacity_mah) {
+  if (std::isfinite(battery_capacity_mah) && battery_capacity_mah > 0.0) {
+    values_.batt_capacity = battery_capacity_mah;
+    values_.batt_low_mah = 0.2 * battery_capacity_mah;
+  }
+  names_.reserve(std::size(kTable));
+  for (const ParamDef& def : kTable) names_.emplace_back(def.name);
+  derive();
+}
+
+std::optional<double> ParamTable::get(std::string_view name) const {
+  const ParamDef* def = find(name);
+  if (def == nullptr) return std::nullopt;
+  return values_.*(def->field);
+}
+
+bool ParamTable::set(std::string_view name, double value) {
+  const ParamDef* def = find(name);
+  if (def == nullptr || !std::isfinite(value) || value < def->min || value > def->max) return false;
+  values_.*(def->field) = value;
+  derive();
+  return true;
+}
+
+void ParamTable::derive() {
+  const ParamValues& v = values_;
+  DerivedParams& d = derived_;
+  // ArduPilot units (cdeg, cm, cm/s, ms) to SI
+  d.angle_max_rad = v.angle_max * 0.01 * kDegToRad;
+  d.tan_angle_max = std::tan(d.angle_max_rad);
+  d.rate_rp_max_rad_s = v.atc_rate_rp_max * kDegToRad;
+  d.rate_y_max_rad_s = v.atc_rate_y_max * kDegToRad;
+  d.slew_yaw_rad_s = v.atc_slew_yaw * 0.01 * kDegToRad;
+  d.wp_speed_m_s = v.wpnav_speed * 0.01;
+  d.wp_speed_up_m_s = v.wpnav_speed_up * 0.01;
+  d.wp_speed_dn_m_s = v.wpnav_speed_dn * 0.01;
+  d.wp_accel_m_s2 = v.wpnav_accel * 0.01;
+  d.wp_accel_z_m_s2 = v.wpnav_accel_z * 0.01;
+  d.wp_radius_m = v.wpnav_radius * 0.01;
+  d.velxy_imax_m_s2 = v.psc_velxy_imax * 0.01;
+  d.accz_imax_m_s2 = v.psc_accz_imax * 0.01;
+  d.land_speed_m_s = v.land_speed * 0.01;
+  // as ArduCopter: 0 means "use WPNAV_SPEED_DN", and RTL_SPEED 0 means "use WPNAV_SPEED"
+  d.land_speed_high_m_s = (v.land_speed_high > 0.0 ? v.land_speed_high : v.wpnav_speed_dn) * 0.01;
+  d.rtl_alt_m = v.rtl_alt * 0.01;
+  d.rtl_speed_m_s = (v.rtl_speed > 0.0 ? v.rtl_speed : v.wpnav_speed) * 0.01;
+  d.rtl_loit_time_s = v.rtl_loit_time * 0.001;
+  d.pilot_tkoff_alt_m = v.pilot_tkoff_alt * 0.01;
+  d.pilot_speed_up_m_s = v.pilot_speed_up * 0.01;
+  d.pilot_speed_dn_m_s = (v.pilot_speed_dn > 0.0 ? v.pilot_speed_dn : v.pilot_speed_up) * 0.01;
+}
+
+}  // namespace uavsim::server::fc

@@ -1,0 +1,66 @@
+// Seeded sensor models sampled from ground truth: IMU (every control step), GPS, barometer and compass
+// at their own rates. All noise comes from one std::mt19937_64 seeded by the FC's seed, drawn in a fixed
+// order, so equal seeds and equal truth give equal samples. No allocation in sample().
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <random>
+
+#include "fc/fc_types.hpp"
+#include "fc/params.hpp"
+
+namespace uavsim::server::fc {
+
+inline constexpr double kGravityM_S2 = 9.80665;
+
+struct ImuSample {
+  Eigen::Vector3d gyro_body_rad_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_body_m_s2 = Eigen::Vector3d::Zero();  // specific force R^T (a + g)
+};
+
+struct GpsSample {
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+  bool fix_3d = false;
+  int satellites = 0;
+  double hdop = 99.99;
+};
+
+// What arrived in one sample() call; the flags say which slow sensors produced a new sample.
+struct SensorFrame {
+  ImuSample imu;
+  GpsSample gps;
+  double baro_alt_m = 0.0;       // altitude of the ENU origin plane, z up
+  double heading_enu_rad = 0.0;  // compass yaw, ENU (0 = east, ccw)
+  bool gps_new = false;
+  bool baro_new = false;
+  bool mag_new = false;
+};
+
+class Sensors {
+ public:
+  explicit Sensors(uint64_t seed) : rng_(seed) {}
+
+  // (time, truth) => the samples due at time_s; the IMU is sampled on every call, the others when
+  // their period (1 / rate from params) has elapsed since their last sample.
+  void sample(double time_s, const TruthState& truth, const ParamValues& params, SensorFrame* out);
+
+  void set_gps_denied(bool denied) { gps_denied_ = denied; }
+  void set_gps_glitch(const Eigen::Vector3d& offset_enu_m) { gps_glitch_enu_m_ = offset_enu_m; }
+  bool gps_denied() const { return gps_denied_; }
+
+ private:
+  double gauss(double sd) { return sd > 0.0 ? sd * normal_(rng_) : 0.0; }
+  static bool due(double time_s, double rate_hz, double* next_s);
+
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  double next_gps_s_ = 0.0;
+  double next_baro_s_ = 0.0;
+  double next_mag_s_ = 0.0;
+  bool gps_denied_ = false;
+  Eigen::Vector3d gps_glitch_enu_m_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace uavsim::server::fc
