@@ -1,5 +1,5 @@
-// MAVLink codec throughput: encoding frames and parsing a stream of them, for a 9-byte (HEARTBEAT) and a
-// 28-byte (GLOBAL_POSITION_INT) payload. items/s = frames/s, bytes/s = wire bytes.
+// MAVLink codec throughput: encoding frames and parsing a stream of them, for a 9-byte (HEARTBEAT)
+// and a 28-byte (GLOBAL_POSITION_INT) payload. items/s = frames/s, bytes/s = wire bytes.
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -76,11 +76,12 @@ void parse_bench(benchmark::State& state, const Msg& msg, bool sign) {
   constexpr std::size_t kChunk = 4096;
   for (auto _ : state) {
     for (std::size_t i = 0; i < stream.size(); i += kChunk) {
-      parser.feed(std::span<const std::uint8_t>(stream).subspan(i, std::min(kChunk, stream.size() - i)),
-                  [&](const mav::Frame& f) {
-                    benchmark::DoNotOptimize(Msg::decode(f.payload.data()));
-                    ++frames;
-                  });
+      parser.feed(
+          std::span<const std::uint8_t>(stream).subspan(i, std::min(kChunk, stream.size() - i)),
+          [&](const mav::Frame& f) {
+            benchmark::DoNotOptimize(Msg::decode(f.payload.data()));
+            ++frames;
+          });
     }
   }
   if (frames != static_cast<std::size_t>(state.iterations()) * kFramesPerStream) {
@@ -92,7 +93,9 @@ void parse_bench(benchmark::State& state, const Msg& msg, bool sign) {
 
 void BM_EncodeHeartbeat(benchmark::State& s) { encode_bench(s, make_heartbeat(), false); }
 void BM_EncodeGlobalPositionInt(benchmark::State& s) { encode_bench(s, make_position(), false); }
-void BM_EncodeGlobalPositionIntSigned(benchmark::State& s) { encode_bench(s, make_position(), true); }
+void BM_EncodeGlobalPositionIntSigned(benchmark::State& s) {
+  encode_bench(s, make_position(), true);
+}
 void BM_ParseHeartbeat(benchmark::State& s) { parse_bench(s, make_heartbeat(), false); }
 void BM_ParseGlobalPositionInt(benchmark::State& s) { parse_bench(s, make_position(), false); }
 void BM_ParseGlobalPositionIntSigned(benchmark::State& s) { parse_bench(s, make_position(), true); }

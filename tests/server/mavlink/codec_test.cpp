@@ -1,6 +1,7 @@
+#include "mavlink/codec/codec.hpp"
+
 #include <gtest/gtest.h>
 
-#include "mavlink/codec/codec.hpp"
 #include "mavlink/codec/crc.hpp"
 #include "mavlink/codec/parser.hpp"
 #include "mavlink/codec/signing.hpp"
@@ -61,7 +62,8 @@ TEST(Codec, ReferenceFramesCarryTheLabelledValues) {
   EXPECT_EQ(hb->custom_mode, 4u);
   EXPECT_EQ(hb->system_status, to_underlying(MavState::Active));
 
-  const auto takeoff = decode<msg::CommandLong>(frame_of("v2_COMMAND_LONG_sys255_comp190_seq3_takeoff"));
+  const auto takeoff =
+      decode<msg::CommandLong>(frame_of("v2_COMMAND_LONG_sys255_comp190_seq3_takeoff"));
   ASSERT_TRUE(takeoff);
   EXPECT_EQ(takeoff->command, to_underlying(MavCmd::NavTakeoff));
   EXPECT_EQ(takeoff->param7, 10.0f);
@@ -211,7 +213,8 @@ TEST(Signing, TamperedSignatureOrWrongKeyIsRejected) {
   EXPECT_TRUE(parse_all(f.view(), wrong).empty());
   EXPECT_EQ(wrong.stats().bad_signature, 1u);
 
-  // without a key, signatures are parsed but not checked (like the reference library without signing)
+  // without a key, signatures are parsed but not checked (like the reference library without
+  // signing)
   Parser open;
   EXPECT_EQ(parse_all(tampered.view(), open).size(), 1u);
 }
@@ -242,7 +245,8 @@ TEST(Signing, ReplayedOrStaleTimestampsAreRejected) {
   // another link is another stream with its own history
   EXPECT_EQ(parse_all(signed_frame(2, 500).view(), parser).size(), 1u);
 
-  // a new stream more than one minute (6,000,000 ticks of 10 us) behind the newest timestamp is refused
+  // a new stream more than one minute (6,000,000 ticks of 10 us) behind the newest timestamp is
+  // refused
   const std::uint64_t now = 10'000'000;
   EXPECT_EQ(parse_all(signed_frame(3, now).view(), parser).size(), 1u);
   EXPECT_TRUE(parse_all(signed_frame(4, now - 6'000'001).view(), parser).empty());

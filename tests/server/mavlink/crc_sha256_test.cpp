@@ -17,8 +17,9 @@ std::span<const std::uint8_t> bytes_of(std::string_view s) {
 TEST(Crc, TableMatchesBitwiseReferenceForEveryByteAndState) {
   for (unsigned crc = 0; crc < 0x10000; crc += 257) {
     for (unsigned b = 0; b < 256; ++b) {
-      ASSERT_EQ(crc_accumulate(static_cast<std::uint8_t>(b), static_cast<std::uint16_t>(crc)),
-                crc_accumulate_bitwise(static_cast<std::uint8_t>(b), static_cast<std::uint16_t>(crc)));
+      ASSERT_EQ(
+          crc_accumulate(static_cast<std::uint8_t>(b), static_cast<std::uint16_t>(crc)),
+          crc_accumulate_bitwise(static_cast<std::uint8_t>(b), static_cast<std::uint16_t>(crc)));
     }
   }
 }
@@ -34,10 +35,12 @@ TEST(Sha256, MatchesNistVectors) {
             "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   EXPECT_EQ(test::to_hex(sha256(bytes_of("abc"))),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
-  EXPECT_EQ(test::to_hex(sha256(bytes_of("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"))),
-            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
-  EXPECT_EQ(test::to_hex(sha256(bytes_of("abcdefghbcdefghicdefghijdefghijkefghijklfghijklmghijklmnhijklmno"
-                                         "ijklmnopjklmnopqklmnopqrlmnopqrsmnopqrstnopqrstu"))),
+  EXPECT_EQ(
+      test::to_hex(sha256(bytes_of("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"))),
+      "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(test::to_hex(
+                sha256(bytes_of("abcdefghbcdefghicdefghijdefghijkefghijklfghijklmghijklmnhijklmno"
+                                "ijklmnopjklmnopqklmnopqrlmnopqrsmnopqrstnopqrstu"))),
             "cf5b16a778af8380036ce59e7b0492370b249b11e8f07a51afac45037afee9d1");
 }
 
@@ -50,7 +53,8 @@ TEST(Sha256, MillionAsInOddChunksMatchesNistVector) {
     h.update(bytes_of(std::string_view(chunk).substr(0, n)));
     left -= n;
   }
-  EXPECT_EQ(test::to_hex(h.finish()), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  EXPECT_EQ(test::to_hex(h.finish()),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
 TEST(Sha256, PaddingBoundariesAgreeBetweenOneShotAndBytewise) {

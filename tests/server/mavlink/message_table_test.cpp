@@ -1,3 +1,5 @@
+#include "mavlink/generated/message_table.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -6,14 +8,14 @@
 #include <string>
 
 #include "mavlink/generated/enums.hpp"
-#include "mavlink/generated/message_table.hpp"
 #include "mavlink/generated/messages.hpp"
 #include "test_util.hpp"
 
 namespace uavsim::server::mavlink {
 namespace {
 
-// tests/data/mavlink/all_messages.csv (id,name,crc_extra,min_len,max_len) is the reference list of the dialect
+// tests/data/mavlink/all_messages.csv (id,name,crc_extra,min_len,max_len) is the reference list of
+// the dialect
 TEST(MessageTable, MatchesEveryRowOfTheReferenceCsv) {
   std::ifstream in(test::data_path("all_messages.csv"));
   ASSERT_TRUE(in);
@@ -70,8 +72,9 @@ TEST(MessageTable, GeneratedStructsAgreeWithTheTable) {
 }
 
 TEST(MessageTable, WireOrderSortsBaseFieldsBySizeAndKeepsExtensionsLast) {
-  // COMMAND_ACK: command (uint16) and result (uint8) are base fields; progress, result_param2 (int32),
-  // target_system, target_component are extensions in XML order, not sorted: offsets 3, 4, 8, 9
+  // COMMAND_ACK: command (uint16) and result (uint8) are base fields; progress, result_param2
+  // (int32), target_system, target_component are extensions in XML order, not sorted: offsets 3, 4,
+  // 8, 9
   msg::CommandAck ack;
   ack.command = 0x0190;
   ack.result = 0x11;
@@ -81,7 +84,8 @@ TEST(MessageTable, WireOrderSortsBaseFieldsBySizeAndKeepsExtensionsLast) {
   ack.target_component = 0x88;
   std::array<std::uint8_t, msg::CommandAck::kMaxLen> p{};
   ack.encode(p.data());
-  const std::array<std::uint8_t, 10> expected = {0x90, 0x01, 0x11, 0x22, 0x66, 0x55, 0x44, 0x33, 0x77, 0x88};
+  const std::array<std::uint8_t, 10> expected = {0x90, 0x01, 0x11, 0x22, 0x66,
+                                                 0x55, 0x44, 0x33, 0x77, 0x88};
   EXPECT_EQ(p, expected);
 }
 

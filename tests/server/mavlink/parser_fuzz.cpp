@@ -1,7 +1,9 @@
-// libFuzzer target for the MAVLink parser. Beyond "no crash, no sanitizer report" it checks invariants:
+// libFuzzer target for the MAVLink parser. Beyond "no crash, no sanitizer report" it checks
+// invariants:
 //   * every input byte ends up in a frame, in bytes_dropped, or buffered;
 //   * an emitted frame, parsed again on its own, is emitted again unchanged;
-//   * a frame with a generated struct re-encodes (unsigned) to a frame that decodes to the same payload.
+//   * a frame with a generated struct re-encodes (unsigned) to a frame that decodes to the same
+//   payload.
 // Built by run_parser_fuzz.sh with clang++ -fsanitize=fuzzer,address,undefined.
 #include <cstddef>
 #include <cstdint>
@@ -39,7 +41,8 @@ void check_reencode(const mav::Frame& frame) {
               int n = 0;
               p.feed(again.view(), [&](const mav::Frame& g) {
                 // v1 carries only the base fields
-                const std::size_t len = frame.version == mav::Version::kV1 ? M::kMinLen : M::kMaxLen;
+                const std::size_t len =
+                    frame.version == mav::Version::kV1 ? M::kMinLen : M::kMaxLen;
                 check(std::memcmp(g.payload.data(), frame.payload.data(), len) == 0);
                 ++n;
               });
@@ -79,7 +82,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       mav::Parser alone(config);
       int n_alone = 0;
       alone.feed(f.raw, [&](const mav::Frame& g) {
-        check(g.raw.size() == f.raw.size() && std::memcmp(g.raw.data(), f.raw.data(), g.raw.size()) == 0);
+        check(g.raw.size() == f.raw.size() &&
+              std::memcmp(g.raw.data(), f.raw.data(), g.raw.size()) == 0);
         ++n_alone;
       });
       check(n_alone == 1);

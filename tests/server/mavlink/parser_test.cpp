@@ -1,10 +1,11 @@
+#include "mavlink/codec/parser.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "mavlink/codec/codec.hpp"
 #include "mavlink/codec/crc.hpp"
-#include "mavlink/codec/parser.hpp"
 #include "mavlink/generated/messages.hpp"
 #include "test_util.hpp"
 
@@ -13,7 +14,8 @@ namespace {
 
 constexpr std::uint32_t kSeed = 20261121;
 
-// v2 HEARTBEAT from the reference vectors: no 0xFD/0xFE inside, so a corrupted copy cannot hide a false start
+// v2 HEARTBEAT from the reference vectors: no 0xFD/0xFE inside, so a corrupted copy cannot hide a
+// false start
 const std::vector<std::uint8_t> kHeartbeat =
     test::from_hex("fd090000000101000000000000000203510303e292");
 const std::vector<std::uint8_t> kHeartbeatV1 = test::from_hex("fe09000101000000000002035103037851");
@@ -46,8 +48,8 @@ std::vector<std::uint8_t> concat(std::initializer_list<std::vector<std::uint8_t>
 }
 
 // a v2 frame with a correct checksum for the given crc_extra
-std::vector<std::uint8_t> make_v2(std::uint32_t msgid, std::vector<std::uint8_t> payload, std::uint8_t crc_extra,
-                                  std::uint8_t incompat = 0) {
+std::vector<std::uint8_t> make_v2(std::uint32_t msgid, std::vector<std::uint8_t> payload,
+                                  std::uint8_t crc_extra, std::uint8_t incompat = 0) {
   std::vector<std::uint8_t> f(kHeaderLenV2 + payload.size());
   f[0] = kStxV2;
   f[1] = static_cast<std::uint8_t>(payload.size());
@@ -67,7 +69,8 @@ std::vector<std::uint8_t> make_v2(std::uint32_t msgid, std::vector<std::uint8_t>
 
 TEST(Parser, ByteAtATimeFindsTheSameFramesAsOneChunk) {
   std::vector<std::uint8_t> stream;
-  for (const auto& v : test::load_vectors()) stream.insert(stream.end(), v.bytes.begin(), v.bytes.end());
+  for (const auto& v : test::load_vectors())
+    stream.insert(stream.end(), v.bytes.begin(), v.bytes.end());
   Parser whole;
   Parser bytewise;
   const Collected a = feed_all(whole, stream);
@@ -182,7 +185,8 @@ TEST(Parser, TruncatedFrameDoesNotHideTheNextOne) {
   Parser parser;
   const Collected c = feed_all(parser, concat({cut, kHeartbeat, kHeartbeat}));
   EXPECT_EQ(c.raws.size(), 2u);
-  // the cut frame borrows the next frame's bytes, fails its checksum, and the search restarts inside it
+  // the cut frame borrows the next frame's bytes, fails its checksum, and the search restarts
+  // inside it
   EXPECT_EQ(parser.stats().bad_crc, 1u);
   EXPECT_EQ(parser.stats().bytes_dropped, cut.size());
 }
@@ -197,7 +201,8 @@ TEST(Parser, CountsUnknownMessageIdAndSkipsIt) {
 }
 
 TEST(Parser, CountsUnsupportedIncompatFlags) {
-  const auto flagged = make_v2(msg::Heartbeat::kId, {0, 0, 0, 0, 2, 3, 0x51, 3, 3}, msg::Heartbeat::kCrcExtra, 0x02);
+  const auto flagged =
+      make_v2(msg::Heartbeat::kId, {0, 0, 0, 0, 2, 3, 0x51, 3, 3}, msg::Heartbeat::kCrcExtra, 0x02);
   Parser parser;
   const Collected c = feed_all(parser, concat({flagged, kHeartbeat}));
   EXPECT_EQ(c.raws.size(), 1u);
@@ -206,8 +211,10 @@ TEST(Parser, CountsUnsupportedIncompatFlags) {
 
 TEST(Parser, CountsBogusLengths) {
   // v2 longer than the message can be, v1 other than the base length
-  const auto too_long = make_v2(msg::Heartbeat::kId, std::vector<std::uint8_t>(40, 1), msg::Heartbeat::kCrcExtra);
-  std::vector<std::uint8_t> short_v1 = {kStxV1, 8, 0, 1, 1, msg::Heartbeat::kId, 1, 1, 1, 1, 1, 1, 1, 1, 0, 0};
+  const auto too_long =
+      make_v2(msg::Heartbeat::kId, std::vector<std::uint8_t>(40, 1), msg::Heartbeat::kCrcExtra);
+  std::vector<std::uint8_t> short_v1 = {kStxV1, 8, 0, 1, 1, msg::Heartbeat::kId, 1, 1, 1, 1, 1,
+                                        1,      1, 1, 0, 0};
   Parser parser;
   const Collected c = feed_all(parser, concat({too_long, kHeartbeat, short_v1, kHeartbeatV1}));
   EXPECT_EQ(c.raws.size(), 2u);

@@ -66,20 +66,22 @@ inline SecretKey reference_key() {
   return key;
 }
 
-// Decodes a frame with its generated struct and encodes it again with the frame's own header (and signature
-// parameters, given the key). Empty when no struct is generated for the id.
+// Decodes a frame with its generated struct and encodes it again with the frame's own header (and
+// signature parameters, given the key). Empty when no struct is generated for the id.
 inline EncodedFrame reencode(const Frame& frame, const SecretKey& key = reference_key()) {
   FrameHeader h;
   h.sysid = frame.sysid;
   h.compid = frame.compid;
   h.seq = frame.seq;
   h.version = frame.version;
-  if (frame.signature) h.signing = SigningParams{key, frame.signature->link_id, frame.signature->timestamp_10us};
+  if (frame.signature)
+    h.signing = SigningParams{key, frame.signature->link_id, frame.signature->timestamp_10us};
   EncodedFrame out;
   std::apply(
       [&](auto... tag) {
-        ((frame.msgid == decltype(tag)::kId ? (out = encode(h, decltype(tag)::decode(frame.payload.data())), 0)
-                                            : 0),
+        ((frame.msgid == decltype(tag)::kId
+              ? (out = encode(h, decltype(tag)::decode(frame.payload.data())), 0)
+              : 0),
          ...);
       },
       msg::AllMessages{});

@@ -13,14 +13,15 @@ std::size_t encode_frame(const FrameHeader& header, const MessageInfo& info,
   const bool v2 = header.version == Version::kV2;
   if (!v2 && (info.id > 0xFF || header.signing)) return 0;
 
-  // payload length on the wire: v1 carries the base fields only; v2 drops trailing zeros, never below
-  // one byte (the reference C library keeps one; some peers mis-handle empty payloads)
+  // payload length on the wire: v1 carries the base fields only; v2 drops trailing zeros, never
+  // below one byte (the reference C library keeps one; some peers mis-handle empty payloads)
   std::size_t len = v2 ? info.max_len : info.min_len;
   if (v2) {
     while (len > 1 && full_payload[len - 1] == 0) --len;
   }
   const std::size_t header_len = v2 ? kHeaderLenV2 : kHeaderLenV1;
-  const std::size_t frame_len = header_len + len + kChecksumLen + (header.signing ? kSignatureLen : 0);
+  const std::size_t frame_len =
+      header_len + len + kChecksumLen + (header.signing ? kSignatureLen : 0);
   if (out.size() < frame_len) return 0;
 
   // header
@@ -47,7 +48,8 @@ std::size_t encode_frame(const FrameHeader& header, const MessageInfo& info,
 
   // payload, then the checksum over everything after the start byte plus CRC_EXTRA
   if (len > 0) std::memcpy(p + header_len, full_payload.data(), len);
-  std::uint16_t crc = crc_accumulate(std::span<const std::uint8_t>(p + 1, header_len - 1 + len), kCrcInit);
+  std::uint16_t crc =
+      crc_accumulate(std::span<const std::uint8_t>(p + 1, header_len - 1 + len), kCrcInit);
   crc = crc_accumulate(info.crc_extra, crc);
   std::uint8_t* q = p + header_len + len;
   q[0] = static_cast<std::uint8_t>(crc);
@@ -58,8 +60,8 @@ std::size_t encode_frame(const FrameHeader& header, const MessageInfo& info,
     const SigningParams& s = *header.signing;
     q[2] = s.link_id;
     for (int i = 0; i < 6; ++i) q[3 + i] = static_cast<std::uint8_t>(s.timestamp_10us >> (8 * i));
-    const SignatureBytes sig =
-        compute_signature(s.key, std::span<const std::uint8_t>(p, frame_len - std::tuple_size_v<SignatureBytes>));
+    const SignatureBytes sig = compute_signature(
+        s.key, std::span<const std::uint8_t>(p, frame_len - std::tuple_size_v<SignatureBytes>));
     std::memcpy(q + 9, sig.data(), sig.size());
   }
   return frame_len;

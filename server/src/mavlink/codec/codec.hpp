@@ -17,7 +17,8 @@ namespace uavsim::server::mavlink {
 struct SigningParams {
   SecretKey key{};
   std::uint8_t link_id = 0;
-  std::uint64_t timestamp_10us = 0;  // see TimestampSource in signing.hpp; only the low 48 bits are sent
+  // see TimestampSource in signing.hpp; only the low 48 bits are sent
+  std::uint64_t timestamp_10us = 0;
 };
 
 // Who sends the frame and how.
@@ -38,23 +39,27 @@ struct EncodedFrame {
   bool empty() const { return size == 0; }
 };
 
-// Frames a message whose full payload (info.max_len bytes, extensions included) is given, writing into out.
-// v2 strips trailing zero bytes of the payload (keeping at least one); v1 sends the info.min_len base bytes.
-// Returns the frame length, or 0 when it cannot be encoded: out too small, a msgid above 255 or signing
-// requested in v1, or full_payload shorter than info.max_len. Thread-safe.
+// Frames a message whose full payload (info.max_len bytes, extensions included) is given, writing
+// into out. v2 strips trailing zero bytes of the payload (keeping at least one); v1 sends the
+// info.min_len base bytes. Returns the frame length, or 0 when it cannot be encoded: out too small,
+// a msgid above 255 or signing requested in v1, or full_payload shorter than info.max_len.
+// Thread-safe.
 std::size_t encode_frame(const FrameHeader& header, const MessageInfo& info,
                          std::span<const std::uint8_t> full_payload, std::span<std::uint8_t> out);
 
-// Frames a generated message struct (msg::Heartbeat, ...) into out; same contract as encode_frame().
+// Frames a generated message struct (msg::Heartbeat, ...) into out; same contract as
+// encode_frame().
 template <class Msg>
 std::size_t encode_into(const FrameHeader& header, const Msg& msg, std::span<std::uint8_t> out) {
-  static constexpr MessageInfo kInfo{Msg::kId, Msg::kCrcExtra, Msg::kMinLen, Msg::kMaxLen, Msg::kName};
+  static constexpr MessageInfo kInfo{Msg::kId, Msg::kCrcExtra, Msg::kMinLen, Msg::kMaxLen,
+                                     Msg::kName};
   std::array<std::uint8_t, Msg::kMaxLen> payload;
   msg.encode(payload.data());
   return encode_frame(header, kInfo, payload, out);
 }
 
-// Frames a generated message struct; the result is empty when it cannot be encoded (see encode_frame()).
+// Frames a generated message struct; the result is empty when it cannot be encoded (see
+// encode_frame()).
 template <class Msg>
 EncodedFrame encode(const FrameHeader& header, const Msg& msg) {
   EncodedFrame frame;

@@ -1,5 +1,6 @@
-// MAVLink's checksum: CRC-16/MCRF4XX ("X.25" in the MAVLink docs), init 0xFFFF, reflected polynomial 0x8408,
-// no final xor. Table-driven (one lookup per byte); the table is built at compile time from the bitwise rule.
+// MAVLink's checksum: CRC-16/MCRF4XX ("X.25" in the MAVLink docs), init 0xFFFF, reflected
+// polynomial 0x8408, no final xor. Table-driven (one lookup per byte); the table is built at
+// compile time from the bitwise rule.
 #pragma once
 
 #include <array>
@@ -11,7 +12,8 @@ namespace uavsim::server::mavlink {
 
 inline constexpr std::uint16_t kCrcInit = 0xFFFF;
 
-// Bitwise form of the MAVLink reference crc_accumulate(): the definition the table is checked against.
+// Bitwise form of the MAVLink reference crc_accumulate(): the definition the table is checked
+// against.
 constexpr std::uint16_t crc_accumulate_bitwise(std::uint8_t byte, std::uint16_t crc) {
   std::uint8_t tmp = static_cast<std::uint8_t>(byte ^ (crc & 0xFF));
   tmp = static_cast<std::uint8_t>(tmp ^ (tmp << 4));
@@ -22,7 +24,8 @@ namespace detail {
 constexpr std::array<std::uint16_t, 256> make_crc_table() {
   std::array<std::uint16_t, 256> table{};
   // with crc = i and input byte 0, one step of the bitwise rule is exactly the table entry for i
-  for (unsigned i = 0; i < 256; ++i) table[i] = crc_accumulate_bitwise(0, static_cast<std::uint16_t>(i));
+  for (unsigned i = 0; i < 256; ++i)
+    table[i] = crc_accumulate_bitwise(0, static_cast<std::uint16_t>(i));
   return table;
 }
 inline constexpr std::array<std::uint16_t, 256> kCrcTable = make_crc_table();

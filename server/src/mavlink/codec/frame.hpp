@@ -1,8 +1,10 @@
 // MAVLink 1/2 framing constants and the decoded-frame view the Parser hands out.
 // Layouts (MAVLink spec "Serialization"):
 //   v1: 0xFE LEN SEQ SYSID COMPID MSGID                                   payload CRC(2)
-//   v2: 0xFD LEN INCOMPAT COMPAT SEQ SYSID COMPID MSGID(3, little-endian)  payload CRC(2) [signature(13)]
-// The CRC covers the header after the start byte and the payload, then the message's CRC_EXTRA byte.
+//   v2: 0xFD LEN INCOMPAT COMPAT SEQ SYSID COMPID MSGID(3, little-endian)  payload CRC(2)
+//   [signature(13)]
+// The CRC covers the header after the start byte and the payload, then the message's CRC_EXTRA
+// byte.
 #pragma once
 
 #include <array>
@@ -24,7 +26,8 @@ inline constexpr std::size_t kHeaderLenV2 = 10;
 inline constexpr std::size_t kChecksumLen = 2;
 inline constexpr std::size_t kSignatureLen = 13;  // link id (1) + timestamp (6) + signature (6)
 inline constexpr std::size_t kMaxPayloadLen = 255;
-inline constexpr std::size_t kMaxFrameLen = kHeaderLenV2 + kMaxPayloadLen + kChecksumLen + kSignatureLen;
+inline constexpr std::size_t kMaxFrameLen =
+    kHeaderLenV2 + kMaxPayloadLen + kChecksumLen + kSignatureLen;
 inline constexpr std::uint8_t kIncompatFlagSigned = 0x01;
 // incompat flags this codec understands; a frame with any other bit set cannot be parsed safely
 inline constexpr std::uint8_t kSupportedIncompatFlags = kIncompatFlagSigned;
@@ -49,11 +52,13 @@ struct Frame {
   std::uint8_t compid = 0;
   std::uint32_t msgid = 0;
   std::uint8_t payload_len = 0;  // as sent; a v2 sender may have stripped trailing zeros
-  // the payload, zero-filled from payload_len up to info->max_len, so msg::X::decode(payload.data()) works
+  // the payload, zero-filled from payload_len up to info->max_len, so
+  // msg::X::decode(payload.data()) works
   std::array<std::uint8_t, kMaxPayloadLen> payload{};
   std::optional<Signature> signature;  // present iff the frame was signed
   const MessageInfo* info = nullptr;   // never null for a frame the Parser emits
-  std::span<const std::uint8_t> raw;   // the frame's bytes as received; valid until the parser is fed again
+  std::span<const std::uint8_t>
+      raw;  // the frame's bytes as received; valid until the parser is fed again
 };
 
 }  // namespace uavsim::server::mavlink

@@ -11,8 +11,8 @@ namespace {
 
 constexpr bool is_start_byte(std::uint8_t b) { return b == kStxV2 || b == kStxV1; }
 
-// a new signing stream may start this far behind the newest timestamp seen: one minute in 10 us units
-// (the MAVLink spec's and the reference library's limit)
+// a new signing stream may start this far behind the newest timestamp seen: one minute in 10 us
+// units (the MAVLink spec's and the reference library's limit)
 constexpr std::uint64_t kNewStreamWindow10us = 60ull * 100000;
 
 }  // namespace
@@ -104,8 +104,8 @@ Parser::Step Parser::evaluate() {
     msgid = buf_[5];
   }
 
-  // the id must be known to check the CRC; its lengths bound the payload (v1 sends exactly the base fields,
-  // v2 anything up to the full length, even 0 bytes from senders that strip every zero)
+  // the id must be known to check the CRC; its lengths bound the payload (v1 sends exactly the base
+  // fields, v2 anything up to the full length, even 0 bytes from senders that strip every zero)
   const MessageInfo* info = find_message_info(msgid);
   if (info == nullptr) {
     ++stats_.unknown_msgid;
@@ -135,8 +135,8 @@ Parser::Step Parser::evaluate() {
   if (config_.signing_key) {
     if (is_signed) {
       const std::size_t signed_part = frame_len - std::tuple_size_v<SignatureBytes>;
-      const SignatureBytes expected =
-          compute_signature(*config_.signing_key, std::span<const std::uint8_t>(buf_.data(), signed_part));
+      const SignatureBytes expected = compute_signature(
+          *config_.signing_key, std::span<const std::uint8_t>(buf_.data(), signed_part));
       if (!std::equal(expected.begin(), expected.end(), buf_.data() + signed_part)) {
         ++stats_.bad_signature;
         return Step::kSkip;
@@ -174,9 +174,9 @@ bool Parser::accept_timestamp(std::uint8_t link_id, std::uint8_t sysid, std::uin
     if (stream_count_ < streams_.size()) {
       stream = &streams_[stream_count_++];
     } else {
-      stream = &*std::min_element(streams_.begin(), streams_.end(), [](const auto& a, const auto& b) {
-        return a.timestamp_10us < b.timestamp_10us;
-      });
+      stream = &*std::min_element(
+          streams_.begin(), streams_.end(),
+          [](const auto& a, const auto& b) { return a.timestamp_10us < b.timestamp_10us; });
     }
     *stream = SigningStream{link_id, sysid, compid, 0};
   }
@@ -209,7 +209,8 @@ void Parser::fill_frame(const MessageInfo& info, std::size_t header_len, std::si
   // payload, zero-filled to the message's full length (a v2 sender strips trailing zeros)
   const std::size_t max_len = info.max_len;
   std::memcpy(f.payload.data(), buf_.data() + header_len, f.payload_len);
-  if (max_len > f.payload_len) std::memset(f.payload.data() + f.payload_len, 0, max_len - f.payload_len);
+  if (max_len > f.payload_len)
+    std::memset(f.payload.data() + f.payload_len, 0, max_len - f.payload_len);
 
   // signature block after the checksum
   if (f.incompat_flags & kIncompatFlagSigned) {

@@ -1,5 +1,6 @@
-// Streaming MAVLink 1/2 parser: feed it byte chunks of any size (a TCP stream, a file, a fuzzer), get back
-// complete checksum-verified frames. Pure: no I/O, no clocks, no allocation after construction, never throws.
+// Streaming MAVLink 1/2 parser: feed it byte chunks of any size (a TCP stream, a file, a fuzzer),
+// get back complete checksum-verified frames. Pure: no I/O, no clocks, no allocation after
+// construction, never throws.
 #pragma once
 
 #include <array>
@@ -12,24 +13,28 @@
 
 namespace uavsim::server::mavlink {
 
-// Why bytes were thrown away. Every byte fed is either part of an emitted frame, counted in bytes_dropped,
-// or still buffered (see Parser::buffered()).
+// Why bytes were thrown away. Every byte fed is either part of an emitted frame, counted in
+// bytes_dropped, or still buffered (see Parser::buffered()).
 struct ParserStats {
-  std::uint64_t frames = 0;              // frames emitted
-  std::uint64_t bytes_dropped = 0;       // bytes that were not part of an emitted frame
-  std::uint64_t bad_crc = 0;             // candidate frames whose checksum failed (also truncated frames)
-  std::uint64_t unknown_msgid = 0;       // message id not in the dialect: the CRC cannot be checked
+  std::uint64_t frames = 0;         // frames emitted
+  std::uint64_t bytes_dropped = 0;  // bytes that were not part of an emitted frame
+  // candidate frames whose checksum failed (a truncated frame shows up here too)
+  std::uint64_t bad_crc = 0;
+  std::uint64_t unknown_msgid = 0;       // id not in the dialect: the CRC cannot be checked
   std::uint64_t bad_incompat_flags = 0;  // v2 incompat flags other than 0 and 0x01 (signed)
   std::uint64_t bad_length = 0;          // payload length impossible for the message id
-  std::uint64_t bad_signature = 0;       // signed frame whose signature does not match the configured key
-  std::uint64_t unsigned_rejected = 0;   // unsigned frame while a key is configured and unsigned is refused
-  std::uint64_t replayed = 0;            // correctly signed, but its timestamp is not newer (replay)
+  // signed frame whose signature does not match the configured key
+  std::uint64_t bad_signature = 0;
+  // unsigned frame while a key is configured and unsigned frames are refused
+  std::uint64_t unsigned_rejected = 0;
+  std::uint64_t replayed = 0;  // correctly signed, but its timestamp is not newer
 };
 
 struct ParserConfig {
-  // when set, signed frames are verified against it, and unsigned frames are refused unless accept_unsigned.
-  // Replays are refused too (MAVLink spec "Message Signing"): per stream (link id, sysid, compid) timestamps
-  // must increase, and a new stream may start at most one minute before the newest timestamp seen.
+  // when set, signed frames are verified against it, and unsigned frames are refused unless
+  // accept_unsigned. Replays are refused too (MAVLink spec "Message Signing"): per stream (link id,
+  // sysid, compid) timestamps must increase, and a new stream may start at most one minute before
+  // the newest timestamp seen.
   std::optional<SecretKey> signing_key;
   bool accept_unsigned = false;
 };
@@ -39,10 +44,11 @@ class Parser {
  public:
   explicit Parser(const ParserConfig& config = {});
 
-  // Consumes bytes until one frame completes or the input runs out, and returns how many bytes it consumed.
-  // *frame points at the completed frame (valid until the next call) or is null when more input is needed.
-  // Garbage, bad checksums, unknown ids and impossible lengths are skipped (and counted) by restarting the
-  // search one byte after the rejected start byte, so a frame hidden behind a false start is still found.
+  // Consumes bytes until one frame completes or the input runs out, and returns how many bytes it
+  // consumed. *frame points at the completed frame (valid until the next call) or is null when more
+  // input is needed. Garbage, bad checksums, unknown ids and impossible lengths are skipped (and
+  // counted) by restarting the search one byte after the rejected start byte, so a frame hidden
+  // behind a false start is still found.
   std::size_t parse(std::span<const std::uint8_t> bytes, const Frame** frame);
 
   // Consumes all bytes, calling on_frame(const Frame&) for each complete frame in stream order.
@@ -55,8 +61,8 @@ class Parser {
     }
   }
 
-  // Replaces the signing configuration (e.g. after SETUP_SIGNING); buffered bytes and the replay history
-  // are kept.
+  // Replaces the signing configuration (e.g. after SETUP_SIGNING); buffered bytes and the replay
+  // history are kept.
   void configure(const ParserConfig& config) { config_ = config; }
 
   // Counters since construction or the last reset_stats().
@@ -78,9 +84,11 @@ class Parser {
   void discard_front(std::size_t n, bool count_dropped);
   void fill_frame(const MessageInfo& info, std::size_t header_len, std::size_t frame_len);
   // (stream, timestamp) => false for a replay; records the timestamp otherwise
-  bool accept_timestamp(std::uint8_t link_id, std::uint8_t sysid, std::uint8_t compid, std::uint64_t ts);
+  bool accept_timestamp(std::uint8_t link_id, std::uint8_t sysid, std::uint8_t compid,
+                        std::uint64_t ts);
 
-  // replay history of signed streams: a fixed table (no allocation), the stalest stream is evicted when full
+  // replay history of signed streams: a fixed table (no allocation), the stalest stream is evicted
+  // when full
   struct SigningStream {
     std::uint8_t link_id = 0;
     std::uint8_t sysid = 0;
@@ -95,9 +103,10 @@ class Parser {
   ParserConfig config_;
   ParserStats stats_;
   std::array<std::uint8_t, kMaxFrameLen> buf_{};
-  std::size_t len_ = 0;          // buffered bytes
-  std::size_t need_ = 0;         // bytes the current candidate needs in total
-  std::size_t emitted_len_ = 0;  // length of the frame handed out by the last call, still at buf_[0]
+  std::size_t len_ = 0;   // buffered bytes
+  std::size_t need_ = 0;  // bytes the current candidate needs in total
+  // length of the frame handed out by the last call, still at buf_[0]
+  std::size_t emitted_len_ = 0;
   Frame frame_;
 };
 

@@ -1,4 +1,5 @@
-// SHA-256 (FIPS 180-4), small and allocation-free: MAVLink 2 signing needs it and nothing else here does.
+// SHA-256 (FIPS 180-4), small and allocation-free: MAVLink 2 signing needs it and nothing else here
+// does.
 #pragma once
 
 #include <array>
@@ -10,7 +11,8 @@ namespace uavsim::server::mavlink {
 
 using Sha256Digest = std::array<std::uint8_t, 32>;
 
-// Incremental hasher: update() any number of times, then finish() once. Not thread-safe (one per thread).
+// Incremental hasher: update() any number of times, then finish() once. Not thread-safe (one per
+// thread).
 class Sha256 {
  public:
   Sha256();

@@ -1,5 +1,6 @@
-// Little-endian field access for MAVLink payloads. Generated message code uses put/get; the string helpers
-// are for the fixed-size char arrays (param ids, status text) that are not NUL-terminated when full.
+// Little-endian field access for MAVLink payloads. Generated message code uses put/get; the string
+// helpers are for the fixed-size char arrays (param ids, status text) that are not NUL-terminated
+// when full.
 #pragma once
 
 #include <algorithm>
@@ -13,7 +14,8 @@
 namespace uavsim::server::mavlink::wire {
 
 // MAVLink is little-endian; memcpy of native values is only correct on little-endian hosts.
-static_assert(std::endian::native == std::endian::little, "MAVLink wire helpers assume a little-endian host");
+static_assert(std::endian::native == std::endian::little,
+              "MAVLink wire helpers assume a little-endian host");
 
 template <class T>
 inline void put(std::uint8_t* p, const T& value) {
@@ -29,7 +31,8 @@ inline void get(const std::uint8_t* p, T& value) {
 
 namespace uavsim::server::mavlink {
 
-// Copies text into a MAVLink char array, NUL-padding the rest; text longer than N is cut to N chars.
+// Copies text into a MAVLink char array, NUL-padding the rest; text longer than N is cut to N
+// chars.
 template <std::size_t N>
 void set_string(std::array<char, N>& field, std::string_view text) {
   field.fill('\0');
