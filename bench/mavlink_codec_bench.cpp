@@ -66,15 +66,17 @@ void parse_bench(benchmark::State& state, const Msg& msg, bool sign) {
   mav::FrameHeader h = header(sign);
   for (int i = 0; i < kFramesPerStream; ++i) {
     ++h.seq;
+    if (h.signing) h.signing->timestamp_10us += 1;  // signed timestamps must increase
     const mav::EncodedFrame f = mav::encode(h, msg);
     stream.insert(stream.end(), f.view().begin(), f.view().end());
   }
   mav::ParserConfig config;
   if (sign) config.signing_key = mav::SecretKey{};
-  mav::Parser parser(config);
   std::size_t frames = 0;
   constexpr std::size_t kChunk = 4096;
   for (auto _ : state) {
+    // a fresh parser per pass: replaying the same signed stream would (rightly) be refused
+    mav::Parser parser(config);
     for (std::size_t i = 0; i < stream.size(); i += kChunk) {
       parser.feed(
           std::span<const std::uint8_t>(stream).subspan(i, std::min(kChunk, stream.size() - i)),
