@@ -82,20 +82,56 @@ TEST(TrackKalman, TracksTruckWithDelayedMeasurements) {
   EXPECT_LT(st.rms_error_m, naive.rms_error_m);
 }
 
+TEST(TrackKalman, FollowsSlowdownFrom15To5KmH) {
+  // MBZIRC 2017: 15 km/h for 8 min, then 5 km/h; here the driver brakes at 0.5 m/s^2 at t = 20 s
+  const EightTrack track;
+  TrackKalman filter(track);
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> noise(0.0, kNoiseM);
+  constexpr double kSlowM_S = 5.0 / 3.6, kBrakeStartS = 20.0, kDecelM_S2 = 0.5;
+  constexpr double kBrakeS = (kTruckSpeedM_S - kSlowM_S) / kDecelM_S2;  // 5.56 s
+  auto s_at = [&](double t) {
+    if (t < kBrakeStartS) return kTruckSpeedM_S * t;
+    const double tb = std::min(t - kBrakeStartS, kBrakeS);
+    return kTruckSpeedM_S * kBrakeStartS + kTruckSpeedM_S * tb - 0.5 * kDecelM_S2 * tb * tb +
+           kSlowM_S * std::max(0.0, t - kBrakeStartS - kBrakeS);
+  };
+  double max_err_m = 0.0;
+  int frame = 0;
+  for (double now_s = 0.0; now_s < 60.0; now_s += 0.02) {
+    while (frame / kFrameRateHz + kLatencyUs * 1e-6 <= now_s) {
+      const double t = frame / kFrameRateHz;
+      filter.add_measurement(to_us(t), track.point_enu(s_at(t)) +
+                                           Eigen::Vector2d(noise(rng), noise(rng)));
+      ++frame;
+    }
+    if (now_s < kSettleS) continue;
+    const auto e = filter.estimate_at(to_us(now_s));
+    ASSERT_TRUE(e.has_value()) << "lost the truck at t = " << now_s << " s";
+    const double err = (e->position_enu_m - track.point_enu(s_at(now_s))).norm();
+    max_err_m = std::max(max_err_m, err);
+  }
+  std::printf("[ kalman   ] braking 15 -> 5 km/h at 0.5 m/s^2: max error %.3f m\n", max_err_m);
+  EXPECT_LT(max_err_m, kMaxErrorM);
+  EXPECT_NEAR(filter.estimate_at(to_us(60.0))->v_s_m_s, kSlowM_S, 0.3);
+}
+
 TEST(TrackKalman, SpeedAndDirectionFromTwoPoints) {
   const EightTrack track;
   TrackKalman filter(track);
   // a truck running backwards along the track: v_s < 0
-  const Eigen::Vector2d p0 = track.point_enu(100.0), p1 = track.point_enu(99.0);
+  const Eigen::Vector2d p0 = track.point_enu(100.0), p1 = track.point_enu(98.0);
   EXPECT_EQ(filter.add_measurement(0, p0), MeasurementResult::kStored);
   EXPECT_FALSE(filter.estimate_at(0).has_value());
-  EXPECT_EQ(filter.add_measurement(250'000, p1), MeasurementResult::kInitialised);
-  const auto e = filter.estimate_at(250'000);
+  // closer than init_min_dt_s (0.4 s): the direction would be noise, wait
+  EXPECT_EQ(filter.add_measurement(100'000, track.point_enu(99.6)), MeasurementResult::kStored);
+  EXPECT_EQ(filter.add_measurement(500'000, p1), MeasurementResult::kInitialised);
+  const auto e = filter.estimate_at(500'000);
   ASSERT_TRUE(e.has_value());
-  EXPECT_NEAR(e->v_s_m_s, -4.0, 1e-6);  // -1 m in 0.25 s
-  EXPECT_NEAR(e->s_m, 99.0, 1e-6);
+  EXPECT_NEAR(e->v_s_m_s, -4.0, 1e-6);  // -2 m in 0.5 s
+  EXPECT_NEAR(e->s_m, 98.0, 1e-6);
   // extrapolation follows the curve: 2 s later the truck is 8 m further back along the track
-  EXPECT_NEAR((filter.estimate_at(2'250'000)->position_enu_m - track.point_enu(91.0)).norm(), 0.0,
+  EXPECT_NEAR((filter.estimate_at(2'500'000)->position_enu_m - track.point_enu(90.0)).norm(), 0.0,
               1e-6);
 }
 
@@ -111,9 +147,9 @@ TEST(TrackKalman, OutOfOrderMeasurementEqualsInOrder) {
   }
   TrackKalman in_order(track), shuffled(track);
   for (const auto& [t, z] : zs) in_order.add_measurement(t, z);
-  // swap neighbours after initialisation: every second one arrives late
+  // swap neighbours after initialisation (the 4th point, 0.43 s): every second one arrives late
   auto late = zs;
-  for (size_t i = 3; i + 1 < late.size(); i += 2) std::swap(late[i], late[i + 1]);
+  for (size_t i = 5; i + 1 < late.size(); i += 2) std::swap(late[i], late[i + 1]);
   int reordered = 0;
   for (const auto& [t, z] : late) {
     reordered += shuffled.add_measurement(t, z) == MeasurementResult::kReordered;
@@ -129,10 +165,26 @@ TEST(TrackKalman, RejectsOutlier) {
   const EightTrack track;
   TrackKalman filter(track);
   filter.add_measurement(0, track.point_enu(10.0));
-  filter.add_measurement(200'000, track.point_enu(10.8));
-  EXPECT_EQ(filter.add_measurement(400'000, track.point_enu(10.8) + Eigen::Vector2d(0, 20)),
+  ASSERT_EQ(filter.add_measurement(500'000, track.point_enu(12.0)), MeasurementResult::kInitialised);
+  EXPECT_EQ(filter.add_measurement(700'000, track.point_enu(12.8) + Eigen::Vector2d(0, 20)),
             MeasurementResult::kRejected);
-  EXPECT_EQ(filter.add_measurement(400'000, track.point_enu(11.6)), MeasurementResult::kCorrected);
+  EXPECT_EQ(filter.add_measurement(700'000, track.point_enu(12.8)), MeasurementResult::kCorrected);
+}
+
+TEST(TrackKalman, RestartsAfterRepeatedOutliers) {
+  // the truck was confused with something else: the filter restarts rather than stay lost
+  const EightTrack track;
+  TrackKalman filter(track);
+  filter.add_measurement(0, track.point_enu(10.0));
+  filter.add_measurement(500'000, track.point_enu(12.0));
+  MeasurementResult last = MeasurementResult::kCorrected;
+  for (int i = 1; i <= 5; ++i) {
+    last = filter.add_measurement(500'000 + i * 142'857, track.point_enu(150.0 + 0.6 * i));
+  }
+  EXPECT_EQ(last, MeasurementResult::kRestarted);
+  EXPECT_FALSE(filter.initialised());
+  EXPECT_EQ(filter.add_measurement(2'000'000, track.point_enu(155.0)),
+            MeasurementResult::kInitialised);
 }
 
 TEST(TrackKalman, InterceptionPointIsReachableAndOnTheTruck) {

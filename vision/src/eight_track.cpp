@@ -64,7 +64,7 @@ Eigen::Vector2d EightTrack::enu_to_track(const Eigen::Vector2d& p_enu) const {
 }
 
 // the five segments, built on the fly (cheap) so the class stays a plain value
-static void build_segments(double c, double r, double phi, double a, double arc, Segment out[5]) {
+static void build_segments(double c, double phi, double a, double arc, Segment out[5]) {
   const Eigen::Vector2d u(std::cos(phi), std::sin(phi));   // first straight
   const Eigen::Vector2d w(-std::cos(phi), std::sin(phi));  // second straight
   out[0] = {false, 0.0, a, Eigen::Vector2d::Zero(), u, 0.0, 0.0};
@@ -75,13 +75,11 @@ static void build_segments(double c, double r, double phi, double a, double arc,
             M_PI / 2 - phi, 1.0};
   out[4] = {false, 3.0 * a + 2.0 * arc, a, a * Eigen::Vector2d(-std::cos(phi), -std::sin(phi)), u,
             0.0, 0.0};
-  (void)r;
 }
 
 Eigen::Vector2d EightTrack::point_enu(double s_m) const {
   Segment seg[5];
-  build_segments(half_sep_m_, params_.circle_radius_m, tangent_angle_rad_, half_straight_m_, arc_m_,
-                 seg);
+  build_segments(half_sep_m_, tangent_angle_rad_, half_straight_m_, arc_m_, seg);
   const double s = wrap_s(s_m);
   for (int i = 4; i >= 0; --i) {
     if (s < seg[i].s0_m) continue;
@@ -96,8 +94,7 @@ Eigen::Vector2d EightTrack::point_enu(double s_m) const {
 
 Eigen::Vector2d EightTrack::tangent_enu(double s_m) const {
   Segment seg[5];
-  build_segments(half_sep_m_, params_.circle_radius_m, tangent_angle_rad_, half_straight_m_, arc_m_,
-                 seg);
+  build_segments(half_sep_m_, tangent_angle_rad_, half_straight_m_, arc_m_, seg);
   const double s = wrap_s(s_m);
   Eigen::Vector2d t_track = seg[0].dir;
   for (int i = 4; i >= 0; --i) {
@@ -128,19 +125,12 @@ Eigen::Vector2d EightTrack::point_enu(const TrackCoordinates& c) const {
   return point_enu(c.s_m) + c.l_m * Eigen::Vector2d(-t.y(), t.x());
 }
 
-TrackCoordinates EightTrack::project(const Eigen::Vector2d& p_enu_m, std::optional<double> s_hint_m,
-                                     double window_m) const {
+std::vector<TrackCoordinates> EightTrack::project_all(const Eigen::Vector2d& p_enu_m) const {
   Segment seg[5];
-  build_segments(half_sep_m_, params_.circle_radius_m, tangent_angle_rad_, half_straight_m_, arc_m_,
-                 seg);
+  build_segments(half_sep_m_, tangent_angle_rad_, half_straight_m_, arc_m_, seg);
   const Eigen::Vector2d p = enu_to_track(p_enu_m);
   const double r = params_.circle_radius_m;
-
-  // closest point of each segment
-  double best_any_d = std::numeric_limits<double>::infinity();
-  double best_any_s = 0.0;
-  double best_hint_d = std::numeric_limits<double>::infinity();
-  double best_hint_s = 0.0;
+  std::vector<std::pair<double, double>> by_distance;  // (distance, s)
   for (const auto& sg : seg) {
     double local = 0.0;
     if (!sg.arc) {
@@ -158,21 +148,27 @@ TrackCoordinates EightTrack::project(const Eigen::Vector2d& p_enu_m, std::option
       }
     }
     const double s = wrap_s(sg.s0_m + local);
-    const double d = (point_enu(s) - p_enu_m).norm();
-    if (d < best_any_d) {
-      best_any_d = d;
-      best_any_s = s;
-    }
-    if (s_hint_m && std::abs(delta_s(*s_hint_m, s)) <= window_m && d < best_hint_d) {
-      best_hint_d = d;
-      best_hint_s = s;
+    by_distance.emplace_back((point_enu(s) - p_enu_m).norm(), s);
+  }
+  std::sort(by_distance.begin(), by_distance.end());
+  std::vector<TrackCoordinates> out;
+  for (const auto& [d, s] : by_distance) {
+    const Eigen::Vector2d t = tangent_enu(s);
+    out.push_back({s, (p_enu_m - point_enu(s)).dot(Eigen::Vector2d(-t.y(), t.x()))});
+  }
+  return out;
+}
+
+TrackCoordinates EightTrack::project(const Eigen::Vector2d& p_enu_m, std::optional<double> s_hint_m,
+                                     double window_m) const {
+  const std::vector<TrackCoordinates> all = project_all(p_enu_m);
+  if (s_hint_m) {
+    // nearest branch within the window around the hint (all is sorted by distance)
+    for (const auto& c : all) {
+      if (std::abs(delta_s(*s_hint_m, c.s_m)) <= window_m) return c;
     }
   }
-  TrackCoordinates c;
-  c.s_m = std::isfinite(best_hint_d) ? best_hint_s : best_any_s;
-  const Eigen::Vector2d t = tangent_enu(c.s_m);
-  c.l_m = (p_enu_m - point_enu(c.s_m)).dot(Eigen::Vector2d(-t.y(), t.x()));
-  return c;
+  return all.front();
 }
 
 }  // namespace uavsim::vision

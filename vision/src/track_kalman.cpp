@@ -23,6 +23,7 @@ void TrackKalman::reset() {
   initialised_ = false;
   first_point_.reset();
   history_.clear();
+  rejections_in_a_row_ = 0;
   x_.setZero();
   P_.setZero();
   stamp_us_ = 0;
@@ -51,14 +52,18 @@ void TrackKalman::predict(double dt_s, Vec4* x, Mat4* P) const {
 bool TrackKalman::correct(const Eigen::Vector2d& z_enu_m, Vec4* x, Mat4* P) const {
   // world point -> (s, l) on the branch near the prediction (the crossing has two)
   const TrackCoordinates c = track_.project(z_enu_m, (*x)(0), params_.projection_window_m);
-  Eigen::Vector2d innovation(track_.delta_s((*x)(0), c.s_m), c.l_m - (*x)(2));
-  if (innovation.norm() > params_.gate_m) return false;
+  const Eigen::Vector2d innovation(track_.delta_s((*x)(0), c.s_m), c.l_m - (*x)(2));
   Eigen::Matrix<double, 2, 4> h = Eigen::Matrix<double, 2, 4>::Zero();
   h(0, 0) = 1.0;
   h(1, 2) = 1.0;
   const Eigen::Matrix2d r =
       Eigen::Matrix2d::Identity() * params_.measurement_sigma_m * params_.measurement_sigma_m;
   const Eigen::Matrix2d s = h * *P * h.transpose() + r;
+  // gate: implausible under the predicted uncertainty, and further than the floor
+  if (innovation.norm() > params_.gate_floor_m &&
+      innovation.dot(s.ldlt().solve(innovation)) > params_.gate_chi2) {
+    return false;
+  }
   const Eigen::Matrix<double, 4, 2> k = *P * h.transpose() * s.inverse();
   *x += k * innovation;
   (*x)(0) = track_.wrap_s((*x)(0));
@@ -82,7 +87,21 @@ MeasurementResult TrackKalman::add_measurement(int64_t stamp_us,
       first_point_ = {stamp_us, position_enu_m};
       return MeasurementResult::kStored;
     }
-    const TrackCoordinates c1 = track_.project(first_point_->second);
+    // the branch of the first point whose direction best matches the motion: at the crossing two
+    // branches are equally near, but they cross at a wide angle
+    const Eigen::Vector2d motion = position_enu_m - first_point_->second;
+    const std::vector<TrackCoordinates> branches = track_.project_all(first_point_->second);
+    constexpr double kBranchSlackM = 3.0;  // candidates this much further than the nearest
+    TrackCoordinates c1 = branches.front();
+    double best_alignment = -1.0;
+    for (const auto& b : branches) {
+      if (std::abs(b.l_m) > std::abs(branches.front().l_m) + kBranchSlackM) continue;
+      const double alignment = std::abs(track_.tangent_enu(b.s_m).dot(motion));
+      if (alignment > best_alignment) {
+        best_alignment = alignment;
+        c1 = b;
+      }
+    }
     const TrackCoordinates c2 =
         track_.project(position_enu_m, c1.s_m, params_.projection_window_m);
     const double v_s = track_.delta_s(c1.s_m, c2.s_m) / dt_s;
@@ -110,7 +129,14 @@ MeasurementResult TrackKalman::add_measurement(int64_t stamp_us,
     Vec4 x = x_;
     Mat4 p = P_;
     predict(us_to_s(stamp_us - stamp_us_), &x, &p);
-    if (!correct(position_enu_m, &x, &p)) return MeasurementResult::kRejected;
+    if (!correct(position_enu_m, &x, &p)) {
+      if (++rejections_in_a_row_ < params_.max_rejections) return MeasurementResult::kRejected;
+      // the truck is not where the filter thinks: start over from this point
+      reset();
+      first_point_ = {stamp_us, position_enu_m};
+      return MeasurementResult::kRestarted;
+    }
+    rejections_in_a_row_ = 0;
     x_ = x;
     P_ = p;
     stamp_us_ = stamp_us;

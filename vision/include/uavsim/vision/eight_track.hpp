@@ -14,6 +14,7 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -62,6 +63,10 @@ class EightTrack {
   // lies within the window.
   TrackCoordinates project(const Eigen::Vector2d& p_enu_m, std::optional<double> s_hint_m = {},
                            double window_m = 15.0) const;
+
+  // The closest point of every branch (one per straight or arc), nearest first: near the crossing the
+  // first two are both plausible, and only the direction of motion tells them apart.
+  std::vector<TrackCoordinates> project_all(const Eigen::Vector2d& p_enu_m) const;
 
  private:
   Eigen::Vector2d track_to_enu(const Eigen::Vector2d& p_track) const;

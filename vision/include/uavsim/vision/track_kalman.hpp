@@ -24,9 +24,16 @@ struct TrackKalmanParams {
   double accel_psd_s_m2_s3 = 0.05;         // q along the track (speed changes are rare and slow)
   double accel_psd_l_m2_s3 = 0.01;         // q across it (the driver keeps to the path)
   double init_max_dt_s = 2.0;              // two initial detections further apart do not initialise
-  double init_min_dt_s = 0.05;             // nor closer ones (speed would be noise)
+  // nor closer ones: at 15 km/h, 0.4 s is 1.7 m, enough for the direction of motion to pick the
+  // branch at the crossing against 0.3 m noise
+  double init_min_dt_s = 0.4;
   double projection_window_m = 15.0;       // branch choice near the crossing, see EightTrack::project
-  double gate_m = 5.0;                     // innovations larger than this are rejected as outliers
+  // outlier gate on the innovation's Mahalanobis distance squared (chi-square, 2 dof: 18.4 is
+  // p = 1e-4), never tighter than gate_floor_m; after max_rejections in a row the filter restarts
+  // from the next two points rather than ignore a truck that really went elsewhere
+  double gate_chi2 = 18.4;
+  double gate_floor_m = 1.5;
+  int max_rejections = 5;
   int history_size = 32;                   // snapshots kept for out-of-order measurements
   // intercept() extrapolates the lateral rate for at most this long: weaving is not a trend
   double lateral_extrapolation_limit_s = 1.0;
@@ -58,6 +65,7 @@ enum class MeasurementResult {
   kCorrected,
   kReordered,    // older than the newest measurement: the filter was re-run from a snapshot
   kRejected,     // outlier (gate), or too old for the history
+  kRestarted,    // too many outliers in a row: this point is the first of a new initialisation
 };
 
 // Not thread-safe: one owner (the mission's vision/estimation thread).
@@ -103,6 +111,7 @@ class TrackKalman {
   Vec4 x_ = Vec4::Zero();
   Mat4 P_ = Mat4::Zero();
   std::deque<Snapshot> history_;
+  int rejections_in_a_row_ = 0;
 };
 
 }  // namespace uavsim::vision
