@@ -29,6 +29,13 @@ Eigen::Quaterniond attitude_from_thrust(const Eigen::Vector3d& thrust_enu, doubl
   return Eigen::Quaterniond(R).normalized();
 }
 
+void AttitudeController::relax_i(double dt_s, double tau_s) {
+  const double f = tau_s / (tau_s + dt_s);
+  roll_.scale_i(f);
+  pitch_.scale_i(f);
+  yaw_.scale_i(f);
+}
+
 void AttitudeController::reset() {
   roll_.reset();
   pitch_.reset();

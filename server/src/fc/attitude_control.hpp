@@ -36,6 +36,9 @@ class AttitudeController {
                               const Eigen::Matrix3d& inertia, const ParamValues& p, double dt_s,
                               const RateLimits& limits);
   void reset();
+  // Bleeds the rate integrators toward zero (time constant tau_s), as ArduCopter relaxes them when
+  // the land detector suspects ground contact: on the ground they only wind up against the contact.
+  void relax_i(double dt_s, double tau_s);
   const Eigen::Vector3d& rate_target() const { return rate_target_body_rad_s_; }
 
  private:

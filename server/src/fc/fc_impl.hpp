@@ -131,6 +131,7 @@ struct FlightController::Impl {
   double fixed_thrust_n_ = 0.0;   // STABILIZE: collective held from entry
   bool attitude_climb_ = false;   // kAttitude: collective from the climb-rate controller
   MixerStatus mixer_status_;
+  double collective_demand_n_ = 0.0;  // before the mixer's desaturation
   std::array<double, kMaxRotors> motor_cmd_{};
   std::array<double, kMaxRotors> rotor_thrust_n_{};
 
@@ -167,7 +168,8 @@ struct FlightController::Impl {
   GuidedTarget guided_target_;
   AttitudeTarget attitude_target_;
   double guided_cmd_time_s_ = 0.0;
-  bool guided_new_ = false;  // a target arrived since the last step
+  bool guided_new_ = false;     // a target arrived since the last step
+  bool guided_reinit_ = false;  // ... and it switched the guided sub-mode
   bool nav_active_ = false;  // the carrot drives the position setpoint
   Eigen::Vector3d hold_position_enu_m_ = Eigen::Vector3d::Zero();
 

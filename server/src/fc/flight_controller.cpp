@@ -15,6 +15,9 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxDtS = 0.05;
 // GUIDED velocity sanity limit, as ArduCopter's SET_POSITION_TARGET handler
 constexpr double kMaxGuidedSpeedM_S = 1000.0;
+// below this fraction of hover thrust the rate integrators bleed off with time constant kRelaxTauS
+constexpr double kRelaxThrustFraction = 0.5;
+constexpr double kRelaxTauS = 0.2;
 
 double wrap_pi(double a) {
   while (a > kPi) a -= 2.0 * kPi;
@@ -210,6 +213,9 @@ void FlightController::Impl::run_cascade(double dt_s) {
                                         est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
     }
   }
+  // low collective demand: ground contact is likely, relax the rate integrators (ArduCopter)
+  collective_demand_n_ = collective_n;
+  if (collective_n < kRelaxThrustFraction * hover_thrust_n_) att_ctrl_.relax_i(dt_s, kRelaxTauS);
   // mixer: per-rotor thrust, then the inverse square law
   collective_n = std::clamp(collective_n, 0.0, mixer_.max_total_thrust_n());
   mixer_status_ = mixer_.mix(torque_body_nm, collective_n, rotor_thrust_n_.data(), motor_cmd_.data());
@@ -323,6 +329,7 @@ CommandResult FlightController::set_guided_target(const GuidedTarget& t) {
   }
   // dispatch as ArduCopter: pos+vel(+acc), vel(+acc), acc, pos, else hold
   const bool landed = s.landed_ || !s.armed_;
+  const GuidedSub old_sub = s.guided_sub_;
   if (t.position_enu_m && (t.velocity_enu_m_s || t.accel_enu_m_s2)) {
     s.guided_sub_ = GuidedSub::kPosVelAccel;
     s.nav_active_ = false;
@@ -332,7 +339,6 @@ CommandResult FlightController::set_guided_target(const GuidedTarget& t) {
   } else if (t.accel_enu_m_s2) {
     s.guided_sub_ = GuidedSub::kAccel;
     s.nav_active_ = false;
-    s.sp_.velocity_enu_m_s = s.estimator_.state().velocity_enu_m_s;
   } else if (t.position_enu_m) {
     s.guided_sub_ = GuidedSub::kWp;
     s.takeoff_active_ = s.takeoff_active_ && landed;
@@ -341,6 +347,7 @@ CommandResult FlightController::set_guided_target(const GuidedTarget& t) {
     s.guided_sub_ = GuidedSub::kHold;
     if (!landed) s.start_hold();
   }
+  s.guided_reinit_ = s.guided_reinit_ || s.guided_sub_ != old_sub;
   return CommandResult::kAccepted;
 }
 

@@ -291,7 +291,9 @@ void FlightController::Impl::run_guided(double dt_s) {
   const double since_cmd = now() - guided_cmd_time_s_;
   const GuidedTarget& t = guided_target_;
   const bool is_new = guided_new_;
+  const bool reinit = guided_reinit_;
   guided_new_ = false;
+  guided_reinit_ = false;
   switch (guided_sub_) {
     case GuidedSub::kHold:
     case GuidedSub::kTakeoff:
@@ -323,18 +325,27 @@ void FlightController::Impl::run_guided(double dt_s) {
         run_nav(dt_s, nav_limits());
         break;
       }
-      if (is_new) {
+      if (reinit) {
         sp_.position_enu_m = est.position_enu_m;
-        if (guided_sub_ == GuidedSub::kAccel) sp_.velocity_enu_m_s = est.velocity_enu_m_s;
+        sp_.velocity_enu_m_s = est.velocity_enu_m_s;
       }
       nav_active_ = false;
+      // shape the velocity target with WPNAV_ACCEL / WPNAV_ACCEL_Z so the integrated position target
+      // does not run away from the vehicle (ArduCopter's input shaping)
+      Eigen::Vector3d vel_cmd;
       if (guided_sub_ == GuidedSub::kVelAccel) {
-        sp_.velocity_enu_m_s = *t.velocity_enu_m_s;
+        vel_cmd = *t.velocity_enu_m_s;
         sp_.accel_enu_m_s2 = t.accel_enu_m_s2 ? *t.accel_enu_m_s2 : Eigen::Vector3d::Zero();
       } else {
         sp_.accel_enu_m_s2 = *t.accel_enu_m_s2;
-        sp_.velocity_enu_m_s += sp_.accel_enu_m_s2 * dt_s;
+        vel_cmd = sp_.velocity_enu_m_s + sp_.accel_enu_m_s2 * dt_s;
       }
+      Eigen::Vector3d dv = vel_cmd - sp_.velocity_enu_m_s;
+      const double dv_xy = dv.head<2>().norm(), dv_xy_max = d.wp_accel_m_s2 * dt_s;
+      if (dv_xy > dv_xy_max) dv.head<2>() *= dv_xy_max / dv_xy;
+      dv.z() = std::clamp(dv.z(), -d.wp_accel_z_m_s2 * dt_s, d.wp_accel_z_m_s2 * dt_s);
+      sp_.velocity_enu_m_s += dv;
+      if (guided_sub_ == GuidedSub::kVelAccel && !t.accel_enu_m_s2) sp_.accel_enu_m_s2 = dv / dt_s;
       // the position target integrates the velocity, kept within a leash of the vehicle
       sp_.position_enu_m += sp_.velocity_enu_m_s * dt_s;
       Eigen::Vector3d lead = sp_.position_enu_m - est.position_enu_m;

@@ -20,6 +20,7 @@ class Pid {
   double update(double error, double dt_s, const PidGains& gains, bool freeze_i = false);
   void reset();
   void reset_i() { integrator_ = 0.0; }
+  void scale_i(double factor) { integrator_ *= factor; }
   double integrator() const { return integrator_; }
   double derivative() const { return derivative_; }
 

@@ -91,8 +91,9 @@ Eigen::Vector3d PositionController::update(const EstimatedState& est, double acc
   const double alpha = dt_s > 0.0 ? dt_s / (dt_s + 1.0 / (kTwoPi * kAccErrCutoffHz)) : 0.0;
   acc_err_z_filt_ += alpha * ((az_t - accel_z_est_m_s2) - acc_err_z_filt_);
   const PidGains gz{p.psc_accz_p, p.psc_accz_i, 0.0, d.accz_imax_m_s2, 0.0};
-  const bool freeze = (acc_err_z_filt_ > 0.0 && limits.thrust_up) ||
-                      (acc_err_z_filt_ < 0.0 && limits.thrust_down);
+  // anti-windup upward only: a mixer that raises thrust to keep attitude (on the ground, against the
+  // contact) must not stop the integrator from lowering thrust, or the land detector never fires
+  const bool freeze = acc_err_z_filt_ > 0.0 && limits.thrust_up;
   const double az_corr = acc_z_.update(acc_err_z_filt_, dt_s, gz, freeze);
 
   // thrust vector: m (a + g)

@@ -72,7 +72,9 @@ void FlightController::Impl::run_land_detector(double dt_s) {
     return;
   }
   const EstimatedState& est = estimator_.state();
-  const bool thrust_low = mixer_status_.thrust_n < kLandThrustFraction * hover_thrust_n_;
+  // ArduCopter: throttle demand at its lower limit. Not the mixer raising thrust for torque: that
+  // happens in the air too (a failed rotor) and would disarm a flying vehicle.
+  const bool thrust_low = collective_demand_n_ < kLandThrustFraction * hover_thrust_n_;
   const bool still = std::abs(est.velocity_enu_m_s.z()) < kLandMaxClimbM_S &&
                      std::abs(estimator_.accel_z_filtered_m_s2()) < kLandMaxAccelM_S2;
   land_detect_s_ = (thrust_low && still) ? land_detect_s_ + dt_s : 0.0;

@@ -52,10 +52,10 @@ class RigidBodyPlant {
         truth_.q_enu_body = (truth_.q_enu_body * Eigen::Quaterniond(Eigen::AngleAxisd(ang, wb.normalized()))).normalized();
       }
       if (truth_.position_enu_m.z() < 0.0) {
-        // touchdown: stop on the ground
+        // touchdown: stop on the ground within this step; the accelerometer sees the impulse
+        a = -truth_.velocity_enu_m_s / dt_s;
         truth_.position_enu_m.z() = 0.0;
         truth_.velocity_enu_m_s.setZero();
-        a.setZero();
       }
     }
     truth_.accel_enu_m_s2 = a;
