@@ -1,10 +1,11 @@
-// Vision benchmarks: detector cost per frame at the camera sizes missions use (seed 7.1 ran its marker
-// detector at ~7 fps on a TX1; these numbers say how much of a companion computer ours needs).
-// Frames are synthetic (synthetic_scene.hpp): a shaded balloon with green clutter over sky and sand, or
-// the landing marker seen from 10 m. Report ms/frame from the time column; items/s is frames/s.
-#include <cmath>
-
+// Vision benchmarks: detector cost per frame at the camera sizes missions use (seed 7.1 ran its
+// marker detector at ~7 fps on a TX1; these numbers say how much of a companion computer ours
+// needs). Frames are synthetic (synthetic_scene.hpp): a shaded balloon with green clutter over sky
+// and sand, or the landing marker seen from 10 m. Report ms/frame from the time column; items/s is
+// frames/s.
 #include <benchmark/benchmark.h>
+
+#include <cmath>
 
 #include "uavsim/vision/balloon_detector.hpp"
 #include "uavsim/vision/eight_track.hpp"

@@ -1,12 +1,12 @@
-// Balloon detector and tracker on synthetic frames: a Lambert-shaded green sphere of known diameter at a
-// known 3D position, over sky and sand, with pixel noise (synthetic_scene.hpp).
+// Balloon detector and tracker on synthetic frames: a Lambert-shaded green sphere of known diameter
+// at a known 3D position, over sky and sand, with pixel noise (synthetic_scene.hpp).
 #include "uavsim/vision/balloon_detector.hpp"
+
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "uavsim/vision/synthetic_scene.hpp"
 
@@ -20,7 +20,8 @@ constexpr double kNoiseSigma = 3.0;
 
 // 640 x 480, 60 deg horizontal field of view: fx = 320 / tan(30 deg) = 554.3 px
 PinholeIntrinsics test_camera() {
-  return PinholeIntrinsics::from_fovy(640, 480, 2.0 * std::atan(240.0 / (320.0 / std::tan(M_PI / 6))));
+  return PinholeIntrinsics::from_fovy(640, 480,
+                                      2.0 * std::atan(240.0 / (320.0 / std::tan(M_PI / 6))));
 }
 
 struct Scene {
@@ -56,8 +57,8 @@ TEST(BalloonDetector, RangeFromKnownDiameterOnAxisAndOffAxis) {
   const auto k = test_camera();
   const double d = 10.0, rr = 0.3;
   const double a = std::asin(rr / d);
-  const Eigen::Vector3d p = sphere_position_from_circle(k, {k.cx_px, k.cy_px}, k.fx_px * std::tan(a),
-                                                        2 * rr);
+  const Eigen::Vector3d p =
+      sphere_position_from_circle(k, {k.cx_px, k.cy_px}, k.fx_px * std::tan(a), 2 * rr);
   EXPECT_NEAR(p.norm(), d, 1e-6);
   EXPECT_NEAR(p.x(), 0.0, 1e-9);
 }
@@ -93,15 +94,16 @@ TEST(BalloonDetector, DetectsShadedBalloonsAndMeasuresRange) {
     worst_range_error = std::max(worst_range_error, err);
     sum_range_error += err;
     ++ranged;
-    worst_centre_px = std::max(
-        worst_centre_px, std::hypot(hit->centre_px.x - truth_px.x(), hit->centre_px.y - truth_px.y()));
+    worst_centre_px = std::max(worst_centre_px, std::hypot(hit->centre_px.x - truth_px.x(),
+                                                           hit->centre_px.y - truth_px.y()));
     EXPECT_LT(err, kMaxRangeError) << "frame " << i << " range " << s.centre_cam_m.norm() << " m";
   }
   const double big_rate = static_cast<double>(big_hits) / big;
-  std::printf("[ balloons ] >=20 px: %d/%d detected (%.1f%%); <20 px: %d/%d; range error mean %.2f%% "
-              "max %.2f%%; centre error max %.2f px; false detections %d\n",
-              big_hits, big, 100 * big_rate, small_hits, small, 100 * sum_range_error / ranged,
-              100 * worst_range_error, worst_centre_px, extra);
+  std::printf(
+      "[ balloons ] >=20 px: %d/%d detected (%.1f%%); <20 px: %d/%d; range error mean %.2f%% "
+      "max %.2f%%; centre error max %.2f px; false detections %d\n",
+      big_hits, big, 100 * big_rate, small_hits, small, 100 * sum_range_error / ranged,
+      100 * worst_range_error, worst_centre_px, extra);
   RecordProperty("detection_rate_ge_20px", std::to_string(big_rate));
   RecordProperty("max_range_error", std::to_string(worst_range_error));
   EXPECT_GE(big_rate, kMinDetectionRate);

@@ -1,8 +1,8 @@
 #include "uavsim/vision/camera_model.hpp"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 namespace uavsim::vision {
 namespace {
@@ -31,8 +31,8 @@ TEST(PinholeIntrinsics, ProjectInvertsRay) {
 }
 
 TEST(CameraPose, DownLookingGimbalAxes) {
-  // vehicle level, facing east (yaw 0); gimbal straight down: optical axis = -z_enu, image top = east,
-  // image right = south
+  // vehicle level, facing east (yaw 0); gimbal straight down: optical axis = -z_enu, image top =
+  // east, image right = south
   const auto pose = camera_pose_from_vehicle({1, 2, 10}, Eigen::Quaterniond::Identity(),
                                              GimbalAngles{-M_PI / 2, 0.0, true});
   EXPECT_NEAR((pose.R_enu_cam * Eigen::Vector3d::UnitZ() - Eigen::Vector3d(0, 0, -1)).norm(), 0,
@@ -59,8 +59,7 @@ TEST(CameraPose, StabilisedGimbalIgnoresRollAndPitch) {
   const auto level = camera_pose_from_vehicle({0, 0, 5}, q_enu_body_from_rpy(0, 0, 0.7),
                                               GimbalAngles{-M_PI / 2, 0, true});
   EXPECT_NEAR((stabilised.R_enu_cam - level.R_enu_cam).norm(), 0.0, 1e-12);
-  const auto body_fixed =
-      camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-M_PI / 2, 0, false});
+  const auto body_fixed = camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-M_PI / 2, 0, false});
   EXPECT_GT((body_fixed.R_enu_cam - level.R_enu_cam).norm(), 0.1);
 }
 

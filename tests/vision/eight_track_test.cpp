@@ -1,9 +1,9 @@
 #include "uavsim/vision/eight_track.hpp"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
-
-#include <gtest/gtest.h>
 
 namespace uavsim::vision {
 namespace {

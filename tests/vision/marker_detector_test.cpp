@@ -2,12 +2,12 @@
 // known camera pose (synthetic_scene.hpp), seen from a down-looking camera on a tilted UAV.
 #include "uavsim/vision/marker_detector.hpp"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
-#include <random>
-
-#include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "uavsim/vision/synthetic_scene.hpp"
 
@@ -28,8 +28,8 @@ struct Trial {
   int frames = 0;
 };
 
-// UAV at 10 m, tilted by up to max_tilt_rad in roll and pitch, random heading; the marker somewhere in
-// the view; the pose passed to the detector is the one that rendered the frame
+// UAV at 10 m, tilted by up to max_tilt_rad in roll and pitch, random heading; the marker somewhere
+// in the view; the pose passed to the detector is the one that rendered the frame
 Trial run_trials(bool earth_stabilised, double max_tilt_rad, int frames, uint64_t seed) {
   const auto k = down_camera();
   MarkerDetector detector;
@@ -38,10 +38,10 @@ Trial run_trials(bool earth_stabilised, double max_tilt_rad, int frames, uint64_
   Trial t;
   for (int i = 0; i < frames; ++i) {
     const Eigen::Vector3d uav(20 * unit(rng), 15 * unit(rng), kAltitudeM);
-    const auto q = q_enu_body_from_rpy(max_tilt_rad * unit(rng), max_tilt_rad * unit(rng),
-                                       M_PI * unit(rng));
-    const CameraPose pose = camera_pose_from_vehicle(uav, q, {-M_PI / 2, 0.0, earth_stabilised},
-                                                     {0.05, 0.0, -0.1});
+    const auto q =
+        q_enu_body_from_rpy(max_tilt_rad * unit(rng), max_tilt_rad * unit(rng), M_PI * unit(rng));
+    const CameraPose pose =
+        camera_pose_from_vehicle(uav, q, {-M_PI / 2, 0.0, earth_stabilised}, {0.05, 0.0, -0.1});
     // a marker centre that lands in the inner 60% of the image
     const Eigen::Vector2d px(k.cx_px + 0.3 * k.width_px * unit(rng),
                              k.cy_px + 0.3 * k.height_px * unit(rng));
@@ -66,8 +66,9 @@ Trial run_trials(bool earth_stabilised, double max_tilt_rad, int frames, uint64_
 TEST(MarkerDetector, LocatesMarkerFromTenMetresWithBodyFixedTiltedCamera) {
   // body-fixed gimbal: the UAV's 10 deg roll/pitch tilts the view; the pose accounts for it
   const Trial t = run_trials(false, 10.0 * M_PI / 180, 40, 2017);
-  std::printf("[ marker   ] body-fixed, tilt <= 10 deg: %d/%d detected, error mean %.3f m max %.3f m\n",
-              t.detected, t.frames, t.sum_error_m / std::max(t.detected, 1), t.worst_error_m);
+  std::printf(
+      "[ marker   ] body-fixed, tilt <= 10 deg: %d/%d detected, error mean %.3f m max %.3f m\n",
+      t.detected, t.frames, t.sum_error_m / std::max(t.detected, 1), t.worst_error_m);
   EXPECT_EQ(t.detected, t.frames);
   EXPECT_LT(t.worst_error_m, kMaxPositionErrorM);
 }
@@ -83,8 +84,8 @@ TEST(MarkerDetector, LocatesMarkerWithStabilisedGimbal) {
 TEST(MarkerDetector, RadiusMatchesPinholeScale) {
   // straight down from 10 m to a deck at 1.2 m: r = f * 0.65 / 8.8 = 415.7 * 0.0739 = 30.7 px
   const auto k = down_camera();
-  const CameraPose pose = camera_pose_from_vehicle({0, 0, kAltitudeM}, Eigen::Quaterniond::Identity(),
-                                                   {-M_PI / 2, 0.0, true});
+  const CameraPose pose = camera_pose_from_vehicle(
+      {0, 0, kAltitudeM}, Eigen::Quaterniond::Identity(), {-M_PI / 2, 0.0, true});
   cv::Mat image = synthetic::sand_background(k, 1);
   synthetic::render_marker(k, pose, LandingMarkerGeometry{}, {0, 0}, 0.3, kDeckHeightM, &image);
   MarkerDetector detector;

@@ -1,14 +1,14 @@
-// Kalman filter on the eight track: a truck at 15 km/h with a small lateral weave, seen at 7 Hz with
-// 150 ms processing latency and 0.3 m measurement noise (seed 7.1's setting), seeded.
+// Kalman filter on the eight track: a truck at 15 km/h with a small lateral weave, seen at 7 Hz
+// with 150 ms processing latency and 0.3 m measurement noise (seed 7.1's setting), seeded.
 #include "uavsim/vision/track_kalman.hpp"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace uavsim::vision {
 namespace {
@@ -38,8 +38,8 @@ struct RunStats {
   double rms_error_m = 0.0;
 };
 
-// images at 7 Hz; each result arrives 150 ms later, stamped with the image time (or, to show what the
-// stamps buy, with the arrival time); the estimate at "now" is scored at 50 Hz
+// images at 7 Hz; each result arrives 150 ms later, stamped with the image time (or, to show what
+// the stamps buy, with the arrival time); the estimate at "now" is scored at 50 Hz
 RunStats run(bool use_image_stamps, double duration_s, uint64_t seed) {
   const EightTrack track;
   const Truck truck{track, 30.0};
@@ -74,9 +74,10 @@ TEST(TrackKalman, TracksTruckWithDelayedMeasurements) {
   // two laps (254.5 m at 4.17 m/s: 61 s each), through the crossing four times
   const RunStats st = run(true, 125.0, 2017);
   const RunStats naive = run(false, 125.0, 2017);
-  std::printf("[ kalman   ] 15 km/h, 7 Hz, 150 ms latency, 0.3 m noise: error at now rms %.3f m "
-              "max %.3f m (stamping at arrival instead: rms %.3f m max %.3f m)\n",
-              st.rms_error_m, st.max_error_m, naive.rms_error_m, naive.max_error_m);
+  std::printf(
+      "[ kalman   ] 15 km/h, 7 Hz, 150 ms latency, 0.3 m noise: error at now rms %.3f m "
+      "max %.3f m (stamping at arrival instead: rms %.3f m max %.3f m)\n",
+      st.rms_error_m, st.max_error_m, naive.rms_error_m, naive.max_error_m);
   EXPECT_LT(st.max_error_m, kMaxErrorM);
   // stamping at arrival lags by latency * speed = 0.15 * 4.17 = 0.63 m
   EXPECT_LT(st.rms_error_m, naive.rms_error_m);
@@ -101,8 +102,8 @@ TEST(TrackKalman, FollowsSlowdownFrom15To5KmH) {
   for (double now_s = 0.0; now_s < 60.0; now_s += 0.02) {
     while (frame / kFrameRateHz + kLatencyUs * 1e-6 <= now_s) {
       const double t = frame / kFrameRateHz;
-      filter.add_measurement(to_us(t), track.point_enu(s_at(t)) +
-                                           Eigen::Vector2d(noise(rng), noise(rng)));
+      filter.add_measurement(to_us(t),
+                             track.point_enu(s_at(t)) + Eigen::Vector2d(noise(rng), noise(rng)));
       ++frame;
     }
     if (now_s < kSettleS) continue;
@@ -156,16 +157,18 @@ TEST(TrackKalman, OutOfOrderMeasurementEqualsInOrder) {
   }
   EXPECT_GT(reordered, 10);
   const int64_t now = zs.back().first + 100'000;
-  EXPECT_NEAR((in_order.estimate_at(now)->position_enu_m - shuffled.estimate_at(now)->position_enu_m)
-                  .norm(),
-              0.0, 1e-9);
+  EXPECT_NEAR(
+      (in_order.estimate_at(now)->position_enu_m - shuffled.estimate_at(now)->position_enu_m)
+          .norm(),
+      0.0, 1e-9);
 }
 
 TEST(TrackKalman, RejectsOutlier) {
   const EightTrack track;
   TrackKalman filter(track);
   filter.add_measurement(0, track.point_enu(10.0));
-  ASSERT_EQ(filter.add_measurement(500'000, track.point_enu(12.0)), MeasurementResult::kInitialised);
+  ASSERT_EQ(filter.add_measurement(500'000, track.point_enu(12.0)),
+            MeasurementResult::kInitialised);
   EXPECT_EQ(filter.add_measurement(700'000, track.point_enu(12.8) + Eigen::Vector2d(0, 20)),
             MeasurementResult::kRejected);
   EXPECT_EQ(filter.add_measurement(700'000, track.point_enu(12.8)), MeasurementResult::kCorrected);

@@ -1,16 +1,15 @@
 #include "uavsim/vision/video_log.hpp"
 
+#include <gtest/gtest.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <random>
-
-#include <unistd.h>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
 
 #include "uavsim/vision/synthetic_scene.hpp"
 
@@ -131,7 +130,8 @@ TEST_F(VideoLogTest, ExportPaintsOverlaysIntoPngsAndMp4) {
     auto writer = VideoLogWriter::open(dir_ / "d.vlog");
     ASSERT_TRUE(writer.ok());
     for (int i = 0; i < 6; ++i) {
-      (*writer)->submit({i * 100'000LL, frame_image(i), frame_overlays(i), "frame " + std::to_string(i)});
+      (*writer)->submit(
+          {i * 100'000LL, frame_image(i), frame_overlays(i), "frame " + std::to_string(i)});
     }
     ASSERT_TRUE((*writer)->close().ok());
   }

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
 #include <opencv2/imgproc.hpp>
 
 #include "circle_fit.hpp"
@@ -13,16 +12,16 @@ namespace uavsim::vision {
 Eigen::Vector3d sphere_position_from_circle(const PinholeIntrinsics& intrinsics,
                                             const cv::Point2d& centre_px, double radius_px,
                                             double diameter_m) {
-  // rays through points of the image circle form (nearly) the sphere's tangent cone; its axis is their
-  // mean direction and its half-angle a gives the range: sin(a) = R / d. Valid off-axis too, where the
-  // sphere's image is an ellipse and a plain f * D / (2 r) would be biased.
+  // rays through points of the image circle form (nearly) the sphere's tangent cone; its axis is
+  // their mean direction and its half-angle a gives the range: sin(a) = R / d. Valid off-axis too,
+  // where the sphere's image is an ellipse and a plain f * D / (2 r) would be biased.
   constexpr int kRimSamples = 16;
   Eigen::Vector3d rays[kRimSamples];
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
   for (int i = 0; i < kRimSamples; ++i) {
     const double t = 2.0 * M_PI * i / kRimSamples;
-    rays[i] = intrinsics.ray_cam({centre_px.x + radius_px * std::cos(t),
-                                  centre_px.y + radius_px * std::sin(t)});
+    rays[i] = intrinsics.ray_cam(
+        {centre_px.x + radius_px * std::cos(t), centre_px.y + radius_px * std::sin(t)});
     axis += rays[i];
   }
   axis.normalize();
@@ -70,16 +69,16 @@ std::vector<BalloonDetection> BalloonDetector::detect(const cv::Mat& bgr) {
     // shape tests: round outline, filled disc
     const double residual = fit.rms_residual_px / fit.radius_px;
     const double fill = area_px / (M_PI * fit.radius_px * fit.radius_px);
-    if (residual > params_.max_fit_residual || fill < params_.min_fill_ratio || fill > 1.15) continue;
+    if (residual > params_.max_fit_residual || fill < params_.min_fill_ratio || fill > 1.15)
+      continue;
     // the outline runs through the centres of the blob's edge pixels: the edge is half a pixel out
     const double radius_px = fit.radius_px + 0.5;
     if (radius_px < params_.min_radius_px || radius_px > params_.max_radius_px) continue;
     // reject blobs cut by the border: their centre and size are unreliable
-    const double outside =
-        std::max({0.0, radius_px - fit.centre_px.x, radius_px - fit.centre_px.y,
-                  fit.centre_px.x + radius_px - (bgr.cols - 1),
-                  fit.centre_px.y + radius_px - (bgr.rows - 1)}) /
-        (2.0 * radius_px);
+    const double outside = std::max({0.0, radius_px - fit.centre_px.x, radius_px - fit.centre_px.y,
+                                     fit.centre_px.x + radius_px - (bgr.cols - 1),
+                                     fit.centre_px.y + radius_px - (bgr.rows - 1)}) /
+                           (2.0 * radius_px);
     if (outside > params_.max_circle_outside) continue;
 
     BalloonDetection d;
@@ -87,16 +86,16 @@ std::vector<BalloonDetection> BalloonDetector::detect(const cv::Mat& bgr) {
     d.radius_px = radius_px;
     d.fit_residual = residual;
 
-    // Circle Hough Transform on the blurred mask around the candidate (seed 7.2, fig. 7.12): it must
-    // find a circle of about the fitted size; its centre, robust to bumps on the outline, is averaged in.
-    // The radius stays the sub-pixel least-squares one (Hough radii are whole pixels).
+    // Circle Hough Transform on the blurred mask around the candidate (seed 7.2, fig. 7.12): it
+    // must find a circle of about the fitted size; its centre, robust to bumps on the outline, is
+    // averaged in. The radius stays the sub-pixel least-squares one (Hough radii are whole pixels).
     constexpr double kMinHoughRadiusPx = 8.0;
     if (params_.hough_refine && radius_px >= kMinHoughRadiusPx) {
       const int margin = static_cast<int>(std::ceil(radius_px * 1.4)) + 2;
-      const cv::Rect roi = cv::Rect(static_cast<int>(fit.centre_px.x) - margin,
-                                    static_cast<int>(fit.centre_px.y) - margin, 2 * margin,
-                                    2 * margin) &
-                           cv::Rect(0, 0, bgr.cols, bgr.rows);
+      const cv::Rect roi =
+          cv::Rect(static_cast<int>(fit.centre_px.x) - margin,
+                   static_cast<int>(fit.centre_px.y) - margin, 2 * margin, 2 * margin) &
+          cv::Rect(0, 0, bgr.cols, bgr.rows);
       cv::GaussianBlur(mask_(roi), work_, {5, 5}, 1.2);
       std::vector<cv::Vec3f> circles;
       cv::HoughCircles(work_, circles, cv::HOUGH_GRADIENT, 1.0, radius_px, 100.0,
@@ -112,8 +111,8 @@ std::vector<BalloonDetection> BalloonDetector::detect(const cv::Mat& bgr) {
       }
     }
 
-    d.position_cam_m =
-        sphere_position_from_circle(intrinsics_, d.centre_px, d.radius_px, params_.balloon_diameter_m);
+    d.position_cam_m = sphere_position_from_circle(intrinsics_, d.centre_px, d.radius_px,
+                                                   params_.balloon_diameter_m);
     d.range_m = d.position_cam_m.norm();
     out.push_back(d);
   }
@@ -130,8 +129,9 @@ std::vector<BalloonTrack> BalloonTracker::update(int64_t stamp_us,
   const double dt_s = tracks_.empty() ? 0.0 : 1e-6 * static_cast<double>(stamp_us - last_stamp_us_);
   last_stamp_us_ = stamp_us;
   // first-order low-pass: alpha = 1 - exp(-dt / tau)
-  const double alpha =
-      params_.lowpass_tau_s > 0.0 ? 1.0 - std::exp(-std::max(dt_s, 0.0) / params_.lowpass_tau_s) : 1.0;
+  const double alpha = params_.lowpass_tau_s > 0.0
+                           ? 1.0 - std::exp(-std::max(dt_s, 0.0) / params_.lowpass_tau_s)
+                           : 1.0;
 
   // greedy nearest-neighbour association, closest pairs first
   struct Pair {

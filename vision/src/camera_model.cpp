@@ -59,7 +59,8 @@ Eigen::Matrix3d R_mount_cam() {
 }
 
 CameraPose camera_pose_from_vehicle(const Eigen::Vector3d& vehicle_position_enu_m,
-                                    const Eigen::Quaterniond& q_enu_body, const GimbalAngles& gimbal,
+                                    const Eigen::Quaterniond& q_enu_body,
+                                    const GimbalAngles& gimbal,
                                     const Eigen::Vector3d& camera_offset_body_m) {
   // gimbal: yaw about up, then elevation; a positive rotation about FLU y tilts x down, so -pitch
   const Eigen::Matrix3d R_base_mount =

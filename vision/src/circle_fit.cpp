@@ -1,8 +1,7 @@
 #include "circle_fit.hpp"
 
-#include <cmath>
-
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace uavsim::vision::detail {
 

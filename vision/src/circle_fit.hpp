@@ -1,9 +1,8 @@
 // Least-squares circle fit shared by the detectors (private header).
 #pragma once
 
-#include <vector>
-
 #include <opencv2/core.hpp>
+#include <vector>
 
 namespace uavsim::vision::detail {
 
@@ -14,8 +13,8 @@ struct CircleFit {
   bool ok = false;
 };
 
-// Algebraic (Kasa 1976) fit: minimises sum (x^2 + y^2 + D x + E y + F)^2, a linear 3x3 problem; unbiased
-// enough for full outlines, which is what the detectors give it.
+// Algebraic (Kasa 1976) fit: minimises sum (x^2 + y^2 + D x + E y + F)^2, a linear 3x3 problem;
+// unbiased enough for full outlines, which is what the detectors give it.
 CircleFit fit_circle(const std::vector<cv::Point2d>& points_px);
 
 }  // namespace uavsim::vision::detail

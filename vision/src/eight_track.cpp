@@ -1,26 +1,26 @@
 #include "uavsim/vision/eight_track.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-
-#include <Eigen/Geometry>
 
 namespace uavsim::vision {
 
 namespace {
 
 // Segments in travel order (see the header): 0 crossing -> right tangent point, 1 right circle
-// clockwise, 2 straight through the crossing, 3 left circle counter-clockwise, 4 back to the crossing.
+// clockwise, 2 straight through the crossing, 3 left circle counter-clockwise, 4 back to the
+// crossing.
 struct Segment {
   bool arc;
   double s0_m;
   double length_m;
-  Eigen::Vector2d start;   // line: start point; arc: circle centre
-  Eigen::Vector2d dir;     // line: unit direction
-  double theta0_rad;       // arc: start angle about the centre
-  double turn;             // arc: +1 counter-clockwise, -1 clockwise
+  Eigen::Vector2d start;  // line: start point; arc: circle centre
+  Eigen::Vector2d dir;    // line: unit direction
+  double theta0_rad;      // arc: start angle about the centre
+  double turn;            // arc: +1 counter-clockwise, -1 clockwise
 };
 
 double wrap_2pi(double a) {
@@ -37,7 +37,8 @@ EightTrack::EightTrack(const EightTrackParams& params) : params_(params) {
     throw std::invalid_argument(
         "EightTrackParams: need centre_separation_m > 2 * circle_radius_m > 0 (internal tangents)");
   }
-  // internal tangent through the crossing: distance from a centre (c, 0) to the line = c sin(phi) = R
+  // internal tangent through the crossing: distance from a centre (c, 0) to the line = c sin(phi) =
+  // R
   tangent_angle_rad_ = std::asin(r / half_sep_m_);
   half_straight_m_ = half_sep_m_ * std::cos(tangent_angle_rad_);
   arc_m_ = r * (M_PI + 2.0 * tangent_angle_rad_);
@@ -69,12 +70,14 @@ static void build_segments(double c, double phi, double a, double arc, Segment o
   const Eigen::Vector2d w(-std::cos(phi), std::sin(phi));  // second straight
   out[0] = {false, 0.0, a, Eigen::Vector2d::Zero(), u, 0.0, 0.0};
   out[1] = {true, a, arc, Eigen::Vector2d(c, 0.0), Eigen::Vector2d::Zero(), phi + M_PI / 2, -1.0};
-  out[2] = {false, a + arc, 2.0 * a, a * Eigen::Vector2d(std::cos(phi), -std::sin(phi)), w, 0.0,
-            0.0};
-  out[3] = {true, 3.0 * a + arc, arc, Eigen::Vector2d(-c, 0.0), Eigen::Vector2d::Zero(),
-            M_PI / 2 - phi, 1.0};
-  out[4] = {false, 3.0 * a + 2.0 * arc, a, a * Eigen::Vector2d(-std::cos(phi), -std::sin(phi)), u,
-            0.0, 0.0};
+  out[2] = {false, a + arc, 2.0 * a, a * Eigen::Vector2d(std::cos(phi), -std::sin(phi)),
+            w,     0.0,     0.0};
+  out[3] = {
+      true, 3.0 * a + arc, arc, Eigen::Vector2d(-c, 0.0), Eigen::Vector2d::Zero(), M_PI / 2 - phi,
+      1.0};
+  out[4] = {
+      false, 3.0 * a + 2.0 * arc, a, a * Eigen::Vector2d(-std::cos(phi), -std::sin(phi)), u, 0.0,
+      0.0};
 }
 
 Eigen::Vector2d EightTrack::point_enu(double s_m) const {
@@ -86,8 +89,8 @@ Eigen::Vector2d EightTrack::point_enu(double s_m) const {
     const double local = s - seg[i].s0_m;
     if (!seg[i].arc) return track_to_enu(seg[i].start + local * seg[i].dir);
     const double theta = seg[i].theta0_rad + seg[i].turn * local / params_.circle_radius_m;
-    return track_to_enu(seg[i].start +
-                        params_.circle_radius_m * Eigen::Vector2d(std::cos(theta), std::sin(theta)));
+    return track_to_enu(seg[i].start + params_.circle_radius_m *
+                                           Eigen::Vector2d(std::cos(theta), std::sin(theta)));
   }
   return track_to_enu(Eigen::Vector2d::Zero());
 }

@@ -2,14 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 namespace uavsim::vision {
 
 namespace {
 
-// rms of (normalised elliptic radius - 1) of an outline about its fitted ellipse: 0 for a perfect ellipse
+// rms of (normalised elliptic radius - 1) of an outline about its fitted ellipse: 0 for a perfect
+// ellipse
 double ellipse_residual(const std::vector<cv::Point>& outline, const cv::RotatedRect& e) {
   const double a = 0.5 * e.size.width;
   const double b = 0.5 * e.size.height;
@@ -78,7 +78,8 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
       }
     }
     const double white_fraction = (outer_area_px - holes_area_px) / outer_area_px;
-    if (white_fraction < params_.min_white_fraction || white_fraction > params_.max_white_fraction) {
+    if (white_fraction < params_.min_white_fraction ||
+        white_fraction > params_.max_white_fraction) {
       continue;
     }
 
@@ -95,14 +96,14 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
       }
     }
 
-    // Circle Hough Transform around the candidate (seed 7.1, fig. 7.4): it must see a circle of about
-    // the ring's size centred on it; its centre is averaged in
+    // Circle Hough Transform around the candidate (seed 7.1, fig. 7.4): it must see a circle of
+    // about the ring's size centred on it; its centre is averaged in
     if (params_.hough_refine) {
       const int margin = static_cast<int>(std::ceil(d.radius_px * 1.3)) + 2;
-      const cv::Rect roi = cv::Rect(static_cast<int>(d.centre_px.x) - margin,
-                                    static_cast<int>(d.centre_px.y) - margin, 2 * margin,
-                                    2 * margin) &
-                           cv::Rect(0, 0, gray_.cols, gray_.rows);
+      const cv::Rect roi =
+          cv::Rect(static_cast<int>(d.centre_px.x) - margin,
+                   static_cast<int>(d.centre_px.y) - margin, 2 * margin, 2 * margin) &
+          cv::Rect(0, 0, gray_.cols, gray_.rows);
       cv::Mat blurred;
       cv::GaussianBlur(gray_(roi), blurred, {5, 5}, 1.2);
       std::vector<cv::Vec3f> circles;
@@ -128,7 +129,8 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
 
 std::optional<Eigen::Vector3d> marker_position_enu(const MarkerDetection& detection,
                                                    const PinholeIntrinsics& intrinsics,
-                                                   const CameraPose& pose, double deck_height_enu_m) {
+                                                   const CameraPose& pose,
+                                                   double deck_height_enu_m) {
   return pixel_to_plane_enu(intrinsics, pose, {detection.centre_px.x, detection.centre_px.y},
                             deck_height_enu_m);
 }

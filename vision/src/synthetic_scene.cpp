@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 namespace uavsim::vision::synthetic {
@@ -27,9 +26,9 @@ cv::Mat sand(cv::Size size, uint64_t seed) {
   for (int y = 0; y < size.height; ++y) {
     for (int x = 0; x < size.width; ++x) {
       const double k = 1.0 + 0.12 * coarse.at<float>(y, x) + 0.06 * fine.at<float>(y, x);
-      out.at<cv::Vec3b>(y, x) = cv::Vec3b(cv::saturate_cast<uint8_t>(135 * k),
-                                          cv::saturate_cast<uint8_t>(180 * k),
-                                          cv::saturate_cast<uint8_t>(205 * k));
+      out.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(cv::saturate_cast<uint8_t>(135 * k), cv::saturate_cast<uint8_t>(180 * k),
+                    cv::saturate_cast<uint8_t>(205 * k));
     }
   }
   return out;
@@ -122,8 +121,7 @@ void render_green_clutter(uint64_t seed, cv::Mat* image_bgr) {
       const double rr = (i % 2 == 0 ? 1.0 : 0.45) * r * rng.uniform(0.85, 1.15);
       poly.emplace_back(cvRound(c.x + rr * std::cos(a)), cvRound(c.y + rr * std::sin(a)));
     }
-    cv::fillPoly(*image_bgr, std::vector<std::vector<cv::Point>>{poly}, {40, 150, 55},
-                 cv::LINE_AA);
+    cv::fillPoly(*image_bgr, std::vector<std::vector<cv::Point>>{poly}, {40, 150, 55}, cv::LINE_AA);
   }
   // a green board
   {
@@ -193,7 +191,8 @@ void render_marker(const PinholeIntrinsics& k, const CameraPose& pose,
       if (w <= 0.0f) continue;
       cv::Vec3b& px = image_bgr->at<cv::Vec3b>(y, x);
       const cv::Vec3b& m = warped.at<cv::Vec3b>(y, x);
-      for (int ch = 0; ch < 3; ++ch) px[ch] = cv::saturate_cast<uint8_t>((1 - w) * px[ch] + w * m[ch]);
+      for (int ch = 0; ch < 3; ++ch)
+        px[ch] = cv::saturate_cast<uint8_t>((1 - w) * px[ch] + w * m[ch]);
     }
   }
 }

@@ -1,9 +1,8 @@
 #include "uavsim/vision/track_kalman.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace uavsim::vision {
 
@@ -102,8 +101,7 @@ MeasurementResult TrackKalman::add_measurement(int64_t stamp_us,
         c1 = b;
       }
     }
-    const TrackCoordinates c2 =
-        track_.project(position_enu_m, c1.s_m, params_.projection_window_m);
+    const TrackCoordinates c2 = track_.project(position_enu_m, c1.s_m, params_.projection_window_m);
     const double v_s = track_.delta_s(c1.s_m, c2.s_m) / dt_s;
     if (std::abs(v_s) > kMaxInitSpeedM_S) {
       first_point_ = {stamp_us, position_enu_m};

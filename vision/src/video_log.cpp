@@ -8,11 +8,10 @@
 #include <deque>
 #include <fstream>
 #include <mutex>
-#include <thread>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
+#include <thread>
 
 namespace uavsim::vision {
 
@@ -123,12 +122,18 @@ bool parse_overlay(ByteReader* r, Overlay* o) {
 
 const char* to_string(VideoLogError error) {
   switch (error) {
-    case VideoLogError::kOpenFailed: return "cannot open the file";
-    case VideoLogError::kWriteFailed: return "write failed";
-    case VideoLogError::kBadFormat: return "not a VLOG file (or an unsupported version/codec)";
-    case VideoLogError::kOutOfRange: return "frame index out of range";
-    case VideoLogError::kDecodeFailed: return "image does not decode";
-    case VideoLogError::kExportFailed: return "export failed";
+    case VideoLogError::kOpenFailed:
+      return "cannot open the file";
+    case VideoLogError::kWriteFailed:
+      return "write failed";
+    case VideoLogError::kBadFormat:
+      return "not a VLOG file (or an unsupported version/codec)";
+    case VideoLogError::kOutOfRange:
+      return "frame index out of range";
+    case VideoLogError::kDecodeFailed:
+      return "image does not decode";
+    case VideoLogError::kExportFailed:
+      return "export failed";
   }
   return "unknown error";
 }
@@ -144,12 +149,18 @@ Overlay Overlay::line(cv::Point2f from_px, cv::Point2f to_px, cv::Scalar colour_
   return {Kind::kLine, colour_bgr, thickness_px, {from_px.x, from_px.y, to_px.x, to_px.y}, {}};
 }
 Overlay Overlay::rectangle(cv::Rect2f rect_px, cv::Scalar colour_bgr, float thickness_px) {
-  return {Kind::kRectangle, colour_bgr, thickness_px,
-          {rect_px.x, rect_px.y, rect_px.width, rect_px.height}, {}};
+  return {Kind::kRectangle,
+          colour_bgr,
+          thickness_px,
+          {rect_px.x, rect_px.y, rect_px.width, rect_px.height},
+          {}};
 }
 Overlay Overlay::label(cv::Point2f origin_px, std::string text, cv::Scalar colour_bgr,
                        float font_scale, float thickness_px) {
-  return {Kind::kText, colour_bgr, thickness_px, {origin_px.x, origin_px.y, font_scale, 0},
+  return {Kind::kText,
+          colour_bgr,
+          thickness_px,
+          {origin_px.x, origin_px.y, font_scale, 0},
           std::move(text)};
 }
 
@@ -243,8 +254,7 @@ Result<std::unique_ptr<VideoLogWriter>, VideoLogError> VideoLogWriter::open(
 }
 
 bool VideoLogWriter::submit(const VideoLogFrame& frame) {
-  if (frame.image.empty() ||
-      (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1)) {
+  if (frame.image.empty() || (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1)) {
     ++impl_->dropped;
     return false;
   }
@@ -375,9 +385,9 @@ Result<VideoLogRecord, VideoLogError> VideoLogReader::read(size_t index) {
   }
   rec.text = r.string();
   if (r.failed()) return VideoLogError::kBadFormat;
-  rec.image = cv::imdecode(cv::Mat(1, static_cast<int>(jpeg_bytes), CV_8UC1,
-                                   const_cast<uint8_t*>(jpeg)),
-                           cv::IMREAD_UNCHANGED);
+  rec.image =
+      cv::imdecode(cv::Mat(1, static_cast<int>(jpeg_bytes), CV_8UC1, const_cast<uint8_t*>(jpeg)),
+                   cv::IMREAD_UNCHANGED);
   if (rec.image.empty()) return VideoLogError::kDecodeFailed;
   return rec;
 }
@@ -399,7 +409,8 @@ void draw_overlays(const std::vector<Overlay>& overlays, cv::Mat* image_bgr) {
                  cv::Point(cvRound(g[2]), cvRound(g[3])), o.colour_bgr, thickness, cv::LINE_AA);
         break;
       case Overlay::Kind::kRectangle:
-        cv::rectangle(*image_bgr, cv::Rect(cvRound(g[0]), cvRound(g[1]), cvRound(g[2]), cvRound(g[3])),
+        cv::rectangle(*image_bgr,
+                      cv::Rect(cvRound(g[0]), cvRound(g[1]), cvRound(g[2]), cvRound(g[3])),
                       o.colour_bgr, thickness, cv::LINE_AA);
         break;
       case Overlay::Kind::kText:
@@ -484,9 +495,8 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
         if (!video.isOpened()) {
           const std::string cmd = "ffmpeg -y -loglevel error -f rawvideo -pix_fmt bgr24 -s " +
                                   std::to_string(video_size.width) + "x" +
-                                  std::to_string(video_size.height) + " -r " +
-                                  std::to_string(fps) + " -i - -c:v mpeg4 -q:v 3 '" +
-                                  options.mp4_path.string() + "'";
+                                  std::to_string(video_size.height) + " -r " + std::to_string(fps) +
+                                  " -i - -c:v mpeg4 -q:v 3 '" + options.mp4_path.string() + "'";
           ffmpeg = popen(cmd.c_str(), "w");
           if (!ffmpeg) return VideoLogError::kExportFailed;
         }

@@ -1,5 +1,5 @@
-// uavsim-videolog-export: replays a VLOG file (seed 6.4) into PNG frames and/or an MP4, with the overlay
-// drawings and per-frame text painted on (or not).
+// uavsim-videolog-export: replays a VLOG file (seed 6.4) into PNG frames and/or an MP4, with the
+// overlay drawings and per-frame text painted on (or not).
 //
 //   uavsim-videolog-export LOG.vlog [--png DIR] [--mp4 FILE] [--no-overlays] [--no-text] [--fps N]
 //   uavsim-videolog-export LOG.vlog --info      frame count, time span, and each frame's text

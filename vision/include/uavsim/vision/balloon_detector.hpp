@@ -2,28 +2,27 @@
 // refined with the Circle Hough Transform; 3D position in the camera frame from the known balloon
 // diameter; a temporal filter against false positives (N consecutive hits) and a low-pass filter.
 //
-// The seed used LINE templates before the colour filter; a colour filter plus shape tests is enough for
-// the simulator's flat-coloured balloons and is cheaper.
+// The seed used LINE templates before the colour filter; a colour filter plus shape tests is enough
+// for the simulator's flat-coloured balloons and is cheaper.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "uavsim/vision/camera_model.hpp"
 
 namespace uavsim::vision {
 
 struct BalloonDetectorParams {
-  // Balloon diameter. Default: 0.6 m, our balloon model (MBZIRC 2020 used party balloons of about this
-  // size); the server's models/objects/balloon.xml must agree.
+  // Balloon diameter. Default: 0.6 m, our balloon model (MBZIRC 2020 used party balloons of about
+  // this size); the server's models/objects/balloon.xml must agree.
   double balloon_diameter_m = 0.6;
 
-  // HSV window (OpenCV scales: hue 0..180, saturation and value 0..255). Green is hue 60. Shading from
-  // the sun above darkens the lower half but keeps hue and saturation, so value_min is low; sky blue
-  // (hue ~105) and sand (hue ~20, low saturation) stay outside.
+  // HSV window (OpenCV scales: hue 0..180, saturation and value 0..255). Green is hue 60. Shading
+  // from the sun above darkens the lower half but keeps hue and saturation, so value_min is low;
+  // sky blue (hue ~105) and sand (hue ~20, low saturation) stay outside.
   int hue_min = 38;
   int hue_max = 85;
   int saturation_min = 70;
@@ -32,9 +31,10 @@ struct BalloonDetectorParams {
   // Shape tests on each blob of the mask.
   double min_radius_px = 4.0;
   double max_radius_px = 2000.0;
-  double min_fill_ratio = 0.70;       // blob area / fitted circle area: rejects crescents and stripes
-  double max_fit_residual = 0.10;     // rms radial residual / radius: rejects polygons and bushes
-  double max_circle_outside = 0.10;   // share of the fitted circle outside the image: rejects cut blobs
+  double min_fill_ratio = 0.70;    // blob area / fitted circle area: rejects crescents and stripes
+  double max_fit_residual = 0.10;  // rms radial residual / radius: rejects polygons and bushes
+  double max_circle_outside =
+      0.10;  // share of the fitted circle outside the image: rejects cut blobs
 
   // Circle Hough Transform refinement of each candidate (seed fig. 7.12).
   bool hough_refine = true;
@@ -47,12 +47,13 @@ struct BalloonDetection {
   double radius_px = 0.0;
   Eigen::Vector3d position_cam_m = Eigen::Vector3d::Zero();  // the balloon's centre
   double range_m = 0.0;                                      // |position_cam_m|
-  double fit_residual = 0.0;  // rms radial residual / radius of the contour fit (0 = perfect circle)
+  double fit_residual =
+      0.0;  // rms radial residual / radius of the contour fit (0 = perfect circle)
   bool hough_refined = false;
 };
 
-// Balloon-centre position in the camera frame from its image circle and true diameter: the circle's rim
-// rays form a cone around the centre ray whose half-angle a satisfies sin(a) = radius / range.
+// Balloon-centre position in the camera frame from its image circle and true diameter: the circle's
+// rim rays form a cone around the centre ray whose half-angle a satisfies sin(a) = radius / range.
 Eigen::Vector3d sphere_position_from_circle(const PinholeIntrinsics& intrinsics,
                                             const cv::Point2d& centre_px, double radius_px,
                                             double diameter_m);
@@ -95,16 +96,17 @@ struct BalloonTrack {
   bool confirmed = false;  // hits reached confirm_hits at least once
 };
 
-// Temporal filter on balloon positions (seed 7.2: "a temporal filter discarded false positives and a
-// low-pass filter reduced the noise"). Positions can be in any frame, but a world frame (ENU) keeps
-// still balloons still while the UAV moves. Not thread-safe.
+// Temporal filter on balloon positions (seed 7.2: "a temporal filter discarded false positives and
+// a low-pass filter reduced the noise"). Positions can be in any frame, but a world frame (ENU)
+// keeps still balloons still while the UAV moves. Not thread-safe.
 class BalloonTracker {
  public:
   explicit BalloonTracker(const BalloonTrackerParams& params = {});
 
-  // Associates one frame's positions (nearest first, within the gate) with the tracks, updates them,
-  // and returns the confirmed tracks that were hit in this frame. stamp_us must not decrease.
-  std::vector<BalloonTrack> update(int64_t stamp_us, const std::vector<Eigen::Vector3d>& positions_m);
+  // Associates one frame's positions (nearest first, within the gate) with the tracks, updates
+  // them, and returns the confirmed tracks that were hit in this frame. stamp_us must not decrease.
+  std::vector<BalloonTrack> update(int64_t stamp_us,
+                                   const std::vector<Eigen::Vector3d>& positions_m);
 
   // Every live track, confirmed or not.
   const std::vector<BalloonTrack>& tracks() const { return tracks_; }

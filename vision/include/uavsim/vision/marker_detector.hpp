@@ -1,23 +1,24 @@
-// Landing-marker detector for MBZIRC 2017 Challenge 1 (seed 7.1): a white ring with a cross inside on a
-// dark 1.5 x 1.5 m square, seen by a down-looking camera. Candidates are white blobs whose outline is an
-// ellipse and whose inside is partly dark (the ring's hole); each is refined with the Circle Hough
-// Transform (seed fig. 7.4). Pixel -> arena coordinates via camera_model.hpp's pixel_to_plane_enu.
+// Landing-marker detector for MBZIRC 2017 Challenge 1 (seed 7.1): a white ring with a cross inside
+// on a dark 1.5 x 1.5 m square, seen by a down-looking camera. Candidates are white blobs whose
+// outline is an ellipse and whose inside is partly dark (the ring's hole); each is refined with the
+// Circle Hough Transform (seed fig. 7.4). Pixel -> arena coordinates via camera_model.hpp's
+// pixel_to_plane_enu.
 //
-// The seed tracked the marker with OpenTLD first; a frame-by-frame detector is enough in simulation.
+// The seed tracked the marker with OpenTLD first; a frame-by-frame detector is enough in
+// simulation.
 #pragma once
-
-#include <optional>
-#include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
 
 #include "uavsim/vision/camera_model.hpp"
 
 namespace uavsim::vision {
 
-// The marker's geometry. Defaults: our model of the MBZIRC 2017 target (1.5 m square, fig. 7.1b); the
-// server's truck deck texture is built from these numbers.
+// The marker's geometry. Defaults: our model of the MBZIRC 2017 target (1.5 m square, fig. 7.1b);
+// the server's truck deck texture is built from these numbers.
 struct LandingMarkerGeometry {
   double square_side_m = 1.5;
   double ring_outer_radius_m = 0.65;
@@ -30,7 +31,7 @@ struct MarkerDetectorParams {
   LandingMarkerGeometry geometry;
   double min_radius_px = 8.0;
   double max_ellipse_residual = 0.08;  // rms distance of the outline from its ellipse / radius
-  double max_axis_ratio = 2.0;         // major / minor axis: oblique views beyond ~60 deg are rejected
+  double max_axis_ratio = 2.0;  // major / minor axis: oblique views beyond ~60 deg are rejected
   // white share of the outer ellipse: ring plus cross = (0.65^2 - 0.5^2 + cross) / 0.65^2 ~ 0.51
   double min_white_fraction = 0.30;
   double max_white_fraction = 0.75;
@@ -63,10 +64,11 @@ class MarkerDetector {
   std::vector<MarkerDetection> candidates_;
 };
 
-// The marker's centre on the plane z_enu = deck_height_enu_m, from a detection and the camera pose at the
-// image's timestamp; nullopt if the ray misses the plane.
+// The marker's centre on the plane z_enu = deck_height_enu_m, from a detection and the camera pose
+// at the image's timestamp; nullopt if the ray misses the plane.
 std::optional<Eigen::Vector3d> marker_position_enu(const MarkerDetection& detection,
                                                    const PinholeIntrinsics& intrinsics,
-                                                   const CameraPose& pose, double deck_height_enu_m);
+                                                   const CameraPose& pose,
+                                                   double deck_height_enu_m);
 
 }  // namespace uavsim::vision

@@ -1,40 +1,39 @@
-// Kalman filter for the truck on the eight-shaped track (seed 7.1, fig. 7.5): state (s, v_s, l, v_l), the
-// arc length along the expected path, its rate, the lateral offset and its rate. Measurements are world
-// positions of the marker tied to the image's timestamp; they arrive late (image processing latency), so
-// the filter predicts to the image time, corrects there, and extrapolates to "now" on request ("delayed
-// time horizon", seed 7.1). Measurements that arrive out of order are handled by re-running the filter
-// from a stored snapshot.
+// Kalman filter for the truck on the eight-shaped track (seed 7.1, fig. 7.5): state (s, v_s, l,
+// v_l), the arc length along the expected path, its rate, the lateral offset and its rate.
+// Measurements are world positions of the marker tied to the image's timestamp; they arrive late
+// (image processing latency), so the filter predicts to the image time, corrects there, and
+// extrapolates to "now" on request ("delayed time horizon", seed 7.1). Measurements that arrive out
+// of order are handled by re-running the filter from a stored snapshot.
 //
-// Constant-velocity model per axis with white-acceleration process noise (Bar-Shalom, Li, Kirubarajan
-// 2001, sec. 6.3.2): F = [1 dt; 0 1], Q = q [dt^3/3 dt^2/2; dt^2/2 dt].
+// Constant-velocity model per axis with white-acceleration process noise (Bar-Shalom, Li,
+// Kirubarajan 2001, sec. 6.3.2): F = [1 dt; 0 1], Q = q [dt^3/3 dt^2/2; dt^2/2 dt].
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <deque>
 #include <optional>
-
-#include <Eigen/Core>
 
 #include "uavsim/vision/eight_track.hpp"
 
 namespace uavsim::vision {
 
 struct TrackKalmanParams {
-  double measurement_sigma_m = 0.3;        // per axis, of a marker position
-  double accel_psd_s_m2_s3 = 0.05;         // q along the track (speed changes are rare and slow)
-  double accel_psd_l_m2_s3 = 0.01;         // q across it (the driver keeps to the path)
-  double init_max_dt_s = 2.0;              // two initial detections further apart do not initialise
+  double measurement_sigma_m = 0.3;  // per axis, of a marker position
+  double accel_psd_s_m2_s3 = 0.05;   // q along the track (speed changes are rare and slow)
+  double accel_psd_l_m2_s3 = 0.01;   // q across it (the driver keeps to the path)
+  double init_max_dt_s = 2.0;        // two initial detections further apart do not initialise
   // nor closer ones: at 15 km/h, 0.4 s is 1.7 m, enough for the direction of motion to pick the
   // branch at the crossing against 0.3 m noise
   double init_min_dt_s = 0.4;
-  double projection_window_m = 15.0;       // branch choice near the crossing, see EightTrack::project
+  double projection_window_m = 15.0;  // branch choice near the crossing, see EightTrack::project
   // outlier gate on the innovation's Mahalanobis distance squared (chi-square, 2 dof: 18.4 is
   // p = 1e-4), never tighter than gate_floor_m; after max_rejections in a row the filter restarts
   // from the next two points rather than ignore a truck that really went elsewhere
   double gate_chi2 = 18.4;
   double gate_floor_m = 1.5;
   int max_rejections = 5;
-  int history_size = 32;                   // snapshots kept for out-of-order measurements
+  int history_size = 32;  // snapshots kept for out-of-order measurements
   // intercept() extrapolates the lateral rate for at most this long: weaving is not a trend
   double lateral_extrapolation_limit_s = 1.0;
 };
@@ -63,9 +62,9 @@ enum class MeasurementResult {
   kStored,       // first point, waiting for a second to initialise
   kInitialised,  // second point: the filter started
   kCorrected,
-  kReordered,    // older than the newest measurement: the filter was re-run from a snapshot
-  kRejected,     // outlier (gate), or too old for the history
-  kRestarted,    // too many outliers in a row: this point is the first of a new initialisation
+  kReordered,  // older than the newest measurement: the filter was re-run from a snapshot
+  kRejected,   // outlier (gate), or too old for the history
+  kRestarted,  // too many outliers in a row: this point is the first of a new initialisation
 };
 
 // Not thread-safe: one owner (the mission's vision/estimation thread).
@@ -82,8 +81,9 @@ class TrackKalman {
   // initialised. Extrapolation follows the track's curve, which is why s is a state.
   std::optional<TrackEstimate> estimate_at(int64_t stamp_us) const;
 
-  // The earliest meeting point of the truck (extrapolated from now_us) and a UAV at uav_position_enu_m
-  // flying at uav_speed_m_s, within horizon_s; nullopt if not initialised or unreachable.
+  // The earliest meeting point of the truck (extrapolated from now_us) and a UAV at
+  // uav_position_enu_m flying at uav_speed_m_s, within horizon_s; nullopt if not initialised or
+  // unreachable.
   std::optional<Interception> intercept(int64_t now_us, const Eigen::Vector2d& uav_position_enu_m,
                                         double uav_speed_m_s, double horizon_s = 120.0) const;
 

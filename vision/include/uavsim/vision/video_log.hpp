@@ -1,11 +1,13 @@
-// Video log ("VLOG", seed 6.4): compressed camera frames with sim timestamps, keyframe flags, overlay
-// drawings and printf-like text per frame. The image is stored without the drawings, so a log can be
-// exported as plain video for offline tuning, or replayed with the drawings on top.
+// Video log ("VLOG", seed 6.4): compressed camera frames with sim timestamps, keyframe flags,
+// overlay drawings and printf-like text per frame. The image is stored without the drawings, so a
+// log can be exported as plain video for offline tuning, or replayed with the drawings on top.
 //
 // File format (little-endian, version 1):
 //   header: "UAVVLOG\0" (8 bytes), u32 version, u32 codec fourcc ('MJPG')
-//   frame record: u32 record_bytes (what follows this field), i64 stamp_us, u8 flags (bit 0: keyframe),
-//     u32 image_bytes, image (a JPEG file), u32 overlay_count, overlays, u32 text_bytes, text (UTF-8)
+//   frame record: u32 record_bytes (what follows this field), i64 stamp_us, u8 flags (bit 0:
+//   keyframe),
+//     u32 image_bytes, image (a JPEG file), u32 overlay_count, overlays, u32 text_bytes, text
+//     (UTF-8)
 //   overlay: u8 kind, u8 b, u8 g, u8 r, f32 thickness_px, then by kind
 //     circle: f32 cx, cy, radius | line: f32 x1, y1, x2, y2 | rectangle: f32 x, y, width, height |
 //     text: f32 x, y, font_scale, u32 bytes, text
@@ -15,10 +17,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "uavsim/vision/result.hpp"
 
@@ -79,9 +80,9 @@ struct VideoLogWriterOptions {
   size_t queue_capacity = 16;  // frames waiting for the encoder; more are dropped
 };
 
-// Writes a VLOG file on its own thread: submit() copies the frame into a bounded queue and returns at
-// once; a worker encodes (JPEG) and writes. A full queue drops the frame and counts it, so a slow
-// encoder or disk never stalls the image processing loop (seed 6.4).
+// Writes a VLOG file on its own thread: submit() copies the frame into a bounded queue and returns
+// at once; a worker encodes (JPEG) and writes. A full queue drops the frame and counts it, so a
+// slow encoder or disk never stalls the image processing loop (seed 6.4).
 class VideoLogWriter {
  public:
   // Creates (truncates) the file and starts the worker. Startup errors are values: kOpenFailed.
@@ -95,9 +96,9 @@ class VideoLogWriter {
   // encoding or I/O. Thread-safe.
   bool submit(const VideoLogFrame& frame);
 
-  // Writes what is queued, then stops the worker and closes the file; kWriteFailed if any write failed.
-  // Idempotent. Thread-safe, but not concurrently with submit() from the same caller's point of view:
-  // frames submitted after close() are dropped.
+  // Writes what is queued, then stops the worker and closes the file; kWriteFailed if any write
+  // failed. Idempotent. Thread-safe, but not concurrently with submit() from the same caller's
+  // point of view: frames submitted after close() are dropped.
   Status<VideoLogError> close();
 
   uint64_t frames_written() const;  // Thread-safe.
@@ -141,8 +142,9 @@ void draw_overlays(const std::vector<Overlay>& overlays, cv::Mat* image_bgr);
 void draw_text_block(const std::string& text, cv::Mat* image_bgr);
 
 struct VideoLogExportOptions {
-  std::filesystem::path png_dir;   // if set: frame_000000.png, ...
-  std::filesystem::path mp4_path;  // if set: an MP4 (OpenCV mp4v; ffmpeg through a pipe as fallback)
+  std::filesystem::path png_dir;  // if set: frame_000000.png, ...
+  std::filesystem::path
+      mp4_path;  // if set: an MP4 (OpenCV mp4v; ffmpeg through a pipe as fallback)
   bool draw_overlays = true;
   bool draw_text = true;
   double fps = 0.0;  // 0: from the timestamps (median frame interval)
