@@ -50,7 +50,7 @@ Eigen::Vector3d FlightController::Impl::stopping_point() const {
 
 bool FlightController::Impl::enter_mode(Mode mode, bool from_failsafe) {
   // position modes need a position estimate
-  if (gps_mode(mode) && !(estimator_.state().gps_ok && estimator_.position_ok())) {
+  if (gps_mode(mode) && !(estimator_.state().gps_ok && estimator_converged_)) {
     status(4, std::string("Mode change to ") + mode_name(mode) + " failed: requires position");
     return false;
   }
