@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace uavsim::server::render {
 namespace {
@@ -359,6 +360,24 @@ TEST_F(CameraRendererTest, OversizeRequestFailsNamingTheOffscreenSizeNeeded) {
       required_offscreen_size({camera("front", 1280, 720), camera("back", 640, 960)});
   EXPECT_EQ(need.width_px, 1280);
   EXPECT_EQ(need.height_px, 960);
+}
+
+TEST_F(CameraRendererTest, RenderersOnTwoThreadsRenderTheSameImage) {
+  place_ball({4, 0.9, 1.6});
+  // each renderer thread: its own renderer (GL context) and its own copy of the data
+  CameraFrame frames[2];
+  auto render_on_thread = [&](CameraFrame* out) {
+    mjData* d = mj_copyData(nullptr, m_.get(), d_.get());
+    CameraRenderer renderer(m_.get(), {camera("front", 320, 240)});
+    for (int i = 0; i < 3; ++i) renderer.render(d, 0, out);
+    mj_deleteData(d);
+  };
+  std::thread a(render_on_thread, &frames[0]);
+  std::thread b(render_on_thread, &frames[1]);
+  a.join();
+  b.join();
+  EXPECT_GT(find_green(frames[0]).area_px, 100);
+  EXPECT_EQ(frames[0].pixels, frames[1].pixels);
 }
 
 TEST_F(CameraRendererTest, RendersWithNoDisplay) {
