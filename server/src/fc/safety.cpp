@@ -22,7 +22,9 @@ constexpr double kGpsLossFailsafeS = 1.0;
 bool FlightController::Impl::prearm_checks(bool report) const {
   const EstimatedState& est = estimator_.state();
   const char* fail = nullptr;
-  if (!estimator_.attitude_ok() || (!estimator_converged_ && gps_mode(mode_))) {
+  // with a GPS fix the position estimate must settle before arming in any mode (so that a GPS mode can
+  // be entered right after); without GPS only the modes that need position wait for it
+  if (!estimator_.attitude_ok() || (!estimator_converged_ && (gps_mode(mode_) || est.gps_ok))) {
     fail = "PreArm: EKF not converged";
   } else if (gps_mode(mode_) && !est.gps_ok) {
     fail = "PreArm: GPS no 3D fix";
