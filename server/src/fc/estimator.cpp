@@ -11,6 +11,12 @@ constexpr double kPi = 3.14159265358979323846;
 // attitude correction gains, rad/s per unit error: slow for gravity (the accelerometer sees vibration
 // and manoeuvres), faster for heading
 constexpr double kAccelCorrectionGain = 0.1;
+// for the first seconds after initialisation the gravity correction is fast (the vehicle sits still):
+// the first accelerometer samples may be taken while the landing gear settles on the ground, and a
+// tilt error left from them would otherwise take tens of seconds to decay (ArduPilot's DCM also uses
+// high gains before arming)
+constexpr double kFastAlignGain = 2.0;
+constexpr double kFastAlignS = 3.0;
 constexpr double kMagCorrectionGain = 0.3;
 // GPS-derived acceleration low-pass time constant
 constexpr double kGpsAccelTauS = 0.3;
@@ -41,10 +47,12 @@ double Estimator::yaw_enu_rad() const {
 }
 
 bool Estimator::converged(double time_s) const {
-  return attitude_init_ && position_init_ && time_s - position_init_time_s_ >= kSettleS;
+  return attitude_init_ && position_init_ && time_s - position_init_time_s_ >= kSettleS &&
+         time_s - attitude_init_time_s_ >= kFastAlignS;
 }
 
 void Estimator::update(double time_s, double dt_s, const SensorFrame& sensors) {
+  time_s_ = time_s;
   if (sensors.mag_new) {
     mag_heading_rad_ = sensors.heading_enu_rad;
     have_mag_ = true;
@@ -71,6 +79,7 @@ void Estimator::update_attitude(double dt_s, const SensorFrame& sensors) {
     q = Eigen::AngleAxisd(wrap_pi(mag_heading_rad_ - yaw0), Eigen::Vector3d::UnitZ()) * q;
     state_.q_enu_body = q.normalized();
     attitude_init_ = true;
+    attitude_init_time_s_ = time_s_;
     return;
   }
   if (!(dt_s > 0.0)) return;
@@ -83,7 +92,8 @@ void Estimator::update_attitude(double dt_s, const SensorFrame& sensors) {
   const double f_norm = f_body.norm();
   if (f_norm > 0.5 * kGravityM_S2 && f_norm < 1.5 * kGravityM_S2) {
     const Eigen::Vector3d v_est = (R_enu_body.transpose() * ref_enu).normalized();
-    omega += kAccelCorrectionGain * (f_body / f_norm).cross(v_est);
+    const bool aligning = time_s_ - attitude_init_time_s_ < kFastAlignS;
+    omega += (aligning ? kFastAlignGain : kAccelCorrectionGain) * (f_body / f_norm).cross(v_est);
   }
   // heading correction: rotate about world z by the compass error
   if (have_mag_) {

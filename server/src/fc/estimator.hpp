@@ -42,6 +42,8 @@ class Estimator {
   bool position_init_ = false;
   bool baro_init_ = false;
   double position_init_time_s_ = 0.0;
+  double attitude_init_time_s_ = 0.0;
+  double time_s_ = 0.0;  // of the last update
   double last_gps_time_s_ = -1e9;
   // heading from the latest compass sample, and whether one arrived
   double mag_heading_rad_ = 0.0;
