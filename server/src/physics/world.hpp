@@ -47,6 +47,8 @@ class World {
   World& operator=(const World&) = delete;
 
   const mjModel_* model() const { return m_; }
+  // For run-time model switches (a popped balloon's geoms, physics/object_bodies). Loop thread only.
+  mjModel_* mutable_model() { return m_; }
   mjData_* data() { return d_; }
   const mjData_* data() const { return d_; }
 

@@ -1,0 +1,55 @@
+// Camera gimbals: a camera sits in a small kinematic (mocap) body that follows its vehicle's camera mount
+// and is oriented every step independently of the vehicle's attitude (a stabilised 2-axis gimbal):
+// "down" looks straight down, "forward" looks level along the vehicle's heading, "targets" points at a
+// pitch and a yaw (relative to the heading) that MAVLink gimbal commands or the API set.
+//
+// World file: a mocap body holding the camera, and a custom text binding it to a vehicle:
+//   <body name="uav0_gimbal" mocap="true"><camera name="uav0_cam" xyaxes="0 -1 0 0 0 1" .../></body>
+//   <text name="uavsim:gimbal:uav0_gimbal" data="uav0 down"/>          (mode: down | forward | targets)
+// The gimbal body's x axis is the pointing direction; a camera with xyaxes="0 -1 0 0 0 1" looks along
+// it with the image top up. The mount is an offset in the vehicle's body frame after the mode
+// (data="uav0 down 0 0 -0.09"), else the vehicle's site VEHICLE/camera_mount, else its origin.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::objects {
+
+enum class GimbalMode { kDown, kForward, kTargets };
+const char* gimbal_mode_name(GimbalMode mode);
+
+struct Gimbal {
+  std::string name;   // the gimbal body
+  int vehicle = -1;
+  int body_id = -1;
+  Eigen::Vector3d mount_body_m = Eigen::Vector3d::Zero();  // in the vehicle's body frame
+  GimbalMode mode = GimbalMode::kDown;
+  double pitch_rad = 0.0;  // kTargets: up positive, -pi/2 = straight down (MAVLink's sign)
+  double yaw_rad = 0.0;    // kTargets: relative to the vehicle's heading, counter-clockwise positive
+};
+
+class GimbalSet : public sim::WorldObject {
+ public:
+  explicit GimbalSet(std::vector<Gimbal> gimbals) : gimbals_(std::move(gimbals)) {}
+
+  void before_step(sim::Simulation& sim) override;
+  bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
+  void reset(uint64_t seed) override;
+
+  // The gimbals, for pointing commands (set mode, pitch_rad, yaw_rad). Loop thread only.
+  std::vector<Gimbal>& gimbals() { return gimbals_; }
+  // The orientation a gimbal's body takes for a vehicle heading (ENU yaw), from its mode and targets.
+  static Eigen::Quaterniond pointing(const Gimbal& gimbal, double vehicle_yaw_rad);
+
+ private:
+  std::vector<Gimbal> gimbals_;
+  std::vector<Gimbal> initial_;
+  bool initial_saved_ = false;
+};
+
+}  // namespace uavsim::server::objects
