@@ -27,9 +27,11 @@ inline void wait_ready(Simulation& sim, size_t vehicle = 0) {
   ASSERT_TRUE(sim.fc(vehicle).prearm_ok()) << "pre-arm checks never passed";
 }
 
-// GUIDED, arm and take off to altitude_m; runs until within 0.3 m of it (or fails after 30 s)
+// GUIDED, arm and take off to altitude_m above home (where the vehicle stands: its body origin sits
+// above the ground by the landing-gear height); runs until within 0.3 m of it (or fails after 30 s)
 inline void take_off(Simulation& sim, double altitude_m, size_t vehicle = 0) {
   wait_ready(sim, vehicle);
+  const double target_z = sim.truth(vehicle).position_enu_m.z() + altitude_m;
   fc::CommandResult mode = fc::CommandResult::kFailed, arm = mode, takeoff = mode;
   sim.post(vehicle, [&](fc::FlightController& f) {
     mode = f.set_mode(fc::Mode::kGuided);
@@ -42,10 +44,10 @@ inline void take_off(Simulation& sim, double altitude_m, size_t vehicle = 0) {
   ASSERT_EQ(arm, fc::CommandResult::kAccepted);
   ASSERT_EQ(takeoff, fc::CommandResult::kAccepted);
   const double deadline = sim.time_s() + 30.0;
-  while (std::abs(sim.truth(vehicle).position_enu_m.z() - altitude_m) > 0.3 && sim.time_s() < deadline) {
+  while (std::abs(sim.truth(vehicle).position_enu_m.z() - target_z) > 0.3 && sim.time_s() < deadline) {
     sim.step();
   }
-  ASSERT_NEAR(sim.truth(vehicle).position_enu_m.z(), altitude_m, 0.3) << "take-off did not reach altitude";
+  ASSERT_NEAR(sim.truth(vehicle).position_enu_m.z(), target_z, 0.3) << "take-off did not reach altitude";
 }
 
 inline void goto_enu(Simulation& sim, const Eigen::Vector3d& p, size_t vehicle = 0) {
