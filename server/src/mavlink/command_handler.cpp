@@ -1,0 +1,315 @@
+// Commands (COMMAND_LONG, COMMAND_INT, SET_MODE) and guided setpoints, with ArduCopter's semantics
+// (behaviour.md §4-5). Commands are acked on the link they came from; setpoints are never acked.
+#include <cmath>
+
+#include "mavlink/frames.hpp"
+#include "mavlink/vehicle_link.hpp"
+
+namespace uavsim::server::mavlink {
+
+namespace {
+
+// MAV_RESULT
+constexpr std::uint8_t kAccepted = 0;
+constexpr std::uint8_t kDenied = 2;
+constexpr std::uint8_t kUnsupported = 3;
+constexpr std::uint8_t kFailed = 4;
+
+constexpr double kDegToRad = frames::kPi / 180.0;
+
+// ArduPilot answers a refused arm, disarm or take-off with FAILED (behaviour.md §4)
+std::uint8_t failed_unless_accepted(fc::CommandResult r) {
+  if (r == fc::CommandResult::kAccepted) return 0;
+  return r == fc::CommandResult::kUnsupported ? 3 : 4;
+}
+
+std::uint8_t mav_result(fc::CommandResult r) {
+  switch (r) {
+    case fc::CommandResult::kAccepted: return kAccepted;
+    case fc::CommandResult::kDenied: return kDenied;
+    case fc::CommandResult::kFailed: return kFailed;
+    case fc::CommandResult::kUnsupported: return kUnsupported;
+    case fc::CommandResult::kInvalid: return kDenied;
+  }
+  return kFailed;
+}
+
+// type_mask groups: any bit of a group set ignores the whole group (ArduCopter)
+constexpr std::uint16_t kPosMask = 1 | 2 | 4;
+constexpr std::uint16_t kVelMask = 8 | 16 | 32;
+constexpr std::uint16_t kAccMask = 64 | 128 | 256;
+constexpr std::uint16_t kForceSet = 512;
+constexpr std::uint16_t kYawIgnore = 1024;
+constexpr std::uint16_t kYawRateIgnore = 2048;
+
+bool finite3(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+}  // namespace
+
+void VehicleLink::ack_command(Link& link, const Frame& frame, std::uint16_t command, std::uint8_t result) {
+  msg::CommandAck ack;
+  ack.command = command;
+  ack.result = result;
+  ack.progress = 0;
+  ack.result_param2 = 0;
+  ack.target_system = frame.sysid;
+  ack.target_component = frame.compid;
+  send(link, ack);
+}
+
+std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::FlightController& fc) {
+  const auto& p = c.p;
+  switch (c.command) {
+    case 400: {  // MAV_CMD_COMPONENT_ARM_DISARM
+      if (p[0] == 1.0) {
+        if (fc.armed()) return kAccepted;
+        const bool force = p[1] == 2989.0 || p[1] == 21196.0;  // both magic values force arming
+        return failed_unless_accepted(fc.arm(force));
+      }
+      if (p[0] == 0.0) {
+        if (!fc.armed()) return kAccepted;
+        return failed_unless_accepted(fc.disarm(p[1] == 21196.0));
+      }
+      return kUnsupported;
+    }
+    case 176: {  // MAV_CMD_DO_SET_MODE (and the SET_MODE message): needs CUSTOM_MODE_ENABLED
+      const auto base_mode = static_cast<std::uint32_t>(p[0]);
+      if ((base_mode & 1u) == 0 || !std::isfinite(p[1]) || p[1] < 0) return kFailed;
+      const auto mode = fc::mode_from_number(static_cast<std::uint32_t>(p[1]));
+      if (!mode) return kFailed;
+      return mav_result(fc.set_mode(*mode));
+    }
+    case 22: {  // MAV_CMD_NAV_TAKEOFF: COMMAND_LONG is GLOBAL_RELATIVE_ALT; COMMAND_INT must be too
+      if (c.is_int && c.frame != 3 && c.frame != 6) return kDenied;
+      if (!std::isfinite(p[6])) return kDenied;
+      return failed_unless_accepted(fc.takeoff(p[6]));
+    }
+    case 21:  // MAV_CMD_NAV_LAND
+      return mav_result(fc.land());
+    case 20:  // MAV_CMD_NAV_RETURN_TO_LAUNCH
+      return mav_result(fc.rtl());
+    case 17:  // MAV_CMD_NAV_LOITER_UNLIM
+      return mav_result(fc.set_mode(fc::Mode::kLoiter));
+    case 115: {  // MAV_CMD_CONDITION_YAW: angle, rate, direction, relative
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1])) return kDenied;
+      const int dir = p[2] > 0 ? 1 : (p[2] < 0 ? -1 : 0);
+      return mav_result(fc.condition_yaw(p[0], p[1], dir, p[3] != 0.0));
+    }
+    case 178:  // MAV_CMD_DO_CHANGE_SPEED: speed type, speed
+      if (!std::isfinite(p[1])) return kDenied;
+      return mav_result(fc.change_speed(static_cast<int>(p[0]), p[1]));
+    case 300:  // MAV_CMD_MISSION_START: first, last item (0, 0 = all)
+      return mav_result(fc.mission_start(static_cast<int>(p[0]), static_cast<int>(p[1])));
+    case 224:  // MAV_CMD_DO_SET_MISSION_CURRENT
+      return mav_result(fc.set_mission_current(static_cast<int>(p[0])));
+    case 192: {  // MAV_CMD_DO_REPOSITION (COMMAND_INT): go to lat/lon/alt in GUIDED
+      if (!c.is_int) return kUnsupported;
+      if (fc.mode() != fc::Mode::kGuided) {
+        const fc::CommandResult r = fc.set_mode(fc::Mode::kGuided);
+        if (r != fc::CommandResult::kAccepted) return mav_result(r);
+      }
+      fc::GuidedTarget t;
+      Eigen::Vector3d pos = fc.estimate().position_enu_m;
+      if (c.x != 0 || c.y != 0) {
+        const Eigen::Vector3d xy = enu_of_geodetic({c.x / 1e7, c.y / 1e7, config_.origin.alt_m});
+        pos.x() = xy.x();
+        pos.y() = xy.y();
+      }
+      if (std::isfinite(p[6])) {
+        const bool amsl = c.frame == 0 || c.frame == 5;
+        pos.z() = amsl ? p[6] - config_.origin.alt_m : fc.home_enu_m().z() + p[6];
+      }
+      t.position_enu_m = pos;
+      return mav_result(fc.set_guided_target(t));
+    }
+    case 205: {  // MAV_CMD_DO_MOUNT_CONTROL: pitch, roll, yaw (deg), mode in param7
+      if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
+      if (std::isfinite(p[1])) gimbal_.roll_deg = p[1];
+      if (std::isfinite(p[2])) gimbal_.yaw_deg = p[2];
+      if (std::isfinite(p[6]) && p[6] > 0) gimbal_.mount_mode = static_cast<std::uint8_t>(p[6]);
+      gimbal_.yaw_earth_frame = false;
+      gimbal_.stamp_s = now_s();
+      return kAccepted;
+    }
+    case 1000: {  // MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: pitch, yaw (deg), rates (deg/s), flags
+      if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
+      if (std::isfinite(p[1])) gimbal_.yaw_deg = p[1];
+      gimbal_.pitch_rate_deg_s = std::isfinite(p[2]) ? p[2] : 0.0;
+      gimbal_.yaw_rate_deg_s = std::isfinite(p[3]) ? p[3] : 0.0;
+      gimbal_.yaw_earth_frame = (static_cast<std::uint32_t>(std::isfinite(p[4]) ? p[4] : 0) & 16u) != 0;
+      gimbal_.mount_mode = 2;
+      gimbal_.stamp_s = now_s();
+      return kAccepted;
+    }
+    case 410:  // MAV_CMD_GET_HOME_POSITION
+      if (!fc.home_set()) return kFailed;
+      send_home(link);
+      send_message_by_id(link, msg::GpsGlobalOrigin::kId);
+      return kAccepted;
+    case 520:  // MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES
+      if (p[0] == 1.0) send_autopilot_version(link);
+      return kAccepted;
+    case 512: {  // MAV_CMD_REQUEST_MESSAGE: sent at the next control step, after this ack
+      if (!std::isfinite(p[0]) || p[0] < 0) return kFailed;
+      const auto id = static_cast<std::uint32_t>(p[0]);
+      if (!can_send(id)) return kFailed;
+      link.one_shot.push_back(id);
+      return kAccepted;
+    }
+    case 511: {  // MAV_CMD_SET_MESSAGE_INTERVAL: msgid, interval us (0 default, -1 stop)
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || p[0] < 0) return kFailed;
+      const auto id = static_cast<std::uint32_t>(p[0]);
+      Stream* stream = nullptr;
+      for (Stream& s : link.streams) {
+        if (s.msgid == id) stream = &s;
+      }
+      if (stream == nullptr) return kFailed;
+      double interval_s = 0.0;
+      if (p[1] == 0.0) {
+        if (stream->default_interval_s <= 0.0) return kFailed;
+        interval_s = stream->default_interval_s;
+      } else if (p[1] < 0.0) {
+        interval_s = 0.0;
+      } else {
+        interval_s = std::clamp(p[1] * 1e-6, 1e-3, 60.0);
+      }
+      stream->interval_s = interval_s;
+      stream->next_due_s = now_s();  // first one at the next control step
+      return kAccepted;
+    }
+    case 510: {  // MAV_CMD_GET_MESSAGE_INTERVAL -> MESSAGE_INTERVAL
+      const auto id = static_cast<std::uint32_t>(std::isfinite(p[0]) && p[0] >= 0 ? p[0] : 0);
+      msg::MessageInterval mi;
+      mi.message_id = static_cast<std::uint16_t>(id);
+      mi.interval_us = 0;  // not available
+      for (const Stream& s : link.streams) {
+        if (s.msgid == id) mi.interval_us = s.interval_s > 0 ? static_cast<std::int32_t>(s.interval_s * 1e6) : -1;
+      }
+      send(link, mi);
+      return kAccepted;
+    }
+    case 42428:  // MAV_CMD_DO_SEND_BANNER
+      send_status_text(6, "ArduCopter V4.5.0 (uavsim)");
+      return kAccepted;
+    default:
+      return kUnsupported;
+  }
+}
+
+void VehicleLink::hold_position(fc::FlightController& fc) {
+  // ArduCopter re-initialises guided mode (hold where it is) on an unusable setpoint frame
+  fc::GuidedTarget t;
+  t.position_enu_m = fc.estimate().position_enu_m;
+  fc.set_guided_target(t);
+}
+
+void VehicleLink::apply_setpoint(std::uint16_t mask, int frame, std::optional<Eigen::Vector3d> pos_ned,
+                                 const Eigen::Vector3d& vel_ned_in, const Eigen::Vector3d& acc_ned_in,
+                                 double yaw_ned, double yaw_rate_ned, fc::FlightController& fc) {
+  const bool use_pos = (mask & kPosMask) == 0 && pos_ned.has_value();
+  const bool use_vel = (mask & kVelMask) == 0;
+  const bool use_acc = (mask & kAccMask) == 0;
+  const bool use_yaw = (mask & kYawIgnore) == 0;
+  const bool use_yaw_rate = (mask & kYawRateIgnore) == 0;
+  // FORCE_SET with an acceleration is a force setpoint, which ArduCopter refuses
+  if ((mask & kForceSet) != 0 && use_acc) {
+    StatCounters::add(stats_.rejected_inputs);
+    return;
+  }
+  const fc::EstimatedState& est = fc.estimate();
+  const double yaw_now_ned =
+      frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(est.q_enu_body)).yaw_rad;
+  const bool body = frame == 8 || frame == 9;            // BODY_NED, BODY_OFFSET_NED
+  const bool offset = frame == 7 || frame == 8 || frame == 9;  // relative to the current position
+  Eigen::Vector3d vel_ned = vel_ned_in, acc_ned = acc_ned_in;
+  // sanity: NaN, or |v| > 1000 m/s, is rejected
+  if ((use_vel && (!finite3(vel_ned) || vel_ned.norm() > 1000.0)) || (use_acc && !finite3(acc_ned)) ||
+      (use_pos && !finite3(*pos_ned)) || (use_yaw && !std::isfinite(yaw_ned)) ||
+      (use_yaw_rate && !std::isfinite(yaw_rate_ned))) {
+    StatCounters::add(stats_.rejected_inputs);
+    return;
+  }
+  fc::GuidedTarget t;
+  if (use_pos) {
+    Eigen::Vector3d p = body ? frames::ned_from_body_yaw(*pos_ned, yaw_now_ned) : *pos_ned;
+    if (offset) p += frames::ned_from_enu(est.position_enu_m);
+    t.position_enu_m = frames::enu_from_ned(p);
+  }
+  if (use_vel) {
+    if (body) vel_ned = frames::ned_from_body_yaw(vel_ned, yaw_now_ned);
+    t.velocity_enu_m_s = frames::enu_from_ned(vel_ned);
+  }
+  if (use_acc) {
+    if (body) acc_ned = frames::ned_from_body_yaw(acc_ned, yaw_now_ned);
+    t.accel_enu_m_s2 = frames::enu_from_ned(acc_ned);
+  }
+  if (use_yaw) t.yaw_enu_rad = frames::yaw_enu_from_yaw_ned(body ? yaw_ned + yaw_now_ned : yaw_ned);
+  if (use_yaw_rate) t.yaw_rate_rad_s = -yaw_rate_ned;
+  // dispatch as ArduCopter: pos(+vel)(+acc), vel(+acc), acc, pos; anything else (e.g. yaw only) holds
+  if (!t.position_enu_m && !t.velocity_enu_m_s && !t.accel_enu_m_s2) {
+    hold_position(fc);
+    return;
+  }
+  if (fc.set_guided_target(t) != fc::CommandResult::kAccepted) StatCounters::add(stats_.rejected_inputs);
+}
+
+void VehicleLink::handle_set_position_target_local(const msg::SetPositionTargetLocalNed& m,
+                                                   fc::FlightController& fc) {
+  const int frame = m.coordinate_frame;
+  if (frame != 1 && frame != 7 && frame != 8 && frame != 9) {
+    hold_position(fc);
+    return;
+  }
+  apply_setpoint(m.type_mask, frame, Eigen::Vector3d(m.x, m.y, m.z), Eigen::Vector3d(m.vx, m.vy, m.vz),
+                 Eigen::Vector3d(m.afx, m.afy, m.afz), m.yaw, m.yaw_rate, fc);
+}
+
+void VehicleLink::handle_set_position_target_global(const msg::SetPositionTargetGlobalInt& m,
+                                                    fc::FlightController& fc) {
+  const int frame = m.coordinate_frame;
+  const bool amsl = frame == 0 || frame == 5;
+  const bool relative = frame == 3 || frame == 6 || frame == 10 || frame == 11;  // terrain treated as relative
+  if (!amsl && !relative) {
+    hold_position(fc);
+    return;
+  }
+  std::optional<Eigen::Vector3d> pos_ned;
+  if ((m.type_mask & kPosMask) == 0) {
+    const double lat = m.lat_int / 1e7, lon = m.lon_int / 1e7;
+    if (std::abs(lat) > 90.0 || std::abs(lon) > 180.0 || !std::isfinite(m.alt)) {
+      hold_position(fc);
+      return;
+    }
+    const double alt_amsl = amsl ? m.alt : config_.origin.alt_m + fc.home_enu_m().z() + m.alt;
+    pos_ned = ned_from_geodetic(config_.origin, {lat, lon, alt_amsl});
+  }
+  apply_setpoint(m.type_mask, 1, pos_ned, Eigen::Vector3d(m.vx, m.vy, m.vz), Eigen::Vector3d(m.afx, m.afy, m.afz),
+                 m.yaw, m.yaw_rate, fc);
+}
+
+void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc::FlightController& fc) {
+  fc::AttitudeTarget t;
+  // type_mask: 1/2/4 ignore body rates, 128 ignores the attitude
+  if ((m.type_mask & 128) == 0) {
+    const Eigen::Quaterniond q_ned_frd(m.q[0], m.q[1], m.q[2], m.q[3]);
+    if (!q_ned_frd.coeffs().allFinite() || q_ned_frd.norm() < 1e-6) {
+      StatCounters::add(stats_.rejected_inputs);
+      return;
+    }
+    t.q_enu_body = frames::q_enu_flu_from_q_ned_frd(q_ned_frd.normalized());
+  }
+  if ((m.type_mask & 7) != 7) {
+    const Eigen::Vector3d w_frd((m.type_mask & 1) ? 0.0 : m.body_roll_rate,
+                                (m.type_mask & 2) ? 0.0 : m.body_pitch_rate,
+                                (m.type_mask & 4) ? 0.0 : m.body_yaw_rate);
+    if (!w_frd.allFinite()) {
+      StatCounters::add(stats_.rejected_inputs);
+      return;
+    }
+    t.rate_body_rad_s = frames::flu_from_frd(w_frd);
+  }
+  if ((m.type_mask & 64) == 0 && std::isfinite(m.thrust)) t.thrust = std::clamp<double>(m.thrust, 0.0, 1.0);
+  if (fc.set_attitude_target(t) != fc::CommandResult::kAccepted) StatCounters::add(stats_.rejected_inputs);
+}
+
+}  // namespace uavsim::server::mavlink

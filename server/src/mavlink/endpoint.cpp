@@ -1,0 +1,402 @@
+#include "mavlink/endpoint.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <unordered_map>
+
+#include "mavlink/codec/parser.hpp"
+#include "mavlink/vehicle_link.hpp"
+
+namespace uavsim::server::mavlink {
+
+namespace {
+
+// what the I/O thread hands to the loop thread, per vehicle
+struct InEvent {
+  enum class Kind { kConnect, kFrame, kDisconnect };
+  Kind kind = Kind::kFrame;
+  std::uint64_t client = 0;
+  std::shared_ptr<Outbox> outbox;  // kConnect only
+  Frame frame;                     // kFrame only (raw cleared: it pointed into the parser)
+};
+
+constexpr std::size_t kReadChunk = 64 * 1024;
+constexpr std::size_t kMaxReadPerWake = 256 * 1024;  // fairness between clients
+
+}  // namespace
+
+// Shared by the server object, the I/O thread, the control observer and the posted tasks; the observer and
+// tasks hold it weakly so they become no-ops once the server is gone.
+struct MavlinkServer::Core {
+  struct Vehicle {
+    std::unique_ptr<VehicleLink> link;  // loop thread only
+    StatCounters stats;
+    int listen_fd = -1;
+    std::uint16_t port = 0;
+    std::mutex inbox_mutex;
+    std::vector<InEvent> inbox;  // guarded by inbox_mutex
+    std::size_t inbox_frames = 0;  // guarded by inbox_mutex
+    bool task_posted = false;      // guarded by inbox_mutex
+  };
+  struct Client {  // I/O thread only
+    int fd = -1;
+    std::size_t vehicle = 0;
+    std::uint64_t id = 0;
+    Parser parser;
+    ParserStats parser_seen;
+    std::shared_ptr<Outbox> outbox;
+    std::vector<std::uint8_t> write_buf;
+    std::size_t write_off = 0;
+    bool want_out = false;
+  };
+
+  sim::Simulation& sim;
+  EndpointConfig config;
+  std::vector<std::unique_ptr<Vehicle>> vehicles;
+  int epoll_fd = -1;
+  int wake_fd = -1;
+  std::atomic<bool> stop{false};
+  std::atomic<bool> wake_pending{false};
+  std::thread io_thread;
+  std::unordered_map<int, std::unique_ptr<Client>> clients;  // by fd; I/O thread only
+  std::uint64_t next_client_id = 1;                          // I/O thread only
+  std::weak_ptr<Core> self;
+
+  Core(sim::Simulation& s, const EndpointConfig& c) : sim(s), config(c) {}
+  ~Core() {
+    shutdown();
+  }
+
+  // startup: one listening socket per vehicle (throws on failure)
+  void open(std::shared_ptr<Core> shared) {
+    self = shared;
+    epoll_fd = epoll_create1(EPOLL_CLOEXEC);
+    wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (epoll_fd < 0 || wake_fd < 0) throw std::runtime_error("mavlink endpoint: epoll/eventfd failed");
+    add_fd(wake_fd, EPOLLIN, tag_wake());
+    for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
+      auto v = std::make_unique<Vehicle>();
+      v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats);
+      const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
+      v->listen_fd = listen_on(config.bind_address, port, &v->port);
+      add_fd(v->listen_fd, EPOLLIN, tag_listen(i));
+      vehicles.push_back(std::move(v));
+    }
+  }
+
+  // epoll tags: 0 = wake, 1..N = listening socket of vehicle tag-1, otherwise a client fd + 2^32
+  static std::uint64_t tag_wake() { return 0; }
+  static std::uint64_t tag_listen(std::size_t vehicle) { return vehicle + 1; }
+  static std::uint64_t tag_client(int fd) { return (std::uint64_t{1} << 32) + static_cast<std::uint32_t>(fd); }
+
+  void add_fd(int fd, std::uint32_t events, std::uint64_t tag) {
+    epoll_event ev{};
+    ev.events = events;
+    ev.data.u64 = tag;
+    epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd, &ev);
+  }
+
+  static int listen_on(const std::string& address, int port, std::uint16_t* bound_port) {
+    const std::string where = address + ":" + std::to_string(port);
+    const int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) throw std::runtime_error("mavlink endpoint: socket() failed for " + where);
+    const int one = 1;
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+    sockaddr_in sa{};
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons(static_cast<std::uint16_t>(port));
+    if (inet_pton(AF_INET, address.c_str(), &sa.sin_addr) != 1) {
+      close(fd);
+      throw std::runtime_error("mavlink endpoint: --bind: not an IPv4 address: '" + address + "'");
+    }
+    if (bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof(sa)) != 0 || listen(fd, 64) != 0) {
+      const std::string err = std::strerror(errno);
+      close(fd);
+      throw std::runtime_error("mavlink endpoint: cannot listen on " + where + ": " + err);
+    }
+    socklen_t len = sizeof(sa);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&sa), &len);
+    *bound_port = ntohs(sa.sin_port);
+    return fd;
+  }
+
+  // --- loop thread -> I/O thread ---
+  void wake() {
+    if (wake_pending.exchange(true, std::memory_order_acq_rel)) return;
+    const std::uint64_t one = 1;
+    [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
+  }
+
+  // --- I/O thread -> loop thread ---
+  void push_event(std::size_t vehicle, InEvent&& ev) {
+    Vehicle& v = *vehicles[vehicle];
+    bool post = false;
+    {
+      std::lock_guard lock(v.inbox_mutex);
+      if (ev.kind == InEvent::Kind::kFrame) {
+        if (v.inbox_frames >= config.inbox_frames) {
+          StatCounters::add(v.stats.inbox_dropped);
+          return;
+        }
+        ++v.inbox_frames;
+      }
+      v.inbox.push_back(std::move(ev));
+      if (!v.task_posted) v.task_posted = post = true;
+    }
+    if (post) {
+      std::weak_ptr<Core> weak = self;
+      sim.post(vehicle, [weak, vehicle](fc::FlightController& fc) {
+        if (auto core = weak.lock()) core->drain_inbox(vehicle, fc);
+      });
+    }
+  }
+
+  // runs on the loop thread as a vehicle task: handle everything queued for the vehicle
+  void drain_inbox(std::size_t vehicle, fc::FlightController& fc) {
+    Vehicle& v = *vehicles[vehicle];
+    std::vector<InEvent> events;
+    {
+      std::lock_guard lock(v.inbox_mutex);
+      events.swap(v.inbox);
+      v.inbox_frames = 0;
+      v.task_posted = false;
+    }
+    for (InEvent& e : events) {
+      switch (e.kind) {
+        case InEvent::Kind::kConnect: v.link->on_connect(e.client, std::move(e.outbox)); break;
+        case InEvent::Kind::kDisconnect: v.link->on_disconnect(e.client); break;
+        case InEvent::Kind::kFrame: v.link->on_frame(e.client, e.frame, fc); break;
+      }
+    }
+    wake();
+  }
+
+  // the control observer: telemetry of every vehicle, then one wake-up for the I/O thread
+  void on_control_step() {
+    bool any = false;
+    for (auto& v : vehicles) {
+      v->link->on_control_step();
+      any = any || v->link->has_clients();
+    }
+    if (any) wake();
+  }
+
+  // --- I/O thread ---
+  void run() {
+    std::vector<epoll_event> events(256);
+    while (!stop.load()) {
+      const int n = epoll_wait(epoll_fd, events.data(), static_cast<int>(events.size()), 200);
+      if (n < 0 && errno != EINTR) break;
+      for (int k = 0; k < n; ++k) {
+        const std::uint64_t tag = events[k].data.u64;
+        if (tag == tag_wake()) {
+          std::uint64_t count = 0;
+          [[maybe_unused]] const auto r = read(wake_fd, &count, sizeof(count));
+          wake_pending.store(false, std::memory_order_release);
+          flush_all();
+        } else if (tag <= vehicles.size()) {
+          accept_clients(static_cast<std::size_t>(tag - 1));
+        } else {
+          const int fd = static_cast<int>(tag & 0xffffffffu);
+          auto it = clients.find(fd);
+          if (it == clients.end()) continue;
+          Client& c = *it->second;
+          bool alive = true;
+          if (events[k].events & (EPOLLIN | EPOLLERR | EPOLLHUP | EPOLLRDHUP)) alive = read_client(c);
+          if (alive && (events[k].events & EPOLLOUT)) alive = flush_client(c);
+          if (!alive) close_client(fd);
+        }
+      }
+    }
+  }
+
+  void accept_clients(std::size_t vehicle) {
+    Vehicle& v = *vehicles[vehicle];
+    for (;;) {
+      const int fd = accept4(v.listen_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) return;  // EAGAIN, or a transient error (EMFILE, ECONNABORTED): try at the next event
+      const int one = 1;
+      setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+      auto c = std::make_unique<Client>();
+      c->fd = fd;
+      c->vehicle = vehicle;
+      c->id = next_client_id++;
+      c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
+      add_fd(fd, EPOLLIN | EPOLLRDHUP, tag_client(fd));
+      StatCounters::add(v.stats.clients_accepted);
+      StatCounters::add(v.stats.clients_now);
+      InEvent ev;
+      ev.kind = InEvent::Kind::kConnect;
+      ev.client = c->id;
+      ev.outbox = c->outbox;
+      clients[fd] = std::move(c);
+      push_event(vehicle, std::move(ev));
+    }
+  }
+
+  // false when the client is gone
+  bool read_client(Client& c) {
+    Vehicle& v = *vehicles[c.vehicle];
+    std::uint8_t buf[kReadChunk];
+    std::size_t total = 0;
+    while (total < kMaxReadPerWake) {
+      const ssize_t n = recv(c.fd, buf, sizeof(buf), 0);
+      if (n == 0) return false;
+      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      total += static_cast<std::size_t>(n);
+      StatCounters::add(v.stats.bytes_received, static_cast<std::uint64_t>(n));
+      c.parser.feed({buf, static_cast<std::size_t>(n)}, [&](const Frame& f) {
+        InEvent ev;
+        ev.kind = InEvent::Kind::kFrame;
+        ev.client = c.id;
+        ev.frame = f;
+        ev.frame.raw = {};
+        push_event(c.vehicle, std::move(ev));
+      });
+      account_parser(c);
+    }
+    return true;
+  }
+
+  void account_parser(Client& c) {
+    StatCounters& s = vehicles[c.vehicle]->stats;
+    const ParserStats& now = c.parser.stats();
+    ParserStats& was = c.parser_seen;
+    StatCounters::add(s.frames_received, now.frames - was.frames);
+    StatCounters::add(s.bytes_discarded, now.bytes_dropped - was.bytes_dropped);
+    StatCounters::add(s.bad_crc, now.bad_crc - was.bad_crc);
+    StatCounters::add(s.unknown_msgid, now.unknown_msgid - was.unknown_msgid);
+    StatCounters::add(s.bad_length, now.bad_length - was.bad_length);
+    StatCounters::add(s.bad_incompat_flags, now.bad_incompat_flags - was.bad_incompat_flags);
+    was = now;
+  }
+
+  void flush_all() {
+    std::vector<int> dead;
+    for (auto& [fd, c] : clients) {
+      if (!c->outbox->pending() && c->write_off >= c->write_buf.size()) continue;
+      if (!flush_client(*c)) dead.push_back(fd);
+    }
+    for (int fd : dead) close_client(fd);
+  }
+
+  // writes what it can without blocking; false when the client is gone
+  bool flush_client(Client& c) {
+    Vehicle& v = *vehicles[c.vehicle];
+    for (;;) {
+      if (c.write_off >= c.write_buf.size()) {
+        c.write_buf.clear();
+        c.write_off = 0;
+        if (!c.outbox->pending()) break;
+        c.outbox->take(c.write_buf);
+        if (c.write_buf.empty()) break;
+      }
+      const ssize_t n = send(c.fd, c.write_buf.data() + c.write_off, c.write_buf.size() - c.write_off,
+                             MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n < 0) {
+        if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+        if (errno == EINTR) continue;
+        return false;
+      }
+      c.write_off += static_cast<std::size_t>(n);
+      StatCounters::add(v.stats.bytes_sent, static_cast<std::uint64_t>(n));
+    }
+    // ask for EPOLLOUT only while bytes are stuck in the socket
+    const bool stuck = c.write_off < c.write_buf.size();
+    if (stuck != c.want_out) {
+      epoll_event ev{};
+      ev.events = EPOLLIN | EPOLLRDHUP | (stuck ? EPOLLOUT : 0u);
+      ev.data.u64 = tag_client(c.fd);
+      epoll_ctl(epoll_fd, EPOLL_CTL_MOD, c.fd, &ev);
+      c.want_out = stuck;
+    }
+    return true;
+  }
+
+  void close_client(int fd) {
+    auto it = clients.find(fd);
+    if (it == clients.end()) return;
+    Client& c = *it->second;
+    epoll_ctl(epoll_fd, EPOLL_CTL_DEL, fd, nullptr);
+    close(fd);
+    c.outbox->close();
+    Vehicle& v = *vehicles[c.vehicle];
+    StatCounters::add(v.stats.clients_closed);
+    v.stats.clients_now.fetch_sub(1, std::memory_order_relaxed);
+    InEvent ev;
+    ev.kind = InEvent::Kind::kDisconnect;
+    ev.client = c.id;
+    const std::size_t vehicle = c.vehicle;
+    clients.erase(it);
+    push_event(vehicle, std::move(ev));
+  }
+
+  void shutdown() {
+    stop.store(true);
+    if (wake_fd >= 0) {
+      const std::uint64_t one = 1;
+      [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
+    }
+    if (io_thread.joinable()) io_thread.join();
+    for (auto& [fd, c] : clients) {
+      c->outbox->close();
+      close(fd);
+    }
+    clients.clear();
+    for (auto& v : vehicles) {
+      if (v->listen_fd >= 0) close(v->listen_fd);
+      v->listen_fd = -1;
+    }
+    if (epoll_fd >= 0) close(epoll_fd);
+    if (wake_fd >= 0) close(wake_fd);
+    epoll_fd = wake_fd = -1;
+  }
+};
+
+MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config)
+    : core_(std::make_shared<Core>(sim, config)) {
+  core_->open(core_);
+  // sim_vehicle.py --auto-sysid: vehicle i is system i + 1
+  if (config.auto_sysid) {
+    for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
+      sim.post(i, [i](fc::FlightController& fc) { fc.set_param("SYSID_THISMAV", static_cast<double>(i + 1)); });
+    }
+  }
+  std::weak_ptr<Core> weak = core_;
+  sim.add_control_observer([weak](sim::Simulation&) {
+    if (auto core = weak.lock()) core->on_control_step();
+  });
+  Core* core = core_.get();
+  core_->io_thread = std::thread([core] { core->run(); });
+}
+
+MavlinkServer::~MavlinkServer() { core_->shutdown(); }
+
+std::size_t MavlinkServer::vehicle_count() const { return core_->vehicles.size(); }
+std::uint16_t MavlinkServer::port(std::size_t vehicle) const { return core_->vehicles.at(vehicle)->port; }
+EndpointStats MavlinkServer::stats(std::size_t vehicle) const {
+  return core_->vehicles.at(vehicle)->stats.snapshot();
+}
+std::size_t MavlinkServer::client_count(std::size_t vehicle) const {
+  return static_cast<std::size_t>(core_->vehicles.at(vehicle)->stats.clients_now.load());
+}
+const GimbalState& MavlinkServer::gimbal(std::size_t vehicle) const {
+  return core_->vehicles.at(vehicle)->link->gimbal();
+}
+const EndpointConfig& MavlinkServer::config() const { return core_->config; }
+
+}  // namespace uavsim::server::mavlink

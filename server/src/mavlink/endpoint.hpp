@@ -1,0 +1,83 @@
+// The per-vehicle MAVLink TCP endpoints (DESIGN.md "MAVLink endpoint per vehicle"; behaviour per the shared
+// mavlink/behaviour.md, i.e. ArduCopter SITL on the wire).
+//
+// Vehicle i listens on base_port + 10 i (ArduPilot SITL's -I convention), several clients at once. Threads:
+//   * one network I/O thread (epoll, non-blocking sockets) for every endpoint: accepts, reads and parses
+//     frames, writes queued bytes. It never touches a flight controller.
+//   * the simulation loop thread: incoming frames are queued per vehicle and handled in a task posted with
+//     Simulation::post() (so commands take effect at control boundaries in vehicle order); the replies and
+//     all telemetry are encoded there (telemetry from a control observer, scheduled in sim time) into
+//     per-client bounded buffers (outbox.hpp) that the I/O thread drains.
+// A slow or dead client costs only its own frames (dropped and counted); bad input is skipped and counted.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "mavlink/geodesy.hpp"
+#include "mavlink/gimbal_state.hpp"
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::mavlink {
+
+struct EndpointConfig {
+  std::string bind_address = "127.0.0.1";  // loopback by default; a non-loopback address must be explicit
+  int base_port = 5760;                    // vehicle i: base_port + port_stride * i; 0: ephemeral ports
+  int port_stride = 10;
+  GeodeticOrigin origin;                   // geodetic position of the world origin
+  bool auto_sysid = true;                  // vehicle i gets SYSID_THISMAV = i + 1 (sim_vehicle.py --auto-sysid)
+  std::size_t client_buffer_bytes = 512 * 1024;  // per-client outgoing limit; frames beyond are dropped
+  std::size_t inbox_frames = 4096;               // per-vehicle incoming frames awaiting the loop thread
+};
+
+// Counters of one vehicle's endpoint since start (a snapshot).
+struct EndpointStats {
+  std::uint64_t clients_accepted = 0;
+  std::uint64_t clients_closed = 0;
+  std::uint64_t bytes_received = 0;
+  std::uint64_t bytes_sent = 0;
+  std::uint64_t frames_received = 0;      // checksum-valid frames parsed
+  std::uint64_t bytes_discarded = 0;      // bytes that were not part of a valid frame (garbage, bad frames)
+  std::uint64_t bad_crc = 0;              // includes truncated frames
+  std::uint64_t unknown_msgid = 0;
+  std::uint64_t bad_length = 0;
+  std::uint64_t bad_incompat_flags = 0;
+  std::uint64_t inbox_dropped = 0;        // frames dropped because the loop thread fell behind
+  std::uint64_t frames_handled = 0;       // frames the loop thread processed
+  std::uint64_t wrong_target = 0;         // addressed to another system or component: ignored
+  std::uint64_t unhandled_messages = 0;   // valid frames of messages the endpoint does not act on
+  std::uint64_t rejected_inputs = 0;      // malformed or unusable values (NaN setpoint, bad seq, ...)
+  std::uint64_t commands = 0;             // COMMAND_LONG/COMMAND_INT/SET_MODE handled (each acked)
+  std::uint64_t frames_sent = 0;          // frames queued to clients
+  std::uint64_t frames_dropped_full = 0;  // frames dropped because a client's buffer was full
+};
+
+class MavlinkServer {
+ public:
+  // Opens one listening socket per vehicle of sim, registers the telemetry observer, starts the I/O thread.
+  // Throws std::runtime_error naming the address and port when a socket cannot be bound (startup error).
+  // Call on the loop thread (or before the loop runs); sim must outlive the server's use of the loop.
+  MavlinkServer(sim::Simulation& sim, const EndpointConfig& config);
+  // Stops the I/O thread and closes every socket; queued tasks and the observer become no-ops. Loop thread
+  // or after the loop stopped.
+  ~MavlinkServer();
+  MavlinkServer(const MavlinkServer&) = delete;
+  MavlinkServer& operator=(const MavlinkServer&) = delete;
+
+  std::size_t vehicle_count() const;                // Thread-safe.
+  std::uint16_t port(std::size_t vehicle) const;    // The bound TCP port (useful with base_port 0). Thread-safe.
+  EndpointStats stats(std::size_t vehicle) const;   // Thread-safe.
+  std::size_t client_count(std::size_t vehicle) const;  // Connected clients. Thread-safe.
+  // The gimbal pointing last commanded over MAVLink for a vehicle. Loop thread only.
+  const GimbalState& gimbal(std::size_t vehicle) const;
+  const EndpointConfig& config() const;             // Thread-safe.
+
+  struct Core;
+
+ private:
+  std::shared_ptr<Core> core_;
+};
+
+}  // namespace uavsim::server::mavlink

@@ -1,0 +1,354 @@
+// The MAVLink mission protocol over the flight controller's AUTO mission (behaviour.md §6): upload
+// (MISSION_COUNT -> MISSION_REQUEST[_INT] per item -> MISSION_ACK), download (MISSION_REQUEST_LIST ->
+// MISSION_COUNT, MISSION_REQUEST[_INT] -> MISSION_ITEM[_INT]), clear, set current, and DroneKit's guided goto
+// (MISSION_ITEM with current = 2). Item 0 is home, as in ArduPilot. Transfers are per client and time out in
+// sim time: an unanswered request is repeated after 1 s, the upload is cancelled after 8 s of silence.
+#include <cmath>
+
+#include "mavlink/frames.hpp"
+#include "mavlink/vehicle_link.hpp"
+
+namespace uavsim::server::mavlink {
+
+namespace {
+
+// MAV_MISSION_RESULT
+constexpr std::uint8_t kMissionAccepted = 0;
+constexpr std::uint8_t kMissionError = 1;
+constexpr std::uint8_t kMissionUnsupportedFrame = 2;
+constexpr std::uint8_t kMissionUnsupported = 3;
+constexpr std::uint8_t kMissionNoSpace = 4;
+constexpr std::uint8_t kMissionInvalidSequence = 13;
+constexpr std::uint8_t kMissionCancelled = 15;
+
+constexpr int kMaxMissionItems = 700;       // ArduPilot's SITL storage holds ~700 items
+constexpr double kRequestRetryS = 1.0;
+constexpr double kUploadTimeoutS = 8.0;
+
+}  // namespace
+
+void VehicleLink::send_mission_ack(Link& link, std::uint8_t sysid, std::uint8_t compid, std::uint8_t result,
+                                   std::uint8_t mission_type) {
+  msg::MissionAck ack;
+  ack.target_system = sysid;
+  ack.target_component = compid;
+  ack.type = result;
+  ack.mission_type = mission_type;
+  send(link, ack);
+}
+
+msg::MissionCurrent VehicleLink::mission_current() const {
+  const fc::FlightController& fc = sim_.fc(vehicle_);
+  msg::MissionCurrent m;
+  m.seq = static_cast<std::uint16_t>(std::max(0, fc.mission_current()));
+  m.total = static_cast<std::uint16_t>(fc.mission().empty() ? 0 : fc.mission().size() - 1);
+  m.mission_state = fc.mission().size() <= 1 ? 1 : (fc.mode() == fc::Mode::kAuto ? 3 : 2);  // NO_MISSION/ACTIVE/NOT_STARTED
+  m.mission_mode = fc.mode() == fc::Mode::kAuto ? 1 : 0;
+  return m;
+}
+
+void VehicleLink::handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m) {
+  if (m.mission_type != 0) {  // no fence or rally support
+    send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, m.mission_type);
+    return;
+  }
+  if (m.count > kMaxMissionItems) {
+    send_mission_ack(link, f.sysid, f.compid, kMissionNoSpace);
+    return;
+  }
+  MissionUpload& u = link.upload;
+  u = MissionUpload{};
+  if (m.count == 0) {  // an empty upload clears the mission
+    sim_.fc(vehicle_).set_mission({});
+    send_mission_ack(link, f.sysid, f.compid, kMissionAccepted);
+    return;
+  }
+  u.active = true;
+  u.count = m.count;
+  u.next_seq = 0;
+  u.last_activity_s = now_s();
+  u.items.reserve(m.count);
+  send_mission_request(link);
+}
+
+void VehicleLink::send_mission_request(Link& link) {
+  MissionUpload& u = link.upload;
+  u.last_request_s = now_s();
+  // MISSION_REQUEST_INT once the client has shown it speaks INT; otherwise the legacy request, which
+  // every client answers (DroneKit only understands MISSION_REQUEST)
+  if (link.mission_int) {
+    msg::MissionRequestInt r;
+    r.seq = static_cast<std::uint16_t>(u.next_seq);
+    r.target_system = link.peer_sysid;
+    r.target_component = link.peer_compid;
+    send(link, r);
+  } else {
+    msg::MissionRequest r;
+    r.seq = static_cast<std::uint16_t>(u.next_seq);
+    r.target_system = link.peer_sysid;
+    r.target_component = link.peer_compid;
+    send(link, r);
+  }
+}
+
+void VehicleLink::service_mission_upload(Link& link, double t) {
+  MissionUpload& u = link.upload;
+  if (!u.active) return;
+  if (t - u.last_activity_s > kUploadTimeoutS) {
+    u = MissionUpload{};
+    send_mission_ack(link, link.peer_sysid, link.peer_compid, kMissionCancelled);
+    return;
+  }
+  if (t - u.last_request_s >= kRequestRetryS) send_mission_request(link);
+}
+
+std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg::MissionItemInt& m, bool is_int,
+                                                                      std::uint8_t* error) const {
+  (void)is_int;
+  const fc::FlightController& fc = sim_.fc(vehicle_);
+  fc::MissionItem item;
+  // frame: global AMSL, relative to home, or terrain (treated as relative); local frames are not missions
+  const int frame = m.frame;
+  const bool amsl = frame == 0 || frame == 5;
+  const bool relative = frame == 3 || frame == 6 || frame == 10 || frame == 11;
+  const bool needs_position = m.command == 16 || m.command == 22 || m.command == 21 || m.command == 19;
+  if (needs_position && !amsl && !relative) {
+    *error = kMissionUnsupportedFrame;
+    return std::nullopt;
+  }
+  const double lat = m.x / 1e7, lon = m.y / 1e7;
+  const double home_up = fc.home_set() ? fc.home_enu_m().z() : 0.0;
+  const double up = amsl ? m.z - config_.origin.alt_m : home_up + m.z;
+  item.position_valid = !(m.x == 0 && m.y == 0);
+  if (item.position_valid) {
+    const Eigen::Vector3d p = enu_of_geodetic({lat, lon, config_.origin.alt_m});
+    item.position_enu_m = {p.x(), p.y(), up};
+  } else {
+    item.position_enu_m = {0.0, 0.0, up};
+  }
+  switch (m.command) {
+    case 16:  // NAV_WAYPOINT: param1 = hold time
+      item.kind = fc::MissionItem::Kind::kWaypoint;
+      item.param_s_or_m_s = m.param1;
+      break;
+    case 22:  // NAV_TAKEOFF: altitude above home
+      item.kind = fc::MissionItem::Kind::kTakeoff;
+      item.position_enu_m.z() = amsl ? m.z - config_.origin.alt_m - home_up : m.z;
+      break;
+    case 21:  // NAV_LAND
+      item.kind = fc::MissionItem::Kind::kLand;
+      break;
+    case 20:  // NAV_RETURN_TO_LAUNCH
+      item.kind = fc::MissionItem::Kind::kRtl;
+      item.position_valid = false;
+      break;
+    case 19:  // NAV_LOITER_TIME: param1 = seconds
+      item.kind = fc::MissionItem::Kind::kLoiterTime;
+      item.param_s_or_m_s = m.param1;
+      break;
+    case 178:  // DO_CHANGE_SPEED: param2 = speed
+      item.kind = fc::MissionItem::Kind::kChangeSpeed;
+      item.param_s_or_m_s = m.param2;
+      item.position_valid = false;
+      break;
+    case 115:  // CONDITION_YAW: param1 = angle
+      item.kind = fc::MissionItem::Kind::kConditionYaw;
+      item.yaw_deg = m.param1;
+      item.position_valid = false;
+      break;
+    default:
+      *error = kMissionUnsupported;
+      return std::nullopt;
+  }
+  if (!item.position_enu_m.allFinite() || !std::isfinite(item.param_s_or_m_s) || !std::isfinite(item.yaw_deg)) {
+    *error = kMissionError;
+    return std::nullopt;
+  }
+  return item;
+}
+
+msg::MissionItemInt VehicleLink::mission_item_to_mavlink(const fc::MissionItem& item, int seq) const {
+  const fc::FlightController& fc = sim_.fc(vehicle_);
+  const double home_up = fc.home_set() ? fc.home_enu_m().z() : 0.0;
+  msg::MissionItemInt m;
+  m.seq = static_cast<std::uint16_t>(seq);
+  m.frame = 6;  // GLOBAL_RELATIVE_ALT_INT
+  m.autocontinue = 1;
+  m.current = (seq == fc.mission_current()) ? 1 : 0;
+  if (item.position_valid) {
+    const Geodetic g = geodetic_of_enu(item.position_enu_m);
+    m.x = static_cast<std::int32_t>(std::llround(g.lat_deg * 1e7));
+    m.y = static_cast<std::int32_t>(std::llround(g.lon_deg * 1e7));
+  }
+  m.z = static_cast<float>(item.position_enu_m.z() - home_up);
+  switch (item.kind) {
+    case fc::MissionItem::Kind::kWaypoint:
+      m.command = 16;
+      m.param1 = static_cast<float>(item.param_s_or_m_s);
+      break;
+    case fc::MissionItem::Kind::kTakeoff:
+      m.command = 22;
+      m.z = static_cast<float>(item.position_enu_m.z());
+      break;
+    case fc::MissionItem::Kind::kLand: m.command = 21; break;
+    case fc::MissionItem::Kind::kRtl: m.command = 20; break;
+    case fc::MissionItem::Kind::kLoiterTime:
+      m.command = 19;
+      m.param1 = static_cast<float>(item.param_s_or_m_s);
+      break;
+    case fc::MissionItem::Kind::kChangeSpeed:
+      m.command = 178;
+      m.param1 = 1;  // ground speed
+      m.param2 = static_cast<float>(item.param_s_or_m_s);
+      m.param3 = -1;
+      break;
+    case fc::MissionItem::Kind::kConditionYaw:
+      m.command = 115;
+      m.param1 = static_cast<float>(item.yaw_deg);
+      break;
+  }
+  if (seq == 0) {  // home: absolute altitude, frame GLOBAL, as ArduPilot sends it
+    m.frame = 0;
+    m.command = 16;
+    m.z = static_cast<float>(config_.origin.alt_m + item.position_enu_m.z());
+  }
+  return m;
+}
+
+void VehicleLink::guided_goto(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
+                              fc::FlightController& fc) {
+  std::uint8_t error = kMissionError;
+  msg::MissionItemInt item = m;
+  item.command = 16;
+  auto target_item = mission_item_from_mavlink(item, is_int, &error);
+  if (!target_item || fc.mode() != fc::Mode::kGuided) {
+    send_mission_ack(link, f.sysid, f.compid, target_item ? kMissionError : error);
+    return;
+  }
+  fc::GuidedTarget t;
+  Eigen::Vector3d p = target_item->position_enu_m;
+  if (m.current == 3 || !target_item->position_valid) {  // altitude change only: keep the horizontal target
+    const auto current = fc.current_target();
+    const Eigen::Vector3d keep =
+        current && current->position_enu_m ? *current->position_enu_m : fc.estimate().position_enu_m;
+    p.x() = keep.x();
+    p.y() = keep.y();
+  }
+  t.position_enu_m = p;
+  const fc::CommandResult r = fc.set_guided_target(t);
+  send_mission_ack(link, f.sysid, f.compid, r == fc::CommandResult::kAccepted ? kMissionAccepted : kMissionError);
+}
+
+void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
+                                      fc::FlightController& fc) {
+  if (m.current == 2 || m.current == 3) {  // guided goto / altitude change (DroneKit simple_goto)
+    guided_goto(link, f, m, is_int, fc);
+    return;
+  }
+  MissionUpload& u = link.upload;
+  if (!u.active || m.mission_type != 0) {
+    StatCounters::add(stats_.rejected_inputs);
+    return;
+  }
+  if (m.seq < u.next_seq) return;  // a repeat of an item we already have: the next request follows
+  if (m.seq > u.next_seq) {
+    StatCounters::add(stats_.rejected_inputs);
+    send_mission_ack(link, f.sysid, f.compid, kMissionInvalidSequence);
+    u = MissionUpload{};
+    return;
+  }
+  u.last_activity_s = now_s();
+  fc::MissionItem item;
+  if (m.seq == 0) {
+    // item 0 is home: the vehicle keeps its own home, the slot is a placeholder
+    item.kind = fc::MissionItem::Kind::kWaypoint;
+    item.position_enu_m = fc.home_enu_m();
+  } else {
+    std::uint8_t error = kMissionError;
+    const auto converted = mission_item_from_mavlink(m, is_int, &error);
+    if (!converted) {
+      send_mission_ack(link, f.sysid, f.compid, error);
+      u = MissionUpload{};
+      return;
+    }
+    item = *converted;
+  }
+  u.items.push_back(item);
+  ++u.next_seq;
+  if (u.next_seq < u.count) {
+    send_mission_request(link);
+    return;
+  }
+  // complete: hand the mission to the flight controller
+  fc.set_mission(std::move(u.items));
+  u = MissionUpload{};
+  send_mission_ack(link, f.sysid, f.compid, kMissionAccepted);
+}
+
+void VehicleLink::handle_mission_request_list(Link& link, const Frame& f, int mission_type,
+                                              fc::FlightController& fc) {
+  msg::MissionCount c;
+  c.target_system = f.sysid;
+  c.target_component = f.compid;
+  c.mission_type = static_cast<std::uint8_t>(mission_type);
+  c.count = mission_type == 0 ? static_cast<std::uint16_t>(std::max<std::size_t>(fc.mission().size(), 1)) : 0;
+  send(link, c);
+}
+
+void VehicleLink::handle_mission_request(Link& link, const Frame& f, int seq, bool want_int,
+                                         fc::FlightController& fc) {
+  const auto& mission = fc.mission();
+  msg::MissionItemInt m;
+  if (seq == 0 && mission.empty()) {
+    fc::MissionItem home;
+    home.position_enu_m = fc.home_enu_m();
+    m = mission_item_to_mavlink(home, 0);
+  } else if (seq >= 0 && static_cast<std::size_t>(seq) < mission.size()) {
+    m = mission_item_to_mavlink(mission[seq], seq);
+  } else {
+    StatCounters::add(stats_.rejected_inputs);
+    send_mission_ack(link, f.sysid, f.compid, kMissionInvalidSequence);
+    return;
+  }
+  m.target_system = f.sysid;
+  m.target_component = f.compid;
+  if (want_int) {
+    send(link, m);
+    return;
+  }
+  // legacy MISSION_ITEM: degrees as float
+  msg::MissionItem legacy;
+  legacy.param1 = m.param1;
+  legacy.param2 = m.param2;
+  legacy.param3 = m.param3;
+  legacy.param4 = m.param4;
+  legacy.x = static_cast<float>(m.x / 1e7);
+  legacy.y = static_cast<float>(m.y / 1e7);
+  legacy.z = m.z;
+  legacy.seq = m.seq;
+  legacy.command = m.command;
+  legacy.target_system = m.target_system;
+  legacy.target_component = m.target_component;
+  legacy.frame = m.frame == 6 ? 3 : (m.frame == 5 ? 0 : m.frame);
+  legacy.current = m.current;
+  legacy.autocontinue = m.autocontinue;
+  send(link, legacy);
+}
+
+void VehicleLink::handle_mission_clear_all(Link& link, const Frame& f, int mission_type,
+                                           fc::FlightController& fc) {
+  if (mission_type != 0 && mission_type != 255) {
+    send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, static_cast<std::uint8_t>(mission_type));
+    return;
+  }
+  fc.set_mission({});
+  send_mission_ack(link, f.sysid, f.compid, kMissionAccepted, static_cast<std::uint8_t>(mission_type));
+}
+
+void VehicleLink::handle_mission_set_current(int seq, fc::FlightController& fc) {
+  if (fc.set_mission_current(seq) != fc::CommandResult::kAccepted) StatCounters::add(stats_.rejected_inputs);
+  // echo with MISSION_CURRENT (no ack), whether or not it changed
+  broadcast(mission_current());
+}
+
+}  // namespace uavsim::server::mavlink

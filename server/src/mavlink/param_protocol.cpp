@@ -1,0 +1,90 @@
+// The parameter protocol over the flight controller's live parameter table (behaviour.md §6): values as
+// REAL32, param_index = the FC's fixed order, unknown names and non-finite values ignored as ArduPilot does.
+#include <cmath>
+
+#include "mavlink/vehicle_link.hpp"
+
+namespace uavsim::server::mavlink {
+
+namespace {
+constexpr std::uint8_t kParamTypeReal32 = 9;
+constexpr int kParamsPerStep = 16;  // PARAM_REQUEST_LIST pacing: 16 per control step = 8000/s at 500 Hz
+}  // namespace
+
+void VehicleLink::send_param(Link& link, std::size_t index) {
+  const fc::FlightController& fc = sim_.fc(vehicle_);
+  const auto& names = fc.param_names();
+  if (index >= names.size()) return;
+  msg::ParamValue v;
+  set_string(v.param_id, names[index]);
+  v.param_value = static_cast<float>(fc.param(names[index]).value_or(0.0));
+  v.param_type = kParamTypeReal32;
+  v.param_count = static_cast<std::uint16_t>(names.size());
+  v.param_index = static_cast<std::uint16_t>(index);
+  send(link, v);
+}
+
+void VehicleLink::handle_param_request_list(Link& link) {
+  // banner first, as ArduPilot does, then the whole table paced over the next control steps
+  send_status_text(6, "ArduCopter V4.5.0 (uavsim)");
+  send_status_text(6, mav_type_ == 13 ? "Frame: HEXA" : "Frame: QUAD");
+  link.param_next = 0;
+}
+
+void VehicleLink::service_param_download(Link& link) {
+  if (link.param_next < 0) return;
+  const std::size_t count = sim_.fc(vehicle_).param_names().size();
+  for (int i = 0; i < kParamsPerStep && static_cast<std::size_t>(link.param_next) < count; ++i) {
+    send_param(link, static_cast<std::size_t>(link.param_next++));
+  }
+  if (static_cast<std::size_t>(link.param_next) >= count) link.param_next = -1;
+}
+
+void VehicleLink::handle_param_request_read(Link& link, const msg::ParamRequestRead& m) {
+  const auto& names = sim_.fc(vehicle_).param_names();
+  if (m.param_index >= 0) {
+    if (static_cast<std::size_t>(m.param_index) < names.size()) {
+      send_param(link, static_cast<std::size_t>(m.param_index));
+    } else {
+      StatCounters::add(stats_.rejected_inputs);
+    }
+    return;
+  }
+  const std::string name(get_string(m.param_id));
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) {
+      send_param(link, i);
+      return;
+    }
+  }
+  StatCounters::add(stats_.rejected_inputs);  // unknown name: no reply, as ArduPilot
+}
+
+void VehicleLink::handle_param_set(const msg::ParamSet& m, fc::FlightController& fc) {
+  const std::string name(get_string(m.param_id));
+  const auto& names = fc.param_names();
+  std::size_t index = names.size();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) index = i;
+  }
+  if (index == names.size() || !std::isfinite(m.param_value)) {
+    StatCounters::add(stats_.rejected_inputs);  // ignored silently, as ArduPilot
+    return;
+  }
+  if (fc.set_param(name, m.param_value) != fc::CommandResult::kAccepted) {
+    StatCounters::add(stats_.rejected_inputs);  // out of range: the echo below reports the unchanged value
+  }
+  if (name == "SYSID_THISMAV") {
+    if (const auto id = fc.param(name)) sysid_ = static_cast<std::uint8_t>(*id);
+  }
+  // the echo goes to every client, with param_index 65535 as ArduPilot's send_parameter_value
+  msg::ParamValue v;
+  set_string(v.param_id, name);
+  v.param_value = static_cast<float>(fc.param(name).value_or(0.0));
+  v.param_type = kParamTypeReal32;
+  v.param_count = static_cast<std::uint16_t>(names.size());
+  v.param_index = 65535;
+  broadcast(v);
+}
+
+}  // namespace uavsim::server::mavlink

@@ -1,0 +1,312 @@
+#include "mavlink/vehicle_link.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace uavsim::server::mavlink {
+
+EndpointStats StatCounters::snapshot() const {
+  auto r = [](const std::atomic<std::uint64_t>& c) { return c.load(std::memory_order_relaxed); };
+  EndpointStats s;
+  s.clients_accepted = r(clients_accepted);
+  s.clients_closed = r(clients_closed);
+  s.bytes_received = r(bytes_received);
+  s.bytes_sent = r(bytes_sent);
+  s.frames_received = r(frames_received);
+  s.bytes_discarded = r(bytes_discarded);
+  s.bad_crc = r(bad_crc);
+  s.unknown_msgid = r(unknown_msgid);
+  s.bad_length = r(bad_length);
+  s.bad_incompat_flags = r(bad_incompat_flags);
+  s.inbox_dropped = r(inbox_dropped);
+  s.frames_handled = r(frames_handled);
+  s.wrong_target = r(wrong_target);
+  s.unhandled_messages = r(unhandled_messages);
+  s.rejected_inputs = r(rejected_inputs);
+  s.commands = r(commands);
+  s.frames_sent = r(frames_sent);
+  s.frames_dropped_full = r(frames_dropped_full);
+  return s;
+}
+
+VehicleLink::VehicleLink(sim::Simulation& sim, std::size_t vehicle, const EndpointConfig& config,
+                         StatCounters& stats)
+    : sim_(sim), vehicle_(vehicle), config_(config), stats_(stats) {
+  // MAV_TYPE from the rotor count, as ArduPilot's motors matrix reports it
+  const std::size_t rotors = sim.airframe(vehicle).rotors.size();
+  mav_type_ = rotors == 6 ? 13 : (rotors == 8 ? 14 : 2);
+  if (const auto id = sim.fc(vehicle).param("SYSID_THISMAV")) sysid_ = static_cast<std::uint8_t>(*id);
+  if (config.auto_sysid) sysid_ = static_cast<std::uint8_t>(std::min<std::size_t>(vehicle + 1, 255));
+}
+
+std::uint32_t VehicleLink::time_boot_ms() const {
+  return static_cast<std::uint32_t>(std::llround(sim_.time_s() * 1000.0));
+}
+
+VehicleLink::Link* VehicleLink::find_link(std::uint64_t client) {
+  for (Link& l : links_) {
+    if (l.id == client) return &l;
+  }
+  return nullptr;
+}
+
+void VehicleLink::push_frame(Link& link, std::span<const std::uint8_t> frame) {
+  if (link.outbox->push(frame)) {
+    StatCounters::add(stats_.frames_sent);
+  } else {
+    StatCounters::add(stats_.frames_dropped_full);
+  }
+}
+
+bool VehicleLink::addressed_to_us(int target_system, int target_component) const {
+  // broadcast (0) or our system; component 0 or the autopilot
+  if (target_system != 0 && target_system != sysid_) return false;
+  return target_component == 0 || target_component == kCompIdAutopilot;
+}
+
+void VehicleLink::on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbox) {
+  Link link;
+  link.id = client;
+  link.outbox = std::move(outbox);
+  link.streams = default_streams();
+  const double t = now_s();
+  for (Stream& s : link.streams) s.next_due_s = t + s.interval_s;
+  links_.push_back(std::move(link));
+  // start the stream with a MAVLink 2 heartbeat, so version-sniffing clients (pymavlink) pick v2
+  send_heartbeat(links_.back());
+}
+
+void VehicleLink::on_disconnect(std::uint64_t client) {
+  std::erase_if(links_, [client](const Link& l) { return l.id == client; });
+}
+
+void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightController& fc) {
+  Link* link_ptr = find_link(client);
+  if (link_ptr == nullptr) return;
+  Link& link = *link_ptr;
+  StatCounters::add(stats_.frames_handled);
+  // answer each client in the MAVLink version it last spoke
+  link.version = f.version;
+  link.peer_sysid = f.sysid;
+  link.peer_compid = f.compid;
+
+  auto wrong_target = [&](int ts, int tc) {
+    if (addressed_to_us(ts, tc)) return false;
+    StatCounters::add(stats_.wrong_target);
+    return true;
+  };
+
+  switch (f.msgid) {
+    case msg::Heartbeat::kId: {
+      // any heartbeat from a ground station keeps the GCS-loss failsafe fed
+      const auto m = msg::Heartbeat::decode(f.payload.data());
+      if (m.type == 6 /* MAV_TYPE_GCS */ || m.autopilot == 8 /* MAV_AUTOPILOT_INVALID */) {
+        fc.on_gcs_heartbeat(now_s());
+      }
+      break;
+    }
+    case msg::CommandLong::kId: {
+      const auto m = msg::CommandLong::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      CommandArgs c;
+      c.command = m.command;
+      c.p = {m.param1, m.param2, m.param3, m.param4, m.param5, m.param6, m.param7};
+      StatCounters::add(stats_.commands);
+      ack_command(link, f, m.command, handle_command(link, c, fc));
+      break;
+    }
+    case msg::CommandInt::kId: {
+      const auto m = msg::CommandInt::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      CommandArgs c;
+      c.command = m.command;
+      c.is_int = true;
+      c.frame = m.frame;
+      c.x = m.x;
+      c.y = m.y;
+      c.p = {m.param1, m.param2, m.param3, m.param4, m.x / 1e7, m.y / 1e7, m.z};
+      StatCounters::add(stats_.commands);
+      ack_command(link, f, m.command, handle_command(link, c, fc));
+      break;
+    }
+    case msg::SetMode::kId: {
+      const auto m = msg::SetMode::decode(f.payload.data());
+      if (wrong_target(m.target_system, 0)) break;
+      StatCounters::add(stats_.commands);
+      CommandArgs c;
+      c.command = 176;  // same path as MAV_CMD_DO_SET_MODE
+      c.p[0] = m.base_mode;
+      c.p[1] = m.custom_mode;
+      ack_command(link, f, msg::SetMode::kId, handle_command(link, c, fc));
+      break;
+    }
+    case msg::SetPositionTargetLocalNed::kId: {
+      const auto m = msg::SetPositionTargetLocalNed::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_set_position_target_local(m, fc);
+      break;
+    }
+    case msg::SetPositionTargetGlobalInt::kId: {
+      const auto m = msg::SetPositionTargetGlobalInt::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_set_position_target_global(m, fc);
+      break;
+    }
+    case msg::SetAttitudeTarget::kId: {
+      const auto m = msg::SetAttitudeTarget::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_set_attitude_target(m, fc);
+      break;
+    }
+    case msg::GimbalManagerSetPitchyaw::kId: {
+      const auto m = msg::GimbalManagerSetPitchyaw::decode(f.payload.data());
+      if (m.target_system != 0 && m.target_system != sysid_) {
+        StatCounters::add(stats_.wrong_target);
+        break;
+      }
+      constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+      if (std::isfinite(m.pitch)) gimbal_.pitch_deg = m.pitch * kRadToDeg;
+      if (std::isfinite(m.yaw)) gimbal_.yaw_deg = m.yaw * kRadToDeg;
+      gimbal_.pitch_rate_deg_s = std::isfinite(m.pitch_rate) ? m.pitch_rate * kRadToDeg : 0.0;
+      gimbal_.yaw_rate_deg_s = std::isfinite(m.yaw_rate) ? m.yaw_rate * kRadToDeg : 0.0;
+      gimbal_.yaw_earth_frame = (m.flags & 16) != 0;  // GIMBAL_MANAGER_FLAGS_YAW_LOCK
+      gimbal_.stamp_s = now_s();
+      break;
+    }
+    case msg::ParamRequestList::kId: {
+      const auto m = msg::ParamRequestList::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_param_request_list(link);
+      break;
+    }
+    case msg::ParamRequestRead::kId: {
+      const auto m = msg::ParamRequestRead::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_param_request_read(link, m);
+      break;
+    }
+    case msg::ParamSet::kId: {
+      const auto m = msg::ParamSet::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_param_set(m, fc);
+      break;
+    }
+    case msg::MissionCount::kId: {
+      const auto m = msg::MissionCount::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_mission_count(link, f, m);
+      break;
+    }
+    case msg::MissionItemInt::kId: {
+      const auto m = msg::MissionItemInt::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      link.mission_int = true;
+      handle_mission_item(link, f, m, true, fc);
+      break;
+    }
+    case msg::MissionItem::kId: {
+      const auto m = msg::MissionItem::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution
+      msg::MissionItemInt i;
+      i.param1 = m.param1;
+      i.param2 = m.param2;
+      i.param3 = m.param3;
+      i.param4 = m.param4;
+      i.x = static_cast<std::int32_t>(std::llround(static_cast<double>(m.x) * 1e7));
+      i.y = static_cast<std::int32_t>(std::llround(static_cast<double>(m.y) * 1e7));
+      i.z = m.z;
+      i.seq = m.seq;
+      i.command = m.command;
+      i.target_system = m.target_system;
+      i.target_component = m.target_component;
+      i.frame = m.frame;
+      i.current = m.current;
+      i.autocontinue = m.autocontinue;
+      i.mission_type = m.mission_type;
+      handle_mission_item(link, f, i, false, fc);
+      break;
+    }
+    case msg::MissionRequestInt::kId: {
+      const auto m = msg::MissionRequestInt::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      link.mission_int = true;
+      handle_mission_request(link, f, m.seq, true, fc);
+      break;
+    }
+    case msg::MissionRequest::kId: {
+      const auto m = msg::MissionRequest::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_mission_request(link, f, m.seq, false, fc);
+      break;
+    }
+    case msg::MissionRequestList::kId: {
+      const auto m = msg::MissionRequestList::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_mission_request_list(link, f, m.mission_type, fc);
+      break;
+    }
+    case msg::MissionClearAll::kId: {
+      const auto m = msg::MissionClearAll::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_mission_clear_all(link, f, m.mission_type, fc);
+      break;
+    }
+    case msg::MissionSetCurrent::kId: {
+      const auto m = msg::MissionSetCurrent::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_mission_set_current(m.seq, fc);
+      break;
+    }
+    case msg::MissionAck::kId:
+      break;  // end of a download: nothing is held per download
+    case msg::RequestDataStream::kId: {
+      const auto m = msg::RequestDataStream::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_request_data_stream(link, m);
+      break;
+    }
+    case msg::Timesync::kId:
+      handle_timesync(link, msg::Timesync::decode(f.payload.data()));
+      break;
+    case msg::AutopilotVersionRequest::kId: {
+      const auto m = msg::AutopilotVersionRequest::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      send_autopilot_version(link);
+      break;
+    }
+    default:
+      StatCounters::add(stats_.unhandled_messages);
+      break;
+  }
+}
+
+void VehicleLink::on_control_step() {
+  fc::FlightController& fc = sim_.fc(vehicle_);
+  // status texts and reached mission items are events: drain them even with nobody listening
+  for (const fc::StatusText& s : fc.drain_status_texts()) send_status_text(s.severity, s.text);
+  for (int seq : fc.drain_reached_items()) {
+    msg::MissionItemReached r;
+    r.seq = static_cast<std::uint16_t>(seq);
+    broadcast(r);
+  }
+  if (links_.empty()) return;
+  const double t = now_s();
+  for (Link& link : links_) {
+    for (std::uint32_t id : link.one_shot) send_message_by_id(link, id);
+    link.one_shot.clear();
+    send_due_streams(link, t);
+    service_mission_upload(link, t);
+    service_param_download(link);
+  }
+  // TIMESYNC: ArduPilot broadcasts its own request every ~10 s (ts1 = now_ns + sysid)
+  if (t >= next_timesync_s_) {
+    next_timesync_s_ = t + 10.0;
+    msg::Timesync ts;
+    ts.tc1 = 0;
+    ts.ts1 = static_cast<std::int64_t>(std::llround(t * 1e9)) + sysid_;
+    broadcast(ts);
+  }
+}
+
+}  // namespace uavsim::server::mavlink

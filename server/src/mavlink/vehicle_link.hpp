@@ -1,0 +1,196 @@
+// Internal to the endpoint: the loop-thread half of one vehicle's MAVLink endpoint. It owns the state of
+// every connected client (its MAVLink version, sequence numbers, stream intervals, mission transfer,
+// parameter download) and speaks ArduCopter's protocol over the vehicle's flight controller:
+//   vehicle_link.cpp      dispatch of incoming frames, sending, client bookkeeping
+//   telemetry.cpp         streamed and requested messages, stream rates
+//   command_handler.cpp   COMMAND_LONG/INT, SET_MODE, SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, gimbal
+//   mission_protocol.cpp  mission upload/download, MISSION_ITEM guided goto, MISSION_CURRENT/REACHED
+//   param_protocol.cpp    PARAM_REQUEST_LIST/READ, PARAM_SET
+// Every method is loop-thread only.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "fc/flight_controller.hpp"
+#include "mavlink/codec/codec.hpp"
+#include "mavlink/endpoint.hpp"
+#include "mavlink/generated/messages.hpp"
+#include "mavlink/outbox.hpp"
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::mavlink {
+
+// EndpointStats as relaxed atomics, written by both threads.
+struct StatCounters {
+  std::atomic<std::uint64_t> clients_accepted{0}, clients_closed{0}, bytes_received{0}, bytes_sent{0},
+      frames_received{0}, bytes_discarded{0}, bad_crc{0}, unknown_msgid{0}, bad_length{0},
+      bad_incompat_flags{0}, inbox_dropped{0}, frames_handled{0}, wrong_target{0}, unhandled_messages{0},
+      rejected_inputs{0}, commands{0}, frames_sent{0}, frames_dropped_full{0};
+  std::atomic<std::uint64_t> clients_now{0};
+
+  static void add(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) {
+    c.fetch_add(n, std::memory_order_relaxed);
+  }
+  EndpointStats snapshot() const;
+};
+
+// A message a client may have streamed, with the data-stream group REQUEST_DATA_STREAM addresses it by.
+enum class StreamGroup : std::uint8_t {
+  kNone = 0,  // only by SET_MESSAGE_INTERVAL
+  kExtendedStatus = 2,
+  kPosition = 6,
+  kExtra1 = 10,
+  kExtra2 = 11,
+  kExtra3 = 12,
+};
+
+inline constexpr std::uint8_t kCompIdAutopilot = 1;
+
+class VehicleLink {
+ public:
+  VehicleLink(sim::Simulation& sim, std::size_t vehicle, const EndpointConfig& config, StatCounters& stats);
+
+  // client bookkeeping, from the I/O thread's events
+  void on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbox);
+  void on_disconnect(std::uint64_t client);
+  // one checksum-valid frame from a client; commands act on fc
+  void on_frame(std::uint64_t client, const Frame& frame, fc::FlightController& fc);
+  // after every control step: due telemetry, status texts, reached items, transfer retries
+  void on_control_step();
+
+  bool has_clients() const { return !links_.empty(); }
+  const GimbalState& gimbal() const { return gimbal_; }
+
+ private:
+  struct Stream {
+    std::uint32_t msgid = 0;
+    StreamGroup group = StreamGroup::kNone;
+    double default_interval_s = 0.0;  // 0 = not streamed unless asked
+    double interval_s = 0.0;          // current; 0 = off
+    double next_due_s = 0.0;
+  };
+  struct MissionUpload {
+    bool active = false;
+    int count = 0;
+    int next_seq = 0;
+    double last_activity_s = 0.0;
+    double last_request_s = 0.0;
+    std::vector<fc::MissionItem> items;
+  };
+  struct Link {
+    std::uint64_t id = 0;
+    std::shared_ptr<Outbox> outbox;
+    Version version = Version::kV2;
+    std::uint8_t seq = 0;
+    std::uint8_t peer_sysid = 255;
+    std::uint8_t peer_compid = 190;
+    std::vector<Stream> streams;
+    std::vector<std::uint32_t> one_shot;  // REQUEST_MESSAGE answers queued for the next step
+    MissionUpload upload;
+    bool mission_int = false;    // the client has used *_INT mission messages: request items as INT
+    int param_next = -1;         // next index of a PARAM_REQUEST_LIST download; -1 = none
+  };
+
+  // --- vehicle_link.cpp ---
+  Link* find_link(std::uint64_t client);
+  template <class Msg>
+  void send(Link& link, const Msg& msg) {
+    FrameHeader header;
+    header.sysid = sysid_;
+    header.compid = kCompIdAutopilot;
+    header.seq = link.seq;
+    header.version = link.version;
+    std::array<std::uint8_t, kMaxFrameLen> buf;
+    const std::size_t n = encode_into(header, msg, buf);
+    if (n == 0) return;  // e.g. a message id above 255 on a MAVLink 1 link
+    ++link.seq;
+    push_frame(link, {buf.data(), n});
+  }
+  void push_frame(Link& link, std::span<const std::uint8_t> frame);
+  template <class Msg>
+  void broadcast(const Msg& msg) {
+    for (Link& l : links_) send(l, msg);
+  }
+  bool addressed_to_us(int target_system, int target_component) const;
+  double now_s() const { return sim_.time_s(); }
+  std::uint32_t time_boot_ms() const;
+
+  // --- telemetry.cpp ---
+  std::vector<Stream> default_streams() const;
+  void send_due_streams(Link& link, double t);
+  bool send_message_by_id(Link& link, std::uint32_t msgid);  // false: not a message we can produce
+  bool can_send(std::uint32_t msgid) const;
+  void set_group_rate(Link& link, int group, double rate_hz, bool start);
+  std::optional<double> default_interval(std::uint32_t msgid) const;
+  msg::Heartbeat heartbeat() const;
+  void send_heartbeat(Link& link);
+  void send_home(Link& link);
+  void send_autopilot_version(Link& link);
+  void send_status_text(int severity, std::string_view text);
+  void handle_request_data_stream(Link& link, const msg::RequestDataStream& m);
+  void handle_timesync(Link& link, const msg::Timesync& m);
+  Geodetic geodetic_of_enu(const Eigen::Vector3d& p_enu) const;
+  Eigen::Vector3d enu_of_geodetic(const Geodetic& g) const;
+
+  // --- command_handler.cpp ---
+  struct CommandArgs {
+    std::uint16_t command = 0;
+    std::array<double, 7> p{};
+    bool is_int = false;
+    int frame = 3;                   // COMMAND_INT frame; COMMAND_LONG: GLOBAL_RELATIVE_ALT
+    std::int32_t x = 0, y = 0;       // COMMAND_INT lat/lon degE7
+  };
+  std::uint8_t handle_command(Link& link, const CommandArgs& c, fc::FlightController& fc);
+  void ack_command(Link& link, const Frame& frame, std::uint16_t command, std::uint8_t result);
+  void handle_set_position_target_local(const msg::SetPositionTargetLocalNed& m, fc::FlightController& fc);
+  void handle_set_position_target_global(const msg::SetPositionTargetGlobalInt& m, fc::FlightController& fc);
+  void apply_setpoint(std::uint16_t mask, int frame, std::optional<Eigen::Vector3d> pos_ned,
+                      const Eigen::Vector3d& vel_ned, const Eigen::Vector3d& acc_ned, double yaw_ned,
+                      double yaw_rate_ned, fc::FlightController& fc);
+  void handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc::FlightController& fc);
+  void hold_position(fc::FlightController& fc);
+
+  // --- mission_protocol.cpp ---
+  void handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m);
+  void handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
+                           fc::FlightController& fc);
+  void handle_mission_request(Link& link, const Frame& f, int seq, bool want_int, fc::FlightController& fc);
+  void handle_mission_request_list(Link& link, const Frame& f, int mission_type, fc::FlightController& fc);
+  void handle_mission_clear_all(Link& link, const Frame& f, int mission_type, fc::FlightController& fc);
+  void handle_mission_set_current(int seq, fc::FlightController& fc);
+  void send_mission_request(Link& link);
+  void send_mission_ack(Link& link, std::uint8_t sysid, std::uint8_t compid, std::uint8_t result,
+                        std::uint8_t mission_type = 0);
+  void service_mission_upload(Link& link, double t);
+  msg::MissionCurrent mission_current() const;
+  std::optional<fc::MissionItem> mission_item_from_mavlink(const msg::MissionItemInt& m, bool is_int,
+                                                           std::uint8_t* error) const;
+  msg::MissionItemInt mission_item_to_mavlink(const fc::MissionItem& item, int seq) const;
+  void guided_goto(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
+                   fc::FlightController& fc);
+
+  // --- param_protocol.cpp ---
+  void handle_param_request_list(Link& link);
+  void handle_param_request_read(Link& link, const msg::ParamRequestRead& m);
+  void handle_param_set(const msg::ParamSet& m, fc::FlightController& fc);
+  void send_param(Link& link, std::size_t index);
+  void service_param_download(Link& link);
+
+  sim::Simulation& sim_;
+  const std::size_t vehicle_;
+  const EndpointConfig& config_;
+  StatCounters& stats_;
+  std::vector<Link> links_;
+  GimbalState gimbal_;
+  std::uint8_t sysid_ = 1;
+  std::uint8_t mav_type_ = 2;
+  double next_timesync_s_ = 0.0;
+  std::uint16_t next_text_id_ = 1;  // STATUSTEXT chunk ids
+};
+
+}  // namespace uavsim::server::mavlink

@@ -1,0 +1,249 @@
+// A minimal ground station for endpoint tests: a blocking-connect, non-blocking-read TCP client with our
+// codec, plus a fixture that owns a Simulation and a MavlinkServer on ephemeral ports. Synchronisation is
+// by observable state only: the sim is stepped on the test thread until the expected frame arrives (with a
+// sim-time bound); waiting on the I/O thread is bounded by a wall-clock timeout, never a fixed sleep.
+#pragma once
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "mavlink/codec/codec.hpp"
+#include "mavlink/codec/parser.hpp"
+#include "mavlink/endpoint.hpp"
+#include "mavlink/generated/messages.hpp"
+#include "sim/sim_fixture.hpp"
+
+namespace uavsim::server::mavlink::testing {
+
+class TestGcs {
+ public:
+  // receive_buffer_bytes > 0 shrinks the socket's receive buffer (a client that reads slowly fills up fast)
+  explicit TestGcs(std::uint16_t port, Version version = Version::kV2, int receive_buffer_bytes = 0)
+      : version_(version) {
+    fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (receive_buffer_bytes > 0) {
+      setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &receive_buffer_bytes, sizeof(receive_buffer_bytes));
+    }
+    sockaddr_in sa{};
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons(port);
+    inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+    connected_ = connect(fd_, reinterpret_cast<sockaddr*>(&sa), sizeof(sa)) == 0;
+    fcntl(fd_, F_SETFL, fcntl(fd_, F_GETFL) | O_NONBLOCK);
+    const int one = 1;
+    setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+  }
+  ~TestGcs() { close_now(); }
+  TestGcs(const TestGcs&) = delete;
+  TestGcs& operator=(const TestGcs&) = delete;
+
+  bool connected() const { return connected_; }
+  void close_now() {
+    if (fd_ >= 0) close(fd_);
+    fd_ = -1;
+  }
+
+  template <class Msg>
+  void send(const Msg& m, std::uint8_t sysid = 255, std::uint8_t compid = 190) {
+    FrameHeader h;
+    h.sysid = sysid;
+    h.compid = compid;
+    h.seq = seq_++;
+    h.version = version_;
+    const EncodedFrame f = encode(h, m);
+    ASSERT_FALSE(f.empty());
+    send_raw(f.view());
+    ++sent_frames_;
+  }
+  void send_raw(std::span<const std::uint8_t> bytes) {
+    std::size_t off = 0;
+    while (off < bytes.size()) {
+      const ssize_t n = ::send(fd_, bytes.data() + off, bytes.size() - off, MSG_NOSIGNAL);
+      if (n > 0) {
+        off += static_cast<std::size_t>(n);
+      } else {
+        pollfd p{fd_, POLLOUT, 0};
+        poll(&p, 1, 100);
+      }
+    }
+  }
+  std::uint64_t sent_frames() const { return sent_frames_; }
+
+  // reads whatever has arrived, waiting at most timeout_ms for the first byte
+  void poll_once(int timeout_ms) {
+    pollfd p{fd_, POLLIN, 0};
+    if (poll(&p, 1, timeout_ms) <= 0) return;
+    std::uint8_t buf[65536];
+    for (;;) {
+      const ssize_t n = recv(fd_, buf, sizeof(buf), 0);
+      if (n <= 0) return;
+      bytes_received_ += static_cast<std::size_t>(n);
+      if (first_byte_ < 0) first_byte_ = buf[0];
+      parser_.feed({buf, static_cast<std::size_t>(n)}, [&](const Frame& f) {
+        frames_.push_back(f);
+        frames_.back().raw = {};
+      });
+    }
+  }
+
+  const std::vector<Frame>& frames() const { return frames_; }
+  void clear() { frames_.clear(); }
+  int first_byte() const { return first_byte_; }
+  std::size_t bytes_received() const { return bytes_received_; }
+
+  template <class Msg>
+  std::vector<Msg> all() const {
+    std::vector<Msg> out;
+    for (const Frame& f : frames_) {
+      if (f.msgid == Msg::kId) out.push_back(Msg::decode(f.payload.data()));
+    }
+    return out;
+  }
+  template <class Msg>
+  std::optional<Msg> last() const {
+    for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
+      if (it->msgid == Msg::kId) return Msg::decode(it->payload.data());
+    }
+    return std::nullopt;
+  }
+  template <class Msg>
+  std::size_t count() const {
+    std::size_t n = 0;
+    for (const Frame& f : frames_) n += f.msgid == Msg::kId;
+    return n;
+  }
+  const Frame* last_frame(std::uint32_t msgid) const {
+    for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
+      if (it->msgid == msgid) return &*it;
+    }
+    return nullptr;
+  }
+
+ private:
+  int fd_ = -1;
+  bool connected_ = false;
+  Version version_;
+  std::uint8_t seq_ = 0;
+  std::uint64_t sent_frames_ = 0;
+  Parser parser_;
+  std::vector<Frame> frames_;
+  int first_byte_ = -1;
+  std::size_t bytes_received_ = 0;
+};
+
+class EndpointTest : public ::testing::Test {
+ protected:
+  void start(const std::string& world = "empty.xml") {
+    sim_ = sim::testing::make_sim(world);
+    EndpointConfig c;
+    c.base_port = 0;
+    server_ = std::make_unique<MavlinkServer>(*sim_, c);
+  }
+  void SetUp() override { start(); }
+  void TearDown() override {
+    clients_.clear();
+    server_.reset();
+    sim_.reset();
+  }
+
+  // waits (wall clock, bounded) for a condition that the I/O thread makes true
+  static bool wait_for(const std::function<bool()>& done, double timeout_s = 5.0) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (!done()) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      poll(nullptr, 0, 1);
+    }
+    return true;
+  }
+
+  // connects a client and waits until the endpoint has accepted it
+  std::unique_ptr<TestGcs> connect(std::size_t vehicle = 0, Version v = Version::kV2, int rcvbuf = 0) {
+    const std::size_t before = server_->stats(vehicle).clients_accepted;
+    auto g = std::make_unique<TestGcs>(server_->port(vehicle), v, rcvbuf);
+    EXPECT_TRUE(g->connected());
+    if (vehicle == 0) clients_.push_back(g.get());
+    EXPECT_TRUE(wait_for([&] { return server_->stats(vehicle).clients_accepted > before; }));
+    return g;
+  }
+
+  // waits until the endpoint has parsed every frame the clients sent (so the next step handles them)
+  void sync(std::uint64_t frames_sent_total, std::size_t vehicle = 0) {
+    ASSERT_TRUE(wait_for([&] { return server_->stats(vehicle).frames_received >= frames_sent_total; }))
+        << "endpoint never received the frames";
+  }
+
+  // steps whole control periods until pred() holds over what g received; false after max_sim_s
+  bool step_until(TestGcs& g, const std::function<bool()>& pred, double max_sim_s) {
+    const double end = sim_->time_s() + max_sim_s;
+    while (sim_->time_s() < end) {
+      for (int k = 0; k < sim_->control_decimation(); ++k) sim_->step();
+      g.poll_once(0);
+      if (pred()) return true;
+    }
+    // replies produced before the bound may still be on their way through the I/O thread
+    const auto wall_end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (std::chrono::steady_clock::now() < wall_end) {
+      g.poll_once(10);
+      if (pred()) return true;
+    }
+    return false;
+  }
+
+  // steps until SYS_STATUS reports GPS and pre-arm healthy (GUIDED can be entered then), at most 30 s
+  void wait_gps_ready(TestGcs& g) {
+    constexpr std::uint32_t kPrearm = 0x10000000, kGps = 32;
+    ASSERT_TRUE(step_until(g, [&] {
+      const auto s = g.last<msg::SysStatus>();
+      return s && (s->onboard_control_sensors_health & kPrearm) && (s->onboard_control_sensors_health & kGps);
+    }, 30.0)) << "GPS / pre-arm never healthy";
+  }
+
+  void step_for(double sim_s) {
+    const double end = sim_->time_s() + sim_s;
+    while (sim_->time_s() < end) sim_->step();
+  }
+
+  // sends a COMMAND_LONG and returns its COMMAND_ACK result (-1: no ack within 2 s of sim time)
+  int command(TestGcs& g, std::uint16_t cmd, std::array<float, 7> p = {}, std::uint8_t target_system = 1) {
+    msg::CommandLong c;
+    c.command = cmd;
+    c.target_system = target_system;
+    c.target_component = 1;
+    c.param1 = p[0], c.param2 = p[1], c.param3 = p[2], c.param4 = p[3];
+    c.param5 = p[4], c.param6 = p[5], c.param7 = p[6];
+    const std::size_t acks_before = g.count<msg::CommandAck>();
+    g.send(c);
+    sync_client(g);
+    if (!step_until(g, [&] { return g.count<msg::CommandAck>() > acks_before; }, 2.0)) return -1;
+    const auto ack = g.last<msg::CommandAck>();
+    EXPECT_EQ(ack->command, cmd);
+    return ack->result;
+  }
+
+  // waits until every frame the vehicle-0 clients sent (with send()) has been parsed by the endpoint
+  void sync_client(TestGcs& g) {
+    (void)g;
+    std::uint64_t total = 0;
+    for (const TestGcs* c : clients_) total += c->sent_frames();
+    sync(total);
+  }
+
+  std::unique_ptr<sim::Simulation> sim_;
+  std::unique_ptr<MavlinkServer> server_;
+  std::vector<TestGcs*> clients_;  // vehicle-0 clients made by connect(); keep them alive in the test
+};
+
+}  // namespace uavsim::server::mavlink::testing
