@@ -120,7 +120,9 @@ class CameraRenderer {
   // Renders camera `index` as `d` shows the world now, into `out` (its pixel buffer is reused).
   // `d` must be forwarded: its positions (xpos, geom_xpos, cam_xpos, ...) must be those of d->qpos
   // at d->time, as after mj_forward or mj_step1. After a plain mj_step they lag one step behind
-  // d->time. Nothing in `d` is written. Renderer thread only; nothing may write `d` meanwhile.
+  // d->time. The renderer writes nothing in `d` (mjv_updateScene merely takes it non-const).
+  // Renderer thread only; nothing may write `d` meanwhile: give a renderer thread its own copy
+  // (mj_copyData) of a forwarded mjData.
   void render(mjData* d, int index, CameraFrame* out);
 
  private:
