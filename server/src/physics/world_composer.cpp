@@ -365,12 +365,21 @@ class Composer {
     }
   }
 
-  // sizes the composed model needs: user data slots of the rotor sites, the offscreen buffer
+  // sizes the composed model needs: user data slots of the rotor sites, contact and constraint buffers
+  // for every vehicle resting on its gear (MuJoCo 2.2's defaults, 100 contacts and 500 constraint rows,
+  // drop contacts beyond a few vehicles), the offscreen buffer
   void finish(XMLElement* root) {
+    XMLElement* size = child_or_create(*world_, root, "size", true);
     if (nuser_site_ > 0) {
-      XMLElement* size = child_or_create(*world_, root, "size", true);
       size->SetAttribute("nuser_site", std::max(nuser_site_, size->IntAttribute("nuser_site", 0)));
     }
+    // a grounded vehicle: up to 4 gear contacts x 4 pyramid rows; MuJoCo 2.2 allocates njmax^2 doubles
+    // (efc_AR), so the automatic size stops growing at kAutoSizedVehicles: larger worlds that start on
+    // the ground set <size nconmax njmax> themselves
+    constexpr int kAutoSizedVehicles = 300;
+    const int n = std::min(static_cast<int>(names_.size()), kAutoSizedVehicles);
+    if (size->Attribute("nconmax") == nullptr) size->SetAttribute("nconmax", 100 + 6 * n);
+    if (size->Attribute("njmax") == nullptr) size->SetAttribute("njmax", 500 + 16 * n);
     XMLElement* visual = child_or_create(*world_, root, "visual");
     XMLElement* global = child_or_create(*world_, visual, "global");
     global->SetAttribute("offwidth",
