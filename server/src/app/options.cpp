@@ -24,6 +24,13 @@ options:
                       and exit with 0 if the flight succeeded
   --write-world FILE  write the composed MJCF (plain MuJoCo, opens in mujoco-simulate) and exit
   --models-dir DIR    where vehicles/ and objects/ templates live (default: the source tree's models/)
+  --mavlink-port BASE TCP port of vehicle 0's MAVLink endpoint; vehicle i listens on BASE + 10 i
+                      (ArduPilot SITL's convention); default 5760; 0: ephemeral ports; -1: none
+  --bind ADDR         address the MAVLink endpoints listen on; default 127.0.0.1 (loopback only)
+  --api-port N        TCP port of the sim socket API (docs/protocol.md); default 5700; 0: an ephemeral
+                      port (printed); -1: no API
+  --api-bind ADDR     address the sim API listens on; default 127.0.0.1 (loopback only)
+  --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
   --quiet             print only errors and the result
   --help              this text
 )";
@@ -84,6 +91,22 @@ std::optional<Options> parse_options(int argc, char** argv, int* exit_code) {
     } else if (a == "--models-dir") {
       if (!value(&v)) return std::nullopt;
       o.models_dir = v;
+    } else if (a == "--mavlink-port") {
+      if (!value(&v) || !parse_double(a, v, &number) || number < -1 || number > 65535) return std::nullopt;
+      o.mavlink_base_port = static_cast<int>(number);
+    } else if (a == "--bind") {
+      if (!value(&v)) return std::nullopt;
+      o.bind_address = v;
+    } else if (a == "--api-port") {
+      if (!value(&v) || !parse_double(a, v, &number) || number < -1 || number > 65535) return std::nullopt;
+      o.api_port = static_cast<int>(number);
+    } else if (a == "--api-bind") {
+      if (!value(&v)) return std::nullopt;
+      o.api_bind_address = v;
+    } else if (a == "--lockstep-timeout") {
+      if (!value(&v) || !parse_double(a, v, &o.lockstep_timeout_s) || o.lockstep_timeout_s <= 0) {
+        return std::nullopt;
+      }
     } else if (a == "--quiet") {
       o.quiet = true;
     } else if (!a.empty() && a[0] == '-') {

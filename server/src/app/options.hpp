@@ -18,6 +18,11 @@ struct Options {
   double duration_s = 0.0;            // 0 = run until interrupted
   bool demo = false;                  // fly the scripted demo on vehicle 0 and exit
   bool quiet = false;
+  int api_port = 5700;                // sim socket API (docs/protocol.md); 0 = ephemeral; -1 = none
+  std::string api_bind_address = "127.0.0.1";
+  double lockstep_timeout_s = 10.0;   // wall seconds a lockstep client may take for one tick
+  int mavlink_base_port = 5760;       // vehicle i: base + 10 i; 0 = ephemeral; -1 = no MAVLink endpoints
+  std::string bind_address = "127.0.0.1";
 };
 
 // Parses argv. Returns std::nullopt after printing --help or an error (exit_code says which).
