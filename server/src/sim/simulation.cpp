@@ -49,7 +49,7 @@ void Simulation::init_vehicles() {
   for (size_t i = 0; i < bindings.size(); ++i) {
     const airframe::AirframeParams& a = bindings[i].airframe;
     VehicleRuntime rt{fc::FlightController(a, mix_seed(config_.seed, i)), airframe::make_motor_state(a),
-                      airframe::BatteryState{}, {}, {}, {}, false, true};
+                      airframe::BatteryState{}, {}, {}, {}, false, true, 0.0};
     rt.battery.voltage_v = a.battery.voltage_full_v;
     rt.motor_cmd.assign(a.rotors.size(), 0.0);
     rt.thrust_n.assign(a.rotors.size(), 0.0);
@@ -164,11 +164,17 @@ void Simulation::check_contacts() {
       }
     }
   }
+  // on the ground: a contact now or within airborne_after_s (a resting contact comes and goes)
+  const double now_s = world_->time_s();
   for (size_t i = 0; i < vehicles_.size(); ++i) {
-    const bool now = touching[i] != 0;
-    if (now != vehicles_[i].on_ground) {
-      vehicles_[i].on_ground = now;
-      record(now ? EventType::kTouchdown : EventType::kTakeoff, static_cast<int>(i), "");
+    VehicleRuntime& v = vehicles_[i];
+    if (touching[i]) v.last_contact_s = now_s;
+    const bool grounded = touching[i] || now_s - v.last_contact_s < config_.airborne_after_s;
+    if (grounded != v.on_ground) {
+      v.on_ground = grounded;
+      if (!v.crashed) {
+        record(grounded ? EventType::kTouchdown : EventType::kTakeoff, static_cast<int>(i), "");
+      }
     }
   }
 }

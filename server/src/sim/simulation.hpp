@@ -24,6 +24,7 @@ struct SimConfig {
   double control_hz = 500.0;  // rounded to an integer divisor of physics_hz (400 Hz does not divide 1 kHz)
   uint64_t seed = 1;
   double crash_speed_m_s = 3.0;  // landing-gear contact faster than this is a hard impact
+  double airborne_after_s = 0.1;  // no contact for this long = airborne (contacts flicker at rest)
 };
 
 // A vehicle's runtime state on the loop thread.
@@ -36,6 +37,7 @@ struct VehicleRuntime {
   std::vector<double> thrust_n;
   bool crashed = false;
   bool on_ground = true;
+  double last_contact_s = 0.0;  // sim time of the last contact with anything
 };
 
 // A command or query for one vehicle, run on the loop thread at the next control boundary.
