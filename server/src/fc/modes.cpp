@@ -72,8 +72,9 @@ bool FlightController::Impl::enter_mode(Mode mode, bool from_failsafe) {
 }
 
 void FlightController::Impl::init_mode_state() {
-  const bool flying = armed_ && !landed_;
-  if (!takeoff_active_ || mode_ != Mode::kGuided) takeoff_active_ = takeoff_active_ && flying;
+  // a GUIDED take-off ends with any change to another mode (LAND during the climb must be able to
+  // detect its landing); AUTO's take-off items start their own
+  if (mode_ != Mode::kGuided) takeoff_active_ = false;
   nav_active_ = false;
   attitude_climb_ = false;
   brake_holding_ = false;

@@ -70,7 +70,7 @@ TEST_P(EveryFrame, YawOf90DegSettles) {
   // clockwise seen from above is negative ENU yaw
   const double turned = wrap_pi(yaw_of(sim->truth(0).q_enu_body) - yaw0);
   EXPECT_NEAR(turned, -M_PI / 2, 3.0 * M_PI / 180.0);
-  EXPECT_LT(sim->truth(0).rate_body_rad_s.norm(), 0.05);
+  EXPECT_LT(std::abs(sim->truth(0).rate_body_rad_s.z()), 0.02);  // stopped turning
 }
 
 INSTANTIATE_TEST_SUITE_P(QuadAndHexa, EveryFrame, ::testing::Values("empty.xml", "hexa.xml"));
