@@ -1,0 +1,175 @@
+// MAVLink endpoint benchmarks over loopback (Google Benchmark; figures, not a gate):
+//   BM_TelemetryThroughput/N  N vehicles, one client each, every stream group at 50 Hz: frames delivered to
+//                             the clients per wall second while the loop steps as fast as it can.
+//   BM_CommandAckLatency/N/R  N vehicles, the loop on its own thread at R x real time (0 = as fast as
+//                             possible); one client on vehicle 0: COMMAND_LONG -> COMMAND_ACK round trip.
+#include <benchmark/benchmark.h>
+#include <poll.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "mavlink/codec/codec.hpp"
+#include "mavlink/codec/parser.hpp"
+#include "mavlink/endpoint.hpp"
+#include "mavlink/generated/messages.hpp"
+#include "physics/world.hpp"
+#include "sim/runner.hpp"
+#include "sim/simulation.hpp"
+
+namespace mav = uavsim::server::mavlink;
+namespace sim = uavsim::server::sim;
+namespace physics = uavsim::server::physics;
+
+namespace {
+
+// a world with n quads on a grid (uavsim_grid), written to a temporary file
+std::unique_ptr<sim::Simulation> make_grid_sim(int n) {
+  // rows x cols = n exactly: the largest divisor of n not above sqrt(n)
+  int rows = 1;
+  for (int d = 1; d * d <= n; ++d) {
+    if (n % d == 0) rows = d;
+  }
+  const int cols = n / rows;
+  const std::string path = "/tmp/uavsim_mavlink_bench_" + std::to_string(n) + ".xml";
+  std::ofstream(path) << "<mujoco model=\"bench\"><compiler angle=\"radian\"/>"
+                      << "<option timestep=\"0.001\" integrator=\"Euler\"/>"
+                      << "<include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/><worldbody>"
+                      << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\"" << cols
+                      << "\" spacing=\"4\" pos=\"0 0 0\"/></worldbody></mujoco>";
+  physics::ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  return std::make_unique<sim::Simulation>(physics::World::load(path, o), sim::SimConfig{});
+}
+
+int connect_to(std::uint16_t port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in sa{};
+  sa.sin_family = AF_INET;
+  sa.sin_port = htons(port);
+  inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+  connect(fd, reinterpret_cast<sockaddr*>(&sa), sizeof(sa));
+  const int one = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+  return fd;
+}
+
+template <class Msg>
+void send_msg(int fd, const Msg& m) {
+  const mav::EncodedFrame f = mav::encode(mav::FrameHeader{255, 190, 0, mav::Version::kV2, std::nullopt}, m);
+  [[maybe_unused]] const auto n = ::send(fd, f.bytes.data(), f.size, MSG_NOSIGNAL);
+}
+
+void BM_TelemetryThroughput(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  auto s = make_grid_sim(n);
+  mav::EndpointConfig c;
+  c.base_port = 0;
+  mav::MavlinkServer server(*s, c);
+  std::vector<int> fds;
+  for (int i = 0; i < n; ++i) {
+    fds.push_back(connect_to(server.port(i)));
+    mav::msg::RequestDataStream r;
+    r.target_system = static_cast<std::uint8_t>(i + 1);
+    r.req_stream_id = 0;
+    r.req_message_rate = 50;
+    r.start_stop = 1;
+    send_msg(fds.back(), r);
+  }
+  // a reader thread per benchmark drains every socket and counts frames
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> frames{0};
+  std::thread reader([&] {
+    std::vector<mav::Parser> parsers(fds.size());
+    std::vector<pollfd> pfds;
+    for (int fd : fds) pfds.push_back({fd, POLLIN, 0});
+    std::vector<std::uint8_t> buf(1 << 16);
+    while (!stop.load()) {
+      if (poll(pfds.data(), pfds.size(), 20) <= 0) continue;
+      for (std::size_t k = 0; k < pfds.size(); ++k) {
+        if (!(pfds[k].revents & POLLIN)) continue;
+        const ssize_t r = recv(pfds[k].fd, buf.data(), buf.size(), MSG_DONTWAIT);
+        if (r <= 0) continue;
+        std::uint64_t got = 0;
+        parsers[k].feed({buf.data(), static_cast<std::size_t>(r)}, [&](const mav::Frame&) { ++got; });
+        frames.fetch_add(got);
+      }
+    }
+  });
+  s->run_until(1.0);  // connect + rate requests handled, warm-up
+  const std::uint64_t frames_start = frames.load();
+  const double sim_start = s->time_s();
+  const auto wall_start = std::chrono::steady_clock::now();
+  for (auto _ : state) s->run_until(s->time_s() + 1.0);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // let the last frames arrive (reporting only)
+  stop = true;
+  reader.join();
+  std::uint64_t sent = 0, dropped = 0;
+  for (int i = 0; i < n; ++i) {
+    sent += server.stats(i).frames_sent;
+    dropped += server.stats(i).frames_dropped_full;
+  }
+  const double received = static_cast<double>(frames.load() - frames_start);
+  state.counters["frames_per_s"] = received / wall_s;
+  state.counters["x_real_time"] = (s->time_s() - sim_start) / wall_s;
+  state.counters["dropped_frames"] = static_cast<double>(dropped);
+  state.counters["sent_frames"] = static_cast<double>(sent);
+  state.SetItemsProcessed(static_cast<int64_t>(received));
+  for (int fd : fds) close(fd);
+}
+BENCHMARK(BM_TelemetryThroughput)->Arg(1)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_CommandAckLatency(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const double rate = static_cast<double>(state.range(1));
+  auto s = make_grid_sim(n);
+  mav::EndpointConfig c;
+  c.base_port = 0;
+  mav::MavlinkServer server(*s, c);
+  const int fd = connect_to(server.port(0));
+  // only the acks matter: stop the streams of this client
+  mav::msg::RequestDataStream r;
+  r.target_system = 1;
+  r.req_stream_id = 0;
+  r.start_stop = 0;
+  send_msg(fd, r);
+  sim::Runner runner(*s, rate);
+  std::thread loop([&] { runner.run_until(1e9); });
+  mav::Parser parser;
+  std::vector<std::uint8_t> buf(1 << 16);
+  mav::msg::CommandLong cmd;
+  cmd.target_system = 1;
+  cmd.command = 31000;  // unknown: UNSUPPORTED, no side effects
+  for (auto _ : state) {
+    send_msg(fd, cmd);
+    bool acked = false;
+    while (!acked) {
+      const ssize_t got = recv(fd, buf.data(), buf.size(), 0);
+      if (got <= 0) break;
+      parser.feed({buf.data(), static_cast<std::size_t>(got)}, [&](const mav::Frame& f) {
+        acked = acked || f.msgid == mav::msg::CommandAck::kId;
+      });
+    }
+  }
+  runner.stop();
+  loop.join();
+  close(fd);
+}
+BENCHMARK(BM_CommandAckLatency)
+    ->Args({1, 0})->Args({10, 0})->Args({100, 0})->Args({1, 1})->Args({100, 1})
+    ->Unit(benchmark::kMicrosecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
