@@ -1,0 +1,571 @@
+#include "api/api_server.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace uavsim::server::api {
+
+namespace {
+
+using Json = nlohmann::json;
+
+constexpr auto kIdleWait = std::chrono::milliseconds(50);   // stop-check polling while held
+constexpr auto kSeqPoll = std::chrono::milliseconds(1);     // MAVLink seq polling while a done waits
+
+const char* const kOps[] = {"status",        "pause",           "resume",         "step",
+                            "set_rate",      "reset",           "vehicles",       "truck",
+                            "balloons",      "events",          "subscribe_events", "unsubscribe_events",
+                            "kill_vehicle",  "motor_failure",   "gps_glitch",     "gps_denied",
+                            "link_drop",     "gimbal",          "lockstep_join",  "lockstep_leave",
+                            "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe"};
+
+Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
+
+std::string dump(const Json& j) {
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
+}
+
+// typed field access that never throws: nullopt if absent or of another type
+std::optional<double> number(const Json& j, const char* key) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return std::nullopt;
+  return it->get<double>();
+}
+std::optional<bool> boolean(const Json& j, const char* key) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_boolean()) return std::nullopt;
+  return it->get<bool>();
+}
+std::optional<std::string> text(const Json& j, const char* key) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_string()) return std::nullopt;
+  return it->get<std::string>();
+}
+bool has(const Json& j, const char* key) { return j.find(key) != j.end(); }
+
+}  // namespace
+
+ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects,
+                     const ApiConfig& config)
+    : sim_(sim), runner_(runner), objects_(std::move(objects)), config_(config) {
+  LineServer::Callbacks cb;
+  cb.on_connect = [this](uint64_t conn) {
+    Json ops = Json::array();
+    for (const char* op : kOps) ops.push_back(op);
+    send(conn, Json{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops}});
+    enqueue({Request::Kind::kConnect, conn, {}});
+  };
+  cb.on_line = [this](uint64_t conn, std::string line) {
+    // parse on the I/O thread; malformed input is answered here, without the loop
+    if (line.find_first_not_of(" \t") == std::string::npos) return;
+    Json body = Json::parse(line, nullptr, false);
+    if (body.is_discarded()) return reply_error(conn, nullptr, "bad_json", "the line is not valid JSON");
+    if (!body.is_object()) return reply_error(conn, nullptr, "bad_request", "a request is a JSON object");
+    const Json id = body.contains("id") ? body["id"] : Json(nullptr);
+    const auto op = text(body, "op");
+    if (!op) return reply_error(conn, id, "missing_field", "a request needs \"op\" (a string)");
+    if (std::find_if(std::begin(kOps), std::end(kOps), [&](const char* o) { return *op == o; }) ==
+        std::end(kOps)) {
+      return reply_error(conn, id, "unknown_op", "unknown op '" + *op + "'");
+    }
+    enqueue({Request::Kind::kLine, conn, std::move(body)});
+  };
+  cb.on_line_too_long = [this](uint64_t conn) {
+    reply_error(conn, nullptr, "line_too_long",
+                "request lines are limited to " + std::to_string(config_.max_line_bytes) + " bytes");
+  };
+  cb.on_disconnect = [this](uint64_t conn) { enqueue({Request::Kind::kDisconnect, conn, {}}); };
+  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, config_.max_line_bytes, cb);
+}
+
+ApiServer::~ApiServer() { shutdown(); }
+
+void ApiServer::start() { server_->start(); }
+
+void ApiServer::shutdown() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    shutdown_ = true;
+  }
+  wake_.notify_all();
+  server_->stop();
+}
+
+void ApiServer::enqueue(Request request) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(request));
+  }
+  wake_.notify_all();
+}
+
+void ApiServer::send(uint64_t conn, const Json& message) { server_->send(conn, dump(message)); }
+
+void ApiServer::reply_error(uint64_t conn, const Json& id, const std::string& code,
+                            const std::string& message) {
+  send(conn, Json{{"id", id}, {"ok", false}, {"error", {{"code", code}, {"message", message}}}});
+}
+
+// ---------------------------------------------------------------------------------------------------
+// the gate: requests, events, lockstep and pause, all on the loop thread before a control step
+
+void ApiServer::on_gate() {
+  for (;;) {
+    // events before requests, so that a subscription's backlog and its stream neither overlap nor skip
+    forward_events();
+    drain();
+    forward_events();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (shutdown_) return;
+    }
+    if (stop_check_ && stop_check_()) return;
+    announce_ticks();
+    complete_ticks();
+
+    bool waiting_seq = false;
+    Clock::time_point next_deadline = Clock::now() + kIdleWait;
+    if (lockstep_blocked()) {
+      // drop clients that let their tick time out (wall clock), then wait for the others
+      const Clock::time_point now = Clock::now();
+      for (auto& [conn, c] : clients_) {
+        if (!c.awaiting) continue;
+        if (now >= c.deadline) {
+          drop_lockstep(conn, c, "timeout");
+          continue;
+        }
+        next_deadline = std::min(next_deadline, c.deadline);
+        waiting_seq = waiting_seq || c.done_received;
+      }
+      if (!lockstep_blocked()) continue;
+    } else if (!paused_) {
+      return;
+    } else if (steps_remaining_ > 0) {
+      --steps_remaining_;
+      return;
+    } else if (step_reply_) {
+      send(step_reply_->first, Json{{"id", step_reply_->second}, {"ok", true},
+                                    {"result", {{"time_s", sim_.time_s()}, {"paused", true}}}});
+      step_reply_.reset();
+    }
+    // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (queue_.empty() && !shutdown_) {
+      wake_.wait_until(lock, waiting_seq ? std::min(next_deadline, Clock::now() + kSeqPoll) : next_deadline);
+    }
+  }
+}
+
+void ApiServer::drain() {
+  std::deque<Request> batch;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    batch.swap(queue_);
+  }
+  for (Request& r : batch) {
+    switch (r.kind) {
+      case Request::Kind::kConnect:
+        clients_[r.conn] = Client{};
+        break;
+      case Request::Kind::kDisconnect:
+        if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
+        clients_.erase(r.conn);
+        break;
+      case Request::Kind::kLine:
+        handle(r.conn, r.body);
+        break;
+    }
+  }
+}
+
+void ApiServer::forward_events() {
+  const std::vector<sim::Event>& all = sim_.events().all();
+  if (events_forwarded_ > all.size()) events_forwarded_ = 0;  // the log was cleared (reset)
+  for (; events_forwarded_ < all.size(); ++events_forwarded_) {
+    const Json e = event_json(all[events_forwarded_]);
+    for (auto& [conn, c] : clients_) {
+      if (c.events) send(conn, e);
+    }
+  }
+}
+
+bool ApiServer::lockstep_blocked() const {
+  for (const auto& [conn, c] : clients_) {
+    if (c.awaiting) return true;
+  }
+  return false;
+}
+
+void ApiServer::announce_ticks() {
+  const double now = sim_.time_s();
+  const double eps = 0.25 * sim_.physics_dt_s();
+  for (auto& [conn, c] : clients_) {
+    if (!c.lockstep || c.awaiting || now + eps < c.next_due_s) continue;
+    c.awaiting = true;
+    c.done_received = false;
+    c.wait_seq.clear();
+    c.busy_until_s.reset();
+    c.tick = std::llround(now / c.period_s);
+    c.tick_time_s = now;
+    c.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                    std::chrono::duration<double>(c.timeout_s));
+    send(conn, Json{{"event", "tick"}, {"tick", c.tick}, {"time", now}});
+  }
+}
+
+void ApiServer::complete_ticks() {
+  for (auto& [conn, c] : clients_) {
+    if (!c.awaiting || !c.done_received) continue;
+    // the MAVLink messages the client sent before "done" must have been handled
+    bool seq_ok = true;
+    if (seq_waiter_ != nullptr) {
+      for (const auto& [vehicle, seq] : c.wait_seq) seq_ok = seq_ok && seq_waiter_->seq_processed(vehicle, seq);
+    }
+    if (!seq_ok) continue;
+    c.awaiting = false;
+    c.next_due_s = c.tick_time_s + c.period_s;
+    if (c.busy_until_s && *c.busy_until_s > c.next_due_s) {
+      // detached timing: the next tick for this client is the first one at or after busy_until
+      c.next_due_s = std::ceil(*c.busy_until_s / c.period_s - 1e-9) * c.period_s;
+    }
+  }
+}
+
+void ApiServer::drop_lockstep(uint64_t conn, Client& c, const std::string& reason) {
+  c.lockstep = false;
+  c.awaiting = false;
+  send(conn, Json{{"event", "lockstep_dropped"}, {"reason", reason}, {"time", sim_.time_s()}});
+}
+
+// ---------------------------------------------------------------------------------------------------
+// requests
+
+std::optional<size_t> ApiServer::vehicle_arg(const Json& request, Error* error) const {
+  auto it = request.find("vehicle");
+  if (it == request.end()) {
+    *error = {"missing_field", "\"vehicle\" (index or name) is required"};
+    return std::nullopt;
+  }
+  if (it->is_number_integer() || it->is_number_unsigned()) {
+    const int64_t i = it->get<int64_t>();
+    if (i >= 0 && static_cast<size_t>(i) < sim_.vehicle_count()) return static_cast<size_t>(i);
+  } else if (it->is_string()) {
+    for (size_t i = 0; i < sim_.vehicle_count(); ++i) {
+      if (sim_.vehicle_name(i) == it->get<std::string>()) return i;
+    }
+  } else {
+    *error = {"bad_field", "\"vehicle\" must be an index or a name"};
+    return std::nullopt;
+  }
+  *error = {"unknown_vehicle", "no vehicle " + it->dump() + " (" + std::to_string(sim_.vehicle_count()) +
+                                   " vehicles)"};
+  return std::nullopt;
+}
+
+Json ApiServer::vehicle_json(size_t i) const {
+  const fc::TruthState t = const_cast<sim::Simulation&>(sim_).truth(i);
+  const sim::VehicleRuntime& rt = sim_.runtime(i);
+  Json failed = Json::array();
+  for (size_t k = 0; k < rt.motors.failed.size(); ++k) {
+    if (rt.motors.failed[k]) failed.push_back(k);
+  }
+  return Json{{"index", i},
+              {"name", sim_.vehicle_name(i)},
+              {"frame", sim_.airframe(i).frame},
+              {"position_enu_m", vec3(t.position_enu_m)},
+              {"velocity_enu_m_s", vec3(t.velocity_enu_m_s)},
+              {"q_enu_body", {t.q_enu_body.w(), t.q_enu_body.x(), t.q_enu_body.y(), t.q_enu_body.z()}},
+              {"rate_body_rad_s", vec3(t.rate_body_rad_s)},
+              {"armed", sim_.fc(i).armed()},
+              {"mode", fc::mode_name(sim_.fc(i).mode())},
+              {"crashed", rt.crashed},
+              {"on_ground", rt.on_ground},
+              {"battery_v", rt.battery.voltage_v},
+              {"battery_used_mah", rt.battery.consumed_mah},
+              {"failed_motors", failed}};
+}
+
+Json ApiServer::event_json(const sim::Event& e) const {
+  return Json{{"event", "sim_event"},
+              {"seq", e.seq},
+              {"time", e.time_s},
+              {"type", sim::event_type_name(e.type)},
+              {"vehicle", e.vehicle},
+              {"vehicle_name", e.vehicle >= 0 && static_cast<size_t>(e.vehicle) < sim_.vehicle_count()
+                                   ? Json(sim_.vehicle_name(static_cast<size_t>(e.vehicle)))
+                                   : Json(nullptr)},
+              {"detail", e.detail}};
+}
+
+void ApiServer::handle(uint64_t conn, const Json& request) {
+  const Json id = request.contains("id") ? request["id"] : Json(nullptr);
+  const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
+  Client& client = clients_[conn];
+  Error error;
+  Json result = Json::object();
+  auto fail = [&](const std::string& code, const std::string& message) { error = {code, message}; };
+
+  if (op == "status") {
+    int lockstep = 0;
+    for (const auto& [k, c] : clients_) lockstep += c.lockstep ? 1 : 0;
+    result = {{"protocol", kProtocolVersion},
+              {"time_s", sim_.time_s()},
+              {"steps", sim_.step_count()},
+              {"paused", paused_},
+              {"rate", runner_ ? Json(runner_->rate()) : Json(nullptr)},
+              {"physics_hz", 1.0 / sim_.physics_dt_s()},
+              {"control_hz", 1.0 / sim_.control_dt_s()},
+              {"seed", sim_.config().seed},
+              {"vehicles", sim_.vehicle_count()},
+              {"lockstep_clients", lockstep},
+              {"events", sim_.events().all().size()}};
+  } else if (op == "pause") {
+    paused_ = true;
+    result = {{"time_s", sim_.time_s()}, {"paused", true}};
+  } else if (op == "resume") {
+    paused_ = false;
+    steps_remaining_ = 0;
+    result = {{"time_s", sim_.time_s()}, {"paused", false}};
+  } else if (op == "step") {
+    // N control steps (default 1) or a duration rounded to whole control steps; pauses first
+    const auto steps = number(request, "steps");
+    const auto duration = number(request, "duration_s");
+    double n = 1;
+    if (steps) n = *steps;
+    if (duration) n = std::round(*duration / control_dt_s());
+    if (!(n >= 1 && n <= 1e9) || std::floor(n) != n) {
+      fail("bad_field", "\"steps\" must be an integer in [1, 1e9] (or \"duration_s\" at least one control step)");
+    } else if (step_reply_) {
+      fail("busy", "another step request is in progress");
+    } else {
+      paused_ = true;
+      steps_remaining_ = static_cast<uint64_t>(n);
+      step_reply_ = std::make_pair(conn, id);
+      return;  // answered when the steps are done
+    }
+  } else if (op == "set_rate") {
+    const auto rate = number(request, "rate");
+    if (!rate) {
+      fail("missing_field", "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
+    } else if (!(*rate >= 0.0) || !std::isfinite(*rate)) {
+      fail("bad_field", "\"rate\" must be >= 0");
+    } else if (runner_ == nullptr) {
+      fail("not_available", "this server has no clock runner");
+    } else {
+      runner_->set_rate(*rate);
+      result = {{"rate", *rate}};
+    }
+  } else if (op == "reset") {
+    const auto seed = number(request, "seed");
+    if (has(request, "seed") && (!seed || *seed < 0 || std::floor(*seed) != *seed)) {
+      fail("bad_field", "\"seed\" must be a non-negative integer");
+    } else {
+      const uint64_t s = seed ? static_cast<uint64_t>(*seed) : sim_.config().seed;
+      sim_.reset(s);
+      events_forwarded_ = 0;
+      for (auto& [k, c] : clients_) {
+        c.awaiting = false;
+        c.next_due_s = 0.0;
+        if (c.events) send(k, Json{{"event", "reset"}, {"seed", s}});
+      }
+      result = {{"seed", s}, {"time_s", sim_.time_s()}};
+    }
+  } else if (op == "vehicles") {
+    result = Json::array();
+    for (size_t i = 0; i < sim_.vehicle_count(); ++i) result.push_back(vehicle_json(i));
+    result = {{"time_s", sim_.time_s()}, {"vehicles", result}};
+  } else if (op == "truck") {
+    if (objects_.trucks.empty()) {
+      fail("not_available", "this world has no truck");
+    } else {
+      Json trucks = Json::array();
+      for (const objects::Truck* truck : objects_.trucks) {
+        const objects::TruckState s = truck->state(sim_.time_s());
+        trucks.push_back({{"name", s.name},
+                          {"position_enu_m", vec3(s.position_enu_m)},
+                          {"velocity_enu_m_s", vec3(s.velocity_enu_m_s)},
+                          {"yaw_rad", s.yaw_rad},
+                          {"speed_m_s", s.speed_m_s},
+                          {"s_m", s.s_m},
+                          {"laps", s.laps},
+                          {"track_length_m", truck->track().length_m()},
+                          {"deck_centre_enu_m", vec3(s.deck_centre_enu_m)},
+                          {"carried_vehicles", s.carried_vehicles}});
+      }
+      result = {{"time_s", sim_.time_s()}, {"trucks", trucks}};
+    }
+  } else if (op == "balloons") {
+    if (objects_.balloons == nullptr) {
+      fail("not_available", "this world has no balloons");
+    } else {
+      Json balloons = Json::array();
+      for (const objects::BalloonState& b : objects_.balloons->balloons()) {
+        balloons.push_back({{"name", b.name},
+                            {"position_enu_m", vec3(b.position_enu_m)},
+                            {"radius_m", b.radius_m},
+                            {"popped", b.popped},
+                            {"popped_by", b.popped ? Json(b.popped_by) : Json(nullptr)},
+                            {"popped_time_s", b.popped ? Json(b.popped_time_s) : Json(nullptr)}});
+      }
+      result = {{"time_s", sim_.time_s()}, {"balloons", balloons}};
+    }
+  } else if (op == "events" || op == "subscribe_events") {
+    const auto from = number(request, "from_seq");
+    if (has(request, "from_seq") && (!from || *from < 0)) {
+      fail("bad_field", "\"from_seq\" must be a non-negative integer");
+    } else {
+      const uint64_t from_seq = from ? static_cast<uint64_t>(*from) : 0;
+      Json list = Json::array();
+      const auto& all = sim_.events().all();
+      for (size_t k = 0; k < events_forwarded_ && k < all.size(); ++k) {
+        if (all[k].seq >= from_seq) list.push_back(event_json(all[k]));
+      }
+      if (op == "subscribe_events") {
+        // the backlog in the reply; later events stream as {"event": "sim_event", ...}
+        client.events = true;
+        result = {{"events", list}, {"next_seq", events_forwarded_}};
+      } else {
+        result = {{"events", list}, {"next_seq", events_forwarded_}};
+      }
+    }
+  } else if (op == "unsubscribe_events") {
+    client.events = false;
+  } else if (op == "kill_vehicle" || op == "motor_failure" || op == "gps_glitch" || op == "gps_denied" ||
+             op == "link_drop") {
+    const auto v = vehicle_arg(request, &error);
+    if (v) {
+      if (op == "kill_vehicle") {
+        const std::string reason = text(request, "reason").value_or("fault injection");
+        sim_.record(sim::EventType::kVehicleKilled, static_cast<int>(*v), reason);
+        sim_.kill_vehicle(*v, "killed: " + reason);
+      } else if (op == "motor_failure") {
+        const auto rotor = number(request, "rotor");
+        const size_t rotors = sim_.airframe(*v).rotors.size();
+        if (!rotor) {
+          fail("missing_field", "\"rotor\" (index) is required");
+        } else if (*rotor < 0 || *rotor >= static_cast<double>(rotors) || std::floor(*rotor) != *rotor) {
+          fail("bad_field", "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
+        } else {
+          sim_.set_motor_failed(*v, static_cast<size_t>(*rotor), boolean(request, "failed").value_or(true));
+        }
+      } else if (op == "gps_glitch") {
+        auto it = request.find("offset_enu_m");
+        if (it == request.end()) {
+          fail("missing_field", "\"offset_enu_m\" [x, y, z] is required ([0, 0, 0] clears the glitch)");
+        } else if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
+                   !(*it)[2].is_number()) {
+          fail("bad_field", "\"offset_enu_m\" must be three numbers");
+        } else {
+          sim_.fc(*v).set_gps_glitch(
+              Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()));
+        }
+      } else if (op == "gps_denied") {
+        sim_.fc(*v).set_gps_denied(boolean(request, "denied").value_or(true));
+      } else if (op == "link_drop") {
+        if (link_ == nullptr) {
+          fail("not_available", "no MAVLink endpoint is attached to this server");
+        } else if (!link_->set_link_down(*v, boolean(request, "down").value_or(true))) {
+          fail("not_available", "vehicle " + std::to_string(*v) + " has no MAVLink link");
+        }
+      }
+      if (error.code.empty()) result = {{"vehicle", *v}, {"time_s", sim_.time_s()}};
+    }
+  } else if (op == "gimbal") {
+    const auto name = text(request, "gimbal");
+    objects::Gimbal* g = nullptr;
+    if (objects_.gimbals != nullptr && name) {
+      for (objects::Gimbal& x : objects_.gimbals->gimbals()) {
+        if (x.name == *name) g = &x;
+      }
+    }
+    const auto mode = text(request, "mode");
+    if (!name) {
+      fail("missing_field", "\"gimbal\" (the gimbal body's name) is required");
+    } else if (g == nullptr) {
+      fail("bad_field", "no gimbal named '" + *name + "'");
+    } else if (mode && *mode != "down" && *mode != "forward" && *mode != "targets") {
+      fail("bad_field", "\"mode\" must be down, forward or targets");
+    } else {
+      if (mode) {
+        g->mode = *mode == "down"      ? objects::GimbalMode::kDown
+                  : *mode == "forward" ? objects::GimbalMode::kForward
+                                       : objects::GimbalMode::kTargets;
+      }
+      if (const auto p = number(request, "pitch_deg")) g->pitch_rad = *p * M_PI / 180.0;
+      if (const auto y = number(request, "yaw_deg")) g->yaw_rad = *y * M_PI / 180.0;
+      result = {{"gimbal", g->name}, {"mode", objects::gimbal_mode_name(g->mode)},
+                {"pitch_deg", g->pitch_rad * 180.0 / M_PI}, {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
+    }
+  } else if (op == "lockstep_join") {
+    const auto period = number(request, "period_s");
+    const auto timeout = number(request, "timeout_s");
+    if (!period) {
+      fail("missing_field", "\"period_s\" (sim seconds between ticks) is required");
+    } else if (!(*period > 0.0) || !std::isfinite(*period) || *period > 3600.0) {
+      fail("bad_field", "\"period_s\" must be in (0, 3600]");
+    } else if (timeout && !(*timeout > 0.0)) {
+      fail("bad_field", "\"timeout_s\" must be > 0");
+    } else {
+      // whole control steps, at least one; the first tick is the next multiple of the period
+      client.period_steps = std::max<int64_t>(1, std::llround(*period / control_dt_s()));
+      client.period_s = client.period_steps * control_dt_s();
+      client.lockstep = true;
+      client.awaiting = false;
+      client.timeout_s = timeout.value_or(config_.lockstep_timeout_s);
+      client.next_due_s = std::ceil(sim_.time_s() / client.period_s - 1e-9) * client.period_s;
+      result = {{"period_s", client.period_s}, {"first_tick_time", client.next_due_s},
+                {"timeout_s", client.timeout_s}};
+    }
+  } else if (op == "lockstep_leave") {
+    client.lockstep = false;
+    client.awaiting = false;
+  } else if (op == "done") {
+    const auto tick = number(request, "tick");
+    const auto busy = number(request, "busy_until");
+    auto seqs = request.find("mavlink_seq");
+    if (!client.lockstep) {
+      fail("not_joined", "\"done\" without lockstep_join");
+    } else if (!client.awaiting || client.done_received) {
+      fail("bad_state", "no tick is waiting for \"done\"");
+    } else if (has(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
+      fail("bad_field", "the tick waiting is " + std::to_string(client.tick));
+    } else if (has(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
+      fail("bad_field", "\"busy_until\" must be a sim time in seconds");
+    } else if (seqs != request.end() && !seqs->is_object()) {
+      fail("bad_field", "\"mavlink_seq\" must be an object {vehicle: seq}");
+    } else {
+      std::map<size_t, uint8_t> wait;
+      if (seqs != request.end()) {
+        for (auto it = seqs->begin(); it != seqs->end() && error.code.empty(); ++it) {
+          Json probe = {{"vehicle", it.key()}};
+          // "0" names vehicle 0; any other string a vehicle name
+          char* end = nullptr;
+          const long index = std::strtol(it.key().c_str(), &end, 10);
+          if (!it.key().empty() && *end == '\0') probe["vehicle"] = index;
+          const auto v = vehicle_arg(probe, &error);
+          if (v && (!it.value().is_number_integer() || it.value().get<int64_t>() < 0 ||
+                    it.value().get<int64_t>() > 255)) {
+            fail("bad_field", "MAVLink sequence numbers are integers in [0, 255]");
+          } else if (v) {
+            wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
+          }
+        }
+      }
+      if (error.code.empty()) {
+        client.done_received = true;
+        client.wait_seq = wait;
+        if (busy) client.busy_until_s = *busy;
+        result = {{"tick", client.tick},
+                  {"mavlink_seq_checked", seq_waiter_ != nullptr}};
+      }
+    }
+  } else if (op == "camera_list" || op == "camera_subscribe" || op == "camera_unsubscribe") {
+    fail("not_available", "camera frames are not served by this server yet");
+  }
+
+  if (!error.code.empty()) return reply_error(conn, id, error.code, error.message);
+  send(conn, Json{{"id", id}, {"ok", true}, {"result", result}});
+}
+
+}  // namespace uavsim::server::api

@@ -1,0 +1,161 @@
+// The sim socket API (docs/protocol.md): one TCP port, newline-delimited JSON, protocol version 1.
+// Control (status, pause, resume, step, set_rate, reset), ground-truth queries (vehicles, truck, balloons),
+// the event stream, fault injection, gimbal pointing and the lockstep contract (seed 5.3/6.5: gzuav's
+// Begin-Tick/End-Tick).
+//
+// Threads: socket I/O runs on the LineServer's thread; every request that touches the simulation is
+// queued and executed on the loop thread inside the control gate (gate(), installed with
+// Runner::set_control_gate), before the control step, in arrival order. The gate is also where pause,
+// single-stepping and lockstep hold the clock, so the loop thread keeps serving requests while held.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "api/line_server.hpp"
+#include "objects/world_objects.hpp"
+#include "sim/runner.hpp"
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::api {
+
+inline constexpr int kProtocolVersion = 1;
+
+// Implemented by the MAVLink endpoint: cut or restore a vehicle's MAVLink link (fault injection).
+class LinkControl {
+ public:
+  virtual ~LinkControl() = default;
+  // Drops (down = true) or restores a vehicle's link: while down, nothing is delivered either way.
+  // Thread-safe. False if the vehicle has no link.
+  virtual bool set_link_down(size_t vehicle, bool down) = 0;
+};
+
+// Implemented by the MAVLink endpoint: has the message with this sequence number, sent by a client on
+// a vehicle's link, been handled (its commands posted to the simulation)? The lockstep contract waits
+// for it before a tick ends, so commands sent before "done" take effect at that tick.
+class SeqWaiter {
+ public:
+  virtual ~SeqWaiter() = default;
+  // True once the endpoint has processed the MAVLink message with sequence seq (0-255, as in the
+  // MAVLink header) on vehicle's link, or any later one. Thread-safe.
+  virtual bool seq_processed(size_t vehicle, uint8_t seq) const = 0;
+};
+
+struct ApiConfig {
+  std::string bind_address = "127.0.0.1";
+  uint16_t port = 5700;               // 0: an ephemeral port (tests)
+  double lockstep_timeout_s = 10.0;   // wall time a lockstep client may take for a tick before it is dropped
+  size_t max_line_bytes = 1u << 20;   // longer request lines get an error reply and are skipped
+};
+
+class ApiServer {
+ public:
+  // runner may be null (set_rate then answers not_available). Binds the port: throws std::runtime_error
+  // naming the address if that fails (a startup error). Construct before the loop starts.
+  ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects, const ApiConfig& config);
+  ~ApiServer();
+  ApiServer(const ApiServer&) = delete;
+  ApiServer& operator=(const ApiServer&) = delete;
+
+  // Optional endpoint hooks. Before start().
+  void set_link_control(LinkControl* link) { link_ = link; }
+  void set_seq_waiter(SeqWaiter* waiter) { seq_waiter_ = waiter; }
+  // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
+  void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
+
+  // Starts serving connections (the I/O thread). Call once, before or after the loop starts.
+  void start();
+  // Releases a held gate for good and stops the I/O thread. Thread-safe; idempotent.
+  void shutdown();
+  uint16_t port() const { return server_->port(); }
+
+  // The control gate for Runner::set_control_gate: runs queued requests and holds the clock while
+  // paused or while a lockstep client has not finished its tick. Loop thread only.
+  sim::Runner::Gate gate() {
+    return [this](double) { on_gate(); };
+  }
+
+ private:
+  using Json = nlohmann::json;
+  using Clock = std::chrono::steady_clock;
+
+  struct Request {
+    enum class Kind { kLine, kConnect, kDisconnect } kind = Kind::kLine;
+    uint64_t conn = 0;
+    Json body;
+  };
+  // per connection state, loop thread only
+  struct Client {
+    bool events = false;
+    bool lockstep = false;
+    double period_s = 0.0;
+    int64_t period_steps = 0;       // in control steps
+    double next_due_s = 0.0;        // sim time of the next tick for this client
+    bool awaiting = false;          // a tick was announced and is not done yet
+    int64_t tick = 0;
+    double tick_time_s = 0.0;
+    Clock::time_point deadline;
+    double timeout_s = 0.0;
+    bool done_received = false;
+    std::map<size_t, uint8_t> wait_seq;  // vehicle -> MAVLink seq the done named
+    std::optional<double> busy_until_s;
+  };
+
+  // I/O thread side
+  void enqueue(Request request);
+  void send(uint64_t conn, const Json& message);
+  void reply_error(uint64_t conn, const Json& id, const std::string& code, const std::string& message);
+
+  // loop thread side
+  void on_gate();
+  void drain();
+  void handle(uint64_t conn, const Json& request);
+  void forward_events();
+  void announce_ticks();
+  void complete_ticks();
+  void drop_lockstep(uint64_t conn, Client& c, const std::string& reason);
+  bool lockstep_blocked() const;
+  double control_dt_s() const { return sim_.control_dt_s(); }
+
+  // op handlers (loop thread); each returns the result object or sets *error
+  struct Error {
+    std::string code;
+    std::string message;
+  };
+  std::optional<size_t> vehicle_arg(const Json& request, Error* error) const;
+  Json vehicle_json(size_t i) const;
+  Json event_json(const sim::Event& e) const;
+
+  sim::Simulation& sim_;
+  sim::Runner* runner_;
+  objects::ObjectSet objects_;
+  ApiConfig config_;
+  LinkControl* link_ = nullptr;
+  SeqWaiter* seq_waiter_ = nullptr;
+  std::function<bool()> stop_check_;
+  std::unique_ptr<LineServer> server_;
+
+  std::mutex mutex_;                 // guards queue_ and shutdown_
+  std::condition_variable wake_;
+  std::deque<Request> queue_;
+  bool shutdown_ = false;
+
+  // loop thread only
+  std::map<uint64_t, Client> clients_;
+  bool paused_ = false;
+  uint64_t steps_remaining_ = 0;
+  std::optional<std::pair<uint64_t, Json>> step_reply_;  // conn, request id: answered when the steps are done
+  size_t events_forwarded_ = 0;
+};
+
+}  // namespace uavsim::server::api
