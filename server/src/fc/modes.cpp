@@ -72,6 +72,7 @@ bool FlightController::Impl::enter_mode(Mode mode, bool from_failsafe) {
 }
 
 void FlightController::Impl::init_mode_state() {
+  const bool flying = armed_ && !landed_;
   // a GUIDED take-off ends with any change to another mode (LAND during the climb must be able to
   // detect its landing); AUTO's take-off items start their own
   if (mode_ != Mode::kGuided) takeoff_active_ = false;
