@@ -1,11 +1,10 @@
-// Camera rendering throughput: CameraRenderer against bare MuJoCo + OSMesa on the same scene and GL
-// backend.
-//   BM_RenderCamera/<w>x<h>/cams:<n>       CameraRenderer::render for n cameras (frame = RGB8, top
-//   row first) BM_BareMujocoRender/<w>x<h>/cams:<n>   mjv_updateScene + mjr_render +
-//   mjr_readPixels, same flags BM_BareMujocoRenderDefaults/<w>x<h>    the same with MuJoCo's
-//   defaults (shadows, reflections, skybox, 4x MSAA)
-// Counter fps: frames rendered per second of wall time (all cameras together); real time, because
-// llvmpipe rasterises on its own threads.
+// Camera rendering throughput: CameraRenderer vs bare MuJoCo + OSMesa, same scene and backend.
+//   BM_RenderCamera/WxH/cams:N       CameraRenderer::render for N cameras (RGB8, top row first)
+//   BM_BareMujocoRender/WxH/cams:N   mjv_updateScene + mjr_render + mjr_readPixels, same flags
+//   BM_RenderVsBarePaired/WxH        both, alternating frame by frame; counters give the ratio
+//   BM_BareMujocoRenderDefaults/WxH  bare, MuJoCo's defaults (shadows, reflections, skybox, MSAA)
+// Counter fps: frames (all cameras together) per second of wall time, not the CPU time that the
+// "CPU" column shows, because llvmpipe rasterises on its own threads.
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 
@@ -116,54 +115,99 @@ void BM_RenderCamera(benchmark::State& state, int width, int height, int cameras
   report_fps(state, cameras, start);
 }
 
-// bare MuJoCo on the same GL backend; fast = the renderer's defaults (no shadows, reflections,
-// skybox, MSAA)
+// bare MuJoCo on the same GL backend: mjv_updateScene + mjr_render + mjr_readPixels, nothing else;
+// fast = the renderer's defaults (no shadows, reflections, skybox, MSAA)
+class BareRenderer {
+ public:
+  BareRenderer(const mjModel* m, int width, int height, bool fast)
+      : m_(m),
+        gl_(uavsim::server::render::make_gl_context("osmesa")),
+        viewport_{0, 0, width, height} {
+    if (!gl_->make_current()) throw std::runtime_error("render_bench: make_current failed");
+    mjModel model = *m;  // shallow copy: only the sample count differs
+    if (fast) model.vis.quality.offsamples = 0;
+    mjr_defaultContext(&con_);
+    mjr_makeContext(&model, &con_, mjFONTSCALE_50);
+    mjv_defaultScene(&scn_);
+    mjv_makeScene(m, &scn_, 2000);
+    mjv_defaultOption(&opt_);
+    if (fast) {
+      scn_.flags[mjRND_SHADOW] = 0;
+      scn_.flags[mjRND_REFLECTION] = 0;
+      scn_.flags[mjRND_SKYBOX] = 0;
+    }
+    rgb_.resize(static_cast<size_t>(width) * height * 3);
+  }
+  ~BareRenderer() {
+    mjv_freeScene(&scn_);
+    gl_->make_current();
+    mjr_freeContext(&con_);
+    gl_->release();
+  }
+
+  void render(mjData* d, int camera_id) {
+    gl_->make_current();
+    mjvCamera cam;
+    mjv_defaultCamera(&cam);
+    cam.type = mjCAMERA_FIXED;
+    cam.fixedcamid = camera_id;
+    mjv_updateScene(m_, d, &opt_, nullptr, &cam, mjCAT_ALL, &scn_);
+    mjr_setBuffer(mjFB_OFFSCREEN, &con_);
+    mjr_render(viewport_, &scn_, &con_);
+    mjr_readPixels(rgb_.data(), nullptr, viewport_, &con_);
+    benchmark::DoNotOptimize(rgb_.data());
+  }
+
+ private:
+  const mjModel* m_;
+  std::unique_ptr<uavsim::server::render::GlContext> gl_;
+  mjrRect viewport_;
+  mjrContext con_;
+  mjvScene scn_;
+  mjvOption opt_;
+  std::vector<unsigned char> rgb_;
+};
+
 void BM_BareMujocoRender(benchmark::State& state, int width, int height, int cameras, bool fast) {
   Scene& s = scene();
-  auto gl = uavsim::server::render::make_gl_context("osmesa");
-  if (!gl->make_current()) {
-    state.SkipWithError("make_current failed");
-    return;
-  }
-  mjModel model = *s.m;  // shallow copy: only the sample count differs
-  if (fast) model.vis.quality.offsamples = 0;
-  mjrContext con;
-  mjr_defaultContext(&con);
-  mjr_makeContext(&model, &con, mjFONTSCALE_50);
-  mjvScene scn;
-  mjv_defaultScene(&scn);
-  mjv_makeScene(s.m, &scn, 2000);
-  mjvOption opt;
-  mjv_defaultOption(&opt);
-  if (fast) {
-    scn.flags[mjRND_SHADOW] = 0;
-    scn.flags[mjRND_REFLECTION] = 0;
-    scn.flags[mjRND_SKYBOX] = 0;
-  }
-  std::vector<unsigned char> rgb(static_cast<size_t>(width) * height * 3);
-  const mjrRect viewport = {0, 0, width, height};
-  mjr_setBuffer(mjFB_OFFSCREEN, &con);
-  auto render_all = [&] {
-    for (int c = 0; c < cameras; ++c) {
-      mjvCamera cam;
-      mjv_defaultCamera(&cam);
-      cam.type = mjCAMERA_FIXED;
-      cam.fixedcamid = c;
-      mjv_updateScene(s.m, s.d, &opt, nullptr, &cam, mjCAT_ALL, &scn);
-      mjr_render(viewport, &scn, &con);
-      mjr_readPixels(rgb.data(), nullptr, viewport, &con);
-    }
-  };
-  render_all();  // warm-up
+  BareRenderer bare(s.m, width, height, fast);
+  for (int c = 0; c < cameras; ++c) bare.render(s.d, c);  // warm-up
   const auto start = std::chrono::steady_clock::now();
   for (auto _ : state) {
-    render_all();
-    benchmark::DoNotOptimize(rgb.data());
+    for (int c = 0; c < cameras; ++c) bare.render(s.d, c);
   }
   report_fps(state, cameras, start);
-  mjv_freeScene(&scn);
-  mjr_freeContext(&con);
-  gl->release();
+}
+
+// CameraRenderer and bare MuJoCo frame by frame in one loop, so that load from other processes on a
+// shared machine falls on both alike; each side's time includes switching to its GL context
+void BM_RenderVsBarePaired(benchmark::State& state, int width, int height) {
+  Scene& s = scene();
+  CameraConfig config;
+  config.camera = "cam0";
+  config.width_px = width;
+  config.height_px = height;
+  CameraRenderer renderer(s.m, {config});
+  BareRenderer bare(s.m, width, height, true);
+  CameraFrame frame;
+  renderer.render(s.d, 0, &frame);  // warm-up
+  bare.render(s.d, 0);
+  using Clock = std::chrono::steady_clock;
+  Clock::duration renderer_time{}, bare_time{};
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    renderer.render(s.d, 0, &frame);
+    const auto t1 = Clock::now();
+    bare.render(s.d, 0);
+    renderer_time += t1 - t0;
+    bare_time += Clock::now() - t1;
+  }
+  const double n = static_cast<double>(state.iterations());
+  const double renderer_fps = n / std::chrono::duration<double>(renderer_time).count();
+  const double bare_fps = n / std::chrono::duration<double>(bare_time).count();
+  state.counters["renderer_fps"] = renderer_fps;
+  state.counters["bare_fps"] = bare_fps;
+  state.counters["ratio"] = renderer_fps / bare_fps;
 }
 
 }  // namespace
@@ -180,6 +224,9 @@ int main(int argc, char** argv) {
                                    w, h, cams, true)
           ->Unit(benchmark::kMillisecond);
     }
+    benchmark::RegisterBenchmark(("BM_RenderVsBarePaired/" + size).c_str(), BM_RenderVsBarePaired,
+                                 w, h)
+        ->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("BM_BareMujocoRenderDefaults/" + size).c_str(),
                                  BM_BareMujocoRender, w, h, 1, false)
         ->Unit(benchmark::kMillisecond);
