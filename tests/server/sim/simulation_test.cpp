@@ -73,15 +73,11 @@ TEST(Simulation, VehiclesThatCollideAreBothCrashed) {
   Simulation sim(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/grid100.xml", o), SimConfig{});
   take_off(sim, 5.0, 0);
   take_off(sim, 5.0, 1);
-  // put hovering uav1 1 m ahead of uav0 at exactly its altitude (each vehicle's estimate has its own
-  // few-cm offset, so commanding both to one altitude would not reliably make them meet), then fly
-  // uav0 forward through it
-  const Eigen::Vector3d p0 = sim.truth(0).position_enu_m;
-  const double ahead[3] = {p0.x() + 1.0, p0.y(), p0.z()};
-  const double level[4] = {1, 0, 0, 0};
-  sim.world().set_pose(1, ahead, level);
-  goto_enu(sim, sim.fc(0).estimate().position_enu_m + Eigen::Vector3d(5, 0, 0), 0);
-  sim.run_until(sim.time_s() + 3.0);
+  // send uav0 through uav1: the target is uav1's true position expressed in uav0's own estimate
+  // (each estimate has its own few-cm offset, and the hulls are only 7 cm tall), plus 2 m beyond
+  const Eigen::Vector3d offset = sim.truth(1).position_enu_m - sim.truth(0).position_enu_m;
+  goto_enu(sim, sim.fc(0).estimate().position_enu_m + offset + Eigen::Vector3d(2, 0, 0), 0);
+  sim.run_until(sim.time_s() + 10.0);
   ASSERT_GE(sim.events().count(EventType::kCrash), 2u);
   EXPECT_TRUE(sim.runtime(0).crashed);
   EXPECT_TRUE(sim.runtime(1).crashed);
