@@ -48,7 +48,7 @@ bool has(const Json& j, const char* key) { return j.find(key) != j.end(); }
 
 ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects,
                      const ApiConfig& config)
-    : sim_(sim), runner_(runner), objects_(std::move(objects)), config_(config) {
+    : sim_(sim), runner_(runner), objects_(std::move(objects)), config_(config), paused_(config.start_paused) {
   LineServer::Callbacks cb;
   cb.on_connect = [this](uint64_t conn) {
     Json ops = Json::array();

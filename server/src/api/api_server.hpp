@@ -56,6 +56,7 @@ struct ApiConfig {
   uint16_t port = 5700;               // 0: an ephemeral port (tests)
   double lockstep_timeout_s = 10.0;   // wall time a lockstep client may take for a tick before it is dropped
   size_t max_line_bytes = 1u << 20;   // longer request lines get an error reply and are skipped
+  bool start_paused = false;          // hold the clock at start until a client sends resume or step
 };
 
 class ApiServer {
