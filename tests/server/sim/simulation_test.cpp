@@ -73,11 +73,14 @@ TEST(Simulation, VehiclesThatCollideAreBothCrashed) {
   Simulation sim(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/grid100.xml", o), SimConfig{});
   take_off(sim, 5.0, 0);
   take_off(sim, 5.0, 1);
-  // send uav0 through uav1: the target is uav1's true position expressed in uav0's own estimate
-  // (each estimate has its own few-cm offset, and the hulls are only 7 cm tall), plus 2 m beyond
-  const Eigen::Vector3d offset = sim.truth(1).position_enu_m - sim.truth(0).position_enu_m;
-  goto_enu(sim, sim.fc(0).estimate().position_enu_m + offset + Eigen::Vector3d(2, 0, 0), 0);
-  sim.run_until(sim.time_s() + 10.0);
+  // steer uav0 into uav1: every 50 ms its target is uav1's true position expressed in uav0's own
+  // estimate (each estimate has its own offset of some cm and the hulls are only 7 cm tall)
+  const double end = sim.time_s() + 10.0;
+  while (sim.time_s() < end && !sim.runtime(0).crashed) {
+    const Eigen::Vector3d offset = sim.truth(1).position_enu_m - sim.truth(0).position_enu_m;
+    goto_enu(sim, sim.fc(0).estimate().position_enu_m + offset, 0);
+    for (int i = 0; i < 50; ++i) sim.step();
+  }
   ASSERT_GE(sim.events().count(EventType::kCrash), 2u);
   EXPECT_TRUE(sim.runtime(0).crashed);
   EXPECT_TRUE(sim.runtime(1).crashed);
