@@ -149,7 +149,11 @@ void Simulation::check_contacts() {
     VehicleRuntime& v = vehicles_[c.vehicle];
     bool handled = false;
     for (auto& object : objects_) handled = handled || object->on_contact(*this, c);
-    if (handled) continue;
+    if (handled) {
+      // gear on a deck is still ground contact (the land detector needs it); blades in a balloon are not
+      if (c.landing_gear) touching[c.vehicle] = 1;
+      continue;
+    }
     touching[c.vehicle] = 1;
     if (v.crashed) continue;
     if (c.other_vehicle >= 0) {
