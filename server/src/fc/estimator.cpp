@@ -16,7 +16,7 @@ constexpr double kAccelCorrectionGain = 0.1;
 // tilt error left from them would otherwise take tens of seconds to decay (ArduPilot's DCM also uses
 // high gains before arming)
 constexpr double kFastAlignGain = 2.0;
-constexpr double kFastAlignS = 3.0;
+constexpr double kFastAlignS = 2.0;
 constexpr double kMagCorrectionGain = 0.3;
 // GPS-derived acceleration low-pass time constant
 constexpr double kGpsAccelTauS = 0.3;
