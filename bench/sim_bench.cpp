@@ -28,7 +28,10 @@ std::string grid_world(int n) {
   const int cols = n / rows;
   const std::string path =
       (std::filesystem::temp_directory_path() / ("uavsim_bench_grid" + std::to_string(n) + ".xml")).string();
+  // every vehicle starts on its gear: 4 contacts x 4 constraint rows each (the composer sizes worlds
+  // of up to 300 vehicles by itself)
   std::ofstream(path) << "<mujoco><compiler angle=\"radian\"/><option timestep=\"0.001\"/>"
+                      << "<size nconmax=\"" << 100 + 4 * n << "\" njmax=\"" << 500 + 16 * n << "\"/>"
                       << "<worldbody><geom name=\"ground\" type=\"plane\" size=\"500 500 0.1\"/>"
                       << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\""
                       << cols << "\" spacing=\"4\"/></worldbody></mujoco>";
