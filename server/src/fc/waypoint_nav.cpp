@@ -49,10 +49,16 @@ void WaypointNav::update(double dt_s, const NavLimits& lim, const Eigen::Vector3
     if ((position_enu_m_ - vehicle_enu_m).norm() > kLeashM) speed = 0.0;
     vel_des = u * std::min(speed, dist / dt_s);
   }
-  // change the carrot velocity by at most accel_max * dt
+  // change the carrot velocity horizontally by at most WPNAV_ACCEL * dt and vertically by at most
+  // WPNAV_ACCEL_Z * dt, each part on its own: one shared budget let a long horizontal acceleration starve
+  // the vertical correction, so a climb still under way when a level leg began (a goto issued at the
+  // end of a take-off) carried on for seconds and overshot the leg's altitude by up to 1 m
   Eigen::Vector3d dv = vel_des - velocity_enu_m_s_;
-  const double dv_max = accel_max * dt_s;
-  if (dv.norm() > dv_max) dv *= dv_max / dv.norm();
+  const double dv_xy_max = lim.accel_xy_m_s2 * dt_s;
+  const double dv_z_max = lim.accel_z_m_s2 * dt_s;
+  const double dv_xy = dv.head<2>().norm();
+  if (dv_xy > dv_xy_max) dv.head<2>() *= dv_xy_max / dv_xy;
+  dv.z() = std::clamp(dv.z(), -dv_z_max, dv_z_max);
   velocity_enu_m_s_ += dv;
   accel_enu_m_s2_ = dv / dt_s;
   position_enu_m_ += velocity_enu_m_s_ * dt_s;
