@@ -83,6 +83,16 @@ ApiServer::~ApiServer() { shutdown(); }
 
 void ApiServer::start() { server_->start(); }
 
+void ApiServer::set_frame_service(render::FrameService* service) {
+  frame_service_ = service;
+  if (service == nullptr) return;
+  frames_ = std::make_unique<FrameStream>(*service, *server_, [this](uint64_t conn) {
+    auto it = clients_.find(conn);
+    return it != clients_.end() && it->second.lockstep;
+  });
+  service->add_consumer(frames_.get());
+}
+
 void ApiServer::shutdown() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -170,6 +180,7 @@ void ApiServer::drain() {
         break;
       case Request::Kind::kDisconnect:
         if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
+        if (frames_) frames_->on_disconnect(r.conn);
         clients_.erase(r.conn);
         break;
       case Request::Kind::kLine:
@@ -208,6 +219,8 @@ void ApiServer::announce_ticks() {
     c.busy_until_s.reset();
     c.tick = std::llround(now / c.period_s);
     c.tick_time_s = now;
+    // the frames due at this tick reach the client before the tick (docs/protocol.md)
+    if (frames_ && frames_->has_subscriptions(conn)) frame_service_->wait_delivered();
     c.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                     std::chrono::duration<double>(c.timeout_s));
     send(conn, Json{{"event", "tick"}, {"tick", c.tick}, {"time", now}});
@@ -561,7 +574,11 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       }
     }
   } else if (op == "camera_list" || op == "camera_subscribe" || op == "camera_unsubscribe") {
-    fail("not_available", "camera frames are not served by this server yet");
+    if (!frames_) {
+      fail("not_available", "this server renders no camera frames");
+    } else if (!frames_->handle(conn, op, request, &result, &error.code, &error.message)) {
+      // error set
+    }
   }
 
   if (!error.code.empty()) return reply_error(conn, id, error.code, error.message);

@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
 #include "objects/world_objects.hpp"
 #include "sim/runner.hpp"
@@ -71,6 +72,9 @@ class ApiServer {
   // Optional endpoint hooks. Before start().
   void set_link_control(LinkControl* link) { link_ = link; }
   void set_seq_waiter(SeqWaiter* waiter) { seq_waiter_ = waiter; }
+  // Camera frames (camera_list, camera_subscribe, camera_unsubscribe); without one they answer
+  // not_available. The service's capture() runs in the runner's gate before this server's gate. Before start().
+  void set_frame_service(render::FrameService* service);
   // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
   void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
 
@@ -145,6 +149,8 @@ class ApiServer {
   SeqWaiter* seq_waiter_ = nullptr;
   std::function<bool()> stop_check_;
   std::unique_ptr<LineServer> server_;
+  render::FrameService* frame_service_ = nullptr;
+  std::unique_ptr<FrameStream> frames_;
 
   std::mutex mutex_;                 // guards queue_ and shutdown_
   std::condition_variable wake_;

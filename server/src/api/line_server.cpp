@@ -83,6 +83,12 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
   return true;
 }
 
+size_t LineServer::pending_bytes(uint64_t conn) {
+  std::lock_guard<std::mutex> lock(out_mutex_);
+  auto it = conns_.find(conn);
+  return it == conns_.end() ? 0 : it->second.out.size();
+}
+
 void LineServer::accept_all() {
   for (;;) {
     const int fd = accept(listen_fd_, nullptr, nullptr);

@@ -36,6 +36,8 @@ class LineServer {
 
   // Queues data for a connection. Thread-safe. False if the connection is gone.
   bool send(uint64_t conn, const std::string& data);
+  // Bytes queued for a connection and not yet written to its socket (0 if it is gone). Thread-safe.
+  size_t pending_bytes(uint64_t conn);
 
  private:
   struct Conn {

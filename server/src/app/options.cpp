@@ -1,6 +1,7 @@
 #include "app/options.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -31,6 +32,13 @@ options:
                       port (printed); -1: no API
   --api-bind ADDR     address the sim API listens on; default 127.0.0.1 (loopback only)
   --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
+  --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
+                      width, height, fps, fovy, shadows, reflections, skybox, msaa (docs/protocol.md)
+  --no-cameras        no offscreen renderer (the camera ops answer not_available)
+  --record FILE.mp4   write a video of the run from the world camera "overview" (else a free camera
+                      looking at the vehicles), 15 frames per second of sim time; never slows physics
+  --record-fps F      frames per second of sim time in the video; default 15
+  --record-size WxH   video size; default 640x480
   --quiet             print only errors and the result
   --help              this text
 )";
@@ -107,6 +115,26 @@ std::optional<Options> parse_options(int argc, char** argv, int* exit_code) {
       if (!value(&v) || !parse_double(a, v, &o.lockstep_timeout_s) || o.lockstep_timeout_s <= 0) {
         return std::nullopt;
       }
+    } else if (a == "--camera") {
+      if (!value(&v)) return std::nullopt;
+      o.camera_overrides.push_back(v);
+    } else if (a == "--no-cameras") {
+      o.cameras = false;
+    } else if (a == "--record") {
+      if (!value(&v)) return std::nullopt;
+      o.record_path = v;
+    } else if (a == "--record-fps") {
+      if (!value(&v) || !parse_double(a, v, &o.record_fps) || o.record_fps <= 0) return std::nullopt;
+    } else if (a == "--record-size") {
+      if (!value(&v)) return std::nullopt;
+      int w = 0, h = 0;
+      char x = 0;
+      if (std::sscanf(v, "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w <= 0 || h <= 0 || w > 8192 || h > 8192) {
+        std::cerr << "uavsim-server: --record-size needs WIDTHxHEIGHT, got '" << v << "'\n";
+        return std::nullopt;
+      }
+      o.record_width = w;
+      o.record_height = h;
     } else if (a == "--quiet") {
       o.quiet = true;
     } else if (!a.empty() && a[0] == '-') {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace uavsim::server::app {
 
@@ -23,6 +24,12 @@ struct Options {
   double lockstep_timeout_s = 10.0;   // wall seconds a lockstep client may take for one tick
   int mavlink_base_port = 5760;       // vehicle i: base + 10 i; 0 = ephemeral; -1 = no MAVLink endpoints
   std::string bind_address = "127.0.0.1";
+  std::vector<std::string> camera_overrides;  // --camera CAMNAME:key=value,... (repeatable)
+  bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
+  std::optional<std::string> record_path;     // --record out.mp4
+  double record_fps = 15.0;
+  int record_width = 640;
+  int record_height = 480;
 };
 
 // Parses argv. Returns std::nullopt after printing --help or an error (exit_code says which).

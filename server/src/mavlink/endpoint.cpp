@@ -51,6 +51,9 @@ struct MavlinkServer::Core {
     std::vector<InEvent> inbox;  // guarded by inbox_mutex
     std::size_t inbox_frames = 0;  // guarded by inbox_mutex
     bool task_posted = false;      // guarded by inbox_mutex
+    std::atomic<bool> link_down{false};
+    mutable std::mutex seq_mutex;
+    std::unordered_map<std::uint64_t, std::uint8_t> last_seq;  // client id -> last handled seq; seq_mutex
   };
   struct Client {  // I/O thread only
     int fd = -1;
@@ -258,6 +261,7 @@ struct MavlinkServer::Core {
       if (n == 0) return false;
       if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
       total += static_cast<std::size_t>(n);
+      if (v.link_down.load(std::memory_order_relaxed)) continue;  // a dropped link: the bytes are lost
       StatCounters::add(v.stats.bytes_received, static_cast<std::uint64_t>(n));
       c.parser.feed({buf, static_cast<std::size_t>(n)}, [&](const Frame& f) {
         InEvent ev;
@@ -265,7 +269,10 @@ struct MavlinkServer::Core {
         ev.client = c.id;
         ev.frame = f;
         ev.frame.raw = {};
+        const std::uint8_t seq = f.seq;
         push_event(c.vehicle, std::move(ev));
+        std::lock_guard lock(v.seq_mutex);
+        v.last_seq[c.id] = seq;
       });
       account_parser(c);
     }
@@ -297,6 +304,16 @@ struct MavlinkServer::Core {
   // writes what it can without blocking; false when the client is gone
   bool flush_client(Client& c) {
     Vehicle& v = *vehicles[c.vehicle];
+    if (v.link_down.load(std::memory_order_relaxed)) {
+      // a dropped link: what the vehicle sends meanwhile is lost
+      std::vector<std::uint8_t> lost;
+      while (c.outbox->pending()) {
+        lost.clear();
+        c.outbox->take(lost);
+        if (lost.empty()) break;
+      }
+      return true;
+    }
     for (;;) {
       if (c.write_off >= c.write_buf.size()) {
         c.write_buf.clear();
@@ -341,6 +358,10 @@ struct MavlinkServer::Core {
     ev.kind = InEvent::Kind::kDisconnect;
     ev.client = c.id;
     const std::size_t vehicle = c.vehicle;
+    {
+      std::lock_guard lock(v.seq_mutex);
+      v.last_seq.erase(c.id);
+    }
     clients.erase(it);
     push_event(vehicle, std::move(ev));
   }
@@ -398,5 +419,26 @@ const GimbalState& MavlinkServer::gimbal(std::size_t vehicle) const {
   return core_->vehicles.at(vehicle)->link->gimbal();
 }
 const EndpointConfig& MavlinkServer::config() const { return core_->config; }
+
+bool MavlinkServer::set_link_down(std::size_t vehicle, bool down) {
+  if (vehicle >= core_->vehicles.size()) return false;
+  core_->vehicles[vehicle]->link_down.store(down);
+  core_->wake();
+  return true;
+}
+
+bool MavlinkServer::link_down(std::size_t vehicle) const {
+  return vehicle < core_->vehicles.size() && core_->vehicles[vehicle]->link_down.load();
+}
+
+bool MavlinkServer::seq_processed(std::size_t vehicle, std::uint8_t seq) const {
+  if (vehicle >= core_->vehicles.size()) return false;
+  const Core::Vehicle& v = *core_->vehicles[vehicle];
+  std::lock_guard lock(v.seq_mutex);
+  for (const auto& [client, last] : v.last_seq) {
+    if (static_cast<std::uint8_t>(last - seq) < 128) return true;
+  }
+  return false;
+}
 
 }  // namespace uavsim::server::mavlink

@@ -74,6 +74,17 @@ class MavlinkServer {
   const GimbalState& gimbal(std::size_t vehicle) const;
   const EndpointConfig& config() const;             // Thread-safe.
 
+  // Fault injection (the sim API's link_drop): while a vehicle's link is down its endpoint neither delivers
+  // bytes to its clients (telemetry produced meanwhile is discarded) nor accepts any (bytes received are read
+  // and discarded, so no GCS heartbeat reaches the flight controller: its GCS failsafe acts). Connections
+  // stay open. Thread-safe. False if there is no such vehicle.
+  bool set_link_down(std::size_t vehicle, bool down);
+  bool link_down(std::size_t vehicle) const;        // Thread-safe.
+  // Has the endpoint handled (parsed and queued for the loop thread's next control step) the message with
+  // MAVLink sequence number seq, or one up to 127 later (mod 256), on some client connection of the vehicle?
+  // Per connection the last handled seq is kept (the lockstep contract's mavlink_seq). Thread-safe.
+  bool seq_processed(std::size_t vehicle, std::uint8_t seq) const;
+
   struct Core;
 
  private:

@@ -1,0 +1,67 @@
+// The API's camera-frame subscriptions (docs/protocol.md "Camera frames"): camera_list, camera_subscribe,
+// camera_unsubscribe, and the frame messages (a JSON header line, then the raw image bytes) with their
+// back-pressure rules. A render::FrameConsumer: want() and the ops run on the loop thread, deliver() on the
+// render thread.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api/line_server.hpp"
+#include "render/frame_service.hpp"
+
+namespace uavsim::server::api {
+
+class FrameStream : public render::FrameConsumer {
+ public:
+  using Json = nlohmann::json;
+  // is_lockstep(conn): whether a connection has joined lockstep (its frames are never dropped). Loop thread.
+  FrameStream(render::FrameService& service, LineServer& server, std::function<bool(uint64_t)> is_lockstep);
+
+  // The camera ops. Loop thread. Returns false and sets code/message for an error reply.
+  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
+              std::string* message);
+  void on_disconnect(uint64_t conn);                // Loop thread.
+  bool has_subscriptions(uint64_t conn) const;      // Loop thread.
+
+  void want(int camera, int64_t index, int64_t stamp_us, std::vector<render::EncodingKey>* encodings,
+            bool* must_deliver) override;
+  void dropped(int camera, int64_t index) override;
+  void deliver(const render::ReadyFrame& frame) override;
+
+ private:
+  struct Sub {
+    uint64_t conn = 0;
+    int camera = -1;
+    render::EncodingKey key;
+    int every = 1;
+    uint64_t next_seq = 0;               // loop thread
+    std::atomic<bool> active{true};
+    std::atomic<uint64_t> delivered{0};
+    std::atomic<uint64_t> dropped{0};
+  };
+  struct Pending {
+    std::shared_ptr<Sub> sub;
+    uint64_t seq = 0;
+    bool must = false;
+  };
+  Json camera_json(int index) const;
+
+  render::FrameService& service_;
+  LineServer& server_;
+  std::function<bool(uint64_t)> is_lockstep_;
+  std::map<uint64_t, std::map<int, std::shared_ptr<Sub>>> subs_;  // conn -> camera -> sub; loop thread
+
+  std::mutex mutex_;
+  std::map<std::pair<int, int64_t>, std::vector<Pending>> pending_;  // (camera, frame) -> takers
+};
+
+}  // namespace uavsim::server::api

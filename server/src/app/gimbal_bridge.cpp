@@ -1,0 +1,51 @@
+#include "app/gimbal_bridge.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace uavsim::server::app {
+
+namespace {
+constexpr double kDegToRad = M_PI / 180.0;
+double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
+}  // namespace
+
+void apply_gimbal_state(const mavlink::GimbalState& s, double vehicle_yaw_enu_rad, objects::Gimbal* g) {
+  if (s.mount_mode <= 1) {  // RETRACT, NEUTRAL: level and straight ahead
+    g->mode = objects::GimbalMode::kForward;
+    g->pitch_rad = 0.0;
+    g->yaw_rad = 0.0;
+    return;
+  }
+  g->mode = objects::GimbalMode::kTargets;
+  g->pitch_rad = std::clamp(s.pitch_deg, -90.0, 90.0) * kDegToRad;
+  if (s.yaw_earth_frame) {
+    // a heading (clockwise from north) -> ENU yaw -> relative to the vehicle, counter-clockwise
+    const double enu_yaw = (90.0 - s.yaw_deg) * kDegToRad;
+    g->yaw_rad = wrap_pi(enu_yaw - vehicle_yaw_enu_rad);
+  } else {
+    g->yaw_rad = wrap_pi(-s.yaw_deg * kDegToRad);
+  }
+}
+
+MavlinkGimbalBridge::MavlinkGimbalBridge(objects::GimbalSet& gimbals, StateOf state_of)
+    : gimbals_(gimbals), state_of_(std::move(state_of)), applied_stamp_(gimbals.gimbals().size(), -1.0) {}
+
+void MavlinkGimbalBridge::update(sim::Simulation& sim) {
+  std::vector<objects::Gimbal>& all = gimbals_.gimbals();
+  for (size_t k = 0; k < all.size(); ++k) {
+    objects::Gimbal& g = all[k];
+    if (g.vehicle < 0 || static_cast<size_t>(g.vehicle) >= sim.vehicle_count()) continue;
+    const mavlink::GimbalState& s = state_of_(static_cast<size_t>(g.vehicle));
+    if (s.stamp_s < 0) continue;  // never commanded: the world's mode stays
+    const bool fresh = s.stamp_s != applied_stamp_[k];
+    // an earth-frame yaw is held while the vehicle turns: re-apply it every step
+    if (!fresh && !(s.yaw_earth_frame && s.mount_mode > 1 && g.mode == objects::GimbalMode::kTargets)) continue;
+    const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
+    const Eigen::Vector3d x = t.q_enu_body * Eigen::Vector3d::UnitX();
+    apply_gimbal_state(s, std::atan2(x.y(), x.x()), &g);
+    applied_stamp_[k] = s.stamp_s;
+  }
+}
+
+}  // namespace uavsim::server::app

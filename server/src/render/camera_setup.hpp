@@ -1,0 +1,40 @@
+// Which cameras a world has and how each is rendered (docs/protocol.md "Camera frames"): every named MJCF
+// camera, configured by the world's custom text
+//   <text name="uavsim:camera:CAMNAME" data="width=640 height=480 fps=15 shadows=0 reflections=0 skybox=0 msaa=0"/>
+// (every key optional; defaults 640 x 480 at 15 fps, all effects off: DESIGN.md's frame-rate figures),
+// then by command-line overrides "CAMNAME:width=W,height=H,fps=F" ("*" for every camera).
+// A camera belongs to a vehicle when its body is one of that vehicle's bodies or a gimbal body bound to it.
+#pragma once
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "render/camera_renderer.hpp"
+
+namespace uavsim::server::render {
+
+struct CameraSetup {
+  CameraConfig config;       // format is always kRgb8 here: the frame service encodes per subscriber
+  int vehicle = -1;          // owning vehicle index, -1 for a world camera
+  std::string vehicle_name;  // "" for a world camera
+};
+
+// What the application knows about vehicles and gimbals (no MuJoCo types).
+struct CameraOwners {
+  std::vector<std::pair<int, std::string>> vehicle_root_bodies;  // body id of vehicle i's root, its name
+  std::map<int, int> gimbal_body_vehicle;                        // gimbal body id -> vehicle index
+};
+
+// Parses "key=value key=value" (spaces or commas between pairs) into config; throws std::invalid_argument
+// naming `where` and the key for an unknown key or a bad value.
+void apply_camera_options(const std::string& text, const std::string& where, CameraConfig* config);
+
+// Every named camera of the model, in camera id order, configured from the world and the overrides.
+// Throws std::invalid_argument naming the camera for a bad custom text or override, an override naming
+// no camera, or an fps outside (0, control_hz].
+std::vector<CameraSetup> discover_cameras(const mjModel* m, const CameraOwners& owners,
+                                          const std::vector<std::string>& overrides, double control_hz);
+
+}  // namespace uavsim::server::render

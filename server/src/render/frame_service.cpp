@@ -1,0 +1,303 @@
+#include "render/frame_service.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <future>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "render/camera_renderer.hpp"
+#include "render/camera_setup.hpp"
+
+namespace uavsim::server::render {
+
+namespace {
+
+// BT.601 luma in 16-bit fixed point, as CameraRenderer's grey images
+constexpr uint32_t kLumaR = 19595, kLumaG = 38470, kLumaB = 7471;
+
+std::shared_ptr<const std::string> encode(const std::vector<uint8_t>& rgb, int w, int h, const EncodingKey& key) {
+  auto out = std::make_shared<std::string>();
+  switch (key.encoding) {
+    case Encoding::kRgb:
+      out->assign(reinterpret_cast<const char*>(rgb.data()), rgb.size());
+      break;
+    case Encoding::kGrey: {
+      out->resize(static_cast<size_t>(w) * h);
+      const uint8_t* src = rgb.data();
+      for (size_t i = 0; i < out->size(); ++i, src += 3) {
+        (*out)[i] = static_cast<char>((kLumaR * src[0] + kLumaG * src[1] + kLumaB * src[2] + 32768) >> 16);
+      }
+      break;
+    }
+    case Encoding::kJpeg: {
+      const cv::Mat view(h, w, CV_8UC3, const_cast<uint8_t*>(rgb.data()));
+      cv::Mat bgr;
+      cv::cvtColor(view, bgr, cv::COLOR_RGB2BGR);
+      std::vector<uint8_t> buf;
+      cv::imencode(".jpg", bgr, buf, {cv::IMWRITE_JPEG_QUALITY, std::clamp(key.quality, 1, 100)});
+      out->assign(reinterpret_cast<const char*>(buf.data()), buf.size());
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* encoding_name(Encoding e) {
+  switch (e) {
+    case Encoding::kRgb: return "rgb";
+    case Encoding::kGrey: return "grey";
+    case Encoding::kJpeg: return "jpeg";
+  }
+  return "?";
+}
+
+std::optional<Encoding> encoding_from_name(const std::string& name) {
+  if (name == "rgb") return Encoding::kRgb;
+  if (name == "grey") return Encoding::kGrey;
+  if (name == "jpeg") return Encoding::kJpeg;
+  return std::nullopt;
+}
+
+const std::string* ReadyFrame::image(const EncodingKey& key) const {
+  for (const auto& [k, bytes] : images) {
+    if (k == key) return bytes.get();
+  }
+  return nullptr;
+}
+
+struct FrameService::RenderState {
+  mjModel* m = nullptr;
+  mjData* d = nullptr;
+  std::unique_ptr<CameraRenderer> renderer;
+  CameraFrame frame;
+  ~RenderState() {
+    renderer.reset();
+    if (d) mj_deleteData(d);
+    if (m) mj_deleteModel(m);
+  }
+};
+
+FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& cameras,
+                           const FrameServiceOptions& options)
+    : m_(m), options_(options) {
+  for (const CameraSetup& c : cameras) {
+    FrameCamera f;
+    f.name = c.config.camera;
+    f.vehicle = c.vehicle;
+    f.vehicle_name = c.vehicle_name;
+    f.width_px = c.config.width_px;
+    f.height_px = c.config.height_px;
+    f.fps_hz = c.config.fps_hz;
+    const int id = mj_name2id(m, mjOBJ_CAMERA, c.config.camera.c_str());
+    if (id < 0) throw std::invalid_argument("frames: the model has no camera named '" + c.config.camera + "'");
+    const CameraIntrinsics k =
+        pinhole_intrinsics(f.width_px, f.height_px, c.config.fovy_deg.value_or(m->cam_fovy[id]));
+    f.fx_px = k.fx_px;
+    f.fy_px = k.fy_px;
+    f.cx_px = k.cx_px;
+    f.cy_px = k.cy_px;
+    cameras_.push_back(std::move(f));
+  }
+  next_index_.assign(cameras_.size(), 0);
+  if (options_.queue_depth == 0) options_.queue_depth = 1;
+
+  // the renderer lives on its thread: build it there and report how that went
+  std::promise<void> ready;
+  std::future<void> started = ready.get_future();
+  thread_ = std::thread([this, cameras, backend = options_.backend, p = std::move(ready)]() mutable {
+    try {
+      rs_ = std::make_unique<RenderState>();
+      rs_->m = mj_copyModel(nullptr, m_);
+      if (rs_->m == nullptr) throw std::runtime_error("frames: cannot copy the model");
+      std::vector<CameraConfig> configs;
+      for (const CameraSetup& c : cameras) configs.push_back(c.config);
+      const OffscreenSize need = required_offscreen_size(configs);
+      rs_->m->vis.global.offwidth = std::max(rs_->m->vis.global.offwidth, need.width_px);
+      rs_->m->vis.global.offheight = std::max(rs_->m->vis.global.offheight, need.height_px);
+      rs_->d = mj_makeData(rs_->m);
+      RendererOptions ro;
+      ro.backend = backend;
+      rs_->renderer = std::make_unique<CameraRenderer>(rs_->m, std::move(configs), ro);
+    } catch (...) {
+      rs_.reset();
+      p.set_exception(std::current_exception());
+      return;
+    }
+    p.set_value();
+    render_thread_main({}, {});
+  });
+  try {
+    started.get();
+  } catch (...) {
+    thread_.join();
+    throw;
+  }
+}
+
+FrameService::~FrameService() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::optional<int> FrameService::find(const std::string& name) const {
+  for (size_t i = 0; i < cameras_.size(); ++i) {
+    if (cameras_[i].name == name) return static_cast<int>(i);
+  }
+  return std::nullopt;
+}
+
+void FrameService::add_consumer(FrameConsumer* consumer) { consumers_.push_back(consumer); }
+
+FrameServiceStats FrameService::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
+}
+
+void FrameService::capture(mjData_* d) {
+  const int64_t now_us = std::llround(d->time * 1e6);
+  if (last_capture_us_ && now_us == *last_capture_us_) return;
+  if (last_capture_us_ && now_us < *last_capture_us_) std::fill(next_index_.begin(), next_index_.end(), 0);
+  last_capture_us_ = now_us;
+
+  std::vector<Job> jobs;
+  bool must = false;
+  for (size_t c = 0; c < cameras_.size(); ++c) {
+    // frame k is due at the first control step at or after k / fps
+    const double frames_now = d->time * cameras_[c].fps_hz + 1e-6;
+    if (frames_now < static_cast<double>(next_index_[c])) continue;
+    const int64_t k = static_cast<int64_t>(std::floor(frames_now));  // the latest due (k >= next_index_)
+    next_index_[c] = k + 1;
+    Job job;
+    job.camera = static_cast<int>(c);
+    job.index = k;
+    for (FrameConsumer* consumer : consumers_) {
+      std::vector<EncodingKey> wanted;
+      bool consumer_must = false;
+      consumer->want(job.camera, k, now_us, &wanted, &consumer_must);
+      if (wanted.empty()) continue;
+      job.consumers.push_back(consumer);
+      must = must || consumer_must;
+      for (const EncodingKey& key : wanted) {
+        if (std::find(job.encodings.begin(), job.encodings.end(), key) == job.encodings.end()) {
+          job.encodings.push_back(key);
+        }
+      }
+    }
+    if (!job.consumers.empty()) jobs.push_back(std::move(job));
+  }
+  if (jobs.empty()) return;
+
+  std::unique_ptr<Snapshot> snap;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (queue_.size() >= options_.queue_depth) {
+      if (!must) {
+        stats_.frames_dropped += jobs.size();
+        lock.unlock();
+        for (const Job& job : jobs) {
+          for (FrameConsumer* consumer : job.consumers) consumer->dropped(job.camera, job.index);
+        }
+        return;
+      }
+      cv_.wait(lock, [&] { return queue_.size() < options_.queue_depth || stop_; });
+      if (stop_) return;
+    }
+    if (!spare_.empty()) {
+      snap = std::move(spare_.back());
+      spare_.pop_back();
+    }
+  }
+  if (!snap) snap = std::make_unique<Snapshot>();
+  if (before_capture_) before_capture_();
+  const mjModel* m = m_;
+  snap->id = next_id_++;
+  snap->time = d->time;
+  snap->qpos.assign(d->qpos, d->qpos + m->nq);
+  snap->qvel.assign(d->qvel, d->qvel + m->nv);
+  snap->act.assign(d->act, d->act + m->na);
+  snap->mocap_pos.assign(d->mocap_pos, d->mocap_pos + 3 * m->nmocap);
+  snap->mocap_quat.assign(d->mocap_quat, d->mocap_quat + 4 * m->nmocap);
+  snap->geom_rgba.assign(m->geom_rgba, m->geom_rgba + 4 * m->ngeom);
+  snap->geom_group.assign(m->geom_group, m->geom_group + m->ngeom);
+  snap->jobs = std::move(jobs);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.snapshots;
+    queue_.push_back(std::move(snap));
+  }
+  cv_.notify_all();
+}
+
+void FrameService::wait_delivered() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  const uint64_t target = next_id_ - 1;
+  cv_.wait(lock, [&] { return done_id_ >= target || stop_; });
+}
+
+void FrameService::render_thread_main(std::vector<CameraSetup>, std::string) {
+  for (;;) {
+    std::unique_ptr<Snapshot> snap;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) break;
+      snap = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    cv_.notify_all();  // room in the queue
+    render_snapshot(*snap);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_id_ = snap->id;
+      stats_.frames_rendered += snap->jobs.size();
+      snap->jobs.clear();
+      if (spare_.size() < options_.queue_depth + 1) spare_.push_back(std::move(snap));
+    }
+    cv_.notify_all();
+  }
+  rs_.reset();  // GL resources are freed on this thread
+}
+
+void FrameService::render_snapshot(Snapshot& s) {
+  RenderState& r = *rs_;
+  mjModel* m = r.m;
+  mjData* d = r.d;
+  d->time = s.time;
+  std::copy(s.qpos.begin(), s.qpos.end(), d->qpos);
+  std::copy(s.qvel.begin(), s.qvel.end(), d->qvel);
+  std::copy(s.act.begin(), s.act.end(), d->act);
+  std::copy(s.mocap_pos.begin(), s.mocap_pos.end(), d->mocap_pos);
+  std::copy(s.mocap_quat.begin(), s.mocap_quat.end(), d->mocap_quat);
+  std::copy(s.geom_rgba.begin(), s.geom_rgba.end(), m->geom_rgba);
+  std::copy(s.geom_group.begin(), s.geom_group.end(), m->geom_group);
+  mj_forward(m, d);
+  for (const Job& job : s.jobs) {
+    const std::optional<int> index = r.renderer->find(cameras_[static_cast<size_t>(job.camera)].name);
+    r.renderer->render(d, *index, &r.frame);
+    ReadyFrame f;
+    f.camera = job.camera;
+    f.index = job.index;
+    f.stamp_us = r.frame.stamp_us;
+    f.stamp_s = s.time;
+    f.info = &cameras_[static_cast<size_t>(job.camera)];
+    f.position_enu_m = r.frame.position_enu_m;
+    f.R_enu_cam = r.frame.R_enu_cam;
+    for (const EncodingKey& key : job.encodings) {
+      f.images.emplace_back(key, encode(r.frame.pixels, r.frame.width_px, r.frame.height_px, key));
+    }
+    for (FrameConsumer* consumer : job.consumers) consumer->deliver(f);
+  }
+}
+
+}  // namespace uavsim::server::render

@@ -1,0 +1,166 @@
+// FrameService: camera frames for whoever subscribes (the sim API's connections, the video recorder), taken
+// at control steps and rendered off the loop thread (docs/protocol.md "Camera frames").
+//
+//   loop thread   capture(d) at every control step (in the runner's gate, before the step): for each camera
+//                 whose frame k is due (the first control step at or after k / fps) it asks the consumers
+//                 which encodings they want; if any, it snapshots the state (time, qpos, qvel, act, mocap,
+//                 geom colours and groups: gimbals, trucks and popped balloons included) into a bounded
+//                 queue. A full queue drops the frame (FrameConsumer::dropped) unless a consumer needs it
+//                 (lockstep): then the loop thread waits for room. Physics otherwise never waits.
+//   render thread owns a CameraRenderer, its own mjModel copy (offscreen buffer sized for the cameras) and its
+//                 own mjData: per snapshot it copies the state in, mj_forward's, renders each camera due,
+//                 encodes (RGB, grey, JPEG via OpenCV) and hands the frame to the consumers that wanted it.
+//
+// This header does not include MuJoCo: users outside render/ see only forward declarations.
+#pragma once
+
+#include <Eigen/Core>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+struct mjModel_;
+struct mjData_;
+
+namespace uavsim::server::render {
+
+struct CameraSetup;
+
+enum class Encoding : uint8_t { kRgb, kGrey, kJpeg };
+const char* encoding_name(Encoding e);                       // "rgb", "grey", "jpeg"
+std::optional<Encoding> encoding_from_name(const std::string& name);
+
+// One encoding of a frame; quality only for JPEG (1-100), 0 otherwise.
+struct EncodingKey {
+  Encoding encoding = Encoding::kRgb;
+  int quality = 0;
+  bool operator==(const EncodingKey& o) const { return encoding == o.encoding && quality == o.quality; }
+};
+
+// A camera as the frame service serves it.
+struct FrameCamera {
+  std::string name;
+  int vehicle = -1;          // -1: a world camera
+  std::string vehicle_name;  // "" for a world camera
+  int width_px = 0;
+  int height_px = 0;
+  double fps_hz = 0.0;
+  double fx_px = 0.0, fy_px = 0.0, cx_px = 0.0, cy_px = 0.0;  // OpenCV pinhole convention
+};
+
+// A rendered frame as consumers receive it (render thread).
+struct ReadyFrame {
+  int camera = -1;        // index into FrameService::cameras()
+  int64_t index = 0;      // frame k of the camera (due at k / fps)
+  int64_t stamp_us = 0;   // sim time of the pose shown, round(t * 1e6)
+  double stamp_s = 0.0;   // the same sim time, seconds
+  const FrameCamera* info = nullptr;
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // optical centre
+  Eigen::Matrix3d R_enu_cam = Eigen::Matrix3d::Identity();   // OpenCV camera frame -> ENU
+  std::vector<std::pair<EncodingKey, std::shared_ptr<const std::string>>> images;
+  // the bytes of one encoding, or null if nobody asked for it
+  const std::string* image(const EncodingKey& key) const;
+};
+
+class FrameConsumer {
+ public:
+  virtual ~FrameConsumer() = default;
+  // Loop thread, at a control step where frame `index` of `camera` is due at sim time stamp_us: append the
+  // encodings wanted (none: not wanted). Set *must_deliver if the frame may not be dropped (the clock waits).
+  virtual void want(int camera, int64_t index, int64_t stamp_us, std::vector<EncodingKey>* encodings,
+                    bool* must_deliver) = 0;
+  // Loop thread: a frame this consumer wanted was dropped before rendering (the renderer is behind).
+  virtual void dropped(int camera, int64_t index) = 0;
+  // Render thread: a frame this consumer wanted, with (at least) every encoding it asked for.
+  virtual void deliver(const ReadyFrame& frame) = 0;
+};
+
+struct FrameServiceOptions {
+  size_t queue_depth = 4;            // snapshots waiting for the renderer; beyond: frames are dropped
+  std::string backend = "osmesa";    // make_gl_context
+};
+
+struct FrameServiceStats {
+  uint64_t snapshots = 0;            // control steps at which frames were taken
+  uint64_t frames_rendered = 0;      // camera images rendered
+  uint64_t frames_dropped = 0;       // camera frames dropped because the queue was full
+};
+
+class FrameService {
+ public:
+  // Starts the render thread and builds its renderer there. Throws std::invalid_argument /
+  // std::runtime_error as CameraRenderer does (e.g. no GL), from this thread. m must outlive the service.
+  FrameService(const mjModel_* m, const std::vector<CameraSetup>& cameras, const FrameServiceOptions& options = {});
+  ~FrameService();  // stops the render thread; frames not yet rendered are not delivered
+  FrameService(const FrameService&) = delete;
+  FrameService& operator=(const FrameService&) = delete;
+
+  // The cameras, in the world's camera order. Thread-safe (never changes).
+  const std::vector<FrameCamera>& cameras() const { return cameras_; }
+  std::optional<int> find(const std::string& name) const;
+
+  // Loop thread, before capture() runs for the first time with it.
+  void add_consumer(FrameConsumer* consumer);
+  // Loop thread: called before a snapshot is taken (e.g. refresh gimbal bodies to the current vehicle pose).
+  void set_before_capture(std::function<void()> fn) { before_capture_ = std::move(fn); }
+
+  // Loop thread, at each control step before it runs: takes the frames due now. Idempotent per sim time
+  // (the gate may run several times at one held step); a sim time earlier than the last one (reset)
+  // restarts every camera's frame grid at k = 0.
+  void capture(mjData_* d);
+  // Loop thread: waits until every snapshot taken so far has been rendered and delivered.
+  void wait_delivered();
+
+  FrameServiceStats stats() const;
+
+ private:
+  struct Job {
+    int camera = -1;
+    int64_t index = 0;
+    std::vector<EncodingKey> encodings;
+    std::vector<FrameConsumer*> consumers;
+  };
+  struct Snapshot {
+    uint64_t id = 0;
+    double time = 0.0;
+    std::vector<double> qpos, qvel, act, mocap_pos, mocap_quat;
+    std::vector<float> geom_rgba;
+    std::vector<int> geom_group;
+    std::vector<Job> jobs;
+  };
+  void render_thread_main(std::vector<CameraSetup> cameras, std::string backend);
+  void render_snapshot(Snapshot& s);
+
+  const mjModel_* m_;
+  std::vector<FrameCamera> cameras_;
+  FrameServiceOptions options_;
+  std::vector<FrameConsumer*> consumers_;
+  std::function<void()> before_capture_;
+
+  // loop thread
+  std::vector<int64_t> next_index_;   // per camera: the next frame index not yet taken
+  std::optional<int64_t> last_capture_us_;
+  uint64_t next_id_ = 1;
+
+  mutable std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::unique_ptr<Snapshot>> queue_;  // guarded by mutex_
+  std::vector<std::unique_ptr<Snapshot>> spare_; // recycled snapshots, guarded by mutex_
+  uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
+  bool stop_ = false;
+  FrameServiceStats stats_;
+  std::string start_error_;
+  bool started_ = false;
+  std::thread thread_;
+  struct RenderState;
+  std::unique_ptr<RenderState> rs_;  // render thread only
+};
+
+}  // namespace uavsim::server::render
