@@ -28,10 +28,11 @@ std::string grid_world(int n) {
   const int cols = n / rows;
   const std::string path =
       (std::filesystem::temp_directory_path() / ("uavsim_bench_grid" + std::to_string(n) + ".xml")).string();
-  // every vehicle starts on its gear: 4 contacts x 4 constraint rows each (the composer sizes worlds
-  // of up to 300 vehicles by itself)
-  std::ofstream(path) << "<mujoco><compiler angle=\"radian\"/><option timestep=\"0.001\"/>"
-                      << "<size nconmax=\"" << 100 + 4 * n << "\" njmax=\"" << 500 + 16 * n << "\"/>"
+  // every vehicle starts on its gear: 4 contacts of 3 constraint rows each with elliptic friction cones
+  // (4 with MuJoCo's default pyramids: 1000 grounded quads would need 2.2 GB for MuJoCo 2.2's dense
+  // njmax x njmax efc_AR, which mj_makeData refuses); bare and full steps use the same world
+  std::ofstream(path) << "<mujoco><compiler angle=\"radian\"/><option timestep=\"0.001\" cone=\"elliptic\"/>"
+                      << "<size nconmax=\"" << 100 + 4 * n << "\" njmax=\"" << 500 + 12 * n << "\"/>"
                       << "<worldbody><geom name=\"ground\" type=\"plane\" size=\"500 500 0.1\"/>"
                       << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\""
                       << cols << "\" spacing=\"4\"/></worldbody></mujoco>";
