@@ -67,7 +67,13 @@ void BM_SimStep(benchmark::State& state) {
   mjModel* m = s.world().mutable_model();
   const double gravity_z = m->opt.gravity[2];
   m->opt.gravity[2] = 0.0;
-  while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
+  auto all_ready = [&s] {
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      if (!s.fc(i).prearm_ok()) return false;
+    }
+    return true;
+  };
+  while (s.time_s() < 20.0 && !all_ready()) s.step();
   m->opt.gravity[2] = gravity_z;
   for (size_t i = 0; i < s.vehicle_count(); ++i) {
     s.post(i, [](fc::FlightController& f) {
