@@ -1,0 +1,218 @@
+// A running server with cameras, for the frame-service system tests: a world with its objects, the frame
+// service, the sim API and (optionally) the MAVLink endpoint with the gimbal bridge and the endpoint hooks,
+// wired as server_app.cpp wires them; a Runner on its own thread. FrameClient reads the API's messages
+// including frames (a header line, then exactly "bytes" raw bytes).
+#pragma once
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <limits>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "api/api_server.hpp"
+#include "app/gimbal_bridge.hpp"
+#include "mavlink/endpoint.hpp"
+#include "objects/world_objects.hpp"
+#include "physics/world.hpp"
+#include "render/camera_setup.hpp"
+#include "render/frame_service.hpp"
+#include "sim/runner.hpp"
+
+namespace uavsim::server::render::testing {
+
+using Json = nlohmann::json;
+
+struct ServerOptions {
+  std::string world = "mbzirc2020.xml";
+  std::vector<std::string> camera_overrides;
+  double rate = 0.0;
+  bool mavlink = false;
+  bool start_paused = false;
+};
+
+class Hooks : public api::LinkControl, public api::SeqWaiter {
+ public:
+  explicit Hooks(mavlink::MavlinkServer& s) : s_(s) {}
+  bool set_link_down(size_t v, bool down) override { return s_.set_link_down(v, down); }
+  bool seq_processed(size_t v, uint8_t seq) const override { return s_.seq_processed(v, seq); }
+
+ private:
+  mavlink::MavlinkServer& s_;
+};
+
+class FrameServer {
+ public:
+  explicit FrameServer(const ServerOptions& o = {}) {
+    physics::ComposeOptions co;
+    co.models_dir = UAVSIM_MODELS_DIR;
+    sim_ = std::make_unique<sim::Simulation>(
+        physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/" + o.world, co), sim::SimConfig{});
+    objects_ = objects::add_world_objects(*sim_);
+    if (o.mavlink) {
+      mavlink::EndpointConfig ec;
+      ec.base_port = 0;
+      mavlink_ = std::make_unique<mavlink::MavlinkServer>(*sim_, ec);
+      hooks_ = std::make_unique<Hooks>(*mavlink_);
+      if (objects_.gimbals) {
+        mavlink::MavlinkServer* ms = mavlink_.get();
+        bridge_ = std::make_unique<app::MavlinkGimbalBridge>(
+            *objects_.gimbals, [ms](size_t v) -> const mavlink::GimbalState& { return ms->gimbal(v); });
+        sim_->add_control_observer([this](sim::Simulation& s) { bridge_->update(s); });
+      }
+    }
+    CameraOwners owners;
+    for (const auto& v : sim_->world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
+    if (objects_.gimbals) {
+      for (const auto& g : objects_.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
+    }
+    cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides, 1.0 / sim_->control_dt_s());
+    frames_ = std::make_unique<FrameService>(sim_->world().model(), cameras_);
+    if (objects_.gimbals) {
+      objects::GimbalSet* g = objects_.gimbals;
+      frames_->set_before_capture([g, this] { g->before_step(*sim_); });
+    }
+    runner_ = std::make_unique<sim::Runner>(*sim_, o.rate);
+    api::ApiConfig config;
+    config.port = 0;
+    config.start_paused = o.start_paused;
+    api_ = std::make_unique<api::ApiServer>(*sim_, runner_.get(), objects_, config);
+    if (hooks_) {
+      api_->set_link_control(hooks_.get());
+      api_->set_seq_waiter(hooks_.get());
+    }
+    api_->set_frame_service(frames_.get());
+    auto gate = api_->gate();
+    FrameService* fs = frames_.get();
+    runner_->set_control_gate([fs, gate, this](double t) {
+      fs->capture(sim_->world().data());
+      gate(t);
+    });
+    api_->start();
+    loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
+  }
+  ~FrameServer() {
+    runner_->stop();
+    api_->shutdown();
+    loop_.join();
+    frames_.reset();
+    api_.reset();
+    mavlink_.reset();
+  }
+  uint16_t port() const { return api_->port(); }
+  uint16_t mavlink_port(size_t v) const { return mavlink_->port(v); }
+  mavlink::MavlinkServer& mavlink() { return *mavlink_; }
+  sim::Simulation& sim() { return *sim_; }  // only while the loop is held (paused, or a lockstep tick)
+  FrameService& frames() { return *frames_; }
+
+ private:
+  std::unique_ptr<sim::Simulation> sim_;
+  objects::ObjectSet objects_;
+  std::unique_ptr<mavlink::MavlinkServer> mavlink_;
+  std::unique_ptr<Hooks> hooks_;
+  std::unique_ptr<app::MavlinkGimbalBridge> bridge_;
+  std::vector<CameraSetup> cameras_;
+  std::unique_ptr<FrameService> frames_;
+  std::unique_ptr<sim::Runner> runner_;
+  std::unique_ptr<api::ApiServer> api_;
+  std::thread loop_;
+};
+
+// a message: the JSON, and for a frame its image bytes
+struct Message {
+  Json json;
+  std::string bytes;
+};
+
+class FrameClient {
+ public:
+  explicit FrameClient(uint16_t port, int rcvbuf = 0) {
+    fd_ = socket(AF_INET, SOCK_STREAM, 0);
+    if (rcvbuf > 0) setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    EXPECT_EQ(connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+    hello_ = read().json;
+  }
+  ~FrameClient() { close(fd_); }
+  const Json& hello() const { return hello_; }
+  void send(const Json& j) {
+    const std::string text = j.dump() + "\n";
+    size_t off = 0;
+    while (off < text.size()) {
+      const ssize_t n = ::send(fd_, text.data() + off, text.size() - off, MSG_NOSIGNAL);
+      ASSERT_GT(n, 0);
+      off += static_cast<size_t>(n);
+    }
+  }
+  // the next message from the wire (null json after 20 s)
+  Message read() {
+    Message m;
+    size_t nl;
+    while ((nl = buf_.find('\n')) == std::string::npos) {
+      if (!fill()) return m;
+    }
+    m.json = Json::parse(buf_.substr(0, nl), nullptr, false);
+    buf_.erase(0, nl + 1);
+    if (m.json.is_object() && m.json.value("event", "") == "frame") {
+      const size_t n = m.json["bytes"].get<size_t>();
+      while (buf_.size() < n) {
+        if (!fill()) return Message{};
+      }
+      m.bytes = buf_.substr(0, n);
+      buf_.erase(0, n);
+    }
+    return m;
+  }
+  // the next reply; frames and events met on the way are kept (frames()) or dropped
+  Json request(const Json& j) {
+    send(j);
+    for (;;) {
+      Message m = read();
+      if (m.json.is_null() || m.json.contains("ok")) return m.json;
+      kept_.push_back(std::move(m));
+    }
+  }
+  // the next message of an event kind (kept ones first)
+  Message next_event(const std::string& kind) {
+    while (!kept_.empty()) {
+      Message m = std::move(kept_.front());
+      kept_.pop_front();
+      if (m.json.value("event", "") == kind) return m;
+    }
+    for (;;) {
+      Message m = read();
+      if (m.json.is_null() || m.json.value("event", "") == kind) return m;
+    }
+  }
+  std::deque<Message>& kept() { return kept_; }
+
+ private:
+  bool fill() {
+    pollfd p{fd_, POLLIN, 0};
+    if (poll(&p, 1, 20000) <= 0) return false;
+    char tmp[1 << 16];
+    const ssize_t n = recv(fd_, tmp, sizeof(tmp), 0);
+    if (n <= 0) return false;
+    buf_.append(tmp, static_cast<size_t>(n));
+    return true;
+  }
+  int fd_ = -1;
+  std::string buf_;
+  std::deque<Message> kept_;
+  Json hello_;
+};
+
+}  // namespace uavsim::server::render::testing
