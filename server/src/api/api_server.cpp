@@ -53,6 +53,7 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
   cb.on_connect = [this](uint64_t conn) {
     Json ops = Json::array();
     for (const char* op : kOps) ops.push_back(op);
+    for (const std::string& op : extension_ops_) ops.push_back(op);
     send(conn, Json{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops}});
     enqueue({Request::Kind::kConnect, conn, {}});
   };
@@ -66,7 +67,8 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     const auto op = text(body, "op");
     if (!op) return reply_error(conn, id, "missing_field", "a request needs \"op\" (a string)");
     if (std::find_if(std::begin(kOps), std::end(kOps), [&](const char* o) { return *op == o; }) ==
-        std::end(kOps)) {
+            std::end(kOps) &&
+        std::find(extension_ops_.begin(), extension_ops_.end(), *op) == extension_ops_.end()) {
       return reply_error(conn, id, "unknown_op", "unknown op '" + *op + "'");
     }
     enqueue({Request::Kind::kLine, conn, std::move(body)});
@@ -82,6 +84,11 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
 ApiServer::~ApiServer() { shutdown(); }
 
 void ApiServer::start() { server_->start(); }
+
+void ApiServer::add_extension(ApiExtension* extension) {
+  extensions_.push_back(extension);
+  for (std::string& op : extension->ops()) extension_ops_.push_back(std::move(op));
+}
 
 void ApiServer::set_frame_service(render::FrameService* service) {
   frame_service_ = service;
@@ -131,6 +138,7 @@ void ApiServer::on_gate() {
       if (shutdown_) return;
     }
     if (stop_check_ && stop_check_()) return;
+    for (ApiExtension* e : extensions_) e->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
     announce_ticks();
     complete_ticks();
 
@@ -180,6 +188,7 @@ void ApiServer::drain() {
         break;
       case Request::Kind::kDisconnect:
         if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
+        for (ApiExtension* e : extensions_) e->on_disconnect(r.conn);
         if (frames_) frames_->on_disconnect(r.conn);
         clients_.erase(r.conn);
         break;
@@ -318,6 +327,16 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   Error error;
   Json result = Json::object();
   auto fail = [&](const std::string& code, const std::string& message) { error = {code, message}; };
+
+  // an extension's op (radio_ops.hpp, ...)
+  for (ApiExtension* e : extensions_) {
+    const std::vector<std::string> ops = e->ops();
+    if (std::find(ops.begin(), ops.end(), op) == ops.end()) continue;
+    if (!e->handle(conn, op, request, &result, &error.code, &error.message)) {
+      return reply_error(conn, id, error.code, error.message);
+    }
+    return send(conn, Json{{"id", id}, {"ok", true}, {"result", result}});
+  }
 
   if (op == "status") {
     int lockstep = 0;

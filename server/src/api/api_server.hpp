@@ -19,6 +19,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,25 @@ class SeqWaiter {
   virtual bool seq_processed(size_t vehicle, uint8_t seq) const = 0;
 };
 
+// Ops served by another module (e.g. radio_ops.hpp). Their requests run on the loop thread like the
+// built-in ones; at every pass of the gate, before ticks are announced, the extension may push async
+// messages, so what it sends for sim time t reaches a lockstep client before tick t.
+class ApiExtension {
+ public:
+  using Json = nlohmann::json;
+  using Send = std::function<void(uint64_t conn, const Json& message)>;
+  virtual ~ApiExtension() = default;
+  // The op names served; constant (read on the I/O thread). Thread-safe.
+  virtual std::vector<std::string> ops() const = 0;
+  // Handles one request: true with *result, or false with *code and *message. Loop thread only.
+  virtual bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
+                      std::string* message) = 0;
+  // At every pass of the gate, before tick announcements: push async messages with send. Loop thread only.
+  virtual void on_gate(const Send& send) = 0;
+  // A connection closed. Loop thread only.
+  virtual void on_disconnect(uint64_t conn) = 0;
+};
+
 struct ApiConfig {
   std::string bind_address = "127.0.0.1";
   uint16_t port = 5700;               // 0: an ephemeral port (tests)
@@ -75,6 +95,8 @@ class ApiServer {
   // Camera frames (camera_list, camera_subscribe, camera_unsubscribe); without one they answer
   // not_available. The service's capture() runs in the runner's gate before this server's gate. Before start().
   void set_frame_service(render::FrameService* service);
+  // Serves an extension's ops; it must outlive this server. Before start().
+  void add_extension(ApiExtension* extension);
   // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
   void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
 
@@ -149,6 +171,8 @@ class ApiServer {
   SeqWaiter* seq_waiter_ = nullptr;
   std::function<bool()> stop_check_;
   std::unique_ptr<LineServer> server_;
+  std::vector<ApiExtension*> extensions_;  // set before start()
+  std::vector<std::string> extension_ops_;
   render::FrameService* frame_service_ = nullptr;
   std::unique_ptr<FrameStream> frames_;
 

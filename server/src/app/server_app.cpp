@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "api/api_server.hpp"
+#include "api/radio_ops.hpp"
 #include "app/demo_flight.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "mavlink/endpoint.hpp"
@@ -198,6 +199,7 @@ int run_server(const Options& options) {
   });
 
   // the sim socket API: requests run in the control gate, on this (the loop) thread
+  std::unique_ptr<api::RadioOps> radio_ops;  // outlives api_server, which serves its ops
   std::unique_ptr<api::ApiServer> api_server;
   std::unique_ptr<EndpointHooks> endpoint_hooks;
   if (options.api_port >= 0) {
@@ -218,6 +220,10 @@ int run_server(const Options& options) {
       api_server->set_seq_waiter(endpoint_hooks.get());
     }
     if (frames) api_server->set_frame_service(frames.get());
+    // the A2A radio and the GCS link relay (seed 6.2, 6.3), served as radio_* / gcs_link_* ops
+    radio_ops = std::make_unique<api::RadioOps>(s, radio::SimRadio::attach(s, radio::RadioConfig{}),
+                                                &radio::GcsRelaySet::attach(s, options.api_bind_address));
+    api_server->add_extension(radio_ops.get());
     api_server->start();
     if (!options.quiet) {
       std::cout << "uavsim-server: sim API on tcp:" << api_config.bind_address << ":" << api_server->port()

@@ -1,0 +1,390 @@
+#include "api/radio_ops.hpp"
+
+#include <cmath>
+
+namespace uavsim::server::api {
+
+namespace {
+
+constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+int sextet(char c) {
+  if (c >= 'A' && c <= 'Z') return c - 'A';
+  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+  if (c >= '0' && c <= '9') return c - '0' + 52;
+  if (c == '+') return 62;
+  if (c == '/') return 63;
+  return -1;
+}
+
+bool set_error(std::string* code, std::string* message, const std::string& c,
+               const std::string& m) {
+  *code = c;
+  *message = m;
+  return false;
+}
+
+}  // namespace
+
+std::string base64_encode(const std::vector<uint8_t>& bytes) {
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    const uint32_t n = (uint32_t{bytes[i]} << 16) |
+                       (i + 1 < bytes.size() ? uint32_t{bytes[i + 1]} << 8 : 0u) |
+                       (i + 2 < bytes.size() ? uint32_t{bytes[i + 2]} : 0u);
+    out.push_back(kAlphabet[(n >> 18) & 63]);
+    out.push_back(kAlphabet[(n >> 12) & 63]);
+    out.push_back(i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=');
+    out.push_back(i + 2 < bytes.size() ? kAlphabet[n & 63] : '=');
+  }
+  return out;
+}
+
+std::optional<std::vector<uint8_t>> base64_decode(const std::string& text) {
+  // strip padding (at most two, only at the end)
+  size_t len = text.size();
+  size_t pad = 0;
+  while (len > 0 && text[len - 1] == '=' && pad < 2) {
+    --len;
+    ++pad;
+  }
+  if (pad > 0 && text.size() % 4 != 0) return std::nullopt;
+  if (len % 4 == 1) return std::nullopt;
+  std::vector<uint8_t> out;
+  out.reserve(len * 3 / 4);
+  uint32_t acc = 0;
+  int bits = 0;
+  for (size_t i = 0; i < len; ++i) {
+    const int v = sextet(text[i]);
+    if (v < 0) return std::nullopt;
+    acc = (acc << 6) | static_cast<uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<uint8_t>((acc >> bits) & 0xFF));
+    }
+  }
+  // the unused low bits of the last character must be zero (canonical encoding)
+  if (bits > 0 && (acc & ((1u << bits) - 1)) != 0) return std::nullopt;
+  return out;
+}
+
+RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays)
+    : sim_(sim), radio_(radio), relays_(relays) {}
+
+std::vector<std::string> RadioOps::ops() const {
+  return {"radio_send",   "radio_subscribe", "radio_unsubscribe", "radio_stats",
+          "radio_config", "gcs_link_open",   "gcs_link_impair",   "gcs_link_stats"};
+}
+
+std::optional<size_t> RadioOps::vehicle(const Json& value, std::string* code,
+                                        std::string* message) const {
+  if (value.is_number_integer() || value.is_number_unsigned()) {
+    const int64_t i = value.get<int64_t>();
+    if (i >= 0 && static_cast<size_t>(i) < sim_.vehicle_count()) return static_cast<size_t>(i);
+  } else if (value.is_string()) {
+    for (size_t i = 0; i < sim_.vehicle_count(); ++i) {
+      if (sim_.vehicle_name(i) == value.get<std::string>()) return i;
+    }
+  } else {
+    set_error(code, message, "bad_field", "a vehicle is an index or a name");
+    return std::nullopt;
+  }
+  set_error(
+      code, message, "unknown_vehicle",
+      "no vehicle " + value.dump() + " (" + std::to_string(sim_.vehicle_count()) + " vehicles)");
+  return std::nullopt;
+}
+
+RadioOps::Json RadioOps::config_json() const {
+  const radio::RadioConfig& c = radio_.model().config();
+  return Json{{"model", radio::propagation_name(c.propagation)},
+              {"range_m", c.range_m},
+              {"tx_power_dbm", c.tx_power_dbm},
+              {"sensitivity_dbm", c.sensitivity_dbm},
+              {"reference_loss_db", c.reference_loss_db},
+              {"path_loss_exponent", c.path_loss_exponent},
+              {"shadowing_sigma_db", c.shadowing_sigma_db},
+              {"loss", c.loss_probability},
+              {"latency_s", c.latency_s},
+              {"tdma", c.tdma},
+              {"slot_s", c.slot_s},
+              {"period_s", c.period_s},
+              {"collisions", c.collisions},
+              {"max_queue_frames", c.max_queue_frames},
+              {"max_frame_bytes", radio::kMaxFrameBytes}};
+}
+
+bool RadioOps::apply_config(const Json& request, std::string* code, std::string* message) {
+  radio::RadioConfig c = radio_.model().config();
+  // every field optional; a present field of the wrong type is an error, nothing is applied then
+  const std::pair<const char*, double*> numbers[] = {{"range_m", &c.range_m},
+                                                     {"tx_power_dbm", &c.tx_power_dbm},
+                                                     {"sensitivity_dbm", &c.sensitivity_dbm},
+                                                     {"reference_loss_db", &c.reference_loss_db},
+                                                     {"path_loss_exponent", &c.path_loss_exponent},
+                                                     {"shadowing_sigma_db", &c.shadowing_sigma_db},
+                                                     {"loss", &c.loss_probability},
+                                                     {"latency_s", &c.latency_s},
+                                                     {"slot_s", &c.slot_s},
+                                                     {"period_s", &c.period_s}};
+  for (const auto& [key, field] : numbers) {
+    auto it = request.find(key);
+    if (it == request.end()) continue;
+    if (!it->is_number())
+      return set_error(code, message, "bad_field", std::string("\"") + key + "\" must be a number");
+    *field = it->get<double>();
+  }
+  const std::pair<const char*, bool*> flags[] = {{"tdma", &c.tdma}, {"collisions", &c.collisions}};
+  for (const auto& [key, field] : flags) {
+    auto it = request.find(key);
+    if (it == request.end()) continue;
+    if (!it->is_boolean())
+      return set_error(code, message, "bad_field",
+                       std::string("\"") + key + "\" must be a boolean");
+    *field = it->get<bool>();
+  }
+  if (auto it = request.find("model"); it != request.end()) {
+    const auto p =
+        it->is_string() ? radio::propagation_from_name(it->get<std::string>()) : std::nullopt;
+    if (!p)
+      return set_error(code, message, "bad_field",
+                       "\"model\" must be \"range\" or \"log_distance\"");
+    c.propagation = *p;
+  }
+  if (auto it = request.find("max_queue_frames"); it != request.end()) {
+    if (!it->is_number_unsigned() || it->get<uint64_t>() > 1000000) {
+      return set_error(code, message, "bad_field",
+                       "\"max_queue_frames\" must be an integer in [1, 1000000]");
+    }
+    c.max_queue_frames = it->get<size_t>();
+  }
+  std::string why;
+  if (!radio_.model().set_config(c, &why)) return set_error(code, message, "bad_field", why);
+  return true;
+}
+
+bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
+                      std::string* code, std::string* message) {
+  const auto vit = request.find("vehicle");
+  if (op == "radio_send") {
+    if (vit == request.end())
+      return set_error(code, message, "missing_field", "\"vehicle\" (the sender) is required");
+    const auto from = vehicle(*vit, code, message);
+    if (!from) return false;
+    const auto tit = request.find("to");
+    if (tit == request.end()) {
+      return set_error(code, message, "missing_field",
+                       "\"to\" (a vehicle or \"broadcast\") is required");
+    }
+    int to = radio::kBroadcast;
+    if (!(tit->is_string() && tit->get<std::string>() == "broadcast")) {
+      const auto v = vehicle(*tit, code, message);
+      if (!v) return false;
+      if (*v == *from)
+        return set_error(code, message, "bad_field", "a vehicle cannot send a frame to itself");
+      to = static_cast<int>(*v);
+    }
+    const auto dit = request.find("data_b64");
+    if (dit == request.end() || !dit->is_string()) {
+      return set_error(code, message, "missing_field",
+                       "\"data_b64\" (the frame, base64) is required");
+    }
+    // a generous bound before decoding: 127 bytes are 172 characters
+    if (dit->get_ref<const std::string&>().size() > 4 * radio::kMaxFrameBytes) {
+      return set_error(
+          code, message, "frame_too_large",
+          "a frame is at most " + std::to_string(radio::kMaxFrameBytes) + " bytes (802.15.4)");
+    }
+    const auto data = base64_decode(dit->get<std::string>());
+    if (!data) return set_error(code, message, "bad_base64", "\"data_b64\" is not valid base64");
+    if (data->empty())
+      return set_error(code, message, "bad_field", "a frame carries at least one byte");
+    if (data->size() > radio::kMaxFrameBytes) {
+      return set_error(code, message, "frame_too_large",
+                       "a frame is at most " + std::to_string(radio::kMaxFrameBytes) +
+                           " bytes (802.15.4), got " + std::to_string(data->size()));
+    }
+    const radio::SendResult r = radio_.send(*from, to, *data);
+    if (!r.seq) {
+      const bool full = r.error == radio::Error::kQueueFull;
+      return set_error(code, message, full ? "queue_full" : "bad_field",
+                       full ? "the sender's radio queue is full" : radio::error_name(r.error));
+    }
+    *result = {{"vehicle", *from}, {"seq", *r.seq}, {"time_s", sim_.time_s()}};
+    return true;
+  }
+  if (op == "radio_subscribe" || op == "radio_unsubscribe") {
+    // one vehicle, or every vehicle without "vehicle"
+    std::set<size_t> which;
+    if (vit != request.end()) {
+      const auto v = vehicle(*vit, code, message);
+      if (!v) return false;
+      which.insert(*v);
+    } else {
+      for (size_t i = 0; i < sim_.vehicle_count(); ++i) which.insert(i);
+    }
+    std::set<size_t>& subs = subscriptions_[conn];
+    for (size_t v : which) {
+      if (op == "radio_subscribe") {
+        subs.insert(v);
+      } else {
+        subs.erase(v);
+      }
+    }
+    *result = {{"vehicles", Json(std::vector<size_t>(subs.begin(), subs.end()))},
+               {"time_s", sim_.time_s()}};
+    return true;
+  }
+  if (op == "radio_stats") {
+    std::optional<size_t> only;
+    if (vit != request.end()) {
+      only = vehicle(*vit, code, message);
+      if (!only) return false;
+    }
+    const radio::RadioModel& m = radio_.model();
+    Json vehicles = Json::array();
+    Json links = Json::array();
+    for (size_t a = 0; a < m.vehicle_count(); ++a) {
+      if (!only || *only == a) {
+        vehicles.push_back({{"vehicle", a},
+                            {"name", sim_.vehicle_name(a)},
+                            {"transmitted", m.transmitted(a)},
+                            {"queued", m.queued(a)}});
+      }
+      for (size_t b = 0; b < m.vehicle_count(); ++b) {
+        const radio::LinkStats& s = m.link(a, b);
+        if (s.sent == 0 || (only && *only != a && *only != b)) continue;
+        links.push_back({{"from", a},
+                         {"to", b},
+                         {"sent", s.sent},
+                         {"delivered", s.delivered},
+                         {"lost", s.lost},
+                         {"collided", s.collided},
+                         {"out_of_range", s.out_of_range}});
+      }
+    }
+    *result = {{"time_s", sim_.time_s()},
+               {"vehicles", vehicles},
+               {"links", links},
+               {"inbox_overflows", radio_.inbox_overflows()}};
+    return true;
+  }
+  if (op == "radio_config") {
+    if (!apply_config(request, code, message)) return false;
+    *result = config_json();
+    return true;
+  }
+
+  // the ground-station link relay
+  if (relays_ == nullptr)
+    return set_error(code, message, "not_available", "this server has no GCS link relay");
+  if (vit == request.end())
+    return set_error(code, message, "missing_field", "\"vehicle\" (index or name) is required");
+  const auto v = vehicle(*vit, code, message);
+  if (!v) return false;
+  auto port_field = [&](const char* key, std::optional<uint16_t>* out) {
+    auto it = request.find(key);
+    if (it == request.end()) return true;
+    if (!it->is_number_unsigned() || it->get<uint64_t>() > 65535) {
+      return set_error(code, message, "bad_field",
+                       std::string("\"") + key + "\" must be a port in [0, 65535]");
+    }
+    *out = static_cast<uint16_t>(it->get<uint64_t>());
+    return true;
+  };
+  auto relay_json = [&](radio::GcsRelay& r) {
+    const radio::RelayImpairment& i = r.impairment();
+    const radio::RelayStats& s = r.stats();
+    return Json{{"vehicle", *v},
+                {"uav_port", r.uav_port()},
+                {"gcs_port", r.gcs_port()},
+                {"loss", i.loss_probability},
+                {"latency_s", i.latency_s},
+                {"outage_until_s",
+                 std::isfinite(i.outage_until_s) ? Json(i.outage_until_s) : Json(nullptr)},
+                {"to_gcs_forwarded", s.to_gcs_forwarded},
+                {"to_gcs_dropped", s.to_gcs_dropped},
+                {"to_uav_forwarded", s.to_uav_forwarded},
+                {"to_uav_dropped", s.to_uav_dropped},
+                {"time_s", sim_.time_s()}};
+  };
+  if (op == "gcs_link_open") {
+    std::optional<uint16_t> uav_port, gcs_port, target_port;
+    if (!port_field("uav_port", &uav_port) || !port_field("gcs_port", &gcs_port) ||
+        !port_field("gcs_target_port", &target_port)) {
+      return false;
+    }
+    std::optional<std::string> target_host;
+    if (auto it = request.find("gcs_target_host"); it != request.end()) {
+      if (!it->is_string())
+        return set_error(code, message, "bad_field", "\"gcs_target_host\" must be an IPv4 address");
+      target_host = it->get<std::string>();
+    }
+    std::string why;
+    radio::GcsRelay* r = relays_->open(*v, uav_port.value_or(0), gcs_port.value_or(0), target_host,
+                                       target_port, &why);
+    if (r == nullptr) return set_error(code, message, "io_error", why);
+    *result = relay_json(*r);
+    return true;
+  }
+  radio::GcsRelay* r = relays_->relay(*v);
+  if (r == nullptr) {
+    return set_error(code, message, "not_available",
+                     "vehicle " + std::to_string(*v) + " has no relay (gcs_link_open)");
+  }
+  if (op == "gcs_link_impair") {
+    auto num = [&](const char* key, double fallback, double lo, double hi, double* out) {
+      auto it = request.find(key);
+      if (it == request.end()) {
+        *out = fallback;
+        return true;
+      }
+      if (!it->is_number() || !(it->get<double>() >= lo && it->get<double>() <= hi)) {
+        return set_error(code, message, "bad_field",
+                         std::string("\"") + key + "\" must be a number in [" + std::to_string(lo) +
+                             ", " + std::to_string(hi) + "]");
+      }
+      *out = it->get<double>();
+      return true;
+    };
+    double loss = 0.0, latency = 0.0, outage = 0.0;
+    if (!num("loss", r->impairment().loss_probability, 0.0, 1.0, &loss) ||
+        !num("latency_s", r->impairment().latency_s, 0.0, 3600.0, &latency) ||
+        !num("outage_s", 0.0, 0.0, 1e6, &outage)) {
+      return false;
+    }
+    r->impair(loss, latency, outage, sim_.time_s());
+  }
+  *result = relay_json(*r);
+  return true;
+}
+
+void RadioOps::on_gate(const Send& send) {
+  // frames that arrived by now go out before this gate announces its ticks
+  radio_.advance();
+  std::vector<radio::Delivery> arrived = radio_.take_deliveries();
+  if (arrived.empty() || subscriptions_.empty()) return;
+  for (const radio::Delivery& d : arrived) {
+    Json event;
+    for (const auto& [conn, vehicles] : subscriptions_) {
+      if (vehicles.count(d.to) == 0) continue;
+      if (event.is_null()) {
+        event = {{"event", "radio"},
+                 {"to", d.to},
+                 {"from", d.from},
+                 {"time", d.time_s},
+                 {"seq", d.seq},
+                 {"broadcast", d.broadcast},
+                 {"sent_time", d.queued_s},
+                 {"data_b64", base64_encode(d.data)}};
+      }
+      send(conn, event);
+    }
+  }
+}
+
+void RadioOps::on_disconnect(uint64_t conn) { subscriptions_.erase(conn); }
+
+}  // namespace uavsim::server::api

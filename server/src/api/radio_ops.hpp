@@ -1,0 +1,50 @@
+// The radio's ops on the sim socket API (docs/protocol.md, "Radio"): radio_send, radio_subscribe,
+// radio_unsubscribe, radio_stats, radio_config for the A2A radio (seed 6.2), and gcs_link_open,
+// gcs_link_impair, gcs_link_stats for the ground-station link relay (seed 6.3). Received frames
+// stream to subscribers as {"event": "radio", ...} at the gate, before the tick at whose sim time
+// they arrive.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "api/api_server.hpp"
+#include "radio/gcs_relay.hpp"
+#include "radio/sim_radio.hpp"
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::api {
+
+// Standard base64 (RFC 4648 section 4): padding optional on input, always written on output.
+std::string base64_encode(const std::vector<uint8_t>& bytes);
+// Nullopt for characters outside the alphabet, misplaced padding or an impossible length.
+std::optional<std::vector<uint8_t>> base64_decode(const std::string& text);
+
+class RadioOps : public ApiExtension {
+ public:
+  // relays may be null (the gcs_link_* ops then answer not_available). All must outlive the server.
+  RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays);
+
+  std::vector<std::string> ops() const override;
+  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
+              std::string* code, std::string* message) override;
+  void on_gate(const Send& send) override;
+  void on_disconnect(uint64_t conn) override;
+
+ private:
+  std::optional<size_t> vehicle(const Json& value, std::string* code, std::string* message) const;
+  Json config_json() const;
+  bool apply_config(const Json& request, std::string* code, std::string* message);
+
+  sim::Simulation& sim_;
+  radio::SimRadio& radio_;
+  radio::GcsRelaySet* relays_;
+  std::map<uint64_t, std::set<size_t>> subscriptions_;  // conn -> vehicles whose frames it receives
+};
+
+}  // namespace uavsim::server::api

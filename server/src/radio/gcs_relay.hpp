@@ -1,0 +1,121 @@
+// The ground-station link impaired in sim time (seed 6.3): a UDP relay per vehicle between a
+// vehicle-side port (the UAV's GCS link sends there) and a GCS-side port (the ground station's link
+// sends there), that drops datagrams with a seeded loss probability or during an outage window and
+// delays the others by a latency, all in sim time. The same client code talks to a real ground
+// station without it.
+//
+// The relay reads its sockets without blocking when pumped (at control steps, on the loop thread):
+// a datagram's arrival time is the sim time of the pump that read it, so the relay adds no
+// wall-clock behaviour of its own, and it stops with the clock (pause, lockstep). Peers are learned
+// from the last datagram each side received; the GCS peer can also be given up front.
+#pragma once
+
+#include <netinet/in.h>
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "sim/simulation.hpp"
+
+namespace uavsim::server::radio {
+
+struct RelayImpairment {
+  double loss_probability = 0.0;  // per datagram, both directions
+  double latency_s = 0.0;         // added to every datagram, both directions
+  double outage_until_s =
+      -std::numeric_limits<double>::infinity();  // everything dropped before this
+};
+
+struct RelayStats {
+  uint64_t to_gcs_forwarded = 0;
+  uint64_t to_gcs_dropped = 0;
+  uint64_t to_uav_forwarded = 0;
+  uint64_t to_uav_dropped = 0;
+};
+
+class GcsRelay {
+ public:
+  // Binds both sockets on bind_address (port 0: ephemeral); gcs_host/gcs_port, if given, is where
+  // vehicle datagrams go before the GCS has sent anything. Null (and *error naming the address) if
+  // a socket cannot be opened or bound.
+  static std::unique_ptr<GcsRelay> open(const std::string& bind_address, uint16_t uav_port,
+                                        uint16_t gcs_port,
+                                        const std::optional<std::string>& gcs_host,
+                                        std::optional<uint16_t> gcs_target_port, uint64_t seed,
+                                        std::string* error);
+  ~GcsRelay();
+  GcsRelay(const GcsRelay&) = delete;
+  GcsRelay& operator=(const GcsRelay&) = delete;
+
+  uint16_t uav_port() const { return uav_port_; }
+  uint16_t gcs_port() const { return gcs_port_; }
+
+  // Reads what has arrived on both sockets (never blocks), drops or delays it per the impairment at
+  // now_s and sends what is due. Single caller (the loop thread).
+  void pump(double now_s);
+  // Sets loss and latency, and an outage of outage_s starting at now_s (0: none). Single caller.
+  void impair(double loss_probability, double latency_s, double outage_s, double now_s);
+  // Back to an unimpaired relay with nothing in flight, the generator restarted from seed. Single
+  // caller.
+  void reset(uint64_t seed);
+
+  const RelayImpairment& impairment() const { return impairment_; }
+  const RelayStats& stats() const { return stats_; }
+
+ private:
+  struct InFlight {
+    double due_s = 0.0;
+    bool to_gcs = false;
+    std::vector<uint8_t> bytes;
+  };
+  GcsRelay() = default;
+  void receive(int fd, bool to_gcs, double now_s);
+  double uniform();
+
+  int uav_fd_ = -1;
+  int gcs_fd_ = -1;
+  uint16_t uav_port_ = 0;
+  uint16_t gcs_port_ = 0;
+  std::optional<sockaddr_in> uav_peer_;
+  std::optional<sockaddr_in> gcs_peer_;
+  RelayImpairment impairment_;
+  RelayStats stats_;
+  std::vector<InFlight> in_flight_;  // ordered by due time, arrival order among equals
+  std::mt19937_64 rng_;
+};
+
+// Every vehicle's relay, pumped by the simulation at control steps (a WorldObject the simulation
+// owns).
+class GcsRelaySet : public sim::WorldObject {
+ public:
+  // Creates an empty set and adds it to sim. Before the loop starts.
+  static GcsRelaySet& attach(sim::Simulation& sim, std::string bind_address);
+
+  // Opens vehicle's relay (replacing one already open). Null and *error if the sockets fail. Loop
+  // thread only.
+  GcsRelay* open(size_t vehicle, uint16_t uav_port, uint16_t gcs_port,
+                 const std::optional<std::string>& gcs_host,
+                 std::optional<uint16_t> gcs_target_port, std::string* error);
+  GcsRelay* relay(size_t vehicle);  // null if none open. Loop thread only.
+
+  void before_step(sim::Simulation& sim) override;
+  bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
+  void reset(uint64_t seed) override;
+
+  GcsRelaySet(sim::Simulation& sim, std::string bind_address);  // use attach()
+
+ private:
+  static uint64_t relay_seed(uint64_t sim_seed, size_t vehicle) {
+    return (sim_seed + 0x6763735FULL) * 0xBF58476D1CE4E5B9ull + vehicle;
+  }
+  sim::Simulation& sim_;
+  std::string bind_address_;
+  std::vector<std::unique_ptr<GcsRelay>> relays_;  // per vehicle
+};
+
+}  // namespace uavsim::server::radio

@@ -1,0 +1,171 @@
+// The A2A radio model (seed 6.2): every vehicle has an IEEE 802.15.4 transceiver that sends
+// broadcast or unicast frames of at most 127 bytes to the vehicles in range. Pure: no MuJoCo, no
+// sockets, no clock — the caller steps it in sim time with the vehicles' positions at that time.
+//
+// A frame's life:
+//   queued (send) -> scheduled (its transmission start: at once, after the vehicle's previous
+//   frame, or at the vehicle's next TDMA slot) -> on air (at the first step at or after its start:
+//   the positions of that step decide who is in range, and the seeded loss draws are made) ->
+//   resolved (at the first step at or after its end: overlapping transmissions heard at a receiver
+//   collide) -> delivered at max(end + latency_s, queued + one step).
+// Determinism: every random draw happens in a fixed order — transmissions by (start, sender, seq),
+// then receivers by index — from one seeded generator, so the same seed and inputs give the same
+// deliveries.
+//
+// TDMA (seed 6.2, fig. 6.2): the GPS period T is cut into slots of duration D; slot k belongs to
+// vehicle k mod N, slots that do not fit whole in T are wasted; a vehicle transmits one frame per
+// own slot, at the slot's start. With D >= the longest frame's airtime no two transmissions
+// overlap, and a frame queued with an empty queue waits less than 2·N·D.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace uavsim::server::radio {
+
+inline constexpr size_t kMaxFrameBytes = 127;     // 802.15.4 aMaxPHYPacketSize
+inline constexpr double kBitRateBitS = 250000.0;  // 2.4 GHz O-QPSK PHY
+inline constexpr size_t kPhyOverheadBytes =
+    6;  // preamble (4) + start-of-frame delimiter (1) + length (1)
+inline constexpr int kBroadcast = -1;
+
+// Time on air of a frame of frame_bytes (PSDU) bytes at 250 kbit/s, PHY header included:
+// 127 bytes -> (127 + 6) * 8 / 250000 = 4.256 ms.
+double airtime_s(size_t frame_bytes);
+
+enum class Propagation {
+  kRange,        // received within range_m
+  kLogDistance,  // received when tx_power - PL(d) >= sensitivity, PL(d) = PL(1 m) + 10 n log10(d) +
+                 // X_sigma
+};
+const char* propagation_name(Propagation p);
+std::optional<Propagation> propagation_from_name(const std::string& name);
+
+struct RadioConfig {
+  Propagation propagation = Propagation::kRange;
+  double range_m = 100.0;
+  // log-distance path loss with log-normal shadowing (Rappaport, Wireless Communications, eq. 4.69)
+  double tx_power_dbm = 0.0;
+  double sensitivity_dbm =
+      -85.0;  // MRF24J40 datasheet: -95 dBm typical; -85 leaves a fading margin
+  double reference_loss_db = 40.05;  // free space at 1 m, 2.4 GHz: 20 log10(4 pi / 0.125 m)
+  double path_loss_exponent = 2.5;
+  double shadowing_sigma_db = 4.0;  // drawn per (transmission, receiver)
+  double loss_probability = 0.0;    // of a frame that reached a receiver in range
+  double latency_s = 0.0;  // processing after the end of transmission (delivery is >= one step)
+  bool tdma = false;
+  double slot_s = 0.01;   // D
+  double period_s = 1.0;  // T (the GPS pulse)
+  bool collisions =
+      false;  // overlapping frames heard at a receiver are both lost (half duplex too)
+  size_t max_queue_frames = 256;  // per vehicle; send() refuses more
+};
+
+// Why a config is unusable for vehicles vehicles ("" if usable); names the field.
+std::string validate(const RadioConfig& config, size_t vehicles);
+
+enum class Error { kUnknownVehicle, kBadDestination, kEmptyFrame, kFrameTooLarge, kQueueFull };
+const char* error_name(Error e);
+
+struct SendResult {
+  std::optional<uint64_t> seq;           // the frame's sequence number (per sender), if queued
+  Error error = Error::kUnknownVehicle;  // if not
+};
+
+struct Delivery {
+  size_t to = 0;
+  size_t from = 0;
+  uint64_t seq = 0;
+  bool broadcast = false;
+  double queued_s = 0.0;
+  double tx_start_s = 0.0;
+  double time_s = 0.0;  // arrival at the receiver
+  std::vector<uint8_t> data;
+};
+
+// One directed link's counters. Every frame addressed to the receiver (unicast to it, or broadcast)
+// that went on air counts once in sent and, once resolved, once in exactly one of the others.
+struct LinkStats {
+  uint64_t sent = 0;
+  uint64_t delivered = 0;
+  uint64_t lost = 0;          // in range, dropped by the loss draw
+  uint64_t collided = 0;      // overlapped another transmission heard at the receiver
+  uint64_t out_of_range = 0;  // beyond range (or below sensitivity after shadowing)
+};
+
+class RadioModel {
+ public:
+  // step_s: the caller's step (the physics step), the least latency. Throws std::invalid_argument
+  // with validate()'s message for an unusable config (a startup error).
+  RadioModel(size_t vehicles, const RadioConfig& config, uint64_t seed, double step_s);
+
+  // Queues a frame from vehicle from to vehicle to (or kBroadcast) at time now_s. Not thread-safe
+  // (one caller: the loop thread).
+  SendResult send(size_t from, int to, const std::vector<uint8_t>& data, double now_s);
+
+  // Advances to now_s (non-decreasing) with every vehicle's position at now_s: schedules queued
+  // frames, puts due ones on air, resolves finished ones and appends the frames arriving at or
+  // before now_s to *out, ordered by (arrival, receiver, sender, seq). Calling it again at the same
+  // time only handles frames queued since.
+  void step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
+            std::vector<Delivery>* out);
+
+  // True when step(now_s) would put a frame on air (so the caller needs fresh positions).
+  bool has_due(double now_s) const;
+
+  // Replaces the config; frames already scheduled keep their start. False (and *error) if unusable.
+  bool set_config(const RadioConfig& config, std::string* error);
+  const RadioConfig& config() const { return config_; }
+  // Drops every frame and counter and restarts the generator from seed.
+  void reset(uint64_t seed);
+
+  size_t vehicle_count() const { return vehicles_; }
+  const LinkStats& link(size_t from, size_t to) const { return links_[from * vehicles_ + to]; }
+  uint64_t transmitted(size_t vehicle) const { return transmitted_[vehicle]; }
+  size_t queued(size_t vehicle) const { return queues_[vehicle].size(); }
+
+  // The start of vehicle's first TDMA slot at or after t_s (exact slot arithmetic, seed fig. 6.2).
+  double next_slot_start_s(size_t vehicle, double t_s) const;
+
+ private:
+  struct Frame {
+    size_t from = 0;
+    int to = kBroadcast;
+    uint64_t seq = 0;
+    double queued_s = 0.0;
+    double start_s = 0.0;
+    double end_s = 0.0;
+    std::vector<uint8_t> data;
+    // on air: per receiver, heard (in range) and the loss draw
+    std::vector<uint8_t> heard;
+    std::vector<uint8_t> dropped;
+    bool resolved = false;
+  };
+
+  bool reaches(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+  double uniform();
+  double normal();
+  void go_on_air(Frame& f, const std::vector<Eigen::Vector3d>& positions);
+  void resolve(const Frame& f, std::vector<Delivery>* arrivals);
+
+  size_t vehicles_;
+  RadioConfig config_;
+  double step_s_;
+  std::mt19937_64 rng_;
+  std::vector<std::deque<Frame>> queues_;  // per sender, FIFO, not yet scheduled
+  std::vector<uint64_t> next_seq_;
+  std::vector<double> busy_until_s_;  // per sender: end of its last scheduled transmission
+  std::vector<Frame> scheduled_;      // sorted by (start, from, seq), not yet on air
+  std::vector<Frame> air_;            // on air or recently ended, for overlap checks
+  std::vector<Delivery> pending_;     // resolved, not yet arrived
+  std::vector<LinkStats> links_;      // from * N + to
+  std::vector<uint64_t> transmitted_;
+};
+
+}  // namespace uavsim::server::radio

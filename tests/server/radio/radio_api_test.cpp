@@ -1,0 +1,241 @@
+// The radio ops over the sim socket API (docs/protocol.md, "Radio"): a live server on loopback with
+// the radio and the GCS relay attached, as server_app wires them.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <memory>
+#include <thread>
+
+#include "api/radio_ops.hpp"
+#include "api_fixture.hpp"
+#include "radio/gcs_relay.hpp"
+#include "radio/sim_radio.hpp"
+
+namespace uavsim::server::api {
+namespace {
+
+using testing::Json;
+using testing::TestClient;
+
+constexpr double kTimeTol_s = 1e-9;
+constexpr double kStep_s = 0.001;  // physics
+
+class RadioServer {
+ public:
+  RadioServer() {
+    physics::ComposeOptions o;
+    o.models_dir = UAVSIM_MODELS_DIR;
+    sim_ = std::make_unique<sim::Simulation>(
+        physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o),
+        sim::SimConfig{});
+    objects_ = objects::add_world_objects(*sim_);
+    radio::SimRadio& radio = radio::SimRadio::attach(*sim_, radio::RadioConfig{});
+    radio::GcsRelaySet& relays = radio::GcsRelaySet::attach(*sim_, "127.0.0.1");
+    ops_ = std::make_unique<RadioOps>(*sim_, radio, &relays);
+    runner_ = std::make_unique<sim::Runner>(*sim_, 0.0);
+    ApiConfig config;
+    config.port = 0;
+    config.start_paused = true;
+    api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
+    api_->add_extension(ops_.get());
+    runner_->set_control_gate(api_->gate());
+    api_->start();
+    loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
+  }
+  ~RadioServer() {
+    runner_->stop();
+    api_->shutdown();
+    loop_.join();
+  }
+  uint16_t port() const { return api_->port(); }
+
+ private:
+  std::unique_ptr<sim::Simulation> sim_;
+  objects::ObjectSet objects_;
+  std::unique_ptr<RadioOps> ops_;
+  std::unique_ptr<sim::Runner> runner_;
+  std::unique_ptr<ApiServer> api_;
+  std::thread loop_;
+};
+
+std::string error_code(const Json& reply) {
+  return reply.value("ok", true) ? "" : reply["error"].value("code", "");
+}
+
+Json send_op(int from, Json to, const std::string& data) {
+  return {{"op", "radio_send"}, {"vehicle", from}, {"to", to}, {"data_b64", data}};
+}
+
+TEST(Base64, RoundTripsEveryLengthAndRejectsGarbage) {
+  for (size_t n = 0; n < 130; ++n) {
+    std::vector<uint8_t> b(n);
+    for (size_t k = 0; k < n; ++k) b[k] = static_cast<uint8_t>(k * 37 + n);
+    const auto back = base64_decode(base64_encode(b));
+    ASSERT_TRUE(back) << n;
+    EXPECT_EQ(*back, b);
+  }
+  EXPECT_EQ(base64_encode({'h', 'i', '!'}), "aGkh");
+  EXPECT_EQ(*base64_decode("aGk"), (std::vector<uint8_t>{'h', 'i'}));  // padding optional
+  EXPECT_EQ(*base64_decode("aGk="), (std::vector<uint8_t>{'h', 'i'}));
+  EXPECT_FALSE(base64_decode("a"));     // impossible length
+  EXPECT_FALSE(base64_decode("aGk*"));  // outside the alphabet
+  EXPECT_FALSE(base64_decode("a=Gk"));  // padding inside
+  EXPECT_FALSE(base64_decode("aGl="));  // non-canonical trailing bits
+}
+
+TEST(RadioApi, AFrameReachesTheSubscriberOfItsAddressee) {
+  RadioServer server;
+  TestClient c(server.port());
+  bool listed = false;
+  for (const Json& op : c.hello()["ops"]) listed = listed || op == "radio_send";
+  EXPECT_TRUE(listed) << c.hello();
+  ASSERT_TRUE(c.request({{"op", "radio_subscribe"}, {"vehicle", 1}})["ok"]);
+  const Json sent = c.request(send_op(0, 1, base64_encode({'h', 'e', 'l', 'l', 'o'})));
+  ASSERT_TRUE(sent["ok"]) << sent;
+  ASSERT_TRUE(c.request({{"op", "step"}, {"steps", 10}})["ok"]);
+  const Json e = c.next_event("radio");
+  ASSERT_FALSE(e.is_null());
+  EXPECT_EQ(e["from"], 0);
+  EXPECT_EQ(e["to"], 1);
+  EXPECT_EQ(e["broadcast"], false);
+  EXPECT_EQ(e["data_b64"], base64_encode({'h', 'e', 'l', 'l', 'o'}));
+  // at least one physics step after it was sent
+  EXPECT_GE(e["time"].get<double>(), sent["result"]["time_s"].get<double>() + kStep_s - kTimeTol_s);
+
+  const Json stats = c.request({{"op", "radio_stats"}, {"vehicle", 0}});
+  ASSERT_TRUE(stats["ok"]) << stats;
+  ASSERT_EQ(stats["result"]["links"].size(), 1u);
+  EXPECT_EQ(stats["result"]["links"][0]["delivered"], 1);
+  EXPECT_EQ(stats["result"]["vehicles"][0]["transmitted"], 1);
+}
+
+TEST(RadioApi, SubscribersOfOtherVehiclesDoNotSeeAUnicast) {
+  RadioServer server;
+  TestClient c(server.port());
+  ASSERT_TRUE(c.request({{"op", "radio_subscribe"}, {"vehicle", 0}})["ok"]);
+  ASSERT_TRUE(c.request(send_op(0, 1, "AQID"))["ok"]);
+  ASSERT_TRUE(c.request(send_op(1, "broadcast", "BAUG"))["ok"]);
+  ASSERT_TRUE(c.request({{"op", "step"}, {"steps", 10}})["ok"]);
+  const Json e = c.next_event("radio");
+  ASSERT_FALSE(e.is_null());
+  EXPECT_EQ(e["from"], 1);  // only the broadcast from 1: the unicast went to 1
+  EXPECT_EQ(e["data_b64"], "BAUG");
+  EXPECT_TRUE(c.request({{"op", "status"}})["ok"]);
+}
+
+TEST(RadioApi, BadInputGetsAnErrorAndTheServerCarriesOn) {
+  RadioServer server;
+  TestClient c(server.port());
+  const std::string big = base64_encode(std::vector<uint8_t>(128, 1));
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, big))), "frame_too_large");
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, std::string(2000, 'A')))), "frame_too_large");
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, "!!!!"))), "bad_base64");
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, ""))), "bad_field");
+  EXPECT_EQ(error_code(c.request(send_op(7, 1, "AQID"))), "unknown_vehicle");
+  EXPECT_EQ(error_code(c.request(send_op(0, 9, "AQID"))), "unknown_vehicle");
+  EXPECT_EQ(error_code(c.request(send_op(0, "nobody", "AQID"))), "unknown_vehicle");
+  EXPECT_EQ(error_code(c.request(send_op(0, 0, "AQID"))), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_send"}, {"vehicle", 0}, {"data_b64", "AQID"}})),
+            "missing_field");
+  EXPECT_EQ(
+      error_code(c.request({{"op", "radio_send"}, {"vehicle", 0}, {"to", 1}, {"data_b64", 5}})),
+      "missing_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_subscribe"}, {"vehicle", 3}})), "unknown_vehicle");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_stats"}, {"vehicle", true}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"loss", 2}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"model", "magic"}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"tdma", true}, {"slot_s", 0.001}})),
+            "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"tdma", "yes"}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "gcs_link_impair"}, {"vehicle", 0}, {"loss", 0.1}})),
+            "not_available");
+  EXPECT_EQ(error_code(c.request({{"op", "gcs_link_open"}, {"vehicle", 0}, {"uav_port", 70000}})),
+            "bad_field");
+  // a refused config leaves the old one
+  const Json cfg = c.request({{"op", "radio_config"}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["tdma"], false);
+  EXPECT_EQ(cfg["result"]["loss"], 0.0);
+  const Json status = c.request({{"op", "status"}});
+  EXPECT_TRUE(status["ok"]) << status;
+}
+
+TEST(RadioApi, ConfigChangesTheModel) {
+  RadioServer server;
+  TestClient c(server.port());
+  const Json r = c.request({{"op", "radio_config"},
+                            {"model", "log_distance"},
+                            {"tdma", true},
+                            {"slot_s", 0.01},
+                            {"period_s", 0.5},
+                            {"loss", 0.25},
+                            {"collisions", true}});
+  ASSERT_TRUE(r["ok"]) << r;
+  EXPECT_EQ(r["result"]["model"], "log_distance");
+  EXPECT_EQ(r["result"]["tdma"], true);
+  EXPECT_EQ(r["result"]["loss"], 0.25);
+  // out of range: loss 1 drops everything in range
+  ASSERT_TRUE(c.request(
+      {{"op", "radio_config"}, {"model", "range"}, {"tdma", false}, {"loss", 1.0}})["ok"]);
+  ASSERT_TRUE(c.request(send_op(0, 1, "AQID"))["ok"]);
+  ASSERT_TRUE(c.request({{"op", "step"}, {"steps", 10}})["ok"]);
+  const Json stats = c.request({{"op", "radio_stats"}});
+  ASSERT_EQ(stats["result"]["links"].size(), 1u) << stats;
+  EXPECT_EQ(stats["result"]["links"][0]["lost"], 1);
+  EXPECT_EQ(stats["result"]["links"][0]["delivered"], 0);
+}
+
+TEST(RadioApi, ALockstepClientGetsAFrameBeforeTheTickAtWhichItArrives) {
+  RadioServer server;
+  TestClient c(server.port());
+  ASSERT_TRUE(c.request({{"op", "radio_subscribe"}})["ok"]);
+  ASSERT_TRUE(c.request({{"op", "lockstep_join"}, {"period_s", 0.01}})["ok"]);
+  ASSERT_TRUE(c.request({{"op", "resume"}})["ok"]);
+  // every tick: send one frame; alternate latencies so that arrivals fall just before and just
+  // after the next tick (10-byte frame: 0.512 ms on air; + 9.5 ms = 10.012 ms)
+  double last_tick_s = -1.0;
+  int radio_events = 0;
+  for (int ticks = 0; ticks < 20;) {
+    const Json m = c.read_message();
+    ASSERT_FALSE(m.is_null()) << "no message";
+    if (m.value("event", "") == "radio") {
+      ++radio_events;
+      // delivered after the last announced tick's time and before the tick at or after its arrival
+      EXPECT_LT(last_tick_s, m["time"].get<double>()) << m;
+      continue;
+    }
+    if (m.value("event", "") != "tick") continue;
+    const double t = m["time"].get<double>();
+    last_tick_s = t;
+    ++ticks;
+    ASSERT_TRUE(c.request({{"op", "radio_config"}, {"latency_s", ticks % 2 ? 0.0095 : 0.0}})["ok"]);
+    ASSERT_TRUE(
+        c.request(send_op(0, "broadcast", base64_encode(std::vector<uint8_t>(10, 3))))["ok"]);
+    ASSERT_TRUE(c.request({{"op", "done"}, {"tick", m["tick"]}})["ok"]);
+  }
+  EXPECT_GE(radio_events, 18);
+}
+
+TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
+  RadioServer server;
+  TestClient c(server.port());
+  const Json open = c.request({{"op", "gcs_link_open"}, {"vehicle", 1}});
+  ASSERT_TRUE(open["ok"]) << open;
+  EXPECT_GT(open["result"]["uav_port"].get<int>(), 0);
+  EXPECT_GT(open["result"]["gcs_port"].get<int>(), 0);
+  const Json r = c.request({{"op", "gcs_link_impair"},
+                            {"vehicle", 1},
+                            {"loss", 0.3},
+                            {"latency_s", 0.2},
+                            {"outage_s", 5.0}});
+  ASSERT_TRUE(r["ok"]) << r;
+  EXPECT_EQ(r["result"]["loss"], 0.3);
+  EXPECT_EQ(r["result"]["latency_s"], 0.2);
+  EXPECT_NEAR(r["result"]["outage_until_s"].get<double>(), 5.0, kTimeTol_s);
+  EXPECT_EQ(error_code(c.request({{"op", "gcs_link_impair"}, {"vehicle", 1}, {"loss", -0.1}})),
+            "bad_field");
+  EXPECT_TRUE(c.request({{"op", "gcs_link_stats"}, {"vehicle", 1}})["ok"]);
+}
+
+}  // namespace
+}  // namespace uavsim::server::api
