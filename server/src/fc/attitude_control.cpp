@@ -36,6 +36,12 @@ void AttitudeController::relax_i(double dt_s, double tau_s) {
   yaw_.scale_i(f);
 }
 
+void AttitudeController::reset_integrators() {
+  roll_.reset_i();
+  pitch_.reset_i();
+  yaw_.reset_i();
+}
+
 void AttitudeController::reset() {
   roll_.reset();
   pitch_.reset();

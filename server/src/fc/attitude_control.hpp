@@ -39,6 +39,8 @@ class AttitudeController {
   // Bleeds the rate integrators toward zero (time constant tau_s), as ArduCopter relaxes them when
   // the land detector suspects ground contact: on the ground they only wind up against the contact.
   void relax_i(double dt_s, double tau_s);
+  // Zeroes the rate integrators (the mixer changed under them, e.g. a lost rotor).
+  void reset_integrators();
   const Eigen::Vector3d& rate_target() const { return rate_target_body_rad_s_; }
 
  private:

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "fc/fc_types.hpp"
 #include "fc/flight_controller.hpp"
 #include "fc/mixer.hpp"
+#include "fc/motor_monitor.hpp"
 #include "fc/params.hpp"
 #include "fc/position_control.hpp"
 #include "fc/sensors.hpp"
@@ -75,6 +77,10 @@ struct FlightController::Impl {
               double* motor_cmd);
   void run_cascade(double dt_s);
   void update_yaw(double dt_s);
+  void monitor_motors(double dt_s);
+  const Mixer& active_mixer() const {
+    return lost_motor_ >= 0 ? *degraded_mixers_[static_cast<std::size_t>(lost_motor_)] : mixer_;
+  }
   void status(int severity, std::string_view text) const;
   void set_home(const Eigen::Vector3d& home);
   double now() const { return last_time_s_; }
@@ -113,6 +119,11 @@ struct FlightController::Impl {
   Eigen::Matrix3d inertia_ = Eigen::Matrix3d::Identity();
   ParamTable params_;
   Mixer mixer_;
+  // one degraded mixer per rotor that could be lost (vehicles with MotorMonitor::kMinRotors or more),
+  // built up front so a detection in flight allocates nothing; nullopt: that loss is not flyable
+  std::vector<std::optional<Mixer>> degraded_mixers_;
+  MotorMonitor motor_monitor_;
+  int lost_motor_ = -1;  // the rotor the degraded mixer leaves out, or -1
 
   // sensing and estimation
   Sensors sensors_;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <stdexcept>
 
 #include "fc/fc_impl.hpp"
 
@@ -18,6 +20,10 @@ constexpr double kMaxGuidedSpeedM_S = 1000.0;
 // below this fraction of hover thrust the rate integrators bleed off with time constant kRelaxTauS
 constexpr double kRelaxThrustFraction = 0.5;
 constexpr double kRelaxTauS = 0.2;
+// the motor monitor judges only well clear of the ground (contact torques are not the model's) and
+// with a collective near hover (no spin-up or free-fall transients)
+constexpr double kMonitorMinHeightM = 1.0;
+constexpr double kMonitorMinThrustFraction = 0.5;
 
 double wrap_pi(double a) {
   while (a > kPi) a -= 2.0 * kPi;
@@ -72,8 +78,19 @@ FlightController::Impl::Impl(const airframe::AirframeParams& airframe, uint64_t 
       inertia_(airframe.inertia_body_kgm2),
       params_(airframe.battery.capacity_mah),
       mixer_(airframe),
+      motor_monitor_(airframe),
       sensors_(seed) {
   if (!(mass_kg_ > 0.0)) mass_kg_ = 1.0;
+  if (airframe.rotors.size() >= MotorMonitor::kMinRotors) {
+    degraded_mixers_.reserve(airframe.rotors.size());
+    for (std::size_t k = 0; k < airframe.rotors.size(); ++k) {
+      try {
+        degraded_mixers_.emplace_back(Mixer(airframe, k));
+      } catch (const std::invalid_argument&) {
+        degraded_mixers_.emplace_back(std::nullopt);  // this loss cannot be flown: keep the full mixer
+      }
+    }
+  }
   hover_thrust_n_ = mass_kg_ * kGravityM_S2;
   mission_.reserve(16);
   mission_.push_back(MissionItem{});  // item 0: home
@@ -137,6 +154,7 @@ void FlightController::Impl::update(double time_s, const TruthState& truth,
   // failsafes, then the mode's setpoints, then the cascade
   run_failsafes();
   if (armed_) {
+    monitor_motors(dt_s);
     run_mode(dt_s);
     update_yaw(dt_s);
     run_land_detector(dt_s);
@@ -158,6 +176,27 @@ void FlightController::Impl::update(double time_s, const TruthState& truth,
     run_cascade(dt_s);
   }
   for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = motor_cmd_[k];
+}
+
+void FlightController::Impl::monitor_motors(double dt_s) {
+  // (commands of the last step, IMU now) => a lost rotor, once, then the degraded mixer
+  const double height = estimator_.state().position_enu_m.z() - (home_set_ ? home_enu_m_.z() : 0.0);
+  const bool airborne = !landed_ && control_ != ControlKind::kIdle && height > kMonitorMinHeightM &&
+                        collective_demand_n_ > kMonitorMinThrustFraction * hover_thrust_n_;
+  motor_monitor_.update(motor_cmd_.data(), frame_.imu.gyro_body_rad_s, frame_.imu.accel_body_m_s2,
+                        dt_s, airborne);
+  const int lost = motor_monitor_.lost_rotor();
+  if (lost < 0 || lost_motor_ >= 0) return;
+  if (static_cast<std::size_t>(lost) >= degraded_mixers_.size() ||
+      !degraded_mixers_[static_cast<std::size_t>(lost)]) {
+    return;
+  }
+  lost_motor_ = lost;
+  // the rate integrators wound up against the lost torque: with the new mixer they only disturb
+  att_ctrl_.reset_integrators();
+  char text[51];
+  std::snprintf(text, sizeof(text), "Thrust loss: motor %d, yaw released", lost + 1);
+  status(2, text);
 }
 
 void FlightController::Impl::update_yaw(double dt_s) {
@@ -186,6 +225,13 @@ void FlightController::Impl::run_cascade(double dt_s) {
   double collective_n = 0.0;
   const RateLimits rate_limits{mixer_status_.roll_pitch_scale < 1.0, mixer_status_.yaw_scale < 1.0};
   const ThrustLimits thrust_limits{mixer_status_.limit_thrust_up, mixer_status_.limit_thrust_down};
+  // a lost rotor: yaw is no longer controlled, the heading target follows the vehicle (it may turn)
+  // and only the yaw rate is damped as far as the degraded mixer allows
+  if (lost_motor_ >= 0) {
+    yaw_target_rad_ = estimator_.yaw_enu_rad();
+    yaw_cmd_rad_ = yaw_target_rad_;
+    yaw_rate_ff_rad_s_ = 0.0;
+  }
   const Eigen::Vector3d z_body_enu = est.q_enu_body * Eigen::Vector3d::UnitZ();
   // the collective that gives the demanded vertical thrust at the current tilt
   const double cos_tilt = std::max(z_body_enu.z(), 0.5);
@@ -217,8 +263,9 @@ void FlightController::Impl::run_cascade(double dt_s) {
   collective_demand_n_ = collective_n;
   if (collective_n < kRelaxThrustFraction * hover_thrust_n_) att_ctrl_.relax_i(dt_s, kRelaxTauS);
   // mixer: per-rotor thrust, then the inverse square law
-  collective_n = std::clamp(collective_n, 0.0, mixer_.max_total_thrust_n());
-  mixer_status_ = mixer_.mix(torque_body_nm, collective_n, rotor_thrust_n_.data(), motor_cmd_.data());
+  const Mixer& mixer = active_mixer();
+  collective_n = std::clamp(collective_n, 0.0, mixer.max_total_thrust_n());
+  mixer_status_ = mixer.mix(torque_body_nm, collective_n, rotor_thrust_n_.data(), motor_cmd_.data());
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -255,6 +302,8 @@ CommandResult FlightController::arm(bool force) {
   s.fs_gcs_active_ = false;
   s.fs_batt_triggered_ = false;
   s.fs_ekf_active_ = false;
+  s.motor_monitor_.reset();
+  s.lost_motor_ = -1;
   s.control_ = ControlKind::kIdle;
   s.yaw_target_rad_ = s.estimator_.yaw_enu_rad();
   s.yaw_cmd_rad_ = s.yaw_target_rad_;

@@ -6,6 +6,11 @@
 //   3. collective thrust goes last: it is moved (up or down) into the range that fits the torques.
 // So a vehicle near full or zero throttle keeps its attitude and gives up climb rate, as ArduCopter's
 // motors matrix does. Motor command = sqrt(thrust / max_thrust), the inverse of the plant's square law.
+//
+// A degraded mixer leaves one (lost) rotor out. On a hexa with alternating spin the rotor opposite the
+// lost one can then only push yaw one way, so yaw is no longer a controlled axis: roll/pitch come
+// first, then thrust (held within what the live rotors give at zero torque), and yaw gets whatever
+// torque keeps every live rotor in range, as close to the demand as that allows.
 #pragma once
 
 #include <Eigen/Core>
@@ -32,6 +37,10 @@ class Mixer {
   // Builds A and B from the rotor layout. Throws std::invalid_argument (a config error) for no rotors,
   // more than kMaxRotors, or a layout that cannot control roll, pitch, yaw and thrust independently.
   explicit Mixer(const airframe::AirframeParams& airframe);
+  // The degraded mixer for the same airframe with rotor lost_rotor left out (its command is always
+  // 0). Falls back to roll, pitch and thrust only where the live rotors cannot also set yaw. Throws
+  // std::invalid_argument when they cannot even control roll, pitch and thrust.
+  Mixer(const airframe::AirframeParams& airframe, std::size_t lost_rotor);
 
   // (torque_body_nm about the CoM, collective thrust_n) => per-rotor thrust_n and motor command [0, 1].
   // Writes rotor_count() values to each output; no allocation.
@@ -39,13 +48,21 @@ class Mixer {
                   double* motor_cmd) const;
 
   std::size_t rotor_count() const { return n_; }
+  bool degraded() const { return degraded_; }
   double max_total_thrust_n() const { return max_total_thrust_n_; }
   // Row r of A: the effect of each rotor's thrust on roll (0), pitch (1), yaw (2), thrust (3).
   const Eigen::Matrix<double, 4, Eigen::Dynamic>& allocation() const { return a_; }
 
  private:
+  void build(const airframe::AirframeParams& airframe, std::size_t lost_rotor);
+  MixerStatus mix_degraded(const Eigen::Vector3d& torque_body_nm, double thrust_n,
+                           double* rotor_thrust_n, double* motor_cmd) const;
+
   std::size_t n_ = 0;
+  bool degraded_ = false;
   double max_total_thrust_n_ = 0.0;
+  // degraded: the largest collective the live rotors give with zero torque
+  double max_live_thrust_n_ = 0.0;
   Eigen::Matrix<double, 4, Eigen::Dynamic> a_;
   // B's columns per rotor, and max thrust, in fixed arrays for the hot path
   std::array<double, kMaxRotors> b_roll_{}, b_pitch_{}, b_yaw_{}, b_thrust_{}, max_thrust_n_{};
