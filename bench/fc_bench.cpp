@@ -31,8 +31,26 @@ airframe::AirframeParams make_quad() {
   return a;
 }
 
-void BM_FlightControllerUpdate(benchmark::State& state) {
-  const airframe::AirframeParams af = make_quad();
+// A hexa (S900 class): six rotors, so the lost-motor monitor runs on every step too.
+airframe::AirframeParams make_hexa() {
+  airframe::AirframeParams a;
+  a.frame = "hexa";
+  a.mass_kg = 6.8;
+  a.inertia_body_kgm2 = Eigen::Vector3d(0.24, 0.24, 0.43).asDiagonal();
+  for (int k = 0; k < 6; ++k) {
+    const double ang = (30.0 + 60.0 * k) * 3.14159265358979323846 / 180.0;
+    airframe::RotorParams rp;
+    rp.position_body_m = Eigen::Vector3d(0.45 * std::cos(ang), 0.45 * std::sin(ang), 0.0);
+    rp.spin_dir = (k % 2 == 0) ? 1 : -1;
+    rp.max_thrust_n = 2.0 * a.mass_kg * 9.80665 / 6.0;
+    rp.torque_coef_m = 0.02;
+    rp.time_const_s = 0.05;
+    a.rotors.push_back(rp);
+  }
+  return a;
+}
+
+void run_update_bench(benchmark::State& state, const airframe::AirframeParams& af) {
   fc::FlightController controller(af, 1);
   fc::TruthState truth;
   airframe::BatteryState battery;
@@ -50,7 +68,12 @@ void BM_FlightControllerUpdate(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
+
+void BM_FlightControllerUpdate(benchmark::State& state) { run_update_bench(state, make_quad()); }
 BENCHMARK(BM_FlightControllerUpdate);
+
+void BM_FlightControllerUpdateHexa(benchmark::State& state) { run_update_bench(state, make_hexa()); }
+BENCHMARK(BM_FlightControllerUpdateHexa);
 
 }  // namespace
 

@@ -55,13 +55,17 @@ void MotorMonitor::update(const double* motor_cmd_prev, const Eigen::Vector3d& g
   if (!enabled_ || !(dt_s > 0.0)) return;
   // expected rotor speeds over the step just ended (the plant's first-order lag), thrust ~ speed^2;
   // the torque over the step is taken at the mean of the start and end speeds
+  if (dt_s != lag_dt_s_) {
+    for (std::size_t k = 0; k < n_; ++k) lag_alpha_[k] = 1.0 - std::exp(-dt_s / time_const_s_[k]);
+    lag_dt_s_ = dt_s;
+  }
   std::array<double, kMaxRotors> thrust{};
   Eigen::Vector2d torque_exp = Eigen::Vector2d::Zero();
   double thrust_exp = 0.0;
   for (std::size_t k = 0; k < n_; ++k) {
     const double start = speed_[k];
     const double cmd = std::clamp(motor_cmd_prev[k], 0.0, 1.0);
-    speed_[k] += (cmd - speed_[k]) * (1.0 - std::exp(-dt_s / time_const_s_[k]));
+    speed_[k] += (cmd - speed_[k]) * lag_alpha_[k];
     const double mid = 0.5 * (start + speed_[k]);
     thrust[k] = max_thrust_n_[k] * mid * mid;
     torque_exp += thrust[k] * Eigen::Vector2d(arm_roll_[k], arm_pitch_[k]);

@@ -42,6 +42,8 @@ class MotorMonitor {
   std::array<double, kMaxRotors> arm_roll_{}, arm_pitch_{}, max_thrust_n_{}, time_const_s_{};
   // state
   std::array<double, kMaxRotors> speed_{};  // modelled normalised rotor speed
+  std::array<double, kMaxRotors> lag_alpha_{};  // 1 - exp(-dt/tau) for lag_dt_s_ (dt rarely changes)
+  double lag_dt_s_ = -1.0;
   Eigen::Vector3d last_gyro_ = Eigen::Vector3d::Zero();
   bool have_gyro_ = false;
   Eigen::Vector2d residual_lp_nm_ = Eigen::Vector2d::Zero();  // roll/pitch torque residual
