@@ -1,0 +1,98 @@
+// EventLoop internals shared with the rest of the library (vehicle links register their MAVLink sequence
+// numbers here for the lockstep `done`). Not installed, not part of the API.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "api_stream.hpp"
+#include "uavsim/client/event_loop.hpp"
+
+namespace uavsim::client {
+
+struct EventLoop::Impl {
+  struct Timer {
+    double deadline = 0.0;
+    double period = 0.0;  // 0: one-shot
+    std::shared_ptr<Task> fn;
+  };
+  struct Watch {
+    std::uint32_t events = 0;
+    std::shared_ptr<std::function<void(std::uint32_t)>> fn;
+  };
+  // a vehicle link: () -> (vehicle key for `done`, last seq sent) or nullopt when it has sent nothing yet
+  using SeqSource = std::function<std::optional<std::pair<std::string, int>>()>;
+
+  LoopConfig config;
+  std::thread::id thread;
+  int epfd = -1;
+  int timerfd = -1;
+  int wakefd = -1;
+  std::int64_t start_mono_ns = 0;
+
+  std::map<TimerId, Timer> timers;
+  TimerId next_timer_id = 1;
+  std::unordered_map<int, Watch> watches;
+  std::mutex posted_mutex;
+  std::vector<Task> posted;
+  std::atomic<bool> stop_requested{false};
+
+  // lockstep
+  int api_fd = -1;
+  ApiStream api_stream;
+  // camera frames arriving on the lockstep connection, by camera name (camera.cpp)
+  using FrameSink = std::function<void(const nlohmann::json& header, std::string_view bytes)>;
+  std::map<std::string, FrameSink> frame_sinks;
+  // replies to requests sent with api_request(), by id
+  std::map<std::string, std::function<void(const nlohmann::json&)>> reply_handlers;
+  std::uint64_t next_request_id = 1;
+  bool alive = true;
+  std::string dead_reason;
+  double sim_now = 0.0;
+  double period_s = 0.0;
+  std::int64_t tick = -1;
+  bool tick_outstanding = false;
+  std::optional<double> pending_busy_until;
+  // from the server's replies to `done`: does it wait for the MAVLink seqs named there (api::SeqWaiter)?
+  std::optional<bool> mavlink_seq_checked;
+  std::map<std::uint64_t, SeqSource> seq_sources;
+  std::uint64_t next_seq_source = 1;
+
+  ~Impl();
+  double now() const;
+  // Handles what is ready, runs posted tasks and due timers; under lockstep answers the tick when nothing
+  // is left to do at this time. With may_block, then waits for something to happen (at most until
+  // wake_at on the loop clock, if finite). Returns false when nothing happened.
+  bool iterate(bool may_block, double wake_at);
+  bool dispatch(int timeout_ms);
+  bool run_posted();
+  bool run_due_timers();
+  void arm_timerfd(double wake_at);
+  void on_api_readable();
+  void handle_api_message(const nlohmann::json& j, std::string_view payload);
+  // Sends a request on the lockstep connection; on_reply gets the whole reply. False if there is none.
+  bool api_request(nlohmann::json request, std::function<void(const nlohmann::json&)> on_reply);
+  void send_done();
+  void lose_clock(const std::string& why);
+  bool send_api(const std::string& line);
+
+  std::uint64_t add_seq_source(SeqSource s) {
+    seq_sources[next_seq_source] = std::move(s);
+    return next_seq_source++;
+  }
+  void remove_seq_source(std::uint64_t id) { seq_sources.erase(id); }
+};
+
+}  // namespace uavsim::client

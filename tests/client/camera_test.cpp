@@ -1,0 +1,180 @@
+// CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a small
+// camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host clock.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <regex>
+
+#include <Eigen/LU>
+
+#include "uavsim/client/camera.hpp"
+#include "uavsim/client/event_loop.hpp"
+
+extern char** environ;
+
+namespace uavsim::client::testing {
+namespace {
+
+// uavsim-server on ephemeral ports; the API port read from its output
+class ServerProcess {
+ public:
+  explicit ServerProcess(const std::vector<std::string>& extra) {
+    std::vector<std::string> args{UAVSIM_SERVER, std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", "--rate", "0",
+                                  "--mavlink-port", "0", "--api-port", "0"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int fds[2];
+    if (pipe(fds) != 0) return;
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
+    posix_spawn_file_actions_addclose(&fa, fds[0]);
+    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+    close(fds[1]);
+    out_ = fdopen(fds[0], "r");
+    char line[1024];
+    const std::regex api(R"(sim API on tcp:[0-9.]+:(\d+))");
+    const std::regex mav(R"(MAVLink on tcp:[0-9.]+:(\d+))");
+    while (pid_ > 0 && fgets(line, sizeof(line), out_) != nullptr) {
+      output_ += line;
+      std::cmatch m;
+      if (std::regex_search(line, m, mav) && mavlink_port_ == 0) mavlink_port_ = std::stoi(m[1]);
+      if (std::regex_search(line, m, api)) {
+        port_ = std::stoi(m[1]);
+        break;
+      }
+    }
+  }
+  ~ServerProcess() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (out_ != nullptr) fclose(out_);
+  }
+  int api_port() const { return port_; }
+  int mavlink_port() const { return mavlink_port_; }
+  const std::string& output() const { return output_; }
+
+ private:
+  pid_t pid_ = -1;
+  FILE* out_ = nullptr;
+  int port_ = 0;
+  int mavlink_port_ = 0;
+  std::string output_;
+};
+
+const std::vector<std::string> kSmallCamera{"--camera", "overview:width=64,height=48,fps=10"};
+
+TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose) {
+  ServerProcess server(kSmallCamera);
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  std::vector<CameraFrame> frames;
+  bool late = false;
+  CameraConfig overview;
+  overview.camera = "overview";
+  auto sub = CameraSubscriber::subscribe(loop, overview, [&](const CameraFrame& f) {
+    late = late || f.stamp_s > loop.now() + 0.02 + 1e-9;  // never later than the tick being handled
+    frames.push_back(f);
+  });
+  if (!sub && sub.message().find("not_available") != std::string::npos) GTEST_SKIP() << sub.message();
+  ASSERT_TRUE(sub) << sub.message();
+  EXPECT_EQ((*sub)->width(), 64);
+  EXPECT_EQ((*sub)->height(), 48);
+  EXPECT_DOUBLE_EQ((*sub)->fps(), 10.0);
+  const double t0 = loop.now();
+  ASSERT_TRUE(loop.run_for(1.0));
+  ASSERT_GE(frames.size(), 9u);
+  EXPECT_LE(frames.size(), 11u);
+  EXPECT_FALSE(late);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const CameraFrame& f = frames[i];
+    EXPECT_EQ(f.seq, static_cast<std::int64_t>(i));
+    EXPECT_EQ(f.dropped, 0);
+    EXPECT_GE(f.stamp_s, t0 - 1e-9);
+    if (i > 0) {
+      EXPECT_NEAR(f.stamp_s - frames[i - 1].stamp_s, 0.1, 1e-6);
+    }
+    ASSERT_EQ(f.image.rows, 48);
+    ASSERT_EQ(f.image.cols, 64);
+    EXPECT_EQ(f.image.type(), CV_8UC3);
+  }
+  const CameraFrame& f = frames.back();
+  EXPECT_TRUE(f.vehicle.empty());
+  EXPECT_NEAR(f.intrinsics.cx, 31.5, 1e-6);
+  EXPECT_NEAR(f.intrinsics.cy, 23.5, 1e-6);
+  EXPECT_GT(f.intrinsics.fx, 0.0);
+  EXPECT_LT((f.pose.position_enu_m - Eigen::Vector3d(-12, -12, 8)).norm(), 1e-6);
+  EXPECT_NEAR(f.pose.R_enu_cam.determinant(), 1.0, 1e-6);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(f.image, mean, stddev);
+  EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 1.0) << "a blank image";
+  // an unknown camera is refused with the simulator's message
+  CameraConfig missing;
+  missing.camera = "no_such_camera";
+  auto bad = CameraSubscriber::subscribe(loop, missing, nullptr);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.code(), Error::kDenied);
+  EXPECT_NE(bad.message().find("overview"), std::string::npos) << bad.message();
+}
+
+TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
+  ServerProcess server(kSmallCamera);
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::host());
+  ASSERT_TRUE(l);
+  EventLoop& loop = **l;
+  const std::string api = "127.0.0.1:" + std::to_string(server.api_port());
+  std::vector<CameraFrame> grey, jpeg;
+  CameraConfig gc;
+  gc.camera = "overview";
+  gc.format = CameraFormat::kGrey;
+  gc.api_address = api;
+  auto g = CameraSubscriber::subscribe(loop, gc, [&](const CameraFrame& f) { grey.push_back(f); });
+  if (!g && g.message().find("not_available") != std::string::npos) GTEST_SKIP() << g.message();
+  ASSERT_TRUE(g) << g.message();
+  CameraConfig jc = gc;
+  jc.format = CameraFormat::kJpeg;
+  jc.fps = 5;
+  auto j = CameraSubscriber::subscribe(loop, jc, [&](const CameraFrame& f) { jpeg.push_back(f); });
+  ASSERT_TRUE(j) << j.message();
+  auto r = loop.run_until([&] { return grey.size() >= 3 && jpeg.size() >= 2; }, 30.0, "frames");
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_EQ(grey[0].image.type(), CV_8UC1);
+  EXPECT_EQ(grey[0].image.cols, 64);
+  EXPECT_EQ(jpeg[0].image.type(), CV_8UC3);
+  EXPECT_EQ(jpeg[0].image.rows, 48);
+  EXPECT_NEAR(jpeg[1].stamp_s - jpeg[0].stamp_s, 0.2 * (jpeg[1].seq - jpeg[0].seq), 1e-6);
+}
+
+// the README's example program, unchanged, against a server: UAVSIM_MAVLINK + UAVSIM_LOCKSTEP
+TEST(Examples, FlySquareUnderLockstep) {
+  ServerProcess server({"--no-cameras"});
+  ASSERT_GT(server.mavlink_port(), 0) << server.output();
+  const std::string cmd = "UAVSIM_MAVLINK=tcp:127.0.0.1:" + std::to_string(server.mavlink_port()) +
+                          " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) + " timeout 120 " +
+                          FLY_SQUARE + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof(buf), p) != nullptr) out += buf;
+  const int status = pclose(p);
+  EXPECT_EQ(status, 0) << out;
+  EXPECT_NE(out.find("corner (0, 0) reached"), std::string::npos) << out;
+  EXPECT_NE(out.find("landed"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace uavsim::client::testing
