@@ -136,6 +136,32 @@ TEST(TrackKalman, SpeedAndDirectionFromTwoPoints) {
               1e-6);
 }
 
+// Regression (found on rendered frames, tests/vision/rendered): the MBZIRC 2017 truck starts at the
+// crossing, where the straight before it, the straight after it and the arcs' ends all lie on one
+// line with the same tangent; initialisation must take the branch the truck is on, not a parallel
+// branch end metres along the track (which gave v_s = -10 m/s and a restart).
+TEST(TrackKalman, InitialisesOnTheRightBranchJustAfterTheCrossing) {
+  const EightTrack track;
+  constexpr double kSpeedM_S = 15.0 / 3.6;
+  constexpr double kSpeedTolM_S = 0.3;
+  int cases = 0;
+  for (double s0 = 0.5; s0 < 9.0; s0 += 0.25) {
+    for (const double l_m : {-0.04, -0.01, 0.0, 0.02, 0.05}) {
+      TrackKalman filter(track);
+      const double dt_s = 3.0 / 7.0;  // the third 7 Hz frame is the first 0.4 s after the first
+      filter.add_measurement(1'000'000, track.point_enu({s0, l_m}));
+      ASSERT_EQ(filter.add_measurement(1'428'571, track.point_enu({s0 + kSpeedM_S * dt_s, -l_m})),
+                MeasurementResult::kInitialised);
+      const auto e = filter.estimate_at(1'428'571);
+      ASSERT_TRUE(e.has_value());
+      EXPECT_NEAR(e->v_s_m_s, kSpeedM_S, kSpeedTolM_S) << "s0 " << s0 << " l " << l_m;
+      EXPECT_NEAR(e->s_m, s0 + kSpeedM_S * dt_s, 0.1) << "s0 " << s0 << " l " << l_m;
+      ++cases;
+    }
+  }
+  EXPECT_EQ(cases, 34 * 5);
+}
+
 TEST(TrackKalman, OutOfOrderMeasurementEqualsInOrder) {
   const EightTrack track;
   const Truck truck{track, 200.0};

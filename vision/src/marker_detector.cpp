@@ -42,13 +42,35 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
     return std::nullopt;
   }
 
-  // white paint vs dark deck: Otsu picks the split (the sand around the deck falls on either side,
-  // it is outside the deck's dark border anyway)
-  cv::threshold(gray_, binary_, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  // fill thin dark specks and hatching in the white paint (a renderer's shadow acne, sensor noise)
+  // with a grey-level closing, which leaves the ring's and cross's outlines where they are
+  if (params_.close_kernel_px > 1) {
+    const cv::Mat kernel = cv::getStructuringElement(
+        cv::MORPH_RECT, {params_.close_kernel_px, params_.close_kernel_px});
+    cv::morphologyEx(gray_, closed_, cv::MORPH_CLOSE, kernel);
+  } else {
+    closed_ = gray_;
+  }
+  // white paint vs dark deck, at two levels: Otsu's split, which a bright truck body or deck in
+  // view can push above the paint (shade, or a renderer's shadow acne, greys it), and a share of
+  // it, which still splits paint from the dark square around it; the square's border keeps the
+  // ring a component of its own at either level. Candidates found at both are kept once.
+  const double otsu = cv::threshold(closed_, binary_, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  find_candidates(binary_);
+  if (params_.low_threshold_share > 0.0 && params_.low_threshold_share < 1.0) {
+    cv::threshold(closed_, binary_, otsu * params_.low_threshold_share, 255, cv::THRESH_BINARY);
+    find_candidates(binary_);
+  }
+  std::sort(candidates_.begin(), candidates_.end(),
+            [](const auto& a, const auto& b) { return a.radius_px > b.radius_px; });
+  if (candidates_.empty()) return std::nullopt;
+  return candidates_.front();
+}
 
+void MarkerDetector::find_candidates(const cv::Mat& binary) {
   std::vector<std::vector<cv::Point>> contours;
   std::vector<cv::Vec4i> hierarchy;
-  cv::findContours(binary_, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
+  cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
 
   const double min_area_px = M_PI * params_.min_radius_px * params_.min_radius_px;
   for (size_t i = 0; i < contours.size(); ++i) {
@@ -65,19 +87,26 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
     const double minor = std::min(e.size.width, e.size.height);
     if (minor <= 0.0 || major / minor > params_.max_axis_ratio) continue;
     if (ellipse_residual(outline, e) > params_.max_ellipse_residual) continue;
-    // the region inside the ring is partly dark: ring + cross over the whole disc
-    double holes_area_px = 0.0;
+    // the region inside the ring is partly dark: ring + cross over the whole disc. The cross does
+    // not touch the ring, so it is an island in the ring's hole: count white pixels inside the
+    // outline rather than subtract the holes' areas (which would leave the cross out)
     int largest_hole = -1;
     double largest_hole_area_px = 0.0;
     for (int h = hierarchy[i][2]; h >= 0; h = hierarchy[h][0]) {
       const double a = cv::contourArea(contours[h]);
-      holes_area_px += a;
       if (a > largest_hole_area_px) {
         largest_hole_area_px = a;
         largest_hole = h;
       }
     }
-    const double white_fraction = (outer_area_px - holes_area_px) / outer_area_px;
+    const cv::Rect box = cv::boundingRect(outline);
+    disc_.create(box.size(), CV_8UC1);
+    disc_.setTo(0);
+    cv::drawContours(disc_, contours, static_cast<int>(i), cv::Scalar(255), cv::FILLED, cv::LINE_8,
+                     cv::noArray(), 0, -box.tl());
+    const int disc_px = cv::countNonZero(disc_);
+    cv::bitwise_and(disc_, binary(box), disc_);
+    const double white_fraction = static_cast<double>(cv::countNonZero(disc_)) / disc_px;
     if (white_fraction < params_.min_white_fraction ||
         white_fraction > params_.max_white_fraction) {
       continue;
@@ -119,12 +148,13 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
         }
       }
     }
-    candidates_.push_back(d);
+    // the same marker from the other threshold level: keep the first
+    const bool known =
+        std::any_of(candidates_.begin(), candidates_.end(), [&](const MarkerDetection& c) {
+          return cv::norm(c.centre_px - d.centre_px) < 0.25 * c.radius_px;
+        });
+    if (!known) candidates_.push_back(d);
   }
-  std::sort(candidates_.begin(), candidates_.end(),
-            [](const auto& a, const auto& b) { return a.radius_px > b.radius_px; });
-  if (candidates_.empty()) return std::nullopt;
-  return candidates_.front();
 }
 
 std::optional<Eigen::Vector3d> marker_position_enu(const MarkerDetection& detection,

@@ -87,16 +87,24 @@ MeasurementResult TrackKalman::add_measurement(int64_t stamp_us,
       return MeasurementResult::kStored;
     }
     // the branch of the first point whose direction best matches the motion: at the crossing two
-    // branches are equally near, but they cross at a wide angle
-    const Eigen::Vector2d motion = position_enu_m - first_point_->second;
+    // branches are equally near, but they cross at a wide angle. Branches are judged by their true
+    // distance, not |l|: a branch whose closest point is its end (the straight before the
+    // crossing, an arc's start) has a small l but lies metres away along the track, and runs
+    // parallel to the right branch there; such ties go to the nearer branch (project_all's order).
+    const Eigen::Vector2d motion = (position_enu_m - first_point_->second).normalized();
     const std::vector<TrackCoordinates> branches = track_.project_all(first_point_->second);
-    constexpr double kBranchSlackM = 3.0;  // candidates this much further than the nearest
+    constexpr double kBranchSlackM = 3.0;   // candidates this much further than the nearest
+    constexpr double kAlignmentTie = 0.05;  // |cos| closer than this: equally aligned
+    const auto distance_m = [&](const TrackCoordinates& c) {
+      return (track_.point_enu(c.s_m) - first_point_->second).norm();
+    };
+    const double nearest_m = distance_m(branches.front());
     TrackCoordinates c1 = branches.front();
     double best_alignment = -1.0;
     for (const auto& b : branches) {
-      if (std::abs(b.l_m) > std::abs(branches.front().l_m) + kBranchSlackM) continue;
+      if (distance_m(b) > nearest_m + kBranchSlackM) continue;
       const double alignment = std::abs(track_.tangent_enu(b.s_m).dot(motion));
-      if (alignment > best_alignment) {
+      if (alignment > best_alignment + kAlignmentTie) {
         best_alignment = alignment;
         c1 = b;
       }

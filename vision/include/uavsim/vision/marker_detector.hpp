@@ -32,10 +32,16 @@ struct MarkerDetectorParams {
   double min_radius_px = 8.0;
   double max_ellipse_residual = 0.08;  // rms distance of the outline from its ellipse / radius
   double max_axis_ratio = 2.0;  // major / minor axis: oblique views beyond ~60 deg are rejected
-  // white share of the outer ellipse: ring plus cross = (0.65^2 - 0.5^2 + cross) / 0.65^2 ~ 0.51
+  // white share of the ring's outline: ring plus cross, pi (0.65^2 - 0.5^2) = 0.542 m^2 plus
+  // 2 * 0.7 * 0.12 - 0.12^2 = 0.154 m^2, over pi 0.65^2 = 1.327 m^2: 0.52
   double min_white_fraction = 0.30;
   double max_white_fraction = 0.75;
   bool hough_refine = true;
+  // grey-level closing before the threshold (odd, pixels; 1 = off): fills dark specks and the
+  // hatching that shadow acne draws on the white paint in frames rendered with shadows
+  int close_kernel_px = 3;
+  // second threshold level as a share of Otsu's (0 or 1 = Otsu's only), see detect()
+  double low_threshold_share = 0.5;
 };
 
 struct MarkerDetection {
@@ -58,9 +64,14 @@ class MarkerDetector {
   const std::vector<MarkerDetection>& candidates() const { return candidates_; }
 
  private:
+  // appends the ring candidates of one binary image (white = paint) to candidates_
+  void find_candidates(const cv::Mat& binary);
+
   MarkerDetectorParams params_;
   cv::Mat gray_;
+  cv::Mat closed_;
   cv::Mat binary_;
+  cv::Mat disc_;
   std::vector<MarkerDetection> candidates_;
 };
 
