@@ -1,0 +1,65 @@
+#include "balloon_perception.hpp"
+
+#include <cmath>
+
+namespace uavsim::missions::mbzirc2020 {
+namespace {
+
+constexpr double kMinBalloonHeight_m = 1.2;  // a "balloon" below this is something green on the ground
+constexpr double kMaxBalloonHeight_m = 4.5;
+
+vision::BalloonTrackerParams tracker_params() {
+  vision::BalloonTrackerParams p;
+  p.confirm_hits = 3;
+  p.max_misses = 4;
+  // far away the range from the apparent diameter is coarse (a pixel of radius is ~10% at 30 m): a wide
+  // gate keeps one track per balloon; balloons are at least 5 m apart
+  p.gate_m = 3.0;
+  p.lowpass_tau_s = 0.3;
+  return p;
+}
+
+}  // namespace
+
+BalloonPerception::BalloonPerception(const MissionConfig& config) : config_(config), tracker_(tracker_params()) {}
+
+vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad) const {
+  const Eigen::Quaterniond q_enu_body = vision::q_enu_body_from_rpy(0.0, 0.0, yaw_enu_rad);
+  return vision::camera_pose_from_vehicle(position_enu_m, q_enu_body, vision::GimbalAngles{0.0, 0.0, true},
+                                          config_.camera_offset_body_m);
+}
+
+int BalloonPerception::on_frame(const cv::Mat& bgr, const vision::PinholeIntrinsics& intrinsics, double stamp_s,
+                                const vision::CameraPose& pose) {
+  if (!detector_ || intrinsics.width_px != intrinsics_.width_px || intrinsics.height_px != intrinsics_.height_px ||
+      intrinsics.fx_px != intrinsics_.fx_px) {
+    intrinsics_ = intrinsics;
+    detector_ = std::make_unique<vision::BalloonDetector>(vision::BalloonDetectorParams{}, intrinsics_);
+  }
+  // (image) => balloon centres in the camera frame => in the field frame
+  std::vector<Eigen::Vector3d> positions_enu_m;
+  for (const vision::BalloonDetection& d : detector_->detect(bgr)) {
+    const Eigen::Vector3d p = pose.cam_to_enu(d.position_cam_m);
+    if (p.z() < kMinBalloonHeight_m || p.z() > kMaxBalloonHeight_m) continue;
+    positions_enu_m.push_back(p);
+  }
+  const int64_t stamp_us = static_cast<int64_t>(std::llround(stamp_s * 1e6));
+  for (const vision::BalloonTrack& t : tracker_.update(stamp_us, positions_enu_m)) {
+    seen_[t.id] = BalloonSighting{t.id, t.position_m, stamp_s};
+  }
+  // forget the tracks the filter dropped
+  for (auto it = seen_.begin(); it != seen_.end();) {
+    bool live = false;
+    for (const vision::BalloonTrack& t : tracker_.tracks()) live = live || t.id == it->first;
+    it = live ? std::next(it) : seen_.erase(it);
+  }
+  return static_cast<int>(positions_enu_m.size());
+}
+
+std::vector<BalloonSighting> BalloonPerception::sightings() const {
+  std::vector<BalloonSighting> out;
+  for (const auto& [id, s] : seen_) out.push_back(s);
+  return out;
+}
+
+}  // namespace uavsim::missions::mbzirc2020

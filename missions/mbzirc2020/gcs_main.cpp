@@ -1,0 +1,93 @@
+// mbzirc2020-gcs: the ground station of the balloon mission (seed 7.2): one GCS link (seed 6.3) per UAV, the
+// allocator and supervisor of ground_station.hpp stepped at 20 Hz. It prints the UDP port of each UAV's link,
+// then runs until every UAV has landed or is out (or --max-time s of loop time).
+//
+// usage: mbzirc2020-gcs [--uavs N] [--max-time S]
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ground_station.hpp"
+#include "messages.hpp"
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/gcs_link.hpp"
+
+using namespace uavsim::client;
+using namespace uavsim::missions::mbzirc2020;
+
+int main(int argc, char** argv) {
+  int uav_count = 2;
+  double max_time_s = 3600.0;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--uavs") uav_count = std::atoi(argv[i + 1]);
+    else if (a == "--max-time") max_time_s = std::atof(argv[i + 1]);
+    else {
+      std::fprintf(stderr, "usage: mbzirc2020-gcs [--uavs N] [--max-time S]\n");
+      return 2;
+    }
+  }
+  if (uav_count < 1 || uav_count > 254) return 2;
+
+  // a link per UAV, each learning its UAV's address from the first packet (the UAVs call the GCS)
+  std::vector<std::unique_ptr<GcsLink>> links;
+  for (int i = 0; i < uav_count; ++i) {
+    std::string error;
+    auto l = GcsLink::open(GcsLinkConfig{kGcsId}, {"127.0.0.1", 0, "127.0.0.1", 0}, &error);
+    if (!l) {
+      std::fprintf(stderr, "gcs: %s\n", error.c_str());
+      return 1;
+    }
+    std::printf("gcs: uav%d link on udp:127.0.0.1:%u\n", i, l->local_port());
+    links.push_back(std::move(l));
+  }
+  std::fflush(stdout);
+
+  auto created = EventLoop::create();
+  if (!created) {
+    std::fprintf(stderr, "gcs: event loop: %s\n", created.message().c_str());
+    return 1;
+  }
+  EventLoop& loop = **created;
+  auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
+  for (auto& l : links) {
+    GcsLink* p = l.get();
+    (void)loop.watch_fd(p->fd(), EventLoop::kReadable, [p, &now_us](uint32_t) { p->service(now_us()); });
+  }
+
+  GroundStation gs(GroundStationConfig{}, uav_count);
+  double finished_s = -1.0;
+  while (loop.now() < max_time_s && (finished_s < 0 || loop.now() < finished_s + 1.0)) {
+    if (auto r = loop.run_for(0.05); !r) {
+      std::fprintf(stderr, "gcs: clock: %s\n", r.message().c_str());
+      return 1;
+    }
+    const double now = loop.now();
+    for (int i = 0; i < uav_count; ++i) {
+      links[static_cast<size_t>(i)]->service(now_us());
+      for (const GcsMessage& m : links[static_cast<size_t>(i)]->take_received()) {
+        if (m.topic == kTopicStatus) {
+          if (auto s = decode_status(m.payload)) gs.on_status(i, *s, now);
+        } else if (m.topic == kTopicAirspace) {
+          if (auto a = decode_airspace(m.payload)) gs.on_airspace(i, *a, now);
+        } else if (m.topic == kTopicPopped) {
+          if (auto p = decode_point(m.payload)) gs.on_popped(i, *p, now);
+        }
+      }
+    }
+    std::vector<std::string> notes;
+    for (const GcsOutgoing& o : gs.step(now, &notes)) links[static_cast<size_t>(o.uav)]->publish(o.topic, o.payload);
+    for (const std::string& n : notes) std::printf("gcs t=%.2f %s\n", now, n.c_str());
+    if (!notes.empty()) std::fflush(stdout);
+    if (finished_s < 0 && gs.finished()) {
+      finished_s = now;
+      std::printf("gcs t=%.2f every UAV landed or out; %d balloon(s) reported popped\n", now, gs.popped_reported());
+      std::fflush(stdout);
+    }
+  }
+  for (auto& l : links) loop.unwatch_fd(l->fd());
+  return gs.finished() ? 0 : 3;
+}

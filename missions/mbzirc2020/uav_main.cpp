@@ -1,0 +1,206 @@
+// mbzirc2020-uav: one balloon-popping UAV (seed 7.2): its own MAVLink link, its camera, its GCS link, and the
+// strategy FSM (vehicle_fsm.hpp) stepped at 20 Hz on the event loop. The same program would fly a real drone
+// (the camera frames then come from its driver); UAVSIM_LOCKSTEP puts it on sim time.
+//
+// usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] [--vehicle NAME]
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "balloon_perception.hpp"
+#include "messages.hpp"
+#include "mission_config.hpp"
+#include "uavsim/client/camera.hpp"
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/gcs_link.hpp"
+#include "uavsim/client/vehicle.hpp"
+#include "vehicle_fsm.hpp"
+
+using namespace uavsim::client;
+using namespace uavsim::missions::mbzirc2020;
+
+namespace {
+
+constexpr double kStep_s = 0.05;          // FSM rate 20 Hz
+constexpr double kStatusPeriod_s = 0.5;   // STATUS to the GCS
+constexpr double kLinger_s = 3.0;         // keep reporting after the end, so the GCS hears it
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] "
+               "[--vehicle NAME]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int index = -1;
+  std::string mavlink, gcs, camera, vehicle;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--index") index = std::atoi(argv[i + 1]);
+    else if (a == "--mavlink") mavlink = argv[i + 1];
+    else if (a == "--gcs") gcs = argv[i + 1];
+    else if (a == "--camera") camera = argv[i + 1];
+    else if (a == "--vehicle") vehicle = argv[i + 1];
+    else return usage();
+  }
+  if (index < 0 || index > 1 || mavlink.empty() || gcs.empty() || gcs.find(':') == std::string::npos) return usage();
+  if (vehicle.empty()) vehicle = "uav" + std::to_string(index);
+  if (camera.empty()) camera = vehicle + "_front";
+  const std::string me = vehicle;
+
+  auto created = EventLoop::create();
+  if (!created) {
+    std::fprintf(stderr, "%s: event loop: %s\n", me.c_str(), created.message().c_str());
+    return 1;
+  }
+  EventLoop& loop = **created;
+  auto log = [&](const std::string& s) {
+    std::printf("%s t=%.2f %s\n", me.c_str(), loop.now(), s.c_str());
+    std::fflush(stdout);
+  };
+
+  VehicleConfig vc;
+  vc.telemetry_rate_hz = 20.0;
+  vc.sim_vehicle = vehicle;
+  Vehicle uav(loop, vc);
+  if (auto r = uav.connect(mavlink, 30); !r) {
+    log("connect: " + r.message());
+    return 1;
+  }
+
+  // the ground-station link (seed 6.3)
+  std::string error;
+  const size_t colon = gcs.rfind(':');
+  auto link = GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
+                            {"127.0.0.1", 0, gcs.substr(0, colon), static_cast<uint16_t>(std::atoi(gcs.c_str() + colon + 1))},
+                            &error);
+  if (!link) {
+    log("GCS link: " + error);
+    return 1;
+  }
+  auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
+  (void)loop.watch_fd(link->fd(), EventLoop::kReadable, [&](uint32_t) { link->service(now_us()); });
+
+  // telemetry kept with the loop time it arrived at, to place each camera frame
+  struct Pose {
+    double time_s = -1.0;
+    Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+    double yaw_enu_rad = 0.0;
+  } pose;
+  uav.on_telemetry([&](const Telemetry& t) {
+    if (!t.has_local_position) return;
+    pose = {loop.now(), t.position_enu_m, t.velocity_enu_m_s, enu_yaw_from_ned(t.yaw_rad)};
+  });
+
+  // the forward camera on its stabilised gimbal: level, straight ahead (seed 7.2)
+  const MissionConfig config;
+  BalloonPerception perception(config);
+  CameraConfig cc;
+  cc.camera = camera;
+  cc.format = CameraFormat::kBgr;
+  auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
+    if (pose.time_s < 0) return;
+    const Eigen::Vector3d p = pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
+    uavsim::vision::PinholeIntrinsics k;
+    k.fx_px = f.intrinsics.fx;
+    k.fy_px = f.intrinsics.fy;
+    k.cx_px = f.intrinsics.cx;
+    k.cy_px = f.intrinsics.cy;
+    k.width_px = f.image.cols;
+    k.height_px = f.image.rows;
+    perception.on_frame(f.image, k, f.stamp_s, perception.camera_pose(p, pose.yaw_enu_rad));
+  });
+  if (!sub) {
+    log("camera " + camera + ": " + sub.message());
+    return 1;
+  }
+
+  if (auto r = uav.wait_ready(120); !r) {
+    log("wait ready: " + r.message());
+    return 1;
+  }
+  if (auto r = uav.point_gimbal(0.0, 0.0); !r) log("gimbal: " + r.message() + " (keeping its default)");
+  const Eigen::Vector2d home = uav.telemetry().position_enu_m.head<2>();
+  const Side side = index == 0 ? Side::kSouth : Side::kNorth;
+  VehicleFsm fsm(config, index, side, home);
+  log(std::string("ready at (") + std::to_string(home.x()).substr(0, 6) + ", " + std::to_string(home.y()).substr(0, 6) +
+      "), side " + (side == Side::kSouth ? "south" : "north") + ": waiting for the GCS start");
+
+  double last_status_s = -1e9, end_s = -1.0;
+  VehicleState last_state = fsm.state();
+  while (end_s < 0 || loop.now() < end_s + kLinger_s) {
+    if (auto r = loop.run_for(kStep_s); !r) {
+      log("clock: " + r.message());
+      return 1;
+    }
+    link->service(now_us());
+
+    // inputs: telemetry, sightings, GCS messages
+    const Telemetry& t = uav.telemetry();
+    VehicleInputs in;
+    in.now_s = loop.now();
+    in.armed = t.armed;
+    in.on_ground = t.landed == LandedState::kOnGround;
+    in.position_enu_m = t.position_enu_m;
+    in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
+    in.balloons = perception.sightings();
+    for (const GcsMessage& m : link->take_received()) {
+      if (m.topic == kTopicState) {
+        if (auto c = decode_command(m.payload)) in.commands.push_back(*c);
+      } else if (m.topic == kTopicAirspace) {
+        if (auto a = decode_airspace(m.payload)) in.airspace_replies.push_back(*a);
+      }
+    }
+
+    const VehicleOutputs out = fsm.step(in);
+    if (!out.note.empty()) log(out.note);
+
+    // outputs: setpoints and GCS messages
+    switch (out.action) {
+      case VehicleOutputs::Action::kNone:
+        break;
+      case VehicleOutputs::Action::kArmAndTakeOff: {
+        auto r = uav.set_mode(FlightMode::kGuided);
+        if (r) r = uav.arm();
+        if (r) r = uav.takeoff(out.takeoff_altitude_m, false);
+        if (!r) log("take-off failed: " + r.message());
+        break;
+      }
+      case VehicleOutputs::Action::kVelocity:
+        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad); !r && fsm.state() != VehicleState::kFailed) {
+          log("velocity: " + r.message());
+        }
+        break;
+      case VehicleOutputs::Action::kLand:
+        if (auto r = uav.land(false); !r) log("land: " + r.message());
+        break;
+    }
+    if (out.airspace) link->publish(kTopicAirspace, encode_airspace(*out.airspace));
+    if (out.popped_enu_m) link->publish(kTopicPopped, encode_point(*out.popped_enu_m));
+    if (fsm.state() != last_state || loop.now() - last_status_s >= kStatusPeriod_s) {
+      last_state = fsm.state();
+      last_status_s = loop.now();
+      UavStatus s;
+      s.state = static_cast<uint8_t>(fsm.state());
+      s.ready = fsm.state() == VehicleState::kPreflight && uav.ready();
+      s.failed = fsm.state() == VehicleState::kFailed;
+      s.landed = fsm.state() == VehicleState::kLanded;
+      s.position_enu_m = t.position_enu_m;
+      s.popped = static_cast<uint8_t>(fsm.popped());
+      link->publish(kTopicStatus, encode_status(s));
+    }
+    if (end_s < 0 && (fsm.state() == VehicleState::kLanded || fsm.state() == VehicleState::kFailed)) {
+      end_s = loop.now();
+      log(std::string("mission over: ") + vehicle_state_name(fsm.state()) + ", " + std::to_string(fsm.popped()) +
+          " balloon(s) pierced");
+    }
+  }
+  loop.unwatch_fd(link->fd());
+  return fsm.state() == VehicleState::kLanded ? 0 : 3;
+}

@@ -1,0 +1,391 @@
+#include "vehicle_fsm.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace uavsim::missions::mbzirc2020 {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGainXy_1_s = 1.0;       // position error -> horizontal speed
+constexpr double kGainZ_1_s = 1.5;        // altitude error -> climb rate
+constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost"
+constexpr double kSameBalloon_m = 1.5;    // a new track this close to the target is the target
+constexpr double kPoppedExclusion_m = 2.5;
+constexpr double kArenaMargin_m = 0.5;
+
+double wrap_pi(double a) {
+  while (a > kPi) a -= 2 * kPi;
+  while (a < -kPi) a += 2 * kPi;
+  return a;
+}
+
+std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), f, a, b, c);
+  return buf;
+}
+
+}  // namespace
+
+const char* vehicle_state_name(VehicleState s) {
+  switch (s) {
+    case VehicleState::kPreflight: return "Preflight";
+    case VehicleState::kTakeOff: return "Take-off";
+    case VehicleState::kGoSideCenter: return "Go Side Center";
+    case VehicleState::kGoScanAltitude: return "Go Scan Altitude";
+    case VehicleState::kBlindScan: return "Blind Scan";
+    case VehicleState::kAreaAllocationRequest: return "Area Allocation Request";
+    case VehicleState::kPierce: return "Pierce";
+    case VehicleState::kBackOff: return "Back Off";
+    case VehicleState::kLand: return "Land";
+    case VehicleState::kLanded: return "Landed";
+    case VehicleState::kFailed: return "Failed";
+  }
+  return "?";
+}
+
+VehicleFsm::VehicleFsm(const MissionConfig& config, int index, Side side, const Eigen::Vector2d& landing_spot_enu_m)
+    : config_(config), index_(index), side_(side), home_side_(side), landing_spot_enu_m_(landing_spot_enu_m) {}
+
+double VehicleFsm::line_y_m() const {
+  return side_ == Side::kSouth ? config_.arena_y_min_m + config_.side_inset_m
+                               : config_.arena_y_max_m - config_.side_inset_m;
+}
+
+double VehicleFsm::inward_yaw_rad() const { return side_ == Side::kSouth ? kPi / 2 : -kPi / 2; }
+
+bool VehicleFsm::in_own_half(const Eigen::Vector3d& p) const {
+  if (take_over_) return true;
+  const double mid_y = 0.5 * (config_.arena_y_min_m + config_.arena_y_max_m);
+  return home_side_ == Side::kSouth ? p.y() <= mid_y + config_.own_half_margin_m
+                                    : p.y() >= mid_y - config_.own_half_margin_m;
+}
+
+// seed: "the UAV slowly translates sideways ... When a corner of the arena rectangle is reached, the direction
+// of the translation is inverted and the operating altitude is swapped ... After two full scans the UAV,
+// which is back at the midpoint, transitions to the Land state". S0 sweeps east first, S1 west first, so the
+// two start on different balloons.
+void VehicleFsm::plan_scan() {
+  const double centre_x = 0.5 * (config_.arena_x_min_m + config_.arena_x_max_m);
+  const double east = config_.arena_x_max_m - config_.scan_corner_inset_m;
+  const double west = config_.arena_x_min_m + config_.scan_corner_inset_m;
+  const double first = index_ == 0 ? east : west, second = index_ == 0 ? west : east;
+  const double a = index_ == 0 ? config_.scan_altitude_low_m : config_.scan_altitude_high_m;
+  const double b = index_ == 0 ? config_.scan_altitude_high_m : config_.scan_altitude_low_m;
+  scan_ = {{first, a}, {second, b}, {centre_x, a}};
+  scan_leg_ = 0;
+}
+
+Eigen::Vector3d VehicleFsm::toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target,
+                                   double max_speed_m_s) const {
+  Eigen::Vector2d v_xy = kGainXy_1_s * (target.head<2>() - p.head<2>());
+  if (v_xy.norm() > max_speed_m_s) v_xy *= max_speed_m_s / v_xy.norm();
+  const double vz = std::clamp(kGainZ_1_s * (target.z() - p.z()), -config_.max_climb_m_s, config_.max_climb_m_s);
+  return {v_xy.x(), v_xy.y(), vz};
+}
+
+void VehicleFsm::hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const {
+  out.action = VehicleOutputs::Action::kVelocity;
+  out.velocity_enu_m_s = toward(in.position_enu_m,
+                                {in.position_enu_m.x(), in.position_enu_m.y(), hold_altitude_m_}, 0.0);
+  out.yaw_enu_rad = yaw_enu_rad;
+}
+
+void VehicleFsm::enter(VehicleState s, VehicleOutputs& out, const std::string& why) {
+  out.note = std::string(vehicle_state_name(state_)) + " -> " + vehicle_state_name(s) + (why.empty() ? "" : ": ") + why;
+  state_ = s;
+  state_since_s_ = now_s_;
+}
+
+void VehicleFsm::start_landing(VehicleOutputs& out, const std::string& why) {
+  if (airspace_held_ || request_) {
+    out.airspace = std::optional<AirspaceArea>();  // NaN: release
+    airspace_held_ = false;
+    request_.reset();
+  }
+  land_phase_ = 0;
+  enter(VehicleState::kLand, out, why);
+}
+
+// the nearest confirmed balloon in this UAV's half, inside the arena, not where we already popped one
+std::optional<BalloonSighting> VehicleFsm::choose_target(const VehicleInputs& in) const {
+  std::optional<BalloonSighting> best;
+  double best_range = config_.max_target_range_m;
+  for (const BalloonSighting& b : in.balloons) {
+    if (in.now_s - b.last_seen_s > kFreshSighting_s) continue;
+    const Eigen::Vector3d& p = b.position_enu_m;
+    if (p.x() < config_.arena_x_min_m + kArenaMargin_m || p.x() > config_.arena_x_max_m - kArenaMargin_m ||
+        p.y() < config_.arena_y_min_m + kArenaMargin_m || p.y() > config_.arena_y_max_m - kArenaMargin_m) {
+      continue;
+    }
+    if (!in_own_half(p)) continue;
+    bool done = false;
+    for (const Eigen::Vector2d& q : popped_at_) done = done || (q - p.head<2>()).norm() < kPoppedExclusion_m;
+    if (done) continue;
+    const double range = (p.head<2>() - in.position_enu_m.head<2>()).norm();
+    if (range < best_range) {
+      best_range = range;
+      best = b;
+    }
+  }
+  return best;
+}
+
+VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
+  VehicleOutputs out;
+  now_s_ = in.now_s;
+  if (in.armed) armed_seen_ = true;
+
+  // GCS commands (STATE topic) apply in any state
+  for (GcsCommand c : in.commands) {
+    if (c == GcsCommand::kTakeOver && !take_over_) {
+      take_over_ = true;
+      out.note = "take over: the other UAV is out, every balloon is ours";
+    } else if (c == GcsCommand::kLand && state_ != VehicleState::kLand && state_ != VehicleState::kLanded &&
+               state_ != VehicleState::kFailed) {
+      if (state_ == VehicleState::kPreflight) {
+        enter(VehicleState::kLanded, out, "GCS land before start");
+      } else {
+        start_landing(out, "GCS land command");
+      }
+      return out;
+    } else if (c == GcsCommand::kStart && state_ == VehicleState::kPreflight) {
+      enter(VehicleState::kTakeOff, out, "GCS start");
+      out.action = VehicleOutputs::Action::kArmAndTakeOff;
+      out.takeoff_altitude_m = config_.takeoff_altitude_m;
+      return out;
+    }
+  }
+
+  // motors gone while flying (seed 7.2 Competition Day 2: "a malfunction in one UAV")
+  const bool flying = state_ != VehicleState::kPreflight && state_ != VehicleState::kLanded &&
+                      state_ != VehicleState::kFailed && state_ != VehicleState::kLand;
+  if (flying && armed_seen_ && !in.armed && state_since_s_ + 1.0 < now_s_) {
+    if (airspace_held_ || request_) out.airspace = std::optional<AirspaceArea>();
+    airspace_held_ = false;
+    request_.reset();
+    enter(VehicleState::kFailed, out, "disarmed in the air");
+    return out;
+  }
+
+  const Eigen::Vector3d& p = in.position_enu_m;
+  switch (state_) {
+    case VehicleState::kPreflight:
+    case VehicleState::kLanded:
+    case VehicleState::kFailed:
+      break;
+
+    case VehicleState::kTakeOff:
+      if (p.z() >= config_.takeoff_altitude_m - 0.3) {
+        hold_altitude_m_ = p.z();
+        enter(VehicleState::kGoSideCenter, out, fmt("%.1f m reached", p.z()));
+      }
+      break;
+
+    case VehicleState::kGoSideCenter: {
+      // "reaches the midpoint of one of the long sides ... maintaining the current altitude. The heading is
+      // adjusted so that the camera points towards the inner part of the arena"
+      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m), line_y_m(), hold_altitude_m_);
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = toward(p, target, config_.transit_speed_m_s);
+      out.yaw_enu_rad = inward_yaw_rad();
+      if ((target.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
+        plan_scan();
+        hold_altitude_m_ = scan_[0].altitude_m;
+        enter(VehicleState::kGoScanAltitude, out, fmt("side centre (%.1f, %.1f)", target.x(), target.y()));
+      }
+      break;
+    }
+
+    case VehicleState::kGoScanAltitude: {
+      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m), line_y_m(), hold_altitude_m_);
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = toward(p, target, config_.transit_speed_m_s);
+      out.yaw_enu_rad = inward_yaw_rad();
+      if (std::abs(p.z() - hold_altitude_m_) < config_.altitude_tolerance_m) {
+        enter(VehicleState::kBlindScan, out, fmt("%.2f m", p.z()));
+      }
+      break;
+    }
+
+    case VehicleState::kBlindScan: {
+      // "Whenever a green balloon is detected, a transition to the Area Allocation Request is immediately
+      // executed"
+      if (auto b = choose_target(in)) {
+        target_ = *b;
+        pierce_start_enu_m_ = {p.x(), line_y_m(), hold_altitude_m_};
+        const Eigen::Vector2d dir = (b->position_enu_m.head<2>() - p.head<2>()).normalized();
+        request_ = AirspaceArea{p.head<2>(), b->position_enu_m.head<2>() + config_.pierce_overshoot_m * dir};
+        out.airspace = request_;
+        hover(in, out, inward_yaw_rad());
+        enter(VehicleState::kAreaAllocationRequest, out,
+              fmt("balloon at (%.1f, %.1f, %.1f)", b->position_enu_m.x(), b->position_enu_m.y(), b->position_enu_m.z()));
+        break;
+      }
+      if (scan_leg_ >= scan_.size()) {
+        if (take_over_ && !other_side_done_) {
+          // this side is done; the other UAV's side is still to scan (over the balloons, at take-off height)
+          other_side_done_ = true;
+          side_ = side_ == Side::kSouth ? Side::kNorth : Side::kSouth;
+          hold_altitude_m_ = config_.takeoff_altitude_m;
+          enter(VehicleState::kGoSideCenter, out, "scans done, taking over the other side");
+          break;
+        }
+        start_landing(out, "two full scans done");
+        break;
+      }
+      const ScanWaypoint& w = scan_[scan_leg_];
+      hold_altitude_m_ = w.altitude_m;
+      const Eigen::Vector3d target(w.x_m, line_y_m(), w.altitude_m);
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = toward(p, target, config_.scan_speed_m_s);
+      out.yaw_enu_rad = inward_yaw_rad();
+      if ((target.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
+        ++scan_leg_;
+        out.note = fmt("scan waypoint x=%.0f reached", w.x_m);
+      }
+      break;
+    }
+
+    case VehicleState::kAreaAllocationRequest: {
+      // follow the balloon (a new track id close to it is the same balloon)
+      for (const BalloonSighting& b : in.balloons) {
+        if (b.track_id == target_.track_id ||
+            (b.position_enu_m - target_.position_enu_m).norm() < kSameBalloon_m) {
+          if (b.last_seen_s >= target_.last_seen_s) target_ = b;
+        }
+      }
+      hover(in, out, inward_yaw_rad());
+      bool granted = false;
+      for (const auto& r : in.airspace_replies) granted = granted || (r && request_ && *r == *request_);
+      if (granted) {
+        airspace_held_ = true;
+        closest_blade_m_ = 1e9;
+        coast_dir_ = (target_.position_enu_m.head<2>() - p.head<2>()).normalized();
+        enter(VehicleState::kPierce, out, "airspace granted");
+      } else if (in.now_s - target_.last_seen_s > config_.allocation_wait_lost_s) {
+        // "should the balloon be no longer visible (e.g. if popped by the other UAV while waiting), the request
+        // can be cancelled by sending a NaN position"
+        out.airspace = std::optional<AirspaceArea>();
+        request_.reset();
+        enter(VehicleState::kBlindScan, out, "balloon lost while waiting: request cancelled");
+      }
+      break;
+    }
+
+    case VehicleState::kPierce: {
+      // "moves forward, while adjusting its lateral and vertical position so that the balloon stays
+      // horizontally centred and at the same height as the strip of blades"
+      for (const BalloonSighting& b : in.balloons) {
+        if (b.track_id == target_.track_id ||
+            (b.position_enu_m - target_.position_enu_m).norm() < kSameBalloon_m) {
+          if (b.last_seen_s >= target_.last_seen_s) target_ = b;
+        }
+      }
+      const Eigen::Vector3d& b = target_.position_enu_m;
+      const Eigen::Vector2d heading(std::cos(in.yaw_enu_rad), std::sin(in.yaw_enu_rad));
+      const Eigen::Vector2d blade_xy = p.head<2>() + config_.blade_offset_body_m.x() * heading;
+      const double blade_range = (b.head<2>() - blade_xy).norm();
+      closest_blade_m_ = std::min(closest_blade_m_, blade_range);
+      const bool seen = in.now_s - target_.last_seen_s < kFreshSighting_s;
+      // the blades ride just above the balloon's centre, never low enough for the gear to meet the pole
+      const double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
+                                        config_.pole_top_height_m + 0.25, config_.balloon_centre_height_m + 0.3);
+      double speed = config_.pierce_speed_near_m_s;
+      if (seen) {
+        coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
+        const double s = std::clamp((blade_range - 1.0) / config_.pierce_slow_range_m, 0.0, 1.0);
+        speed = config_.pierce_speed_near_m_s + s * (config_.pierce_speed_far_m_s - config_.pierce_speed_near_m_s);
+        const double yaw_error = wrap_pi(std::atan2(coast_dir_.y(), coast_dir_.x()) - in.yaw_enu_rad);
+        if (std::abs(yaw_error) > 0.35) speed *= 0.3;  // turn towards it first: the camera must keep it
+      }
+      // and reach blade height before the balloon is close (from the high scan altitude it is 0.5 m down)
+      const double dz = std::abs(blade_z - p.z());
+      if (blade_range < 2.0 * config_.pierce_slow_range_m) speed *= std::clamp(1.0 - (dz - 0.1) / 0.3, 0.15, 1.0);
+      const double along_m = (blade_xy - b.head<2>()).dot(coast_dir_);  // > 0: blades past the centre
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = {coast_dir_.x() * speed, coast_dir_.y() * speed,
+                              std::clamp(kGainZ_1_s * (blade_z - p.z()), -config_.max_climb_m_s, config_.max_climb_m_s)};
+      out.yaw_enu_rad = std::atan2(coast_dir_.y(), coast_dir_.x());
+      // "this state is maintained for N seconds after the balloon was last detected" (or until the blades
+      // are through it)
+      const bool through = !seen && along_m >= config_.pierce_overshoot_m;
+      const bool coasted = in.now_s - target_.last_seen_s > config_.pierce_coast_s;
+      const bool timeout = in.now_s - state_since_s_ > config_.pierce_timeout_s;
+      if (through || coasted || timeout) {
+        // the camera cannot tell a pop (it lost the balloon at close range): if the blades got there, look
+        // back at it while backing off; POPPED is reported only if it is not seen again
+        pierce_reached_ = closest_blade_m_ < 0.35 || along_m > -0.2;
+        seen_again_ = false;
+        hold_altitude_m_ = scan_leg_ < scan_.size() ? scan_[scan_leg_].altitude_m : scan_.back().altitude_m;
+        pierce_start_enu_m_.z() = hold_altitude_m_;
+        enter(VehicleState::kBackOff, out,
+              std::string(through ? "through the balloon" : timeout ? "timeout" : "balloon lost") +
+                  (pierce_reached_ ? ", blades reached it" : ", blades did not reach it"));
+      }
+      break;
+    }
+
+    case VehicleState::kBackOff: {
+      // "the UAV moves backwards in order to resume the Blind Scan operation and deallocates the area";
+      // backwards indeed: the camera keeps looking where the balloon was
+      const Eigen::Vector3d& b = target_.position_enu_m;
+      for (const BalloonSighting& s : in.balloons) {
+        if (in.now_s - s.last_seen_s < kFreshSighting_s && s.last_seen_s > state_since_s_ + 0.5 &&
+            (s.position_enu_m - b).norm() < kSameBalloon_m) {
+          seen_again_ = true;
+        }
+      }
+      const Eigen::Vector2d to_b = b.head<2>() - p.head<2>();
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = toward(p, pierce_start_enu_m_, config_.transit_speed_m_s);
+      out.yaw_enu_rad = to_b.norm() > 0.5 ? std::atan2(to_b.y(), to_b.x()) : in.yaw_enu_rad;
+      if ((pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
+        out.airspace = std::optional<AirspaceArea>();
+        airspace_held_ = false;
+        request_.reset();
+        std::string why = "back on the scan line: airspace released";
+        if (pierce_reached_ && !seen_again_) {
+          ++popped_;
+          popped_at_.push_back(b.head<2>());
+          out.popped_enu_m = b.head<2>();
+          why += ", balloon gone (" + std::to_string(popped_) + " popped)";
+        } else {
+          why += seen_again_ ? ", the balloon is still there" : "";
+        }
+        enter(VehicleState::kBlindScan, out, why);
+      }
+      break;
+    }
+
+    case VehicleState::kLand: {
+      // "reaches a pre-designated landing spot, starts a slow descent and, eventually, turns off the motors"
+      const double transit_z =
+          index_ == 0 ? config_.landing_transit_altitude_s0_m : config_.landing_transit_altitude_s1_m;
+      if (land_phase_ == 0) {
+        out.action = VehicleOutputs::Action::kVelocity;
+        out.velocity_enu_m_s = toward(p, {p.x(), p.y(), transit_z}, 0.0);
+        out.yaw_enu_rad = in.yaw_enu_rad;
+        if (std::abs(p.z() - transit_z) < 0.3) land_phase_ = 1;
+      } else if (land_phase_ == 1) {
+        const Eigen::Vector3d spot(landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), transit_z);
+        out.action = VehicleOutputs::Action::kVelocity;
+        out.velocity_enu_m_s = toward(p, spot, config_.transit_speed_m_s);
+        out.yaw_enu_rad = in.yaw_enu_rad;
+        if ((spot.head<2>() - p.head<2>()).norm() < 0.5) {
+          land_phase_ = 2;
+          out.action = VehicleOutputs::Action::kLand;
+          out.note = "over the landing spot: descending";
+        }
+      } else if (!in.armed && in.on_ground) {
+        enter(VehicleState::kLanded, out, "motors off");
+      }
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace uavsim::missions::mbzirc2020

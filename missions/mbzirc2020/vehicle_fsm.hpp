@@ -1,0 +1,134 @@
+// The balloon-popping UAV's strategy (seed 7.2, fig. 7.13) as a pure state machine: the event loop feeds it
+// what a real drone has (MAVLink telemetry, balloons seen by its camera, GCS messages) at a fixed rate and
+// applies what it returns (a GUIDED velocity + heading setpoint, take-off or landing, GCS messages). No
+// sockets, clocks or simulator calls: tests drive it with made-up inputs.
+//
+// States, in the seed's order: Preflight -> Take-off -> Go Side Center -> Go Scan Altitude -> Blind Scan ->
+// Area Allocation Request -> Pierce -> (Back Off: the seed's "moves backwards ... and deallocates the
+// area", a state of its own here) -> Blind Scan ... -> Land. Land is entered from any state on the GCS's
+// STATE command. Failed: the vehicle disarmed in the air (motors lost); it only reports.
+//
+// Beyond the seed: TakeOver (GCS STATE command when the other UAV has failed, as on Competition Day 2)
+// lifts the own-half rule and, once this side's scans are done, sends the UAV to scan the other side.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "messages.hpp"
+#include "mission_config.hpp"
+
+namespace uavsim::missions::mbzirc2020 {
+
+enum class VehicleState : uint8_t {
+  kPreflight,
+  kTakeOff,
+  kGoSideCenter,
+  kGoScanAltitude,
+  kBlindScan,
+  kAreaAllocationRequest,
+  kPierce,
+  kBackOff,
+  kLand,
+  kLanded,
+  kFailed,
+};
+const char* vehicle_state_name(VehicleState s);  // "Blind Scan", ...
+
+// A balloon the camera pipeline confirmed (temporal filter), in the field frame.
+struct BalloonSighting {
+  int track_id = 0;
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // centre
+  double last_seen_s = 0.0;                                  // loop time of the last hit
+};
+
+struct VehicleInputs {
+  double now_s = 0.0;
+  // telemetry (MAVLink)
+  bool armed = false;
+  bool on_ground = true;
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+  double yaw_enu_rad = 0.0;
+  // camera
+  std::vector<BalloonSighting> balloons;
+  // GCS link: commands and the airspace echoes received since the last step, oldest first
+  std::vector<GcsCommand> commands;
+  std::vector<std::optional<AirspaceArea>> airspace_replies;
+};
+
+struct VehicleOutputs {
+  enum class Action { kNone, kArmAndTakeOff, kVelocity, kLand };
+  Action action = Action::kNone;
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();  // kVelocity
+  double yaw_enu_rad = 0.0;                                    // kVelocity
+  double takeoff_altitude_m = 0.0;                             // kArmAndTakeOff
+  // GCS messages to publish: an airspace request / release (nullopt inside), a popped balloon
+  std::optional<std::optional<AirspaceArea>> airspace;
+  std::optional<Eigen::Vector2d> popped_enu_m;
+  // a line for the log when something happened (state change, target chosen, ...), else empty
+  std::string note;
+};
+
+class VehicleFsm {
+ public:
+  // index 0 is "S0" (scans low first, lands via the low transit altitude), 1 is "S1".
+  VehicleFsm(const MissionConfig& config, int index, Side side, const Eigen::Vector2d& landing_spot_enu_m);
+
+  // (inputs at now_s) => (setpoint, GCS messages). Call at a fixed rate (10-20 Hz).
+  VehicleOutputs step(const VehicleInputs& in);
+
+  VehicleState state() const { return state_; }
+  Side side() const { return side_; }
+  int popped() const { return popped_; }
+  bool take_over() const { return take_over_; }
+
+ private:
+  struct ScanWaypoint {
+    double x_m;
+    double altitude_m;
+  };
+  void enter(VehicleState s, VehicleOutputs& out, const std::string& why);
+  void plan_scan();
+  double line_y_m() const;
+  double inward_yaw_rad() const;
+  bool in_own_half(const Eigen::Vector3d& p) const;
+  std::optional<BalloonSighting> choose_target(const VehicleInputs& in) const;
+  Eigen::Vector3d toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target, double max_speed_m_s) const;
+  void hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const;
+  void start_landing(VehicleOutputs& out, const std::string& why);
+
+  MissionConfig config_;
+  int index_;
+  Side side_;
+  Side home_side_;
+  Eigen::Vector2d landing_spot_enu_m_;
+  VehicleState state_ = VehicleState::kPreflight;
+  double state_since_s_ = 0.0;
+  double now_s_ = 0.0;
+  bool armed_seen_ = false;
+  bool take_over_ = false;
+  bool other_side_done_ = false;
+  int popped_ = 0;
+  std::vector<Eigen::Vector2d> popped_at_;
+
+  std::vector<ScanWaypoint> scan_;
+  size_t scan_leg_ = 0;
+  double hold_altitude_m_ = 0.0;
+
+  // the balloon being requested / pierced
+  BalloonSighting target_;
+  std::optional<AirspaceArea> request_;
+  bool airspace_held_ = false;
+  Eigen::Vector3d pierce_start_enu_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector2d coast_dir_ = Eigen::Vector2d::UnitY();
+  double closest_blade_m_ = 1e9;
+  bool pierce_reached_ = false;
+  bool seen_again_ = false;
+
+  // landing: climb, transit, land
+  int land_phase_ = 0;
+};
+
+}  // namespace uavsim::missions::mbzirc2020

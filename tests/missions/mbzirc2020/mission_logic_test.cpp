@@ -1,0 +1,239 @@
+// The balloon mission's logic without a simulator: the GCS link payloads, the ground station's start /
+// airspace / take-over / land decisions, and the UAV FSM's path through seed fig. 7.13 on made-up inputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "ground_station.hpp"
+#include "messages.hpp"
+#include "vehicle_fsm.hpp"
+
+namespace uavsim::missions::mbzirc2020 {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+UavStatus status(bool ready, Eigen::Vector3d p = Eigen::Vector3d::Zero()) {
+  UavStatus s;
+  s.ready = ready;
+  s.position_enu_m = p;
+  return s;
+}
+
+bool has(const std::vector<GcsOutgoing>& out, int uav, uint16_t topic, const std::vector<uint8_t>& payload) {
+  for (const GcsOutgoing& o : out) {
+    if (o.uav == uav && o.topic == topic && o.payload == payload) return true;
+  }
+  return false;
+}
+
+TEST(Mbzirc2020Messages, RoundTripAndNanRelease) {
+  const AirspaceArea a{{1.5, -2.25}, {3.0, 20.0}};
+  const auto d = decode_airspace(encode_airspace(a));
+  ASSERT_TRUE(d && *d);
+  EXPECT_EQ(**d, a);
+  const auto release = decode_airspace(encode_airspace(std::nullopt));
+  ASSERT_TRUE(release);
+  EXPECT_FALSE(*release);
+  // the seed's NaN position on the wire
+  const auto bytes = encode_airspace(std::nullopt);
+  EXPECT_EQ(bytes[0], 0x7f);
+  UavStatus s = status(true, {1, 2, 3});
+  s.popped = 4;
+  const auto sd = decode_status(encode_status(s));
+  ASSERT_TRUE(sd);
+  EXPECT_TRUE(sd->ready);
+  EXPECT_EQ(sd->popped, 4);
+  EXPECT_EQ(sd->position_enu_m, Eigen::Vector3d(1, 2, 3));
+  EXPECT_FALSE(decode_command({9}));
+  EXPECT_EQ(decode_point(encode_point({4, 5})), Eigen::Vector2d(4, 5));
+}
+
+TEST(Mbzirc2020GroundStation, SegmentDistance) {
+  EXPECT_DOUBLE_EQ(segment_distance({0, 0}, {10, 0}, {5, -1}, {5, 1}), 0.0);  // crossing
+  EXPECT_DOUBLE_EQ(segment_distance({0, 0}, {10, 0}, {0, 3}, {10, 3}), 3.0);  // parallel
+  EXPECT_DOUBLE_EQ(segment_distance({0, 0}, {1, 0}, {4, 4}, {4, 4}), 5.0);    // to a point: 3-4-5
+}
+
+TEST(Mbzirc2020GroundStation, StartsWhenAllReadyAndSeparatesAirspace) {
+  GroundStation gs({}, 2);
+  gs.on_status(0, status(true, {0, -28, 0}), 0.0);
+  EXPECT_TRUE(gs.step(0.1, nullptr).empty());  // uav1 not heard yet
+  gs.on_status(1, status(true, {0, 28, 0}), 0.2);
+  auto out = gs.step(0.3, nullptr);
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kStart)));
+  EXPECT_TRUE(has(out, 1, kTopicState, encode_command(GcsCommand::kStart)));
+  gs.on_status(0, status(false, {-10, -28, 3}), 1.0);
+  gs.on_status(1, status(false, {10, 28, 3}), 1.0);
+
+  // far apart: both granted (echoed unchanged)
+  const AirspaceArea a0{{-10, -28}, {-10, -10}}, a1{{10, 28}, {10, 12}};
+  gs.on_airspace(0, a0, 1.1);
+  gs.on_airspace(1, a1, 1.2);
+  out = gs.step(1.3, nullptr);
+  EXPECT_TRUE(has(out, 0, kTopicAirspace, encode_airspace(a0)));
+  EXPECT_TRUE(has(out, 1, kTopicAirspace, encode_airspace(a1)));
+
+  // uav1 releases, then asks for a balloon next to uav0's: it waits until uav0 releases
+  gs.on_airspace(1, std::nullopt, 2.0);
+  gs.step(2.1, nullptr);
+  const AirspaceArea near{{-8, 28}, {-11, -8}};
+  gs.on_airspace(1, near, 2.2);
+  out = gs.step(2.3, nullptr);
+  EXPECT_FALSE(has(out, 1, kTopicAirspace, encode_airspace(near)));
+  gs.on_status(0, status(false, {-10, -27, 3}), 2.4);
+  gs.on_airspace(0, std::nullopt, 2.5);
+  out = gs.step(2.6, nullptr);
+  EXPECT_TRUE(has(out, 1, kTopicAirspace, encode_airspace(near)));
+}
+
+TEST(Mbzirc2020GroundStation, FailedUavHandsItsSideOverAndFiveBalloonsLandAll) {
+  GroundStation gs({}, 2);
+  gs.on_status(0, status(true), 0.0);
+  gs.on_status(1, status(true), 0.0);
+  gs.step(0.1, nullptr);
+  UavStatus failed = status(false);
+  failed.failed = true;
+  gs.on_status(0, status(false, {0, -28, 5}), 2.0);
+  gs.on_status(1, failed, 2.0);
+  auto out = gs.step(2.1, nullptr);
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kTakeOver)));
+  // five distinct balloons (a duplicate report is merged)
+  for (int i = 0; i < 5; ++i) gs.on_popped(0, {10.0 * i, 0.0}, 3.0);
+  gs.on_popped(0, {0.5, 0.5}, 3.0);
+  EXPECT_EQ(gs.popped_reported(), 5);
+  out = gs.step(3.1, nullptr);
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kLand)));
+  EXPECT_FALSE(has(out, 1, kTopicState, encode_command(GcsCommand::kLand)));
+  EXPECT_FALSE(gs.finished());
+  UavStatus landed = status(false);
+  landed.landed = true;
+  gs.on_status(0, landed, 30.0);
+  gs.step(30.1, nullptr);
+  EXPECT_TRUE(gs.finished());
+}
+
+TEST(Mbzirc2020GroundStation, SilentUavIsOut) {
+  GroundStation gs({}, 2);
+  gs.on_status(0, status(true), 0.0);
+  gs.on_status(1, status(true), 0.0);
+  gs.step(0.1, nullptr);
+  gs.on_status(0, status(false), 5.0);
+  const auto out = gs.step(5.1, nullptr);  // uav1 silent for 5 s > stale_s
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kTakeOver)));
+}
+
+// A simulated vehicle that follows velocity setpoints exactly.
+struct FakeVehicle {
+  VehicleInputs in;
+  void apply(const VehicleOutputs& out, double dt_s) {
+    if (out.action == VehicleOutputs::Action::kArmAndTakeOff) in.armed = true;
+    if (out.action == VehicleOutputs::Action::kVelocity) {
+      in.position_enu_m += out.velocity_enu_m_s * dt_s;
+      in.yaw_enu_rad = out.yaw_enu_rad;
+    }
+    in.now_s += dt_s;
+  }
+};
+
+TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle v;
+  v.in.position_enu_m = {-10, -27, 0};
+  constexpr double dt = 0.05;
+  EXPECT_EQ(fsm.step(v.in).action, VehicleOutputs::Action::kNone);  // Preflight: waits for the start
+  v.in.commands = {GcsCommand::kStart};
+  VehicleOutputs out = fsm.step(v.in);
+  v.in.commands.clear();
+  EXPECT_EQ(out.action, VehicleOutputs::Action::kArmAndTakeOff);
+  EXPECT_EQ(fsm.state(), VehicleState::kTakeOff);
+  v.apply(out, dt);
+  v.in.position_enu_m.z() = 5.0;  // the flight controller's take-off
+  fsm.step(v.in);
+  EXPECT_EQ(fsm.state(), VehicleState::kGoSideCenter);
+  // fly until scanning
+  for (int i = 0; i < 2000 && fsm.state() != VehicleState::kBlindScan; ++i) v.apply(fsm.step(v.in), dt);
+  ASSERT_EQ(fsm.state(), VehicleState::kBlindScan);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);  // the south side line
+  EXPECT_NEAR(v.in.position_enu_m.z(), config.scan_altitude_low_m, 0.2);
+  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);       // camera towards the arena
+
+  // a balloon in the other half is not ours: the scan goes on
+  v.in.balloons = {{1, {v.in.position_enu_m.x() + 2, 15.0, 2.7}, v.in.now_s}};
+  v.apply(fsm.step(v.in), dt);
+  EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
+  // one in our half: request its airspace
+  const Eigen::Vector3d balloon(v.in.position_enu_m.x() + 3, -12.0, 2.7);
+  v.in.balloons = {{2, balloon, v.in.now_s}};
+  out = fsm.step(v.in);
+  ASSERT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);
+  ASSERT_TRUE(out.airspace && *out.airspace);
+  const AirspaceArea request = **out.airspace;
+  v.apply(out, dt);
+  v.in.balloons[0].last_seen_s = v.in.now_s;
+  v.apply(fsm.step(v.in), dt);
+  EXPECT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);  // no echo yet: stays
+  v.in.airspace_replies = {request};
+  v.apply(fsm.step(v.in), dt);
+  v.in.airspace_replies.clear();
+  ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+
+  // pierce: the balloon stays in sight until the blades are 1.3 m away, then disappears (popped)
+  for (int i = 0; i < 2000 && fsm.state() == VehicleState::kPierce; ++i) {
+    const double range = (balloon.head<2>() - v.in.position_enu_m.head<2>()).norm();
+    if (range > 1.7) v.in.balloons[0].last_seen_s = v.in.now_s;
+    out = fsm.step(v.in);
+    // on the way, the blades ride just above the balloon's centre
+    if (range < 3.0 && range > 1.0) {
+      EXPECT_NEAR(v.in.position_enu_m.z(), 2.7 + config.pierce_blade_above_centre_m, 0.1);
+    }
+    v.apply(out, dt);
+  }
+  ASSERT_EQ(fsm.state(), VehicleState::kBackOff);
+  // backing off, the camera looks back: the balloon is gone, so it counts as popped
+  v.in.balloons.clear();
+  bool released = false, reported = false;
+  for (int i = 0; i < 2000 && fsm.state() == VehicleState::kBackOff; ++i) {
+    out = fsm.step(v.in);
+    released = released || (out.airspace && !*out.airspace);
+    reported = reported || out.popped_enu_m.has_value();
+    v.apply(out, dt);
+  }
+  EXPECT_TRUE(released);  // NaN once back on the scan line
+  EXPECT_TRUE(reported);
+  EXPECT_EQ(fsm.popped(), 1);
+  EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
+}
+
+TEST(Mbzirc2020VehicleFsm, DisarmedInTheAirIsFailedAndGcsLandWorksFromAnyState) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
+  FakeVehicle v;
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.in.position_enu_m.z() = 5.0;
+  fsm.step(v.in);
+  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
+  ASSERT_EQ(fsm.state(), VehicleState::kGoSideCenter);
+  v.in.commands = {GcsCommand::kLand};
+  fsm.step(v.in);
+  v.in.commands.clear();
+  EXPECT_EQ(fsm.state(), VehicleState::kLand);
+
+  VehicleFsm other(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle w;
+  w.in.commands = {GcsCommand::kStart};
+  w.apply(other.step(w.in), 0.05);
+  w.in.commands.clear();
+  for (int i = 0; i < 40; ++i) w.apply(other.step(w.in), 0.05);
+  w.in.armed = false;  // killed
+  other.step(w.in);
+  EXPECT_EQ(other.state(), VehicleState::kFailed);
+}
+
+}  // namespace
+}  // namespace uavsim::missions::mbzirc2020
