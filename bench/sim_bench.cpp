@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -62,8 +63,9 @@ void BM_BareMjStep(benchmark::State& state) {
 void BM_SimStep(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   sim::Simulation s(load(n), sim::SimConfig{});
-  // warm-up without gravity while the flight controllers boot (they believe they stand on the ground:
-  // the accelerometer reads 1 g, nothing moves), then gravity on, arm and climb into a hover
+  // warm-up: the flight controllers boot without gravity (they believe they stand on the ground: the
+  // accelerometer reads 1 g, nothing moves), arm and take off, then gravity is ramped in over 3 s while
+  // their vertical loops take the weight; 10 s later every quad hovers
   mjModel* m = s.world().mutable_model();
   const double gravity_z = m->opt.gravity[2];
   m->opt.gravity[2] = 0.0;
@@ -74,15 +76,31 @@ void BM_SimStep(benchmark::State& state) {
     return true;
   };
   while (s.time_s() < 20.0 && !all_ready()) s.step();
-  m->opt.gravity[2] = gravity_z;
-  for (size_t i = 0; i < s.vehicle_count(); ++i) {
-    s.post(i, [](fc::FlightController& f) {
-      f.set_mode(fc::Mode::kGuided);
-      f.arm(true);
-      f.takeoff(2.0);
-    });
+  // GUIDED, arm, take off: repeated until every controller took it (one may still be settling)
+  auto all_climbing = [&s] {
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      if (!s.fc(i).armed() || s.fc(i).mode() != fc::Mode::kGuided) return false;
+    }
+    return true;
+  };
+  while (s.time_s() < 30.0 && !all_climbing()) {
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      if (s.fc(i).armed() && s.fc(i).mode() == fc::Mode::kGuided) continue;
+      s.post(i, [](fc::FlightController& f) {
+        f.set_mode(fc::Mode::kGuided);
+        f.arm(true);
+        f.takeoff(2.0);
+      });
+    }
+    s.run_until(s.time_s() + 0.1);
   }
-  s.run_until(s.time_s() + 20.0);
+  const double ramp_start = s.time_s() + 0.5;
+  while (s.time_s() < ramp_start + 3.0) {
+    m->opt.gravity[2] = gravity_z * std::clamp((s.time_s() - ramp_start) / 3.0, 0.0, 1.0);
+    s.step();
+  }
+  m->opt.gravity[2] = gravity_z;
+  s.run_until(s.time_s() + 10.0);
   size_t flying = 0;
   for (size_t i = 0; i < s.vehicle_count(); ++i) flying += s.fc(i).armed() && !s.runtime(i).crashed;
   state.counters["flying"] = static_cast<double>(flying);

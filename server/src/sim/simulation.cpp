@@ -110,6 +110,11 @@ void Simulation::run_until(double time_s) {
 }
 
 void Simulation::control_step() {
+  // armed state and mode before this step's commands, so command-driven changes become events too
+  for (VehicleRuntime& v : vehicles_) {
+    v.was_armed = v.fc.armed();
+    v.old_mode = v.fc.mode();
+  }
   // queued tasks, in vehicle order
   {
     std::lock_guard<std::mutex> lock(tasks_mutex_);
@@ -128,16 +133,14 @@ void Simulation::control_step() {
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     VehicleRuntime& v = vehicles_[i];
     const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
-    const bool was_armed = v.fc.armed();
-    const fc::Mode old_mode = v.fc.mode();
     v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
     if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
     airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
 
-    if (v.fc.armed() != was_armed) {
+    if (v.fc.armed() != v.was_armed) {
       record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");
     }
-    if (v.fc.mode() != old_mode) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
+    if (v.fc.mode() != v.old_mode) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
   }
   for (ControlObserver& observer : observers_) observer(*this);
 }

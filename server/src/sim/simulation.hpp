@@ -38,6 +38,8 @@ struct VehicleRuntime {
   bool crashed = false;
   bool on_ground = true;
   double last_contact_s = 0.0;  // sim time of the last contact with anything
+  bool was_armed = false;       // at the start of the control step, for events
+  fc::Mode old_mode = fc::Mode::kStabilize;
 };
 
 // A command or query for one vehicle, run on the loop thread at the next control boundary.

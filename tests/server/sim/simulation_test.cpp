@@ -110,6 +110,16 @@ TEST(Simulation, HardLandingFromGearContactIsACrash) {
   }
 }
 
+TEST(Simulation, CommandedArmingAndModeChangesAreEvents) {
+  auto sim = make_sim("empty.xml");
+  take_off(*sim, 3.0);  // GUIDED + arm in one control step
+  ASSERT_EQ(sim->events().count(EventType::kArmed), 1u);
+  ASSERT_EQ(sim->events().count(EventType::kModeChange), 1u);
+  for (const Event& e : sim->events().all()) {
+    if (e.type == EventType::kModeChange) EXPECT_EQ(e.detail, "GUIDED");
+  }
+}
+
 TEST(Simulation, TakeoffAndTouchdownEventsFollowGroundContact) {
   auto sim = make_sim("empty.xml");
   take_off(*sim, 3.0);
