@@ -42,29 +42,24 @@ std::optional<MarkerDetection> MarkerDetector::detect(const cv::Mat& image) {
     return std::nullopt;
   }
 
-  // fill thin dark specks and hatching in the white paint (a renderer's shadow acne, sensor noise)
-  // with a grey-level closing, which leaves the ring's and cross's outlines where they are
-  if (params_.close_kernel_px > 1) {
-    const cv::Mat kernel = cv::getStructuringElement(
-        cv::MORPH_RECT, {params_.close_kernel_px, params_.close_kernel_px});
-    cv::morphologyEx(gray_, closed_, cv::MORPH_CLOSE, kernel);
-  } else {
-    closed_ = gray_;
-  }
   // white paint vs dark deck, at two levels: Otsu's split, which a bright truck body or deck in
   // view can push above the paint (shade, or a renderer's shadow acne, greys it), and a share of
   // it, which still splits paint from the dark square around it; the square's border keeps the
   // ring a component of its own at either level. Candidates found at both are kept once.
-  const double otsu = cv::threshold(closed_, binary_, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
-  find_candidates(binary_);
-  if (params_.low_threshold_share > 0.0 && params_.low_threshold_share < 1.0) {
-    cv::threshold(closed_, binary_, otsu * params_.low_threshold_share, 255, cv::THRESH_BINARY);
-    find_candidates(binary_);
-  }
+  search_levels(gray_);
   std::sort(candidates_.begin(), candidates_.end(),
             [](const auto& a, const auto& b) { return a.radius_px > b.radius_px; });
   if (candidates_.empty()) return std::nullopt;
   return candidates_.front();
+}
+
+void MarkerDetector::search_levels(const cv::Mat& gray) {
+  const double otsu = cv::threshold(gray, binary_, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  find_candidates(binary_);
+  if (params_.low_threshold_share > 0.0 && params_.low_threshold_share < 1.0) {
+    cv::threshold(gray, binary_, otsu * params_.low_threshold_share, 255, cv::THRESH_BINARY);
+    find_candidates(binary_);
+  }
 }
 
 void MarkerDetector::find_candidates(const cv::Mat& binary) {

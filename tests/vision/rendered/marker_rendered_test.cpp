@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <deque>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "rendered_fixture.hpp"
 #include "uavsim/vision/eight_track.hpp"
@@ -54,21 +56,40 @@ void drive_to(RenderedWorld& w, double t_s) {
 }
 
 TEST(MarkerRendered, LocatesMarkerOnTheDrivingTruckFrom10mWithTilt) {
-  server::render::CameraConfig shadows = camera("uav0_down", kWidthPx, kHeightPx);
-  shadows.flags.shadows = true;
-  RenderedWorld w("mbzirc2017.xml", 1, {camera("uav0_down", kWidthPx, kHeightPx), shadows});
+  // each pose at 640 x 480 and at 320 x 240 (ring radius ~32 and ~16 px), every other pose with
+  // shadows (the cab's may fall on the deck; shadow acne greys the thin marker's paint)
+  struct Look {
+    const char* name;
+    int width_px;
+    int height_px;
+    bool shadows;
+    double min_detection_rate;
+    int frames = 0;
+    int detected = 0;
+    double worst_m = 0.0;
+    double sum_m = 0.0;
+  };
+  // 320 x 240 with shadows: the ring is 3 px wide and shadow acne (the marker is a 1 mm box on
+  // the deck, models/objects/truck.xml) speckles all of it in some poses; seen, not required
+  constexpr double kMinRateWithAcneAt320 = 0.8;
+  Look looks[] = {{"640x480", 640, 480, false, kMinMarkerDetectionRate},
+                  {"640x480 shadows", 640, 480, true, kMinMarkerDetectionRate},
+                  {"320x240", 320, 240, false, kMinMarkerDetectionRate},
+                  {"320x240 shadows", 320, 240, true, kMinRateWithAcneAt320}};
+  std::vector<server::render::CameraConfig> cameras;
+  for (const Look& l : looks) {
+    cameras.push_back(camera("uav0_down", l.width_px, l.height_px));
+    cameras.back().flags.shadows = l.shadows;
+  }
+  RenderedWorld w("mbzirc2017.xml", 1, cameras);
   const server::objects::Truck& truck = *w.objects.trucks.at(0);
-  const PinholeIntrinsics k = to_intrinsics(w.renderer->intrinsics(0));
   MarkerDetector detector;
   std::mt19937_64 rng(2017);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
 
-  // a lap: straights, both circles, the crossing; every other frame with shadows (the cab's may
-  // fall on the deck)
-  constexpr int kFrames = 80;
-  int detected = 0;
-  double worst_m = 0.0, sum_m = 0.0;
-  for (int i = 0; i < kFrames; ++i) {
+  // a lap: straights, both circles, the crossing
+  constexpr int kPoses = 80;
+  for (int i = 0; i < kPoses; ++i) {
     drive_to(w, 0.5 + 0.75 * i);
     const server::objects::TruckState truth = truck.state(w.sim->time_s());
     // the camera up to 2.5 m off the deck centre sideways, any heading, tilted up to 10 deg
@@ -76,26 +97,31 @@ TEST(MarkerRendered, LocatesMarkerOnTheDrivingTruckFrom10mWithTilt) {
         truth.deck_centre_enu_m +
         Eigen::Vector3d(2.5 * unit(rng), 2.5 * unit(rng), kHeightAboveDeckM);
     place_hexa(w, camera_enu_m, kMaxTiltRad * unit(rng), kMaxTiltRad * unit(rng), M_PI * unit(rng));
-    const server::render::CameraFrame f = w.render(i % 2);
-    ASSERT_EQ(f.stamp_us, to_us(w.sim->time_s()));
-
-    const auto d = detector.detect(to_bgr(f));
-    if (!d) {
-      ADD_FAILURE() << "no marker in frame " << i << " at t = " << w.sim->time_s();
-      continue;
+    for (int size = 0; size < 2; ++size) {
+      const int index = 2 * size + i % 2;
+      Look& l = looks[index];
+      const server::render::CameraFrame f = w.render(index);
+      ASSERT_EQ(f.stamp_us, to_us(w.sim->time_s()));
+      ++l.frames;
+      const auto d = detector.detect(to_bgr(f));
+      if (!d) continue;
+      const auto p = marker_position_enu(*d, to_intrinsics(f.intrinsics), to_pose(f),
+                                         truth.deck_centre_enu_m.z());
+      ASSERT_TRUE(p.has_value());
+      ++l.detected;
+      const double error_m = (p->head<2>() - truth.deck_centre_enu_m.head<2>()).norm();
+      l.worst_m = std::max(l.worst_m, error_m);
+      l.sum_m += error_m;
+      EXPECT_LT(error_m, kMaxMarkerErrorM) << "frame " << i << " (" << l.name << ")";
     }
-    const auto p = marker_position_enu(*d, k, to_pose(f), truth.deck_centre_enu_m.z());
-    ASSERT_TRUE(p.has_value());
-    ++detected;
-    const double error_m = (p->head<2>() - truth.deck_centre_enu_m.head<2>()).norm();
-    worst_m = std::max(worst_m, error_m);
-    sum_m += error_m;
-    EXPECT_LT(error_m, kMaxMarkerErrorM) << "frame " << i << " at t = " << w.sim->time_s();
   }
-  std::printf("marker: detected %d/%d, error mean %.3f m worst %.3f m\n", detected, kFrames,
-              sum_m / std::max(detected, 1), worst_m);
-  EXPECT_GE(static_cast<double>(detected) / kFrames, kMinMarkerDetectionRate);
-  EXPECT_LT(worst_m, kMaxMarkerErrorM);
+  for (const Look& l : looks) {
+    std::printf("marker %-16s detected %d/%d, error mean %.3f m worst %.3f m\n", l.name, l.detected,
+                l.frames, l.sum_m / std::max(l.detected, 1), l.worst_m);
+    EXPECT_EQ(l.frames, kPoses / 2);
+    EXPECT_GE(static_cast<double>(l.detected) / l.frames, l.min_detection_rate) << l.name;
+    EXPECT_LT(l.worst_m, kMaxMarkerErrorM) << l.name;
+  }
 }
 
 TEST(TrackKalmanRendered, TracksTheDrivingTruckAt7HzWith150msLatency) {

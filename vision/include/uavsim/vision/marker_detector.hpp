@@ -37,10 +37,8 @@ struct MarkerDetectorParams {
   double min_white_fraction = 0.30;
   double max_white_fraction = 0.75;
   bool hough_refine = true;
-  // grey-level closing before the threshold (odd, pixels; 1 = off): fills dark specks and the
-  // hatching that shadow acne draws on the white paint in frames rendered with shadows
-  int close_kernel_px = 3;
-  // second threshold level as a share of Otsu's (0 or 1 = Otsu's only), see detect()
+  // second threshold level as a share of Otsu's (0 or 1 = Otsu's only), see detect(): paint greyed
+  // by shade (or a renderer's shadow acne) next to a bright truck body falls below Otsu's split
   double low_threshold_share = 0.5;
 };
 
@@ -64,12 +62,13 @@ class MarkerDetector {
   const std::vector<MarkerDetection>& candidates() const { return candidates_; }
 
  private:
+  // thresholds a grey image at each level and collects its candidates
+  void search_levels(const cv::Mat& gray);
   // appends the ring candidates of one binary image (white = paint) to candidates_
   void find_candidates(const cv::Mat& binary);
 
   MarkerDetectorParams params_;
   cv::Mat gray_;
-  cv::Mat closed_;
   cv::Mat binary_;
   cv::Mat disc_;
   std::vector<MarkerDetection> candidates_;
