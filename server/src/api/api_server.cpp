@@ -220,8 +220,12 @@ bool ApiServer::lockstep_blocked() const {
 void ApiServer::announce_ticks() {
   const double now = sim_.time_s();
   const double eps = 0.25 * sim_.physics_dt_s();
+  bool mavlink_flushed = false;
   for (auto& [conn, c] : clients_) {
     if (!c.lockstep || c.awaiting || now + eps < c.next_due_s) continue;
+    // the MAVLink bytes of the control steps before this tick reach the client before the tick
+    if (!mavlink_flushed && seq_waiter_ != nullptr) seq_waiter_->flush_sent();
+    mavlink_flushed = true;
     c.awaiting = true;
     c.done_received = false;
     c.wait_seq.clear();

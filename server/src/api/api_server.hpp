@@ -51,6 +51,11 @@ class SeqWaiter {
   // True once the endpoint has processed the MAVLink message with sequence seq (0-255, as in the
   // MAVLink header) on vehicle's link, or any later one. Thread-safe.
   virtual bool seq_processed(size_t vehicle, uint8_t seq) const = 0;
+  // Returns once every MAVLink byte the endpoint has queued for its clients so far (the telemetry and
+  // replies of the control steps before now) has been written to their sockets. Called before a tick is
+  // announced, so a lockstep client has its vehicles' telemetry stamped before the tick when the tick
+  // arrives. The default does nothing (an endpoint that writes synchronously). Loop thread only.
+  virtual void flush_sent() {}
 };
 
 // Ops served by another module (e.g. radio_ops.hpp). Their requests run on the loop thread like the

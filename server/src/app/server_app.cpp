@@ -30,6 +30,7 @@ class EndpointHooks : public api::LinkControl, public api::SeqWaiter {
   explicit EndpointHooks(mavlink::MavlinkServer& server) : server_(server) {}
   bool set_link_down(size_t vehicle, bool down) override { return server_.set_link_down(vehicle, down); }
   bool seq_processed(size_t vehicle, uint8_t seq) const override { return server_.seq_processed(vehicle, seq); }
+  void flush_sent() override { server_.flush_queued(); }
 
  private:
   mavlink::MavlinkServer& server_;

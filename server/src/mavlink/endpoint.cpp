@@ -11,6 +11,8 @@
 
 #include <atomic>
 #include <cerrno>
+#include <chrono>
+#include <condition_variable>
 #include <cstring>
 #include <mutex>
 #include <stdexcept>
@@ -78,6 +80,11 @@ struct MavlinkServer::Core {
   std::unordered_map<int, std::unique_ptr<Client>> clients;  // by fd; I/O thread only
   std::uint64_t next_client_id = 1;                          // I/O thread only
   std::weak_ptr<Core> self;
+  // flush_queued(): a request generation, and the last generation the I/O thread has flushed
+  std::mutex flush_mutex;
+  std::condition_variable flush_cv;
+  std::uint64_t flush_requested = 0;  // guarded by flush_mutex
+  std::uint64_t flush_done = 0;       // guarded by flush_mutex
 
   Core(sim::Simulation& s, const EndpointConfig& c) : sim(s), config(c) {}
   ~Core() {
@@ -139,9 +146,35 @@ struct MavlinkServer::Core {
 
   // --- loop thread -> I/O thread ---
   void wake() {
-    if (wake_pending.exchange(true, std::memory_order_acq_rel)) return;
+    if (wake_pending.exchange(true, std::memory_order_seq_cst)) return;
     const std::uint64_t one = 1;
     [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
+  }
+
+  // a new flush generation, one wake-up, then wait until the I/O thread has flushed it
+  bool flush_queued(double timeout_s) {
+    std::uint64_t generation = 0;
+    {
+      std::lock_guard lock(flush_mutex);
+      generation = ++flush_requested;
+    }
+    wake();
+    using SteadyClock = std::chrono::steady_clock;
+    const auto deadline = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
+                                                   std::chrono::duration<double>(timeout_s));
+    std::unique_lock lock(flush_mutex);
+    return flush_cv.wait_until(lock, deadline, [&] { return flush_done >= generation || stop.load(); }) &&
+           flush_done >= generation;
+  }
+
+  // I/O thread: the bytes queued before request `generation` are on the wire (or stuck in a full socket)
+  void publish_flushed(std::uint64_t generation) {
+    {
+      std::lock_guard lock(flush_mutex);
+      if (generation <= flush_done) return;
+      flush_done = generation;
+    }
+    flush_cv.notify_all();
   }
 
   // --- I/O thread -> loop thread ---
@@ -209,8 +242,15 @@ struct MavlinkServer::Core {
         if (tag == tag_wake()) {
           std::uint64_t count = 0;
           [[maybe_unused]] const auto r = read(wake_fd, &count, sizeof(count));
-          wake_pending.store(false, std::memory_order_release);
+          wake_pending.store(false, std::memory_order_seq_cst);
+          // every flush request made before this wake-up is covered by the flush that follows
+          std::uint64_t generation = 0;
+          {
+            std::lock_guard lock(flush_mutex);
+            generation = flush_requested;
+          }
           flush_all();
+          publish_flushed(generation);
         } else if (tag <= vehicles.size()) {
           accept_clients(static_cast<std::size_t>(tag - 1));
         } else {
@@ -372,6 +412,7 @@ struct MavlinkServer::Core {
       const std::uint64_t one = 1;
       [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
     }
+    flush_cv.notify_all();
     if (io_thread.joinable()) io_thread.join();
     for (auto& [fd, c] : clients) {
       c->outbox->close();
@@ -430,6 +471,8 @@ bool MavlinkServer::set_link_down(std::size_t vehicle, bool down) {
 bool MavlinkServer::link_down(std::size_t vehicle) const {
   return vehicle < core_->vehicles.size() && core_->vehicles[vehicle]->link_down.load();
 }
+
+bool MavlinkServer::flush_queued(double timeout_s) { return core_->flush_queued(timeout_s); }
 
 bool MavlinkServer::seq_processed(std::size_t vehicle, std::uint8_t seq) const {
   if (vehicle >= core_->vehicles.size()) return false;

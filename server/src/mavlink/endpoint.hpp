@@ -84,6 +84,12 @@ class MavlinkServer {
   // MAVLink sequence number seq, or one up to 127 later (mod 256), on some client connection of the vehicle?
   // Per connection the last handled seq is kept (the lockstep contract's mavlink_seq). Thread-safe.
   bool seq_processed(std::size_t vehicle, std::uint8_t seq) const;
+  // Blocks until the I/O thread has written to the sockets every byte queued for any client before the call
+  // (telemetry and replies of the control steps so far), so that the sim API can announce a lockstep tick only
+  // after them. A client whose socket buffer is full (it does not read) is not waited for; the wait is also
+  // bounded by timeout_s of wall time (false then, or when the server is stopping). Any thread but the I/O
+  // thread; in practice the loop thread, in the control gate.
+  bool flush_queued(double timeout_s = 2.0);
 
   struct Core;
 

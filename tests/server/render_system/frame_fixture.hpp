@@ -46,6 +46,7 @@ class Hooks : public api::LinkControl, public api::SeqWaiter {
   explicit Hooks(mavlink::MavlinkServer& s) : s_(s) {}
   bool set_link_down(size_t v, bool down) override { return s_.set_link_down(v, down); }
   bool seq_processed(size_t v, uint8_t seq) const override { return s_.seq_processed(v, seq); }
+  void flush_sent() override { s_.flush_queued(); }
 
  private:
   mavlink::MavlinkServer& s_;
