@@ -2,14 +2,23 @@
 
 #include <tinyxml2.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
 #include <map>
 #include <memory>
 #include <set>
 #include <sstream>
 #include <vector>
+
+#include "assets/mesh_convert.hpp"
 
 namespace uavsim::server::physics {
 
@@ -112,6 +121,103 @@ void inline_includes(XMLDocument& doc, XMLElement* element, const fs::path& base
   }
 }
 
+// --- meshes MuJoCo 2.2 cannot read ---
+
+// bump when the conversion's output changes, so that stale cache entries are not reused
+constexpr const char* kMeshCacheVersion = "uavsim-mesh-obj-1";
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// MuJoCo 2.2 reads OBJ, MSH and binary STL (not ASCII STL); a binary STL is 84 + 50 n bytes
+bool mujoco_reads(const fs::path& file) {
+  const std::string ext = lower(file.extension().string());
+  if (ext == ".obj" || ext == ".msh") return true;
+  if (ext != ".stl") return false;
+  std::ifstream in(file, std::ios::binary);
+  char header[84] = {};
+  if (!in.read(header, sizeof(header))) return true;  // too short for either: let MuJoCo report it
+  const std::uint32_t n = static_cast<std::uint8_t>(header[80]) | static_cast<std::uint8_t>(header[81]) << 8 |
+                          static_cast<std::uint8_t>(header[82]) << 16 |
+                          static_cast<std::uint32_t>(static_cast<std::uint8_t>(header[83])) << 24;
+  std::error_code ec;
+  const auto size = fs::file_size(file, ec);
+  return ec || size == 84 + 50 * static_cast<std::uintmax_t>(n) || std::string(header, 5) != "solid";
+}
+
+// 64-bit FNV-1a of the cache version and the file's bytes: the cache file's name
+std::string content_hash(const fs::path& file) {
+  std::uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](const char* data, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      h ^= static_cast<std::uint8_t>(data[i]);
+      h *= 1099511628211ull;
+    }
+  };
+  mix(kMeshCacheVersion, std::char_traits<char>::length(kMeshCacheVersion));
+  std::ifstream in(file, std::ios::binary);
+  char buf[1 << 16];
+  while (in.read(buf, sizeof(buf)) || in.gcount() > 0) mix(buf, static_cast<std::size_t>(in.gcount()));
+  std::ostringstream s;
+  s << std::hex << std::setw(16) << std::setfill('0') << h;
+  return s.str();
+}
+
+fs::path mesh_cache_dir(const ComposeOptions& options) {
+  if (!options.mesh_cache_dir.empty()) return options.mesh_cache_dir;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg != '\0') {
+    return fs::path(xdg) / "uavsim" / "meshes";
+  }
+  return "/tmp/uavsim-mesh-cache";
+}
+
+// the composed world no longer knows which file declared a mesh: name the world and the mesh
+[[noreturn]] void mesh_fail(const std::string& world_path, const std::string& what) {
+  throw WorldError(world_path + ": " + what);
+}
+
+// converts every <mesh file=...> MuJoCo 2.2 cannot read into the cache (once per content) and points the
+// element at the OBJ; runs after the paths are absolute and every template's assets are merged
+void convert_meshes(XMLElement* root, const std::string& world_path, const ComposeOptions& options) {
+  for (XMLElement* asset = root->FirstChildElement("asset"); asset; asset = asset->NextSiblingElement("asset")) {
+    for (XMLElement* mesh = asset->FirstChildElement("mesh"); mesh; mesh = mesh->NextSiblingElement("mesh")) {
+      const char* file_attr = mesh->Attribute("file");
+      if (file_attr == nullptr) continue;
+      const fs::path source = file_attr;
+      const std::string what = "mesh " + (mesh->Attribute("name") ? std::string("'") + mesh->Attribute("name") + "' "
+                                                                  : std::string()) + "(" + source.string() + ")";
+      if (!fs::exists(source)) mesh_fail(world_path, what + ": file not found");
+      if (mujoco_reads(source)) continue;
+
+      const fs::path dir = mesh_cache_dir(options);
+      const fs::path cached = dir / (source.stem().string() + "-" + content_hash(source) + ".obj");
+      if (!fs::exists(cached)) {
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        if (ec) mesh_fail(world_path, what + ": cannot create the mesh cache " + dir.string() + ": " + ec.message());
+        // write under a private name, then rename: concurrent servers never see half a file
+        const fs::path partial = dir / (cached.filename().string() + ".part" + std::to_string(getpid()));
+        try {
+          assets::MeshConvertOptions convert;
+          convert.format = assets::MeshFormat::kObj;  // the private name has no .obj extension
+          assets::convert_mesh(source, partial, convert);
+        } catch (const std::exception& e) {
+          fs::remove(partial, ec);
+          mesh_fail(world_path, what + ": MuJoCo 2.2 reads only OBJ, MSH and binary STL, and converting it failed: " +
+                                  e.what());
+        }
+        fs::rename(partial, cached, ec);
+        if (ec) mesh_fail(world_path, what + ": cannot write the mesh cache " + cached.string() + ": " + ec.message());
+      }
+      // MuJoCo names an unnamed mesh after its file: keep the source's name for the geoms that use it
+      if (mesh->Attribute("name") == nullptr) mesh->SetAttribute("name", source.stem().string().c_str());
+      mesh->SetAttribute("file", cached.string().c_str());
+    }
+  }
+}
+
 void split3(const char* text, double out[3]) {
   std::istringstream s(text ? text : "");
   for (int i = 0; i < 3; ++i) {
@@ -160,6 +266,7 @@ class Composer {
     }
     check_nested(root);
     finish(root);
+    convert_meshes(root, world_path_, options_);
 
     tinyxml2::XMLPrinter printer;
     world_->Print(&printer);

@@ -7,6 +7,8 @@
 //   <uavsim_object type="balloon" name="balloon0" pos="..."/>                   one object from models/objects
 // <include file="..."/> is inlined here (MuJoCo would resolve it relative to the composed file otherwise), and
 // every asset file path is made absolute, so the composed text loads from anywhere (--write-world).
+// Meshes in formats MuJoCo 2.2 does not read are converted (assets/mesh_convert.hpp) into a cache directory
+// and the <mesh file=...> points at the converted file.
 // This is the one place that would change on MuJoCo 3.x (mjSpec and <attach> replace it).
 #pragma once
 
@@ -25,11 +27,16 @@ struct ComposeOptions {
   std::string models_dir;  // where vehicles/ and objects/ templates live
   int offscreen_width_px = 1280;   // <visual><global offwidth/offheight>: the largest camera frame
   int offscreen_height_px = 960;
+  // Where meshes MuJoCo 2.2 cannot read (COLLADA, glTF, FBX, PLY, ASCII STL, ...) are converted to, as
+  // OBJ files named by a hash of the source's content (so a second load reuses them). Empty:
+  // $XDG_CACHE_HOME/uavsim/meshes, else /tmp/uavsim-mesh-cache.
+  std::string mesh_cache_dir;
 };
 
 // Reads world_path, expands includes, vehicles and objects, and returns standalone MJCF text.
 // Throws WorldError naming the file and line for malformed XML, an unknown vehicle or object type,
-// a missing or duplicate name, or a bad attribute.
+// a missing or duplicate name, or a bad attribute; naming the world file and the mesh for a mesh file
+// that is missing or cannot be converted, or a cache directory that cannot be written.
 std::string compose_world(const std::string& world_path, const ComposeOptions& options);
 
 // The directory that holds the shipped models, from UAVSIM_MODELS_DIR in the environment or the build.
