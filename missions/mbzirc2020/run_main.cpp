@@ -38,8 +38,11 @@ namespace {
 using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
+// a program installed beside this one (found through /proc/self/exe, so a PATH lookup works too)
 std::string sibling(const char* argv0, const std::string& name) {
-  std::string dir = argv0;
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  std::string dir = n > 0 ? std::string(self, static_cast<size_t>(n)) : std::string(argv0);
   const size_t slash = dir.rfind('/');
   dir = slash == std::string::npos ? "." : dir.substr(0, slash);
   return dir + "/" + name;
