@@ -86,7 +86,7 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
 size_t LineServer::pending_bytes(uint64_t conn) {
   std::lock_guard<std::mutex> lock(out_mutex_);
   auto it = conns_.find(conn);
-  return it == conns_.end() ? 0 : it->second.out.size();
+  return it == conns_.end() ? 0 : it->second.out.size() + it->second.unsent;
 }
 
 void LineServer::accept_all() {
@@ -140,13 +140,22 @@ bool LineServer::read_conn(uint64_t id, Conn& c) {
 }
 
 bool LineServer::write_conn(Conn& c) {
-  // out_mutex_ held by the caller
-  while (!c.out.empty()) {
-    const ssize_t n = ::send(c.fd, c.out.data(), c.out.size(), MSG_NOSIGNAL);
+  for (;;) {
+    if (c.sent >= c.sending.size()) {
+      // the next batch: swap buffers, so the emptied one takes the next messages without reallocating
+      c.sending.clear();
+      c.sent = 0;
+      std::lock_guard<std::mutex> lock(out_mutex_);
+      c.sending.swap(c.out);
+      c.unsent = c.sending.size();
+      if (c.sending.empty()) return true;
+    }
+    const ssize_t n = ::send(c.fd, c.sending.data() + c.sent, c.sending.size() - c.sent, MSG_NOSIGNAL);
     if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
-    c.out.erase(0, static_cast<size_t>(n));
+    c.sent += static_cast<size_t>(n);
+    std::lock_guard<std::mutex> lock(out_mutex_);
+    c.unsent = c.sending.size() - c.sent;
   }
-  return true;
 }
 
 void LineServer::run() {
@@ -161,7 +170,8 @@ void LineServer::run() {
     {
       std::lock_guard<std::mutex> lock(out_mutex_);
       for (auto& [id, c] : conns_) {
-        fds.push_back({c.fd, static_cast<short>(POLLIN | (c.out.empty() ? 0 : POLLOUT)), 0});
+        const bool pending = !c.out.empty() || c.sent < c.sending.size();
+        fds.push_back({c.fd, static_cast<short>(POLLIN | (pending ? POLLOUT : 0)), 0});
         ids.push_back(id);
       }
     }
@@ -185,18 +195,13 @@ void LineServer::run() {
       }
       bool ok = true;
       if (ev & (POLLIN | POLLHUP | POLLERR)) ok = read_conn(ids[k], *c);
-      if (ok) {
-        std::lock_guard<std::mutex> lock(out_mutex_);
-        ok = write_conn(*c) && c->out.size() < kMaxPendingOutput;
-      }
+      if (ok) ok = write_conn(*c) && pending_bytes(ids[k]) < kMaxPendingOutput;
       if (!ok) closed.push_back(ids[k]);
     }
     // flush output queued since the poll (replies to what was just read)
-    {
-      std::lock_guard<std::mutex> lock(out_mutex_);
-      for (auto& [id, c] : conns_) {
-        if (!write_conn(c)) closed.push_back(id);
-      }
+    // (conns_ changes membership on this thread only: iterating it here needs no lock)
+    for (auto& [id, c] : conns_) {
+      if (!write_conn(c)) closed.push_back(id);
     }
     for (uint64_t id : closed) {
       int fd = -1;

@@ -45,12 +45,18 @@ class LineServer {
     std::string in;
     bool discarding = false;  // skipping the rest of an over-long line
     std::string out;          // guarded by out_mutex_
+    // being written, I/O thread only: whole batches are swapped out of `out` and written from an offset,
+    // so a large frame is neither moved on every partial write nor written with out_mutex_ held (which
+    // would stall the threads queueing the next frame)
+    std::string sending;
+    size_t sent = 0;
+    size_t unsent = 0;        // sending.size() - sent, for pending_bytes(); guarded by out_mutex_
   };
   void run();
   void wake();
   void accept_all();
   bool read_conn(uint64_t id, Conn& c);   // false: closed
-  bool write_conn(Conn& c);               // false: failed
+  bool write_conn(Conn& c);               // false: failed; takes out_mutex_ itself
 
   Callbacks callbacks_;
   size_t max_line_bytes_;
