@@ -5,15 +5,16 @@
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
-constexpr double kMinBalloonHeight_m = 1.2;  // a "balloon" below this is something green on the ground
+constexpr double kMinBalloonHeight_m =
+    1.2;  // a "balloon" below this is something green on the ground
 constexpr double kMaxBalloonHeight_m = 4.5;
 
 vision::BalloonTrackerParams tracker_params() {
   vision::BalloonTrackerParams p;
   p.confirm_hits = 3;
   p.max_misses = 4;
-  // far away the range from the apparent diameter is coarse (a pixel of radius is ~10% at 30 m): a wide
-  // gate keeps one track per balloon; balloons are at least 5 m apart
+  // far away the range from the apparent diameter is coarse (a pixel of radius is ~10% at 30 m): a
+  // wide gate keeps one track per balloon; balloons are at least 5 m apart
   p.gate_m = 3.0;
   p.lowpass_tau_s = 0.3;
   return p;
@@ -21,20 +22,24 @@ vision::BalloonTrackerParams tracker_params() {
 
 }  // namespace
 
-BalloonPerception::BalloonPerception(const MissionConfig& config) : config_(config), tracker_(tracker_params()) {}
+BalloonPerception::BalloonPerception(const MissionConfig& config)
+    : config_(config), tracker_(tracker_params()) {}
 
-vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad) const {
+vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& position_enu_m,
+                                                  double yaw_enu_rad) const {
   const Eigen::Quaterniond q_enu_body = vision::q_enu_body_from_rpy(0.0, 0.0, yaw_enu_rad);
-  return vision::camera_pose_from_vehicle(position_enu_m, q_enu_body, vision::GimbalAngles{0.0, 0.0, true},
+  return vision::camera_pose_from_vehicle(position_enu_m, q_enu_body,
+                                          vision::GimbalAngles{0.0, 0.0, true},
                                           config_.camera_offset_body_m);
 }
 
-int BalloonPerception::on_frame(const cv::Mat& bgr, const vision::PinholeIntrinsics& intrinsics, double stamp_s,
-                                const vision::CameraPose& pose) {
-  if (!detector_ || intrinsics.width_px != intrinsics_.width_px || intrinsics.height_px != intrinsics_.height_px ||
-      intrinsics.fx_px != intrinsics_.fx_px) {
+int BalloonPerception::on_frame(const cv::Mat& bgr, const vision::PinholeIntrinsics& intrinsics,
+                                double stamp_s, const vision::CameraPose& pose) {
+  if (!detector_ || intrinsics.width_px != intrinsics_.width_px ||
+      intrinsics.height_px != intrinsics_.height_px || intrinsics.fx_px != intrinsics_.fx_px) {
     intrinsics_ = intrinsics;
-    detector_ = std::make_unique<vision::BalloonDetector>(vision::BalloonDetectorParams{}, intrinsics_);
+    detector_ =
+        std::make_unique<vision::BalloonDetector>(vision::BalloonDetectorParams{}, intrinsics_);
   }
   // (image) => balloon centres in the camera frame => in the field frame
   std::vector<Eigen::Vector3d> positions_enu_m;

@@ -1,16 +1,15 @@
-// The UAV's balloon pipeline (seed 7.2): detector (colour filter, circle fit, Circle Hough refinement, 3D
-// position from the known diameter) on each camera frame, the camera pose from the vehicle's own telemetry
-// and its stabilised forward gimbal, and a temporal filter in the field frame. Pure: frames and poses in,
-// sightings out.
+// The UAV's balloon pipeline (seed 7.2): detector (colour filter, circle fit, Circle Hough
+// refinement, 3D position from the known diameter) on each camera frame, the camera pose from the
+// vehicle's own telemetry and its stabilised forward gimbal, and a temporal filter in the field
+// frame. Pure: frames and poses in, sightings out.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <vector>
-
-#include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "mission_config.hpp"
 #include "uavsim/vision/balloon_detector.hpp"
@@ -23,13 +22,13 @@ class BalloonPerception {
  public:
   explicit BalloonPerception(const MissionConfig& config);
 
-  // The camera pose of a level, forward-looking stabilised gimbal on a vehicle at position_enu_m with heading
-  // yaw_enu_rad (roll and pitch are cancelled by the gimbal; the mount offset is a few centimetres, so the
-  // vehicle's tilt moving it is neglected).
+  // The camera pose of a level, forward-looking stabilised gimbal on a vehicle at position_enu_m
+  // with heading yaw_enu_rad (roll and pitch are cancelled by the gimbal; the mount offset is a few
+  // centimetres, so the vehicle's tilt moving it is neglected).
   vision::CameraPose camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad) const;
 
-  // (frame, its intrinsics, stamp, camera pose at the stamp) => tracks updated. Returns the detections'
-  // count in this frame.
+  // (frame, its intrinsics, stamp, camera pose at the stamp) => tracks updated. Returns the
+  // detections' count in this frame.
   int on_frame(const cv::Mat& bgr, const vision::PinholeIntrinsics& intrinsics, double stamp_s,
                const vision::CameraPose& pose);
 

@@ -1,6 +1,7 @@
-// mbzirc2020-gcs: the ground station of the balloon mission (seed 7.2): one GCS link (seed 6.3) per UAV, the
-// allocator and supervisor of ground_station.hpp stepped at 20 Hz. It prints the UDP port of each UAV's link,
-// then runs until every UAV has landed or is out (or --max-time s of loop time).
+// mbzirc2020-gcs: the ground station of the balloon mission (seed 7.2): one GCS link (seed 6.3) per
+// UAV, the allocator and supervisor of ground_station.hpp stepped at 20 Hz. It prints the UDP port
+// of each UAV's link, then runs until every UAV has landed or is out (or --max-time s of loop
+// time).
 //
 // usage: mbzirc2020-gcs [--uavs N] [--max-time S]
 #include <cmath>
@@ -23,8 +24,10 @@ int main(int argc, char** argv) {
   double max_time_s = 3600.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--uavs") uav_count = std::atoi(argv[i + 1]);
-    else if (a == "--max-time") max_time_s = std::atof(argv[i + 1]);
+    if (a == "--uavs")
+      uav_count = std::atoi(argv[i + 1]);
+    else if (a == "--max-time")
+      max_time_s = std::atof(argv[i + 1]);
     else {
       std::fprintf(stderr, "usage: mbzirc2020-gcs [--uavs N] [--max-time S]\n");
       return 2;
@@ -55,7 +58,8 @@ int main(int argc, char** argv) {
   auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
   for (auto& l : links) {
     GcsLink* p = l.get();
-    (void)loop.watch_fd(p->fd(), EventLoop::kReadable, [p, &now_us](uint32_t) { p->service(now_us()); });
+    (void)loop.watch_fd(p->fd(), EventLoop::kReadable,
+                        [p, &now_us](uint32_t) { p->service(now_us()); });
   }
 
   GroundStation gs(GroundStationConfig{}, uav_count);
@@ -79,12 +83,14 @@ int main(int argc, char** argv) {
       }
     }
     std::vector<std::string> notes;
-    for (const GcsOutgoing& o : gs.step(now, &notes)) links[static_cast<size_t>(o.uav)]->publish(o.topic, o.payload);
+    for (const GcsOutgoing& o : gs.step(now, &notes))
+      links[static_cast<size_t>(o.uav)]->publish(o.topic, o.payload);
     for (const std::string& n : notes) std::printf("gcs t=%.2f %s\n", now, n.c_str());
     if (!notes.empty()) std::fflush(stdout);
     if (finished_s < 0 && gs.finished()) {
       finished_s = now;
-      std::printf("gcs t=%.2f every UAV landed or out; %d balloon(s) reported popped\n", now, gs.popped_reported());
+      std::printf("gcs t=%.2f every UAV landed or out; %d balloon(s) reported popped\n", now,
+                  gs.popped_reported());
       std::fflush(stdout);
     }
   }

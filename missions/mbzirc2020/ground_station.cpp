@@ -6,30 +6,34 @@
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
-double point_segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+double point_segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                              const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;
   const double len2 = ab.squaredNorm();
   const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
   return (a + t * ab - p).norm();
 }
 
-double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 std::string area_text(const AirspaceArea& a) {
   char buf[96];
-  std::snprintf(buf, sizeof(buf), "(%.1f, %.1f) -> (%.1f, %.1f)", a.from_enu_m.x(), a.from_enu_m.y(), a.to_enu_m.x(),
-                a.to_enu_m.y());
+  std::snprintf(buf, sizeof(buf), "(%.1f, %.1f) -> (%.1f, %.1f)", a.from_enu_m.x(),
+                a.from_enu_m.y(), a.to_enu_m.x(), a.to_enu_m.y());
   return buf;
 }
 
 }  // namespace
 
-double segment_distance(const Eigen::Vector2d& a0, const Eigen::Vector2d& a1, const Eigen::Vector2d& b0,
-                        const Eigen::Vector2d& b1) {
+double segment_distance(const Eigen::Vector2d& a0, const Eigen::Vector2d& a1,
+                        const Eigen::Vector2d& b0, const Eigen::Vector2d& b1) {
   // crossing segments are 0 apart; otherwise the closest pair involves an endpoint
   const double d1 = cross(a1 - a0, b0 - a0), d2 = cross(a1 - a0, b1 - a0);
   const double d3 = cross(b1 - b0, a0 - b0), d4 = cross(b1 - b0, a1 - b0);
-  if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0) return 0.0;
+  if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0)
+    return 0.0;
   return std::min({point_segment_distance(a0, b0, b1), point_segment_distance(a1, b0, b1),
                    point_segment_distance(b0, a0, a1), point_segment_distance(b1, a0, a1)});
 }
@@ -49,7 +53,8 @@ void GroundStation::on_airspace(int uav, const std::optional<AirspaceArea>& a, d
   Uav& u = uavs_[static_cast<size_t>(uav)];
   if (!a) {
     // release: echo the NaN so the UAV sees its release acknowledged too
-    if (u.granted || u.pending) queued_notes_.push_back("uav" + std::to_string(uav) + " airspace released");
+    if (u.granted || u.pending)
+      queued_notes_.push_back("uav" + std::to_string(uav) + " airspace released");
     u.granted.reset();
     u.pending.reset();
     queued_.push_back({uav, kTopicAirspace, encode_airspace(std::nullopt)});
@@ -66,8 +71,8 @@ void GroundStation::on_popped(int uav, const Eigen::Vector2d& p, double) {
   }
   popped_.push_back(p);
   char buf[128];
-  std::snprintf(buf, sizeof(buf), "uav%d reports a balloon popped at (%.1f, %.1f): %zu/%d", uav, p.x(), p.y(),
-                popped_.size(), config_.balloon_count);
+  std::snprintf(buf, sizeof(buf), "uav%d reports a balloon popped at (%.1f, %.1f): %zu/%d", uav,
+                p.x(), p.y(), popped_.size(), config_.balloon_count);
   queued_notes_.push_back(buf);
 }
 
@@ -75,8 +80,8 @@ bool GroundStation::conflicts(int uav, const AirspaceArea& a) const {
   for (size_t j = 0; j < uavs_.size(); ++j) {
     if (static_cast<int>(j) == uav || uavs_[j].out) continue;
     const Uav& o = uavs_[j];
-    if (o.granted && segment_distance(a.from_enu_m, a.to_enu_m, o.granted->from_enu_m, o.granted->to_enu_m) <
-                         config_.min_separation_m) {
+    if (o.granted && segment_distance(a.from_enu_m, a.to_enu_m, o.granted->from_enu_m,
+                                      o.granted->to_enu_m) < config_.min_separation_m) {
       return true;
     }
     const bool flying = o.heard && !o.status.landed && !o.status.ready && !o.status.failed;
@@ -127,7 +132,8 @@ std::vector<GcsOutgoing> GroundStation::step(double now_s, std::vector<std::stri
       u.out = true;
       u.granted.reset();
       u.pending.reset();
-      note("uav" + std::to_string(i) + (u.status.failed ? " failed" : " silent") + ": out of the mission");
+      note("uav" + std::to_string(i) + (u.status.failed ? " failed" : " silent") +
+           ": out of the mission");
       for (int j = 0; j < n; ++j) {
         Uav& o = uavs_[static_cast<size_t>(j)];
         if (j == i || o.out || o.take_over_sent || o.status.landed) continue;
@@ -144,7 +150,8 @@ std::vector<GcsOutgoing> GroundStation::step(double now_s, std::vector<std::stri
     if (uavs_[static_cast<size_t>(i)].pending) order.push_back(i);
   }
   std::sort(order.begin(), order.end(), [&](int a, int b) {
-    return uavs_[static_cast<size_t>(a)].pending_since_s < uavs_[static_cast<size_t>(b)].pending_since_s;
+    return uavs_[static_cast<size_t>(a)].pending_since_s <
+           uavs_[static_cast<size_t>(b)].pending_since_s;
   });
   for (int i : order) {
     Uav& u = uavs_[static_cast<size_t>(i)];
@@ -159,7 +166,8 @@ std::vector<GcsOutgoing> GroundStation::step(double now_s, std::vector<std::stri
   if (!land_sent_ && static_cast<int>(popped_.size()) >= config_.balloon_count) {
     land_sent_ = true;
     for (int i = 0; i < n; ++i) {
-      if (!uavs_[static_cast<size_t>(i)].out) out.push_back({i, kTopicState, encode_command(GcsCommand::kLand)});
+      if (!uavs_[static_cast<size_t>(i)].out)
+        out.push_back({i, kTopicState, encode_command(GcsCommand::kLand)});
     }
     note("all " + std::to_string(config_.balloon_count) + " balloons reported popped: land all");
   }

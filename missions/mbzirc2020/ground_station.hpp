@@ -1,12 +1,13 @@
-// The ground station's part of the balloon mission (seed 7.2), as a pure class: it starts the UAVs, allocates
-// airspace, notices a failed UAV and hands its side to the others, and lands everyone once the five balloons
-// are reported popped. The UDP/event-loop shell is gcs_main.cpp.
+// The ground station's part of the balloon mission (seed 7.2), as a pure class: it starts the UAVs,
+// allocates airspace, notices a failed UAV and hands its side to the others, and lands everyone
+// once the five balloons are reported popped. The UDP/event-loop shell is gcs_main.cpp.
 //
-// Airspace (seed 7.2, note 40): "The ground control software receives AIRSPACE messages from both UAVs and,
-// therefore, knows if they are trying to get too close. If they are sufficiently apart, it replies to both.
-// Otherwise, it only replies to the first one and the other one has to wait." A request is the segment from
-// the UAV to the end of its pierce; it is granted (echoed unchanged) when it stays min_separation_m away from
-// every other UAV's granted segment and from every other flying UAV's last reported position. NaN releases.
+// Airspace (seed 7.2, note 40): "The ground control software receives AIRSPACE messages from both
+// UAVs and, therefore, knows if they are trying to get too close. If they are sufficiently apart,
+// it replies to both. Otherwise, it only replies to the first one and the other one has to wait." A
+// request is the segment from the UAV to the end of its pierce; it is granted (echoed unchanged)
+// when it stays min_separation_m away from every other UAV's granted segment and from every other
+// flying UAV's last reported position. NaN releases.
 #pragma once
 
 #include <Eigen/Core>
@@ -34,8 +35,8 @@ struct GcsOutgoing {
 };
 
 // Distance between segments [a0, a1] and [b0, b1] in the plane.
-double segment_distance(const Eigen::Vector2d& a0, const Eigen::Vector2d& a1, const Eigen::Vector2d& b0,
-                        const Eigen::Vector2d& b1);
+double segment_distance(const Eigen::Vector2d& a0, const Eigen::Vector2d& a1,
+                        const Eigen::Vector2d& b0, const Eigen::Vector2d& b1);
 
 class GroundStation {
  public:

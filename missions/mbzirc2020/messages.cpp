@@ -32,8 +32,8 @@ std::optional<GcsCommand> decode_command(const std::vector<uint8_t>& p) {
 
 std::vector<uint8_t> encode_airspace(const std::optional<AirspaceArea>& a) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const double v[4] = {a ? a->from_enu_m.x() : nan, a ? a->from_enu_m.y() : nan, a ? a->to_enu_m.x() : nan,
-                       a ? a->to_enu_m.y() : nan};
+  const double v[4] = {a ? a->from_enu_m.x() : nan, a ? a->from_enu_m.y() : nan,
+                       a ? a->to_enu_m.x() : nan, a ? a->to_enu_m.y() : nan};
   std::vector<uint8_t> out;
   for (double x : v) put_double(out, x);
   return out;
@@ -52,9 +52,9 @@ std::optional<std::optional<AirspaceArea>> decode_airspace(const std::vector<uin
 }
 
 std::vector<uint8_t> encode_status(const UavStatus& s) {
-  std::vector<uint8_t> out{s.state,
-                           static_cast<uint8_t>((s.ready ? 1 : 0) | (s.failed ? 2 : 0) | (s.landed ? 4 : 0)),
-                           s.popped};
+  std::vector<uint8_t> out{
+      s.state, static_cast<uint8_t>((s.ready ? 1 : 0) | (s.failed ? 2 : 0) | (s.landed ? 4 : 0)),
+      s.popped};
   for (int i = 0; i < 3; ++i) put_double(out, s.position_enu_m[i]);
   return out;
 }

@@ -1,11 +1,14 @@
-// The mission's ground-station topics (seed 6.3 protocol, seed 7.2 topics) and their payloads. Topic ids
-// with the high bit set are latest-only (a newer message replaces an unacknowledged older one).
-//   STATE     GCS -> UAV, queued: start / land / take over the other side (seed: "start, monitor and land")
-//   AIRSPACE  both ways, latest-only: a UAV's request (its position and the balloon it will pierce), echoed
+// The mission's ground-station topics (seed 6.3 protocol, seed 7.2 topics) and their payloads.
+// Topic ids with the high bit set are latest-only (a newer message replaces an unacknowledged older
+// one).
+//   STATE     GCS -> UAV, queued: start / land / take over the other side (seed: "start, monitor
+//   and land") AIRSPACE  both ways, latest-only: a UAV's request (its position and the balloon it
+//   will pierce), echoed
 //             unchanged by the GCS when granted; all NaN releases (seed 7.2, note 40)
 //   STATUS    UAV -> GCS, latest-only: FSM state, flags, position, balloons it believes it popped
 //   POPPED    UAV -> GCS, queued: where a balloon was pierced
-// Payloads are big-endian (doubles as IEEE-754 bit patterns), so any ground station can decode them.
+// Payloads are big-endian (doubles as IEEE-754 bit patterns), so any ground station can decode
+// them.
 #pragma once
 
 #include <Eigen/Core>
@@ -22,16 +25,18 @@ inline constexpr uint16_t kTopicPopped = 0x0004;
 
 enum class GcsCommand : uint8_t { kStart = 1, kLand = 2, kTakeOver = 3 };
 
-// An airspace request: the requester's position and the point it will fly to (x, y in the field frame).
-// Unset (std::nullopt) is the release, sent as NaN on the wire as the seed does.
+// An airspace request: the requester's position and the point it will fly to (x, y in the field
+// frame). Unset (std::nullopt) is the release, sent as NaN on the wire as the seed does.
 struct AirspaceArea {
   Eigen::Vector2d from_enu_m = Eigen::Vector2d::Zero();
   Eigen::Vector2d to_enu_m = Eigen::Vector2d::Zero();
-  bool operator==(const AirspaceArea& o) const { return from_enu_m == o.from_enu_m && to_enu_m == o.to_enu_m; }
+  bool operator==(const AirspaceArea& o) const {
+    return from_enu_m == o.from_enu_m && to_enu_m == o.to_enu_m;
+  }
 };
 
 struct UavStatus {
-  uint8_t state = 0;  // VehicleState
+  uint8_t state = 0;    // VehicleState
   bool ready = false;   // on the ground, ready to arm
   bool failed = false;  // lost its motors / disarmed in the air: out of the mission
   bool landed = false;  // mission over, on the ground

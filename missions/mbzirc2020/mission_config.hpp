@@ -1,14 +1,15 @@
-// What the MBZIRC 2020 Challenge 1 balloon mission knows before take-off (seed 7.2): the arena (from the
-// rules, in the field's local ENU frame, which is every vehicle's EKF origin here), the balloons' height,
-// the airframe's geometry (camera and blade offsets) and the strategy's tuning. Nothing in it comes from
-// the simulator's ground truth.
+// What the MBZIRC 2020 Challenge 1 balloon mission knows before take-off (seed 7.2): the arena
+// (from the rules, in the field's local ENU frame, which is every vehicle's EKF origin here), the
+// balloons' height, the airframe's geometry (camera and blade offsets) and the strategy's tuning.
+// Nothing in it comes from the simulator's ground truth.
 #pragma once
 
 #include <Eigen/Core>
 
 namespace uavsim::missions::mbzirc2020 {
 
-// Which long side of the arena a UAV works from (seed 7.2: "S0" goes to a side and "S1" to the opposite).
+// Which long side of the arena a UAV works from (seed 7.2: "S0" goes to a side and "S1" to the
+// opposite).
 enum class Side { kSouth, kNorth };
 
 struct MissionConfig {
@@ -24,28 +25,32 @@ struct MissionConfig {
   Eigen::Vector3d blade_offset_body_m{0.43, 0.0, 0.0};
 
   // strategy (seed fig. 7.13)
-  double takeoff_altitude_m = 5.0;          // "Take-off": until 5 m
-  double side_inset_m = 2.0;                // scan line this far inside a long side
-  double scan_corner_inset_m = 4.0;         // scan legs end this far from the short sides
-  double scan_altitude_low_m = 2.8;         // seed: 3 m / 3.5 m for a ~3 m balloon; ours is 2.7 m at centre
+  double takeoff_altitude_m = 5.0;   // "Take-off": until 5 m
+  double side_inset_m = 2.0;         // scan line this far inside a long side
+  double scan_corner_inset_m = 4.0;  // scan legs end this far from the short sides
+  double scan_altitude_low_m =
+      2.8;  // seed: 3 m / 3.5 m for a ~3 m balloon; ours is 2.7 m at centre
   double scan_altitude_high_m = 3.3;
-  double scan_speed_m_s = 3.5;              // "Blind Scan": slow sideways translation
-  double transit_speed_m_s = 6.0;           // side centre, back-off, landing spot
+  double scan_speed_m_s = 3.5;     // "Blind Scan": slow sideways translation
+  double transit_speed_m_s = 6.0;  // side centre, back-off, landing spot
   double max_climb_m_s = 1.5;
-  // piercing: the blades ride this far above the balloon's centre (still inside the balloon, whose half
-  // chord 0.1 m above the centre is 0.28 m) so that the gear clears the pole top once the balloon is gone
+  // piercing: the blades ride this far above the balloon's centre (still inside the balloon, whose
+  // half chord 0.1 m above the centre is 0.28 m) so that the gear clears the pole top once the
+  // balloon is gone
   double pierce_blade_above_centre_m = 0.08;
   double pierce_speed_far_m_s = 4.0;
   double pierce_speed_near_m_s = 1.3;
-  double pierce_slow_range_m = 5.0;         // blade-to-balloon distance where the approach slows down
-  // seed: "this state is maintained for 10 seconds after the balloon was last detected"; our camera loses
-  // the balloon ~1.3 m before the blades touch it, so a shorter coast, ended early once past the balloon
+  double pierce_slow_range_m = 5.0;  // blade-to-balloon distance where the approach slows down
+  // seed: "this state is maintained for 10 seconds after the balloon was last detected"; our camera
+  // loses the balloon ~1.3 m before the blades touch it, so a shorter coast, ended early once past
+  // the balloon
   double pierce_coast_s = 3.0;
-  double pierce_overshoot_m = 1.0;          // blades this far past the balloon's centre: done
+  double pierce_overshoot_m = 1.0;  // blades this far past the balloon's centre: done
   double pierce_timeout_s = 40.0;
-  double allocation_wait_lost_s = 2.0;      // balloon unseen this long while waiting: cancel (NaN)
+  double allocation_wait_lost_s = 2.0;  // balloon unseen this long while waiting: cancel (NaN)
   double max_target_range_m = 60.0;
-  // each side belongs to one UAV (seed 7.2): a UAV pierces the balloons nearer its side, plus this margin
+  // each side belongs to one UAV (seed 7.2): a UAV pierces the balloons nearer its side, plus this
+  // margin
   double own_half_margin_m = 2.0;
   double position_tolerance_m = 1.0;
   double altitude_tolerance_m = 0.15;

@@ -1,11 +1,13 @@
-// mbzirc2020-run: the whole MBZIRC 2020 balloon mission in the simulator, as on competition day (seed 7.2):
-// uavsim-server on models/worlds/mbzirc2020.xml (seeded balloon positions, optional --record video), the
-// ground station and one mission program per UAV, all on the server's lockstep clock at full speed. It
-// prints the programs' progress and the simulator's events, then a summary scored from the sim API's ground
-// truth (the programs never see it): balloons popped, mission time, crashes, the video.
+// mbzirc2020-run: the whole MBZIRC 2020 balloon mission in the simulator, as on competition day
+// (seed 7.2): uavsim-server on models/worlds/mbzirc2020.xml (seeded balloon positions, optional
+// --record video), the ground station and one mission program per UAV, all on the server's lockstep
+// clock at full speed. It prints the programs' progress and the simulator's events, then a summary
+// scored from the sim API's ground truth (the programs never see it): balloons popped, mission
+// time, crashes, the video.
 //
-// Exit status: 0 only when every balloon is popped and no vehicle crashed (other than one killed on purpose
-// with --kill, Competition Day 2's failed UAV). 1: the mission fell short; 2: usage; 4: the harness failed.
+// Exit status: 0 only when every balloon is popped and no vehicle crashed (other than one killed on
+// purpose with --kill, Competition Day 2's failed UAV). 1: the mission fell short; 2: usage; 4: the
+// harness failed.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -23,13 +25,12 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 extern char** environ;
 
@@ -149,7 +150,8 @@ class Api {
   Json request(Json j, double wall_timeout_s = 30.0) {
     j["id"] = ++next_id_;
     const std::string line = j.dump() + "\n";
-    if (send(fd_, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size())) return Json();
+    if (send(fd_, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size()))
+      return Json();
     const auto end = Clock::now() + std::chrono::duration<double>(wall_timeout_s);
     while (Clock::now() < end) {
       auto m = read_one(std::chrono::duration<double>(end - Clock::now()).count());
@@ -201,7 +203,7 @@ struct Options {
   std::string record;  // empty: no video
   double budget_s = 400.0;
   double wall_limit_s = 1800.0;
-  std::string kill;    // vehicle to kill right after its take-off
+  std::string kill;  // vehicle to kill right after its take-off
   std::string json_path;
   std::string camera_size = "384x216";
   double camera_fps = 15;
@@ -240,29 +242,47 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
     const char* v = nullptr;
-    if (a == "--no-record") record = false;
-    else if (a == "--quiet") o.quiet = true;
-    else if (a == "--help" || a == "-h") return usage();
-    else if ((v = next()) == nullptr) return usage();
-    else if (a == "--seed") o.seed = std::strtoull(v, nullptr, 10);
-    else if (a == "--world") o.world = v;
-    else if (a == "--record") o.record = v;
-    else if (a == "--budget") o.budget_s = std::atof(v);
-    else if (a == "--wall-limit") o.wall_limit_s = std::atof(v);
-    else if (a == "--kill") o.kill = v;
-    else if (a == "--json") o.json_path = v;
-    else if (a == "--camera-size") o.camera_size = v;
-    else if (a == "--camera-fps") o.camera_fps = std::atof(v);
-    else if (a == "--server") o.server = v;
-    else if (a == "--uav") o.uav = v;
-    else if (a == "--gcs") o.gcs = v;
-    else return usage();
+    if (a == "--no-record")
+      record = false;
+    else if (a == "--quiet")
+      o.quiet = true;
+    else if (a == "--help" || a == "-h")
+      return usage();
+    else if ((v = next()) == nullptr)
+      return usage();
+    else if (a == "--seed")
+      o.seed = std::strtoull(v, nullptr, 10);
+    else if (a == "--world")
+      o.world = v;
+    else if (a == "--record")
+      o.record = v;
+    else if (a == "--budget")
+      o.budget_s = std::atof(v);
+    else if (a == "--wall-limit")
+      o.wall_limit_s = std::atof(v);
+    else if (a == "--kill")
+      o.kill = v;
+    else if (a == "--json")
+      o.json_path = v;
+    else if (a == "--camera-size")
+      o.camera_size = v;
+    else if (a == "--camera-fps")
+      o.camera_fps = std::atof(v);
+    else if (a == "--server")
+      o.server = v;
+    else if (a == "--uav")
+      o.uav = v;
+    else if (a == "--gcs")
+      o.gcs = v;
+    else
+      return usage();
   }
   if (record && o.record.empty()) o.record = "mbzirc2020_seed" + std::to_string(o.seed) + ".mp4";
   if (!record) o.record.clear();
   const size_t x = o.camera_size.find('x');
   if (x == std::string::npos) return usage();
-  const std::string cam_opts = "width=" + o.camera_size.substr(0, x) + ",height=" + o.camera_size.substr(x + 1) +
+  const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
+                               ",height=" + o.camera_size.substr(x + 1) +
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
   const auto wall_start = Clock::now();
   auto wall_s = [&] { return std::chrono::duration<double>(Clock::now() - wall_start).count(); };
@@ -284,9 +304,22 @@ int main(int argc, char** argv) {
   // 1. the server, on ephemeral ports, as fast as possible
   Child& server = children.emplace_back();
   server.name = "server";
-  std::vector<std::string> sargs{o.server, o.world, "--rate", "0", "--seed", std::to_string(o.seed),
-                                 "--mavlink-port", "0", "--api-port", "0", "--lockstep-timeout", "120",
-                                 "--camera", "uav0_front:" + cam_opts, "--camera", "uav1_front:" + cam_opts};
+  std::vector<std::string> sargs{o.server,
+                                 o.world,
+                                 "--rate",
+                                 "0",
+                                 "--seed",
+                                 std::to_string(o.seed),
+                                 "--mavlink-port",
+                                 "0",
+                                 "--api-port",
+                                 "0",
+                                 "--lockstep-timeout",
+                                 "120",
+                                 "--camera",
+                                 "uav0_front:" + cam_opts,
+                                 "--camera",
+                                 "uav1_front:" + cam_opts};
   if (!o.record.empty()) sargs.insert(sargs.end(), {"--record", o.record});
   std::map<std::string, int> mavlink_port;
   int api_port = 0;
@@ -326,7 +359,8 @@ int main(int argc, char** argv) {
     api.request({{"op", "subscribe_events"}});
     const std::string lockstep = "UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(api_port) + "/0.05";
 
-    // 3. the ground station; its link ports, then the server's GCS link relay in front of each (seed 6.3)
+    // 3. the ground station; its link ports, then the server's GCS link relay in front of each
+    // (seed 6.3)
     Child& gcs = children.emplace_back();
     gcs.name = "gcs";
     std::map<int, int> gcs_port;
@@ -343,7 +377,9 @@ int main(int argc, char** argv) {
     }
     if (!harness_error && gcs_port.size() < 2) fail("the ground station did not start");
     for (int i = 0; i < 2 && !harness_error; ++i) {
-      const Json r = api.request({{"op", "gcs_link_open"}, {"vehicle", i}, {"gcs_target_host", "127.0.0.1"},
+      const Json r = api.request({{"op", "gcs_link_open"},
+                                  {"vehicle", i},
+                                  {"gcs_target_host", "127.0.0.1"},
                                   {"gcs_target_port", gcs_port[i]}});
       if (!r.value("ok", false)) {
         fail("gcs_link_open: " + r.dump());
@@ -372,8 +408,9 @@ int main(int argc, char** argv) {
     }
     if (!harness_error) {
       api.request({{"op", "resume"}});
-      say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " + std::to_string(static_cast<int>(o.budget_s)) +
-          " s sim" + (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
+      say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " +
+          std::to_string(static_cast<int>(o.budget_s)) + " s sim" +
+          (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
     }
 
     // 6. follow the programs and the event stream until they finish or the budget is spent
@@ -393,26 +430,31 @@ int main(int argc, char** argv) {
         const std::string type = e.value("type", ""), veh = e.value("vehicle_name", "");
         const double t = e.value("time", 0.0);
         const std::string detail = e.value("detail", "");
-        if (type == "takeoff" && first_armed_s < 0) first_armed_s = t;  // the GCS start: first take-off
+        if (type == "takeoff" && first_armed_s < 0)
+          first_armed_s = t;  // the GCS start: first take-off
         if (type == "balloon_popped") last_pop_s = t;
         if (type == "vehicle_killed") killed.insert(veh);
         if (type == "crash" && !killed.count(veh)) {
           crashes.push_back(veh + " at " + std::to_string(t) + " s: " + detail);
           collision = collision || detail.find("collision") != std::string::npos;
         }
-        if (type == "balloon_popped" || type == "crash" || type == "vehicle_killed" || type == "takeoff" ||
-            type == "touchdown") {
+        if (type == "balloon_popped" || type == "crash" || type == "vehicle_killed" ||
+            type == "takeoff" || type == "touchdown") {
           char buf[256];
-          std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), veh.c_str(), detail.c_str());
+          std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), veh.c_str(),
+                        detail.c_str());
           say(buf);
         }
         if (type == "takeoff" && veh == o.kill && !killed.count(veh)) {
-          api.request({{"op", "kill_vehicle"}, {"vehicle", veh}, {"reason", "Competition Day 2 malfunction"}});
+          api.request({{"op", "kill_vehicle"},
+                       {"vehicle", veh},
+                       {"reason", "Competition Day 2 malfunction"}});
           killed.insert(veh);
         }
       }
       bool all_done = true;
-      for (size_t i = 1; i < children.size(); ++i) all_done = all_done && children[i].reap() && children[i].fd < 0;
+      for (size_t i = 1; i < children.size(); ++i)
+        all_done = all_done && children[i].reap() && children[i].fd < 0;
       if (Clock::now() - last_status > std::chrono::milliseconds(500) || all_done) {
         last_status = Clock::now();
         const Json s = api.request({{"op", "status"}});
@@ -455,21 +497,25 @@ int main(int argc, char** argv) {
     for (const std::string& l : c.read_lines()) say("[" + c.name + "] " + l);
   }
 
-  const bool success = harness_error == 0 && balloons_total > 0 && popped == balloons_total && crashes.empty();
-  const double mission_s = (first_armed_s >= 0 && last_pop_s >= 0) ? last_pop_s - first_armed_s : -1;
-  std::printf("==== MBZIRC 2020 balloons, seed %llu%s ====\n", static_cast<unsigned long long>(o.seed),
+  const bool success =
+      harness_error == 0 && balloons_total > 0 && popped == balloons_total && crashes.empty();
+  const double mission_s =
+      (first_armed_s >= 0 && last_pop_s >= 0) ? last_pop_s - first_armed_s : -1;
+  std::printf("==== MBZIRC 2020 balloons, seed %llu%s ====\n",
+              static_cast<unsigned long long>(o.seed),
               o.kill.empty() ? "" : (" (" + o.kill + " killed after take-off)").c_str());
   std::printf("balloons popped: %d/%d\n", popped, balloons_total);
   if (mission_s >= 0) {
-    std::printf("mission time: %.1f s sim (first take-off at t=%.1f s, last balloon at t=%.1f s)\n", mission_s, first_armed_s,
-                last_pop_s);
+    std::printf("mission time: %.1f s sim (first take-off at t=%.1f s, last balloon at t=%.1f s)\n",
+                mission_s, first_armed_s, last_pop_s);
   } else {
     std::printf("mission time: n/a\n");
   }
   std::printf("collisions between UAVs: %s\n", collision ? "yes" : "none");
   std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
-  if (!killed.empty()) std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
+  if (!killed.empty())
+    std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
   std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");

@@ -1,8 +1,10 @@
-// mbzirc2020-uav: one balloon-popping UAV (seed 7.2): its own MAVLink link, its camera, its GCS link, and the
-// strategy FSM (vehicle_fsm.hpp) stepped at 20 Hz on the event loop. The same program would fly a real drone
-// (the camera frames then come from its driver); UAVSIM_LOCKSTEP puts it on sim time.
+// mbzirc2020-uav: one balloon-popping UAV (seed 7.2): its own MAVLink link, its camera, its GCS
+// link, and the strategy FSM (vehicle_fsm.hpp) stepped at 20 Hz on the event loop. The same program
+// would fly a real drone (the camera frames then come from its driver); UAVSIM_LOCKSTEP puts it on
+// sim time.
 //
-// usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] [--vehicle NAME]
+// usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME]
+// [--vehicle NAME]
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -23,14 +25,15 @@ using namespace uavsim::missions::mbzirc2020;
 
 namespace {
 
-constexpr double kStep_s = 0.05;          // FSM rate 20 Hz
-constexpr double kStatusPeriod_s = 0.5;   // STATUS to the GCS
-constexpr double kLinger_s = 3.0;         // keep reporting after the end, so the GCS hears it
+constexpr double kStep_s = 0.05;         // FSM rate 20 Hz
+constexpr double kStatusPeriod_s = 0.5;  // STATUS to the GCS
+constexpr double kLinger_s = 3.0;        // keep reporting after the end, so the GCS hears it
 
 int usage() {
-  std::fprintf(stderr,
-               "usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] "
-               "[--vehicle NAME]\n");
+  std::fprintf(
+      stderr,
+      "usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] "
+      "[--vehicle NAME]\n");
   return 2;
 }
 
@@ -41,14 +44,22 @@ int main(int argc, char** argv) {
   std::string mavlink, gcs, camera, vehicle;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--index") index = std::atoi(argv[i + 1]);
-    else if (a == "--mavlink") mavlink = argv[i + 1];
-    else if (a == "--gcs") gcs = argv[i + 1];
-    else if (a == "--camera") camera = argv[i + 1];
-    else if (a == "--vehicle") vehicle = argv[i + 1];
-    else return usage();
+    if (a == "--index")
+      index = std::atoi(argv[i + 1]);
+    else if (a == "--mavlink")
+      mavlink = argv[i + 1];
+    else if (a == "--gcs")
+      gcs = argv[i + 1];
+    else if (a == "--camera")
+      camera = argv[i + 1];
+    else if (a == "--vehicle")
+      vehicle = argv[i + 1];
+    else
+      return usage();
   }
-  if (index < 0 || index > 1 || mavlink.empty() || gcs.empty() || gcs.find(':') == std::string::npos) return usage();
+  if (index < 0 || index > 1 || mavlink.empty() || gcs.empty() ||
+      gcs.find(':') == std::string::npos)
+    return usage();
   if (vehicle.empty()) vehicle = "uav" + std::to_string(index);
   if (camera.empty()) camera = vehicle + "_front";
   const std::string me = vehicle;
@@ -77,7 +88,8 @@ int main(int argc, char** argv) {
   std::string error;
   const size_t colon = gcs.rfind(':');
   auto link = GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
-                            {"127.0.0.1", 0, gcs.substr(0, colon), static_cast<uint16_t>(std::atoi(gcs.c_str() + colon + 1))},
+                            {"127.0.0.1", 0, gcs.substr(0, colon),
+                             static_cast<uint16_t>(std::atoi(gcs.c_str() + colon + 1))},
                             &error);
   if (!link) {
     log("GCS link: " + error);
@@ -106,7 +118,8 @@ int main(int argc, char** argv) {
   cc.format = CameraFormat::kBgr;
   auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
     if (pose.time_s < 0) return;
-    const Eigen::Vector3d p = pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
+    const Eigen::Vector3d p =
+        pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
     uavsim::vision::PinholeIntrinsics k;
     k.fx_px = f.intrinsics.fx;
     k.fy_px = f.intrinsics.fy;
@@ -125,12 +138,14 @@ int main(int argc, char** argv) {
     log("wait ready: " + r.message());
     return 1;
   }
-  if (auto r = uav.point_gimbal(0.0, 0.0); !r) log("gimbal: " + r.message() + " (keeping its default)");
+  if (auto r = uav.point_gimbal(0.0, 0.0); !r)
+    log("gimbal: " + r.message() + " (keeping its default)");
   const Eigen::Vector2d home = uav.telemetry().position_enu_m.head<2>();
   const Side side = index == 0 ? Side::kSouth : Side::kNorth;
   VehicleFsm fsm(config, index, side, home);
-  log(std::string("ready at (") + std::to_string(home.x()).substr(0, 6) + ", " + std::to_string(home.y()).substr(0, 6) +
-      "), side " + (side == Side::kSouth ? "south" : "north") + ": waiting for the GCS start");
+  log(std::string("ready at (") + std::to_string(home.x()).substr(0, 6) + ", " +
+      std::to_string(home.y()).substr(0, 6) + "), side " +
+      (side == Side::kSouth ? "south" : "north") + ": waiting for the GCS start");
 
   double last_status_s = -1e9, end_s = -1.0;
   VehicleState last_state = fsm.state();
@@ -173,7 +188,8 @@ int main(int argc, char** argv) {
         break;
       }
       case VehicleOutputs::Action::kVelocity:
-        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad); !r && fsm.state() != VehicleState::kFailed) {
+        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad);
+            !r && fsm.state() != VehicleState::kFailed) {
           log("velocity: " + r.message());
         }
         break;
@@ -195,10 +211,11 @@ int main(int argc, char** argv) {
       s.popped = static_cast<uint8_t>(fsm.popped());
       link->publish(kTopicStatus, encode_status(s));
     }
-    if (end_s < 0 && (fsm.state() == VehicleState::kLanded || fsm.state() == VehicleState::kFailed)) {
+    if (end_s < 0 &&
+        (fsm.state() == VehicleState::kLanded || fsm.state() == VehicleState::kFailed)) {
       end_s = loop.now();
-      log(std::string("mission over: ") + vehicle_state_name(fsm.state()) + ", " + std::to_string(fsm.popped()) +
-          " balloon(s) pierced");
+      log(std::string("mission over: ") + vehicle_state_name(fsm.state()) + ", " +
+          std::to_string(fsm.popped()) + " balloon(s) pierced");
     }
   }
   loop.unwatch_fd(link->fd());

@@ -31,23 +31,39 @@ std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
 
 const char* vehicle_state_name(VehicleState s) {
   switch (s) {
-    case VehicleState::kPreflight: return "Preflight";
-    case VehicleState::kTakeOff: return "Take-off";
-    case VehicleState::kGoSideCenter: return "Go Side Center";
-    case VehicleState::kGoScanAltitude: return "Go Scan Altitude";
-    case VehicleState::kBlindScan: return "Blind Scan";
-    case VehicleState::kAreaAllocationRequest: return "Area Allocation Request";
-    case VehicleState::kPierce: return "Pierce";
-    case VehicleState::kBackOff: return "Back Off";
-    case VehicleState::kLand: return "Land";
-    case VehicleState::kLanded: return "Landed";
-    case VehicleState::kFailed: return "Failed";
+    case VehicleState::kPreflight:
+      return "Preflight";
+    case VehicleState::kTakeOff:
+      return "Take-off";
+    case VehicleState::kGoSideCenter:
+      return "Go Side Center";
+    case VehicleState::kGoScanAltitude:
+      return "Go Scan Altitude";
+    case VehicleState::kBlindScan:
+      return "Blind Scan";
+    case VehicleState::kAreaAllocationRequest:
+      return "Area Allocation Request";
+    case VehicleState::kPierce:
+      return "Pierce";
+    case VehicleState::kBackOff:
+      return "Back Off";
+    case VehicleState::kLand:
+      return "Land";
+    case VehicleState::kLanded:
+      return "Landed";
+    case VehicleState::kFailed:
+      return "Failed";
   }
   return "?";
 }
 
-VehicleFsm::VehicleFsm(const MissionConfig& config, int index, Side side, const Eigen::Vector2d& landing_spot_enu_m)
-    : config_(config), index_(index), side_(side), home_side_(side), landing_spot_enu_m_(landing_spot_enu_m) {}
+VehicleFsm::VehicleFsm(const MissionConfig& config, int index, Side side,
+                       const Eigen::Vector2d& landing_spot_enu_m)
+    : config_(config),
+      index_(index),
+      side_(side),
+      home_side_(side),
+      landing_spot_enu_m_(landing_spot_enu_m) {}
 
 double VehicleFsm::line_y_m() const {
   return side_ == Side::kSouth ? config_.arena_y_min_m + config_.side_inset_m
@@ -63,10 +79,10 @@ bool VehicleFsm::in_own_half(const Eigen::Vector3d& p) const {
                                     : p.y() >= mid_y - config_.own_half_margin_m;
 }
 
-// seed: "the UAV slowly translates sideways ... When a corner of the arena rectangle is reached, the direction
-// of the translation is inverted and the operating altitude is swapped ... After two full scans the UAV,
-// which is back at the midpoint, transitions to the Land state". S0 sweeps east first, S1 west first, so the
-// two start on different balloons.
+// seed: "the UAV slowly translates sideways ... When a corner of the arena rectangle is reached,
+// the direction of the translation is inverted and the operating altitude is swapped ... After two
+// full scans the UAV, which is back at the midpoint, transitions to the Land state". S0 sweeps east
+// first, S1 west first, so the two start on different balloons.
 void VehicleFsm::plan_scan() {
   const double centre_x = 0.5 * (config_.arena_x_min_m + config_.arena_x_max_m);
   const double east = config_.arena_x_max_m - config_.scan_corner_inset_m;
@@ -82,19 +98,21 @@ Eigen::Vector3d VehicleFsm::toward(const Eigen::Vector3d& p, const Eigen::Vector
                                    double max_speed_m_s) const {
   Eigen::Vector2d v_xy = kGainXy_1_s * (target.head<2>() - p.head<2>());
   if (v_xy.norm() > max_speed_m_s) v_xy *= max_speed_m_s / v_xy.norm();
-  const double vz = std::clamp(kGainZ_1_s * (target.z() - p.z()), -config_.max_climb_m_s, config_.max_climb_m_s);
+  const double vz =
+      std::clamp(kGainZ_1_s * (target.z() - p.z()), -config_.max_climb_m_s, config_.max_climb_m_s);
   return {v_xy.x(), v_xy.y(), vz};
 }
 
 void VehicleFsm::hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const {
   out.action = VehicleOutputs::Action::kVelocity;
-  out.velocity_enu_m_s = toward(in.position_enu_m,
-                                {in.position_enu_m.x(), in.position_enu_m.y(), hold_altitude_m_}, 0.0);
+  out.velocity_enu_m_s = toward(
+      in.position_enu_m, {in.position_enu_m.x(), in.position_enu_m.y(), hold_altitude_m_}, 0.0);
   out.yaw_enu_rad = yaw_enu_rad;
 }
 
 void VehicleFsm::enter(VehicleState s, VehicleOutputs& out, const std::string& why) {
-  out.note = std::string(vehicle_state_name(state_)) + " -> " + vehicle_state_name(s) + (why.empty() ? "" : ": ") + why;
+  out.note = std::string(vehicle_state_name(state_)) + " -> " + vehicle_state_name(s) +
+             (why.empty() ? "" : ": ") + why;
   state_ = s;
   state_since_s_ = now_s_;
 }
@@ -109,20 +127,24 @@ void VehicleFsm::start_landing(VehicleOutputs& out, const std::string& why) {
   enter(VehicleState::kLand, out, why);
 }
 
-// the nearest confirmed balloon in this UAV's half, inside the arena, not where we already popped one
+// the nearest confirmed balloon in this UAV's half, inside the arena, not where we already popped
+// one
 std::optional<BalloonSighting> VehicleFsm::choose_target(const VehicleInputs& in) const {
   std::optional<BalloonSighting> best;
   double best_range = config_.max_target_range_m;
   for (const BalloonSighting& b : in.balloons) {
     if (in.now_s - b.last_seen_s > kFreshSighting_s) continue;
     const Eigen::Vector3d& p = b.position_enu_m;
-    if (p.x() < config_.arena_x_min_m + kArenaMargin_m || p.x() > config_.arena_x_max_m - kArenaMargin_m ||
-        p.y() < config_.arena_y_min_m + kArenaMargin_m || p.y() > config_.arena_y_max_m - kArenaMargin_m) {
+    if (p.x() < config_.arena_x_min_m + kArenaMargin_m ||
+        p.x() > config_.arena_x_max_m - kArenaMargin_m ||
+        p.y() < config_.arena_y_min_m + kArenaMargin_m ||
+        p.y() > config_.arena_y_max_m - kArenaMargin_m) {
       continue;
     }
     if (!in_own_half(p)) continue;
     bool done = false;
-    for (const Eigen::Vector2d& q : popped_at_) done = done || (q - p.head<2>()).norm() < kPoppedExclusion_m;
+    for (const Eigen::Vector2d& q : popped_at_)
+      done = done || (q - p.head<2>()).norm() < kPoppedExclusion_m;
     if (done) continue;
     const double range = (p.head<2>() - in.position_enu_m.head<2>()).norm();
     if (range < best_range) {
@@ -143,8 +165,8 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
     if (c == GcsCommand::kTakeOver && !take_over_) {
       take_over_ = true;
       out.note = "take over: the other UAV is out, every balloon is ours";
-    } else if (c == GcsCommand::kLand && state_ != VehicleState::kLand && state_ != VehicleState::kLanded &&
-               state_ != VehicleState::kFailed) {
+    } else if (c == GcsCommand::kLand && state_ != VehicleState::kLand &&
+               state_ != VehicleState::kLanded && state_ != VehicleState::kFailed) {
       if (state_ == VehicleState::kPreflight) {
         enter(VehicleState::kLanded, out, "GCS land before start");
       } else {
@@ -185,22 +207,25 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
       break;
 
     case VehicleState::kGoSideCenter: {
-      // "reaches the midpoint of one of the long sides ... maintaining the current altitude. The heading is
-      // adjusted so that the camera points towards the inner part of the arena"
-      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m), line_y_m(), hold_altitude_m_);
+      // "reaches the midpoint of one of the long sides ... maintaining the current altitude. The
+      // heading is adjusted so that the camera points towards the inner part of the arena"
+      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m),
+                                   line_y_m(), hold_altitude_m_);
       out.action = VehicleOutputs::Action::kVelocity;
       out.velocity_enu_m_s = toward(p, target, config_.transit_speed_m_s);
       out.yaw_enu_rad = inward_yaw_rad();
       if ((target.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
         plan_scan();
         hold_altitude_m_ = scan_[0].altitude_m;
-        enter(VehicleState::kGoScanAltitude, out, fmt("side centre (%.1f, %.1f)", target.x(), target.y()));
+        enter(VehicleState::kGoScanAltitude, out,
+              fmt("side centre (%.1f, %.1f)", target.x(), target.y()));
       }
       break;
     }
 
     case VehicleState::kGoScanAltitude: {
-      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m), line_y_m(), hold_altitude_m_);
+      const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m),
+                                   line_y_m(), hold_altitude_m_);
       out.action = VehicleOutputs::Action::kVelocity;
       out.velocity_enu_m_s = toward(p, target, config_.transit_speed_m_s);
       out.yaw_enu_rad = inward_yaw_rad();
@@ -211,22 +236,25 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
     }
 
     case VehicleState::kBlindScan: {
-      // "Whenever a green balloon is detected, a transition to the Area Allocation Request is immediately
-      // executed"
+      // "Whenever a green balloon is detected, a transition to the Area Allocation Request is
+      // immediately executed"
       if (auto b = choose_target(in)) {
         target_ = *b;
         pierce_start_enu_m_ = {p.x(), line_y_m(), hold_altitude_m_};
         const Eigen::Vector2d dir = (b->position_enu_m.head<2>() - p.head<2>()).normalized();
-        request_ = AirspaceArea{p.head<2>(), b->position_enu_m.head<2>() + config_.pierce_overshoot_m * dir};
+        request_ = AirspaceArea{p.head<2>(),
+                                b->position_enu_m.head<2>() + config_.pierce_overshoot_m * dir};
         out.airspace = request_;
         hover(in, out, inward_yaw_rad());
         enter(VehicleState::kAreaAllocationRequest, out,
-              fmt("balloon at (%.1f, %.1f, %.1f)", b->position_enu_m.x(), b->position_enu_m.y(), b->position_enu_m.z()));
+              fmt("balloon at (%.1f, %.1f, %.1f)", b->position_enu_m.x(), b->position_enu_m.y(),
+                  b->position_enu_m.z()));
         break;
       }
       if (scan_leg_ >= scan_.size()) {
         if (take_over_ && !other_side_done_) {
-          // this side is done; the other UAV's side is still to scan (over the balloons, at take-off height)
+          // this side is done; the other UAV's side is still to scan (over the balloons, at
+          // take-off height)
           other_side_done_ = true;
           side_ = side_ == Side::kSouth ? Side::kNorth : Side::kSouth;
           hold_altitude_m_ = config_.takeoff_altitude_m;
@@ -259,15 +287,16 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
       }
       hover(in, out, inward_yaw_rad());
       bool granted = false;
-      for (const auto& r : in.airspace_replies) granted = granted || (r && request_ && *r == *request_);
+      for (const auto& r : in.airspace_replies)
+        granted = granted || (r && request_ && *r == *request_);
       if (granted) {
         airspace_held_ = true;
         closest_blade_m_ = 1e9;
         coast_dir_ = (target_.position_enu_m.head<2>() - p.head<2>()).normalized();
         enter(VehicleState::kPierce, out, "airspace granted");
       } else if (in.now_s - target_.last_seen_s > config_.allocation_wait_lost_s) {
-        // "should the balloon be no longer visible (e.g. if popped by the other UAV while waiting), the request
-        // can be cancelled by sending a NaN position"
+        // "should the balloon be no longer visible (e.g. if popped by the other UAV while waiting),
+        // the request can be cancelled by sending a NaN position"
         out.airspace = std::optional<AirspaceArea>();
         request_.reset();
         enter(VehicleState::kBlindScan, out, "balloon lost while waiting: request cancelled");
@@ -290,47 +319,59 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
       const double blade_range = (b.head<2>() - blade_xy).norm();
       closest_blade_m_ = std::min(closest_blade_m_, blade_range);
       const bool seen = in.now_s - target_.last_seen_s < kFreshSighting_s;
-      // the blades ride just above the balloon's centre, never low enough for the gear to meet the pole
-      const double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
-                                        config_.pole_top_height_m + 0.25, config_.balloon_centre_height_m + 0.3);
+      // the blades ride just above the balloon's centre, never low enough for the gear to meet the
+      // pole
+      const double blade_z =
+          std::clamp(b.z() + config_.pierce_blade_above_centre_m, config_.pole_top_height_m + 0.25,
+                     config_.balloon_centre_height_m + 0.3);
       double speed = config_.pierce_speed_near_m_s;
       if (seen) {
         coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
         const double s = std::clamp((blade_range - 1.0) / config_.pierce_slow_range_m, 0.0, 1.0);
-        speed = config_.pierce_speed_near_m_s + s * (config_.pierce_speed_far_m_s - config_.pierce_speed_near_m_s);
-        const double yaw_error = wrap_pi(std::atan2(coast_dir_.y(), coast_dir_.x()) - in.yaw_enu_rad);
-        if (std::abs(yaw_error) > 0.35) speed *= 0.3;  // turn towards it first: the camera must keep it
+        speed = config_.pierce_speed_near_m_s +
+                s * (config_.pierce_speed_far_m_s - config_.pierce_speed_near_m_s);
+        const double yaw_error =
+            wrap_pi(std::atan2(coast_dir_.y(), coast_dir_.x()) - in.yaw_enu_rad);
+        if (std::abs(yaw_error) > 0.35)
+          speed *= 0.3;  // turn towards it first: the camera must keep it
       }
-      // and reach blade height before the balloon is close (from the high scan altitude it is 0.5 m down)
+      // and reach blade height before the balloon is close (from the high scan altitude it is 0.5 m
+      // down)
       const double dz = std::abs(blade_z - p.z());
-      if (blade_range < 2.0 * config_.pierce_slow_range_m) speed *= std::clamp(1.0 - (dz - 0.1) / 0.3, 0.15, 1.0);
-      const double along_m = (blade_xy - b.head<2>()).dot(coast_dir_);  // > 0: blades past the centre
+      if (blade_range < 2.0 * config_.pierce_slow_range_m)
+        speed *= std::clamp(1.0 - (dz - 0.1) / 0.3, 0.15, 1.0);
+      const double along_m =
+          (blade_xy - b.head<2>()).dot(coast_dir_);  // > 0: blades past the centre
       out.action = VehicleOutputs::Action::kVelocity;
       out.velocity_enu_m_s = {coast_dir_.x() * speed, coast_dir_.y() * speed,
-                              std::clamp(kGainZ_1_s * (blade_z - p.z()), -config_.max_climb_m_s, config_.max_climb_m_s)};
+                              std::clamp(kGainZ_1_s * (blade_z - p.z()), -config_.max_climb_m_s,
+                                         config_.max_climb_m_s)};
       out.yaw_enu_rad = std::atan2(coast_dir_.y(), coast_dir_.x());
-      // "this state is maintained for N seconds after the balloon was last detected" (or until the blades
-      // are through it)
+      // "this state is maintained for N seconds after the balloon was last detected" (or until the
+      // blades are through it)
       const bool through = !seen && along_m >= config_.pierce_overshoot_m;
       const bool coasted = in.now_s - target_.last_seen_s > config_.pierce_coast_s;
       const bool timeout = in.now_s - state_since_s_ > config_.pierce_timeout_s;
       if (through || coasted || timeout) {
-        // the camera cannot tell a pop (it lost the balloon at close range): if the blades got there, look
-        // back at it while backing off; POPPED is reported only if it is not seen again
+        // the camera cannot tell a pop (it lost the balloon at close range): if the blades got
+        // there, look back at it while backing off; POPPED is reported only if it is not seen again
         pierce_reached_ = closest_blade_m_ < 0.35 || along_m > -0.2;
         seen_again_ = false;
-        hold_altitude_m_ = scan_leg_ < scan_.size() ? scan_[scan_leg_].altitude_m : scan_.back().altitude_m;
+        hold_altitude_m_ =
+            scan_leg_ < scan_.size() ? scan_[scan_leg_].altitude_m : scan_.back().altitude_m;
         pierce_start_enu_m_.z() = hold_altitude_m_;
         enter(VehicleState::kBackOff, out,
-              std::string(through ? "through the balloon" : timeout ? "timeout" : "balloon lost") +
+              std::string(through   ? "through the balloon"
+                          : timeout ? "timeout"
+                                    : "balloon lost") +
                   (pierce_reached_ ? ", blades reached it" : ", blades did not reach it"));
       }
       break;
     }
 
     case VehicleState::kBackOff: {
-      // "the UAV moves backwards in order to resume the Blind Scan operation and deallocates the area";
-      // backwards indeed: the camera keeps looking where the balloon was
+      // "the UAV moves backwards in order to resume the Blind Scan operation and deallocates the
+      // area"; backwards indeed: the camera keeps looking where the balloon was
       const Eigen::Vector3d& b = target_.position_enu_m;
       for (const BalloonSighting& s : in.balloons) {
         if (in.now_s - s.last_seen_s < kFreshSighting_s && s.last_seen_s > state_since_s_ + 0.5 &&
@@ -361,9 +402,10 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
     }
 
     case VehicleState::kLand: {
-      // "reaches a pre-designated landing spot, starts a slow descent and, eventually, turns off the motors"
-      const double transit_z =
-          index_ == 0 ? config_.landing_transit_altitude_s0_m : config_.landing_transit_altitude_s1_m;
+      // "reaches a pre-designated landing spot, starts a slow descent and, eventually, turns off
+      // the motors"
+      const double transit_z = index_ == 0 ? config_.landing_transit_altitude_s0_m
+                                           : config_.landing_transit_altitude_s1_m;
       if (land_phase_ == 0) {
         out.action = VehicleOutputs::Action::kVelocity;
         out.velocity_enu_m_s = toward(p, {p.x(), p.y(), transit_z}, 0.0);

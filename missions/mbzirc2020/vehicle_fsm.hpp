@@ -1,15 +1,18 @@
-// The balloon-popping UAV's strategy (seed 7.2, fig. 7.13) as a pure state machine: the event loop feeds it
-// what a real drone has (MAVLink telemetry, balloons seen by its camera, GCS messages) at a fixed rate and
-// applies what it returns (a GUIDED velocity + heading setpoint, take-off or landing, GCS messages). No
-// sockets, clocks or simulator calls: tests drive it with made-up inputs.
+// The balloon-popping UAV's strategy (seed 7.2, fig. 7.13) as a pure state machine: the event loop
+// feeds it what a real drone has (MAVLink telemetry, balloons seen by its camera, GCS messages) at
+// a fixed rate and applies what it returns (a GUIDED velocity + heading setpoint, take-off or
+// landing, GCS messages). No sockets, clocks or simulator calls: tests drive it with made-up
+// inputs.
 //
-// States, in the seed's order: Preflight -> Take-off -> Go Side Center -> Go Scan Altitude -> Blind Scan ->
-// Area Allocation Request -> Pierce -> (Back Off: the seed's "moves backwards ... and deallocates the
-// area", a state of its own here) -> Blind Scan ... -> Land. Land is entered from any state on the GCS's
-// STATE command. Failed: the vehicle disarmed in the air (motors lost); it only reports.
+// States, in the seed's order: Preflight -> Take-off -> Go Side Center -> Go Scan Altitude -> Blind
+// Scan -> Area Allocation Request -> Pierce -> (Back Off: the seed's "moves backwards ... and
+// deallocates the area", a state of its own here) -> Blind Scan ... -> Land. Land is entered from
+// any state on the GCS's STATE command. Failed: the vehicle disarmed in the air (motors lost); it
+// only reports.
 //
-// Beyond the seed: TakeOver (GCS STATE command when the other UAV has failed, as on Competition Day 2)
-// lifts the own-half rule and, once this side's scans are done, sends the UAV to scan the other side.
+// Beyond the seed: TakeOver (GCS STATE command when the other UAV has failed, as on Competition Day
+// 2) lifts the own-half rule and, once this side's scans are done, sends the UAV to scan the other
+// side.
 #pragma once
 
 #include <Eigen/Core>
@@ -74,7 +77,8 @@ struct VehicleOutputs {
 class VehicleFsm {
  public:
   // index 0 is "S0" (scans low first, lands via the low transit altitude), 1 is "S1".
-  VehicleFsm(const MissionConfig& config, int index, Side side, const Eigen::Vector2d& landing_spot_enu_m);
+  VehicleFsm(const MissionConfig& config, int index, Side side,
+             const Eigen::Vector2d& landing_spot_enu_m);
 
   // (inputs at now_s) => (setpoint, GCS messages). Call at a fixed rate (10-20 Hz).
   VehicleOutputs step(const VehicleInputs& in);
@@ -95,7 +99,8 @@ class VehicleFsm {
   double inward_yaw_rad() const;
   bool in_own_half(const Eigen::Vector3d& p) const;
   std::optional<BalloonSighting> choose_target(const VehicleInputs& in) const;
-  Eigen::Vector3d toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target, double max_speed_m_s) const;
+  Eigen::Vector3d toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target,
+                         double max_speed_m_s) const;
   void hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const;
   void start_landing(VehicleOutputs& out, const std::string& why);
 

@@ -1,5 +1,6 @@
-// The balloon mission's logic without a simulator: the GCS link payloads, the ground station's start /
-// airspace / take-over / land decisions, and the UAV FSM's path through seed fig. 7.13 on made-up inputs.
+// The balloon mission's logic without a simulator: the GCS link payloads, the ground station's
+// start / airspace / take-over / land decisions, and the UAV FSM's path through seed fig. 7.13 on
+// made-up inputs.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,7 +22,8 @@ UavStatus status(bool ready, Eigen::Vector3d p = Eigen::Vector3d::Zero()) {
   return s;
 }
 
-bool has(const std::vector<GcsOutgoing>& out, int uav, uint16_t topic, const std::vector<uint8_t>& payload) {
+bool has(const std::vector<GcsOutgoing>& out, int uav, uint16_t topic,
+         const std::vector<uint8_t>& payload) {
   for (const GcsOutgoing& o : out) {
     if (o.uav == uav && o.topic == topic && o.payload == payload) return true;
   }
@@ -143,7 +145,8 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   FakeVehicle v;
   v.in.position_enu_m = {-10, -27, 0};
   constexpr double dt = 0.05;
-  EXPECT_EQ(fsm.step(v.in).action, VehicleOutputs::Action::kNone);  // Preflight: waits for the start
+  EXPECT_EQ(fsm.step(v.in).action,
+            VehicleOutputs::Action::kNone);  // Preflight: waits for the start
   v.in.commands = {GcsCommand::kStart};
   VehicleOutputs out = fsm.step(v.in);
   v.in.commands.clear();
@@ -154,11 +157,12 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   fsm.step(v.in);
   EXPECT_EQ(fsm.state(), VehicleState::kGoSideCenter);
   // fly until scanning
-  for (int i = 0; i < 2000 && fsm.state() != VehicleState::kBlindScan; ++i) v.apply(fsm.step(v.in), dt);
+  for (int i = 0; i < 2000 && fsm.state() != VehicleState::kBlindScan; ++i)
+    v.apply(fsm.step(v.in), dt);
   ASSERT_EQ(fsm.state(), VehicleState::kBlindScan);
   EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);  // the south side line
   EXPECT_NEAR(v.in.position_enu_m.z(), config.scan_altitude_low_m, 0.2);
-  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);       // camera towards the arena
+  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);  // camera towards the arena
 
   // a balloon in the other half is not ours: the scan goes on
   v.in.balloons = {{1, {v.in.position_enu_m.x() + 2, 15.0, 2.7}, v.in.now_s}};

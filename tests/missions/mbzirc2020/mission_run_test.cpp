@@ -1,26 +1,29 @@
-// The whole MBZIRC 2020 balloon mission (seed 7.2) in the simulator through its launcher: uavsim-server
-// (headless, lockstep at full speed, seeded balloons), the ground station and the two UAV programs. Scored
-// from the sim API's ground truth (the launcher's JSON summary), never seen by the mission programs.
+// The whole MBZIRC 2020 balloon mission (seed 7.2) in the simulator through its launcher:
+// uavsim-server (headless, lockstep at full speed, seeded balloons), the ground station and the two
+// UAV programs. Scored from the sim API's ground truth (the launcher's JSON summary), never seen by
+// the mission programs.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <fstream>
-#include <string>
-
 #include <nlohmann/json.hpp>
-#include <unistd.h>
+#include <string>
 
 namespace {
 
 using Json = nlohmann::json;
 
-constexpr double kBudget_s = 400.0;  // sim time; the seed's table 7.1: 126-162 s with two UAVs, 262-306 s with one
+constexpr double kBudget_s =
+    400.0;  // sim time; the seed's table 7.1: 126-162 s with two UAVs, 262-306 s with one
 
 Json run_mission(const std::string& extra, std::string* output) {
-  const std::string json_path = ::testing::TempDir() + "mbzirc2020_" + std::to_string(getpid()) + ".json";
+  const std::string json_path =
+      ::testing::TempDir() + "mbzirc2020_" + std::to_string(getpid()) + ".json";
   std::remove(json_path.c_str());
-  const std::string cmd = std::string(MBZIRC2020_RUN) + " --no-record --budget " + std::to_string(kBudget_s) +
-                          " --wall-limit 600 --json " + json_path + " " + extra + " 2>&1";
+  const std::string cmd = std::string(MBZIRC2020_RUN) + " --no-record --budget " +
+                          std::to_string(kBudget_s) + " --wall-limit 600 --json " + json_path +
+                          " " + extra + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return Json();
   char buf[1024];
@@ -52,7 +55,8 @@ TEST(Mbzirc2020Mission, OneUavKilledAfterTakeOffTheOtherPopsAllFive) {
   ASSERT_TRUE(r.is_object()) << out;
   EXPECT_EQ(r["killed"], Json::array({"uav1"})) << out;
   EXPECT_EQ(r["popped"].get<int>(), 5) << out;
-  for (const Json& b : r["balloons"]) EXPECT_EQ(b["popped_by"], Json(0)) << out;  // vehicle index of uav0
+  for (const Json& b : r["balloons"])
+    EXPECT_EQ(b["popped_by"], Json(0)) << out;  // vehicle index of uav0
   EXPECT_TRUE(r["crashes"].empty()) << out;  // the killed UAV's crash is expected and not counted
   EXPECT_LT(r["mission_time_s"].get<double>(), kBudget_s) << out;
   EXPECT_TRUE(r["success"].get<bool>()) << out;
