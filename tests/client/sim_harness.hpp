@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/api_server.hpp"
+#include "app/endpoint_hooks.hpp"
 #include "mavlink/endpoint.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
@@ -69,17 +70,9 @@ class SimServer {
   std::size_t mavlink_clients(std::size_t vehicle = 0) const { return mavlink_->client_count(vehicle); }
 
  private:
-  // the endpoint's hooks as the API sees them (as uavsim-server wires them): commands sent before `done`
-  // take effect at that tick
-  class EndpointHooks : public uavsim::server::api::LinkControl, public uavsim::server::api::SeqWaiter {
-   public:
-    explicit EndpointHooks(uavsim::server::mavlink::MavlinkServer& s) : s_(s) {}
-    bool set_link_down(size_t vehicle, bool down) override { return s_.set_link_down(vehicle, down); }
-    bool seq_processed(size_t vehicle, uint8_t seq) const override { return s_.seq_processed(vehicle, seq); }
-
-   private:
-    uavsim::server::mavlink::MavlinkServer& s_;
-  };
+  // the endpoint's hooks as uavsim-server wires them: commands sent before `done` take effect at that
+  // tick, and telemetry queued before a tick reaches the client before the tick
+  using EndpointHooks = uavsim::server::app::EndpointHooks;
   std::unique_ptr<uavsim::server::sim::Simulation> sim_;
   uavsim::server::objects::ObjectSet objects_;
   std::unique_ptr<uavsim::server::mavlink::MavlinkServer> mavlink_;

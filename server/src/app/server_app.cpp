@@ -17,24 +17,13 @@
 #include "render/frame_service.hpp"
 #include "render/video_recorder.hpp"
 #include "sim/runner.hpp"
+#include "app/endpoint_hooks.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::app {
 
 namespace {
 std::atomic<bool> g_stop_requested{false};
-
-// the MAVLink endpoint's fault and lockstep hooks, as the sim API sees them
-class EndpointHooks : public api::LinkControl, public api::SeqWaiter {
- public:
-  explicit EndpointHooks(mavlink::MavlinkServer& server) : server_(server) {}
-  bool set_link_down(size_t vehicle, bool down) override { return server_.set_link_down(vehicle, down); }
-  bool seq_processed(size_t vehicle, uint8_t seq) const override { return server_.seq_processed(vehicle, seq); }
-  void flush_sent() override { server_.flush_queued(); }
-
- private:
-  mavlink::MavlinkServer& server_;
-};
 
 // which camera --record films: the world camera "overview", else the first world camera, else the first
 std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& cameras) {

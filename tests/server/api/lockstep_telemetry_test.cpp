@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "api/api_server.hpp"
+#include "app/endpoint_hooks.hpp"
 #include "api_fixture.hpp"
 #include "mavlink/endpoint.hpp"
 #include "mavlink_endpoint/test_gcs.hpp"
@@ -28,15 +29,7 @@ using testing::Json;
 using testing::TestClient;
 
 // the endpoint's hooks as server_app.cpp wires them
-class Hooks : public SeqWaiter {
- public:
-  explicit Hooks(mavlink::MavlinkServer& s) : s_(s) {}
-  bool seq_processed(size_t v, uint8_t seq) const override { return s_.seq_processed(v, seq); }
-  void flush_sent() override { s_.flush_queued(); }
-
- private:
-  mavlink::MavlinkServer& s_;
-};
+using Hooks = app::EndpointHooks;
 
 // a world, its MAVLink endpoints and the API with the endpoint hooks; the clock held until resume
 class MavlinkApiServer {

@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "api/api_server.hpp"
+#include "app/endpoint_hooks.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "mavlink/endpoint.hpp"
 #include "objects/world_objects.hpp"
@@ -41,16 +42,7 @@ struct ServerOptions {
   bool start_paused = false;
 };
 
-class Hooks : public api::LinkControl, public api::SeqWaiter {
- public:
-  explicit Hooks(mavlink::MavlinkServer& s) : s_(s) {}
-  bool set_link_down(size_t v, bool down) override { return s_.set_link_down(v, down); }
-  bool seq_processed(size_t v, uint8_t seq) const override { return s_.seq_processed(v, seq); }
-  void flush_sent() override { s_.flush_queued(); }
-
- private:
-  mavlink::MavlinkServer& s_;
-};
+using Hooks = app::EndpointHooks;
 
 class FrameServer {
  public:
