@@ -303,7 +303,7 @@ TEST(ClientNoServer, ConnectionRefusedQuickly) {
   auto r = v.connect("tcp:127.0.0.1:" + std::to_string(ntohs(a.sin_port)), 5.0);
   ASSERT_FALSE(r);
   EXPECT_EQ(r.code(), Error::kConnectionRefused) << r.message();
-  EXPECT_LT((*l)->now() - t0, 0.5);
+  EXPECT_LT((*l)->now() - t0, 2.5);  // refused at once, not after the 5 s connect timeout
   EXPECT_FALSE(v.connected());
   auto c = v.arm();
   ASSERT_FALSE(c);
