@@ -35,8 +35,9 @@ options:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
                       width, height, fps, fovy, shadows, reflections, skybox, msaa (docs/protocol.md)
   --no-cameras        no offscreen renderer (the camera ops answer not_available)
-  --record FILE.mp4   write a video of the run from the world camera "overview" (else a free camera
-                      looking at the vehicles), 15 frames per second of sim time; never slows physics
+  --record FILE.mp4   write a video of the run from the world camera "overview" (else the first world
+                      camera, else the first camera), 15 frames per second of sim time; in real time
+                      it drops frames rather than slow physics, at --rate 0 it keeps every frame
   --record-fps F      frames per second of sim time in the video; default 15
   --record-size WxH   video size; default 640x480
   --quiet             print only errors and the result
