@@ -74,8 +74,9 @@ sim::Simulation& warmed(int n, size_t* flying_out) {
   auto owned = std::make_unique<sim::Simulation>(load(n), sim::SimConfig{});
   sim::Simulation& s = *owned;
   // warm-up: the flight controllers boot without gravity (they believe they stand on the ground: the
-  // accelerometer reads 1 g, nothing moves), arm and take off, then gravity is ramped in over 3 s while
-  // their vertical loops take the weight; 10 s later every quad hovers
+  // accelerometer reads 1 g, nothing moves); then GUIDED, arm and take off to 5 m while gravity is ramped
+  // in over 1 s, so that the climb takes the weight before any controller could judge itself landed
+  // (low thrust, no motion); 10 s later the quads hover
   mjModel* m = s.world().mutable_model();
   const double gravity_z = m->opt.gravity[2];
   m->opt.gravity[2] = 0.0;
@@ -86,27 +87,17 @@ sim::Simulation& warmed(int n, size_t* flying_out) {
     return true;
   };
   while (s.time_s() < 20.0 && !all_ready()) s.step();
-  // GUIDED, arm, take off: repeated until every controller took it (one may still be settling)
-  auto all_climbing = [&s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (!s.fc(i).armed() || s.fc(i).mode() != fc::Mode::kGuided) return false;
-    }
-    return true;
-  };
-  while (s.time_s() < 30.0 && !all_climbing()) {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (s.fc(i).armed() && s.fc(i).mode() == fc::Mode::kGuided) continue;
-      s.post(i, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(true);
-        f.takeoff(2.0);
-      });
-    }
-    s.run_until(s.time_s() + 0.1);
+  for (size_t i = 0; i < s.vehicle_count(); ++i) {
+    s.post(i, [](fc::FlightController& f) {
+      f.set_mode(fc::Mode::kGuided);
+      f.arm(true);
+      f.takeoff(5.0);
+    });
   }
-  const double ramp_start = s.time_s() + 0.5;
-  while (s.time_s() < ramp_start + 3.0) {
-    m->opt.gravity[2] = gravity_z * std::clamp((s.time_s() - ramp_start) / 3.0, 0.0, 1.0);
+  const double ramp_start = s.time_s();
+  constexpr double kRampS = 1.0;
+  while (s.time_s() < ramp_start + kRampS) {
+    m->opt.gravity[2] = gravity_z * (s.time_s() - ramp_start) / kRampS;
     s.step();
   }
   m->opt.gravity[2] = gravity_z;
