@@ -40,6 +40,10 @@ constexpr StreamDef kStreamable[] = {
     {msg::SystemTime::kId, StreamGroup::kExtra3},
     {msg::BatteryStatus::kId, StreamGroup::kExtra3},
     {msg::EkfStatusReport::kId, StreamGroup::kExtra3},
+    // ArduCopter streams GIMBAL_DEVICE_ATTITUDE_STATUS in EXTRA3; MOUNT_ORIENTATION (deprecated) rides along
+    // for clients that still read it (e.g. DroneKit's gimbal attribute)
+    {msg::MountOrientation::kId, StreamGroup::kExtra3},
+    {msg::GimbalDeviceAttitudeStatus::kId, StreamGroup::kExtra3},
     {msg::AttitudeQuaternion::kId, StreamGroup::kNone},
     {msg::HomePosition::kId, StreamGroup::kNone},
     {msg::ExtendedSysState::kId, StreamGroup::kNone},
@@ -456,6 +460,49 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
       m.pointing_b = clamp_to<std::int32_t>(gimbal_.roll_deg * 100.0);
       m.pointing_c = clamp_to<std::int32_t>(gimbal_.yaw_deg * 100.0);
       m.mount_mode = gimbal_.mount_mode;
+      send(link, m);
+      return true;
+    }
+    case msg::MountOrientation::kId:
+    case msg::GimbalDeviceAttitudeStatus::kId: {
+      // the commanded pointing (the simulated gimbal follows it instantly): roll and pitch relative to the
+      // horizon, yaw relative to the body or as a heading, per gimbal_.yaw_earth_frame
+      const double vehicle_yaw_deg =
+          frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(est.q_enu_body)).yaw_rad * kRadToDeg;
+      const auto wrap_180 = [](double deg) { return std::remainder(deg, 360.0); };
+      const double yaw_body_deg =
+          wrap_180(gimbal_.yaw_earth_frame ? gimbal_.yaw_deg - vehicle_yaw_deg : gimbal_.yaw_deg);
+      const double yaw_north_deg = wrap_180(yaw_body_deg + vehicle_yaw_deg);
+      if (msgid == msg::MountOrientation::kId) {
+        msg::MountOrientation m;
+        m.time_boot_ms = t_ms;
+        m.roll = static_cast<float>(gimbal_.roll_deg);
+        m.pitch = static_cast<float>(gimbal_.pitch_deg);
+        m.yaw = static_cast<float>(yaw_body_deg);
+        m.yaw_absolute = static_cast<float>(yaw_north_deg);
+        send(link, m);
+        return true;
+      }
+      constexpr double kDegToRad = frames::kPi / 180.0;
+      constexpr std::uint16_t kRollLock = 4, kPitchLock = 8, kYawLock = 16, kYawInVehicleFrame = 32,
+                              kYawInEarthFrame = 64;
+      const double q_yaw_deg = gimbal_.yaw_earth_frame ? yaw_north_deg : yaw_body_deg;
+      // FRD attitude of the camera: yaw, then pitch, then roll (ZYX), w x y z
+      const Eigen::Quaterniond q = Eigen::AngleAxisd(q_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(gimbal_.pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
+                                   Eigen::AngleAxisd(gimbal_.roll_deg * kDegToRad, Eigen::Vector3d::UnitX());
+      msg::GimbalDeviceAttitudeStatus m;
+      m.time_boot_ms = t_ms;
+      m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
+             static_cast<float>(q.z())};
+      m.angular_velocity_x = 0.0f;
+      m.angular_velocity_y = static_cast<float>(gimbal_.pitch_rate_deg_s * kDegToRad);
+      m.angular_velocity_z = static_cast<float>(gimbal_.yaw_rate_deg_s * kDegToRad);
+      m.flags = kRollLock | kPitchLock |
+                (gimbal_.yaw_earth_frame ? (kYawLock | kYawInEarthFrame) : kYawInVehicleFrame);
+      m.delta_yaw = static_cast<float>(yaw_body_deg * kDegToRad);
+      m.delta_yaw_velocity = std::numeric_limits<float>::quiet_NaN();
+      m.gimbal_device_id = 1;  // the autopilot reports for its first (non-MAVLink) gimbal
       send(link, m);
       return true;
     }

@@ -305,6 +305,36 @@ TEST_F(EndpointTest, GimbalCommandsAreStoredForTheCamera) {
   EXPECT_GE(server_->gimbal(0).stamp_s, 0.0);
 }
 
+TEST_F(EndpointTest, GimbalAttitudeIsStreamedAfterMountControl) {
+  auto g = connect();
+  EXPECT_EQ(command(*g, 205, {-90, 0, 0, 0, 0, 0, 2}), 0);  // DO_MOUNT_CONTROL: straight down
+  g->clear();
+  ASSERT_TRUE(step_until(*g, [&] {
+    return g->count<msg::MountOrientation>() > 0 && g->count<msg::GimbalDeviceAttitudeStatus>() > 0;
+  }, 2.0)) << "gimbal attitude is not streamed";
+  const auto mo = g->last<msg::MountOrientation>();
+  EXPECT_NEAR(mo->pitch, -90.0, 1e-3);
+  EXPECT_NEAR(mo->roll, 0.0, 1e-3);
+  EXPECT_NEAR(mo->yaw, 0.0, 1e-3);
+  EXPECT_NEAR(mo->time_boot_ms, sim_->time_s() * 1000.0, 600.0);
+  // the quaternion (w x y z) is a -90 deg pitch about y: w = cos(-45 deg), y = sin(-45 deg)
+  const auto gd = g->last<msg::GimbalDeviceAttitudeStatus>();
+  EXPECT_NEAR(gd->q[0], std::sqrt(0.5), 1e-4);
+  EXPECT_NEAR(gd->q[1], 0.0, 1e-4);
+  EXPECT_NEAR(gd->q[2], -std::sqrt(0.5), 1e-4);
+  EXPECT_NEAR(gd->q[3], 0.0, 1e-4);
+  EXPECT_EQ(gd->flags & 32, 32);  // GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME
+  EXPECT_EQ(gd->gimbal_device_id, 1);
+  // a few Hz: EXTRA3 at 2 Hz by default
+  g->clear();
+  step_for(2.0);
+  ASSERT_TRUE(wait_for([&] {
+    g->poll_once(5);
+    return g->count<msg::MountOrientation>() >= 3;
+  }));
+  EXPECT_NEAR(static_cast<double>(g->count<msg::GimbalDeviceAttitudeStatus>()), 4.0, 1.0);
+}
+
 TEST_F(EndpointTest, GcsHeartbeatsAreCountedAsHandled) {
   auto g = connect();
   msg::Heartbeat hb;
