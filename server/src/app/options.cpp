@@ -1,5 +1,6 @@
 #include "app/options.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +29,9 @@ options:
   --mavlink-port BASE TCP port of vehicle 0's MAVLink endpoint; vehicle i listens on BASE + 10 i
                       (ArduPilot SITL's convention); default 5760; 0: ephemeral ports; -1: none
   --bind ADDR         address the MAVLink endpoints listen on; default 127.0.0.1 (loopback only)
+  --mavlink-key HEX64 MAVLink 2 signing key (64 hex digits) of every vehicle from the start: frames
+                      sent are signed, unsigned ones received are ignored (a client's SETUP_SIGNING
+                      replaces it; an all-zero key turns signing off)
   --api-port N        TCP port of the sim socket API (docs/protocol.md); default 5700; 0: an ephemeral
                       port (printed); -1: no API
   --api-bind ADDR     address the sim API listens on; default 127.0.0.1 (loopback only)
@@ -106,6 +110,23 @@ std::optional<Options> parse_options(int argc, char** argv, int* exit_code) {
     } else if (a == "--bind") {
       if (!value(&v)) return std::nullopt;
       o.bind_address = v;
+    } else if (a == "--mavlink-key") {
+      if (!value(&v)) return std::nullopt;
+      const std::string hex = v;
+      std::array<uint8_t, 32> key{};
+      bool ok = hex.size() == 64;
+      for (std::size_t k = 0; ok && k < key.size(); ++k) {
+        const std::string byte = hex.substr(2 * k, 2);
+        char* end = nullptr;
+        const unsigned long b = std::strtoul(byte.c_str(), &end, 16);
+        ok = std::isxdigit(static_cast<unsigned char>(byte[0])) && end == byte.c_str() + 2;
+        key[k] = static_cast<uint8_t>(b);
+      }
+      if (!ok) {
+        std::cerr << "uavsim-server: --mavlink-key needs 64 hex digits (32 bytes)\n";
+        return std::nullopt;
+      }
+      o.mavlink_key = key;
     } else if (a == "--api-port") {
       if (!value(&v) || !parse_double(a, v, &number) || number < -1 || number > 65535) return std::nullopt;
       o.api_port = static_cast<int>(number);

@@ -1,6 +1,7 @@
 // Command-line options of uavsim-server.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,6 +25,7 @@ struct Options {
   double lockstep_timeout_s = 10.0;   // wall seconds a lockstep client may take for one tick
   int mavlink_base_port = 5760;       // vehicle i: base + 10 i; 0 = ephemeral; -1 = no MAVLink endpoints
   std::string bind_address = "127.0.0.1";
+  std::optional<std::array<uint8_t, 32>> mavlink_key;  // --mavlink-key HEX64: MAVLink 2 signing from the start
   std::vector<std::string> camera_overrides;  // --camera CAMNAME:key=value,... (repeatable)
   bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
   std::optional<std::string> record_path;     // --record out.mp4

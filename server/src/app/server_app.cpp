@@ -95,6 +95,7 @@ int run_server(const Options& options) {
     mavlink::EndpointConfig endpoint;
     endpoint.base_port = options.mavlink_base_port;
     endpoint.bind_address = options.bind_address;
+    endpoint.signing_key = options.mavlink_key;
     try {
       mavlink_server = std::make_unique<mavlink::MavlinkServer>(s, endpoint);
     } catch (const std::exception& e) {

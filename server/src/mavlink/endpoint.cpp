@@ -47,6 +47,7 @@ struct MavlinkServer::Core {
   struct Vehicle {
     std::unique_ptr<VehicleLink> link;  // loop thread only
     StatCounters stats;
+    SigningKeyCell signing;  // set by the link, read by the I/O thread
     int listen_fd = -1;
     std::uint16_t port = 0;
     std::mutex inbox_mutex;
@@ -63,6 +64,7 @@ struct MavlinkServer::Core {
     std::uint64_t id = 0;
     Parser parser;
     ParserStats parser_seen;
+    std::uint64_t signing_generation = 0;  // of the vehicle's SigningKeyCell the parser is configured with
     std::shared_ptr<Outbox> outbox;
     std::vector<std::uint8_t> write_buf;
     std::size_t write_off = 0;
@@ -100,7 +102,7 @@ struct MavlinkServer::Core {
     add_fd(wake_fd, EPOLLIN, tag_wake());
     for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
       auto v = std::make_unique<Vehicle>();
-      v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats);
+      v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats, v->signing);
       const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
       v->listen_fd = listen_on(config.bind_address, port, &v->port);
       add_fd(v->listen_fd, EPOLLIN, tag_listen(i));
@@ -303,7 +305,21 @@ struct MavlinkServer::Core {
       total += static_cast<std::size_t>(n);
       if (v.link_down.load(std::memory_order_relaxed)) continue;  // a dropped link: the bytes are lost
       StatCounters::add(v.stats.bytes_received, static_cast<std::uint64_t>(n));
+      // a new signing key (SETUP_SIGNING handled since the last read): the parser checks signatures and
+      // replays; which unsigned frames pass is decided below, per message
+      if (const std::uint64_t generation = v.signing.generation(); generation != c.signing_generation) {
+        c.signing_generation = generation;
+        ParserConfig pc;
+        pc.signing_key = v.signing.get();
+        pc.accept_unsigned = true;
+        c.parser.configure(pc);
+      }
+      const bool signing = v.signing.get().has_value();
       c.parser.feed({buf, static_cast<std::size_t>(n)}, [&](const Frame& f) {
+        if (signing && !f.signature && !accepted_unsigned(f.msgid)) {
+          StatCounters::add(v.stats.unsigned_rejected);
+          return;
+        }
         InEvent ev;
         ev.kind = InEvent::Kind::kFrame;
         ev.client = c.id;
@@ -329,6 +345,8 @@ struct MavlinkServer::Core {
     StatCounters::add(s.unknown_msgid, now.unknown_msgid - was.unknown_msgid);
     StatCounters::add(s.bad_length, now.bad_length - was.bad_length);
     StatCounters::add(s.bad_incompat_flags, now.bad_incompat_flags - was.bad_incompat_flags);
+    StatCounters::add(s.bad_signature, now.bad_signature - was.bad_signature);
+    StatCounters::add(s.replayed, now.replayed - was.replayed);
     was = now;
   }
 

@@ -11,9 +11,11 @@
 // A slow or dead client costs only its own frames (dropped and counted); bad input is skipped and counted.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "mavlink/geodesy.hpp"
@@ -30,6 +32,9 @@ struct EndpointConfig {
   bool auto_sysid = true;                  // vehicle i gets SYSID_THISMAV = i + 1 (sim_vehicle.py --auto-sysid)
   std::size_t client_buffer_bytes = 512 * 1024;  // per-client outgoing limit; frames beyond are dropped
   std::size_t inbox_frames = 4096;               // per-vehicle incoming frames awaiting the loop thread
+  // MAVLink 2 signing from the start (--mavlink-key) for every vehicle; a client's SETUP_SIGNING replaces it
+  // (an all-zero key turns signing off). See VehicleLink for the rules.
+  std::optional<std::array<std::uint8_t, 32>> signing_key;
 };
 
 // Counters of one vehicle's endpoint since start (a snapshot).
@@ -52,6 +57,10 @@ struct EndpointStats {
   std::uint64_t commands = 0;             // COMMAND_LONG/COMMAND_INT/SET_MODE handled (each acked)
   std::uint64_t frames_sent = 0;          // frames queued to clients
   std::uint64_t frames_dropped_full = 0;  // frames dropped because a client's buffer was full
+  // MAVLink 2 signing, while the vehicle has a key (ignored frames, none of them handled):
+  std::uint64_t bad_signature = 0;        // signed with another key (or altered)
+  std::uint64_t unsigned_rejected = 0;    // unsigned (or MAVLink 1), other than RADIO_STATUS / RADIO
+  std::uint64_t replayed = 0;             // correctly signed but not newer than the stream's last frame
 };
 
 class MavlinkServer {

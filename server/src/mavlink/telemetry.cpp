@@ -85,6 +85,14 @@ std::uint8_t landed_state_number(fc::LandedState s) {
 
 }  // namespace
 
+std::uint64_t VehicleLink::signing_now_10us() const {
+  const double elapsed_s = std::max(0.0, now_s() - signing_set_s_);
+  const std::uint64_t advanced = signing_initial_10us_ + static_cast<std::uint64_t>(std::llround(elapsed_s * 1e5));
+  const std::uint64_t gps =
+      signing_timestamp_from_unix_us(kSimEpochUnixUs + static_cast<std::uint64_t>(std::llround(now_s() * 1e6)));
+  return std::max(advanced, gps);
+}
+
 std::vector<VehicleLink::Stream> VehicleLink::default_streams() const {
   std::vector<Stream> streams;
   streams.reserve(std::size(kStreamable));

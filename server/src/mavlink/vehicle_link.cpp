@@ -1,6 +1,7 @@
 #include "mavlink/vehicle_link.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace uavsim::server::mavlink {
@@ -26,17 +27,34 @@ EndpointStats StatCounters::snapshot() const {
   s.commands = r(commands);
   s.frames_sent = r(frames_sent);
   s.frames_dropped_full = r(frames_dropped_full);
+  s.bad_signature = r(bad_signature);
+  s.unsigned_rejected = r(unsigned_rejected);
+  s.replayed = r(replayed);
   return s;
 }
 
 VehicleLink::VehicleLink(sim::Simulation& sim, std::size_t vehicle, const EndpointConfig& config,
-                         StatCounters& stats)
-    : sim_(sim), vehicle_(vehicle), config_(config), stats_(stats) {
+                         StatCounters& stats, SigningKeyCell& signing_cell)
+    : sim_(sim), vehicle_(vehicle), config_(config), stats_(stats), signing_cell_(signing_cell) {
   // MAV_TYPE from the rotor count, as ArduPilot's motors matrix reports it
   const std::size_t rotors = sim.airframe(vehicle).rotors.size();
   mav_type_ = rotors == 6 ? 13 : (rotors == 8 ? 14 : 2);
   if (const auto id = sim.fc(vehicle).param("SYSID_THISMAV")) sysid_ = static_cast<std::uint8_t>(*id);
   if (config.auto_sysid) sysid_ = static_cast<std::uint8_t>(std::min<std::size_t>(vehicle + 1, 255));
+  if (config.signing_key) {
+    // no SETUP_SIGNING timestamp: start from the wall clock, as a client's own signing clock does
+    const auto unix_us = std::chrono::duration_cast<std::chrono::microseconds>(
+        std::chrono::system_clock::now().time_since_epoch());
+    set_signing(*config.signing_key, signing_timestamp_from_unix_us(static_cast<std::uint64_t>(unix_us.count())));
+  }
+}
+
+void VehicleLink::set_signing(const std::optional<SecretKey>& key, std::uint64_t initial_timestamp_10us) {
+  const bool all_zero = !key || std::all_of(key->begin(), key->end(), [](std::uint8_t b) { return b == 0; });
+  signing_key_ = all_zero ? std::nullopt : key;
+  signing_initial_10us_ = initial_timestamp_10us;
+  signing_set_s_ = now_s();
+  signing_cell_.set(signing_key_);
 }
 
 std::uint32_t VehicleLink::time_boot_ms() const {
@@ -69,6 +87,13 @@ void VehicleLink::on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbo
   link.id = client;
   link.outbox = std::move(outbox);
   link.streams = default_streams();
+  // like ArduPilot's per-channel link ids: the lowest id no connected client uses
+  for (int id = 0; id < 256; ++id) {
+    if (std::none_of(links_.begin(), links_.end(), [id](const Link& l) { return l.link_id == id; })) {
+      link.link_id = static_cast<std::uint8_t>(id);
+      break;
+    }
+  }
   const double t = now_s();
   for (Stream& s : link.streams) s.next_due_s = t + s.interval_s;
   links_.push_back(std::move(link));
@@ -269,6 +294,14 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
     case msg::Timesync::kId:
       handle_timesync(link, msg::Timesync::decode(f.payload.data()));
       break;
+    case msg::SetupSigning::kId: {
+      // ArduPilot takes it from any client and applies it to every link at once (GCS_Signing.cpp); once
+      // signing is on, only a signed SETUP_SIGNING gets here (the I/O thread drops unsigned frames)
+      const auto m = msg::SetupSigning::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      set_signing(m.secret_key, m.initial_timestamp);
+      break;
+    }
     case msg::AutopilotVersionRequest::kId: {
       const auto m = msg::AutopilotVersionRequest::decode(f.payload.data());
       if (wrong_target(m.target_system, m.target_component)) break;

@@ -13,11 +13,13 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
 #include "fc/flight_controller.hpp"
 #include "mavlink/codec/codec.hpp"
+#include "mavlink/codec/signing.hpp"
 #include "mavlink/endpoint.hpp"
 #include "mavlink/generated/messages.hpp"
 #include "mavlink/outbox.hpp"
@@ -30,7 +32,8 @@ struct StatCounters {
   std::atomic<std::uint64_t> clients_accepted{0}, clients_closed{0}, bytes_received{0}, bytes_sent{0},
       frames_received{0}, bytes_discarded{0}, bad_crc{0}, unknown_msgid{0}, bad_length{0},
       bad_incompat_flags{0}, inbox_dropped{0}, frames_handled{0}, wrong_target{0}, unhandled_messages{0},
-      rejected_inputs{0}, commands{0}, frames_sent{0}, frames_dropped_full{0};
+      rejected_inputs{0}, commands{0}, frames_sent{0}, frames_dropped_full{0}, bad_signature{0},
+      unsigned_rejected{0}, replayed{0};
   std::atomic<std::uint64_t> clients_now{0};
 
   static void add(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) {
@@ -38,6 +41,34 @@ struct StatCounters {
   }
   EndpointStats snapshot() const;
 };
+
+// A vehicle's MAVLink 2 signing key as the I/O thread needs it to check incoming frames: the loop thread
+// sets it (SETUP_SIGNING), the I/O thread reconfigures a client's parser when generation() moves.
+// Thread-safe.
+class SigningKeyCell {
+ public:
+  void set(const std::optional<SecretKey>& key) {
+    std::lock_guard lock(mutex_);
+    key_ = key;
+    generation_.fetch_add(1, std::memory_order_release);
+  }
+  std::optional<SecretKey> get() const {
+    std::lock_guard lock(mutex_);
+    return key_;
+  }
+  std::uint64_t generation() const { return generation_.load(std::memory_order_acquire); }
+
+ private:
+  mutable std::mutex mutex_;
+  std::optional<SecretKey> key_;  // guarded by mutex_
+  std::atomic<std::uint64_t> generation_{0};
+};
+
+// Unsigned messages ArduPilot accepts on a signed link (GCS_Signing.cpp accept_unsigned_callback): the
+// radios' own status reports, which a radio cannot sign.
+inline bool accepted_unsigned(std::uint32_t msgid) {
+  return msgid == 109 /* RADIO_STATUS */ || msgid == 166 /* RADIO */;
+}
 
 // A message a client may have streamed, with the data-stream group REQUEST_DATA_STREAM addresses it by.
 enum class StreamGroup : std::uint8_t {
@@ -53,7 +84,9 @@ inline constexpr std::uint8_t kCompIdAutopilot = 1;
 
 class VehicleLink {
  public:
-  VehicleLink(sim::Simulation& sim, std::size_t vehicle, const EndpointConfig& config, StatCounters& stats);
+  // signing_cell receives the vehicle's signing key (config.signing_key at once, then SETUP_SIGNING's)
+  VehicleLink(sim::Simulation& sim, std::size_t vehicle, const EndpointConfig& config, StatCounters& stats,
+              SigningKeyCell& signing_cell);
 
   // client bookkeeping, from the I/O thread's events
   void on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbox);
@@ -65,6 +98,7 @@ class VehicleLink {
 
   bool has_clients() const { return !links_.empty(); }
   const GimbalState& gimbal() const { return gimbal_; }
+  bool signing() const { return signing_key_.has_value(); }
 
  private:
   struct Stream {
@@ -94,6 +128,8 @@ class VehicleLink {
     MissionUpload upload;
     bool mission_int = false;    // the client has used *_INT mission messages: request items as INT
     int param_next = -1;         // next index of a PARAM_REQUEST_LIST download; -1 = none
+    std::uint8_t link_id = 0;    // signing link id: the lowest one free when the client connected
+    TimestampSource signing_timestamps;
   };
 
   // --- vehicle_link.cpp ---
@@ -105,6 +141,11 @@ class VehicleLink {
     header.compid = kCompIdAutopilot;
     header.seq = link.seq;
     header.version = link.version;
+    // the C library signs MAVLink 2 only; a MAVLink 1 link stays unsigned
+    if (signing_key_ && link.version == Version::kV2) {
+      header.signing = SigningParams{*signing_key_, link.link_id,
+                                     link.signing_timestamps.next(signing_now_10us())};
+    }
     std::array<std::uint8_t, kMaxFrameLen> buf;
     const std::size_t n = encode_into(header, msg, buf);
     if (n == 0) return;  // e.g. a message id above 255 on a MAVLink 1 link
@@ -117,6 +158,11 @@ class VehicleLink {
     for (Link& l : links_) send(l, msg);
   }
   bool addressed_to_us(int target_system, int target_component) const;
+  // SETUP_SIGNING: the key and initial timestamp (an all-zero key turns signing off)
+  void set_signing(const std::optional<SecretKey>& key, std::uint64_t initial_timestamp_10us);
+  // the signing clock (10 us since 2015): the initial timestamp advanced by sim time, or the simulated
+  // GPS time when later (ArduPilot's update_signing_timestamp on GPS lock)
+  std::uint64_t signing_now_10us() const;
   double now_s() const { return sim_.time_s(); }
   std::uint32_t time_boot_ms() const;
 
@@ -187,6 +233,10 @@ class VehicleLink {
   StatCounters& stats_;
   std::vector<Link> links_;
   GimbalState gimbal_;
+  SigningKeyCell& signing_cell_;
+  std::optional<SecretKey> signing_key_;
+  std::uint64_t signing_initial_10us_ = 0;
+  double signing_set_s_ = 0.0;  // sim time of the last set_signing()
   std::uint8_t sysid_ = 1;
   std::uint8_t mav_type_ = 2;
   double next_timesync_s_ = 0.0;

@@ -22,6 +22,7 @@
 
 #include "mavlink/codec/codec.hpp"
 #include "mavlink/codec/parser.hpp"
+#include "mavlink/codec/signing.hpp"
 #include "mavlink/endpoint.hpp"
 #include "mavlink/generated/messages.hpp"
 #include "sim/sim_fixture.hpp"
@@ -63,6 +64,10 @@ class TestGcs {
     h.compid = compid;
     h.seq = seq_++;
     h.version = version_;
+    if (signing_) {
+      h.signing = *signing_;
+      h.signing->timestamp_10us = timestamps_.next(signing_->timestamp_10us);
+    }
     const EncodedFrame f = encode(h, m);
     ASSERT_FALSE(f.empty());
     send_raw(f.view());
@@ -81,6 +86,17 @@ class TestGcs {
     }
   }
   std::uint64_t sent_frames() const { return sent_frames_; }
+
+  // signs what send() sends from now on (timestamps from start_10us, strictly increasing); nullopt: unsigned
+  void sign_with(std::optional<SigningParams> signing) { signing_ = signing; }
+  // checks what arrives against key from now on: frames that are unsigned or wrongly signed are dropped and
+  // counted in parser_stats()
+  void verify_with(const SecretKey& key) {
+    ParserConfig c;
+    c.signing_key = key;
+    parser_.configure(c);
+  }
+  const ParserStats& parser_stats() const { return parser_.stats(); }
 
   // reads whatever has arrived, waiting at most timeout_ms for the first byte
   void poll_once(int timeout_ms) {
@@ -138,6 +154,8 @@ class TestGcs {
   Version version_;
   std::uint8_t seq_ = 0;
   std::uint64_t sent_frames_ = 0;
+  std::optional<SigningParams> signing_;
+  TimestampSource timestamps_;
   Parser parser_;
   std::vector<Frame> frames_;
   int first_byte_ = -1;
