@@ -77,7 +77,7 @@ LoopConfig LoopConfig::from_env() {
 // ---------------------------------------------------------------- Impl
 
 EventLoop::Impl::~Impl() {
-  for (int fd : {epfd, timerfd, wakefd, api_fd}) {
+  for (int fd : {epfd, links_epfd, timerfd, wakefd, api_fd}) {
     if (fd >= 0) ::close(fd);
   }
 }
@@ -105,16 +105,44 @@ bool EventLoop::Impl::dispatch(int timeout_ms) {
       on_api_readable();
       continue;
     }
-    auto it = watches.find(fd);
-    if (it == watches.end()) continue;  // unwatched by an earlier callback of this batch
-    std::uint32_t what = 0;
-    if (evs[i].events & (EPOLLIN | EPOLLRDHUP)) what |= kReadable;
-    if (evs[i].events & EPOLLOUT) what |= kWritable;
-    if (evs[i].events & (EPOLLERR | EPOLLHUP)) what |= kError | kReadable;
-    auto fn = it->second.fn;  // keeps the callback alive if it unwatches itself
-    (*fn)(what);
+    notify_watch(fd, evs[i].events);
   }
   return true;
+}
+
+void EventLoop::Impl::notify_watch(int fd, std::uint32_t epoll_events) {
+  auto it = watches.find(fd);
+  if (it == watches.end()) return;  // unwatched by an earlier callback of this batch
+  std::uint32_t what = 0;
+  if (epoll_events & (EPOLLIN | EPOLLRDHUP)) what |= kReadable;
+  if (epoll_events & EPOLLOUT) what |= kWritable;
+  if (epoll_events & (EPOLLERR | EPOLLHUP)) what |= kError | kReadable;
+  auto fn = it->second.fn;  // keeps the callback alive if it unwatches itself
+  (*fn)(what);
+}
+
+std::uint32_t EventLoop::Impl::main_interest(std::uint32_t events) const {
+  const std::uint32_t out = (events & kWritable) ? EPOLLOUT : 0u;
+  if (links_epfd >= 0) return out;
+  return EPOLLRDHUP | ((events & kReadable) ? EPOLLIN : 0u) | out;
+}
+
+std::uint32_t EventLoop::Impl::links_interest(std::uint32_t events) const {
+  return (events & kReadable) ? (EPOLLIN | EPOLLRDHUP) : 0u;
+}
+
+void EventLoop::Impl::read_links() {
+  if (links_epfd < 0) return;
+  epoll_event evs[64];
+  // bounded: a peer that never stops sending is read again at the next tick
+  for (int round = 0; round < 64; ++round) {
+    int n;
+    do {
+      n = epoll_wait(links_epfd, evs, 64, 0);
+    } while (n < 0 && errno == EINTR);
+    if (n <= 0) return;
+    for (int i = 0; i < n; ++i) notify_watch(evs[i].data.fd, evs[i].events);
+  }
 }
 
 bool EventLoop::Impl::run_posted() {
@@ -269,6 +297,11 @@ void EventLoop::Impl::handle_api_message(const Json& j, std::string_view payload
         sink(j, payload);
       }
     } else if (ev == "tick") {
+      // the server flushed the MAVLink bytes of the steps before this tick before it sent the tick:
+      // they are handled now, at the clock of the tick before, wherever epoll would have put them
+      // in this batch
+      read_links();
+      if (!alive) return;
       tick = j.value("tick", std::int64_t{0});
       sim_now = j.value("time", sim_now);
       tick_outstanding = true;
@@ -312,7 +345,9 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
   impl->epfd = epoll_create1(EPOLL_CLOEXEC);
   impl->timerfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
   impl->wakefd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-  if (impl->epfd < 0 || impl->timerfd < 0 || impl->wakefd < 0) {
+  if (config.clock == LoopConfig::Clock::kLockstep) impl->links_epfd = epoll_create1(EPOLL_CLOEXEC);
+  if (impl->epfd < 0 || impl->timerfd < 0 || impl->wakefd < 0 ||
+      (config.clock == LoopConfig::Clock::kLockstep && impl->links_epfd < 0)) {
     return Result<std::unique_ptr<EventLoop>>::fail(Error::kIo, std::string("event loop: ") + std::strerror(errno));
   }
   for (int fd : {impl->timerfd, impl->wakefd}) {
@@ -398,10 +433,18 @@ bool EventLoop::cancel(TimerId id) {
 Result<void> EventLoop::watch_fd(int fd, std::uint32_t events, std::function<void(std::uint32_t)> fn) {
   assert_in_loop_thread();
   epoll_event ev{};
-  ev.events = EPOLLRDHUP | ((events & kReadable) ? EPOLLIN : 0u) | ((events & kWritable) ? EPOLLOUT : 0u);
+  ev.events = impl_->main_interest(events);
   ev.data.fd = fd;
   if (epoll_ctl(impl_->epfd, EPOLL_CTL_ADD, fd, &ev) != 0) {
     return Result<void>::fail(Error::kIo, std::string("epoll_ctl ADD: ") + std::strerror(errno));
+  }
+  if (impl_->links_epfd >= 0) {
+    ev.events = impl_->links_interest(events);
+    if (epoll_ctl(impl_->links_epfd, EPOLL_CTL_ADD, fd, &ev) != 0) {
+      const int err = errno;
+      epoll_ctl(impl_->epfd, EPOLL_CTL_DEL, fd, nullptr);
+      return Result<void>::fail(Error::kIo, std::string("epoll_ctl ADD: ") + std::strerror(err));
+    }
   }
   impl_->watches[fd] = Impl::Watch{events, std::make_shared<std::function<void(std::uint32_t)>>(std::move(fn))};
   return {};
@@ -413,10 +456,16 @@ Result<void> EventLoop::modify_fd(int fd, std::uint32_t events) {
   if (it == impl_->watches.end()) return Result<void>::fail(Error::kInvalidArgument, "modify_fd: not watched");
   if (it->second.events == events) return {};
   epoll_event ev{};
-  ev.events = EPOLLRDHUP | ((events & kReadable) ? EPOLLIN : 0u) | ((events & kWritable) ? EPOLLOUT : 0u);
+  ev.events = impl_->main_interest(events);
   ev.data.fd = fd;
   if (epoll_ctl(impl_->epfd, EPOLL_CTL_MOD, fd, &ev) != 0) {
     return Result<void>::fail(Error::kIo, std::string("epoll_ctl MOD: ") + std::strerror(errno));
+  }
+  if (impl_->links_epfd >= 0) {
+    ev.events = impl_->links_interest(events);
+    if (epoll_ctl(impl_->links_epfd, EPOLL_CTL_MOD, fd, &ev) != 0) {
+      return Result<void>::fail(Error::kIo, std::string("epoll_ctl MOD: ") + std::strerror(errno));
+    }
   }
   it->second.events = events;
   return {};
@@ -424,7 +473,9 @@ Result<void> EventLoop::modify_fd(int fd, std::uint32_t events) {
 
 void EventLoop::unwatch_fd(int fd) {
   assert_in_loop_thread();
-  if (impl_->watches.erase(fd) > 0) epoll_ctl(impl_->epfd, EPOLL_CTL_DEL, fd, nullptr);
+  if (impl_->watches.erase(fd) == 0) return;
+  epoll_ctl(impl_->epfd, EPOLL_CTL_DEL, fd, nullptr);
+  if (impl_->links_epfd >= 0) epoll_ctl(impl_->links_epfd, EPOLL_CTL_DEL, fd, nullptr);
 }
 
 void EventLoop::post(Task fn) {

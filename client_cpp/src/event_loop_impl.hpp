@@ -38,6 +38,10 @@ struct EventLoop::Impl {
   LoopConfig config;
   std::thread::id thread;
   int epfd = -1;
+  // lockstep: the readable side of the watched descriptors, read just before a tick applies
+  // (read_links) rather than whenever bytes arrive, so every run sees the same bytes at the same
+  // tick
+  int links_epfd = -1;
   int timerfd = -1;
   int wakefd = -1;
   std::int64_t start_mono_ns = 0;
@@ -81,6 +85,14 @@ struct EventLoop::Impl {
   bool run_due_timers();
   void arm_timerfd(double wake_at);
   void on_api_readable();
+  // lockstep: handles what has arrived on the watched descriptors, at the clock of the tick now
+  // ending
+  void read_links();
+  // the epoll interest of a watched descriptor: in epfd (all of it on the host clock; under
+  // lockstep only writability, errors aside) and in links_epfd (readability, under lockstep)
+  std::uint32_t main_interest(std::uint32_t events) const;
+  std::uint32_t links_interest(std::uint32_t events) const;
+  void notify_watch(int fd, std::uint32_t epoll_events);
   void handle_api_message(const nlohmann::json& j, std::string_view payload);
   // Sends a request on the lockstep connection; on_reply gets the whole reply. False if there is none.
   bool api_request(nlohmann::json request, std::function<void(const nlohmann::json&)> on_reply);

@@ -204,6 +204,8 @@ struct Options {
   double budget_s = 400.0;
   double wall_limit_s = 1800.0;
   std::string kill;  // vehicle to kill right after its take-off
+  double gcs_loss = 0.0;       // the GCS link relay's loss probability, both vehicles
+  double gcs_latency_s = 0.0;  // and its one-way latency
   std::string json_path;
   std::string camera_size = "384x216";
   double camera_fps = 15;
@@ -219,6 +221,9 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   --record FILE.mp4   video of the run (default mbzirc2020_seedN.mp4); --no-record: none
   --budget S          sim-time limit of the mission (default 400)
   --kill VEHICLE      kill this vehicle right after its take-off (Competition Day 2)
+  --gcs-loss P        impair both UAVs' GCS links in the server's relay: drop each datagram with
+                      probability P (0-1, seeded; default 0)
+  --gcs-latency S     and deliver the rest S seconds of sim time later (default 0)
   --camera-size WxH   the UAV cameras' size (default 384x216: 39 x 21 deg as the seed's oCam-1CGN-U)
   --camera-fps F      the UAV cameras' frame rate (default 15)
   --json FILE         write the summary as JSON
@@ -262,6 +267,10 @@ int main(int argc, char** argv) {
       o.wall_limit_s = std::atof(v);
     else if (a == "--kill")
       o.kill = v;
+    else if (a == "--gcs-loss")
+      o.gcs_loss = std::atof(v);
+    else if (a == "--gcs-latency")
+      o.gcs_latency_s = std::atof(v);
     else if (a == "--json")
       o.json_path = v;
     else if (a == "--camera-size")
@@ -277,6 +286,7 @@ int main(int argc, char** argv) {
     else
       return usage();
   }
+  if (!(o.gcs_loss >= 0.0 && o.gcs_loss <= 1.0) || !(o.gcs_latency_s >= 0.0)) return usage();
   if (record && o.record.empty()) o.record = "mbzirc2020_seed" + std::to_string(o.seed) + ".mp4";
   if (!record) o.record.clear();
   const size_t x = o.camera_size.find('x');
@@ -386,6 +396,17 @@ int main(int argc, char** argv) {
         break;
       }
       const int uav_port = r["result"]["uav_port"].get<int>();
+      if (o.gcs_loss > 0.0 || o.gcs_latency_s > 0.0) {
+        // impaired from t = 0, before the UAV program sends anything
+        const Json ir = api.request({{"op", "gcs_link_impair"},
+                                     {"vehicle", i},
+                                     {"loss", o.gcs_loss},
+                                     {"latency_s", o.gcs_latency_s}});
+        if (!ir.value("ok", false)) {
+          fail("gcs_link_impair: " + ir.dump());
+          break;
+        }
+      }
       // 4. the UAV programs
       Child& u = children.emplace_back();
       u.name = "uav" + std::to_string(i);
@@ -487,6 +508,12 @@ int main(int argc, char** argv) {
         }
       }
       summary["balloons"] = b["result"]["balloons"];
+    }
+    // the relay's counters: what the impairment did to each GCS link
+    summary["gcs_links"] = Json::array();
+    for (int i = 0; i < 2; ++i) {
+      const Json g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}});
+      if (g.value("ok", false)) summary["gcs_links"].push_back(g["result"]);
     }
   }
 

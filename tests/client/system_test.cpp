@@ -342,14 +342,32 @@ TEST(ClientNoServer, SilentPeerTimesOut) {
 namespace uavsim::client::testing {
 namespace {
 
-// The same mission twice on fresh servers: the same trajectory under lockstep. Commands take effect at the
-// tick they were sent in (the server waits for the MAVLink seq named in `done`), but telemetry has no
-// such guarantee yet: a message stamped at or before a tick can arrive just after the tick event, so a
-// wait on telemetry may end one tick later in one run than in the other. Hence closeness, not identity.
+// The same mission twice on fresh servers: bit for bit the same run under lockstep. Commands take
+// effect at the tick they were sent in (the server waits for the MAVLink seq named in `done`);
+// telemetry stamped before a tick reaches the client before the tick (the server flushes first),
+// and the client handles what arrived on its links before it applies a tick, so each tick sees the
+// same telemetry in every run.
 struct FlightRecord {
-  std::vector<Eigen::Vector3d> truth;
+  std::vector<std::string> truth;  // the server's whole `vehicles` entry at each sample, as JSON
+  std::vector<std::string> telemetry;  // the client's telemetry cache at every tick, in hex floats
+  std::vector<double> resumed_at;      // the loop clock when each blocking call returned
   bool seq_checked = false;
 };
+
+std::string telemetry_line(double now, const Telemetry& t) {
+  char buf[640];
+  std::snprintf(
+      buf, sizeof(buf),
+      "t=%a mode=%u armed=%d landed=%d hb=%a vt=%a p=%a,%a,%a v=%a,%a,%a rpy=%a,%a,%a w=%a,%a,%a "
+      "alt=%a batt=%a,%a,%a gps=%a,%a,%a",
+      now, t.custom_mode, t.armed, static_cast<int>(t.landed), t.last_heartbeat_time,
+      t.vehicle_time_s, t.position_ned_m.x(), t.position_ned_m.y(), t.position_ned_m.z(),
+      t.velocity_ned_m_s.x(), t.velocity_ned_m_s.y(), t.velocity_ned_m_s.z(), t.roll_rad,
+      t.pitch_rad, t.yaw_rad, t.body_rates_rad_s.x(), t.body_rates_rad_s.y(),
+      t.body_rates_rad_s.z(), t.relative_alt_m, t.battery_voltage_v, t.battery_current_a,
+      t.battery_consumed_mah, t.position.lat_deg, t.position.lon_deg, t.position.alt_m);
+  return buf;
+}
 
 FlightRecord fly_scripted() {
   FlightRecord rec;
@@ -361,32 +379,70 @@ FlightRecord fly_scripted() {
   ApiClient api(server.api_port());
   api.request({{"op", "resume"}});
   Vehicle uav(loop);
+  // timers run at ticks, after the tick's telemetry: the client's view of every tick
+  loop.call_every(0.02,
+                  [&] { rec.telemetry.push_back(telemetry_line(loop.now(), uav.telemetry())); });
+  auto sample = [&] {
+    rec.resumed_at.push_back(loop.now());
+    rec.truth.push_back(api.truth().dump());
+  };
   EXPECT_TRUE(uav.connect(server.mavlink_address(), 10));
+  sample();
   EXPECT_TRUE(uav.wait_ready(60));
+  sample();
   EXPECT_TRUE(uav.set_mode(FlightMode::kGuided));
+  sample();
   EXPECT_TRUE(uav.arm());
+  sample();
   EXPECT_TRUE(uav.takeoff(6.0));
+  sample();
   EXPECT_TRUE(uav.set_velocity_enu({1.0, 0.5, 0.0}));
   for (int i = 0; i < 8; ++i) {
     EXPECT_TRUE(loop.run_for(0.5));
-    rec.truth.push_back(api.truth_position_enu());
+    sample();
   }
   EXPECT_TRUE(uav.goto_local_enu({0.0, 0.0, 6.0}));
   EXPECT_TRUE(loop.run_for(3.0));
-  rec.truth.push_back(api.truth_position_enu());
+  sample();
   rec.seq_checked = loop.impl().mavlink_seq_checked.value_or(false);
   return rec;
+}
+
+// the index of the first entry where a and b differ, or -1
+template <class T>
+long first_difference(const std::vector<T>& a, const std::vector<T>& b) {
+  for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
+    if (i >= a.size() || i >= b.size() || !(a[i] == b[i])) return static_cast<long>(i);
+  }
+  return -1;
 }
 
 TEST(ClientDeterminism, SameMissionSameTrajectory) {
   const FlightRecord a = fly_scripted();
   const FlightRecord b = fly_scripted();
-  ASSERT_EQ(a.truth.size(), b.truth.size());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < a.truth.size(); ++i) worst = std::max(worst, (a.truth[i] - b.truth[i]).norm());
   EXPECT_TRUE(a.seq_checked && b.seq_checked) << "the server did not confirm mavlink_seq_checked";
-  EXPECT_LT(worst, 0.05) << "lockstep runs differ by more than a tick's worth";
-  std::printf("lockstep runs differ by %.3g m at most\n", worst);
+  ASSERT_FALSE(a.truth.empty());
+  ASSERT_GT(a.telemetry.size(), 100u);
+  const long resumed = first_difference(a.resumed_at, b.resumed_at);
+  EXPECT_EQ(resumed, -1)
+      << "blocking call " << resumed << " returned at "
+      << (resumed < static_cast<long>(a.resumed_at.size()) ? a.resumed_at[resumed] : -1.0)
+      << " s in one run, "
+      << (resumed < static_cast<long>(b.resumed_at.size()) ? b.resumed_at[resumed] : -1.0)
+      << " s in the other";
+  const long truth = first_difference(a.truth, b.truth);
+  EXPECT_EQ(truth, -1) << "ground truth differs at sample " << truth << ":\n"
+                       << (truth < static_cast<long>(a.truth.size()) ? a.truth[truth] : "(none)")
+                       << "\n"
+                       << (truth < static_cast<long>(b.truth.size()) ? b.truth[truth] : "(none)");
+  const long tel = first_difference(a.telemetry, b.telemetry);
+  EXPECT_EQ(tel, -1) << "the client's telemetry differs at tick " << tel << ":\n"
+                     << (tel < static_cast<long>(a.telemetry.size()) ? a.telemetry[tel] : "(none)")
+                     << "\n"
+                     << (tel < static_cast<long>(b.telemetry.size()) ? b.telemetry[tel] : "(none)");
+  EXPECT_EQ(a.telemetry.size(), b.telemetry.size());
+  std::printf("%zu samples of ground truth, %zu ticks of client telemetry\n", a.truth.size(),
+              a.telemetry.size());
 }
 
 }  // namespace

@@ -48,6 +48,29 @@ TEST(Mbzirc2020Mission, TwoUavsPopAllFiveBalloonsWithoutCollision) {
   EXPECT_TRUE(r["success"].get<bool>()) << out;
 }
 
+// The ground-station link through the server's relay at 30 % loss and 200 ms latency both ways, for
+// both UAVs (seed 6.3): the mission is still whole, and the relay did drop and delay datagrams.
+TEST(Mbzirc2020Mission, ImpairedGcsLinksStillPopAllFiveWithoutCollision) {
+  std::string out;
+  const Json r = run_mission("--seed 1 --gcs-loss 0.3 --gcs-latency 0.2", &out);
+  ASSERT_TRUE(r.is_object()) << out;
+  EXPECT_EQ(r["total"].get<int>(), 5) << out;
+  EXPECT_EQ(r["popped"].get<int>(), 5) << out;
+  EXPECT_FALSE(r["collision"].get<bool>()) << out;
+  EXPECT_TRUE(r["crashes"].empty()) << out;
+  EXPECT_LT(r["mission_time_s"].get<double>(), kBudget_s) << out;
+  EXPECT_TRUE(r["success"].get<bool>()) << out;
+  ASSERT_EQ(r["gcs_links"].size(), 2u) << out;
+  for (const Json& g : r["gcs_links"]) {
+    EXPECT_DOUBLE_EQ(g["loss"].get<double>(), 0.3) << g.dump();
+    EXPECT_DOUBLE_EQ(g["latency_s"].get<double>(), 0.2) << g.dump();
+    EXPECT_GT(g["to_gcs_dropped"].get<int>(), 0) << g.dump();
+    EXPECT_GT(g["to_uav_dropped"].get<int>(), 0) << g.dump();
+    EXPECT_GT(g["to_gcs_forwarded"].get<int>(), 0) << g.dump();
+    EXPECT_GT(g["to_uav_forwarded"].get<int>(), 0) << g.dump();
+  }
+}
+
 // Competition Day 2 (seed 7.2, note 41): one UAV fails; the other pops all five alone
 TEST(Mbzirc2020Mission, OneUavKilledAfterTakeOffTheOtherPopsAllFive) {
   std::string out;

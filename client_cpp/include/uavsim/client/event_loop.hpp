@@ -69,7 +69,11 @@ class EventLoop {
   TimerId call_every(double period_s, Task fn);
   bool cancel(TimerId id);  // false if it already fired (one-shot) or never existed
 
-  // File descriptors (level-triggered). events: kReadable | kWritable; fn(events that happened, incl. kError).
+  // File descriptors (level-triggered). events: kReadable | kWritable; fn(events that happened,
+  // incl. kError). Under lockstep a descriptor is reported readable only as a tick arrives, before
+  // the clock moves to it: what arrived while the simulation ran up to the tick is handled at the
+  // previous tick's time, in every run alike (and what arrives while a tick is being worked on
+  // waits for the next). Writability and errors are reported at once.
   static constexpr std::uint32_t kReadable = 1, kWritable = 2, kError = 4;
   Result<void> watch_fd(int fd, std::uint32_t events, std::function<void(std::uint32_t)> fn);
   Result<void> modify_fd(int fd, std::uint32_t events);
