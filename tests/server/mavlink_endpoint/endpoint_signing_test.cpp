@@ -49,7 +49,15 @@ class SigningTest : public EndpointTest {
     c.target_component = 1;
     c.param1 = 1;
     const std::size_t acks = g.count<msg::CommandAck>();
+    // the endpoint accounts for every frame it reads: accepted, or rejected for its signature; wait
+    // for that before stepping, so a loaded machine cannot let the sim-time bound pass first
+    auto accounted = [this] {
+      const EndpointStats st = server_->stats(0);
+      return st.frames_received + st.bad_signature + st.unsigned_rejected + st.replayed;
+    };
+    const std::uint64_t before = accounted();
     g.send(c);
+    EXPECT_TRUE(wait_for([&] { return accounted() > before; })) << "the endpoint never read the frame";
     return step_until(g, [&] { return g.count<msg::CommandAck>() > acks; }, 1.0);
   }
 };
