@@ -493,6 +493,9 @@ void EventLoop::run() {
     if (is_lockstep() && !impl_->alive) return;
     impl_->iterate(true, kInf);
   }
+  // tasks posted before stop() still run: a stop from another thread can come before the loop has
+  // woken up for the tasks that thread posted first
+  impl_->run_posted();
 }
 
 void EventLoop::stop() {

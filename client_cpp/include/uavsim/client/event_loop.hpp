@@ -82,7 +82,7 @@ class EventLoop {
   // Thread-safe: runs fn on the loop thread soon (at the current tick under lockstep).
   void post(Task fn);
 
-  // Dispatches until stop() (thread-safe) is called.
+  // Dispatches until stop() (thread-safe) is called; tasks posted before stop() still run.
   void run();
   void stop();
   // Dispatches for duration_s of loop time. kConnectionLost if the lockstep clock dies.
