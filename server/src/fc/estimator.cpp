@@ -1,4 +1,5 @@
 #include "fc/estimator.hpp"
+#include "fc/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,6 @@ namespace uavsim::server::fc {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // attitude correction gains, rad/s per unit error: slow for gravity (the accelerometer sees vibration
 // and manoeuvres), faster for heading
 constexpr double kAccelCorrectionGain = 0.1;
@@ -33,11 +33,6 @@ constexpr double kGlitchResetS = 5.0;
 constexpr double kSettleS = 2.0;
 constexpr double kAccelZLpTauS = 0.15;
 
-double wrap_pi(double a) {
-  while (a > kPi) a -= 2.0 * kPi;
-  while (a < -kPi) a += 2.0 * kPi;
-  return a;
-}
 
 }  // namespace
 

@@ -1,4 +1,5 @@
 #include "fc/flight_controller.hpp"
+#include "fc/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@ namespace uavsim::server::fc {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // control steps longer than this (a paused sim) are treated as this long
 constexpr double kMaxDtS = 0.05;
 // GUIDED velocity sanity limit, as ArduCopter's SET_POSITION_TARGET handler
@@ -25,11 +25,6 @@ constexpr double kRelaxTauS = 0.2;
 constexpr double kMonitorMinHeightM = 1.0;
 constexpr double kMonitorMinThrustFraction = 0.5;
 
-double wrap_pi(double a) {
-  while (a > kPi) a -= 2.0 * kPi;
-  while (a < -kPi) a += 2.0 * kPi;
-  return a;
-}
 
 bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
 

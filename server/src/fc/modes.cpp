@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fc/angles.hpp"
 #include "fc/fc_impl.hpp"
 #include "fc/flight_controller.hpp"
 
@@ -9,7 +10,6 @@ namespace uavsim::server::fc {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // take-off is complete when the carrot is at altitude and the vehicle within this
 constexpr double kTakeoffDoneM = 0.5;
 // "face the waypoint" only while it is further than this horizontally (avoids spinning on arrival)
@@ -23,11 +23,6 @@ constexpr double kYawDoneRad = 5.0 * kPi / 180.0;
 // GUIDED velocity targets: how far the integrated position target may lead the vehicle
 constexpr double kGuidedLeashM = 2.0;
 
-double wrap_pi(double a) {
-  while (a > kPi) a -= 2.0 * kPi;
-  while (a < -kPi) a += 2.0 * kPi;
-  return a;
-}
 
 }  // namespace
 

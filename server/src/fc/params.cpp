@@ -1,4 +1,5 @@
 #include "fc/params.hpp"
+#include "fc/angles.hpp"
 
 #include <cmath>
 
@@ -6,7 +7,6 @@ namespace uavsim::server::fc {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 
 // One row of the table: name, field, accepted range. The order of kTable is the MAVLink param_index;
