@@ -1,0 +1,404 @@
+#include "agent.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace uavsim::missions::coverage {
+
+namespace {
+
+// Taking Off lasts at least this long, so the ADB has heard the flock before the roles are chosen
+constexpr double kDiscovery_s = 3.0;
+// a leader query that has not completed in this long is started again (an agent it waited for
+// may have failed after being counted live; the ADB will have dropped it by then)
+constexpr double kQueryTimeout_s = 20.0;
+// Waiting ends at the latest after this long
+constexpr double kWaitTimeout_s = 30.0;
+// the leader is at the start of its path when this close
+constexpr double kAtStart_m = 1.5;
+// Running: the leader aims at its path this far ahead, and corrects sideways with this gain
+constexpr double kLookahead_m = 5.0;
+constexpr double kLateralGain_1_s = 0.5;
+// altitude hold and home approach
+constexpr double kAltitudeGain_1_s = 1.0;
+constexpr double kMaxClimb_m_s = 2.0;
+constexpr double kApproachGain_1_s = 0.5;
+constexpr double kHomeReached_m = 1.0;
+// Going Home: agents of the same altitude layer closer than this push each other apart
+constexpr double kHomeSeparation_m = 5.0;
+constexpr double kHomeSeparationSpeed_m_s = 1.5;
+
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, f, a, b, c);
+  return buf;
+}
+
+}  // namespace
+
+const char* agent_state_name(AgentState s) {
+  switch (s) {
+    case AgentState::kTakingOff:
+      return "Taking Off";
+    case AgentState::kQuerying:
+      return "Querying";
+    case AgentState::kDeploying:
+      return "Deploying";
+    case AgentState::kRunning:
+      return "Running";
+    case AgentState::kWaiting:
+      return "Waiting";
+    case AgentState::kNonLeader:
+      return "Non-Leader";
+    case AgentState::kGoingHome:
+      return "Going Home";
+    case AgentState::kLanded:
+      return "Landed";
+    case AgentState::kFailed:
+      return "Failed";
+  }
+  return "?";
+}
+
+Agent::Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m)
+    : config_(config),
+      id_(id),
+      home_enu_m_(home_enu_m),
+      origin_{config.origin_x_m, config.origin_y_m},
+      adb_(id,
+           [base = config.max_age_base_s, per_hop = config.max_age_per_hop_s](int hops) {
+             return static_cast<int>(1000.0 * (base + per_hop * std::max(hops, 0)));
+           }),
+      own_(config.stripe_count()),
+      aggregation_(id, config.stripe_count()),
+      reassembler_(config.stripe_count()),
+      flock_(config.gains) {}
+
+bool Agent::is_leader_state() const {
+  return state_ == AgentState::kQuerying || state_ == AgentState::kDeploying ||
+         state_ == AgentState::kRunning || state_ == AgentState::kWaiting;
+}
+
+void Agent::enter(AgentState s, AgentOutputs& out, const std::string& why) {
+  if (!out.note.empty()) out.note += "; ";
+  out.note += std::string(agent_state_name(state_)) + " -> " + agent_state_name(s);
+  if (!why.empty()) out.note += " (" + why + ")";
+  state_ = s;
+  state_since_s_ = last_now_s_;
+}
+
+AgentOutputs Agent::step(const AgentInputs& in) {
+  AgentOutputs out;
+  // time: ages advance by the elapsed milliseconds (Algorithm 2 runs every millisecond)
+  const double dt = started_ ? std::max(0.0, in.now_s - last_now_s_) : 0.0;
+  if (!started_) {
+    started_ = true;
+    state_since_s_ = in.now_s;
+    next_beacon_s_ = in.now_s;
+  }
+  time_in_state_[static_cast<size_t>(state_)] += dt;
+  dt_s_ = dt;
+  last_now_s_ = in.now_s;
+  age_remainder_ms_ += dt * 1000.0;
+  const int elapsed_ms = static_cast<int>(age_remainder_ms_);
+  age_remainder_ms_ -= elapsed_ms;
+  if (elapsed_ms > 0) adb_.age(elapsed_ms);
+
+  if (state_ == AgentState::kLanded || state_ == AgentState::kFailed) return out;
+  // our own vehicle stopped flying in the air: a dead drone is silent
+  if (airborne_seen_ && !in.armed && state_ != AgentState::kGoingHome) {
+    enter(AgentState::kFailed, out, "vehicle disarmed in flight");
+    return out;
+  }
+  if (in.armed && !in.on_ground) airborne_seen_ = true;
+
+  receive(in);
+  take_picture(in, out);
+  run_state(in, out);
+  if (state_ != AgentState::kLanded) broadcast(in, out);
+  return out;
+}
+
+void Agent::receive(const AgentInputs& in) {
+  if (in.gcs_map && in.gcs_map->stripe_count() == own_.stripe_count()) gcs_map_ = in.gcs_map;
+  for (const Frame& f : in.received) {
+    const auto type = message_type(f);
+    if (type == MessageType::kBeacon) {
+      auto b = decode_beacon(f, origin_);
+      if (!b) continue;
+      adb_.on_message(b->self, b->records);
+      if (b->going_home) going_home_heard_ = true;
+    } else if (type == MessageType::kAggregate) {
+      if (auto m = reassembler_.add(f)) aggregation_.on_message(*m, adb_.leader(), own_);
+    }
+  }
+}
+
+void Agent::take_picture(const AgentInputs& in, AgentOutputs& out) {
+  if (state_ == AgentState::kTakingOff || state_ == AgentState::kGoingHome) return;
+  const auto p = camera_trigger(config_, in.position_enu_m.x(), in.position_enu_m.y(),
+                                in.position_enu_m.z(), in.yaw_enu_rad, own_);
+  if (!p) return;
+  own_.add(p->stripe, p->covered);
+  aggregation_.refresh_own(own_);
+  out.picture = p;
+}
+
+void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
+  if (in.now_s >= next_beacon_s_) {
+    // catch up without bursts if the caller stepped slowly
+    next_beacon_s_ = std::max(next_beacon_s_ + 1.0 / config_.broadcast_hz, in.now_s);
+    Beacon b;
+    b.self.id = id_;
+    b.self.seq = ++seq_;
+    b.self.x_m = in.position_enu_m.x();
+    b.self.y_m = in.position_enu_m.y();
+    b.self.heading_rad = target_heading_rad_;
+    b.self.vx_m_s = commanded_velocity_enu_m_s_.x();
+    b.self.vy_m_s = commanded_velocity_enu_m_s_.y();
+    b.going_home = state_ == AgentState::kGoingHome;
+    // the next window of the ADB (rotating, so every record goes out in turn)
+    const auto& records = adb_.records();
+    if (!records.empty()) {
+      record_cursor_ %= records.size();
+      auto it = std::next(records.begin(), static_cast<long>(record_cursor_));
+      for (size_t k = 0; k < std::min(records.size(), static_cast<size_t>(kRecordsPerBeacon));
+           ++k) {
+        b.records.push_back(it->second);
+        if (++it == records.end()) it = records.begin();
+      }
+      record_cursor_ += b.records.size();
+    }
+    out.broadcast.push_back(encode_beacon(b, origin_));
+  }
+  if (state_ != AgentState::kGoingHome) {
+    if (auto m = aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s)) {
+      for (Frame& f : encode_aggregate(*m)) out.broadcast.push_back(std::move(f));
+    }
+  }
+}
+
+double Agent::altitude_rate(const AgentInputs& in, double altitude_m) const {
+  return saturate(kAltitudeGain_1_s * (altitude_m - in.position_enu_m.z()), kMaxClimb_m_s);
+}
+
+double Agent::yaw_rate_to(const AgentInputs& in, double heading_rad) const {
+  // R2's law, also for the leader's own turns
+  return saturate(config_.gains.kp_r2 * angle_diff(heading_rad, in.yaw_enu_rad),
+                  config_.gains.s_r2_deg_s * kPi / 180.0);
+}
+
+void Agent::fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double speed,
+                   double heading_rad, AgentOutputs& out) const {
+  const Eigen::Vector2d d = target - in.position_enu_m.head<2>();
+  const double dist = d.norm();
+  Eigen::Vector2d v = Eigen::Vector2d::Zero();
+  if (dist > 1e-6) v = d / dist * std::min(speed, kApproachGain_1_s * dist);
+  out.action = AgentOutputs::Action::kVelocity;
+  out.velocity_enu_m_s << v, altitude_rate(in, config_.altitude_m);
+  out.yaw_rate_rad_s = yaw_rate_to(in, heading_rad);
+}
+
+bool Agent::flock_in_line(const AgentInputs& in) const {
+  // every agent of the ADB within the tolerance of the leader's flock line (along the heading)
+  const Eigen::Vector2d dir(std::cos(target_heading_rad_), std::sin(target_heading_rad_));
+  for (const auto& [id, r] : adb_.records()) {
+    const Eigen::Vector2d d(r.x_m - in.position_enu_m.x(), r.y_m - in.position_enu_m.y());
+    if (std::abs(d.dot(dir)) > config_.formation_tolerance_m) return false;
+  }
+  return true;
+}
+
+void Agent::start_query(AgentOutputs& out) {
+  ++query_counter_;
+  ++queries_started_;
+  aggregation_.start(query_counter_, own_);
+  if (!out.note.empty()) out.note += "; ";
+  out.note += "query " + std::to_string(query_counter_) + " started";
+}
+
+void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
+  // the flock's map, with our own latest pictures and the ground station's map (3.6)
+  AreaParts map = aggregation_.result();
+  map.merge(own_);
+  if (gcs_map_) map.merge(*gcs_map_);
+  last_map_ = map;
+  const double fraction = map.covered_fraction(config_.width_y_m);
+  if (map.covers_all(config_.width_y_m)) {
+    complete_ = true;
+    enter(AgentState::kGoingHome, out, "rectangle covered");
+    return;
+  }
+  std::vector<double> others_y;
+  for (const auto& [id, r] : adb_.records()) others_y.push_back(r.y_m);
+  const FlockExtent extent = flock_extent(in.position_enu_m.y(), others_y, config_.gains.d_r1_m);
+  path_ = plan_path(config_, map, in.position_enu_m.head<2>(), extent);
+  if (!path_) {
+    complete_ = true;
+    enter(AgentState::kGoingHome, out, "nothing left to plan");
+    return;
+  }
+  target_heading_rad_ = path_->heading_rad;
+  enter(AgentState::kDeploying, out,
+        fmt("covered %.1f%%, path from (%.1f, %.1f)", 100.0 * fraction,
+            path_->points_enu_m.front().x(), path_->points_enu_m.front().y()) +
+            (path_->low_side ? " on the low-y frontier" : " on the high-y frontier"));
+}
+
+void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
+  const double now = in.now_s;
+  const Eigen::Vector2d here = in.position_enu_m.head<2>();
+  const bool lead = adb_.leader() == id_;
+
+  // the "going home" broadcast ends the mission for everyone (fig. 4.6)
+  if (going_home_heard_ && state_ != AgentState::kGoingHome && state_ != AgentState::kTakingOff) {
+    enter(AgentState::kGoingHome, out, "going-home broadcast heard");
+  }
+  // role changes
+  if (is_leader_state() && !lead) {
+    flock_.reset();
+    enter(AgentState::kNonLeader, out, "agent " + std::to_string(adb_.leader()) + " leads");
+  } else if (state_ == AgentState::kNonLeader && lead) {
+    enter(AgentState::kQuerying, out, "leader lost, lowest id left");
+    start_query(out);
+  }
+
+  switch (state_) {
+    case AgentState::kTakingOff: {
+      if (!takeoff_sent_) {
+        takeoff_sent_ = true;
+        out.action = AgentOutputs::Action::kTakeOff;
+        out.takeoff_altitude_m = config_.altitude_m;
+        break;
+      }
+      const bool at_altitude =
+          in.position_enu_m.z() >= config_.altitude_m - config_.altitude_tolerance_m;
+      if (at_altitude && now - state_since_s_ >= kDiscovery_s) {
+        target_heading_rad_ = 0.0;
+        if (going_home_heard_) {
+          enter(AgentState::kGoingHome, out, "going-home broadcast heard");
+        } else if (lead) {
+          enter(AgentState::kQuerying, out, "lowest id");
+          start_query(out);
+        } else {
+          enter(AgentState::kNonLeader, out, "agent " + std::to_string(adb_.leader()) + " leads");
+        }
+      }
+      break;
+    }
+    case AgentState::kQuerying: {
+      fly_to(in, here, 0.0, target_heading_rad_, out);
+      if (aggregation_.complete(adb_.live_mask())) {
+        finish_query(in, out);
+      } else if (now - state_since_s_ > kQueryTimeout_s) {
+        state_since_s_ = now;
+        start_query(out);
+      }
+      break;
+    }
+    case AgentState::kDeploying: {
+      const Eigen::Vector2d start = path_->points_enu_m.front();
+      fly_to(in, start, config_.cruise_speed_m_s, target_heading_rad_, out);
+      const bool aligned =
+          std::abs(angle_diff(in.yaw_enu_rad, target_heading_rad_)) < config_.heading_tolerance_rad;
+      if ((here - start).norm() < kAtStart_m && aligned && flock_in_line(in)) {
+        enter(AgentState::kRunning, out, "flock in line");
+      } else if (now - state_since_s_ > config_.deploy_timeout_s) {
+        enter(AgentState::kRunning, out, "deploy timeout");
+      }
+      break;
+    }
+    case AgentState::kRunning: {
+      const double dir = std::cos(path_->heading_rad) >= 0.0 ? 1.0 : -1.0;
+      const double end_x = path_->points_enu_m.back().x();
+      if ((in.position_enu_m.x() - end_x) * dir >= 0.0) {
+        enter(AgentState::kWaiting, out, "end of path");
+        fly_to(in, here, 0.0, target_heading_rad_, out);
+        break;
+      }
+      const double y_ahead = path_y_at(*path_, in.position_enu_m.x() + dir * kLookahead_m);
+      const double vy =
+          saturate(kLateralGain_1_s * (y_ahead - in.position_enu_m.y()), config_.cruise_speed_m_s);
+      out.action = AgentOutputs::Action::kVelocity;
+      out.velocity_enu_m_s << dir * config_.cruise_speed_m_s, vy,
+          altitude_rate(in, config_.altitude_m);
+      out.yaw_rate_rad_s = yaw_rate_to(in, target_heading_rad_);
+      break;
+    }
+    case AgentState::kWaiting: {
+      fly_to(in, here, 0.0, target_heading_rad_, out);
+      if (flock_in_line(in) || now - state_since_s_ > kWaitTimeout_s) {
+        enter(AgentState::kQuerying, out, "flock caught up");
+        start_query(out);
+      }
+      break;
+    }
+    case AgentState::kNonLeader: {
+      const auto it = adb_.records().find(adb_.leader());
+      if (it == adb_.records().end()) {
+        fly_to(in, here, 0.0, in.yaw_enu_rad, out);
+        break;
+      }
+      const AgentRecord& leader = it->second;
+      FlockInputs f;
+      f.local_enu_m = here;
+      f.local_heading_rad = in.yaw_enu_rad;
+      f.leader_enu_m = {leader.x_m, leader.y_m};
+      f.leader_heading_rad = leader.heading_rad;
+      f.leader_velocity_enu_m_s = {leader.vx_m_s, leader.vy_m_s};
+      for (const auto& [id, r] : adb_.records()) f.others_enu_m.emplace_back(r.x_m, r.y_m);
+      f.dt_s = std::max(1e-3, dt_s_);
+      const FlockOutputs fo = flock_.step(f);
+      target_heading_rad_ = leader.heading_rad;
+      Eigen::Vector2d v = fo.velocity_enu_m_s;
+      if (v.norm() > config_.max_speed_m_s) v *= config_.max_speed_m_s / v.norm();
+      out.action = AgentOutputs::Action::kVelocity;
+      out.velocity_enu_m_s << v, altitude_rate(in, config_.altitude_m);
+      out.yaw_rate_rad_s = fo.yaw_rate_rad_s;
+      break;
+    }
+    case AgentState::kGoingHome: {
+      // climb or descend to our layer first, then fly home in it, then land
+      const double layer_alt =
+          config_.altitude_m + (id_ % config_.home_layers) * config_.home_layer_m;
+      const Eigen::Vector2d d = home_enu_m_ - here;
+      if (land_sent_) {
+        if (!in.armed && in.on_ground) enter(AgentState::kLanded, out, "on the ground");
+        break;
+      }
+      if (d.norm() < kHomeReached_m) {
+        land_sent_ = true;
+        out.action = AgentOutputs::Action::kLand;
+        break;
+      }
+      out.action = AgentOutputs::Action::kVelocity;
+      out.yaw_rate_rad_s = 0.0;
+      if (std::abs(in.position_enu_m.z() - layer_alt) > config_.altitude_tolerance_m) {
+        out.velocity_enu_m_s << 0.0, 0.0, altitude_rate(in, layer_alt);
+        break;
+      }
+      Eigen::Vector2d v =
+          d / d.norm() * std::min(config_.cruise_speed_m_s, kApproachGain_1_s * d.norm());
+      // steer away from agents in our layer (their ids tell their layers)
+      for (const auto& [id, r] : adb_.records()) {
+        if (id % config_.home_layers != id_ % config_.home_layers) continue;
+        const Eigen::Vector2d away = here - Eigen::Vector2d(r.x_m, r.y_m);
+        const double dist = away.norm();
+        if (dist > 1e-3 && dist < kHomeSeparation_m)
+          v += away / dist * kHomeSeparationSpeed_m_s * (1.0 - dist / kHomeSeparation_m);
+      }
+      out.velocity_enu_m_s << v, altitude_rate(in, layer_alt);
+      break;
+    }
+    case AgentState::kLanded:
+    case AgentState::kFailed:
+      break;
+  }
+  if (out.action == AgentOutputs::Action::kVelocity)
+    commanded_velocity_enu_m_s_ = out.velocity_enu_m_s.head<2>();
+  else
+    commanded_velocity_enu_m_s_.setZero();
+}
+
+}  // namespace uavsim::missions::coverage

@@ -1,0 +1,147 @@
+// One agent of the coverage flock as a pure state machine (the thesis the project descends from,
+// chapter 3 and fig. 4.6). The program around it feeds it, at a fixed rate, what a real drone has
+// (its own telemetry and the radio frames it heard) and applies what it returns (take-off, a
+// velocity + yaw-rate setpoint, landing, radio frames to broadcast). No sockets, clocks or
+// simulator calls: the tests fly several of them over a point-mass model.
+//
+// States (fig. 4.6): Taking Off -> Querying (leader) or Non-Leader; the leader cycles Querying ->
+// Deploying -> Running -> Waiting -> Querying until the query finds the rectangle covered, then
+// Going Home (broadcast, which sends every agent home) -> Landed. A leader that hears a lower id
+// becomes Non-Leader; a Non-Leader whose leader aged out of its ADB and that has the lowest id left
+// becomes the leader and queries. Failed (beyond the figure): the agent's own vehicle stopped
+// flying (disarmed or crashed in the air): it goes silent.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "agents_database.hpp"
+#include "aggregation.hpp"
+#include "area_parts.hpp"
+#include "coverage_config.hpp"
+#include "flocking.hpp"
+#include "path_planner.hpp"
+#include "radio_messages.hpp"
+
+namespace uavsim::missions::coverage {
+
+enum class AgentState : uint8_t {
+  kTakingOff,
+  kQuerying,
+  kDeploying,
+  kRunning,
+  kWaiting,
+  kNonLeader,
+  kGoingHome,
+  kLanded,
+  kFailed,
+};
+inline constexpr int kAgentStateCount = 9;
+const char* agent_state_name(AgentState s);  // "Taking Off", ...
+
+struct AgentInputs {
+  double now_s = 0.0;
+  // telemetry (MAVLink), world ENU
+  bool armed = false;
+  bool on_ground = true;
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+  double yaw_enu_rad = 0.0;
+  // radio frames heard since the last step, in arrival order
+  std::vector<Frame> received;
+  // optimised variant (3.6): the ground station's latest map, if one arrived
+  std::optional<AreaParts> gcs_map;
+};
+
+struct AgentOutputs {
+  enum class Action { kNone, kTakeOff, kVelocity, kLand };
+  Action action = Action::kNone;
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();  // kVelocity
+  double yaw_rate_rad_s = 0.0;                                 // kVelocity, ENU (CCW positive)
+  double takeoff_altitude_m = 0.0;                             // kTakeOff
+  std::vector<Frame> broadcast;                                // radio frames to send now
+  std::optional<Picture> picture;                              // a picture taken at this step
+  std::string note;                                            // a log line when something happened
+};
+
+class Agent {
+ public:
+  // config must validate(); id in [0, kMaxAgents); home is the take-off point (world ENU).
+  Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m);
+
+  // (inputs at now_s) => (setpoint, frames). Call at a fixed rate (10-20 Hz).
+  AgentOutputs step(const AgentInputs& in);
+
+  int id() const { return id_; }
+  AgentState state() const { return state_; }
+  int leader() const { return adb_.leader(); }
+  const AgentsDatabase& adb() const { return adb_; }
+  const AreaParts& own() const { return own_; }
+  const AggregationNode& aggregation() const { return aggregation_; }
+  // The leader's latest query result (its view of the flock's coverage), if it has one.
+  const std::optional<AreaParts>& last_map() const { return last_map_; }
+  const std::optional<PlannedPath>& path() const { return path_; }
+  bool mission_complete() const { return complete_; }
+  // Sim seconds spent in each state (fig. 4.9), indexed by AgentState.
+  const std::array<double, kAgentStateCount>& time_in_state() const { return time_in_state_; }
+  int queries_started() const { return queries_started_; }
+
+ private:
+  void enter(AgentState s, AgentOutputs& out, const std::string& why);
+  bool is_leader_state() const;
+  void receive(const AgentInputs& in);
+  void take_picture(const AgentInputs& in, AgentOutputs& out);
+  void broadcast(const AgentInputs& in, AgentOutputs& out);
+  void run_state(const AgentInputs& in, AgentOutputs& out);
+  void start_query(AgentOutputs& out);
+  void finish_query(const AgentInputs& in, AgentOutputs& out);
+  bool flock_in_line(const AgentInputs& in) const;
+  // a velocity setpoint towards `target` (2D) at `speed`, holding the survey altitude
+  void fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double speed,
+              double heading_rad, AgentOutputs& out) const;
+  double altitude_rate(const AgentInputs& in, double altitude_m) const;
+  double yaw_rate_to(const AgentInputs& in, double heading_rad) const;
+
+  CoverageConfig config_;
+  int id_;
+  Eigen::Vector2d home_enu_m_;
+  RadioFrameOrigin origin_;
+  AgentsDatabase adb_;
+  AreaParts own_;
+  AggregationNode aggregation_;
+  AggregateReassembler reassembler_;
+  FlockController flock_;
+
+  AgentState state_ = AgentState::kTakingOff;
+  double state_since_s_ = 0.0;
+  double last_now_s_ = -1.0;
+  double dt_s_ = 0.0;
+  double age_remainder_ms_ = 0.0;
+  bool started_ = false;
+  bool takeoff_sent_ = false;
+  bool land_sent_ = false;
+  bool airborne_seen_ = false;
+  bool going_home_heard_ = false;
+  bool complete_ = false;
+
+  // overlay network
+  uint16_t seq_ = 0;
+  double next_beacon_s_ = 0.0;
+  size_t record_cursor_ = 0;
+  Eigen::Vector2d commanded_velocity_enu_m_s_ = Eigen::Vector2d::Zero();
+  double target_heading_rad_ = 0.0;
+
+  // the leader's work
+  uint16_t query_counter_ = 0;
+  int queries_started_ = 0;
+  std::optional<AreaParts> gcs_map_;
+  std::optional<AreaParts> last_map_;
+  std::optional<PlannedPath> path_;
+
+  std::array<double, kAgentStateCount> time_in_state_{};
+};
+
+}  // namespace uavsim::missions::coverage

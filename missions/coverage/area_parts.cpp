@@ -1,0 +1,136 @@
+#include "area_parts.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace uavsim::missions::coverage {
+
+std::vector<Interval> normalize_stripe(const std::vector<Interval>& patches) {
+  // discontinuity map: +1 where a patch starts, -1 where one ends (Algorithm 4)
+  std::map<double, int> discont;
+  for (const Interval& p : patches) {
+    if (!(p.end_m > p.start_m)) continue;
+    discont[p.start_m] += 1;
+    discont[p.end_m] -= 1;
+  }
+  // sweep in increasing y: an interval opens when the running sum leaves 0 and closes when it
+  // returns to 0 (a patch ending where another starts nets 0 there, so they join)
+  std::vector<Interval> result;
+  int sum = 0;
+  double start = 0.0;
+  for (const auto& [y, delta] : discont) {
+    const int prev = sum;
+    sum += delta;
+    if (prev == 0 && sum > 0) {
+      start = y;
+    } else if (prev > 0 && sum == 0) {
+      result.push_back({start, y});
+    }
+  }
+  return result;
+}
+
+AreaParts::AreaParts(int stripes) : stripes_(static_cast<size_t>(std::max(stripes, 0))) {}
+
+bool AreaParts::add(int stripe, Interval covered) {
+  if (stripe < 0 || stripe >= stripe_count()) return false;
+  auto& list = stripes_[static_cast<size_t>(stripe)];
+  list.push_back(covered);
+  list = normalize_stripe(list);
+  return true;
+}
+
+bool AreaParts::merge(const AreaParts& other) {
+  if (other.stripe_count() != stripe_count()) return false;
+  for (size_t i = 0; i < stripes_.size(); ++i) {
+    if (other.stripes_[i].empty()) continue;
+    // concatenate the two lists, then normalise (MERGE_APDS)
+    std::vector<Interval> tmp = stripes_[i];
+    tmp.insert(tmp.end(), other.stripes_[i].begin(), other.stripes_[i].end());
+    stripes_[i] = normalize_stripe(tmp);
+  }
+  return true;
+}
+
+bool AreaParts::set_stripe(int stripe, const std::vector<Interval>& intervals) {
+  if (stripe < 0 || stripe >= stripe_count()) return false;
+  stripes_[static_cast<size_t>(stripe)] = normalize_stripe(intervals);
+  return true;
+}
+
+bool AreaParts::stripe_covers(int stripe, Interval span) const {
+  if (stripe < 0 || stripe >= stripe_count()) return false;
+  double reached = span.start_m;  // everything below is covered
+  for (const Interval& iv : stripes_[static_cast<size_t>(stripe)]) {
+    if (iv.start_m > reached + kCoverageSlack_m) break;
+    reached = std::max(reached, iv.end_m);
+    if (reached >= span.end_m - kCoverageSlack_m) return true;
+  }
+  return reached >= span.end_m - kCoverageSlack_m;
+}
+
+std::optional<double> AreaParts::lowest_uncovered(int stripe, double width_m) const {
+  if (stripe < 0 || stripe >= stripe_count()) return std::nullopt;
+  double reached = 0.0;
+  for (const Interval& iv : stripes_[static_cast<size_t>(stripe)]) {
+    if (iv.start_m > reached + kCoverageSlack_m) break;
+    reached = std::max(reached, iv.end_m);
+  }
+  if (reached >= width_m - kCoverageSlack_m) return std::nullopt;
+  return reached;
+}
+
+std::optional<double> AreaParts::highest_uncovered(int stripe, double width_m) const {
+  if (stripe < 0 || stripe >= stripe_count()) return std::nullopt;
+  double reached = width_m;  // everything above is covered
+  const auto& list = stripes_[static_cast<size_t>(stripe)];
+  for (auto it = list.rbegin(); it != list.rend(); ++it) {
+    if (it->end_m < reached - kCoverageSlack_m) break;
+    reached = std::min(reached, it->start_m);
+  }
+  if (reached <= kCoverageSlack_m) return std::nullopt;
+  return reached;
+}
+
+bool AreaParts::covers_all(double width_m) const {
+  for (int i = 0; i < stripe_count(); ++i)
+    if (!stripe_covers(i, {0.0, width_m})) return false;
+  return true;
+}
+
+double AreaParts::covered_fraction(double width_m) const {
+  if (stripes_.empty() || width_m <= 0.0) return 0.0;
+  double sum = 0.0;
+  for (const auto& list : stripes_) {
+    for (const Interval& iv : list)
+      sum += std::max(0.0, std::min(iv.end_m, width_m) - std::max(iv.start_m, 0.0));
+  }
+  return sum / (width_m * static_cast<double>(stripes_.size()));
+}
+
+std::optional<Picture> camera_trigger(const CoverageConfig& config, double x_enu_m, double y_enu_m,
+                                      double altitude_m, double yaw_enu_rad, const AreaParts& own) {
+  // at the survey altitude, so that the footprint is x_sensor x y_sensor
+  if (std::abs(altitude_m - config.altitude_m) > config.altitude_tolerance_m) return std::nullopt;
+  // aligned with the x axis: |sin(yaw)| small means heading +x or -x (fig. 3.10b)
+  if (std::abs(std::sin(yaw_enu_rad)) > std::sin(config.heading_tolerance_rad)) return std::nullopt;
+  const double x = x_enu_m - config.origin_x_m;
+  const double y = y_enu_m - config.origin_y_m;
+  // the footprint must intersect the rectangle (fig. 3.10a)
+  const double half_x = 0.5 * config.x_sensor_m, half_y = 0.5 * config.y_sensor_m;
+  if (x + half_x <= 0.0 || x - half_x >= config.length_x_m) return std::nullopt;
+  if (y + half_y <= 0.0 || y - half_y >= config.width_y_m) return std::nullopt;
+  // the nearest stripe must lie whole inside the footprint (fig. 3.10c)
+  const double h = config.stripe_height_m();
+  const int n = config.stripe_count();
+  const int stripe = std::clamp(static_cast<int>(std::floor(x / h)), 0, n - 1);
+  const double s0 = stripe * h, s1 = s0 + h;
+  if (x - half_x > s0 || x + half_x < s1) return std::nullopt;
+  // clipped to the rectangle, and not acquired yet (fig. 3.10d)
+  const Interval covered{std::max(0.0, y - half_y), std::min(config.width_y_m, y + half_y)};
+  if (own.stripe_covers(stripe, covered)) return std::nullopt;
+  return Picture{stripe, covered};
+}
+
+}  // namespace uavsim::missions::coverage

@@ -1,0 +1,110 @@
+#include "path_planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace uavsim::missions::coverage {
+
+FlockExtent flock_extent(double leader_y_m, const std::vector<double>& others_y_m,
+                         double spacing_m) {
+  int below = 0;
+  for (double y : others_y_m)
+    if (y < leader_y_m) ++below;
+  const int above = static_cast<int>(others_y_m.size()) - below;
+  return {below * spacing_m, above * spacing_m};
+}
+
+std::optional<PlannedPath> plan_side(const CoverageConfig& config, const AreaParts& covered,
+                                     const Eigen::Vector2d& leader_enu_m, const FlockExtent& extent,
+                                     bool low_side) {
+  const double h = config.stripe_height_m();
+  const double w = config.width_y_m;
+  // the frontier: per stripe with something left, the lowest (highest) uncovered y
+  std::vector<Eigen::Vector2d> frontier;
+  for (int i = 0; i < covered.stripe_count(); ++i) {
+    const auto y = low_side ? covered.lowest_uncovered(i, w) : covered.highest_uncovered(i, w);
+    if (y) frontier.emplace_back((i + 0.5) * h, *y);
+  }
+  if (frontier.empty()) return std::nullopt;
+
+  // threshold: drop control points more than lateral_threshold_m from the median frontier, which
+  // would make the whole flock swing sideways for a few stripes (they stay uncovered and are
+  // planned again after the next query, when they will be the median)
+  std::vector<double> ys;
+  for (const auto& p : frontier) ys.push_back(p.y());
+  std::nth_element(ys.begin(), ys.begin() + ys.size() / 2, ys.end());
+  const double median = ys[ys.size() / 2];
+  std::vector<Eigen::Vector2d> kept;
+  for (const auto& p : frontier)
+    if (std::abs(p.y() - median) <= config.lateral_threshold_m) kept.push_back(p);
+
+  // smoothing: moving average over +-smoothing_half_window control points
+  const int n = static_cast<int>(kept.size());
+  const int k = config.smoothing_half_window;
+  std::vector<Eigen::Vector2d> smooth(kept);
+  for (int i = 0; i < n; ++i) {
+    double sum = 0.0;
+    int count = 0;
+    for (int j = std::max(0, i - k); j <= std::min(n - 1, i + k); ++j) {
+      sum += kept[static_cast<size_t>(j)].y();
+      ++count;
+    }
+    smooth[static_cast<size_t>(i)].y() = sum / count;
+  }
+
+  // translation: the flock's edge (its outermost agent's footprint) overlaps the frontier by the
+  // margin, so the leader flies extent + half a footprint - margin inside it
+  const double margin = config.edge_margin_fraction * config.y_sensor_m;
+  const double offset = low_side ? extent.low_extent_m + 0.5 * config.y_sensor_m - margin
+                                 : -(extent.high_extent_m + 0.5 * config.y_sensor_m - margin);
+
+  PlannedPath path;
+  path.low_side = low_side;
+  path.frontier_m = frontier;
+  for (const auto& p : smooth)
+    path.points_enu_m.emplace_back(config.origin_x_m + p.x(), config.origin_y_m + p.y() + offset);
+  // run-in and run-out: start a footprint before the first stripe's edge, end a footprint past
+  // the last, so every agent's camera sweeps over both end stripes
+  const Eigen::Vector2d first = path.points_enu_m.front(), last = path.points_enu_m.back();
+  path.points_enu_m.insert(path.points_enu_m.begin(),
+                           {first.x() - 0.5 * h - config.x_sensor_m, first.y()});
+  path.points_enu_m.emplace_back(last.x() + 0.5 * h + config.x_sensor_m, last.y());
+
+  // direction: start at the end nearer to the leader
+  if (std::abs(leader_enu_m.x() - path.points_enu_m.back().x()) <
+      std::abs(leader_enu_m.x() - path.points_enu_m.front().x())) {
+    std::reverse(path.points_enu_m.begin(), path.points_enu_m.end());
+    path.heading_rad = kPi;
+  }
+  return path;
+}
+
+std::optional<PlannedPath> plan_path(const CoverageConfig& config, const AreaParts& covered,
+                                     const Eigen::Vector2d& leader_enu_m,
+                                     const FlockExtent& extent) {
+  auto low = plan_side(config, covered, leader_enu_m, extent, true);
+  auto high = plan_side(config, covered, leader_enu_m, extent, false);
+  if (!low || !high) return low ? low : high;
+  // keep the nearer start (ties: the low side)
+  const double d_low = (low->points_enu_m.front() - leader_enu_m).norm();
+  const double d_high = (high->points_enu_m.front() - leader_enu_m).norm();
+  return d_high < d_low ? high : low;
+}
+
+double path_y_at(const PlannedPath& path, double x_enu_m) {
+  const auto& p = path.points_enu_m;
+  if (p.empty()) return 0.0;
+  // points are monotonic in x, increasing or decreasing
+  const bool increasing = p.back().x() >= p.front().x();
+  auto before = [&](double a, double b) { return increasing ? a < b : a > b; };
+  if (!before(p.front().x(), x_enu_m)) return p.front().y();
+  for (size_t i = 1; i < p.size(); ++i) {
+    if (!before(p[i].x(), x_enu_m)) {
+      const double t = (x_enu_m - p[i - 1].x()) / (p[i].x() - p[i - 1].x());
+      return p[i - 1].y() + t * (p[i].y() - p[i - 1].y());
+    }
+  }
+  return p.back().y();
+}
+
+}  // namespace uavsim::missions::coverage

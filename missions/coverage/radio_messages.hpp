@@ -1,0 +1,85 @@
+// The flock's radio messages in 802.15.4 frames of at most 127 bytes (the thesis the project
+// descends from, sections 3.3, 3.4 and 6.2). Little-endian, fixed point:
+//
+//   beacon (8 per second, section 3.3), 14 + 14 * n bytes, n <= 8:
+//     u8 type = 1 | u8 sender | u8 flags (bit 0: going home) | u16 seq | i16 x_dm | i16 y_dm |
+//     u16 heading (2 pi / 65536) | i8 vx (0.1 m/s) | i8 vy | u8 n | n records:
+//       u8 id | u16 seq | i16 x_dm | i16 y_dm | u16 heading | i8 vx | i8 vy | u8 hops | u16 age_ms
+//   A full ADB of 25 agents does not fit one frame; each beacon carries the next n records of the
+//   ADB in turn (a rotating window), so a full copy crosses every hop in ceil(size / 8) beacons.
+//   Algorithm 1 merges record by record, so a partial copy is merged exactly like a full one; the
+//   allowed ages (Algorithm 2) are set to cover the rotation.
+//
+//   aggregation fragment (section 3.4), 29 bytes + runs:
+//     u8 type = 2 | u8 sender | u8 origin | u16 query_id | u16 version | u8 fragment | u8 fragments
+//     | u64 responded | u64 acked | u16 first_stripe | u16 stripe_count | runs:
+//       u8 repeat | u8 n | n * (u16 start_dm | u16 end_dm)
+//   A run is one stripe's interval list repeated for `repeat` consecutive stripes: a flock sweeping
+//   along x leaves the same intervals in stripe after stripe, so a whole map is usually a few runs.
+//   Interval ends are rounded inwards to 0.1 m (never claiming more than was covered). A map that
+//   does not fit one frame is cut into fragments by stripe ranges; a receiver uses a message once
+//   it has every fragment of the same (sender, origin, query, version).
+//
+// Positions are relative to the area origin, so any rectangle up to 3000 m fits 16 bits.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <tuple>
+#include <vector>
+
+#include "agents_database.hpp"
+#include "aggregation.hpp"
+
+namespace uavsim::missions::coverage {
+
+inline constexpr size_t kMaxFrameBytes = 127;
+inline constexpr int kRecordsPerBeacon = 8;
+
+using Frame = std::vector<uint8_t>;
+
+enum class MessageType : uint8_t { kBeacon = 1, kAggregate = 2 };
+
+struct Beacon {
+  AgentRecord self;  // id, seq, x, y, heading, velocity (hops and age unused)
+  bool going_home = false;
+  std::vector<AgentRecord> records;  // at most kRecordsPerBeacon
+};
+
+// Positions are sent relative to (origin_x_m, origin_y_m).
+struct RadioFrameOrigin {
+  double x_m = 0.0;
+  double y_m = 0.0;
+};
+
+Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin);
+std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& origin);
+
+// One message as one or more frames (each <= kMaxFrameBytes).
+std::vector<Frame> encode_aggregate(const AggregateMessage& m);
+
+// The first byte of a frame, if it is one of ours.
+std::optional<MessageType> message_type(const Frame& f);
+
+// Collects aggregation fragments; returns a message when its last missing fragment arrives.
+// Malformed fragments are ignored. Keeps at most one message in progress per sender.
+class AggregateReassembler {
+ public:
+  explicit AggregateReassembler(int stripes) : stripes_(stripes) {}
+  std::optional<AggregateMessage> add(const Frame& f);
+
+ private:
+  struct Partial {
+    int origin = 0;
+    uint16_t query_id = 0;
+    uint16_t version = 0;
+    int fragments = 0;
+    uint64_t received = 0;  // bit per fragment (<= 64 fragments)
+    AggregateMessage message;
+  };
+  int stripes_;
+  std::map<int, Partial> partial_;  // by sender
+};
+
+}  // namespace uavsim::missions::coverage

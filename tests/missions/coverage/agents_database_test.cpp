@@ -1,0 +1,92 @@
+// The Agents Database (thesis 3.3): Algorithm 1 (merge) and Algorithm 2 (aging), the leader rule.
+#include "agents_database.hpp"
+
+#include <gtest/gtest.h>
+
+namespace uavsim::missions::coverage {
+namespace {
+
+// allowed age: 1000 ms + 500 ms per hop
+AgentsDatabase make(int id) {
+  return AgentsDatabase(id, [](int hops) { return 1000 + 500 * hops; });
+}
+
+AgentRecord rec(int id, uint16_t seq, double x, int hops = 0, int age = 0) {
+  AgentRecord r;
+  r.id = id;
+  r.seq = seq;
+  r.x_m = x;
+  r.distance_hops = hops;
+  r.age_ms = age;
+  return r;
+}
+
+TEST(AgentsDatabase, MergesASendersCopyOneHopFarther) {
+  AgentsDatabase adb = make(5);
+  // agent 3 says: I am at x=3 (seq 10); I know 7 (1 hop, 100 ms old) and 5 (us: skipped)
+  adb.on_message(rec(3, 10, 3.0), {rec(7, 4, 7.0, 1, 100), rec(5, 99, 5.0, 1, 0)});
+  ASSERT_EQ(adb.records().size(), 2u);
+  EXPECT_EQ(adb.records().at(3).distance_hops, 1);
+  EXPECT_EQ(adb.records().at(3).age_ms, 0);
+  EXPECT_EQ(adb.records().at(7).distance_hops, 2);
+  EXPECT_EQ(adb.records().at(7).age_ms, 100);
+  EXPECT_FALSE(adb.records().count(5));
+}
+
+TEST(AgentsDatabase, KeepsOnlyNewerSequenceNumbers) {
+  AgentsDatabase adb = make(0);
+  adb.merge(rec(2, 10, 1.0, 1));
+  adb.merge(rec(2, 9, 2.0, 1));  // older: ignored
+  EXPECT_EQ(adb.records().at(2).x_m, 1.0);
+  adb.merge(rec(2, 11, 3.0, 3));  // newer, from farther away: taken
+  EXPECT_EQ(adb.records().at(2).x_m, 3.0);
+  EXPECT_EQ(adb.records().at(2).distance_hops, 3);
+  // 16-bit wrap: 2 is newer than 65535
+  adb.merge(rec(4, 65535, 0.0, 1));
+  adb.merge(rec(4, 2, 4.0, 1));
+  EXPECT_EQ(adb.records().at(4).x_m, 4.0);
+  EXPECT_TRUE(seq_newer(2, 65535));
+  EXPECT_FALSE(seq_newer(65535, 2));
+  EXPECT_FALSE(seq_newer(7, 7));
+}
+
+TEST(AgentsDatabase, AgingEvictsByHopDistance) {
+  AgentsDatabase adb = make(0);
+  adb.merge(rec(1, 1, 0.0, 1, 0));             // allowed 1500 ms
+  adb.merge(rec(2, 1, 0.0, 3, 500));           // allowed 2500 ms, already 500 old
+  EXPECT_TRUE(adb.age(1500).empty());          // 1: 1500 <= 1500; 2: 2000
+  EXPECT_EQ(adb.age(1), std::vector<int>{1});  // 1: 1501 > 1500
+  EXPECT_TRUE(adb.age(499).empty());           // 2: 2500
+  EXPECT_EQ(adb.age(1), std::vector<int>{2});
+  EXPECT_TRUE(adb.records().empty());
+}
+
+TEST(AgentsDatabase, AStaleCopyCannotBringAnEvictedAgentBack) {
+  AgentsDatabase adb = make(0);
+  // a neighbour still carries 9 at 2 hops, 2400 ms old: 3 hops here, allowed 2500: taken
+  adb.on_message(rec(1, 1, 0.0), {rec(9, 3, 0.0, 2, 2400)});
+  EXPECT_TRUE(adb.records().count(9));
+  adb.age(101);
+  EXPECT_FALSE(adb.records().count(9));
+  // the same stale copy again, now 2600 ms old: beyond the allowed age, not stored
+  adb.on_message(rec(1, 2, 0.0), {rec(9, 3, 0.0, 2, 2600)});
+  EXPECT_FALSE(adb.records().count(9));
+}
+
+TEST(AgentsDatabase, LeaderIsTheLowestLiveIdAndIsReplacedWhenItAgesOut) {
+  AgentsDatabase adb = make(4);
+  EXPECT_EQ(adb.leader(), 4);  // alone
+  adb.on_message(rec(6, 1, 0.0), {rec(2, 1, 0.0, 1, 0)});
+  EXPECT_EQ(adb.leader(), 2);
+  EXPECT_EQ(adb.live_mask(), (1u << 2) | (1u << 4) | (1u << 6));
+  EXPECT_EQ(adb.neighbours(), std::vector<int>{6});
+  // 2 falls silent, 6 keeps talking: after 2's allowed age (2 hops: 2000 ms) 4 leads
+  for (int t = 0; t < 25; ++t) {
+    adb.age(100);
+    adb.on_message(rec(6, static_cast<uint16_t>(2 + t), 0.0), {});
+  }
+  EXPECT_EQ(adb.leader(), 4);
+}
+
+}  // namespace
+}  // namespace uavsim::missions::coverage

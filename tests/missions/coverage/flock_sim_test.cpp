@@ -1,0 +1,197 @@
+// Whole flocks of the pure agent (thesis chapter 3, FSM of fig. 4.6) over a point-mass model: each
+// vehicle tracks its velocity setpoint with a first-order lag, the radio delivers broadcasts to
+// every live agent within range one step later, with a seeded loss. No simulator, so these
+// scenarios run in a second and pin the algorithm down before it meets physics.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <random>
+
+#include "agent.hpp"
+
+namespace uavsim::missions::coverage {
+namespace {
+
+constexpr double kDt_s = 0.05;
+constexpr double kLag_s = 0.4;  // velocity response of a quad in GUIDED
+
+struct SimVehicle {
+  SimVehicle(Agent a, const Eigen::Vector3d& p) : agent(std::move(a)), position_enu_m(p) {}
+  Agent agent;
+  Eigen::Vector3d position_enu_m;
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+  Eigen::Vector3d command_enu_m_s = Eigen::Vector3d::Zero();
+  double yaw_rad = 0.0, yaw_rate_rad_s = 0.0;
+  bool armed = false, alive = true, landing = false;
+  double takeoff_altitude_m = -1.0;
+  std::vector<Frame> inbox;
+};
+
+struct FlockRun {
+  bool all_done = false;  // every live agent landed
+  double mission_time_s = 0.0;
+  double survivors_fraction = 0.0;  // coverage held by live agents
+  int completed_by = -1;            // the leader whose query found the rectangle covered
+  double min_separation_m = 1e9;    // between flying vehicles
+  double distance_m = 0.0;          // flown by all
+};
+
+struct FlockScenario {
+  int agents = 5;
+  double loss = 0.0;
+  double range_m = 200.0;
+  std::vector<std::pair<double, int>> kills;  // (time, agent)
+  double timeout_s = 2000.0;
+  uint32_t seed = 1;
+};
+
+CoverageConfig area() {
+  CoverageConfig c;
+  c.length_x_m = 150.0;
+  c.width_y_m = 100.0;
+  return c;
+}
+
+FlockRun fly(const FlockScenario& s) {
+  const CoverageConfig config = area();
+  std::vector<SimVehicle> v;
+  for (int i = 0; i < s.agents; ++i) {
+    // take-off line along y, 10 m before the rectangle's x = 0 edge
+    const Eigen::Vector2d home(-10.0, 10.0 * i);
+    v.emplace_back(Agent(config, i, home), Eigen::Vector3d(home.x(), home.y(), 0.0));
+  }
+  std::mt19937 rng(s.seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  FlockRun run;
+  double t = 0.0;
+  size_t next_kill = 0;
+  for (; t < s.timeout_s; t += kDt_s) {
+    while (next_kill < s.kills.size() && s.kills[next_kill].first <= t)
+      v[static_cast<size_t>(s.kills[next_kill++].second)].alive = false;
+    // agents step and broadcast
+    std::vector<std::pair<size_t, Frame>> air;
+    bool done = true;
+    for (size_t i = 0; i < v.size(); ++i) {
+      SimVehicle& sv = v[i];
+      if (!sv.alive) continue;
+      AgentInputs in;
+      in.now_s = t;
+      in.armed = sv.armed;
+      in.on_ground = sv.position_enu_m.z() <= 0.0;
+      in.position_enu_m = sv.position_enu_m;
+      in.velocity_enu_m_s = sv.velocity_enu_m_s;
+      in.yaw_enu_rad = sv.yaw_rad;
+      in.received = std::move(sv.inbox);
+      sv.inbox.clear();
+      const AgentOutputs out = sv.agent.step(in);
+      switch (out.action) {
+        case AgentOutputs::Action::kTakeOff:
+          sv.armed = true;
+          sv.takeoff_altitude_m = out.takeoff_altitude_m;
+          break;
+        case AgentOutputs::Action::kVelocity:
+          sv.takeoff_altitude_m = -1.0;
+          sv.command_enu_m_s = out.velocity_enu_m_s;
+          sv.yaw_rate_rad_s = out.yaw_rate_rad_s;
+          break;
+        case AgentOutputs::Action::kLand:
+          sv.landing = true;
+          break;
+        case AgentOutputs::Action::kNone:
+          break;
+      }
+      for (const Frame& f : out.broadcast) air.emplace_back(i, f);
+      if (sv.agent.state() != AgentState::kLanded) done = false;
+    }
+    if (done) {
+      run.all_done = true;
+      break;
+    }
+    // radio: to every other live vehicle in range, minus the losses
+    for (const auto& [from, f] : air) {
+      for (size_t j = 0; j < v.size(); ++j) {
+        if (j == from || !v[j].alive) continue;
+        if ((v[j].position_enu_m - v[from].position_enu_m).norm() > s.range_m) continue;
+        if (u(rng) < s.loss) continue;
+        v[j].inbox.push_back(f);
+      }
+    }
+    // point-mass vehicles
+    for (SimVehicle& sv : v) {
+      if (!sv.alive || !sv.armed) continue;
+      Eigen::Vector3d cmd = sv.command_enu_m_s;
+      if (sv.takeoff_altitude_m > 0.0)
+        cmd = {0.0, 0.0, std::clamp(sv.takeoff_altitude_m - sv.position_enu_m.z(), -2.0, 2.0)};
+      if (sv.landing) cmd = {0.0, 0.0, -1.0};
+      sv.velocity_enu_m_s += (cmd - sv.velocity_enu_m_s) * (kDt_s / kLag_s);
+      run.distance_m += sv.velocity_enu_m_s.head<2>().norm() * kDt_s;
+      sv.position_enu_m += sv.velocity_enu_m_s * kDt_s;
+      sv.yaw_rad = std::remainder(sv.yaw_rad + sv.yaw_rate_rad_s * kDt_s, 2.0 * M_PI);
+      if (sv.position_enu_m.z() <= 0.0) {
+        sv.position_enu_m.z() = 0.0;
+        sv.velocity_enu_m_s.setZero();
+        if (sv.landing) sv.armed = false;
+      }
+    }
+    for (size_t i = 0; i < v.size(); ++i) {
+      for (size_t j = i + 1; j < v.size(); ++j) {
+        if (!v[i].alive || !v[j].alive || v[i].position_enu_m.z() < 5.0 ||
+            v[j].position_enu_m.z() < 5.0)
+          continue;
+        const double d = (v[i].position_enu_m - v[j].position_enu_m).norm();
+        if (d < run.min_separation_m && std::getenv("FLOCK_DEBUG"))
+          std::printf("t=%.1f %zu(%s) %zu(%s) %.2f m\n", t, i, agent_state_name(v[i].agent.state()),
+                      j, agent_state_name(v[j].agent.state()), d);
+        run.min_separation_m = std::min(run.min_separation_m, d);
+      }
+    }
+  }
+  run.mission_time_s = t;
+  AreaParts held(config.stripe_count());
+  for (const SimVehicle& sv : v) {
+    if (!sv.alive) continue;
+    held.merge(sv.agent.own());
+    if (sv.agent.mission_complete()) run.completed_by = sv.agent.id();
+  }
+  run.survivors_fraction = held.covered_fraction(config.width_y_m);
+  return run;
+}
+
+TEST(FlockSim, FiveAgentsCoverTheRectangleAndLand) {
+  const FlockRun r = fly({});
+  EXPECT_TRUE(r.all_done);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_GT(r.min_separation_m, 2.0);
+  // 150 x 100 with a ~37 m swath: three or four passes of ~165 m at 5 m/s plus turns
+  EXPECT_LT(r.mission_time_s, 600.0);
+  std::printf("mission %.1f s, distance %.0f m, min separation %.2f m\n", r.mission_time_s,
+              r.distance_m, r.min_separation_m);
+}
+
+TEST(FlockSim, LeaderKilledANewLeaderFinishes) {
+  FlockScenario s;
+  s.kills = {{60.0, 0}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.completed_by, 1);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+TEST(FlockSim, NonLeaderKilledItsStripesAreCoveredAgain) {
+  FlockScenario s;
+  s.kills = {{70.0, 3}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+TEST(FlockSim, ThirtyPercentRadioLossStillCoversEverything) {
+  FlockScenario s;
+  s.loss = 0.3;
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+}  // namespace
+}  // namespace uavsim::missions::coverage

@@ -1,0 +1,106 @@
+// Path planning of thesis 3.5: frontier, nearer side kept, threshold, smoothing, translation.
+#include "path_planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace uavsim::missions::coverage {
+namespace {
+
+// 10 stripes of 5.6 m over x in [0, 56), y in [0, 100)
+CoverageConfig config() {
+  CoverageConfig c;
+  c.length_x_m = 56.0;
+  c.width_y_m = 100.0;
+  c.smoothing_half_window = 0;
+  return c;
+}
+
+TEST(PathPlanner, FlockExtentFromTheLeadersRank) {
+  // leader at y=10 with one agent below and three above, spacing 7.5
+  const FlockExtent e = flock_extent(10.0, {2.0, 18.0, 25.0, 40.0}, 7.5);
+  EXPECT_DOUBLE_EQ(e.low_extent_m, 7.5);
+  EXPECT_DOUBLE_EQ(e.high_extent_m, 22.5);
+}
+
+TEST(PathPlanner, EmptyMapLowSideTranslatesTheFlockEdgeOntoTheFrontierWithTheMargin) {
+  const CoverageConfig c = config();
+  const AreaParts empty(c.stripe_count());
+  // leader at the low end of a 5-agent line (extent 0 below, 30 above), just before x = 0
+  const auto p = plan_side(c, empty, {-10.0, 0.0}, {0.0, 30.0}, true);
+  ASSERT_TRUE(p);
+  // frontier y = 0 everywhere; leader y = 0 + 0 (extent) + 5 (half footprint) - 2 (20% of 10)
+  for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), 3.0);
+  // run-in: first stripe centre 2.8 - 2.8 - 7 = -7; run-out: 53.2 + 2.8 + 7 = 63; heading +x
+  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, 1e-9);
+  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, 1e-9);
+  EXPECT_EQ(p->heading_rad, 0.0);
+  EXPECT_EQ(p->points_enu_m.size(), 12u);  // 10 stripes + run-in + run-out
+}
+
+TEST(PathPlanner, HighSideAndDirectionFromTheNearerEnd) {
+  const CoverageConfig c = config();
+  AreaParts map(c.stripe_count());
+  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 40.0});
+  // leader near the far end (x = 60) and high up: the high side starts nearer
+  const FlockExtent e{30.0, 0.0};  // leader at the top of the line
+  const auto p = plan_path(c, map, {60.0, 95.0}, e);
+  ASSERT_TRUE(p);
+  EXPECT_FALSE(p->low_side);
+  // frontier 100; leader y = 100 - (0 + 5 - 2) = 97
+  EXPECT_DOUBLE_EQ(p->points_enu_m.front().y(), 97.0);
+  EXPECT_NEAR(p->heading_rad, M_PI, 1e-12);
+  EXPECT_GT(p->points_enu_m.front().x(), p->points_enu_m.back().x());
+  // low side from the same place would start at y = 40 + 30 + 3 = 73: farther than 97 from 95?
+  // |73 - 95| = 22 > |97 - 95| = 2: the high side is the nearer one
+  const auto low = plan_side(c, map, {60.0, 95.0}, e, true);
+  ASSERT_TRUE(low);
+  EXPECT_DOUBLE_EQ(low->points_enu_m.front().y(), 73.0);
+}
+
+TEST(PathPlanner, ThresholdDropsAnIsolatedHoleAndSmoothingAverages) {
+  CoverageConfig c = config();
+  AreaParts map(c.stripe_count());
+  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 40.0});
+  map.set_stripe(4, {{0.0, 10.0}, {20.0, 40.0}});  // a hole at [10, 20) in stripe 4
+  auto p = plan_side(c, map, {-10.0, 0.0}, {0.0, 0.0}, true);
+  ASSERT_TRUE(p);
+  // frontier 40 everywhere but 10 at stripe 4: 30 m from the median, not over the 30 m threshold
+  EXPECT_DOUBLE_EQ(p->frontier_m[4].y(), 10.0);
+  EXPECT_EQ(p->points_enu_m.size(), 12u);
+  c.lateral_threshold_m = 20.0;
+  p = plan_side(c, map, {-10.0, 0.0}, {0.0, 0.0}, true);
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->points_enu_m.size(), 11u);  // stripe 4 dropped
+  for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), 43.0);
+  // smoothing (+-1): with the hole kept, its neighbours average (40 + 40 + 10) / 3 = 30
+  c.lateral_threshold_m = 100.0;
+  c.smoothing_half_window = 1;
+  p = plan_side(c, map, {-10.0, 0.0}, {0.0, 0.0}, true);
+  ASSERT_TRUE(p);
+  // points: run-in, stripes 0..9, run-out; stripe 3 is point 4
+  EXPECT_DOUBLE_EQ(p->points_enu_m[4].y(), 30.0 + 3.0);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[5].y(), 30.0 + 3.0);
+}
+
+TEST(PathPlanner, NothingToPlanWhenCovered) {
+  const CoverageConfig c = config();
+  AreaParts map(c.stripe_count());
+  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 100.0});
+  EXPECT_FALSE(plan_path(c, map, {0.0, 0.0}, {}));
+}
+
+TEST(PathPlanner, PathYIsInterpolatedAlongX) {
+  PlannedPath p;
+  p.points_enu_m = {{0.0, 0.0}, {10.0, 10.0}, {20.0, 10.0}};
+  EXPECT_DOUBLE_EQ(path_y_at(p, -5.0), 0.0);
+  EXPECT_DOUBLE_EQ(path_y_at(p, 5.0), 5.0);
+  EXPECT_DOUBLE_EQ(path_y_at(p, 25.0), 10.0);
+  std::reverse(p.points_enu_m.begin(), p.points_enu_m.end());
+  EXPECT_DOUBLE_EQ(path_y_at(p, 5.0), 5.0);
+  EXPECT_DOUBLE_EQ(path_y_at(p, 25.0), 10.0);
+}
+
+}  // namespace
+}  // namespace uavsim::missions::coverage

@@ -1,0 +1,119 @@
+// The flock's radio frames: beacons and fragmented aggregation messages within 127 bytes.
+#include "radio_messages.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace uavsim::missions::coverage {
+namespace {
+
+TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
+  const RadioFrameOrigin o{100.0, -50.0};
+  Beacon b;
+  b.self = {3, 65000, 123.45, -40.0, -1.5, 4.9, -0.3, 0, 0};
+  b.going_home = true;
+  for (int i = 0; i < 9; ++i) b.records.push_back({10 + i, 7, 200.0 + i, 0.0, 3.1, 0, 0, 2, 1500});
+  const Frame f = encode_beacon(b, o);
+  EXPECT_EQ(f.size(), 14u + 14u * kRecordsPerBeacon);  // 126: at most 8 records
+  EXPECT_LE(f.size(), kMaxFrameBytes);
+  const auto d = decode_beacon(f, o);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->self.id, 3);
+  EXPECT_EQ(d->self.seq, 65000);
+  EXPECT_NEAR(d->self.x_m, 123.5, 0.051);  // 0.1 m steps
+  EXPECT_NEAR(d->self.y_m, -40.0, 0.051);
+  EXPECT_NEAR(d->self.heading_rad, -1.5, 1e-4);
+  EXPECT_NEAR(d->self.vx_m_s, 4.9, 1e-9);
+  EXPECT_NEAR(d->self.vy_m_s, -0.3, 1e-9);
+  EXPECT_TRUE(d->going_home);
+  ASSERT_EQ(d->records.size(), 8u);
+  EXPECT_EQ(d->records[6].id, 16);
+  EXPECT_EQ(d->records[6].distance_hops, 2);
+  EXPECT_EQ(d->records[6].age_ms, 1500);
+  EXPECT_NEAR(d->records[6].heading_rad, 3.1, 1e-4);
+}
+
+TEST(RadioMessages, MalformedBeaconsAreRejected) {
+  Beacon b;
+  b.self.id = 1;
+  Frame f = encode_beacon(b, {});
+  f.push_back(0);  // length disagrees with the count
+  EXPECT_FALSE(decode_beacon(f, {}));
+  EXPECT_FALSE(decode_beacon(Frame{1, 2, 3}, {}));
+  f = encode_beacon(b, {});
+  f[1] = 200;  // id beyond kMaxAgents
+  EXPECT_FALSE(decode_beacon(f, {}));
+}
+
+TEST(RadioMessages, ACompactMapIsOneFrame) {
+  AggregateMessage m;
+  m.sender = 4;
+  m.origin = 0;
+  m.query_id = 9;
+  m.version = 3;
+  m.responded = 0x1F;
+  m.acked = 0x3;
+  m.apd = AreaParts(108);
+  for (int s = 0; s < 108; ++s) m.apd.add(s, {0.0, 187.5});  // one pass of a 25-agent flock
+  for (int s = 0; s < 50; ++s) m.apd.add(s, {300.0, 487.5});
+  const auto frames = encode_aggregate(m);
+  ASSERT_EQ(frames.size(), 1u);  // two runs: 29 + 2 * 2 + 3 * 4 = 45 bytes
+  EXPECT_EQ(frames[0].size(), 45u);
+  AggregateReassembler r(108);
+  const auto d = r.add(frames[0]);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->apd, m.apd);
+  EXPECT_EQ(d->responded, 0x1Fu);
+  EXPECT_EQ(d->acked, 0x3u);
+  EXPECT_EQ(d->version, 3);
+}
+
+TEST(RadioMessages, AFragmentedMapIsReassembledInAnyOrderAndRoundedInwards) {
+  AggregateMessage m;
+  m.sender = 2;
+  m.origin = 1;
+  m.query_id = 4;
+  m.apd = AreaParts(100);
+  // a different interval list in every stripe: no runs, many fragments
+  for (int s = 0; s < 100; ++s) m.apd.add(s, {s * 0.21, 50.0 + s * 0.333});
+  const auto frames = encode_aggregate(m);
+  ASSERT_GT(frames.size(), 3u);
+  for (const Frame& f : frames) EXPECT_LE(f.size(), kMaxFrameBytes);
+  AggregateReassembler r(100);
+  std::optional<AggregateMessage> d;
+  for (size_t i = frames.size(); i-- > 0;) {
+    auto got = r.add(frames[i]);
+    if (i > 0) {
+      EXPECT_FALSE(got);
+    } else {
+      d = got;
+    }
+  }
+  ASSERT_TRUE(d);
+  for (int s = 0; s < 100; ++s) {
+    ASSERT_EQ(d->apd.stripe(s).size(), 1u);
+    const Interval iv = d->apd.stripe(s)[0];
+    // start rounded up, end down, to 0.1 m: never more than was covered
+    EXPECT_GE(iv.start_m, m.apd.stripe(s)[0].start_m - 1e-9);
+    EXPECT_LE(iv.end_m, m.apd.stripe(s)[0].end_m + 1e-9);
+    EXPECT_NEAR(iv.start_m, m.apd.stripe(s)[0].start_m, 0.1);
+    EXPECT_NEAR(iv.end_m, m.apd.stripe(s)[0].end_m, 0.1);
+  }
+}
+
+TEST(RadioMessages, MalformedFragmentsAreIgnored) {
+  AggregateMessage m;
+  m.apd = AreaParts(10);
+  m.apd.add(0, {0, 5});
+  Frame f = encode_aggregate(m)[0];
+  AggregateReassembler r(5);  // fewer stripes than the frame claims
+  EXPECT_FALSE(r.add(f));
+  AggregateReassembler ok(10);
+  Frame truncated(f.begin(), f.end() - 1);
+  EXPECT_FALSE(ok.add(truncated));
+  EXPECT_TRUE(ok.add(f));
+}
+
+}  // namespace
+}  // namespace uavsim::missions::coverage
