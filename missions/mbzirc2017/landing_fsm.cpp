@@ -1,0 +1,291 @@
+#include "landing_fsm.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace uavsim::missions::mbzirc2017 {
+
+namespace {
+constexpr double kTakeoffRetry_s = 5.0;
+constexpr double kReachedAltitudeMargin_m = 1.0;
+
+client::PidGains approach_gains(const MissionConfig& c) {
+  client::PidGains g;
+  g.kp = c.approach_kp_1_s;
+  g.ki = c.approach_ki_1_s2;
+  g.kd = c.approach_kd;
+  g.output_min = -c.approach_max_speed_m_s;
+  g.output_max = c.approach_max_speed_m_s;
+  g.integral_limit = 1.0;  // m/s: the integral only trims the feed-forward
+  g.derivative_filter_s = 0.2;
+  return g;
+}
+
+Eigen::Vector2d clamp_norm(const Eigen::Vector2d& v, double max) {
+  const double n = v.norm();
+  return n > max ? Eigen::Vector2d(v * (max / n)) : v;
+}
+
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), f, a, b, c);
+  return buf;
+}
+}  // namespace
+
+const char* landing_state_name(LandingState s) {
+  switch (s) {
+    case LandingState::kStart:
+      return "Start";
+    case LandingState::kGoToCentre:
+      return "GoToCentre";
+    case LandingState::kIntercept:
+      return "Intercept";
+    case LandingState::kWaitUntilVisible:
+      return "WaitUntilVisible";
+    case LandingState::kApproach:
+      return "Approach";
+    case LandingState::kLanded:
+      return "Landed";
+  }
+  return "?";
+}
+
+LandingFsm::LandingFsm(const MissionConfig& config)
+    : config_(config),
+      funnel_(config),
+      pid_x_(approach_gains(config)),
+      pid_y_(approach_gains(config)) {}
+
+double LandingFsm::height_above_deck_m(double z_enu_m) const {
+  return z_enu_m - config_.skid_depth_m - config_.deck_height_m;
+}
+
+void LandingFsm::enter(LandingState s, double now_s, FsmOutputs* out, const std::string& why) {
+  // several transitions in one step each leave their line
+  out->note += std::string(out->note.empty() ? "" : "\n") + "state " + landing_state_name(state_) +
+               " -> " + landing_state_name(s) + (why.empty() ? "" : ": " + why);
+  state_ = s;
+  entered_s_ = now_s;
+  if (s == LandingState::kApproach) {
+    pid_x_.reset();
+    pid_y_.reset();
+    lost_since_s_.reset();
+    open_loop_since_s_.reset();
+    outside_reported_ = false;
+    open_loop_reported_ = false;
+  }
+}
+
+double LandingFsm::hold_altitude_m_s(const FsmInputs& in, double altitude_m) const {
+  return std::clamp(config_.altitude_gain_1_s * (altitude_m - in.position_enu_m.z()),
+                    -config_.max_climb_m_s, config_.max_climb_m_s);
+}
+
+Eigen::Vector3d LandingFsm::fly_to(const FsmInputs& in, const Eigen::Vector2d& target_enu_m,
+                                   double speed_m_s, double altitude_m) const {
+  // P on the distance, saturated at the cruise speed (the FC's input shaping limits the
+  // acceleration)
+  const Eigen::Vector2d v = clamp_norm(target_enu_m - in.position_enu_m.head<2>(), speed_m_s);
+  return Eigen::Vector3d(v.x(), v.y(), hold_altitude_m_s(in, altitude_m));
+}
+
+bool LandingFsm::seen_since(const FsmInputs& in, double since_s) const {
+  return in.truck.last_seen_s >= since_s &&
+         in.now_s - in.truck.last_seen_s <= config_.seen_recently_s;
+}
+
+FsmOutputs LandingFsm::step(const FsmInputs& in) {
+  FsmOutputs out;
+  step_dt_s_ = last_step_s_ < 0 ? 0.0 : in.now_s - last_step_s_;
+  last_step_s_ = in.now_s;
+  switch (state_) {
+    case LandingState::kStart: {
+      // take off (retried while the vehicle is not armed), then Go To Centre near the altitude
+      if (!in.armed && (!takeoff_sent_ || in.now_s - takeoff_sent_s_ > kTakeoffRetry_s)) {
+        takeoff_sent_ = true;
+        takeoff_sent_s_ = in.now_s;
+        out.action = FsmOutputs::Action::kArmAndTakeOff;
+        out.takeoff_altitude_m = config_.cruise_altitude_m;
+        out.note = fmt("take-off to %.1f m", config_.cruise_altitude_m);
+        return out;
+      }
+      if (in.armed &&
+          in.position_enu_m.z() > config_.cruise_altitude_m - kReachedAltitudeMargin_m) {
+        enter(LandingState::kGoToCentre, in.now_s, &out, "");
+      }
+      return out;
+    }
+    case LandingState::kGoToCentre: {
+      if (in.truck.initialised && seen_since(in, entered_s_)) {
+        enter(LandingState::kIntercept, in.now_s, &out,
+              fmt("truck seen at (%.1f, %.1f), filter initialised", in.truck.position_enu_m.x(),
+                  in.truck.position_enu_m.y()));
+        break;
+      }
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s,
+                                    config_.cruise_altitude_m);
+      return out;
+    }
+    default:
+      break;
+  }
+
+  switch (state_) {
+    case LandingState::kIntercept: {
+      if (!in.truck.initialised || !in.truck.interception_enu_m) {
+        enter(LandingState::kGoToCentre, in.now_s, &out, "no track of the truck");
+        out.action = FsmOutputs::Action::kVelocity;
+        out.velocity_enu_m_s = fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s,
+                                      config_.cruise_altitude_m);
+        return out;
+      }
+      const Eigen::Vector2d point = *in.truck.interception_enu_m;
+      const double distance = (point - in.position_enu_m.head<2>()).norm();
+      // in view already (caught up from behind, where the meeting point keeps moving ahead): wait
+      if (seen_since(in, entered_s_)) {
+        enter(LandingState::kWaitUntilVisible, in.now_s, &out, "truck in view on the way");
+        break;
+      }
+      // there, or about to meet the truck (from behind, the meeting point moves on as the UAV
+      // slows)
+      if (distance < config_.arrive_radius_m ||
+          in.truck.interception_time_to_go_s < config_.arrive_time_s) {
+        enter(LandingState::kWaitUntilVisible, in.now_s, &out,
+              fmt("on the interception point (%.1f, %.1f)", point.x(), point.y()));
+        break;
+      }
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = fly_to(in, point, config_.cruise_speed_m_s, config_.cruise_altitude_m);
+      return out;
+    }
+    default:
+      break;
+  }
+
+  switch (state_) {
+    case LandingState::kWaitUntilVisible: {
+      if (seen_since(in, entered_s_)) {
+        misses_ = 0;
+        enter(LandingState::kApproach, in.now_s, &out, "marker in view");
+        break;
+      }
+      if (in.now_s - entered_s_ > config_.search_timeout_s) {
+        ++misses_;
+        if (misses_ == 1) {
+          enter(LandingState::kIntercept, in.now_s, &out, "not seen in 12 s (first miss)");
+        } else {
+          misses_ = 0;
+          enter(LandingState::kGoToCentre, in.now_s, &out, "not seen in 12 s (second miss)");
+        }
+        out.action = FsmOutputs::Action::kVelocity;
+        out.velocity_enu_m_s =
+            Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
+        return out;
+      }
+      // move at half the truck's speed along its way: the smallest speed difference when it comes
+      const Eigen::Vector2d v = in.truck.initialised
+                                    ? Eigen::Vector2d(0.5 * in.truck.velocity_enu_m_s)
+                                    : Eigen::Vector2d::Zero();
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s =
+          Eigen::Vector3d(v.x(), v.y(), hold_altitude_m_s(in, config_.cruise_altitude_m));
+      return out;
+    }
+    default:
+      break;
+  }
+
+  if (state_ == LandingState::kApproach && out.note.empty()) return approach(in);
+  if (state_ == LandingState::kLanded) {
+    // keep the motors off: repeat the force disarm while telemetry still says armed
+    if (in.armed) out.action = FsmOutputs::Action::kForceDisarm;
+    return out;
+  }
+  // a transition happened above: the new state acts from the next step; hold meanwhile
+  if (out.action == FsmOutputs::Action::kNone && state_ != LandingState::kStart) {
+    out.action = FsmOutputs::Action::kVelocity;
+    const Eigen::Vector2d v = in.truck.initialised && state_ == LandingState::kApproach
+                                  ? in.truck.velocity_enu_m_s
+                                  : Eigen::Vector2d::Zero();
+    out.velocity_enu_m_s = Eigen::Vector3d(v.x(), v.y(), 0.0);
+  }
+  return out;
+}
+
+FsmOutputs LandingFsm::approach(const FsmInputs& in) {
+  FsmOutputs out;
+  // a pad switch closed: all motors off at once (seed 7.1 "Landed")
+  if (in.switch_closed) {
+    enter(LandingState::kLanded, in.now_s, &out, "pad switch closed: motors off");
+    out.action = FsmOutputs::Action::kForceDisarm;
+    return out;
+  }
+  const double h = height_above_deck_m(in.position_enu_m.z());
+  const bool seen = in.now_s - in.truck.last_seen_s <= config_.lost_after_s;
+
+  // horizontal: the truck's velocity (feed-forward from the filter) + PID on the offset to the
+  // marker
+  const Eigen::Vector2d offset = in.truck.position_enu_m - in.position_enu_m.head<2>();
+  const Eigen::Vector2d correction(
+      pid_x_.update(in.truck.position_enu_m.x(), in.position_enu_m.x(), step_dt_s_),
+      pid_y_.update(in.truck.position_enu_m.y(), in.position_enu_m.y(), step_dt_s_));
+  const Eigen::Vector2d v_xy =
+      clamp_norm(in.truck.velocity_enu_m_s + correction, config_.approach_max_speed_m_s);
+
+  // vertical: descend inside the funnel, climb outside it or when the marker is lost up high; in
+  // the last decimetres the marker no longer fits the image: open-loop descent, at most 8 s
+  double vz = 0.0;
+  if (seen) {
+    lost_since_s_.reset();
+    if (h <= config_.open_loop_height_m) {
+      if (!open_loop_since_s_) open_loop_since_s_ = in.now_s;
+    } else {
+      open_loop_since_s_.reset();
+    }
+    if (funnel_.contains(h, offset.norm())) {
+      vz = -funnel_.descent_rate_m_s(h);
+      outside_reported_ = false;
+    } else {
+      vz = config_.climb_m_s;
+      if (!outside_reported_) {
+        outside_reported_ = true;
+        out.note = fmt("outside the funnel (%.2f m off at %.1f m): climbing", offset.norm(), h);
+      }
+    }
+  } else if (h <= config_.open_loop_height_m || open_loop_since_s_) {
+    if (!open_loop_since_s_) open_loop_since_s_ = in.now_s;
+    if (!open_loop_reported_) {
+      open_loop_reported_ = true;
+      out.note = fmt("marker too close to see at %.2f m: open-loop descent", h);
+    }
+    if (in.now_s - *open_loop_since_s_ > config_.open_loop_timeout_s) {
+      enter(LandingState::kGoToCentre, in.now_s, &out,
+            "no touchdown after 8 s of open-loop descent");
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = Eigen::Vector3d(0, 0, config_.climb_m_s);
+      return out;
+    }
+    vz = -config_.open_loop_descent_m_s;
+  } else {
+    if (!lost_since_s_) {
+      lost_since_s_ = in.now_s;
+      out.note = fmt("marker lost at %.1f m: climbing, following the filter", h);
+    }
+    if (in.now_s - *lost_since_s_ > config_.lost_give_up_s) {
+      enter(LandingState::kGoToCentre, in.now_s, &out, "marker lost for 8 s");
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s =
+          Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
+      return out;
+    }
+    vz = in.position_enu_m.z() < config_.cruise_altitude_m ? config_.climb_m_s : 0.0;
+  }
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s = Eigen::Vector3d(v_xy.x(), v_xy.y(), vz);
+  return out;
+}
+
+}  // namespace uavsim::missions::mbzirc2017

@@ -1,0 +1,85 @@
+// The MBZIRC 2017 landing FSM (seed 7.1, fig. 7.6): Start -> Go To Centre -> Intercept -> Wait
+// Until Visible -> Approach -> Landed. Pure: each step takes what the UAV knows (its telemetry, its
+// pad switches and what its camera pipeline made of the truck) and returns one command; no I/O, no
+// clock.
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "funnel.hpp"
+#include "mission_config.hpp"
+#include "uavsim/client/pid.hpp"
+
+namespace uavsim::missions::mbzirc2017 {
+
+enum class LandingState { kStart, kGoToCentre, kIntercept, kWaitUntilVisible, kApproach, kLanded };
+const char* landing_state_name(LandingState s);
+
+// What the camera pipeline knows about the truck at the step's time (truck_perception.hpp).
+struct TruckKnowledge {
+  bool initialised = false;  // the Kalman filter has started (two points)
+  Eigen::Vector2d position_enu_m = Eigen::Vector2d::Zero();  // the marker, extrapolated to now
+  Eigen::Vector2d velocity_enu_m_s = Eigen::Vector2d::Zero();
+  double last_seen_s = -std::numeric_limits<double>::infinity();  // stamp of the newest sighting
+  std::optional<Eigen::Vector2d> interception_enu_m;  // the best meeting point at cruise speed
+  double interception_time_to_go_s = 0.0;
+};
+
+struct FsmInputs {
+  double now_s = 0.0;
+  bool armed = false;
+  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // telemetry (body origin)
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+  bool switch_closed = false;  // any landing-pad microswitch
+  TruckKnowledge truck;
+};
+
+struct FsmOutputs {
+  enum class Action { kNone, kArmAndTakeOff, kVelocity, kForceDisarm };
+  Action action = Action::kNone;
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+  double takeoff_altitude_m = 0.0;
+  std::string note;  // a progress line, when something happened
+};
+
+class LandingFsm {
+ public:
+  explicit LandingFsm(const MissionConfig& config);
+
+  FsmOutputs step(const FsmInputs& in);
+
+  LandingState state() const { return state_; }
+  int misses() const { return misses_; }
+  // skids above the deck for a body origin at z
+  double height_above_deck_m(double z_enu_m) const;
+
+ private:
+  void enter(LandingState s, double now_s, FsmOutputs* out, const std::string& why);
+  // horizontal velocity towards a point at up to speed, with altitude held at altitude_m
+  Eigen::Vector3d fly_to(const FsmInputs& in, const Eigen::Vector2d& target_enu_m, double speed_m_s,
+                         double altitude_m) const;
+  double hold_altitude_m_s(const FsmInputs& in, double altitude_m) const;
+  FsmOutputs approach(const FsmInputs& in);
+  bool seen_since(const FsmInputs& in, double since_s) const;
+
+  MissionConfig config_;
+  Funnel funnel_;
+  LandingState state_ = LandingState::kStart;
+  double entered_s_ = 0.0;
+  double last_step_s_ = -1.0;
+  double step_dt_s_ = 0.0;
+  bool takeoff_sent_ = false;
+  double takeoff_sent_s_ = 0.0;
+  int misses_ = 0;
+  // Approach
+  client::Pid pid_x_, pid_y_;
+  std::optional<double> lost_since_s_;
+  std::optional<double> open_loop_since_s_;
+  bool outside_reported_ = false;
+  bool open_loop_reported_ = false;
+};
+
+}  // namespace uavsim::missions::mbzirc2017

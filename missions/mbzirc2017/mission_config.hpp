@@ -1,0 +1,60 @@
+// The MBZIRC 2017 landing mission's numbers (seed 7.1), in one place: what the team knew before the
+// competition (arena, the eight's shape, the marker and the deck height) and the mission's own
+// tuning.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "uavsim/vision/eight_track.hpp"
+
+namespace uavsim::missions::mbzirc2017 {
+
+struct MissionConfig {
+  // the arena and the truck (competition rules): the eight's centre is the arena's centre
+  Eigen::Vector2d arena_centre_enu_m = Eigen::Vector2d::Zero();
+  vision::EightTrackParams track;  // R 20 m, centres 45 m apart
+  double deck_height_m = 1.5;      // the marker's plane above the ground
+
+  // the hexa: skid bottoms below the body origin (telemetry's position), and the camera under it
+  double skid_depth_m = 0.362;
+  Eigen::Vector3d camera_offset_body_m = Eigen::Vector3d(0.0, 0.0, -0.09);
+
+  // Go To Centre / Intercept / Wait Until Visible (fig. 7.6)
+  double cruise_altitude_m = 8.0;  // seed 7.1: the centre at 8 m
+  double cruise_speed_m_s = 7.0;   // the UAV's speed profile for interception
+  double altitude_gain_1_s = 1.0;  // vertical P on altitude while cruising
+  double max_climb_m_s = 2.0;
+  double arrive_radius_m = 2.0;    // "on the interception point"
+  double arrive_time_s = 1.0;      // or about to meet the truck
+  double search_timeout_s = 12.0;  // Wait Until Visible: seed 7.1
+  double seen_recently_s = 0.5;    // a detection this fresh counts as "seen"
+
+  // Approach: PID on the marker offset plus the truck's velocity (feed-forward from the filter)
+  double approach_kp_1_s = 1.0;
+  double approach_ki_1_s2 = 0.3;
+  double approach_kd = 0.0;  // the PID's derivative acts on the UAV's own position: on a moving
+                             // target it would brake
+  double approach_max_speed_m_s = 9.0;
+  double lost_after_s = 1.0;           // no detection for this long: the marker is lost
+  double lost_give_up_s = 8.0;         // lost above the open-loop height this long: Go To Centre
+  double climb_m_s = 0.8;              // outside the funnel, or lost: climb for safety
+  double open_loop_height_m = 1.2;     // skids above the deck below which the marker no longer fits
+  double open_loop_timeout_s = 8.0;    // seed 7.1: up to 8 s of open-loop descent
+  double open_loop_descent_m_s = 0.6;  // short: the filter extrapolates blind meanwhile
+
+  // the funnel-shaped safe volume (fig. 7.7), see funnel.hpp
+  double funnel_base_radius_m =
+      0.4;                     // at the deck: skids within the 2.2 m deck, props clear of the cab
+  double funnel_slope = 0.45;  // radius growth per metre of height
+  double funnel_max_radius_m = 3.5;
+  // descent rate inside the funnel: slow near the deck (touchdown at ~0.4 m/s, well under the
+  // 1 m/s landing limit), faster high up
+  double descent_min_m_s = 0.4;
+  double descent_max_m_s = 1.2;
+  double descent_per_m_1_s = 0.15;
+
+  // vision (seed 7.1: ~7 frames/s on the TX1)
+  double vision_latency_s = 0.1;  // processing time of one frame (detached timing)
+};
+
+}  // namespace uavsim::missions::mbzirc2017

@@ -1,0 +1,62 @@
+#include "truck_perception.hpp"
+
+#include <cmath>
+
+namespace uavsim::missions::mbzirc2017 {
+
+namespace {
+constexpr double kInterceptHorizon_s = 120.0;
+
+int64_t to_us(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
+}  // namespace
+
+TruckPerception::TruckPerception(const MissionConfig& config)
+    : config_(config), filter_(vision::EightTrack(config.track)) {}
+
+vision::CameraPose TruckPerception::camera_pose(const Eigen::Vector3d& position_enu_m,
+                                                double yaw_enu_rad) const {
+  // the gimbal cancels roll and pitch: only the heading turns the image; straight down, image top
+  // forward (models/worlds/mbzirc2017.xml)
+  vision::GimbalAngles down;
+  down.pitch_rad = -0.5 * M_PI;
+  down.earth_stabilised = true;
+  return vision::camera_pose_from_vehicle(position_enu_m,
+                                          vision::q_enu_body_from_rpy(0.0, 0.0, yaw_enu_rad), down,
+                                          config_.camera_offset_body_m);
+}
+
+std::optional<Eigen::Vector2d> TruckPerception::on_frame(
+    const cv::Mat& grey, const vision::PinholeIntrinsics& intrinsics, int64_t stamp_us,
+    const vision::CameraPose& pose) {
+  const std::optional<vision::MarkerDetection> d = detector_.detect(grey);
+  if (!d) return std::nullopt;
+  const std::optional<Eigen::Vector3d> p =
+      vision::marker_position_enu(*d, intrinsics, pose, config_.deck_height_m);
+  if (!p) return std::nullopt;
+  const vision::MeasurementResult r = filter_.add_measurement(stamp_us, p->head<2>());
+  if (r == vision::MeasurementResult::kRejected) {
+    ++rejected_;
+    return std::nullopt;
+  }
+  ++detections_;
+  last_seen_s_ = std::max(last_seen_s_, stamp_us * 1e-6);
+  return p->head<2>();
+}
+
+TruckKnowledge TruckPerception::knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const {
+  TruckKnowledge k;
+  k.last_seen_s = last_seen_s_;
+  const std::optional<vision::TrackEstimate> e = filter_.estimate_at(to_us(now_s));
+  if (!e) return k;
+  k.initialised = true;
+  k.position_enu_m = e->position_enu_m;
+  k.velocity_enu_m_s = e->velocity_enu_m_s;
+  if (const auto i = filter_.intercept(to_us(now_s), uav_xy_enu_m, config_.cruise_speed_m_s,
+                                       kInterceptHorizon_s)) {
+    k.interception_enu_m = i->point_enu_m;
+    k.interception_time_to_go_s = i->time_to_go_s;
+  }
+  return k;
+}
+
+}  // namespace uavsim::missions::mbzirc2017

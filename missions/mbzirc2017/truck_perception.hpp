@@ -1,0 +1,51 @@
+// The UAV's view of the truck (seed 7.1): the landing-marker detector on each grey frame of the
+// down-looking camera, the camera pose from the vehicle's own telemetry and its stabilised gimbal,
+// the marker's position on the deck plane (height known from the rules, distance from the GPS
+// altitude), and the Kalman filter on arc length and lateral offset with delayed measurements,
+// whose extrapolation gives the truck now and the best interception point. Pure: frames and poses
+// in, knowledge out.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <optional>
+
+#include "landing_fsm.hpp"
+#include "mission_config.hpp"
+#include "uavsim/vision/camera_model.hpp"
+#include "uavsim/vision/marker_detector.hpp"
+#include "uavsim/vision/track_kalman.hpp"
+
+namespace uavsim::missions::mbzirc2017 {
+
+class TruckPerception {
+ public:
+  explicit TruckPerception(const MissionConfig& config);
+
+  // The pose of the down-looking camera, stabilised (roll and pitch cancelled), image top towards
+  // the vehicle's heading yaw_enu_rad, on a vehicle whose body origin is at position_enu_m.
+  vision::CameraPose camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad) const;
+
+  // (frame, intrinsics, the image's stamp, camera pose at the stamp) => the marker's position on
+  // the deck if found (and fed to the filter, tied to the image's stamp).
+  std::optional<Eigen::Vector2d> on_frame(const cv::Mat& grey,
+                                          const vision::PinholeIntrinsics& intrinsics,
+                                          int64_t stamp_us, const vision::CameraPose& pose);
+
+  // What is known at now_s (the filter extrapolated; the interception from uav_xy at cruise speed).
+  TruckKnowledge knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const;
+
+  int detections() const { return detections_; }
+  int rejected() const { return rejected_; }
+
+ private:
+  MissionConfig config_;
+  vision::MarkerDetector detector_;
+  vision::TrackKalman filter_;
+  double last_seen_s_ = -1e18;
+  int detections_ = 0;
+  int rejected_ = 0;
+};
+
+}  // namespace uavsim::missions::mbzirc2017

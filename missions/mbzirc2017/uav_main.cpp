@@ -1,0 +1,251 @@
+// mbzirc2017-uav: the MBZIRC 2017 landing UAV (seed 7.1): its MAVLink link, its down-looking camera
+// (about 7 frames/s, each costing vision_latency_s of detached time, as the seed's TX1 did), its
+// landing-pad microswitches, and the FSM of fig. 7.6 (landing_fsm.hpp) stepped at 20 Hz. The same
+// program would fly a real drone (frames from its camera driver, switches from its GPIO);
+// UAVSIM_LOCKSTEP puts it on sim time.
+//
+// usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "landing_fsm.hpp"
+#include "mission_config.hpp"
+#include "truck_perception.hpp"
+#include "uavsim/client/camera.hpp"
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/geodesy.hpp"
+#include "uavsim/client/switches.hpp"
+#include "uavsim/client/vehicle.hpp"
+
+using namespace uavsim::client;
+using namespace uavsim::missions::mbzirc2017;
+
+namespace {
+
+constexpr double kStep_s = 0.05;             // FSM rate 20 Hz
+constexpr double kLinger_s = 3.0;            // after Landed, before exiting
+constexpr double kMaxExtrapolation_s = 0.5;  // of the telemetry's position to now
+constexpr double kBudget_s =
+    900.0;  // the program gives up after this long (the run's own limit is shorter)
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string mavlink, vehicle = "uav0", camera;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    if (a == "--mavlink") {
+      mavlink = argv[i + 1];
+    } else if (a == "--vehicle") {
+      vehicle = argv[i + 1];
+    } else if (a == "--camera") {
+      camera = argv[i + 1];
+    } else {
+      return usage();
+    }
+  }
+  if (mavlink.empty() || argc % 2 == 0) return usage();
+  if (camera.empty()) camera = vehicle + "_down";
+
+  auto created = EventLoop::create();
+  if (!created) {
+    std::fprintf(stderr, "%s: event loop: %s\n", vehicle.c_str(), created.message().c_str());
+    return 1;
+  }
+  EventLoop& loop = **created;
+  auto log = [&](const std::string& s) {
+    std::printf("%s t=%.2f %s\n", vehicle.c_str(), loop.now(), s.c_str());
+    std::fflush(stdout);
+  };
+
+  VehicleConfig vc;
+  vc.telemetry_rate_hz = 20.0;
+  vc.sim_vehicle = vehicle;
+  Vehicle uav(loop, vc);
+  if (auto r = uav.connect(mavlink, 30); !r) {
+    log("connect: " + r.message());
+    return 1;
+  }
+
+  // the latest position with the time it was taken, to place each camera frame
+  struct Pose {
+    double time_s = -1.0;
+    Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
+    double yaw_enu_rad = 0.0;
+  } pose;
+  // the position's own time (time_boot_ms) on the loop clock: the smallest arrival delay seen is
+  // the clock offset (a position arrives up to a telemetry period after it was taken; at 4 m/s a 50
+  // ms error would put every marker 0.2 m off)
+  double vehicle_clock_offset_s = std::numeric_limits<double>::infinity();
+  uav.on_telemetry([&](const Telemetry& t) {
+    if (!t.has_local_position) return;
+    vehicle_clock_offset_s = std::min(vehicle_clock_offset_s, loop.now() - t.vehicle_time_s);
+    pose = {t.vehicle_time_s + vehicle_clock_offset_s, t.position_enu_m, t.velocity_enu_m_s,
+            enu_yaw_from_ned(t.yaw_rad)};
+  });
+
+  // the camera: the newest frame waits for the vision computer (older ones are skipped, as a
+  // pipeline that always takes the latest image)
+  const MissionConfig config;
+  TruckPerception perception(config);
+  struct Pending {
+    cv::Mat grey;
+    uavsim::vision::PinholeIntrinsics intrinsics;
+    int64_t stamp_us = 0;
+    uavsim::vision::CameraPose pose;
+  };
+  std::optional<Pending> pending;
+  CameraConfig cc;
+  cc.camera = camera;
+  cc.format = CameraFormat::kGrey;
+  auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
+    if (pose.time_s < 0 || f.image.empty()) return;
+    Pending p;
+    p.grey = f.image;
+    p.intrinsics.fx_px = f.intrinsics.fx;
+    p.intrinsics.fy_px = f.intrinsics.fy;
+    p.intrinsics.cx_px = f.intrinsics.cx;
+    p.intrinsics.cy_px = f.intrinsics.cy;
+    p.intrinsics.width_px = f.image.cols;
+    p.intrinsics.height_px = f.image.rows;
+    p.stamp_us = f.stamp_us;
+    // where the vehicle was when the image was taken: the latest telemetry moved to the stamp
+    const Eigen::Vector3d at =
+        pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
+    p.pose = perception.camera_pose(at, pose.yaw_enu_rad);
+    pending = std::move(p);
+  });
+  if (!sub) {
+    log("camera " + camera + ": " + sub.message());
+    return 1;
+  }
+
+  // the landing-pad microswitches
+  bool switch_closed = false;
+  auto switches =
+      PadSwitches::subscribe(loop, vehicle, [&](const SwitchState& s) { switch_closed = s.any(); });
+  if (!switches) {
+    log("pad switches: " + switches.message());
+    return 1;
+  }
+
+  if (auto r = uav.wait_ready(120); !r) {
+    log("wait ready: " + r.message());
+    return 1;
+  }
+  const double yaw_hold = enu_yaw_from_ned(uav.telemetry().yaw_rad);
+  LandingFsm fsm(config);
+  log("ready: MBZIRC 2017 landing, FSM of seed fig. 7.6");
+
+  double last_step_s = -1e9, landed_s = -1.0;
+  int reported_detections = 0;
+  bool touchdown_reported = false;
+  while (loop.now() < kBudget_s) {
+    if (!loop.clock_alive()) {
+      log("clock lost");
+      return 1;
+    }
+    if (pending) {
+      // the vision computer works on the frame for vision_latency_s; the simulation goes on
+      Pending frame = std::move(*pending);
+      pending.reset();
+      std::optional<Eigen::Vector2d> seen;
+      loop.run_busy(config.vision_latency_s, [&] {
+        seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
+      });
+      if (seen && reported_detections == 0) {
+        char buf[128];
+        std::snprintf(buf, sizeof(buf),
+                      "first sighting: marker at (%.1f, %.1f) in the image of t=%.2f", seen->x(),
+                      seen->y(), frame.stamp_us * 1e-6);
+        log(buf);
+      }
+      reported_detections = perception.detections();
+    } else {
+      (void)loop.run_until(
+          [&] { return pending.has_value() || loop.now() - last_step_s >= kStep_s - 1e-9; },
+          kStep_s, "a frame or the next step");
+    }
+    if (loop.now() - last_step_s < kStep_s - 1e-9 && !switch_closed) continue;
+    last_step_s = loop.now();
+
+    const Telemetry& t = uav.telemetry();
+    FsmInputs in;
+    in.now_s = loop.now();
+    in.armed = t.armed;
+    // the position now: the latest one moved on by its velocity (it is up to a telemetry period
+    // old, more after a frame's processing; at the truck's speed that would put the UAV ahead of
+    // it)
+    in.position_enu_m = t.position_enu_m;
+    if (pose.time_s >= 0) {
+      in.position_enu_m +=
+          t.velocity_enu_m_s * std::clamp(in.now_s - pose.time_s, 0.0, kMaxExtrapolation_s);
+    }
+    in.velocity_enu_m_s = t.velocity_enu_m_s;
+    in.switch_closed = switch_closed;
+    in.truck = perception.knowledge(in.now_s, in.position_enu_m.head<2>());
+    const LandingState before = fsm.state();
+    const FsmOutputs out = fsm.step(in);
+    for (size_t from = 0; from < out.note.size();) {
+      const size_t nl = std::min(out.note.find('\n', from), out.note.size());
+      log(out.note.substr(from, nl - from));
+      from = nl + 1;
+    }
+    if (fsm.state() == LandingState::kIntercept && before != LandingState::kIntercept &&
+        in.truck.interception_enu_m) {
+      char buf[128];
+      std::snprintf(buf, sizeof(buf), "interception point (%.1f, %.1f), %.1f s to go",
+                    in.truck.interception_enu_m->x(), in.truck.interception_enu_m->y(),
+                    in.truck.interception_time_to_go_s);
+      log(buf);
+    }
+
+    switch (out.action) {
+      case FsmOutputs::Action::kNone:
+        break;
+      case FsmOutputs::Action::kArmAndTakeOff: {
+        auto r = uav.set_mode(FlightMode::kGuided);
+        if (r) r = uav.arm();
+        if (r) r = uav.takeoff(out.takeoff_altitude_m, false);
+        if (!r) log("take-off: " + r.message());
+        break;
+      }
+      case FsmOutputs::Action::kVelocity:
+        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, yaw_hold); !r)
+          log("velocity: " + r.message());
+        break;
+      case FsmOutputs::Action::kForceDisarm:
+        // all motors off at once, in flight if need be (MAV_CMD_COMPONENT_ARM_DISARM, 21196)
+        if (auto r = uav.disarm(true); !r) log("force disarm: " + r.message());
+        break;
+    }
+    if (fsm.state() == LandingState::kLanded) {
+      if (!touchdown_reported) {
+        touchdown_reported = true;
+        landed_s = loop.now();
+        const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
+        char buf[160];
+        std::snprintf(
+            buf, sizeof(buf),
+            "touchdown: motors off on the pad switch; the marker estimated at (%+.2f, %+.2f) m",
+            off.x(), off.y());
+        log(buf);
+      }
+      if (loop.now() - landed_s > kLinger_s && !uav.telemetry().armed) break;
+    }
+  }
+  log(std::string("mission over: ") + landing_state_name(fsm.state()) + ", " +
+      std::to_string(perception.detections()) + " marker detections");
+  return fsm.state() == LandingState::kLanded ? 0 : 3;
+}

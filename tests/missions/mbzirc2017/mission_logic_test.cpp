@@ -1,0 +1,221 @@
+// The MBZIRC 2017 landing logic alone (seed 7.1): the funnel of fig. 7.7 and the FSM of fig. 7.6,
+// stepped with made-up telemetry, switches and truck knowledge; no server.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "funnel.hpp"
+#include "landing_fsm.hpp"
+
+namespace uavsim::missions::mbzirc2017 {
+namespace {
+
+constexpr double kStep_s = 0.05;
+
+TEST(Funnel, WidensWithHeightUpToItsCap) {
+  const MissionConfig c;
+  const Funnel f(c);
+  // radius = 0.4 + 0.45 h, at most 3.5 m: 0.4 at the deck, 2.65 at 5 m, capped at 7 m (3.55)
+  EXPECT_DOUBLE_EQ(f.radius_m(0.0), 0.4);
+  EXPECT_NEAR(f.radius_m(5.0), 2.65, 1e-12);
+  EXPECT_DOUBLE_EQ(f.radius_m(7.0), 3.5);
+  EXPECT_DOUBLE_EQ(f.radius_m(-1.0), 0.4);  // below the deck plane: the base
+  EXPECT_TRUE(f.contains(5.0, 2.6));
+  EXPECT_FALSE(f.contains(5.0, 2.7));
+  EXPECT_FALSE(f.contains(0.5, 1.0));  // low and a metre off: outside (the cab is there)
+}
+
+TEST(Funnel, DescendsSlowlyNearTheDeck) {
+  const MissionConfig c;
+  const Funnel f(c);
+  EXPECT_DOUBLE_EQ(f.descent_rate_m_s(0.0), c.descent_min_m_s);
+  EXPECT_LT(f.descent_rate_m_s(0.5), 0.5);  // touchdown far below the 1 m/s landing limit
+  EXPECT_DOUBLE_EQ(f.descent_rate_m_s(20.0), c.descent_max_m_s);
+  EXPECT_LT(f.descent_rate_m_s(1.0), f.descent_rate_m_s(5.0));
+}
+
+// A scripted world for the FSM: the UAV follows its velocity commands exactly; the truck drives
+// east at 4.17 m/s along y = 0.
+class FsmHarness {
+ public:
+  FsmHarness() : fsm(config) { in.position_enu_m = Eigen::Vector3d(-40, -25, 0.36); }
+
+  FsmOutputs step() {
+    in.now_s += kStep_s;
+    truck_x += truck_speed * kStep_s;
+    if (in.truck.initialised) {
+      in.truck.position_enu_m = Eigen::Vector2d(truck_x, 0.0);
+      in.truck.velocity_enu_m_s = Eigen::Vector2d(truck_speed, 0.0);
+    }
+    const FsmOutputs out = fsm.step(in);
+    if (out.action == FsmOutputs::Action::kArmAndTakeOff) in.armed = true;
+    if (out.action == FsmOutputs::Action::kForceDisarm) in.armed = false;
+    if (out.action == FsmOutputs::Action::kVelocity) {
+      in.velocity_enu_m_s = out.velocity_enu_m_s;
+      in.position_enu_m += out.velocity_enu_m_s * kStep_s;
+    }
+    return out;
+  }
+  void see_truck() {
+    in.truck.initialised = true;
+    in.truck.last_seen_s = in.now_s;
+    in.truck.position_enu_m = Eigen::Vector2d(truck_x, 0.0);
+    in.truck.velocity_enu_m_s = Eigen::Vector2d(truck_speed, 0.0);
+  }
+  // runs until the FSM is in state s; false after max_s
+  bool run_until(LandingState s, double max_s, bool seeing) {
+    const double end = in.now_s + max_s;
+    while (in.now_s < end) {
+      if (seeing) see_truck();
+      step();
+      if (fsm.state() == s) return true;
+    }
+    return false;
+  }
+
+  // take-off, at the centre, the truck seen right below: Approach
+  bool reach_approach() {
+    step();
+    in.position_enu_m = Eigen::Vector3d(0, 0, 8.0);
+    step();
+    see_truck();
+    in.truck.interception_enu_m = in.position_enu_m.head<2>();
+    step();
+    return run_until(LandingState::kApproach, 1.0, true);
+  }
+
+  MissionConfig config;
+  LandingFsm fsm;
+  FsmInputs in;
+  double truck_x = -10.0;
+  double truck_speed = 15.0 / 3.6;
+};
+
+TEST(LandingFsm, TakesOffThenGoesToTheCentreAtEightMetres) {
+  FsmHarness h;
+  const FsmOutputs first = h.step();
+  EXPECT_EQ(first.action, FsmOutputs::Action::kArmAndTakeOff);
+  EXPECT_DOUBLE_EQ(first.takeoff_altitude_m, 8.0);
+  EXPECT_EQ(h.fsm.state(), LandingState::kStart);
+  h.in.position_enu_m.z() = 7.5;  // the take-off climbed
+  h.step();
+  EXPECT_EQ(h.fsm.state(), LandingState::kGoToCentre);
+  // flies to the centre at the cruise speed, holding 8 m
+  const FsmOutputs out = h.step();
+  ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+  EXPECT_NEAR(out.velocity_enu_m_s.head<2>().norm(), h.config.cruise_speed_m_s, 1e-9);
+  EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
+  // the truck never seen: it waits over the centre
+  EXPECT_FALSE(h.run_until(LandingState::kIntercept, 30.0, false));
+  EXPECT_LT(h.in.position_enu_m.head<2>().norm(), 0.5);
+  EXPECT_NEAR(h.in.position_enu_m.z(), 8.0, 0.1);
+}
+
+TEST(LandingFsm, SeenTruckLeadsToInterceptWaitApproachAndLandsOnTheSwitch) {
+  FsmHarness h;
+  h.step();
+  h.in.position_enu_m = Eigen::Vector3d(0, 0, 8.0);
+  h.step();
+  ASSERT_EQ(h.fsm.state(), LandingState::kGoToCentre);
+  // the filter initialised and an interception point ahead of the truck
+  h.see_truck();
+  h.in.truck.interception_enu_m = Eigen::Vector2d(5.0, 0.0);
+  h.in.truck.interception_time_to_go_s = 3.0;
+  h.step();
+  ASSERT_EQ(h.fsm.state(), LandingState::kIntercept);
+  h.in.truck.interception_time_to_go_s = 0.5;  // about to meet the truck: on the point
+  ASSERT_TRUE(h.run_until(LandingState::kWaitUntilVisible, 10.0, false));
+  // in view again: Approach; then the UAV follows the truck down inside the funnel
+  ASSERT_TRUE(h.run_until(LandingState::kApproach, 1.0, true));
+  double min_vz = 0.0;
+  for (int i = 0; i < 400 && h.fsm.height_above_deck_m(h.in.position_enu_m.z()) > 0.0; ++i) {
+    h.see_truck();
+    const FsmOutputs out = h.step();
+    ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+    min_vz = std::min(min_vz, out.velocity_enu_m_s.z());
+  }
+  EXPECT_LT(h.fsm.height_above_deck_m(h.in.position_enu_m.z()), 0.05);
+  EXPECT_LT(min_vz, -0.8);  // faster high up
+  // over the truck, at its speed
+  EXPECT_LT(std::abs(h.in.position_enu_m.x() - h.truck_x), h.config.funnel_base_radius_m);
+  EXPECT_NEAR(h.in.velocity_enu_m_s.x(), h.truck_speed, 0.3);
+  // a pad switch closes: force disarm at once, Landed, and it stays off
+  h.in.switch_closed = true;
+  const FsmOutputs landed = h.step();
+  EXPECT_EQ(landed.action, FsmOutputs::Action::kForceDisarm);
+  EXPECT_EQ(h.fsm.state(), LandingState::kLanded);
+  EXPECT_EQ(h.step().action, FsmOutputs::Action::kNone);
+  EXPECT_EQ(h.fsm.state(), LandingState::kLanded);
+}
+
+TEST(LandingFsm, FirstMissGoesBackToInterceptSecondToTheCentre) {
+  FsmHarness h;
+  h.step();
+  h.in.position_enu_m = Eigen::Vector3d(0, 0, 8.0);
+  h.step();
+  h.see_truck();
+  // already on the interception point: Intercept and Wait Until Visible in one step
+  h.in.truck.interception_enu_m = h.in.position_enu_m.head<2>();
+  const FsmOutputs both = h.step();
+  ASSERT_EQ(h.fsm.state(), LandingState::kWaitUntilVisible);
+  EXPECT_NE(both.note.find("GoToCentre -> Intercept"), std::string::npos) << both.note;
+  EXPECT_NE(both.note.find("Intercept -> WaitUntilVisible"), std::string::npos) << both.note;
+  // moves at half the truck's speed while it searches
+  const FsmOutputs wait = h.step();
+  EXPECT_NEAR(wait.velocity_enu_m_s.x(), 0.5 * h.truck_speed, 1e-9);
+  // 12 s unseen: first miss
+  EXPECT_FALSE(h.run_until(LandingState::kIntercept, 11.5, false));
+  ASSERT_TRUE(h.run_until(LandingState::kIntercept, 1.0, false));
+  EXPECT_EQ(h.fsm.misses(), 1);
+  h.in.truck.interception_enu_m = h.in.position_enu_m.head<2>();
+  ASSERT_TRUE(h.run_until(LandingState::kWaitUntilVisible, 1.0, false));
+  // 12 s unseen again: Go To Centre
+  ASSERT_TRUE(h.run_until(LandingState::kGoToCentre, 12.5, false));
+  EXPECT_EQ(h.fsm.misses(), 0);
+}
+
+// Approach with the marker offset beyond the funnel: climb; the marker lost up high: climb while
+// following the filter, then Go To Centre after 8 s.
+TEST(LandingFsm, OutsideTheFunnelOrLostItClimbsAndGivesUpAfterEightSeconds) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  h.in.position_enu_m.z() = 5.0;
+  // the truck 5 m away at 3.1 m above the deck (funnel radius 1.8 m): climb
+  h.truck_x = h.in.position_enu_m.x() + 5.0;
+  h.see_truck();
+  FsmOutputs out = h.step();
+  EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
+  EXPECT_GT(out.velocity_enu_m_s.x(), h.truck_speed);  // and catches up
+  // unseen from now on (high above the open-loop height): climbs, then Go To Centre after 8 s
+  bool climbed = false;
+  for (int i = 0; i < 40; ++i) climbed = h.step().velocity_enu_m_s.z() > 0.0 || climbed;
+  EXPECT_TRUE(climbed);
+  EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
+  ASSERT_TRUE(h.run_until(LandingState::kGoToCentre, 8.0, false));
+}
+
+// In the last decimetres the marker no longer fits the image: open-loop descent for at most 8 s.
+TEST(LandingFsm, OpenLoopDescentLastsAtMostEightSeconds) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  h.in.position_enu_m.z() = 5.0;
+  // 1 m above the deck, right over the marker, then never seen again and no switch
+  h.in.position_enu_m =
+      Eigen::Vector3d(h.truck_x, 0, h.config.skid_depth_m + h.config.deck_height_m + 1.0);
+  h.see_truck();
+  h.step();
+  const double z0 = h.in.position_enu_m.z();
+  // freeze the height: a deck that is not there (the UAV keeps descending open-loop)
+  int descending = 0;
+  for (int i = 0; i < 100; ++i) {
+    const FsmOutputs out = h.step();
+    if (out.velocity_enu_m_s.z() < 0.0) ++descending;
+    h.in.position_enu_m.z() = z0;
+  }
+  EXPECT_GT(descending, 90);
+  EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
+  ASSERT_TRUE(h.run_until(LandingState::kGoToCentre, 4.0, false));
+}
+
+}  // namespace
+}  // namespace uavsim::missions::mbzirc2017
