@@ -41,13 +41,34 @@ Truck::Truck(sim::Simulation& sim, const TruckParams& params) : params_(params),
 
 void Truck::pose_at(double time_s, Eigen::Vector3d* p, Eigen::Quaterniond* q, Eigen::Vector3d* v,
                     double* yaw_rate_rad_s) const {
-  const double speed = params_.speed.speed_m_s(time_s);
-  const TrackPoint tp = track_.at(params_.speed.arc_length_m(time_s));
-  *p = Eigen::Vector3d(tp.position_enu_m.x(), tp.position_enu_m.y(), 0.0);
-  *q = Eigen::Quaterniond(Eigen::AngleAxisd(tp.heading_rad(), Eigen::Vector3d::UnitZ()));
-  *v = speed * Eigen::Vector3d(tp.tangent_enu.x(), tp.tangent_enu.y(), 0.0);
-  // yaw rate = speed x signed curvature
-  *yaw_rate_rad_s = speed * tp.curvature_1_m;
+  // the ideal point the driver follows, and the driver's offset to the left of it
+  const double speed = driver_.speed_m_s(params_.speed, time_s);
+  const TrackPoint tp = track_.at(driver_.arc_length_m(params_.speed, time_s));
+  const Eigen::Vector2d normal(-tp.tangent_enu.y(), tp.tangent_enu.x());
+  const double l = driver_.lateral_m(time_s);
+  const double l_rate = driver_.lateral_rate_m_s(time_s);
+  const Eigen::Vector2d xy = tp.position_enu_m + l * normal;
+  // d/dt (c(s) + l n(s)) = s' (1 - kappa l) t + l' n (Frenet: dn/ds = -kappa t)
+  const double along = speed * (1.0 - tp.curvature_1_m * l);
+  const Eigen::Vector2d vxy = along * tp.tangent_enu + l_rate * normal;
+  // the truck points where it goes: the track's heading turned by the steering angle atan(l' / along)
+  const double steer = std::atan2(l_rate, along);
+  *p = Eigen::Vector3d(xy.x(), xy.y(), 0.0);
+  *q = Eigen::Quaterniond(Eigen::AngleAxisd(tp.heading_rad() + steer, Eigen::Vector3d::UnitZ()));
+  *v = Eigen::Vector3d(vxy.x(), vxy.y(), 0.0);
+  // yaw rate = speed x signed curvature, plus the steering angle's rate (central difference: it is
+  // smooth and small, below l'' / speed)
+  double steer_rate = 0.0;
+  if (driver_.enabled()) {
+    constexpr double kH_s = 1e-3;
+    auto steer_at = [&](double t) {
+      const TrackPoint a = track_.at(driver_.arc_length_m(params_.speed, t));
+      return std::atan2(driver_.lateral_rate_m_s(t),
+                        driver_.speed_m_s(params_.speed, t) * (1.0 - a.curvature_1_m * driver_.lateral_m(t)));
+    };
+    steer_rate = (steer_at(time_s + kH_s) - steer_at(time_s - kH_s)) / (2.0 * kH_s);
+  }
+  *yaw_rate_rad_s = speed * tp.curvature_1_m + steer_rate;
 }
 
 void Truck::before_step(sim::Simulation& sim) {
@@ -112,19 +133,22 @@ bool Truck::on_contact(sim::Simulation& sim, const physics::VehicleContact& cont
   return true;  // touching the deck is never a crash
 }
 
-void Truck::reset(uint64_t /*seed*/) { carried_.clear(); }
+void Truck::reset(uint64_t seed) {
+  carried_.clear();
+  driver_ = TruckDriver(params_.driver, seed, params_.name);
+}
 
 TruckState Truck::state(double time_s) const {
   TruckState s;
   s.name = params_.name;
-  const double unwrapped = params_.speed.arc_length_m(time_s);
+  const double unwrapped = driver_.arc_length_m(params_.speed, time_s);
   s.laps = static_cast<int>(std::floor(unwrapped / track_.length_m()));
   s.s_m = unwrapped - s.laps * track_.length_m();
-  s.speed_m_s = params_.speed.speed_m_s(time_s);
   Eigen::Quaterniond q;
   double yaw_rate = 0.0;
   pose_at(time_s, &s.position_enu_m, &q, &s.velocity_enu_m_s, &yaw_rate);
-  s.yaw_rad = track_.at(unwrapped).heading_rad();
+  s.speed_m_s = s.velocity_enu_m_s.norm();
+  s.yaw_rad = std::remainder(2.0 * std::atan2(q.z(), q.w()), 4.0 * std::acos(0.0));
   s.deck_centre_enu_m = s.position_enu_m + Eigen::Vector3d(0.0, 0.0, deck_top_m_);
   for (const Carried& c : carried_) s.carried_vehicles.push_back(c.vehicle);
   return s;

@@ -9,6 +9,7 @@
 //   <uavsim_object type="truck" name="truck"/>
 //   <numeric name="uavsim:truck:track" data="R_m D_m centre_x_m centre_y_m yaw_deg"/>   any prefix
 //   <numeric name="uavsim:truck:speed" data="speed1_kmh speed2_kmh switch_time_s start_s_m"/>  any prefix
+//   <numeric name="uavsim:truck:driver" data="lateral_amplitude_m speed_wobble_fraction"/>  (truck_driver.hpp)
 #pragma once
 
 #include <string>
@@ -18,6 +19,7 @@
 #include <Eigen/Geometry>
 
 #include "objects/eight_track.hpp"
+#include "objects/truck_driver.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::objects {
@@ -26,13 +28,14 @@ struct TruckParams {
   std::string name = "truck";
   EightTrackParams track;
   SpeedProfile speed;
+  DriverParams driver;  // off by default: the ideal track at the scheduled speed
   double landing_speed_m_s = 1.0;  // relative speed below which a gear touchdown on the deck is a landing
 };
 
 // The truck's ground truth.
 struct TruckState {
   std::string name;
-  double s_m = 0.0;          // arc length along the track, wrapped
+  double s_m = 0.0;          // arc length along the track, wrapped (of the point the driver follows)
   int laps = 0;              // completed laps
   double speed_m_s = 0.0;
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // the body origin (on the ground)
@@ -56,6 +59,7 @@ class Truck : public sim::WorldObject {
   TruckState state(double time_s) const;
   const EightTrack& track() const { return track_; }
   const TruckParams& params() const { return params_; }
+  const TruckDriver& driver() const { return driver_; }
   double deck_height_m() const { return deck_top_m_; }
 
  private:
@@ -70,6 +74,7 @@ class Truck : public sim::WorldObject {
 
   TruckParams params_;
   EightTrack track_;
+  TruckDriver driver_;  // redrawn from the seed on reset
   int body_id_ = -1;
   std::vector<int> deck_geoms_;
   double deck_top_m_ = 1.5;  // deck top above the body origin

@@ -50,6 +50,14 @@ TruckParams truck_params(const physics::World& world, const std::string& name) {
   if (p.speed.speed1_m_s < 0 || p.speed.speed2_m_s < 0 || p.speed.switch_time_s < 0) {
     throw physics::WorldError("custom numeric '" + speed_name + "': speeds and switch time must be >= 0");
   }
+  // uavsim:NAME:driver = lateral_amplitude_m speed_wobble_fraction (truck_driver.hpp)
+  const std::string driver_name = "uavsim:" + name + ":driver";
+  const std::vector<double> d = numeric(world, driver_name, 2);
+  if (d.size() > 0) p.driver.lateral_amplitude_m = d[0];
+  if (d.size() > 1) p.driver.speed_wobble = d[1];
+  if (const std::string e = validate(p.driver); !e.empty()) {
+    throw physics::WorldError("custom numeric '" + driver_name + "': " + e);
+  }
   return p;
 }
 
