@@ -1,7 +1,32 @@
 #!/usr/bin/env bash
 # The README's test command: dependencies, build, then every test (unit, system, scenario) through ctest.
+#
+#   scripts/test.sh [ctest args...]              the normal build (build/) and its tests
+#   scripts/test.sh --sanitize [ctest args...]   ASan + UBSan build (build-sanitize/, clang when present so
+#                                                the fuzz targets build too, benches off) and its tests,
+#                                                with LeakSanitizer suppressions for leaks outside our code
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-"$root/scripts/build.sh"
-cd "$root/build"
+
+if [ "${1:-}" != "--sanitize" ]; then
+  "$root/scripts/build.sh"
+  cd "$root/build"
+  ctest --output-on-failure -j "$(nproc)" "$@"
+  exit
+fi
+shift
+
+build="$root/build-sanitize"
+compilers=()
+if command -v clang++ >/dev/null 2>&1 && command -v clang >/dev/null 2>&1; then
+  compilers=(-DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++)
+fi
+# RelWithDebInfo: -O2 keeps the long scenarios inside their time limits, -g gives readable reports
+UAVSIM_BUILD_DIR="$build" "$root/scripts/build.sh" "${compilers[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DUAVSIM_SANITIZE=ON -DUAVSIM_BUILD_BENCH=OFF
+
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
+cd "$build"
 ctest --output-on-failure -j "$(nproc)" "$@"

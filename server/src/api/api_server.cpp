@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "api/request_fields.hpp"
+#include "sim/checked_number.hpp"
+
 namespace uavsim::server::api {
 
 namespace {
@@ -18,7 +21,8 @@ const char* const kOps[] = {"status",        "pause",           "resume",       
                             "balloons",      "events",          "subscribe_events", "unsubscribe_events",
                             "kill_vehicle",  "motor_failure",   "gps_glitch",     "gps_denied",
                             "link_drop",     "gimbal",          "lockstep_join",  "lockstep_leave",
-                            "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe"};
+                            "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe",
+                            "camera_blackout"};
 
 Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
@@ -26,23 +30,39 @@ std::string dump(const Json& j) {
   return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
-// typed field access that never throws: nullopt if absent or of another type
-std::optional<double> number(const Json& j, const char* key) {
-  auto it = j.find(key);
-  if (it == j.end() || !it->is_number()) return std::nullopt;
-  return it->get<double>();
+// The fields the built-in ops read, with their types: a request naming one with another type gets
+// bad_field before its op runs (so no op half-applies a request). Extensions check their own.
+constexpr FieldSpec kBuiltinFields[] = {
+    {"steps", FieldType::kNumber},       {"duration_s", FieldType::kNumber},
+    {"rate", FieldType::kNumber},        {"seed", FieldType::kNumber},
+    {"from_seq", FieldType::kNumber},    {"vehicle", FieldType::kIndexOrName},
+    {"reason", FieldType::kString},      {"rotor", FieldType::kNumber},
+    {"failed", FieldType::kBoolean},     {"offset_enu_m", FieldType::kArray},
+    {"denied", FieldType::kBoolean},     {"down", FieldType::kBoolean},
+    {"gimbal", FieldType::kString},      {"mode", FieldType::kString},
+    {"pitch_deg", FieldType::kNumber},   {"yaw_deg", FieldType::kNumber},
+    {"period_s", FieldType::kNumber},    {"timeout_s", FieldType::kNumber},
+    {"tick", FieldType::kNumber},        {"busy_until", FieldType::kNumber},
+    {"mavlink_seq", FieldType::kObject},
+};
+
+// ranges of the numbers the built-in ops take
+constexpr double kMaxRate = 1e6;            // set_rate: above this "as fast as possible" (0) is meant
+constexpr double kMinRate = 1e-3;           // below, a control step would take minutes of wall time
+constexpr double kMaxLockstepTimeout_s = 1e6;
+constexpr double kMaxGlitch_m = 1e5;
+constexpr double kMaxGimbalAngle_deg = 360.0;
+
+Json error_reply(const Json& id, const std::string& code, const std::string& message) {
+  return Json{{"id", id}, {"ok", false}, {"error", {{"code", code}, {"message", message}}}};
 }
-std::optional<bool> boolean(const Json& j, const char* key) {
-  auto it = j.find(key);
-  if (it == j.end() || !it->is_boolean()) return std::nullopt;
-  return it->get<bool>();
+
+// compares secrets in time independent of where they differ
+bool same_secret(const std::string& a, const std::string& b) {
+  unsigned diff = a.size() == b.size() ? 0u : 1u;
+  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned>(a[i] ^ b[i % (b.empty() ? 1 : b.size())]);
+  return diff == 0 && !b.empty();
 }
-std::optional<std::string> text(const Json& j, const char* key) {
-  auto it = j.find(key);
-  if (it == j.end() || !it->is_string()) return std::nullopt;
-  return it->get<std::string>();
-}
-bool has(const Json& j, const char* key) { return j.find(key) != j.end(); }
 
 }  // namespace
 
@@ -54,31 +74,76 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     Json ops = Json::array();
     for (const char* op : kOps) ops.push_back(op);
     for (const std::string& op : extension_ops_) ops.push_back(op);
-    send(conn, Json{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops}});
+    ops.push_back("auth");
+    Json hello{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops}};
+    if (config_.token) hello["auth_required"] = true;
+    send(conn, hello);
+    ++connections_;
     enqueue({Request::Kind::kConnect, conn, {}});
   };
   cb.on_line = [this](uint64_t conn, std::string line) {
-    // parse on the I/O thread; malformed input is answered here, without the loop
+    // parse on the I/O thread; a malformed request's error is queued behind the requests before it, so
+    // replies keep the order of the requests on the connection
     if (line.find_first_not_of(" \t") == std::string::npos) return;
-    Json body = Json::parse(line, nullptr, false);
-    if (body.is_discarded()) return reply_error(conn, nullptr, "bad_json", "the line is not valid JSON");
-    if (!body.is_object()) return reply_error(conn, nullptr, "bad_request", "a request is a JSON object");
-    const Json id = body.contains("id") ? body["id"] : Json(nullptr);
-    const auto op = text(body, "op");
-    if (!op) return reply_error(conn, id, "missing_field", "a request needs \"op\" (a string)");
-    if (std::find_if(std::begin(kOps), std::end(kOps), [&](const char* o) { return *op == o; }) ==
-            std::end(kOps) &&
-        std::find(extension_ops_.begin(), extension_ops_.end(), *op) == extension_ops_.end()) {
-      return reply_error(conn, id, "unknown_op", "unknown op '" + *op + "'");
+    ParsedLine parsed = parse_request_line(line);
+    if (!parsed.error_code.empty()) {
+      return reply_in_order(conn, error_reply(parsed.id, parsed.error_code, parsed.error_message));
     }
-    enqueue({Request::Kind::kLine, conn, std::move(body)});
+    Json& body = parsed.body;
+    const Json& id = parsed.id;
+    const std::string op = body["op"].get<std::string>();
+    // --api-token-file: nothing is served before the token (an auth op, or a token field on a request)
+    if (config_.token && !authenticated_.count(conn)) {
+      const auto token = string_field(body, "token");
+      if (!token || !same_secret(*token, *config_.token)) {
+        return reply_in_order(
+            conn, error_reply(id, "unauthorized",
+                              token ? "wrong token" : "this server needs a token first: {\"op\":\"auth\",\"token\":...}"));
+      }
+      authenticated_.insert(conn);
+    }
+    if (op == "auth") {
+      return reply_in_order(conn,
+                            Json{{"id", id}, {"ok", true}, {"result", {{"authenticated", config_.token.has_value()}}}});
+    }
+    // gcs_link_open sends UDP datagrams: only to the requesting client's own host, unless allowed
+    if (op == "gcs_link_open" && !config_.allow_remote_gcs) {
+      const std::string peer = server_->peer_address(conn);
+      auto host = body.find("gcs_target_host");
+      if (host == body.end()) {
+        body["gcs_target_host"] = peer;
+      } else if (host->is_string() && host->get<std::string>() != peer) {
+        return reply_in_order(conn, error_reply(id, "forbidden",
+                                                "gcs_target_host must be this client's own address (" + peer +
+                                                    ") unless the server runs with --allow-remote-gcs"));
+      }
+    }
+    if (std::find_if(std::begin(kOps), std::end(kOps), [&](const char* o) { return op == o; }) ==
+            std::end(kOps) &&
+        std::find(extension_ops_.begin(), extension_ops_.end(), op) == extension_ops_.end()) {
+      return reply_in_order(conn, error_reply(id, "unknown_op", "unknown op '" + op + "'"));
+    }
+    enqueue({Request::Kind::kLine, conn, std::move(parsed.body)});
   };
   cb.on_line_too_long = [this](uint64_t conn) {
-    reply_error(conn, nullptr, "line_too_long",
-                "request lines are limited to " + std::to_string(config_.max_line_bytes) + " bytes");
+    reply_in_order(conn, error_reply(nullptr, "line_too_long", "request lines are limited to " +
+                                                                  std::to_string(config_.max_line_bytes) +
+                                                                  " bytes"));
   };
-  cb.on_disconnect = [this](uint64_t conn) { enqueue({Request::Kind::kDisconnect, conn, {}}); };
-  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, config_.max_line_bytes, cb);
+  cb.on_disconnect = [this](uint64_t conn) {
+    authenticated_.erase(conn);
+    --connections_;
+    enqueue({Request::Kind::kDisconnect, conn, {}});
+  };
+  LineServer::Limits limits;
+  limits.max_line_bytes = config_.max_line_bytes;
+  limits.max_connections = config_.max_connections;
+  limits.max_pending_bytes = config_.max_pending_bytes;
+  limits.max_total_pending_bytes = config_.max_total_pending_bytes;
+  limits.overload_line = dump(error_reply(nullptr, "overloaded",
+                                          "the server's connection or reply-queue limit was reached; this "
+                                          "connection is closed (read replies as they come, or connect later)"));
+  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb);
 }
 
 ApiServer::~ApiServer() { shutdown(); }
@@ -121,7 +186,11 @@ void ApiServer::send(uint64_t conn, const Json& message) { server_->send(conn, d
 
 void ApiServer::reply_error(uint64_t conn, const Json& id, const std::string& code,
                             const std::string& message) {
-  send(conn, Json{{"id", id}, {"ok", false}, {"error", {{"code", code}, {"message", message}}}});
+  send(conn, error_reply(id, code, message));
+}
+
+void ApiServer::reply_in_order(uint64_t conn, Json reply) {
+  enqueue({Request::Kind::kReply, conn, std::move(reply)});
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -191,9 +260,14 @@ void ApiServer::drain() {
         for (ApiExtension* e : extensions_) e->on_disconnect(r.conn);
         if (frames_) frames_->on_disconnect(r.conn);
         clients_.erase(r.conn);
+        // every request of the connection has been answered: the socket may go once that is written
+        server_->close_when_sent(r.conn);
         break;
       case Request::Kind::kLine:
         handle(r.conn, r.body);
+        break;
+      case Request::Kind::kReply:
+        send(r.conn, r.body);
         break;
     }
   }
@@ -342,6 +416,8 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     return send(conn, Json{{"id", id}, {"ok", true}, {"result", result}});
   }
 
+  if (const auto bad = mistyped_field(request, kBuiltinFields)) return reply_error(conn, id, "bad_field", *bad);
+
   if (op == "status") {
     int lockstep = 0;
     for (const auto& [k, c] : clients_) lockstep += c.lockstep ? 1 : 0;
@@ -365,8 +441,8 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     result = {{"time_s", sim_.time_s()}, {"paused", false}};
   } else if (op == "step") {
     // N control steps (default 1) or a duration rounded to whole control steps; pauses first
-    const auto steps = number(request, "steps");
-    const auto duration = number(request, "duration_s");
+    const auto steps = number_field(request, "steps");
+    const auto duration = number_field(request, "duration_s");
     double n = 1;
     if (steps) n = *steps;
     if (duration) n = std::round(*duration / control_dt_s());
@@ -381,11 +457,11 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       return;  // answered when the steps are done
     }
   } else if (op == "set_rate") {
-    const auto rate = number(request, "rate");
+    const auto rate = number_field(request, "rate");
     if (!rate) {
       fail("missing_field", "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
-    } else if (!(*rate >= 0.0) || !std::isfinite(*rate)) {
-      fail("bad_field", "\"rate\" must be >= 0");
+    } else if (*rate != 0.0 && !sim::finite_in(*rate, kMinRate, kMaxRate)) {
+      fail("bad_field", "\"rate\" must be 0 (as fast as possible) or in [0.001, 1e6]");
     } else if (runner_ == nullptr) {
       fail("not_available", "this server has no clock runner");
     } else {
@@ -393,13 +469,20 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       result = {{"rate", *rate}};
     }
   } else if (op == "reset") {
-    const auto seed = number(request, "seed");
-    if (has(request, "seed") && (!seed || *seed < 0 || std::floor(*seed) != *seed)) {
-      fail("bad_field", "\"seed\" must be a non-negative integer");
+    // an integer seed travels exactly; a number in double form must be a whole one below 2^64
+    const auto it = request.find("seed");
+    std::optional<uint64_t> seed;
+    if (it != request.end()) {
+      seed = it->is_number_unsigned() ? std::optional<uint64_t>(it->get<uint64_t>())
+                                      : sim::checked_integer<uint64_t>(it->get<double>());
+    }
+    if (it != request.end() && !seed) {
+      fail("bad_field", "\"seed\" must be an integer in [0, 2^64)");
     } else {
-      const uint64_t s = seed ? static_cast<uint64_t>(*seed) : sim_.config().seed;
+      const uint64_t s = seed.value_or(sim_.config().seed);
       sim_.reset(s);
       events_forwarded_ = 0;
+      if (frames_) frames_->clear_blackouts();  // their times were on the old clock
       for (auto& [k, c] : clients_) {
         c.awaiting = false;
         c.next_due_s = 0.0;
@@ -447,11 +530,12 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       result = {{"time_s", sim_.time_s()}, {"balloons", balloons}};
     }
   } else if (op == "events" || op == "subscribe_events") {
-    const auto from = number(request, "from_seq");
-    if (has(request, "from_seq") && (!from || *from < 0)) {
+    const auto from_number = number_field(request, "from_seq");
+    const auto from = from_number ? sim::checked_integer<uint64_t>(*from_number) : std::optional<uint64_t>(0);
+    if (!from) {
       fail("bad_field", "\"from_seq\" must be a non-negative integer");
     } else {
-      const uint64_t from_seq = from ? static_cast<uint64_t>(*from) : 0;
+      const uint64_t from_seq = *from;
       Json list = Json::array();
       const auto& all = sim_.events().all();
       for (size_t k = 0; k < events_forwarded_ && k < all.size(); ++k) {
@@ -472,76 +556,85 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     const auto v = vehicle_arg(request, &error);
     if (v) {
       if (op == "kill_vehicle") {
-        const std::string reason = text(request, "reason").value_or("fault injection");
+        const std::string reason = string_field(request, "reason").value_or("fault injection");
         sim_.record(sim::EventType::kVehicleKilled, static_cast<int>(*v), reason);
         sim_.kill_vehicle(*v, "killed: " + reason);
       } else if (op == "motor_failure") {
-        const auto rotor = number(request, "rotor");
+        const auto rotor = number_field(request, "rotor");
         const size_t rotors = sim_.airframe(*v).rotors.size();
         if (!rotor) {
           fail("missing_field", "\"rotor\" (index) is required");
         } else if (*rotor < 0 || *rotor >= static_cast<double>(rotors) || std::floor(*rotor) != *rotor) {
           fail("bad_field", "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
         } else {
-          sim_.set_motor_failed(*v, static_cast<size_t>(*rotor), boolean(request, "failed").value_or(true));
+          sim_.set_motor_failed(*v, static_cast<size_t>(*rotor), bool_field(request, "failed").value_or(true));
         }
       } else if (op == "gps_glitch") {
         auto it = request.find("offset_enu_m");
         if (it == request.end()) {
           fail("missing_field", "\"offset_enu_m\" [x, y, z] is required ([0, 0, 0] clears the glitch)");
-        } else if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
-                   !(*it)[2].is_number()) {
-          fail("bad_field", "\"offset_enu_m\" must be three numbers");
+        } else if (it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() || !(*it)[2].is_number() ||
+                   std::abs((*it)[0].get<double>()) > kMaxGlitch_m || std::abs((*it)[1].get<double>()) > kMaxGlitch_m ||
+                   std::abs((*it)[2].get<double>()) > kMaxGlitch_m) {
+          fail("bad_field", "\"offset_enu_m\" must be three numbers of at most 1e5 m");
         } else {
           sim_.fc(*v).set_gps_glitch(
               Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()));
         }
       } else if (op == "gps_denied") {
-        sim_.fc(*v).set_gps_denied(boolean(request, "denied").value_or(true));
+        sim_.fc(*v).set_gps_denied(bool_field(request, "denied").value_or(true));
       } else if (op == "link_drop") {
         if (link_ == nullptr) {
           fail("not_available", "no MAVLink endpoint is attached to this server");
-        } else if (!link_->set_link_down(*v, boolean(request, "down").value_or(true))) {
+        } else if (!link_->set_link_down(*v, bool_field(request, "down").value_or(true))) {
           fail("not_available", "vehicle " + std::to_string(*v) + " has no MAVLink link");
         }
       }
       if (error.code.empty()) result = {{"vehicle", *v}, {"time_s", sim_.time_s()}};
     }
   } else if (op == "gimbal") {
-    const auto name = text(request, "gimbal");
+    const auto name = string_field(request, "gimbal");
     objects::Gimbal* g = nullptr;
     if (objects_.gimbals != nullptr && name) {
       for (objects::Gimbal& x : objects_.gimbals->gimbals()) {
         if (x.name == *name) g = &x;
       }
     }
-    const auto mode = text(request, "mode");
+    const auto mode = string_field(request, "mode");
+    const auto pitch_deg = number_field(request, "pitch_deg");
+    const auto yaw_deg = number_field(request, "yaw_deg");
+    const auto angle_ok = [](const std::optional<double>& a) {
+      return !a || sim::finite_in(*a, -kMaxGimbalAngle_deg, kMaxGimbalAngle_deg);
+    };
     if (!name) {
       fail("missing_field", "\"gimbal\" (the gimbal body's name) is required");
     } else if (g == nullptr) {
       fail("bad_field", "no gimbal named '" + *name + "'");
     } else if (mode && *mode != "down" && *mode != "forward" && *mode != "targets") {
       fail("bad_field", "\"mode\" must be down, forward or targets");
+    } else if (!angle_ok(pitch_deg) || !angle_ok(yaw_deg)) {
+      fail("bad_field", "\"pitch_deg\" and \"yaw_deg\" must be in [-360, 360]");
     } else {
       if (mode) {
         g->mode = *mode == "down"      ? objects::GimbalMode::kDown
                   : *mode == "forward" ? objects::GimbalMode::kForward
                                        : objects::GimbalMode::kTargets;
       }
-      if (const auto p = number(request, "pitch_deg")) g->pitch_rad = *p * M_PI / 180.0;
-      if (const auto y = number(request, "yaw_deg")) g->yaw_rad = *y * M_PI / 180.0;
+      if (pitch_deg) g->pitch_rad = *pitch_deg * M_PI / 180.0;
+      if (yaw_deg) g->yaw_rad = *yaw_deg * M_PI / 180.0;
       result = {{"gimbal", g->name}, {"mode", objects::gimbal_mode_name(g->mode)},
                 {"pitch_deg", g->pitch_rad * 180.0 / M_PI}, {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
     }
   } else if (op == "lockstep_join") {
-    const auto period = number(request, "period_s");
-    const auto timeout = number(request, "timeout_s");
+    const auto period = number_field(request, "period_s");
+    const auto timeout = number_field(request, "timeout_s");
     if (!period) {
       fail("missing_field", "\"period_s\" (sim seconds between ticks) is required");
     } else if (!(*period > 0.0) || !std::isfinite(*period) || *period > 3600.0) {
       fail("bad_field", "\"period_s\" must be in (0, 3600]");
-    } else if (timeout && !(*timeout > 0.0)) {
-      fail("bad_field", "\"timeout_s\" must be > 0");
+    } else if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
+      // the deadline is a steady_clock time point: 1e10 s would overflow it and count as expired
+      fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
     } else {
       // whole control steps, at least one; the first tick is the next multiple of the period
       client.period_steps = std::max<int64_t>(1, std::llround(*period / control_dt_s()));
@@ -557,16 +650,16 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     client.lockstep = false;
     client.awaiting = false;
   } else if (op == "done") {
-    const auto tick = number(request, "tick");
-    const auto busy = number(request, "busy_until");
+    const auto tick = number_field(request, "tick");
+    const auto busy = number_field(request, "busy_until");
     auto seqs = request.find("mavlink_seq");
     if (!client.lockstep) {
       fail("not_joined", "\"done\" without lockstep_join");
     } else if (!client.awaiting || client.done_received) {
       fail("bad_state", "no tick is waiting for \"done\"");
-    } else if (has(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
+    } else if (has_field(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
       fail("bad_field", "the tick waiting is " + std::to_string(client.tick));
-    } else if (has(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
+    } else if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
       fail("bad_field", "\"busy_until\" must be a sim time in seconds");
     } else if (seqs != request.end() && !seqs->is_object()) {
       fail("bad_field", "\"mavlink_seq\" must be an object {vehicle: seq}");
@@ -600,6 +693,12 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     if (!frames_) {
       fail("not_available", "this server renders no camera frames");
     } else if (!frames_->handle(conn, op, request, &result, &error.code, &error.message)) {
+      // error set
+    }
+  } else if (op == "camera_blackout") {
+    if (!frames_) {
+      fail("not_available", "this server renders no camera frames");
+    } else if (!frames_->blackout(request, sim_.time_s(), &result, &error.code, &error.message)) {
       // error set
     }
   }

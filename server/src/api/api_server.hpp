@@ -9,6 +9,7 @@
 // single-stepping and lockstep hold the clock, so the loop thread keeps serving requests while held.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -18,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -82,7 +84,18 @@ struct ApiConfig {
   uint16_t port = 5700;               // 0: an ephemeral port (tests)
   double lockstep_timeout_s = 10.0;   // wall time a lockstep client may take for a tick before it is dropped
   size_t max_line_bytes = 1u << 20;   // longer request lines get an error reply and are skipped
+  size_t max_connections = 64;        // one more is sent an "overloaded" error and closed
+  // unsent replies, events and frames per connection / for all together: a connection that would pass
+  // either is sent an "overloaded" error and closed (docs/protocol.md)
+  size_t max_pending_bytes = 64u << 20;
+  size_t max_total_pending_bytes = 256u << 20;
   bool start_paused = false;          // hold the clock at start until a client sends resume or step
+  // A shared secret: a connection must send it ({"op":"auth","token":...}, or a "token" field in its
+  // first request) before any other op is served. Unset: no authentication.
+  std::optional<std::string> token;
+  // gcs_link_open may name a gcs_target_host other than the requesting client's own address (and
+  // without one sends to the API bind address); false: only the client's address, its default.
+  bool allow_remote_gcs = true;
 };
 
 class ApiServer {
@@ -110,6 +123,8 @@ class ApiServer {
   // Releases a held gate for good and stops the I/O thread. Thread-safe; idempotent.
   void shutdown();
   uint16_t port() const { return server_->port(); }
+  // Connections open now. Thread-safe.
+  size_t connection_count() const { return connections_.load(); }
 
   // The control gate for Runner::set_control_gate: runs queued requests and holds the clock while
   // paused or while a lockstep client has not finished its tick. Loop thread only.
@@ -122,9 +137,10 @@ class ApiServer {
   using Clock = std::chrono::steady_clock;
 
   struct Request {
-    enum class Kind { kLine, kConnect, kDisconnect } kind = Kind::kLine;
+    // kReply: an answer made on the I/O thread (a malformed line), sent from the loop in its turn
+    enum class Kind { kLine, kConnect, kDisconnect, kReply } kind = Kind::kLine;
     uint64_t conn = 0;
-    Json body;
+    Json body;  // the request, or the reply for kReply
   };
   // per connection state, loop thread only
   struct Client {
@@ -147,6 +163,8 @@ class ApiServer {
   void enqueue(Request request);
   void send(uint64_t conn, const Json& message);
   void reply_error(uint64_t conn, const Json& id, const std::string& code, const std::string& message);
+  // queues a reply behind the connection's earlier requests (the loop sends it in order)
+  void reply_in_order(uint64_t conn, Json reply);
 
   // loop thread side
   void on_gate();
@@ -185,6 +203,8 @@ class ApiServer {
   std::condition_variable wake_;
   std::deque<Request> queue_;
   bool shutdown_ = false;
+  std::atomic<size_t> connections_{0};
+  std::set<uint64_t> authenticated_;   // connections that sent the token; I/O thread only
 
   // loop thread only
   std::map<uint64_t, Client> clients_;

@@ -1,6 +1,8 @@
 #include "api/frame_stream.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace uavsim::server::api {
 
@@ -141,6 +143,40 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
   return true;
 }
 
+bool FrameStream::blackout(const Json& request, double now_s, Json* result, std::string* code,
+                           std::string* message) {
+  auto fail = [&](const char* c, std::string m) {
+    *code = c;
+    *message = std::move(m);
+    return false;
+  };
+  auto cam_it = request.find("camera");
+  if (cam_it == request.end()) return fail("missing_field", "\"camera\" (a camera name) is required");
+  const std::optional<int> camera =
+      cam_it->is_string() ? service_.find(cam_it->get<std::string>()) : std::nullopt;
+  if (!camera) return fail("bad_field", "\"camera\" must name a camera of camera_list");
+  auto d = request.find("duration_s");
+  if (d == request.end()) return fail("missing_field", "\"duration_s\" is required");
+  // at most a day of sim time: the end stays an exact integer of microseconds
+  constexpr double kMaxBlackout_s = 86400.0;
+  if (!d->is_number() || !(d->get<double>() >= 0.0) || d->get<double>() > kMaxBlackout_s) {
+    return fail("bad_field", "\"duration_s\" must be a number of seconds in [0, 86400]");
+  }
+  const int64_t from_us = std::llround(now_s * 1e6);
+  const int64_t until_us = from_us + std::llround(d->get<double>() * 1e6);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    blackouts_[*camera] = {from_us, until_us};
+  }
+  *result = {{"camera", cam_it->get<std::string>()}, {"from_s", from_us * 1e-6}, {"until_s", until_us * 1e-6}};
+  return true;
+}
+
+void FrameStream::clear_blackouts() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  blackouts_.clear();
+}
+
 void FrameStream::want(int camera, int64_t index, int64_t, std::vector<render::EncodingKey>* encodings,
                        bool* must_deliver) {
   std::vector<Pending> takers;
@@ -185,11 +221,25 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
                       {frame.position_enu_m.x(), frame.position_enu_m.y(), frame.position_enu_m.z()}},
                      {"R_enu_cam", R}};
   const Json intrinsics = {{"fx", c.fx_px}, {"fy", c.fy_px}, {"cx", c.cx_px}, {"cy", c.cy_px}};
+  const auto blackout = blackouts_.find(frame.camera);
+  const bool black = blackout != blackouts_.end() && frame.stamp_us >= blackout->second.first &&
+                     frame.stamp_us < blackout->second.second;
+  std::vector<std::pair<render::EncodingKey, std::shared_ptr<const std::string>>> black_images;
   for (Pending& p : takers) {
     Sub& sub = *p.sub;
     if (!sub.active) continue;
     const std::string* bytes = frame.image(sub.key);
     if (bytes == nullptr) continue;
+    if (black) {
+      // a blacked-out camera: the same frame, every pixel black (encoded once per encoding)
+      auto it = std::find_if(black_images.begin(), black_images.end(),
+                             [&](const auto& b) { return b.first == sub.key; });
+      if (it == black_images.end()) {
+        black_images.emplace_back(sub.key, render::encode_black_frame(c.width_px, c.height_px, sub.key));
+        it = std::prev(black_images.end());
+      }
+      bytes = it->second.get();
+    }
     if (!p.must && server_.pending_bytes(sub.conn) > kMaxQueuedFrames * bytes->size()) {
       ++sub.dropped;
       continue;

@@ -29,6 +29,12 @@ class FrameStream : public render::FrameConsumer {
   // The camera ops. Loop thread. Returns false and sets code/message for an error reply.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
               std::string* message);
+  // camera_blackout {camera, duration_s}: the camera's frames with a stamp in [now_s, now_s + duration)
+  // are black (a blinded or failed sensor: frames keep coming, showing nothing); 0 ends a blackout.
+  // Loop thread. Returns false and sets code/message for an error reply.
+  bool blackout(const Json& request, double now_s, Json* result, std::string* code, std::string* message);
+  // Ends every blackout (a reset: sim time restarts). Loop thread.
+  void clear_blackouts();
   void on_disconnect(uint64_t conn);                // Loop thread.
   bool has_subscriptions(uint64_t conn) const;      // Loop thread.
 
@@ -62,6 +68,7 @@ class FrameStream : public render::FrameConsumer {
 
   std::mutex mutex_;
   std::map<std::pair<int, int64_t>, std::vector<Pending>> pending_;  // (camera, frame) -> takers
+  std::map<int, std::pair<int64_t, int64_t>> blackouts_;  // camera -> [from, until) stamp_us, guarded by mutex_
 };
 
 }  // namespace uavsim::server::api

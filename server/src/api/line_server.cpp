@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
@@ -17,15 +18,20 @@ namespace uavsim::server::api {
 
 namespace {
 
-constexpr size_t kMaxPendingOutput = 256u << 20;  // a client that reads nothing is dropped past this
+constexpr double kOverloadGrace_s = 5.0;  // an overloaded peer that reads nothing is closed after this
 
 void set_nonblocking(int fd) { fcntl(fd, F_SETFL, fcntl(fd, F_GETFL, 0) | O_NONBLOCK); }
 
+double steady_now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+int open_spare_fd() { return open("/dev/null", O_RDONLY | O_CLOEXEC); }
+
 }  // namespace
 
-LineServer::LineServer(const std::string& bind_address, uint16_t port, size_t max_line_bytes,
-                       Callbacks callbacks)
-    : callbacks_(std::move(callbacks)), max_line_bytes_(max_line_bytes) {
+LineServer::LineServer(const std::string& bind_address, uint16_t port, Limits limits, Callbacks callbacks)
+    : callbacks_(std::move(callbacks)), limits_(std::move(limits)), max_line_bytes_(limits_.max_line_bytes) {
   const std::string where = bind_address + ":" + std::to_string(port);
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
@@ -49,12 +55,14 @@ LineServer::LineServer(const std::string& bind_address, uint16_t port, size_t ma
   if (pipe(wake_fds_) != 0) throw std::runtime_error("sim API: cannot create the wake-up pipe");
   set_nonblocking(wake_fds_[0]);
   set_nonblocking(wake_fds_[1]);
+  spare_fd_ = open_spare_fd();
 }
 
 LineServer::~LineServer() {
   stop();
   for (auto& [id, c] : conns_) close(c.fd);
   if (listen_fd_ >= 0) close(listen_fd_);
+  if (spare_fd_ >= 0) close(spare_fd_);
   close(wake_fds_[0]);
   close(wake_fds_[1]);
 }
@@ -72,15 +80,51 @@ void LineServer::wake() {
   [[maybe_unused]] ssize_t n = write(wake_fds_[1], &b, 1);  // full pipe: a wake-up is pending anyway
 }
 
+void LineServer::mark_overloaded(Conn& c) {
+  if (c.overloaded) return;
+  c.overloaded = true;
+  c.overloaded_at_s = steady_now_s();
+  c.out += limits_.overload_line;
+  total_pending_ += limits_.overload_line.size();
+  overload_drops_.fetch_add(1);
+}
+
 bool LineServer::send(uint64_t conn, const std::string& data) {
   {
     std::lock_guard<std::mutex> lock(out_mutex_);
     auto it = conns_.find(conn);
     if (it == conns_.end()) return false;
-    it->second.out += data;
+    Conn& c = it->second;
+    if (c.overloaded) return false;
+    // past its own cap or the global budget: the overload line instead, then the connection goes
+    const size_t pending = c.out.size() + c.unsent;
+    if (pending + data.size() > limits_.max_pending_bytes ||
+        total_pending_ + data.size() > limits_.max_total_pending_bytes) {
+      mark_overloaded(c);
+    } else {
+      c.out += data;
+      total_pending_ += data.size();
+    }
   }
   wake();
   return true;
+}
+
+void LineServer::close_when_sent(uint64_t conn) {
+  {
+    std::lock_guard<std::mutex> lock(out_mutex_);
+    auto it = conns_.find(conn);
+    if (it == conns_.end()) return;
+    it->second.close_requested = true;
+  }
+  wake();
+}
+
+bool LineServer::finished(const Conn& c) {
+  std::lock_guard<std::mutex> lock(out_mutex_);
+  const bool all_sent = c.out.empty() && c.sent >= c.sending.size();
+  if (c.overloaded) return all_sent || steady_now_s() - c.overloaded_at_s > kOverloadGrace_s;
+  return c.close_requested && c.read_closed && all_sent;
 }
 
 size_t LineServer::pending_bytes(uint64_t conn) {
@@ -91,27 +135,70 @@ size_t LineServer::pending_bytes(uint64_t conn) {
 
 void LineServer::accept_all() {
   for (;;) {
-    const int fd = accept(listen_fd_, nullptr, nullptr);
-    if (fd < 0) return;
-    set_nonblocking(fd);
+    sockaddr_in peer{};
+    socklen_t peer_len = sizeof(peer);
+    const int fd = accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &peer_len, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0) {
+      if ((errno == EMFILE || errno == ENFILE) && spare_fd_ >= 0) {
+        // out of descriptors: the waiting connection would keep the listener readable and this thread
+        // spinning; give up the spare to accept it, close it at once, and take the spare back
+        fd_exhausted_accepts_.fetch_add(1);
+        close(spare_fd_);
+        const int doomed = accept(listen_fd_, nullptr, nullptr);
+        if (doomed >= 0) close(doomed);
+        spare_fd_ = open_spare_fd();
+        continue;
+      }
+      return;
+    }
+    char ip[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof(ip));
     const int one = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+    {
+      std::lock_guard<std::mutex> lock(out_mutex_);
+      if (conns_.size() >= limits_.max_connections) {
+        // over the connection limit: say why, then close (a best-effort write into a fresh socket)
+        overload_drops_.fetch_add(1);
+        [[maybe_unused]] const ssize_t n =
+            ::send(fd, limits_.overload_line.data(), limits_.overload_line.size(), MSG_NOSIGNAL);
+        close(fd);
+        continue;
+      }
+    }
     uint64_t id = 0;
     {
       std::lock_guard<std::mutex> lock(out_mutex_);
       id = next_id_++;
       conns_[id].fd = fd;
+      conns_[id].peer = ip;
     }
     if (callbacks_.on_connect) callbacks_.on_connect(id);
   }
 }
 
-bool LineServer::read_conn(uint64_t id, Conn& c) {
+std::string LineServer::peer_address(uint64_t conn) {
+  std::lock_guard<std::mutex> lock(out_mutex_);
+  auto it = conns_.find(conn);
+  return it == conns_.end() ? std::string() : it->second.peer;
+}
+
+LineServer::ReadResult LineServer::read_conn(uint64_t id, Conn& c) {
   char buf[65536];
   for (;;) {
     const ssize_t n = recv(c.fd, buf, sizeof(buf), 0);
-    if (n == 0) return false;
-    if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+    if (n == 0) {
+      // EOF: an unterminated last line is still a request
+      if (!c.discarding && !c.in.empty() && callbacks_.on_line) {
+        if (c.in.back() == '\r') c.in.pop_back();
+        callbacks_.on_line(id, std::move(c.in));
+      }
+      c.in.clear();
+      return ReadResult::kEof;
+    }
+    if (n < 0) {
+      return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? ReadResult::kOpen : ReadResult::kFailed;
+    }
     size_t start = 0;
     for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
       if (buf[i] != '\n') continue;
@@ -155,6 +242,7 @@ bool LineServer::write_conn(Conn& c) {
     c.sent += static_cast<size_t>(n);
     std::lock_guard<std::mutex> lock(out_mutex_);
     c.unsent = c.sending.size() - c.sent;
+    total_pending_ -= static_cast<size_t>(n);
   }
 }
 
@@ -170,8 +258,10 @@ void LineServer::run() {
     {
       std::lock_guard<std::mutex> lock(out_mutex_);
       for (auto& [id, c] : conns_) {
+        // no POLLIN after EOF (it would stay readable) or once overloaded (its requests are not served)
         const bool pending = !c.out.empty() || c.sent < c.sending.size();
-        fds.push_back({c.fd, static_cast<short>(POLLIN | (pending ? POLLOUT : 0)), 0});
+        const bool reading = !c.read_closed && !c.overloaded;
+        fds.push_back({c.fd, static_cast<short>((reading ? POLLIN : 0) | (pending ? POLLOUT : 0)), 0});
         ids.push_back(id);
       }
     }
@@ -194,26 +284,38 @@ void LineServer::run() {
         c = &it->second;  // stable: only this thread erases
       }
       bool ok = true;
-      if (ev & (POLLIN | POLLHUP | POLLERR)) ok = read_conn(ids[k], *c);
-      if (ok) ok = write_conn(*c) && pending_bytes(ids[k]) < kMaxPendingOutput;
+      if (!c->read_closed && (ev & (POLLIN | POLLHUP | POLLERR))) {
+        const ReadResult r = read_conn(ids[k], *c);
+        ok = r != ReadResult::kFailed;
+        if (r == ReadResult::kEof) {
+          // the owner answers what it got, then calls close_when_sent
+          c->read_closed = true;
+          if (callbacks_.on_disconnect) callbacks_.on_disconnect(ids[k]);
+        }
+      }
+      if (ok && (ev & (POLLHUP | POLLERR)) && c->read_closed) ok = false;  // nobody left to write to
+      if (ok) ok = write_conn(*c);
       if (!ok) closed.push_back(ids[k]);
     }
-    // flush output queued since the poll (replies to what was just read)
+    // flush output queued since the poll (replies to what was just read), then close what is done
     // (conns_ changes membership on this thread only: iterating it here needs no lock)
     for (auto& [id, c] : conns_) {
-      if (!write_conn(c)) closed.push_back(id);
+      if (!write_conn(c) || finished(c)) closed.push_back(id);
     }
     for (uint64_t id : closed) {
       int fd = -1;
+      bool reported = false;
       {
         std::lock_guard<std::mutex> lock(out_mutex_);
         auto it = conns_.find(id);
         if (it == conns_.end()) continue;
         fd = it->second.fd;
+        reported = it->second.read_closed;
+        total_pending_ -= it->second.out.size() + it->second.unsent;
         conns_.erase(it);
       }
       close(fd);
-      if (callbacks_.on_disconnect) callbacks_.on_disconnect(id);
+      if (!reported && callbacks_.on_disconnect) callbacks_.on_disconnect(id);
     }
   }
 }

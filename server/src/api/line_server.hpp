@@ -2,6 +2,17 @@
 // Lines arrive through callbacks on the I/O thread; replies are queued from any thread with send().
 // A line longer than max_line_bytes is reported once and skipped up to its newline; the connection
 // stays open. Knows nothing of JSON or the simulation.
+//
+// Limits: at most max_connections at once (one more is sent the overload line and closed); a
+// connection's unsent output is capped at max_pending_bytes, all connections' together at
+// max_total_pending_bytes: a connection that would pass either is sent the overload line, reads nothing
+// more and is closed once that is written (or after kOverloadGrace_s if it does not read). When the
+// process is out of file descriptors, a spare one is given up to accept and close the waiting
+// connection, so the listener never spins.
+//
+// A peer that shuts down its sending side (EOF) has its last line delivered and on_disconnect called,
+// but keeps receiving until the owner calls close_when_sent(): replies to its last requests still
+// reach it.
 #pragma once
 
 #include <atomic>
@@ -25,7 +36,14 @@ class LineServer {
 
   // Binds and listens on bind_address:port (port 0: an ephemeral port). Throws std::runtime_error
   // naming the address and port if that fails (a startup error). Callbacks run on the I/O thread.
-  LineServer(const std::string& bind_address, uint16_t port, size_t max_line_bytes, Callbacks callbacks);
+  struct Limits {
+    size_t max_line_bytes = 1u << 20;
+    size_t max_connections = 64;
+    size_t max_pending_bytes = 64u << 20;
+    size_t max_total_pending_bytes = 256u << 20;
+    std::string overload_line;  // sent before an overload drop (with its newline); empty: none
+  };
+  LineServer(const std::string& bind_address, uint16_t port, Limits limits, Callbacks callbacks);
   ~LineServer();  // stops the I/O thread and closes every socket
   LineServer(const LineServer&) = delete;
   LineServer& operator=(const LineServer&) = delete;
@@ -34,15 +52,25 @@ class LineServer {
   void stop();   // Thread-safe (not from a callback): stops the I/O thread and closes the sockets.
   uint16_t port() const { return port_; }
 
-  // Queues data for a connection. Thread-safe. False if the connection is gone.
+  // Queues data for a connection. Thread-safe. False if the connection is gone or overloaded (the data
+  // is dropped and the connection closed after the overload line).
   bool send(uint64_t conn, const std::string& data);
+  // Closes a connection once everything queued for it has been written (after its EOF). Thread-safe.
+  void close_when_sent(uint64_t conn);
+  // Connections refused or dropped for the limits above, and accepts that failed for want of file
+  // descriptors. Thread-safe.
+  uint64_t overload_drops() const { return overload_drops_.load(); }
+  uint64_t fd_exhausted_accepts() const { return fd_exhausted_accepts_.load(); }
   // Bytes queued for a connection and not yet written to its socket (0 if it is gone). Thread-safe.
   size_t pending_bytes(uint64_t conn);
+  // The IPv4 address of a connection's peer ("" if it is gone). Thread-safe.
+  std::string peer_address(uint64_t conn);
 
  private:
   struct Conn {
     int fd = -1;
     std::string in;
+    std::string peer;         // the peer's IPv4 address
     bool discarding = false;  // skipping the rest of an over-long line
     std::string out;          // guarded by out_mutex_
     // being written, I/O thread only: whole batches are swapped out of `out` and written from an offset,
@@ -51,15 +79,27 @@ class LineServer {
     std::string sending;
     size_t sent = 0;
     size_t unsent = 0;        // sending.size() - sent, for pending_bytes(); guarded by out_mutex_
+    bool read_closed = false;      // EOF seen, on_disconnect called; I/O thread only
+    bool close_requested = false;  // close_when_sent(); guarded by out_mutex_
+    bool overloaded = false;       // overload line queued, closing; guarded by out_mutex_
+    double overloaded_at_s = 0.0;
   };
+  enum class ReadResult { kOpen, kEof, kFailed };
   void run();
   void wake();
   void accept_all();
-  bool read_conn(uint64_t id, Conn& c);   // false: closed
+  ReadResult read_conn(uint64_t id, Conn& c);
   bool write_conn(Conn& c);               // false: failed; takes out_mutex_ itself
+  void mark_overloaded(Conn& c);          // out_mutex_ held
+  bool finished(const Conn& c);           // takes out_mutex_ itself: closing and all written (or too late)
 
   Callbacks callbacks_;
+  Limits limits_;
   size_t max_line_bytes_;
+  size_t total_pending_ = 0;           // sum of every Conn's out + unsent; guarded by out_mutex_
+  int spare_fd_ = -1;                  // given up to accept (and close) when out of file descriptors
+  std::atomic<uint64_t> overload_drops_{0};
+  std::atomic<uint64_t> fd_exhausted_accepts_{0};
   int listen_fd_ = -1;
   int wake_fds_[2] = {-1, -1};
   uint16_t port_ = 0;

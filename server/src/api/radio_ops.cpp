@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "api/vehicle_arg.hpp"
+
 namespace uavsim::server::api {
 
 namespace {
@@ -80,21 +82,7 @@ std::vector<std::string> RadioOps::ops() const {
 
 std::optional<size_t> RadioOps::vehicle(const Json& value, std::string* code,
                                         std::string* message) const {
-  if (value.is_number_integer() || value.is_number_unsigned()) {
-    const int64_t i = value.get<int64_t>();
-    if (i >= 0 && static_cast<size_t>(i) < sim_.vehicle_count()) return static_cast<size_t>(i);
-  } else if (value.is_string()) {
-    for (size_t i = 0; i < sim_.vehicle_count(); ++i) {
-      if (sim_.vehicle_name(i) == value.get<std::string>()) return i;
-    }
-  } else {
-    set_error(code, message, "bad_field", "a vehicle is an index or a name");
-    return std::nullopt;
-  }
-  set_error(
-      code, message, "unknown_vehicle",
-      "no vehicle " + value.dump() + " (" + std::to_string(sim_.vehicle_count()) + " vehicles)");
-  return std::nullopt;
+  return vehicle_index(sim_, value, code, message);
 }
 
 RadioOps::Json RadioOps::config_json() const {

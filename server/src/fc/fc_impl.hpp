@@ -85,6 +85,8 @@ struct FlightController::Impl {
   void set_home(const Eigen::Vector3d& home);
   double now() const { return last_time_s_; }
   NavLimits nav_limits() const;
+  // the pilot's sticks if fresh (RC_OVERRIDE_TIME) in a mode that reads them
+  std::optional<PilotInput> pilot() const;
 
   // --- modes.cpp ---
   bool enter_mode(Mode mode, bool from_failsafe);
@@ -98,6 +100,11 @@ struct FlightController::Impl {
   void start_rtl();
   void run_guided(double dt_s);
   void run_auto(double dt_s);
+  bool pilot_takeoff();                       // armed on the ground, throttle up in a pilot mode
+  void run_pilot_lean(const PilotInput& in);  // STABILIZE, ALT_HOLD: attitude from the sticks
+  void run_pilot_climb(const PilotInput& in, double dt_s);    // ALT_HOLD, LOITER: the z setpoint
+  bool run_pilot_loiter(const PilotInput& in, double dt_s);  // LOITER: false when the sticks are centred
+  double pilot_thrust_n(double throttle) const;
   void start_mission_item(int seq);
   void complete_mission_item();
   void face_destination();
@@ -182,6 +189,11 @@ struct FlightController::Impl {
   bool guided_new_ = false;     // a target arrived since the last step
   bool guided_reinit_ = false;  // ... and it switched the guided sub-mode
   bool nav_active_ = false;  // the carrot drives the position setpoint
+
+  // the pilot (RC overrides)
+  PilotInput pilot_;
+  std::optional<double> pilot_time_s_;  // when the sticks were last set
+  bool pilot_flying_xy_ = false;        // LOITER: the sticks moved the vehicle (hold where it stops)
   Eigen::Vector3d hold_position_enu_m_ = Eigen::Vector3d::Zero();
 
   // BRAKE, LAND, RTL

@@ -85,6 +85,15 @@ struct AttitudeTarget {
   double thrust = 0.5;  // normalised collective thrust [0, 1]; 0.5 ~ climb rate 0 as in ArduCopter
 };
 
+// A pilot's sticks (RC_CHANNELS_OVERRIDE, MANUAL_CONTROL), normalised: roll right, pitch forward (nose
+// down) and yaw clockwise (seen from above) positive in [-1, 1]; throttle in [0, 1], 0.5 at mid stick.
+struct PilotInput {
+  double roll = 0.0;
+  double pitch = 0.0;
+  double yaw = 0.0;
+  double throttle = 0.5;
+};
+
 enum class LandedState { kOnGround, kTakeoff, kInAir, kLanding };
 
 // Messages for the GCS (STATUSTEXT), with MAV_SEVERITY numbers.

@@ -412,6 +412,28 @@ CommandResult FlightController::set_attitude_target(const AttitudeTarget& t) {
   return CommandResult::kAccepted;
 }
 
+CommandResult FlightController::set_pilot_input(const PilotInput& in, double time_s) {
+  Impl& s = *impl_;
+  const bool finite_in = std::isfinite(in.roll) && std::isfinite(in.pitch) && std::isfinite(in.yaw) &&
+                         std::isfinite(in.throttle) && std::isfinite(time_s);
+  if (!finite_in || std::abs(in.roll) > 1.0 || std::abs(in.pitch) > 1.0 || std::abs(in.yaw) > 1.0 ||
+      in.throttle < 0.0 || in.throttle > 1.0) {
+    return CommandResult::kInvalid;
+  }
+  if (s.params_.values().rc_override_time == 0.0) return CommandResult::kDenied;
+  s.pilot_ = in;
+  s.pilot_time_s_ = time_s;
+  return CommandResult::kAccepted;
+}
+
+std::optional<PilotInput> FlightController::Impl::pilot() const {
+  if (mode_ != Mode::kStabilize && mode_ != Mode::kAltHold && mode_ != Mode::kLoiter) return std::nullopt;
+  const double timeout = params_.values().rc_override_time;
+  if (!pilot_time_s_ || timeout == 0.0) return std::nullopt;
+  if (timeout > 0.0 && now() - *pilot_time_s_ > timeout) return std::nullopt;
+  return pilot_;
+}
+
 CommandResult FlightController::condition_yaw(double angle_deg, double rate_deg_s, int direction,
                                               bool relative) {
   Impl& s = *impl_;

@@ -46,6 +46,13 @@ class FlightController {
   // (-1 ccw, 0 shortest, +1 cw), relative to the current heading or absolute.
   CommandResult condition_yaw(double angle_deg, double rate_deg_s, int direction, bool relative);
   CommandResult change_speed(int speed_type, double speed_m_s);  // MAV_CMD_DO_CHANGE_SPEED
+  // Pilot sticks, as ArduCopter reads its RC channels: STABILIZE leans by them (up to ANGLE_MAX) with
+  // throttle as collective (mid stick = hover); ALT_HOLD leans too, with throttle as climb rate;
+  // LOITER takes them as horizontal velocity (up to WPNAV_SPEED) and climb rate, and holds position when
+  // they are centred. Yaw stick: yaw rate up to ATC_RATE_Y_MAX. Throttle above mid stick takes off in
+  // these modes. Input older than RC_OVERRIDE_TIME seconds counts as centred sticks and mid throttle
+  // (0: ignored; -1: never expires). kInvalid for non-finite or out-of-range values.
+  CommandResult set_pilot_input(const PilotInput& input, double time_s);
   CommandResult land();  // = set_mode(kLand)
   CommandResult rtl();   // = set_mode(kRtl)
 

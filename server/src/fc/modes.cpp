@@ -75,6 +75,7 @@ void FlightController::Impl::init_mode_state() {
   attitude_climb_ = false;
   brake_holding_ = false;
   guided_sub_ = GuidedSub::kHold;
+  pilot_flying_xy_ = false;
   hold_position_enu_m_ = stopping_point();
   switch (mode_) {
     case Mode::kStabilize:
@@ -212,8 +213,15 @@ void FlightController::Impl::run_rtl(double dt_s) {
 void FlightController::Impl::run_mode(double dt_s) {
   const EstimatedState& est = estimator_.state();
   const ParamValues& p = params_.values();
-  // on the ground and not taking off: idle, and auto-disarm after DISARM_DELAY
-  if (landed_ && !takeoff_active_) {
+  // the pilot's yaw stick turns the vehicle at a rate in the modes that read the sticks
+  const std::optional<PilotInput> in = pilot();
+  if (mode_ == Mode::kStabilize || mode_ == Mode::kAltHold || mode_ == Mode::kLoiter) {
+    yaw_rate_mode_ = in.has_value();
+    yaw_rate_cmd_rad_s_ = in ? -in->yaw * params_.derived().rate_y_max_rad_s : 0.0;  // stick right: clockwise
+  }
+  // on the ground and not taking off: idle, and auto-disarm after DISARM_DELAY (unless the pilot's
+  // throttle takes off)
+  if (landed_ && !takeoff_active_ && !pilot_takeoff()) {
     control_ = ControlKind::kIdle;
     nav_active_ = false;
     if (mode_ == Mode::kLand || mode_ == Mode::kRtl) {
@@ -229,13 +237,29 @@ void FlightController::Impl::run_mode(double dt_s) {
     case Mode::kStabilize: {
       control_ = ControlKind::kAttitude;
       attitude_climb_ = false;
-      q_attitude_target_ = attitude_from_thrust(Eigen::Vector3d::UnitZ(), yaw_cmd_rad_, 0.0);
+      if (in) {
+        // the sticks lean the vehicle; the throttle is the collective
+        run_pilot_lean(*in);
+        fixed_thrust_n_ = pilot_thrust_n(in->throttle);
+      } else {
+        q_attitude_target_ = attitude_from_thrust(Eigen::Vector3d::UnitZ(), yaw_cmd_rad_, 0.0);
+      }
       break;
     }
     case Mode::kAltHold: {
       if (takeoff_active_) {
         run_nav(dt_s, nav_limits());
         hold_position_enu_m_ = nav_.destination();
+        break;
+      }
+      if (in) {
+        // the sticks lean the vehicle; the throttle is a climb rate
+        run_pilot_lean(*in);
+        run_pilot_climb(*in, dt_s);
+        sp_.use_pos_xy = false;
+        sp_.use_vel_xy = false;
+        control_ = ControlKind::kAttitude;
+        attitude_climb_ = true;
         break;
       }
       // hold altitude; no horizontal control: level attitude
@@ -252,6 +276,7 @@ void FlightController::Impl::run_mode(double dt_s) {
       run_guided(dt_s);
       break;
     case Mode::kLoiter:
+      if (in && run_pilot_loiter(*in, dt_s)) break;
       run_nav(dt_s, nav_limits());
       break;
     case Mode::kBrake: {
@@ -279,6 +304,120 @@ void FlightController::Impl::run_mode(double dt_s) {
       run_auto(dt_s);
       break;
   }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// the pilot's sticks (RC overrides) in STABILIZE, ALT_HOLD and LOITER, as ArduCopter reads them
+
+namespace {
+// ArduCopter's THR_DZ (100 of the 1000 us throttle range) and a stick dead zone like its RCn_DZ
+constexpr double kThrottleDeadzone = 0.1;
+constexpr double kStickDeadzone = 0.05;
+
+// throttle => climb rate (m/s): 0 inside the dead zone around mid stick, PILOT_SPEED_UP/DN at the ends
+double pilot_climb_rate(double throttle, const DerivedParams& d) {
+  if (throttle > 0.5 + kThrottleDeadzone) {
+    return (throttle - 0.5 - kThrottleDeadzone) / (0.5 - kThrottleDeadzone) * d.pilot_speed_up_m_s;
+  }
+  if (throttle < 0.5 - kThrottleDeadzone) {
+    return (throttle - 0.5 + kThrottleDeadzone) / (0.5 - kThrottleDeadzone) * d.pilot_speed_dn_m_s;
+  }
+  return 0.0;
+}
+}  // namespace
+
+bool FlightController::Impl::pilot_takeoff() {
+  const std::optional<PilotInput> in = pilot();
+  if (!armed_ || !in || in->throttle <= 0.5 + kThrottleDeadzone) return false;
+  if (mode_ == Mode::kLoiter && !estimator_.position_ok()) return false;
+  landed_ = false;
+  land_detect_s_ = 0.0;
+  pos_ctrl_.reset();
+  att_ctrl_.reset();
+  hold_position_enu_m_ = estimator_.state().position_enu_m;
+  sp_.position_enu_m = hold_position_enu_m_;
+  sp_.velocity_enu_m_s.setZero();
+  pilot_flying_xy_ = false;
+  status(6, "Takeoff");
+  return true;
+}
+
+double FlightController::Impl::pilot_thrust_n(double throttle) const {
+  // ArduCopter's throttle curve in STABILIZE: mid stick hovers (MOT_THST_HOVER), full stick is full thrust
+  const double max = active_mixer().max_total_thrust_n();
+  if (throttle <= 0.5) return hover_thrust_n_ * throttle / 0.5;
+  return hover_thrust_n_ + (max - hover_thrust_n_) * (throttle - 0.5) / 0.5;
+}
+
+void FlightController::Impl::run_pilot_lean(const PilotInput& in) {
+  // lean angles up to ANGLE_MAX in any direction (ArduCopter's get_pilot_desired_lean_angles)
+  const double max = params_.derived().angle_max_rad;
+  double roll = in.roll * max;
+  double pitch = in.pitch * max;
+  const double total = std::hypot(roll, pitch);
+  if (total > max) {
+    roll *= max / total;
+    pitch *= max / total;
+  }
+  // FLU body: +roll about x lowers the right side, +pitch about y (left) lowers the nose
+  q_attitude_target_ = Eigen::AngleAxisd(yaw_cmd_rad_, Eigen::Vector3d::UnitZ()) *
+                       Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                       Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+  nav_active_ = false;
+}
+
+void FlightController::Impl::run_pilot_climb(const PilotInput& in, double dt_s) {
+  (void)dt_s;
+  // the throttle's climb rate, or hold the altitude where the pilot left it
+  const double climb = pilot_climb_rate(in.throttle, params_.derived());
+  sp_.velocity_enu_m_s.z() = climb;
+  sp_.accel_enu_m_s2.z() = 0.0;
+  if (climb != 0.0) {
+    hold_position_enu_m_.z() = estimator_.state().position_enu_m.z();
+    sp_.use_pos_z = false;
+  } else {
+    sp_.position_enu_m.z() = hold_position_enu_m_.z();
+    sp_.use_pos_z = true;
+  }
+}
+
+bool FlightController::Impl::run_pilot_loiter(const PilotInput& in, double dt_s) {
+  const DerivedParams& d = params_.derived();
+  const EstimatedState& est = estimator_.state();
+  const bool moving = std::abs(in.roll) > kStickDeadzone || std::abs(in.pitch) > kStickDeadzone ||
+                      pilot_climb_rate(in.throttle, d) != 0.0;
+  if (!moving) {
+    // sticks centred after flying: brake to the stopping point and hold there
+    if (pilot_flying_xy_) {
+      pilot_flying_xy_ = false;
+      start_hold();
+    }
+    return false;
+  }
+  if (!pilot_flying_xy_) {
+    sp_.velocity_enu_m_s = est.velocity_enu_m_s;
+    hold_position_enu_m_.z() = est.position_enu_m.z();
+  }
+  pilot_flying_xy_ = true;
+  nav_active_ = false;
+  // the sticks are a horizontal velocity in the vehicle's heading frame, up to WPNAV_SPEED, reached at
+  // WPNAV_ACCEL (ArduCopter: LOIT_SPEED, LOIT_ACC_MAX)
+  const double yaw = estimator_.yaw_enu_rad();
+  const Eigen::Vector2d forward(std::cos(yaw), std::sin(yaw));
+  const Eigen::Vector2d right(std::sin(yaw), -std::cos(yaw));
+  const Eigen::Vector2d want = (in.pitch * forward + in.roll * right) * d.wp_speed_m_s;
+  Eigen::Vector2d dv = want - sp_.velocity_enu_m_s.head<2>();
+  const double dv_max = d.wp_accel_m_s2 * dt_s;
+  if (dv.norm() > dv_max) dv *= dv_max / dv.norm();
+  sp_.velocity_enu_m_s.head<2>() += dv;
+  sp_.accel_enu_m_s2.head<2>() = dv / dt_s;
+  sp_.position_enu_m.head<2>() = est.position_enu_m.head<2>();
+  sp_.use_pos_xy = false;
+  sp_.use_vel_xy = true;
+  run_pilot_climb(in, dt_s);
+  control_ = ControlKind::kPosition;
+  attitude_climb_ = false;
+  return true;
 }
 
 void FlightController::Impl::run_guided(double dt_s) {

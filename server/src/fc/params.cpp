@@ -87,6 +87,7 @@ constexpr ParamDef kTable[] = {
     {"SIM_MAG_SD", &ParamValues::sim_mag_sd, 0, 1},
     {"SIM_GYRO_SD", &ParamValues::sim_gyro_sd, 0, 1},
     {"SIM_ACCEL_SD", &ParamValues::sim_accel_sd, 0, 10},
+    {"RC_OVERRIDE_TIME", &ParamValues::rc_override_time, -1, 120},
 };
 
 const ParamDef* find(std::string_view name) {
@@ -97,6 +98,14 @@ const ParamDef* find(std::string_view name) {
 }
 
 }  // namespace
+
+std::vector<ParamInfo> param_info(double battery_capacity_mah) {
+  const ParamTable defaults(battery_capacity_mah);
+  std::vector<ParamInfo> out;
+  out.reserve(std::size(kTable));
+  for (const ParamDef& def : kTable) out.push_back({def.name, def.min, def.max, *defaults.get(def.name)});
+  return out;
+}
 
 ParamTable::ParamTable(double battery_capacity_mah) {
   if (std::isfinite(battery_capacity_mah) && battery_capacity_mah > 0.0) {

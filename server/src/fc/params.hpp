@@ -83,6 +83,7 @@ struct ParamValues {
   double mot_spin_arm = 0.10;      // motor command while armed on the ground
   double guid_timeout = 3.0;       // s, velocity/accel/attitude targets in GUIDED
   double sysid_thismav = 1.0;
+  double rc_override_time = 3.0;   // s an RC override lasts (ArduPilot RC_OVERRIDE_TIME; 0 off, -1 forever)
   // sensors (not ArduPilot parameters: the simulated hardware's noise, changeable for experiments)
   double sim_gps_hz = 10.0;
   double sim_gps_pos_h_sd = 0.05;  // m
@@ -122,6 +123,17 @@ struct DerivedParams {
   double pilot_speed_up_m_s = 0.0;
   double pilot_speed_dn_m_s = 0.0;
 };
+
+// One parameter as the documentation lists it: name, accepted range, and its default on a vehicle whose
+// battery holds battery_capacity_mah (BATT_CAPACITY and BATT_LOW_MAH follow the airframe).
+struct ParamInfo {
+  std::string name;
+  double min = 0.0;
+  double max = 0.0;
+  double default_value = 0.0;
+};
+// Every parameter in table order (the MAVLink param_index). Thread-safe (pure).
+std::vector<ParamInfo> param_info(double battery_capacity_mah);
 
 class ParamTable {
  public:

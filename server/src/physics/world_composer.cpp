@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "assets/mesh_convert.hpp"
+#include "mavlink/codec/sha256.hpp"
 
 namespace uavsim::server::physics {
 
@@ -31,11 +32,74 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// bounds on what a world file may ask for; each error says which and why
+constexpr double kMaxCoordinate_m = 1e5;  // MuJoCo resets (t = 0, forever) on positions past 1e10
+constexpr double kMaxYaw_deg = 360.0;
+constexpr double kMaxSpacing_m = 1e4;
+// MuJoCo 2.2 sizes its constraint buffers densely (njmax^2 doubles) and fails to allocate the
+// simulation state for a few thousand vehicles; 1000 is the most the benchmarks run
+constexpr long kMaxVehicles = 1000;
+// includes: total files and bytes over the whole world, so that a fan-out (each file including the
+// next several times) fails at once instead of growing exponentially
+constexpr int kMaxIncludedFiles = 256;
+constexpr std::uintmax_t kMaxIncludedBytes = 64u << 20;
+
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what) {
   std::ostringstream s;
   s << file << ":" << line << ": " << what;
   throw WorldError(s.str());
 }
+
+// Strict attribute parsing: a present attribute must be entirely a finite number in range ("nan",
+// "1e300", "3x" and "" are errors naming the file and line); an absent one takes the fallback.
+double number_attr(const XMLElement* e, const char* attr, double fallback, double lo, double hi,
+                   const std::string& file) {
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  while (end != nullptr && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  if (end == text || *end != '\0' || !std::isfinite(v) || v < lo || v > hi) {
+    std::ostringstream s;
+    s << attr << "=\"" << text << "\" must be a number in [" << lo << ", " << hi << "]";
+    fail(file, e->GetLineNum(), s.str());
+  }
+  return v;
+}
+
+long integer_attr(const XMLElement* e, const char* attr, long fallback, long lo, long hi,
+                  const std::string& file) {
+  const double v = number_attr(e, attr, static_cast<double>(fallback), static_cast<double>(lo),
+                               static_cast<double>(hi), file);
+  if (v != std::trunc(v)) fail(file, e->GetLineNum(), std::string(attr) + " must be a whole number");
+  return static_cast<long>(v);
+}
+
+// "x y z": exactly three finite numbers of at most kMaxCoordinate_m; absent: zeros
+void vec3_attr(const XMLElement* e, const char* attr, double out[3], const std::string& file) {
+  out[0] = out[1] = out[2] = 0.0;
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return;
+  const char* p = text;
+  for (int i = 0; i < 3; ++i) {
+    char* end = nullptr;
+    out[i] = std::strtod(p, &end);
+    if (end == p || !std::isfinite(out[i]) || std::abs(out[i]) > kMaxCoordinate_m) {
+      std::ostringstream s;
+      s << attr << "=\"" << text << "\" must be three numbers of at most " << kMaxCoordinate_m << " m";
+      fail(file, e->GetLineNum(), s.str());
+    }
+    p = end;
+  }
+  while (std::isspace(static_cast<unsigned char>(*p))) ++p;
+  if (*p != '\0') fail(file, e->GetLineNum(), std::string(attr) + "=\"" + text + "\" has more than three numbers");
+}
+
+// the composition's running total of included files and bytes
+struct IncludeBudget {
+  int files = 0;
+  std::uintmax_t bytes = 0;
+};
 
 std::unique_ptr<XMLDocument> load_xml(const std::string& path) {
   auto doc = std::make_unique<XMLDocument>();
@@ -72,7 +136,7 @@ std::string compiler_attr(XMLElement* root, const char* attr, const char* fallba
 
 // make every asset file path absolute: meshes and height fields resolve against meshdir, textures
 // against texturedir, both relative to the file that declares them (MuJoCo's rules)
-void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir) {
+void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir, const std::string& xml_file) {
   const fs::path mesh_dir = base_dir / compiler_attr(root, "meshdir", "");
   const fs::path texture_dir = base_dir / compiler_attr(root, "texturedir", "");
   for (XMLElement* asset = root->FirstChildElement("asset"); asset;
@@ -82,7 +146,10 @@ void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir) {
       if (file == nullptr || fs::path(file).is_absolute()) continue;
       const std::string kind = e->Name();
       const fs::path dir = (kind == "texture") ? texture_dir : mesh_dir;
-      e->SetAttribute("file", fs::weakly_canonical(dir / file).string().c_str());
+      std::error_code ec;
+      const fs::path absolute = fs::weakly_canonical(dir / file, ec);
+      if (ec) fail(xml_file, e->GetLineNum(), "asset file '" + std::string(file) + "': " + ec.message());
+      e->SetAttribute("file", absolute.string().c_str());
     }
   }
   for (XMLElement* c = root->FirstChildElement("compiler"); c; c = c->NextSiblingElement("compiler")) {
@@ -93,23 +160,34 @@ void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir) {
 
 // replace each <include file=.../> with the children of the included file's <mujoco>, recursively
 void inline_includes(XMLDocument& doc, XMLElement* element, const fs::path& base_dir,
-                     const std::string& file, int depth) {
+                     const std::string& file, int depth, IncludeBudget* budget) {
   if (depth > 16) fail(file, element->GetLineNum(), "includes nested more than 16 deep");
   for (XMLElement* e = element->FirstChildElement(); e;) {
     XMLElement* next = e->NextSiblingElement();
     if (std::string(e->Name()) != "include") {
-      inline_includes(doc, e, base_dir, file, depth);
+      inline_includes(doc, e, base_dir, file, depth, budget);
       e = next;
       continue;
     }
     const char* inc = e->Attribute("file");
     if (inc == nullptr) fail(file, e->GetLineNum(), "<include> without file=");
     const fs::path inc_path = base_dir / inc;
-    if (!fs::exists(inc_path)) fail(file, e->GetLineNum(), "included file not found: " + inc_path.string());
+    std::error_code ec;
+    const bool exists = fs::exists(inc_path, ec);
+    if (ec) fail(file, e->GetLineNum(), "included file '" + std::string(inc) + "': " + ec.message());
+    if (!exists) fail(file, e->GetLineNum(), "included file not found: " + inc_path.string());
+    // every include counts, however often the same file comes back
+    budget->bytes += fs::file_size(inc_path, ec);
+    if (++budget->files > kMaxIncludedFiles || budget->bytes > kMaxIncludedBytes) {
+      fail(file, e->GetLineNum(),
+           "the world includes more than " + std::to_string(kMaxIncludedFiles) + " files or " +
+               std::to_string(kMaxIncludedBytes >> 20) + " MiB in all (counting repeats): is a file included "
+               "over and over?");
+    }
     auto inc_doc = load_xml(inc_path.string());
     XMLElement* inc_root = inc_doc->RootElement();
-    absolutize_asset_paths(inc_root, inc_path.parent_path());
-    inline_includes(*inc_doc, inc_root, inc_path.parent_path(), inc_path.string(), depth + 1);
+    absolutize_asset_paths(inc_root, inc_path.parent_path(), inc_path.string());
+    inline_includes(*inc_doc, inc_root, inc_path.parent_path(), inc_path.string(), depth + 1, budget);
     // copy the included children in place of the <include>, keeping their order
     XMLNode* anchor = e->PreviousSibling();
     for (XMLNode* n = inc_root->FirstChild(); n; n = n->NextSibling()) {
@@ -147,30 +225,33 @@ bool mujoco_reads(const fs::path& file) {
   return ec || size == 84 + 50 * static_cast<std::uintmax_t>(n) || std::string(header, 5) != "solid";
 }
 
-// 64-bit FNV-1a of the cache version and the file's bytes: the cache file's name
+// SHA-256 of the cache version and the file's bytes, in hex: the cache file's name. A cryptographic hash,
+// so no other content can be made to hit an entry (the project's one SHA-256, from MAVLink signing).
 std::string content_hash(const fs::path& file) {
-  std::uint64_t h = 14695981039346656037ull;
-  auto mix = [&h](const char* data, std::size_t n) {
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= static_cast<std::uint8_t>(data[i]);
-      h *= 1099511628211ull;
-    }
-  };
-  mix(kMeshCacheVersion, std::char_traits<char>::length(kMeshCacheVersion));
+  mavlink::Sha256 h;
+  const std::string_view version = kMeshCacheVersion;
+  h.update({reinterpret_cast<const std::uint8_t*>(version.data()), version.size()});
   std::ifstream in(file, std::ios::binary);
   char buf[1 << 16];
-  while (in.read(buf, sizeof(buf)) || in.gcount() > 0) mix(buf, static_cast<std::size_t>(in.gcount()));
+  while (in.read(buf, sizeof(buf)) || in.gcount() > 0) {
+    h.update({reinterpret_cast<const std::uint8_t*>(buf), static_cast<std::size_t>(in.gcount())});
+  }
   std::ostringstream s;
-  s << std::hex << std::setw(16) << std::setfill('0') << h;
+  for (std::uint8_t b : h.finish()) s << std::hex << std::setw(2) << std::setfill('0') << static_cast<int>(b);
   return s.str();
 }
 
+// per user, never a directory others can write: $XDG_CACHE_HOME/uavsim/meshes, else
+// ~/.cache/uavsim/meshes, else (no home) a directory in /tmp named after the user id
 fs::path mesh_cache_dir(const ComposeOptions& options) {
   if (!options.mesh_cache_dir.empty()) return options.mesh_cache_dir;
-  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg != '\0') {
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg != nullptr && *xdg == '/') {
     return fs::path(xdg) / "uavsim" / "meshes";
   }
-  return "/tmp/uavsim-mesh-cache";
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home == '/') {
+    return fs::path(home) / ".cache" / "uavsim" / "meshes";
+  }
+  return fs::temp_directory_path() / ("uavsim-mesh-cache-" + std::to_string(getuid()));
 }
 
 // the composed world no longer knows which file declared a mesh: name the world and the mesh
@@ -188,15 +269,20 @@ void convert_meshes(XMLElement* root, const std::string& world_path, const Compo
       const fs::path source = file_attr;
       const std::string what = "mesh " + (mesh->Attribute("name") ? std::string("'") + mesh->Attribute("name") + "' "
                                                                   : std::string()) + "(" + source.string() + ")";
-      if (!fs::exists(source)) mesh_fail(world_path, what + ": file not found");
+      std::error_code exists_ec;
+      const bool exists = fs::exists(source, exists_ec);
+      if (exists_ec) mesh_fail(world_path, what + ": " + exists_ec.message());
+      if (!exists) mesh_fail(world_path, what + ": file not found");
       if (mujoco_reads(source)) continue;
 
       const fs::path dir = mesh_cache_dir(options);
       const fs::path cached = dir / (source.stem().string() + "-" + content_hash(source) + ".obj");
-      if (!fs::exists(cached)) {
+      std::error_code cached_ec;
+      if (!fs::exists(cached, cached_ec)) {
         std::error_code ec;
         fs::create_directories(dir, ec);
         if (ec) mesh_fail(world_path, what + ": cannot create the mesh cache " + dir.string() + ": " + ec.message());
+        fs::permissions(dir, fs::perms::owner_all, fs::perm_options::replace, ec);  // private to its user
         // write under a private name, then rename: concurrent servers never see half a file
         const fs::path partial = dir / (cached.filename().string() + ".part" + std::to_string(getpid()));
         try {
@@ -215,13 +301,6 @@ void convert_meshes(XMLElement* root, const std::string& world_path, const Compo
       if (mesh->Attribute("name") == nullptr) mesh->SetAttribute("name", source.stem().string().c_str());
       mesh->SetAttribute("file", cached.string().c_str());
     }
-  }
-}
-
-void split3(const char* text, double out[3]) {
-  std::istringstream s(text ? text : "");
-  for (int i = 0; i < 3; ++i) {
-    if (!(s >> out[i])) out[i] = 0.0;
   }
 }
 
@@ -252,8 +331,9 @@ class Composer {
     world_ = load_xml(world_path_);
     XMLElement* root = world_->RootElement();
     const fs::path base = fs::absolute(world_path_).parent_path();
-    absolutize_asset_paths(root, base);
-    inline_includes(*world_, root, base, world_path_, 0);
+    absolutize_asset_paths(root, base, world_path_);
+    IncludeBudget budget;
+    inline_includes(*world_, root, base, world_path_, 0, &budget);
     world_angle_ = compiler_attr(root, "angle", "degree");
 
     // includes may leave several <worldbody> sections, as MuJoCo allows
@@ -280,6 +360,7 @@ class Composer {
       XMLElement* next = e->NextSiblingElement();
       const std::string tag = e->Name();
       if (tag == "uavsim_vehicle") {
+        check_vehicle_count(e, 1);
         instantiate(worldbody, e, "vehicles", required(e, "name"), offset(e), yaw(e));
         worldbody->DeleteChild(e);
       } else if (tag == "uavsim_object") {
@@ -294,18 +375,22 @@ class Composer {
   }
 
   void expand_grid(XMLElement* worldbody, XMLElement* e) {
-    const int rows = e->IntAttribute("rows", 1);
-    const int cols = e->IntAttribute("cols", 1);
-    const double spacing = e->DoubleAttribute("spacing", 3.0);
-    if (rows < 1 || cols < 1 || rows * cols > 100000 || !(spacing > 0.0)) {
-      fail(world_path_, e->GetLineNum(), "uavsim_grid needs rows, cols >= 1 and spacing > 0");
-    }
+    // each factor is bounded before the product, so rows * cols cannot overflow
+    const long rows = integer_attr(e, "rows", 1, 1, kMaxVehicles, world_path_);
+    const long cols = integer_attr(e, "cols", 1, 1, kMaxVehicles, world_path_);
+    const double spacing = number_attr(e, "spacing", 3.0, 1e-3, kMaxSpacing_m, world_path_);
+    check_vehicle_count(e, rows * cols);
     const std::string prefix = e->Attribute("prefix") ? e->Attribute("prefix") : "uav";
     double origin[3];
-    split3(e->Attribute("pos"), origin);
+    vec3_attr(e, "pos", origin, world_path_);
+    // the far corner must be in range too
+    if (std::abs(origin[0]) + static_cast<double>(cols - 1) * spacing > kMaxCoordinate_m ||
+        std::abs(origin[1]) + static_cast<double>(rows - 1) * spacing > kMaxCoordinate_m) {
+      fail(world_path_, e->GetLineNum(), "the grid reaches past " + std::to_string(kMaxCoordinate_m) + " m");
+    }
     int index = 0;
-    for (int r = 0; r < rows; ++r) {
-      for (int c = 0; c < cols; ++c) {
+    for (long r = 0; r < rows; ++r) {
+      for (long c = 0; c < cols; ++c) {
         const double pos[3] = {origin[0] + c * spacing, origin[1] + r * spacing, origin[2]};
         instantiate(worldbody, e, "vehicles", prefix + std::to_string(index++), pos, yaw(e));
       }
@@ -320,12 +405,23 @@ class Composer {
     return v;
   }
 
-  static std::vector<double> offset(XMLElement* e) {
+  std::vector<double> offset(XMLElement* e) const {
     double p[3];
-    split3(e->Attribute("pos"), p);
+    vec3_attr(e, "pos", p, world_path_);
     return {p[0], p[1], p[2]};
   }
-  static double yaw(XMLElement* e) { return e->DoubleAttribute("yaw_deg", 0.0) * kPi / 180.0; }
+  double yaw(XMLElement* e) const {
+    return number_attr(e, "yaw_deg", 0.0, -kMaxYaw_deg, kMaxYaw_deg, world_path_) * kPi / 180.0;
+  }
+
+  // adding `more` vehicles keeps the world within kMaxVehicles, or fails saying what to do instead
+  void check_vehicle_count(XMLElement* at, long more) {
+    if (vehicles_ + more <= kMaxVehicles) return;
+    fail(world_path_, at->GetLineNum(),
+         "this world would have " + std::to_string(vehicles_ + more) + " vehicles; one server simulates at "
+         "most " + std::to_string(kMaxVehicles) + " (MuJoCo 2.2 cannot allocate the state of a few thousand): "
+         "split the fleet across several servers, each with its own world and ports");
+  }
 
   void instantiate(XMLElement* worldbody, XMLElement* at, const std::string& kind,
                    const std::string& name, const std::vector<double>& pos, double yaw_rad) {
@@ -353,7 +449,7 @@ class Composer {
     t.path = path.string();
     t.doc = load_xml(t.path);
     XMLElement* root = t.doc->RootElement();
-    absolutize_asset_paths(root, path.parent_path());
+    absolutize_asset_paths(root, path.parent_path(), t.path);
     XMLElement* wb = root->FirstChildElement("worldbody");
     t.body = wb ? wb->FirstChildElement("body") : nullptr;
     if (t.body == nullptr || t.body->Attribute("name") == nullptr) {
@@ -380,13 +476,14 @@ class Composer {
     }
     Template& t = load_template(at, kind);
     merge_globals(t);
+    if (kind == "vehicles") ++vehicles_;
 
     // clone the body, prefix every name inside it, and place it
     XMLElement* body = t.body->DeepClone(world_.get())->ToElement();
     prefix_names(body, name + "/");
     body->SetAttribute("name", name.c_str());
     double base[3];
-    split3(t.body->Attribute("pos"), base);
+    vec3_attr(t.body, "pos", base, t.path);
     const double p[3] = {pos[0] + base[0], pos[1] + base[1], pos[2] + base[2]};
     body->SetAttribute("pos", join3(p).c_str());
     if (yaw_rad != 0.0) {
@@ -413,6 +510,23 @@ class Composer {
           copy->SetAttribute("name", rename_custom(n, t.name, name).c_str());
         }
         custom->InsertEndChild(copy);
+      }
+    }
+    copy_sensors(t, name);
+  }
+
+  // per-instance sensors (e.g. touch sensors on a vehicle's pad sites): the sensor's name and the
+  // element it reads (site, body, joint, ...) take the instance prefix like every name in the body
+  void copy_sensors(const Template& t, const std::string& name) {
+    for (XMLElement* src = t.doc->RootElement()->FirstChildElement("sensor"); src;
+         src = src->NextSiblingElement("sensor")) {
+      XMLElement* sensor = child_or_create(*world_, world_->RootElement(), "sensor");
+      for (XMLElement* c = src->FirstChildElement(); c; c = c->NextSiblingElement()) {
+        XMLElement* copy = c->DeepClone(world_.get())->ToElement();
+        for (const char* attr : {"name", "site", "body", "joint", "objname", "actuator", "tendon"}) {
+          if (const char* v = copy->Attribute(attr)) copy->SetAttribute(attr, (name + "/" + v).c_str());
+        }
+        sensor->InsertEndChild(copy);
       }
     }
   }
@@ -501,6 +615,7 @@ class Composer {
   std::string world_angle_;
   std::map<std::string, Template> templates_;
   std::set<std::string> names_;
+  long vehicles_ = 0;
   int nuser_site_ = 0;
 };
 

@@ -28,8 +28,8 @@ struct ComposeOptions {
   int offscreen_width_px = 1280;   // <visual><global offwidth/offheight>: the largest camera frame
   int offscreen_height_px = 960;
   // Where meshes MuJoCo 2.2 cannot read (COLLADA, glTF, FBX, PLY, ASCII STL, ...) are converted to, as
-  // OBJ files named by a hash of the source's content (so a second load reuses them). Empty:
-  // $XDG_CACHE_HOME/uavsim/meshes, else /tmp/uavsim-mesh-cache.
+  // OBJ files named by the SHA-256 of the source's content (so a second load reuses them). Empty: per
+  // user, $XDG_CACHE_HOME/uavsim/meshes, else ~/.cache/uavsim/meshes.
   std::string mesh_cache_dir;
 };
 

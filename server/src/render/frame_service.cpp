@@ -49,6 +49,11 @@ std::shared_ptr<const std::string> encode(const std::vector<uint8_t>& rgb, int w
 
 }  // namespace
 
+std::shared_ptr<const std::string> encode_black_frame(int width_px, int height_px, const EncodingKey& key) {
+  const std::vector<uint8_t> black(static_cast<size_t>(width_px) * height_px * 3, 0);
+  return encode(black, width_px, height_px, key);
+}
+
 const char* encoding_name(Encoding e) {
   switch (e) {
     case Encoding::kRgb: return "rgb";

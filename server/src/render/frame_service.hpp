@@ -44,6 +44,9 @@ struct EncodingKey {
   bool operator==(const EncodingKey& o) const { return encoding == o.encoding && quality == o.quality; }
 };
 
+// An all-black image of that size in that encoding (a camera-blackout fault's frames). Thread-safe.
+std::shared_ptr<const std::string> encode_black_frame(int width_px, int height_px, const EncodingKey& key);
+
 // A camera as the frame service serves it.
 struct FrameCamera {
   std::string name;

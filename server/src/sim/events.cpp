@@ -16,6 +16,7 @@ const char* event_type_name(EventType type) {
     case EventType::kMotorFailure: return "motor_failure";
     case EventType::kBalloonPopped: return "balloon_popped";
     case EventType::kLandedOnTarget: return "landed_on_target";
+    case EventType::kStateFault: return "state_fault";
   }
   return "unknown";
 }

@@ -20,6 +20,7 @@ enum class EventType {
   kMotorFailure,    // fault injection
   kBalloonPopped,
   kLandedOnTarget,
+  kStateFault,      // a vehicle's force or state went non-finite or ran away: killed and put back, once
 };
 const char* event_type_name(EventType type);
 

@@ -8,7 +8,17 @@ namespace uavsim::server::sim {
 
 using SteadyClock = std::chrono::steady_clock;
 
-Runner::Runner(Simulation& sim, double rate_factor) : sim_(sim), rate_(rate_factor) {}
+double SteadyWallClock::now_s() {
+  return std::chrono::duration<double>(SteadyClock::now().time_since_epoch()).count();
+}
+
+void SteadyWallClock::sleep_until_s(double t_s) {
+  const double wait_s = t_s - now_s();
+  if (wait_s > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(wait_s));
+}
+
+Runner::Runner(Simulation& sim, double rate_factor, WallClock* clock)
+    : sim_(sim), clock_(clock != nullptr ? clock : &steady_clock_), rate_(rate_factor) {}
 
 void Runner::stop() {
   stop_ = true;
@@ -48,14 +58,19 @@ void Runner::wait_while_paused() {
 }
 
 void Runner::run_until(double end_time_s) {
-  SteadyClock::time_point wall_anchor = SteadyClock::now();
+  double wall_anchor_s = clock_->now_s();
   double sim_anchor = sim_.time_s();
   while (!stop_ && sim_.time_s() + 0.5 * sim_.physics_dt_s() < end_time_s) {
     if (paused_) wait_while_paused();
     if (stop_) break;
 
     const bool control_next = sim_.step_count() % sim_.control_decimation() == 0;
-    if (control_next && gate_) gate_(sim_.time_s());
+    if (control_next && gate_) {
+      // the time the gate held the clock (pause, lockstep, requests) is not owed to the simulation
+      const double gate_start_s = clock_->now_s();
+      gate_(sim_.time_s());
+      wall_anchor_s += clock_->now_s() - gate_start_s;
+    }
     sim_.step();
 
     // pacing: at every control step, sleep until wall time catches up with sim time / rate
@@ -64,15 +79,14 @@ void Runner::run_until(double end_time_s) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (rebase_) {
-        wall_anchor = SteadyClock::now();
+        wall_anchor_s = clock_->now_s();
         sim_anchor = sim_.time_s();
         rebase_ = false;
         continue;
       }
     }
-    const auto due = wall_anchor + std::chrono::duration_cast<SteadyClock::duration>(
-                                       std::chrono::duration<double>((sim_.time_s() - sim_anchor) / rate));
-    if (due > SteadyClock::now()) std::this_thread::sleep_until(due);
+    const double due_s = wall_anchor_s + (sim_.time_s() - sim_anchor) / rate;
+    if (due_s > clock_->now_s()) clock_->sleep_until_s(due_s);
   }
 }
 

@@ -13,10 +13,26 @@
 
 namespace uavsim::server::sim {
 
+// The wall clock the runner paces against: the steady clock in the server, a fake one in tests.
+class WallClock {
+ public:
+  virtual ~WallClock() = default;
+  virtual double now_s() = 0;                // monotonic seconds from an arbitrary origin
+  virtual void sleep_until_s(double t_s) = 0;
+};
+
+// std::chrono::steady_clock.
+class SteadyWallClock : public WallClock {
+ public:
+  double now_s() override;
+  void sleep_until_s(double t_s) override;
+};
+
 class Runner {
  public:
-  // rate_factor: 1 = real time, 10 = ten times faster, 0 = as fast as possible.
-  Runner(Simulation& sim, double rate_factor);
+  // rate_factor: 1 = real time, 10 = ten times faster, 0 = as fast as possible. clock: null = the steady
+  // clock; otherwise it must outlive the runner.
+  Runner(Simulation& sim, double rate_factor, WallClock* clock = nullptr);
 
   // Runs until sim time reaches end_time_s (infinity: until stop()). Loop thread only.
   void run_until(double end_time_s);
@@ -30,7 +46,10 @@ class Runner {
   bool paused() const { return paused_.load(); }
 
   // Called on the loop thread before every control step with the sim time it will run at; the lockstep
-  // contract blocks in it until every joined client is done. Set before run_until.
+  // contract blocks in it until every joined client is done, and the API's pause holds the clock in it.
+  // Wall time spent in the gate is time the clock was held: pacing re-anchors after it, so the
+  // simulation never fast-forwards to "catch up" after a pause or a slow lockstep client. Set before
+  // run_until.
   using Gate = std::function<void(double time_s)>;
   void set_control_gate(Gate gate) { gate_ = std::move(gate); }
 
@@ -38,6 +57,8 @@ class Runner {
   void wait_while_paused();
 
   Simulation& sim_;
+  SteadyWallClock steady_clock_;
+  WallClock* clock_;
   std::atomic<double> rate_;
   std::atomic<bool> stop_{false};
   std::atomic<bool> paused_{false};

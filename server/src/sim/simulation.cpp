@@ -16,6 +16,24 @@ uint64_t mix_seed(uint64_t seed, uint64_t index) {
   return z ^ (z >> 31);
 }
 
+// Past these a vehicle's rotor wrench or state is a numerical failure (NaN from a controller, a blow-up),
+// not flight. Caught here, before MuJoCo: its own check (1e10) resets the whole world to t = 0.
+constexpr double kMaxWrench = 1e6;           // N and N m: a copter makes tens
+constexpr double kMaxPosition_m = 1e6;
+constexpr double kMaxSpeed_m_s = 1e4;
+constexpr double kMaxRate_rad_s = 1e4;
+
+bool sane(const airframe::Wrench& w) {
+  return w.force_enu_n.allFinite() && w.torque_body_nm.allFinite() && w.force_enu_n.norm() <= kMaxWrench &&
+         w.torque_body_nm.norm() <= kMaxWrench;
+}
+
+bool sane(const fc::TruthState& t) {
+  return t.position_enu_m.allFinite() && t.velocity_enu_m_s.allFinite() && t.q_enu_body.coeffs().allFinite() &&
+         t.rate_body_rad_s.allFinite() && t.position_enu_m.norm() <= kMaxPosition_m &&
+         t.velocity_enu_m_s.norm() <= kMaxSpeed_m_s && t.rate_body_rad_s.norm() <= kMaxRate_rad_s;
+}
+
 void fnv1a(uint64_t* h, const void* data, size_t n) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < n; ++i) {
@@ -54,6 +72,17 @@ void Simulation::init_vehicles() {
     rt.motor_cmd.assign(a.rotors.size(), 0.0);
     rt.thrust_n.assign(a.rotors.size(), 0.0);
     rt.motor_lag_alpha = airframe::motor_lag_alpha(a, physics_dt_s_);
+    if (i < config_.vehicle_params.size()) {
+      for (const auto& [name, value] : config_.vehicle_params[i]) {
+        if (rt.fc.set_param(name, value) != fc::CommandResult::kAccepted) {
+          throw std::invalid_argument(bindings[i].name + ": parameter " + name + " = " + std::to_string(value) +
+                                      ": unknown, or out of its range");
+        }
+      }
+    }
+    const fc::TruthState start = world_->truth(i);
+    rt.start_position_enu_m = start.position_enu_m;
+    rt.start_q_enu_body = start.q_enu_body;
     vehicles_.push_back(std::move(rt));
   }
 }
@@ -96,12 +125,39 @@ void Simulation::step() {
     airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
     airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
     const fc::TruthState t = world_->truth(i);
-    world_->apply_wrench(i, airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body,
-                                                     t.velocity_enu_m_s));
+    const airframe::Wrench w = airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s);
+    if (sane(w)) {
+      world_->apply_wrench(i, w);
+    } else {
+      fault_vehicle(i, "non-finite or runaway rotor force");
+      world_->apply_wrench(i, airframe::Wrench{});
+    }
   }
   world_->step();
   ++steps_;
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    if (!sane(world_->truth(i))) fault_vehicle(i, "non-finite or runaway state");
+  }
   check_contacts();
+}
+
+void Simulation::fault_vehicle(size_t vehicle, const std::string& what) {
+  // the style rule for a non-finite vehicle: controls zeroed, the vehicle killed and put back where it
+  // started (at rest), one event; the other vehicles fly on
+  VehicleRuntime& v = vehicles_[vehicle];
+  const airframe::AirframeParams& a = world_->vehicles()[vehicle].airframe;
+  std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
+  std::fill(v.thrust_n.begin(), v.thrust_n.end(), 0.0);
+  v.motors = airframe::make_motor_state(a);
+  const double pos[3] = {v.start_position_enu_m.x(), v.start_position_enu_m.y(), v.start_position_enu_m.z()};
+  const Eigen::Quaterniond& q = v.start_q_enu_body;
+  const double quat[4] = {q.w(), q.x(), q.y(), q.z()};
+  world_->set_pose(vehicle, pos, quat);
+  if (v.state_fault) return;
+  v.state_fault = true;
+  v.crashed = true;  // dead as after a crash, with this one event instead of a crash event
+  v.fc.disarm(true);
+  record(EventType::kStateFault, static_cast<int>(vehicle), what);
 }
 
 void Simulation::run_until(double time_s) {

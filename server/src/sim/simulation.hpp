@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "airframe/airframe.hpp"
@@ -25,6 +26,10 @@ struct SimConfig {
   uint64_t seed = 1;
   double crash_speed_m_s = 3.0;  // landing-gear contact faster than this is a hard impact
   double airborne_after_s = 0.1;  // no contact for this long = airborne (contacts flicker at rest)
+  // Flight-controller parameters of vehicle i, set in order at start and again after every reset
+  // (--defaults files, the world's uavsim:params texts). A vehicle past the end gets none. An unknown
+  // name or a value out of range is a startup error (std::invalid_argument naming it).
+  std::vector<std::vector<std::pair<std::string, double>>> vehicle_params;
 };
 
 // A vehicle's runtime state on the loop thread.
@@ -40,6 +45,10 @@ struct VehicleRuntime {
   double last_contact_s = 0.0;  // sim time of the last contact with anything
   bool was_armed = false;       // at the start of the control step, for events
   fc::Mode old_mode = fc::Mode::kStabilize;
+  // where the vehicle started: a vehicle whose state goes bad is killed and put back here
+  Eigen::Vector3d start_position_enu_m = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond start_q_enu_body = Eigen::Quaterniond::Identity();
+  bool state_fault = false;  // the one state_fault event was raised
 };
 
 // A command or query for one vehicle, run on the loop thread at the next control boundary.
@@ -119,6 +128,8 @@ class Simulation {
   void init_vehicles();
   void control_step();
   void check_contacts();
+  // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed (one event)
+  void fault_vehicle(size_t vehicle, const std::string& what);
 
   std::unique_ptr<physics::World> world_;
   SimConfig config_;

@@ -28,6 +28,18 @@ namespace uavsim::server::api::testing {
 
 using Json = nlohmann::json;
 
+// A config whose clock starts held (tests step it explicitly).
+inline ApiConfig paused() {
+  ApiConfig c;
+  c.start_paused = true;
+  return c;
+}
+
+// The error code of a reply, "" for a success.
+inline std::string error_code(const Json& reply) {
+  return reply.value("ok", true) ? "" : reply["error"].value("code", "");
+}
+
 class TestServer {
  public:
   explicit TestServer(const std::string& world, ApiConfig config = {}, LinkControl* link = nullptr,
@@ -85,6 +97,19 @@ class TestClient {
     }
   }
   void send(const Json& j) { send_raw(j.dump() + "\n"); }
+  // shuts down the sending side (the server sees EOF); 0 on success
+  int shutdown_sending() { return ::shutdown(fd_, SHUT_WR); }
+  // true once the server has closed the connection and everything it sent has been read
+  bool at_eof() {
+    for (;;) {
+      pollfd p{fd_, POLLIN, 0};
+      if (poll(&p, 1, 10000) <= 0) return false;
+      char tmp[4096];
+      const ssize_t n = recv(fd_, tmp, sizeof(tmp), 0);
+      if (n <= 0) return n == 0;
+      buf_.append(tmp, static_cast<size_t>(n));
+    }
+  }
 
   // the next message of any kind (null after a 10 s timeout)
   Json read_message() {

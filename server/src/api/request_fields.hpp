@@ -1,0 +1,50 @@
+// Typed, non-throwing access to the fields of an API request (a JSON object), and the checks every
+// request line passes before an op sees it: nesting depth, a scalar id, fields of the declared type.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+namespace uavsim::server::api {
+
+// Deeper JSON is refused at parse time: nlohmann copies, prints and compares values recursively, so a
+// request nested 70k deep would overflow the stack of whichever thread touched it.
+inline constexpr int kMaxNestingDepth = 32;
+
+enum class FieldType { kNumber, kBoolean, kString, kArray, kObject, kIndexOrName };
+
+struct FieldSpec {
+  std::string_view name;
+  FieldType type;
+};
+
+// The outcome of parsing one request line.
+struct ParsedLine {
+  nlohmann::json body;   // the request object, when error_code is empty
+  nlohmann::json id;     // the request's id (a scalar or null), for the reply
+  std::string error_code;
+  std::string error_message;
+};
+
+// Parses a request line: valid JSON (bad_json), at most kMaxNestingDepth deep (bad_request), an object
+// (bad_request) whose "id", if any, is a number, string, boolean or null (bad_field: a structured id is
+// never echoed) and whose "op" is a string (missing_field). Thread-safe (pure).
+ParsedLine parse_request_line(std::string_view line);
+
+// The first field of request that is present with another type than specs gives it, as a bad_field
+// message naming the field and the expected type; nullopt when every present field is well typed.
+// Absent fields are the op's business. Thread-safe (pure).
+std::optional<std::string> mistyped_field(const nlohmann::json& request, std::span<const FieldSpec> specs);
+
+// A field of the given type; nullopt when absent or of another type. Thread-safe (pure).
+std::optional<double> number_field(const nlohmann::json& request, std::string_view key);
+std::optional<bool> bool_field(const nlohmann::json& request, std::string_view key);
+std::optional<std::string> string_field(const nlohmann::json& request, std::string_view key);
+bool has_field(const nlohmann::json& request, std::string_view key);
+
+}  // namespace uavsim::server::api
