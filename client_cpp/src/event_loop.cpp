@@ -309,6 +309,11 @@ void EventLoop::Impl::handle_api_message(const Json& j, std::string_view payload
       lose_clock("the simulator dropped this client: " + j.value("reason", std::string("?")));
     } else if (ev == "reset") {
       std::fprintf(stderr, "uavsim client: the simulation was reset (seed %s)\n", j.value("seed", Json()).dump().c_str());
+    } else {
+      const auto [first, last] = event_sinks.equal_range(ev);
+      std::vector<EventSink> sinks;
+      for (auto it = first; it != last; ++it) sinks.push_back(it->second.second);
+      for (const EventSink& sink : sinks) sink(j);
     }
     return;
   }

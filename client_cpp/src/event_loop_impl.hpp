@@ -59,6 +59,11 @@ struct EventLoop::Impl {
   // camera frames arriving on the lockstep connection, by camera name (camera.cpp)
   using FrameSink = std::function<void(const nlohmann::json& header, std::string_view bytes)>;
   std::map<std::string, FrameSink> frame_sinks;
+  // other events on the lockstep connection (e.g. "sensor": onboard switches, switches.cpp), by event
+  // name; each handler sees every such event and picks its own
+  using EventSink = std::function<void(const nlohmann::json& event)>;
+  std::multimap<std::string, std::pair<std::uint64_t, EventSink>> event_sinks;
+  std::uint64_t next_event_sink = 1;
   // replies to requests sent with api_request(), by id
   std::map<std::string, std::function<void(const nlohmann::json&)>> reply_handlers;
   std::uint64_t next_request_id = 1;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "fc/angles.hpp"
 #include "mavlink/geodesy.hpp"
 
 namespace uavsim::client {
@@ -9,8 +10,9 @@ namespace uavsim::client {
 namespace {
 namespace g = server::mavlink;
 g::GeodeticOrigin to_server(const GeodeticOrigin& o) { return {o.lat_deg, o.lon_deg, o.alt_m, o.heading_rad}; }
-double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
 }  // namespace
+
+double wrap_pi(double a_rad) { return server::fc::wrap_pi(a_rad); }
 
 Eigen::Vector3d ned_from_geodetic(const GeodeticOrigin& origin, const Geodetic& point) {
   return g::ned_from_geodetic(to_server(origin), g::Geodetic{point.lat_deg, point.lon_deg, point.alt_m});

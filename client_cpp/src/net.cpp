@@ -9,6 +9,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -40,24 +41,62 @@ bool parse_address(const std::string& address, std::string* host, int* port) {
   return true;
 }
 
-Result<int> tcp_connect(const std::string& host, int port, double timeout_s) {
+std::optional<LinkAddress> parse_link_address(const std::string& address) {
+  LinkAddress a;
+  std::string rest = address;
+  if (rest.rfind("udpin:", 0) == 0) {
+    a.kind = LinkAddress::Kind::kUdpIn;
+    rest = rest.substr(6);
+  } else if (rest.rfind("udp:", 0) == 0) {
+    a.kind = LinkAddress::Kind::kUdp;
+    rest = rest.substr(4);
+  }
+  if (rest.rfind("tcp:", 0) == 0) rest = rest.substr(4);
+  // one colon at most is left: an unknown scheme ("udpx:HOST:PORT") is not a host name
+  if (std::count(rest.begin(), rest.end(), ':') > 1) return std::nullopt;
+  if (!parse_address(rest, &a.host, &a.port)) return std::nullopt;
+  return a;
+}
+
+// host:port as an IPv4 address (the first the resolver gives); kInvalidArgument if it cannot resolve
+Result<sockaddr_in> resolve_ipv4(const std::string& host, int port) {
   addrinfo hints{};
   hints.ai_family = AF_INET;
-  hints.ai_socktype = SOCK_STREAM;
   addrinfo* res = nullptr;
-  const std::string where = host + ":" + std::to_string(port);
   if (getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &res) != 0 || res == nullptr) {
-    return Result<int>::fail(Error::kInvalidArgument, "cannot resolve " + where);
+    return Result<sockaddr_in>::fail(Error::kInvalidArgument, "cannot resolve " + host + ":" + std::to_string(port));
   }
+  sockaddr_in sa{};
+  std::memcpy(&sa, res->ai_addr, sizeof(sa));
+  freeaddrinfo(res);
+  return sa;
+}
+
+Result<int> udp_open(const std::string& host, int port, bool listen) {
+  const std::string where = host + ":" + std::to_string(port);
+  const auto sa = resolve_ipv4(host, port);
+  if (!sa) return Result<int>(sa.error());
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) return Result<int>::fail(Error::kIo, std::string("socket: ") + std::strerror(errno));
+  const auto* addr = reinterpret_cast<const sockaddr*>(&*sa);
+  if ((listen ? ::bind(fd, addr, sizeof(*sa)) : ::connect(fd, addr, sizeof(*sa))) != 0) {
+    const int err = errno;
+    ::close(fd);
+    return Result<int>::fail(Error::kIo, std::string(listen ? "cannot listen on udp:" : "cannot send to udp:") +
+                                             where + ": " + std::strerror(err));
+  }
+  return fd;
+}
+
+Result<int> tcp_connect(const std::string& host, int port, double timeout_s) {
+  const std::string where = host + ":" + std::to_string(port);
+  const auto sa = resolve_ipv4(host, port);
+  if (!sa) return Result<int>(sa.error());
   const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (fd < 0) {
-    freeaddrinfo(res);
-    return Result<int>::fail(Error::kIo, std::string("socket: ") + std::strerror(errno));
-  }
+  if (fd < 0) return Result<int>::fail(Error::kIo, std::string("socket: ") + std::strerror(errno));
   const int one = 1;
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
-  int rc = ::connect(fd, res->ai_addr, res->ai_addrlen);
-  freeaddrinfo(res);
+  int rc = ::connect(fd, reinterpret_cast<const sockaddr*>(&*sa), sizeof(*sa));
   int err = rc == 0 ? 0 : errno;
   if (err == EINPROGRESS) {
     pollfd p{fd, POLLOUT, 0};

@@ -2,6 +2,7 @@
 // behaviour in the team's mavlink/behaviour.md. The only client source that speaks MAVLink.
 #include "uavsim/client/vehicle.hpp"
 
+#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -177,6 +178,8 @@ struct Vehicle::Impl {
   int fd = -1;
   bool link_up = false;
   std::string address;
+  bool udp = false;       // a UDP link: datagrams, no end of stream
+  bool udp_peer = false;  // the UDP socket is connected to the vehicle (udpin: once it has sent)
   mav::Parser parser;
   std::string out;  // bytes not yet accepted by the socket
   std::uint8_t seq = 0;
@@ -231,6 +234,13 @@ struct Vehicle::Impl {
   }
 
   void flush() {
+    if (udp) {
+      // one datagram per call (frames are flushed as they are queued); a lost datagram is lost, as on a
+      // radio link, and a udpin link drops what it sends before the vehicle has been heard from
+      if (udp_peer && !out.empty()) (void)::send(fd, out.data(), out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+      out.clear();
+      return;
+    }
     while (!out.empty() && fd >= 0) {
       const ssize_t n = ::send(fd, out.data(), out.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
       if (n > 0) {
@@ -248,6 +258,9 @@ struct Vehicle::Impl {
   template <class Msg>
   bool send(const Msg& m) {
     if (fd < 0) return false;
+    // a udpin link cannot send before the vehicle has been heard from (nor count the frame as sent:
+    // lockstep waits for the sequence numbers a link really sent)
+    if (udp && !udp_peer) return false;
     mav::FrameHeader h;
     h.sysid = config.gcs_sysid;
     h.compid = config.gcs_compid;
@@ -270,6 +283,18 @@ struct Vehicle::Impl {
     if (fd < 0 || !(what & EventLoop::kReadable)) return;
     std::uint8_t buf[16384];
     for (;;) {
+      if (udp) {
+        sockaddr_in from{};
+        socklen_t from_len = sizeof(from);
+        const ssize_t n = ::recvfrom(fd, buf, sizeof(buf), MSG_DONTWAIT, reinterpret_cast<sockaddr*>(&from), &from_len);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) return;  // EAGAIN; or ICMP port unreachable (nobody there yet): the link stays
+        // udpin: the first sender is the vehicle; from now on only it is heard and answered
+        if (!udp_peer && ::connect(fd, reinterpret_cast<sockaddr*>(&from), from_len) == 0) udp_peer = true;
+        parser.feed({buf, static_cast<std::size_t>(n)}, [&](const mav::Frame& f) { handle(f); });
+        if (fd < 0) return;
+        continue;
+      }
       const ssize_t n = ::recv(fd, buf, sizeof(buf), MSG_DONTWAIT);
       if (n > 0) {
         parser.feed({buf, static_cast<std::size_t>(n)}, [&](const mav::Frame& f) { handle(f); });
@@ -623,14 +648,18 @@ Result<void> Vehicle::connect(const std::string& address, double timeout_s) {
   Impl& s = *impl_;
   s.loop.assert_in_loop_thread();
   s.close_link(nullptr);
-  std::string host;
-  int port = 0;
-  if (!net::parse_address(address, &host, &port)) {
-    return Result<void>::fail(Error::kInvalidArgument, "bad vehicle address '" + address + "' (tcp:HOST:PORT)");
+  const auto where = net::parse_link_address(address);
+  if (!where) {
+    return Result<void>::fail(Error::kInvalidArgument, "bad vehicle address '" + address +
+                                                           "' (tcp:HOST:PORT, udp:HOST:PORT or udpin:ADDR:PORT)");
   }
   s.address = address;
   const double start = s.loop.now();
-  auto fd = net::tcp_connect(host, port, std::min(timeout_s, 30.0));
+  using Kind = net::LinkAddress::Kind;
+  s.udp = where->kind != Kind::kTcp;
+  s.udp_peer = where->kind == Kind::kUdp;
+  auto fd = s.udp ? net::udp_open(where->host, where->port, where->kind == Kind::kUdpIn)
+                  : net::tcp_connect(where->host, where->port, std::min(timeout_s, 30.0));
   if (!fd) return Result<void>(fd.error());
   s.fd = *fd;
   s.link_up = true;

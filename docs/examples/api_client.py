@@ -3,6 +3,10 @@
 
     python3 docs/examples/api_client.py --port 5700            # status, step, vehicles, events
     python3 docs/examples/api_client.py --port 5700 --check    # the same, asserting the answers (ctest)
+    python3 docs/examples/api_client.py --token-file FILE      # a server run with --api-token-file FILE
+
+It leaves the server as it found it: the vehicle it kills is brought back by a reset with the seed the
+server had (sim time restarts at 0), and the clock runs again if it was running.
 
 The protocol is newline-delimited JSON over one TCP connection: the server says hello, every request
 {"op": ..., "id": ...} gets exactly one reply {"id": ..., "ok": true, "result": ...} or
@@ -26,7 +30,7 @@ class ApiError(Exception):
 class SimApi:
     """One connection to the sim API. Not thread-safe."""
 
-    def __init__(self, host="127.0.0.1", port=5700, timeout_s=10.0):
+    def __init__(self, host="127.0.0.1", port=5700, timeout_s=10.0, token=None):
         self._sock = socket.create_connection((host, port), timeout=timeout_s)
         self._file = self._sock.makefile("rwb")
         self._ids = itertools.count(1)
@@ -34,6 +38,10 @@ class SimApi:
         self.hello = self._read()
         if self.hello.get("protocol") != 1:
             raise RuntimeError(f"unsupported protocol {self.hello.get('protocol')}")
+        if self.hello.get("auth_required"):
+            if token is None:
+                raise RuntimeError("the server needs a token (--token-file)")
+            self.request("auth", token=token)
 
     def close(self):
         self._file.close()
@@ -73,9 +81,14 @@ def main():
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=5700)
     parser.add_argument("--check", action="store_true", help="assert the answers (the ctest)")
+    parser.add_argument("--token-file", help="the server's --api-token-file")
     args = parser.parse_args()
 
-    api = SimApi(args.host, args.port)
+    token = None
+    if args.token_file:
+        with open(args.token_file, encoding="utf-8") as f:
+            token = f.readline().strip()
+    api = SimApi(args.host, args.port, token=token)
     status = api.request("status")
     print(f"protocol {status['protocol']}: t = {status['time_s']:.3f} s, {status['vehicles']} vehicle(s)")
 
@@ -105,12 +118,22 @@ def main():
         unknown_vehicle_error = None
     except ApiError as e:
         unknown_vehicle_error = e.code
+
+    # leave the server as found: the killed vehicle back (a reset with the same seed), the clock running
+    api.request("reset", seed=status["seed"])
+    if not status["paused"]:
+        api.request("resume")
+    after = api.request("status")
+    revived = api.request("vehicles")["vehicles"][0]
+    print(f"restored: seed {after['seed']}, paused={after['paused']}, {revived['name']} crashed={revived['crashed']}")
     api.close()
 
     if args.check:
         assert abs((t1 - t0) - 100 * 1.0 / status["control_hz"]) < 1e-6, (t0, t1)
         assert event["type"] == "vehicle_killed" and event["vehicle"] == 0, event
         assert unknown_vehicle_error == "unknown_vehicle", unknown_vehicle_error
+        assert after["paused"] == status["paused"] and after["seed"] == status["seed"], (status, after)
+        assert not revived["crashed"], revived
         print("check passed")
     return 0
 

@@ -4,9 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "uavsim/client/geodesy.hpp"
+
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
+using client::wrap_pi;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kGainXy_1_s = 1.0;       // position error -> horizontal speed
 constexpr double kGainZ_1_s = 1.5;        // altitude error -> climb rate
@@ -14,12 +17,6 @@ constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost
 constexpr double kSameBalloon_m = 1.5;    // a new track this close to the target is the target
 constexpr double kPoppedExclusion_m = 2.5;
 constexpr double kArenaMargin_m = 0.5;
-
-double wrap_pi(double a) {
-  while (a > kPi) a -= 2 * kPi;
-  while (a < -kPi) a += 2 * kPi;
-  return a;
-}
 
 std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
   char buf[160];

@@ -16,6 +16,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
@@ -34,7 +35,9 @@ using Json = nlohmann::json;
 
 class SimServer {
  public:
-  explicit SimServer(const std::string& world = "empty.xml", bool start_paused = true) {
+  // vehicle0_udp: UDP links of vehicle 0 beside its TCP endpoint (--out)
+  explicit SimServer(const std::string& world = "empty.xml", bool start_paused = true,
+                     std::vector<uavsim::server::mavlink::UdpEndpoint> vehicle0_udp = {}) {
     namespace s = uavsim::server;
     s::physics::ComposeOptions o;
     o.models_dir = UAVSIM_MODELS_DIR;
@@ -43,6 +46,7 @@ class SimServer {
     objects_ = s::objects::add_world_objects(*sim_);
     s::mavlink::EndpointConfig ec;
     ec.base_port = 0;
+    if (!vehicle0_udp.empty()) ec.udp = {std::move(vehicle0_udp)};
     mavlink_ = std::make_unique<s::mavlink::MavlinkServer>(*sim_, ec);
     runner_ = std::make_unique<s::sim::Runner>(*sim_, 0.0);
     s::api::ApiConfig ac;
@@ -68,6 +72,11 @@ class SimServer {
     return "tcp:127.0.0.1:" + std::to_string(mavlink_->port(vehicle));
   }
   std::size_t mavlink_clients(std::size_t vehicle = 0) const { return mavlink_->client_count(vehicle); }
+  // the local port of vehicle 0's k-th UDP link
+  int udp_port(std::size_t k = 0) const { return mavlink_->udp_port(0, k); }
+  uavsim::server::mavlink::EndpointStats mavlink_stats(std::size_t vehicle = 0) const {
+    return mavlink_->stats(vehicle);
+  }
 
  private:
   // the endpoint's hooks as uavsim-server wires them: commands sent before `done` take effect at that

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fc/angles.hpp"
+
 namespace uavsim::server::app {
 
 namespace {
 constexpr double kDegToRad = M_PI / 180.0;
-double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
+using fc::wrap_pi;
 }  // namespace
 
 void apply_gimbal_state(const mavlink::GimbalState& s, double vehicle_yaw_enu_rad, objects::Gimbal* g) {

@@ -1,41 +1,79 @@
 #include "app/options.hpp"
 
+#include "app/param_file.hpp"
+
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <iostream>
+#include <fstream>
+#include <limits>
+#include <sstream>
 #include <string>
 
 namespace uavsim::server::app {
 
+const char* version_string() {
+#ifdef UAVSIM_VERSION
+  return "uavsim-server " UAVSIM_VERSION " (MuJoCo 2.2, MAVLink 2, sim API protocol 1)";
+#else
+  return "uavsim-server (MuJoCo 2.2, MAVLink 2, sim API protocol 1)";
+#endif
+}
+
 const char* usage() {
-  return R"(usage: uavsim-server WORLD.xml [options]
+  return R"(usage: uavsim-server WORLD [options]
 
-Simulates the world and its vehicles. WORLD.xml is MuJoCo MJCF plus uavsim's <uavsim_vehicle>,
-<uavsim_grid> and <uavsim_object> elements (models/README.md).
+Simulates the world and its vehicles. WORLD is a file (MuJoCo MJCF plus uavsim's <uavsim_vehicle>,
+<uavsim_grid> and <uavsim_object> elements, models/README.md) or the name of a shipped
+world (empty, hexa, grid100, mbzirc2017, mbzirc2020).
 
-options:
+simulation:
   --seed N            seed of every random generator (sensor noise, ...); default 1
   --physics-hz HZ     physics rate; default 1000
   --control-hz HZ     flight-control rate, rounded to a divisor of the physics rate; default 500
   --rate X            clock: X times real time (default 1); --rate 0 or --fast: as fast as possible
   --fast              same as --rate 0
   --duration S        stop after S seconds of sim time (default: run until interrupted)
+  --wait-for-clients N  hold the clock at 0 until N clients (MAVLink or sim API) are connected
+  --home LAT,LON,ALT[,HDG]  geodetic position of the world origin (degrees, metres above sea level);
+                      default: the world's <numeric name="uavsim:home" data="LAT LON ALT"/>, else
+                      47.397742,8.545594,488. HDG (ArduPilot SITL's start heading) must be 0 here:
+                      each vehicle's heading is its yaw_deg in the world
+  --defaults FILE.parm  ArduPilot parameter file (NAME VALUE or NAME,VALUE; # comments) applied to
+                      every vehicle at start, after the world's per-vehicle parameters (repeatable)
   --demo              fly vehicle 0 through take-off, three waypoints and landing, print what happened,
                       and exit with 0 if the flight succeeded
   --write-world FILE  write the composed MJCF (plain MuJoCo, opens in mujoco-simulate) and exit
-  --models-dir DIR    where vehicles/ and objects/ templates live (default: the source tree's models/)
+  --models-dir DIR    where vehicles/, objects/ and worlds/ live (default: the source tree's models/)
+
+MAVLink (per vehicle, ArduCopter on the wire):
   --mavlink-port BASE TCP port of vehicle 0's MAVLink endpoint; vehicle i listens on BASE + 10 i
                       (ArduPilot SITL's convention); default 5760; 0: ephemeral ports; -1: none
-  --bind ADDR         address the MAVLink endpoints listen on; default 127.0.0.1 (loopback only)
+  --bind ADDR         address the MAVLink TCP endpoints listen on; default 127.0.0.1 (loopback only)
+  --out URL           also speak MAVLink over UDP (repeatable): udp:HOST:PORT sends to a ground
+                      station there and answers it on the same socket; udpin:ADDR:PORT listens and
+                      answers the first peer. Vehicle i uses PORT + 10 i; a "{i}" in the URL is
+                      replaced by the vehicle index instead; "N=URL" is for vehicle N only.
+                      Default with a fixed --mavlink-port (not 0 or -1): 0=udp:127.0.0.1:14550, so
+                      QGroundControl finds vehicle 0 on its own; --out none: no UDP
   --mavlink-key HEX64 MAVLink 2 signing key (64 hex digits) of every vehicle from the start: frames
                       sent are signed, unsigned ones received are ignored (a client's SETUP_SIGNING
-                      replaces it; an all-zero key turns signing off)
-  --api-port N        TCP port of the sim socket API (docs/protocol.md); default 5700; 0: an ephemeral
-                      port (printed); -1: no API
+                      replaces it; an all-zero key turns signing off). Prefer --mavlink-key-file or
+                      the environment variable UAVSIM_MAVLINK_KEY: arguments are visible to every
+                      user of the machine
+  --mavlink-key-file FILE  the signing key from a file (64 hex digits)
+
+sim socket API (docs/protocol.md):
+  --api-port N        TCP port of the sim socket API; default 5700; 0: an ephemeral port (printed);
+                      -1: no API
   --api-bind ADDR     address the sim API listens on; default 127.0.0.1 (loopback only)
+  --api-token-file FILE  clients must send this file's first line (the token) before any other op
+  --allow-remote-gcs  let gcs_link_open send to hosts other than the API client's own address
   --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
+
+cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
                       width, height, fps, fovy, shadows, reflections, skybox, msaa (docs/protocol.md)
   --no-cameras        no offscreen renderer (the camera ops answer not_available)
@@ -44,137 +82,347 @@ options:
                       it drops frames rather than slow physics, at --rate 0 it keeps every frame
   --record-fps F      frames per second of sim time in the video; default 15
   --record-size WxH   video size; default 640x480
-  --quiet             print only errors and the result
+  --log-dir DIR       write VEHICLE.tlog per vehicle (every MAVLink frame each way, stamped with sim
+                      time, as MAVProxy and QGroundControl write them) and events.jsonl (the server's
+                      events, one JSON object a line)
+  --quiet             print only errors and the result (no event lines, no summary)
+  --list-params       the flight controller's parameters as a Markdown table (docs/parameters.md)
+  --version           the version
   --help              this text
 )";
 }
 
 namespace {
 
-bool parse_double(const std::string& flag, const char* text, double* out) {
+// one option's value, checked: a number in [lo, hi], integral when asked
+struct NumberRule {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool integer = false;
+  const char* what = "a number";
+};
+
+std::string format_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+std::optional<double> parse_number(const std::string& flag, const std::string& text, const NumberRule& rule,
+                                   std::string* why) {
   char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v)) {
-    std::cerr << "uavsim-server: " << flag << " needs a number, got '" << text << "'\n";
-    return false;
+  const double v = std::strtod(text.c_str(), &end);
+  const bool parsed = !text.empty() && end != text.c_str() && *end == '\0' && std::isfinite(v);
+  const bool integral = parsed && std::floor(v) == v;
+  if (parsed && (!rule.integer || integral) && v >= rule.lo && v <= rule.hi) return v;
+  std::string range;
+  if (std::isfinite(rule.lo) && std::isfinite(rule.hi)) {
+    range = " from " + format_number(rule.lo) + " to " + format_number(rule.hi);
+  } else if (std::isfinite(rule.lo)) {
+    range = rule.lo == 0.0 && rule.integer ? " (0 or more)" : " of at least " + format_number(rule.lo);
   }
-  *out = v;
-  return true;
+  *why = flag + " needs " + rule.what + range + ", got '" + text + "'";
+  return std::nullopt;
+}
+
+std::optional<std::string> read_first_line(const std::string& flag, const std::string& path, std::string* why) {
+  std::ifstream in(path);
+  if (!in) {
+    *why = flag + ": cannot read '" + path + "'";
+    return std::nullopt;
+  }
+  std::string line;
+  std::getline(in, line);
+  const auto first = line.find_first_not_of(" \t\r");
+  const auto last = line.find_last_not_of(" \t\r");
+  if (first == std::string::npos) {
+    *why = flag + ": '" + path + "' is empty";
+    return std::nullopt;
+  }
+  return line.substr(first, last - first + 1);
+}
+
+std::optional<HomeOption> parse_home(const std::string& text, std::string* why) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(part.c_str(), &end);
+    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
+    v.push_back(x);
+  }
+  HomeOption h;
+  const bool shape = (v.size() == 3 || v.size() == 4) && std::count(text.begin(), text.end(), ',') + 1 ==
+                                                               static_cast<long>(v.size());
+  if (shape) {
+    h.lat_deg = v[0];
+    h.lon_deg = v[1];
+    h.alt_m = v[2];
+    h.heading_deg = v.size() == 4 ? v[3] : 0.0;
+  }
+  if (!shape || std::abs(h.lat_deg) > 90.0 || std::abs(h.lon_deg) > 180.0 || h.alt_m < -500.0 ||
+      h.alt_m > 10000.0) {
+    *why = "--home needs LAT,LON,ALT (latitude -90..90, longitude -180..180 degrees, altitude -500..10000 m "
+           "above sea level), got '" +
+           text + "'";
+    return std::nullopt;
+  }
+  if (h.heading_deg != 0.0) {
+    *why = "--home: a start heading (" + text.substr(text.rfind(',') + 1) +
+           ") is not taken from the command line here: each vehicle's heading is its yaw_deg in the world file "
+           "(give LAT,LON,ALT or a heading of 0)";
+    return std::nullopt;
+  }
+  return h;
 }
 
 }  // namespace
 
-std::optional<Options> parse_options(int argc, char** argv, int* exit_code) {
+std::optional<std::array<uint8_t, 32>> parse_signing_key(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  const auto last = text.find_last_not_of(" \t\r\n");
+  if (first == std::string::npos) return std::nullopt;
+  const std::string hex = text.substr(first, last - first + 1);
+  if (hex.size() != 64) return std::nullopt;
+  std::array<uint8_t, 32> key{};
+  for (std::size_t k = 0; k < key.size(); ++k) {
+    int byte = 0;
+    for (std::size_t d = 0; d < 2; ++d) {
+      const char c = hex[2 * k + d];
+      if (!std::isxdigit(static_cast<unsigned char>(c))) return std::nullopt;
+      const int nibble = std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::tolower(c) - 'a' + 10;
+      byte = byte * 16 + nibble;
+    }
+    key[k] = static_cast<uint8_t>(byte);
+  }
+  return key;
+}
+
+std::optional<UdpTarget> udp_target(const UdpOut& out, int vehicle, std::string* why) {
+  why->clear();
+  if (out.vehicle && *out.vehicle != vehicle) return std::nullopt;
+  // "{i}": the vehicle index in place; else vehicle i on PORT + 10 i
+  std::string url = out.spec;
+  const bool pattern = url.find("{i}") != std::string::npos;
+  for (auto at = url.find("{i}"); at != std::string::npos; at = url.find("{i}")) {
+    url.replace(at, 3, std::to_string(vehicle));
+  }
+  UdpTarget t;
+  std::string rest;
+  if (url.rfind("udpin:", 0) == 0) {
+    t.listen = true;
+    rest = url.substr(6);
+  } else if (url.rfind("udp:", 0) == 0) {
+    rest = url.substr(4);
+  } else {
+    *why = "--out needs udp:HOST:PORT or udpin:ADDR:PORT, got '" + out.spec + "'";
+    return std::nullopt;
+  }
+  const auto colon = rest.rfind(':');
+  t.host = colon == std::string::npos ? "" : rest.substr(0, colon);
+  const std::string port_text = colon == std::string::npos ? "" : rest.substr(colon + 1);
+  char* end = nullptr;
+  const long port = std::strtol(port_text.c_str(), &end, 10);
+  if (t.host.empty() || port_text.empty() || *end != '\0' || port < 1 || port > 65535) {
+    *why = "--out '" + out.spec + "': needs a host and a port from 1 to 65535";
+    return std::nullopt;
+  }
+  const long offset = pattern || out.vehicle ? 0 : 10L * vehicle;
+  if (port + offset > 65535) {
+    *why = "--out '" + out.spec + "': vehicle " + std::to_string(vehicle) + " would use port " +
+           std::to_string(port + offset) + ", past 65535 (use a lower port or \"{i}\")";
+    return std::nullopt;
+  }
+  t.port = static_cast<int>(port + offset);
+  return t;
+}
+
+std::optional<std::string> port_range_error(const std::string& flag, int base_port, std::size_t vehicle_count) {
+  if (base_port <= 0 || vehicle_count == 0) return std::nullopt;
+  const long last = base_port + 10L * static_cast<long>(vehicle_count - 1);
+  if (last <= 65535) return std::nullopt;
+  const long highest_base = 65535 - 10L * static_cast<long>(vehicle_count - 1);
+  std::string msg = flag + " " + std::to_string(base_port) + ": the world has " + std::to_string(vehicle_count) +
+                    " vehicles, and the last would use port " + std::to_string(last) + ", past 65535; ";
+  if (highest_base >= 1) msg += "use a base of at most " + std::to_string(highest_base) + " or ";
+  return msg + flag + " 0 (ephemeral ports, printed at start)";
+}
+
+bool is_loopback_address(const std::string& address) {
+  return address == "localhost" || address.rfind("127.", 0) == 0;
+}
+
+ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& env) {
+  ParseResult r;
   Options o;
-  *exit_code = 2;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&](const char** out) {
-      if (i + 1 >= argc) {
-        std::cerr << "uavsim-server: " << a << " needs a value\n";
+  r.exit_code = 2;
+  auto fail = [&r](std::string why) {
+    r.error = std::move(why);
+    r.options.reset();
+    return r;
+  };
+  std::optional<std::string> key_text;  // --mavlink-key or the key file's contents
+  std::string key_source;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    std::string why;
+    // the option's value, or a failure naming the option
+    auto value = [&](std::string* out) {
+      if (i + 1 >= args.size()) {
+        why = a + " needs a value (see --help)";
         return false;
       }
-      *out = argv[++i];
+      *out = args[++i];
       return true;
     };
-    const char* v = nullptr;
-    double number = 0.0;
+    auto number = [&](const NumberRule& rule, double* out) {
+      std::string text;
+      if (!value(&text)) return false;
+      const auto v = parse_number(a, text, rule, &why);
+      if (v) *out = *v;
+      return v.has_value();
+    };
+    std::string v;
+    double x = 0.0;
+    bool ok = true;
     if (a == "--help" || a == "-h") {
-      std::cout << usage();
-      *exit_code = 0;
-      return std::nullopt;
+      r.output = usage();
+      r.exit_code = 0;
+      return r;
+    } else if (a == "--list-params") {
+      r.output = params_markdown();
+      r.exit_code = 0;
+      return r;
+    } else if (a == "--version") {
+      r.output = std::string(version_string()) + "\n";
+      r.exit_code = 0;
+      return r;
     } else if (a == "--seed") {
-      if (!value(&v) || !parse_double(a, v, &number) || number < 0) return std::nullopt;
-      o.seed = static_cast<uint64_t>(number);
+      // seeds are integers up to 2^53 (exact in a double)
+      ok = number({0, 9007199254740992.0, true, "an integer"}, &x);
+      o.seed = static_cast<uint64_t>(x);
     } else if (a == "--physics-hz") {
-      if (!value(&v) || !parse_double(a, v, &o.physics_hz) || o.physics_hz <= 0) return std::nullopt;
+      ok = number({1, 100000, false, "a rate in Hz"}, &o.physics_hz);
     } else if (a == "--control-hz") {
-      if (!value(&v) || !parse_double(a, v, &o.control_hz) || o.control_hz <= 0) return std::nullopt;
+      ok = number({1, 100000, false, "a rate in Hz"}, &o.control_hz);
     } else if (a == "--rate") {
-      if (!value(&v) || !parse_double(a, v, &o.rate) || o.rate < 0) return std::nullopt;
+      ok = number({0, 1e6, false, "a factor of real time (0: as fast as possible)"}, &o.rate);
     } else if (a == "--fast") {
       o.rate = 0.0;
     } else if (a == "--duration") {
-      if (!value(&v) || !parse_double(a, v, &o.duration_s) || o.duration_s < 0) return std::nullopt;
+      ok = number({0, 1e9, false, "seconds of sim time"}, &o.duration_s);
+    } else if (a == "--wait-for-clients") {
+      ok = number({0, 100000, true, "a number of clients"}, &x);
+      o.wait_for_clients = static_cast<int>(x);
+    } else if (a == "--home") {
+      if ((ok = value(&v))) {
+        o.home = parse_home(v, &why);
+        ok = o.home.has_value();
+      }
+    } else if (a == "--defaults") {
+      if ((ok = value(&v))) o.defaults_files.push_back(v);
     } else if (a == "--demo") {
       o.demo = true;
     } else if (a == "--write-world") {
-      if (!value(&v)) return std::nullopt;
-      o.write_world_path = v;
+      if ((ok = value(&v))) o.write_world_path = v;
     } else if (a == "--models-dir") {
-      if (!value(&v)) return std::nullopt;
-      o.models_dir = v;
+      if ((ok = value(&v))) o.models_dir = v;
     } else if (a == "--mavlink-port") {
-      if (!value(&v) || !parse_double(a, v, &number) || number < -1 || number > 65535) return std::nullopt;
-      o.mavlink_base_port = static_cast<int>(number);
+      ok = number({-1, 65535, true, "a port (0: ephemeral, -1: none)"}, &x);
+      o.mavlink_base_port = static_cast<int>(x);
     } else if (a == "--bind") {
-      if (!value(&v)) return std::nullopt;
-      o.bind_address = v;
+      if ((ok = value(&v))) o.bind_address = v;
+    } else if (a == "--out") {
+      if ((ok = value(&v))) {
+        o.udp_outs_explicit = true;
+        if (v != "none") {
+          UdpOut out;
+          const auto eq = v.find('=');
+          if (eq != std::string::npos && eq > 0 && v.find(':') > eq) {
+            const auto n = parse_number(a, v.substr(0, eq), {0, 100000, true, "a vehicle index before '='"}, &why);
+            ok = n.has_value();
+            if (n) out.vehicle = static_cast<int>(*n);
+            out.spec = v.substr(eq + 1);
+          } else {
+            out.spec = v;
+          }
+          // check the URL as vehicle 0 (or the named vehicle) would use it
+          ok = ok && udp_target(out, out.vehicle.value_or(0), &why).has_value();
+          if (ok) o.udp_outs.push_back(out);
+        }
+      }
     } else if (a == "--mavlink-key") {
-      if (!value(&v)) return std::nullopt;
-      const std::string hex = v;
-      std::array<uint8_t, 32> key{};
-      bool ok = hex.size() == 64;
-      for (std::size_t k = 0; ok && k < key.size(); ++k) {
-        const std::string byte = hex.substr(2 * k, 2);
-        char* end = nullptr;
-        const unsigned long b = std::strtoul(byte.c_str(), &end, 16);
-        ok = std::isxdigit(static_cast<unsigned char>(byte[0])) && end == byte.c_str() + 2;
-        key[k] = static_cast<uint8_t>(b);
+      if ((ok = value(&v))) {
+        key_text = v;
+        key_source = a;
       }
-      if (!ok) {
-        std::cerr << "uavsim-server: --mavlink-key needs 64 hex digits (32 bytes)\n";
-        return std::nullopt;
+    } else if (a == "--mavlink-key-file") {
+      if ((ok = value(&v))) {
+        key_text = read_first_line(a, v, &why);
+        key_source = a + " " + v;
+        ok = key_text.has_value();
       }
-      o.mavlink_key = key;
     } else if (a == "--api-port") {
-      if (!value(&v) || !parse_double(a, v, &number) || number < -1 || number > 65535) return std::nullopt;
-      o.api_port = static_cast<int>(number);
+      ok = number({-1, 65535, true, "a port (0: ephemeral, -1: none)"}, &x);
+      o.api_port = static_cast<int>(x);
     } else if (a == "--api-bind") {
-      if (!value(&v)) return std::nullopt;
-      o.api_bind_address = v;
-    } else if (a == "--lockstep-timeout") {
-      if (!value(&v) || !parse_double(a, v, &o.lockstep_timeout_s) || o.lockstep_timeout_s <= 0) {
-        return std::nullopt;
+      if ((ok = value(&v))) o.api_bind_address = v;
+    } else if (a == "--api-token-file") {
+      if ((ok = value(&v))) {
+        o.api_token = read_first_line(a, v, &why);
+        ok = o.api_token.has_value();
       }
+    } else if (a == "--allow-remote-gcs") {
+      o.allow_remote_gcs = true;
+    } else if (a == "--lockstep-timeout") {
+      ok = number({0.001, 86400, false, "wall seconds"}, &o.lockstep_timeout_s);
     } else if (a == "--camera") {
-      if (!value(&v)) return std::nullopt;
-      o.camera_overrides.push_back(v);
+      if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {
       o.cameras = false;
     } else if (a == "--record") {
-      if (!value(&v)) return std::nullopt;
-      o.record_path = v;
+      if ((ok = value(&v))) o.record_path = v;
     } else if (a == "--record-fps") {
-      if (!value(&v) || !parse_double(a, v, &o.record_fps) || o.record_fps <= 0) return std::nullopt;
+      ok = number({0.001, 1000, false, "frames per second"}, &o.record_fps);
     } else if (a == "--record-size") {
-      if (!value(&v)) return std::nullopt;
-      int w = 0, h = 0;
-      char x = 0;
-      if (std::sscanf(v, "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w <= 0 || h <= 0 || w > 8192 || h > 8192) {
-        std::cerr << "uavsim-server: --record-size needs WIDTHxHEIGHT, got '" << v << "'\n";
-        return std::nullopt;
+      if ((ok = value(&v))) {
+        int w = 0, h = 0;
+        char xc = 0, extra = 0;
+        ok = std::sscanf(v.c_str(), "%d%c%d%c", &w, &xc, &h, &extra) == 3 && xc == 'x' && w > 0 && h > 0 &&
+             w <= 8192 && h <= 8192;
+        if (!ok) why = "--record-size needs WIDTHxHEIGHT (1 to 8192 each), got '" + v + "'";
+        o.record_width = w;
+        o.record_height = h;
       }
-      o.record_width = w;
-      o.record_height = h;
+    } else if (a == "--log-dir") {
+      if ((ok = value(&v))) o.log_dir = v;
     } else if (a == "--quiet") {
       o.quiet = true;
     } else if (!a.empty() && a[0] == '-') {
-      std::cerr << "uavsim-server: unknown option " << a << " (see --help)\n";
-      return std::nullopt;
+      return fail("unknown option " + a + " (see --help)");
     } else if (o.world_path.empty()) {
       o.world_path = a;
     } else {
-      std::cerr << "uavsim-server: more than one world file given (" << o.world_path << ", " << a << ")\n";
-      return std::nullopt;
+      return fail("more than one world given (" + o.world_path + ", " + a + ")");
+    }
+    if (!ok) return fail(why);
+  }
+  // the signing key: an option, else the environment
+  if (!key_text) {
+    if (auto e = env("UAVSIM_MAVLINK_KEY"); e && !e->empty()) {
+      key_text = *e;
+      key_source = "UAVSIM_MAVLINK_KEY";
     }
   }
-  if (o.world_path.empty()) {
-    std::cerr << "uavsim-server: no world file given\n" << usage();
-    return std::nullopt;
+  if (key_text) {
+    o.mavlink_key = parse_signing_key(*key_text);
+    if (!o.mavlink_key) return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
   }
-  *exit_code = 0;
-  return o;
+  if (o.world_path.empty() && !o.version) return fail("no world given (a world file or a shipped world's name; see --help)");
+  r.options = std::move(o);
+  r.exit_code = 0;
+  return r;
 }
 
 }  // namespace uavsim::server::app

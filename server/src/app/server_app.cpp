@@ -1,6 +1,10 @@
 #include "app/server_app.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -9,9 +13,13 @@
 
 #include "api/api_server.hpp"
 #include "api/radio_ops.hpp"
+#include "api/sensor_ops.hpp"
 #include "app/demo_flight.hpp"
 #include "app/gimbal_bridge.hpp"
+#include "app/param_file.hpp"
+#include "app/run_reporter.hpp"
 #include "mavlink/endpoint.hpp"
+#include "physics/object_bodies.hpp"
 #include "physics/world.hpp"
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
@@ -36,13 +44,124 @@ std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& came
   if (!cameras.empty()) return 0;
   return std::nullopt;
 }
+
+// a socket error with the option that avoids it: another process (often another uavsim-server) holds the port
+std::string with_port_hint(const std::string& what, const char* flag) {
+  if (what.find("in use") == std::string::npos) return what;
+  return what + " (another server running? " + flag + " 0 picks free ports and prints them)";
+}
+
+const UdpOut kDefaultUdpOut{"udp:127.0.0.1:14550", 0};  // QGroundControl listens there
+
+// vehicle i's UDP links from the --out options (the default: vehicle 0 to QGroundControl's 14550)
+std::vector<std::vector<mavlink::UdpEndpoint>> udp_links(const Options& options, std::size_t vehicles) {
+  std::vector<UdpOut> outs = options.udp_outs;
+  // the default goes with a fixed TCP port (a run by hand): runs on ephemeral ports (tests, launchers,
+  // sweeps) and runs without MAVLink do not send to a ground station that may be watching
+  if (!options.udp_outs_explicit && options.mavlink_base_port > 0) outs.push_back(kDefaultUdpOut);
+  std::vector<std::vector<mavlink::UdpEndpoint>> links(vehicles);
+  for (std::size_t i = 0; i < vehicles; ++i) {
+    for (const UdpOut& out : outs) {
+      std::string why;
+      const auto t = udp_target(out, static_cast<int>(i), &why);
+      if (!why.empty()) throw std::invalid_argument(why);
+      if (t) links[i].push_back({t->listen, t->host, t->port});
+    }
+  }
+  return links;
+}
+
 }  // namespace
+
+mavlink::GeodeticOrigin world_home(const physics::World& world, const Options& options) {
+  mavlink::GeodeticOrigin origin;
+  if (options.home) {
+    origin.lat_deg = options.home->lat_deg;
+    origin.lon_deg = options.home->lon_deg;
+    origin.alt_m = options.home->alt_m;
+    return origin;
+  }
+  const std::vector<double> h = physics::custom_numeric(world, "uavsim:home");
+  if (h.empty()) return origin;
+  const bool ok = h.size() == 3 && std::isfinite(h[0]) && std::isfinite(h[1]) && std::isfinite(h[2]) &&
+                  std::abs(h[0]) <= 90.0 && std::abs(h[1]) <= 180.0 && h[2] >= -500.0 && h[2] <= 10000.0;
+  if (!ok) {
+    throw physics::WorldError("custom numeric uavsim:home needs data=\"LAT LON ALT\" (degrees, degrees, metres above "
+                              "sea level; latitude -90..90, longitude -180..180, altitude -500..10000)");
+  }
+  origin.lat_deg = h[0];
+  origin.lon_deg = h[1];
+  origin.alt_m = h[2];
+  return origin;
+}
+
+namespace {
+
+std::size_t mavlink_clients(const mavlink::MavlinkServer* server) {
+  if (server == nullptr) return 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < server->vehicle_count(); ++i) n += server->client_count(i);
+  return n;
+}
+}  // namespace
+
+std::vector<std::string> shipped_worlds(const std::string& models_dir) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(models_dir + "/worlds", ec)) {
+    if (entry.path().extension() == ".xml") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string resolve_world_path(const std::string& given, const std::string& models_dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_regular_file(given, ec)) return given;
+  // a shipped world by name ("mbzirc2020" or "mbzirc2020.xml")
+  const fs::path by_name = fs::path(models_dir) / "worlds" / fs::path(given).filename();
+  for (const fs::path& p : {by_name, fs::path(by_name.string() + ".xml")}) {
+    if (fs::path(given).parent_path().empty() && fs::is_regular_file(p, ec)) return p.string();
+  }
+  std::string list;
+  for (const std::string& n : shipped_worlds(models_dir)) list += (list.empty() ? "" : ", ") + n;
+  throw std::runtime_error("no world file '" + given + "'; the shipped worlds are: " +
+                           (list.empty() ? "(none found in " + models_dir + "/worlds)" : list) +
+                           " (by name, or models/worlds/NAME.xml)");
+}
+
+std::vector<std::string> option_warnings(const Options& options) {
+  std::vector<std::string> w;
+  if (options.mavlink_base_port >= 0 && !is_loopback_address(options.bind_address)) {
+    w.push_back("--bind " + options.bind_address +
+                ": the MAVLink endpoints are reachable from other machines, and whoever reaches them can arm and "
+                "fly the vehicles" +
+                (options.mavlink_key ? "" : " (sign the links with --mavlink-key-file)"));
+  }
+  if (options.api_port >= 0 && !is_loopback_address(options.api_bind_address)) {
+    w.push_back("--api-bind " + options.api_bind_address +
+                ": the sim API is reachable from other machines, and whoever reaches it can pause, reset and "
+                "kill" +
+                (options.api_token ? " (clients must send the --api-token-file token)"
+                                   : "; it has no authentication unless --api-token-file is given"));
+  }
+  return w;
+}
 
 void stop_server() { g_stop_requested = true; }
 
-int run_server(const Options& options) {
+int run_server(const Options& given_options) {
+  Options options = given_options;
   physics::ComposeOptions compose;
   compose.models_dir = options.models_dir.empty() ? physics::default_models_dir() : options.models_dir;
+  try {
+    options.world_path = resolve_world_path(options.world_path, compose.models_dir);
+  } catch (const std::exception& e) {
+    std::cerr << "uavsim-server: " << e.what() << "\n";
+    return 1;
+  }
+  for (const std::string& w : option_warnings(options)) std::cerr << "uavsim-server: warning: " << w << "\n";
 
   // --write-world: compose, write, done
   if (options.write_world_path) {
@@ -63,17 +182,47 @@ int run_server(const Options& options) {
   }
 
   std::unique_ptr<sim::Simulation> simulation;
+  mavlink::GeodeticOrigin origin;
   try {
     sim::SimConfig config;
     config.physics_hz = options.physics_hz;
     config.control_hz = options.control_hz;
     config.seed = options.seed;
-    simulation = std::make_unique<sim::Simulation>(physics::World::load(options.world_path, compose), config);
+    std::unique_ptr<physics::World> world = physics::World::load(options.world_path, compose);
+    // parameters: the world's uavsim:params texts, then --defaults files
+    std::vector<std::string> names;
+    for (const physics::VehicleBinding& v : world->vehicles()) names.push_back(v.name);
+    config.vehicle_params = vehicle_params(names, physics::custom_texts(*world, "uavsim:params:"), options.defaults_files);
+    origin = world_home(*world, options);
+    simulation = std::make_unique<sim::Simulation>(std::move(world), config);
   } catch (const std::exception& e) {
     std::cerr << "uavsim-server: " << e.what() << "\n";
     return 1;
   }
   sim::Simulation& s = *simulation;
+  if (options.mavlink_base_port >= 0) {
+    if (auto why = port_range_error("--mavlink-port", options.mavlink_base_port, s.vehicle_count())) {
+      std::cerr << "uavsim-server: " << *why << "\n";
+      return 2;
+    }
+  }
+
+  // what the server says: event lines (unless --quiet) and --log-dir's events.jsonl
+  std::ofstream event_log;
+  if (options.log_dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(*options.log_dir, ec);
+    event_log.open(*options.log_dir + "/events.jsonl");
+    if (!event_log) {
+      std::cerr << "uavsim-server: --log-dir: cannot write " << *options.log_dir << "/events.jsonl\n";
+      return 1;
+    }
+  }
+  RunReporter reporter(s, options.quiet ? nullptr : &std::cout, options.log_dir ? &event_log : nullptr);
+  if (options.log_dir && !options.quiet) {
+    std::cout << "uavsim-server: logging to " << *options.log_dir << " (VEHICLE.tlog, events.jsonl)\n";
+  }
+  s.add_control_observer([&reporter](sim::Simulation&) { reporter.on_control_step(); });
   // world objects (truck, balloons, gimbals) found in the world
   objects::ObjectSet world_objects;
   try {
@@ -91,21 +240,44 @@ int run_server(const Options& options) {
 
   // MAVLink endpoints: vehicle i on base + 10 i
   std::unique_ptr<mavlink::MavlinkServer> mavlink_server;
-  if (options.mavlink_base_port >= 0 && s.vehicle_count() > 0) {
-    mavlink::EndpointConfig endpoint;
+  mavlink::EndpointConfig endpoint;
+  try {
+    endpoint.udp = udp_links(options, s.vehicle_count());
+  } catch (const std::exception& e) {
+    std::cerr << "uavsim-server: " << e.what() << "\n";
+    return 2;
+  }
+  const bool any_udp = std::any_of(endpoint.udp.begin(), endpoint.udp.end(), [](const auto& v) { return !v.empty(); });
+  if ((options.mavlink_base_port >= 0 || any_udp) && s.vehicle_count() > 0) {
     endpoint.base_port = options.mavlink_base_port;
     endpoint.bind_address = options.bind_address;
     endpoint.signing_key = options.mavlink_key;
+    endpoint.origin = origin;
+    if (options.log_dir) endpoint.tlog_dir = *options.log_dir;
+    endpoint.on_client = [&reporter](std::size_t v, bool connected, const std::string& peer) {
+      reporter.on_client(v, connected, peer);
+    };
+    endpoint.on_status_text = [&reporter](std::size_t v, int severity, const std::string& text) {
+      reporter.on_status_text(v, severity, text);
+    };
     try {
       mavlink_server = std::make_unique<mavlink::MavlinkServer>(s, endpoint);
     } catch (const std::exception& e) {
-      std::cerr << "uavsim-server: " << e.what() << "\n";
+      std::cerr << "uavsim-server: " << with_port_hint(e.what(), "--mavlink-port") << "\n";
       return 1;
     }
     if (!options.quiet) {
       for (size_t i = 0; i < s.vehicle_count(); ++i) {
-        std::cout << "uavsim-server: " << s.vehicle_name(i) << ": MAVLink on tcp:" << endpoint.bind_address << ":"
-                  << mavlink_server->port(i) << "\n";
+        std::cout << "uavsim-server: " << s.vehicle_name(i) << ": MAVLink on";
+        if (options.mavlink_base_port >= 0) {
+          std::cout << " tcp:" << endpoint.bind_address << ":" << mavlink_server->port(i);
+        }
+        for (std::size_t k = 0; k < endpoint.udp[i].size(); ++k) {
+          const mavlink::UdpEndpoint& u = endpoint.udp[i][k];
+          std::cout << (u.listen ? " udpin:" : " udp:") << u.host << ":" << u.port;
+          if (!u.listen) std::cout << " (from port " << mavlink_server->udp_port(i, k) << ")";
+        }
+        std::cout << "\n";
       }
       std::cout.flush();
     }
@@ -191,6 +363,7 @@ int run_server(const Options& options) {
 
   // the sim socket API: requests run in the control gate, on this (the loop) thread
   std::unique_ptr<api::RadioOps> radio_ops;  // outlives api_server, which serves its ops
+  std::unique_ptr<api::SensorOps> sensor_ops;  // likewise
   std::unique_ptr<api::ApiServer> api_server;
   std::unique_ptr<EndpointHooks> endpoint_hooks;
   if (options.api_port >= 0) {
@@ -198,10 +371,12 @@ int run_server(const Options& options) {
     api_config.port = static_cast<uint16_t>(options.api_port);
     api_config.bind_address = options.api_bind_address;
     api_config.lockstep_timeout_s = options.lockstep_timeout_s;
+    api_config.token = options.api_token;
+    api_config.allow_remote_gcs = options.allow_remote_gcs;
     try {
       api_server = std::make_unique<api::ApiServer>(s, &runner, world_objects, api_config);
     } catch (const std::exception& e) {
-      std::cerr << "uavsim-server: " << e.what() << "\n";
+      std::cerr << "uavsim-server: " << with_port_hint(e.what(), "--api-port") << "\n";
       return 1;
     }
     api_server->set_stop_check([] { return g_stop_requested.load(); });
@@ -215,6 +390,9 @@ int run_server(const Options& options) {
     radio_ops = std::make_unique<api::RadioOps>(s, radio::SimRadio::attach(s, radio::RadioConfig{}),
                                                 &radio::GcsRelaySet::attach(s, options.api_bind_address));
     api_server->add_extension(radio_ops.get());
+    // onboard sensors: the landing-pad microswitches (sensor_* ops)
+    sensor_ops = std::make_unique<api::SensorOps>(s);
+    api_server->add_extension(sensor_ops.get());
     api_server->start();
     if (!options.quiet) {
       std::cout << "uavsim-server: sim API on tcp:" << api_config.bind_address << ":" << api_server->port()
@@ -245,6 +423,21 @@ int run_server(const Options& options) {
     });
   }
 
+  // --wait-for-clients: the clock starts when enough MAVLink and sim API clients are connected (the API's
+  // requests are answered from then on), so --rate 0 does not race through an empty world
+  if (options.wait_for_clients > 0) {
+    if (!options.quiet) {
+      std::cout << "uavsim-server: waiting for " << options.wait_for_clients << " client(s) before starting the clock"
+                << std::endl;
+    }
+    const auto clients = [&] {
+      return mavlink_clients(mavlink_server.get()) + (api_server ? api_server->connection_count() : 0);
+    };
+    while (!g_stop_requested && clients() < static_cast<std::size_t>(options.wait_for_clients)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+
   const double end = options.duration_s > 0 ? options.duration_s : std::numeric_limits<double>::infinity();
   runner.run_until(end);
   if (api_server) api_server->shutdown();
@@ -261,11 +454,19 @@ int run_server(const Options& options) {
     }
   }
 
-  for (const sim::Event& e : s.events().all()) {
-    if (e.type == sim::EventType::kCrash && !options.quiet) {
-      std::cout << "event t=" << e.time_s << "s " << sim::event_type_name(e.type) << " "
-                << s.vehicle_name(e.vehicle) << ": " << e.detail << "\n";
+  reporter.on_control_step();  // events of the last step
+  if (!options.quiet) {
+    std::string extra;
+    if (mavlink_server) {
+      std::uint64_t sent = 0, received = 0;
+      for (std::size_t i = 0; i < mavlink_server->vehicle_count(); ++i) {
+        const mavlink::EndpointStats st = mavlink_server->stats(i);
+        sent += st.frames_sent;
+        received += st.frames_received;
+      }
+      extra = "MAVLink frames: " + std::to_string(sent) + " sent, " + std::to_string(received) + " received";
     }
+    reporter.print_summary(std::cout, extra);
   }
   if (demo) {
     demo->print_summary(std::cout);

@@ -1,13 +1,30 @@
 // uavsim-server as a function: load the world, build the simulation and its endpoints, run the clock.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "app/options.hpp"
+#include "mavlink/geodesy.hpp"
+#include "physics/world.hpp"
 
 namespace uavsim::server::app {
 
 // Runs the server until the duration, the demo's end or stop_server(). Returns the process exit code.
 // Startup errors (bad world, bad option) are printed with the file and line and return 1.
 int run_server(const Options& options);
+
+// The world file to load: given itself when it is a file, else the shipped world of that name in
+// models_dir/worlds ("mbzirc2020" or "mbzirc2020.xml"). Throws std::runtime_error listing the shipped worlds.
+std::string resolve_world_path(const std::string& given, const std::string& models_dir);
+// The names of the worlds in models_dir/worlds, sorted.
+std::vector<std::string> shipped_worlds(const std::string& models_dir);
+// Warnings about options that expose the server (non-loopback --bind / --api-bind), one line each.
+std::vector<std::string> option_warnings(const Options& options);
+
+// The geodetic position of the world origin: --home, else the world's custom numeric uavsim:home
+// (LAT LON ALT), else the default. Throws physics::WorldError for a malformed uavsim:home.
+mavlink::GeodeticOrigin world_home(const physics::World& world, const Options& options);
 
 // Asks a running server to stop (from a signal handler: only sets an atomic flag).
 void stop_server();

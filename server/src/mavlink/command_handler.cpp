@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "mavlink/frames.hpp"
+#include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
@@ -42,7 +43,13 @@ constexpr std::uint16_t kForceSet = 512;
 constexpr std::uint16_t kYawIgnore = 1024;
 constexpr std::uint16_t kYawRateIgnore = 2048;
 
-bool finite3(const Eigen::Vector3d& v) { return v.allFinite(); }
+using limits::within;
+using sim::checked_integer;
+
+// MAVLink message ids are 24 bits
+constexpr std::uint32_t kMaxMsgId = 0xFFFFFF;
+// mission sequence numbers are uint16 on the wire
+constexpr int kMaxSeq = 65535;
 
 }  // namespace
 
@@ -73,15 +80,18 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       return kUnsupported;
     }
     case 176: {  // MAV_CMD_DO_SET_MODE (and the SET_MODE message): needs CUSTOM_MODE_ENABLED
-      const auto base_mode = static_cast<std::uint32_t>(p[0]);
-      if ((base_mode & 1u) == 0 || !std::isfinite(p[1]) || p[1] < 0) return kFailed;
-      const auto mode = fc::mode_from_number(static_cast<std::uint32_t>(p[1]));
+      // both are integers on the wire (SET_MODE); anything a uint8/uint32 cannot hold is refused
+      const auto base_mode = checked_integer<std::uint8_t>(p[0]);
+      const auto custom_mode = checked_integer<std::uint32_t>(p[1]);
+      if (!base_mode || !custom_mode) return kDenied;
+      if ((*base_mode & 1u) == 0) return kFailed;
+      const auto mode = fc::mode_from_number(*custom_mode);
       if (!mode) return kFailed;
       return mav_result(fc.set_mode(*mode));
     }
     case 22: {  // MAV_CMD_NAV_TAKEOFF: COMMAND_LONG is GLOBAL_RELATIVE_ALT; COMMAND_INT must be too
       if (c.is_int && c.frame != 3 && c.frame != 6) return kDenied;
-      if (!std::isfinite(p[6])) return kDenied;
+      if (!within(p[6], limits::kPosition_m)) return kDenied;
       return failed_unless_accepted(fc.takeoff(p[6]));
     }
     case 21:  // MAV_CMD_NAV_LAND
@@ -91,19 +101,36 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
     case 17:  // MAV_CMD_NAV_LOITER_UNLIM
       return mav_result(fc.set_mode(fc::Mode::kLoiter));
     case 115: {  // MAV_CMD_CONDITION_YAW: angle, rate, direction, relative
-      if (!std::isfinite(p[0]) || !std::isfinite(p[1])) return kDenied;
+      if (!within(p[0], limits::kAngle_deg) || !sim::finite_in(p[1], 0.0, limits::kYawRate_deg_s) ||
+          !std::isfinite(p[2]) || !std::isfinite(p[3])) {
+        return kDenied;
+      }
       const int dir = p[2] > 0 ? 1 : (p[2] < 0 ? -1 : 0);
       return mav_result(fc.condition_yaw(p[0], p[1], dir, p[3] != 0.0));
     }
-    case 178:  // MAV_CMD_DO_CHANGE_SPEED: speed type, speed
-      if (!std::isfinite(p[1])) return kDenied;
-      return mav_result(fc.change_speed(static_cast<int>(p[0]), p[1]));
-    case 300:  // MAV_CMD_MISSION_START: first, last item (0, 0 = all)
-      return mav_result(fc.mission_start(static_cast<int>(p[0]), static_cast<int>(p[1])));
-    case 224:  // MAV_CMD_DO_SET_MISSION_CURRENT
-      return mav_result(fc.set_mission_current(static_cast<int>(p[0])));
+    case 178: {  // MAV_CMD_DO_CHANGE_SPEED: speed type (0..3), speed
+      const auto type = checked_integer<int>(p[0], 0, 3);
+      if (!type || !within(p[1], limits::kSpeed_m_s)) return kDenied;
+      return mav_result(fc.change_speed(*type, p[1]));
+    }
+    case 300: {  // MAV_CMD_MISSION_START: first, last item (0, 0 = all)
+      const auto first = checked_integer<int>(p[0], 0, kMaxSeq);
+      const auto last = checked_integer<int>(p[1], 0, kMaxSeq);
+      if (!first || !last) return kDenied;
+      return mav_result(fc.mission_start(*first, *last));
+    }
+    case 224: {  // MAV_CMD_DO_SET_MISSION_CURRENT
+      const auto seq = checked_integer<int>(p[0], 0, kMaxSeq);
+      if (!seq) return kDenied;
+      return mav_result(fc.set_mission_current(*seq));
+    }
     case 192: {  // MAV_CMD_DO_REPOSITION (COMMAND_INT): go to lat/lon/alt in GUIDED
       if (!c.is_int) return kUnsupported;
+      // NaN altitude means "keep the current one" (MAVLink's convention); any other non-number is refused
+      if (!limits::valid_lat_lon(c.x / 1e7, c.y / 1e7) ||
+          (!std::isnan(p[6]) && !within(p[6], limits::kPosition_m))) {
+        return kDenied;
+      }
       if (fc.mode() != fc::Mode::kGuided) {
         const fc::CommandResult r = fc.set_mode(fc::Mode::kGuided);
         if (r != fc::CommandResult::kAccepted) return mav_result(r);
@@ -123,20 +150,36 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       return mav_result(fc.set_guided_target(t));
     }
     case 205: {  // MAV_CMD_DO_MOUNT_CONTROL: pitch, roll, yaw (deg), mode in param7
+      // NaN leaves an axis as it is; MAV_MOUNT_MODE is 0..6 (0 here also leaves the mode)
+      for (int i : {0, 1, 2}) {
+        if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
+      }
+      const auto mount_mode = std::isnan(p[6]) ? std::optional<std::uint8_t>(0)
+                                               : checked_integer<std::uint8_t>(p[6], 0, 6);
+      if (!mount_mode) return kDenied;
       if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
       if (std::isfinite(p[1])) gimbal_.roll_deg = p[1];
       if (std::isfinite(p[2])) gimbal_.yaw_deg = p[2];
-      if (std::isfinite(p[6]) && p[6] > 0) gimbal_.mount_mode = static_cast<std::uint8_t>(p[6]);
+      if (*mount_mode > 0) gimbal_.mount_mode = *mount_mode;
       gimbal_.yaw_earth_frame = false;
       gimbal_.stamp_s = now_s();
       return kAccepted;
     }
     case 1000: {  // MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: pitch, yaw (deg), rates (deg/s), flags
+      // NaN leaves an angle as it is and means rate 0 / no flags
+      for (int i : {0, 1}) {
+        if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
+      }
+      for (int i : {2, 3}) {
+        if (!std::isnan(p[i]) && !within(p[i], limits::kYawRate_deg_s)) return kDenied;
+      }
+      const auto flags = std::isnan(p[4]) ? std::optional<std::uint32_t>(0) : checked_integer<std::uint32_t>(p[4]);
+      if (!flags) return kDenied;
       if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
       if (std::isfinite(p[1])) gimbal_.yaw_deg = p[1];
       gimbal_.pitch_rate_deg_s = std::isfinite(p[2]) ? p[2] : 0.0;
       gimbal_.yaw_rate_deg_s = std::isfinite(p[3]) ? p[3] : 0.0;
-      gimbal_.yaw_earth_frame = (static_cast<std::uint32_t>(std::isfinite(p[4]) ? p[4] : 0) & 16u) != 0;
+      gimbal_.yaw_earth_frame = (*flags & 16u) != 0;
       gimbal_.mount_mode = 2;
       gimbal_.stamp_s = now_s();
       return kAccepted;
@@ -150,18 +193,18 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       if (p[0] == 1.0) send_autopilot_version(link);
       return kAccepted;
     case 512: {  // MAV_CMD_REQUEST_MESSAGE: sent at the next control step, after this ack
-      if (!std::isfinite(p[0]) || p[0] < 0) return kFailed;
-      const auto id = static_cast<std::uint32_t>(p[0]);
-      if (!can_send(id)) return kFailed;
-      link.one_shot.push_back(id);
+      const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
+      if (!id) return kDenied;
+      if (!can_send(*id)) return kFailed;
+      link.one_shot.push_back(*id);
       return kAccepted;
     }
     case 511: {  // MAV_CMD_SET_MESSAGE_INTERVAL: msgid, interval us (0 default, -1 stop)
-      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || p[0] < 0) return kFailed;
-      const auto id = static_cast<std::uint32_t>(p[0]);
+      const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
+      if (!id || !std::isfinite(p[1])) return kDenied;
       Stream* stream = nullptr;
       for (Stream& s : link.streams) {
-        if (s.msgid == id) stream = &s;
+        if (s.msgid == *id) stream = &s;
       }
       if (stream == nullptr) return kFailed;
       double interval_s = 0.0;
@@ -178,7 +221,9 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       return kAccepted;
     }
     case 510: {  // MAV_CMD_GET_MESSAGE_INTERVAL -> MESSAGE_INTERVAL
-      const auto id = static_cast<std::uint32_t>(std::isfinite(p[0]) && p[0] >= 0 ? p[0] : 0);
+      const auto checked_id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
+      if (!checked_id) return kDenied;
+      const std::uint32_t id = *checked_id;
       msg::MessageInterval mi;
       mi.message_id = static_cast<std::uint16_t>(id);
       mi.interval_us = 0;  // not available
@@ -222,10 +267,11 @@ void VehicleLink::apply_setpoint(std::uint16_t mask, int frame, std::optional<Ei
   const bool body = frame == 8 || frame == 9;            // BODY_NED, BODY_OFFSET_NED
   const bool offset = frame == 7 || frame == 8 || frame == 9;  // relative to the current position
   Eigen::Vector3d vel_ned = vel_ned_in, acc_ned = acc_ned_in;
-  // sanity: NaN, or |v| > 1000 m/s, is rejected
-  if ((use_vel && (!finite3(vel_ned) || vel_ned.norm() > 1000.0)) || (use_acc && !finite3(acc_ned)) ||
-      (use_pos && !finite3(*pos_ned)) || (use_yaw && !std::isfinite(yaw_ned)) ||
-      (use_yaw_rate && !std::isfinite(yaw_rate_ned))) {
+  // sanity: every used field finite and of a size a vehicle could be asked for
+  if ((use_vel && (!within(vel_ned, limits::kSpeed_m_s) || vel_ned.norm() > limits::kSpeed_m_s)) ||
+      (use_acc && !within(acc_ned, limits::kAccel_m_s2)) || (use_pos && !within(*pos_ned, limits::kPosition_m)) ||
+      (use_yaw && !within(yaw_ned, limits::kYaw_rad)) ||
+      (use_yaw_rate && !within(yaw_rate_ned, limits::kRate_rad_s))) {
     StatCounters::add(stats_.rejected_inputs);
     return;
   }
@@ -276,7 +322,7 @@ void VehicleLink::handle_set_position_target_global(const msg::SetPositionTarget
   std::optional<Eigen::Vector3d> pos_ned;
   if ((m.type_mask & kPosMask) == 0) {
     const double lat = m.lat_int / 1e7, lon = m.lon_int / 1e7;
-    if (std::abs(lat) > 90.0 || std::abs(lon) > 180.0 || !std::isfinite(m.alt)) {
+    if (!limits::valid_lat_lon(lat, lon) || !within(m.alt, limits::kPosition_m)) {
       hold_position(fc);
       return;
     }
@@ -292,7 +338,9 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
   // type_mask: 1/2/4 ignore body rates, 128 ignores the attitude
   if ((m.type_mask & 128) == 0) {
     const Eigen::Quaterniond q_ned_frd(m.q[0], m.q[1], m.q[2], m.q[3]);
-    if (!q_ned_frd.coeffs().allFinite() || q_ned_frd.norm() < 1e-6) {
+    // each component of a unit quaternion is within [-1, 1]; allow slack for unnormalised senders
+    const bool sane = (q_ned_frd.coeffs().array().abs() <= 2.0).all();
+    if (!sane || q_ned_frd.norm() < 1e-6) {
       StatCounters::add(stats_.rejected_inputs);
       return;
     }
@@ -302,7 +350,7 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
     const Eigen::Vector3d w_frd((m.type_mask & 1) ? 0.0 : m.body_roll_rate,
                                 (m.type_mask & 2) ? 0.0 : m.body_pitch_rate,
                                 (m.type_mask & 4) ? 0.0 : m.body_yaw_rate);
-    if (!w_frd.allFinite()) {
+    if (!within(w_frd, limits::kRate_rad_s)) {
       StatCounters::add(stats_.rejected_inputs);
       return;
     }

@@ -15,12 +15,14 @@
 #include <condition_variable>
 #include <cstring>
 #include <mutex>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <unordered_map>
 
 #include "mavlink/codec/parser.hpp"
+#include "mavlink/tlog.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
@@ -33,11 +35,30 @@ struct InEvent {
   Kind kind = Kind::kFrame;
   std::uint64_t client = 0;
   std::shared_ptr<Outbox> outbox;  // kConnect only
+  std::string peer;                // kConnect, kDisconnect: "tcp:ADDR:PORT", "udp:ADDR:PORT"
   Frame frame;                     // kFrame only (raw cleared: it pointed into the parser)
+  std::vector<std::uint8_t> raw;   // kFrame with a telemetry log: the frame's bytes
 };
 
 constexpr std::size_t kReadChunk = 64 * 1024;
 constexpr std::size_t kMaxReadPerWake = 256 * 1024;  // fairness between clients
+
+std::string address_text(const sockaddr_in& sa) {
+  char ip[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &sa.sin_addr, ip, sizeof(ip));
+  return std::string(ip) + ":" + std::to_string(ntohs(sa.sin_port));
+}
+
+sockaddr_in ipv4_address(const std::string& host, int port, const std::string& what) {
+  sockaddr_in sa{};
+  sa.sin_family = AF_INET;
+  sa.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (inet_pton(AF_INET, host.c_str(), &sa.sin_addr) != 1) {
+    throw std::runtime_error("mavlink endpoint: " + what + ": not an IPv4 address: '" + host + "'");
+  }
+  return sa;
+}
+
 
 }  // namespace
 
@@ -50,6 +71,7 @@ struct MavlinkServer::Core {
     SigningKeyCell signing;  // set by the link, read by the I/O thread
     int listen_fd = -1;
     std::uint16_t port = 0;
+    std::vector<std::uint16_t> udp_ports;  // local port of each UDP link
     std::mutex inbox_mutex;
     std::vector<InEvent> inbox;  // guarded by inbox_mutex
     std::size_t inbox_frames = 0;  // guarded by inbox_mutex
@@ -69,6 +91,8 @@ struct MavlinkServer::Core {
     std::vector<std::uint8_t> write_buf;
     std::size_t write_off = 0;
     bool want_out = false;
+    std::string peer;        // "tcp:ADDR:PORT" / "udp:ADDR:PORT"; empty while a udpin link has no peer
+    bool udp = false;        // a UDP link: one datagram per frame, never closed by its peer
   };
 
   sim::Simulation& sim;
@@ -103,11 +127,61 @@ struct MavlinkServer::Core {
     for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
       auto v = std::make_unique<Vehicle>();
       v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats, v->signing);
-      const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
-      v->listen_fd = listen_on(config.bind_address, port, &v->port);
-      add_fd(v->listen_fd, EPOLLIN, tag_listen(i));
+      if (config.base_port >= 0) {
+        const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
+        v->listen_fd = listen_on(config.bind_address, port, &v->port);
+        add_fd(v->listen_fd, EPOLLIN, tag_listen(i));
+      }
       vehicles.push_back(std::move(v));
+      if (i < config.udp.size()) {
+        for (const UdpEndpoint& u : config.udp[i]) open_udp(i, u);
+      }
     }
+  }
+
+  // a UDP link: udpclient sockets are connected to their ground station and start streaming at once;
+  // udpin sockets wait for a peer (read_client latches onto the first one)
+  void open_udp(std::size_t vehicle, const UdpEndpoint& u) {
+    const std::string url = std::string(u.listen ? "udpin:" : "udp:") + u.host + ":" + std::to_string(u.port);
+    sockaddr_in sa = ipv4_address(u.host, u.port, url);
+    const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0) throw std::runtime_error("mavlink endpoint: socket() failed for " + url);
+    const int rc = u.listen ? bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof(sa))
+                            : connect(fd, reinterpret_cast<sockaddr*>(&sa), sizeof(sa));
+    if (rc != 0) {
+      const std::string err = std::strerror(errno);
+      close(fd);
+      throw std::runtime_error("mavlink endpoint: cannot " + std::string(u.listen ? "listen on " : "send to ") + url +
+                               ": " + err);
+    }
+    sockaddr_in local{};
+    socklen_t len = sizeof(local);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len);
+    vehicles[vehicle]->udp_ports.push_back(ntohs(local.sin_port));
+    auto c = std::make_unique<Client>();
+    c->fd = fd;
+    c->vehicle = vehicle;
+    c->id = next_client_id++;
+    c->udp = true;
+    c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
+    add_fd(fd, EPOLLIN, tag_client(fd));
+    Client& client = *c;
+    clients[fd] = std::move(c);
+    if (!u.listen) latch_udp(client, "udp:" + u.host + ":" + std::to_string(u.port));
+  }
+
+  // a UDP link has its peer: from now on it is a client of the vehicle like a TCP connection
+  void latch_udp(Client& c, std::string peer) {
+    Vehicle& v = *vehicles[c.vehicle];
+    c.peer = std::move(peer);
+    StatCounters::add(v.stats.clients_accepted);
+    StatCounters::add(v.stats.clients_now);
+    InEvent ev;
+    ev.kind = InEvent::Kind::kConnect;
+    ev.client = c.id;
+    ev.outbox = c.outbox;
+    ev.peer = c.peer;
+    push_event(c.vehicle, std::move(ev));
   }
 
   // epoll tags: 0 = wake, 1..N = listening socket of vehicle tag-1, otherwise a client fd + 2^32
@@ -215,9 +289,18 @@ struct MavlinkServer::Core {
     }
     for (InEvent& e : events) {
       switch (e.kind) {
-        case InEvent::Kind::kConnect: v.link->on_connect(e.client, std::move(e.outbox)); break;
-        case InEvent::Kind::kDisconnect: v.link->on_disconnect(e.client); break;
-        case InEvent::Kind::kFrame: v.link->on_frame(e.client, e.frame, fc); break;
+        case InEvent::Kind::kConnect:
+          v.link->on_connect(e.client, std::move(e.outbox));
+          if (config.on_client) config.on_client(vehicle, true, e.peer);
+          break;
+        case InEvent::Kind::kDisconnect:
+          v.link->on_disconnect(e.client);
+          if (config.on_client) config.on_client(vehicle, false, e.peer);
+          break;
+        case InEvent::Kind::kFrame:
+          if (!e.raw.empty()) v.link->log_received(e.raw);
+          v.link->on_frame(e.client, e.frame, fc);
+          break;
       }
     }
     wake();
@@ -272,7 +355,9 @@ struct MavlinkServer::Core {
   void accept_clients(std::size_t vehicle) {
     Vehicle& v = *vehicles[vehicle];
     for (;;) {
-      const int fd = accept4(v.listen_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      sockaddr_in peer{};
+      socklen_t peer_len = sizeof(peer);
+      const int fd = accept4(v.listen_fd, reinterpret_cast<sockaddr*>(&peer), &peer_len, SOCK_NONBLOCK | SOCK_CLOEXEC);
       if (fd < 0) return;  // EAGAIN, or a transient error (EMFILE, ECONNABORTED): try at the next event
       const int one = 1;
       setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
@@ -281,6 +366,7 @@ struct MavlinkServer::Core {
       c->vehicle = vehicle;
       c->id = next_client_id++;
       c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
+      c->peer = "tcp:" + address_text(peer);
       add_fd(fd, EPOLLIN | EPOLLRDHUP, tag_client(fd));
       StatCounters::add(v.stats.clients_accepted);
       StatCounters::add(v.stats.clients_now);
@@ -288,6 +374,7 @@ struct MavlinkServer::Core {
       ev.kind = InEvent::Kind::kConnect;
       ev.client = c->id;
       ev.outbox = c->outbox;
+      ev.peer = c->peer;
       clients[fd] = std::move(c);
       push_event(vehicle, std::move(ev));
     }
@@ -299,9 +386,22 @@ struct MavlinkServer::Core {
     std::uint8_t buf[kReadChunk];
     std::size_t total = 0;
     while (total < kMaxReadPerWake) {
-      const ssize_t n = recv(c.fd, buf, sizeof(buf), 0);
-      if (n == 0) return false;
-      if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      sockaddr_in from{};
+      socklen_t from_len = sizeof(from);
+      const ssize_t n = recvfrom(c.fd, buf, sizeof(buf), 0, reinterpret_cast<sockaddr*>(&from), &from_len);
+      if (c.udp) {
+        // datagrams: an empty one is not an end; ICMP port-unreachable (no ground station listening yet)
+        // and other errors leave the link as it is
+        if (n < 0) return true;
+        if (c.peer.empty()) {
+          // a udpin link answers its first peer: connect to it, so that only it is heard from now on
+          if (connect(c.fd, reinterpret_cast<sockaddr*>(&from), from_len) != 0) continue;
+          latch_udp(c, "udp:" + address_text(from));
+        }
+      } else {
+        if (n == 0) return false;
+        if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+      }
       total += static_cast<std::size_t>(n);
       if (v.link_down.load(std::memory_order_relaxed)) continue;  // a dropped link: the bytes are lost
       StatCounters::add(v.stats.bytes_received, static_cast<std::uint64_t>(n));
@@ -325,6 +425,7 @@ struct MavlinkServer::Core {
         ev.client = c.id;
         ev.frame = f;
         ev.frame.raw = {};
+        if (!config.tlog_dir.empty()) ev.raw.assign(f.raw.begin(), f.raw.end());
         const std::uint8_t seq = f.seq;
         push_event(c.vehicle, std::move(ev));
         std::lock_guard lock(v.seq_mutex);
@@ -372,6 +473,10 @@ struct MavlinkServer::Core {
       }
       return true;
     }
+    if (c.udp) {
+      flush_datagrams(c);
+      return true;
+    }
     for (;;) {
       if (c.write_off >= c.write_buf.size()) {
         c.write_buf.clear();
@@ -402,6 +507,26 @@ struct MavlinkServer::Core {
     return true;
   }
 
+  // a UDP link sends one datagram per frame, as ArduPilot does; what the socket refuses is lost
+  void flush_datagrams(Client& c) {
+    Vehicle& v = *vehicles[c.vehicle];
+    while (c.outbox->pending()) {
+      c.write_buf.clear();
+      c.outbox->take(c.write_buf);
+      std::span<const std::uint8_t> rest(c.write_buf);
+      while (!rest.empty()) {
+        const std::size_t len = std::min(frame_length(rest), rest.size());
+        if (len == 0) break;  // not a frame start: the outbox only holds whole frames, so never
+        if (!c.peer.empty()) {
+          const ssize_t n = send(c.fd, rest.data(), len, MSG_NOSIGNAL | MSG_DONTWAIT);
+          if (n > 0) StatCounters::add(v.stats.bytes_sent, static_cast<std::uint64_t>(n));
+        }
+        rest = rest.subspan(len);
+      }
+    }
+    c.write_buf.clear();
+  }
+
   void close_client(int fd) {
     auto it = clients.find(fd);
     if (it == clients.end()) return;
@@ -415,6 +540,7 @@ struct MavlinkServer::Core {
     InEvent ev;
     ev.kind = InEvent::Kind::kDisconnect;
     ev.client = c.id;
+    ev.peer = c.peer;
     const std::size_t vehicle = c.vehicle;
     {
       std::lock_guard lock(v.seq_mutex);
@@ -468,6 +594,9 @@ MavlinkServer::~MavlinkServer() { core_->shutdown(); }
 
 std::size_t MavlinkServer::vehicle_count() const { return core_->vehicles.size(); }
 std::uint16_t MavlinkServer::port(std::size_t vehicle) const { return core_->vehicles.at(vehicle)->port; }
+std::uint16_t MavlinkServer::udp_port(std::size_t vehicle, std::size_t k) const {
+  return core_->vehicles.at(vehicle)->udp_ports.at(k);
+}
 EndpointStats MavlinkServer::stats(std::size_t vehicle) const {
   return core_->vehicles.at(vehicle)->stats.snapshot();
 }

@@ -1,7 +1,7 @@
-// The per-vehicle MAVLink TCP endpoints (DESIGN.md "MAVLink endpoint per vehicle"; behaviour per the shared
-// mavlink/behaviour.md, i.e. ArduCopter SITL on the wire).
+// The per-vehicle MAVLink endpoints: ArduCopter SITL's behaviour on the wire.
 //
-// Vehicle i listens on base_port + 10 i (ArduPilot SITL's -I convention), several clients at once. Threads:
+// Vehicle i listens on TCP base_port + 10 i (ArduPilot SITL's -I convention), several clients at once, and
+// may have UDP links beside (ArduPilot's udpclient/udpin: a ground station on a UDP port). Threads:
 //   * one network I/O thread (epoll, non-blocking sockets) for every endpoint: accepts, reads and parses
 //     frames, writes queued bytes. It never touches a flight controller.
 //   * the simulation loop thread: incoming frames are queued per vehicle and handled in a task posted with
@@ -14,9 +14,11 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "mavlink/geodesy.hpp"
 #include "mavlink/gimbal_state.hpp"
@@ -24,9 +26,18 @@
 
 namespace uavsim::server::mavlink {
 
+// One UDP link of a vehicle (ArduPilot's udpclient / udpin serial protocols, mavlink-router's endpoints).
+struct UdpEndpoint {
+  bool listen = false;  // false: send to host:port from an ephemeral port and answer what comes back from
+                        // there; true: listen on host:port and answer the first peer that sends
+  std::string host;     // IPv4 address
+  int port = 0;
+};
+
 struct EndpointConfig {
   std::string bind_address = "127.0.0.1";  // loopback by default; a non-loopback address must be explicit
-  int base_port = 5760;                    // vehicle i: base_port + port_stride * i; 0: ephemeral ports
+  int base_port = 5760;                    // vehicle i: base_port + port_stride * i; 0: ephemeral ports;
+                                           // -1: no TCP listeners (UDP links only)
   int port_stride = 10;
   GeodeticOrigin origin;                   // geodetic position of the world origin
   bool auto_sysid = true;                  // vehicle i gets SYSID_THISMAV = i + 1 (sim_vehicle.py --auto-sysid)
@@ -35,6 +46,16 @@ struct EndpointConfig {
   // MAVLink 2 signing from the start (--mavlink-key) for every vehicle; a client's SETUP_SIGNING replaces it
   // (an all-zero key turns signing off). See VehicleLink for the rules.
   std::optional<std::array<std::uint8_t, 32>> signing_key;
+  // udp[i]: vehicle i's UDP links beside its TCP endpoint (a vehicle past the end has none). A udp link
+  // is one more client of the vehicle (its own streams, sequence numbers and MAVLink version).
+  std::vector<std::vector<UdpEndpoint>> udp;
+  // Non-empty: DIR/VEHICLE_NAME.tlog per vehicle, every frame sent to and received from its clients
+  // (tlog.hpp), stamped with sim time. The directory must exist.
+  std::string tlog_dir;
+  // Optional observers, called on the loop thread: a client connected (true) or left (false), with its
+  // peer as "tcp:ADDR:PORT" or "udp:ADDR:PORT"; a flight-controller status text (MAV_SEVERITY, text).
+  std::function<void(std::size_t vehicle, bool connected, const std::string& peer)> on_client;
+  std::function<void(std::size_t vehicle, int severity, const std::string& text)> on_status_text;
 };
 
 // Counters of one vehicle's endpoint since start (a snapshot).
@@ -65,7 +86,7 @@ struct EndpointStats {
 
 class MavlinkServer {
  public:
-  // Opens one listening socket per vehicle of sim, registers the telemetry observer, starts the I/O thread.
+  // Opens one listening socket per vehicle of sim (and its UDP links), registers the telemetry observer, starts the I/O thread.
   // Throws std::runtime_error naming the address and port when a socket cannot be bound (startup error).
   // Call on the loop thread (or before the loop runs); sim must outlive the server's use of the loop.
   MavlinkServer(sim::Simulation& sim, const EndpointConfig& config);
@@ -76,7 +97,10 @@ class MavlinkServer {
   MavlinkServer& operator=(const MavlinkServer&) = delete;
 
   std::size_t vehicle_count() const;                // Thread-safe.
-  std::uint16_t port(std::size_t vehicle) const;    // The bound TCP port (useful with base_port 0). Thread-safe.
+  std::uint16_t port(std::size_t vehicle) const;    // The bound TCP port (useful with base_port 0; 0 with
+                                                    // no TCP). Thread-safe.
+  // The local UDP port of a vehicle's k-th UDP link (config.udp[vehicle][k]). Thread-safe.
+  std::uint16_t udp_port(std::size_t vehicle, std::size_t k) const;
   EndpointStats stats(std::size_t vehicle) const;   // Thread-safe.
   std::size_t client_count(std::size_t vehicle) const;  // Connected clients. Thread-safe.
   // The gimbal pointing last commanded over MAVLink for a vehicle. Loop thread only.

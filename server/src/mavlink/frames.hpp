@@ -6,15 +6,12 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "fc/angles.hpp"
+
 namespace uavsim::server::mavlink::frames {
 
-inline constexpr double kPi = 3.14159265358979323846;
-
-// Wraps an angle to (-pi, pi].
-inline double wrap_pi(double a) {
-  a = std::remainder(a, 2.0 * kPi);
-  return a <= -kPi ? a + 2.0 * kPi : a;
-}
+using fc::kPi;
+using fc::wrap_pi;  // (-pi, pi], O(1), non-finite -> 0
 
 // Vectors: ENU (x east, y north, z up) <-> NED (x north, y east, z down). The map is its own inverse.
 inline Eigen::Vector3d ned_from_enu(const Eigen::Vector3d& v_enu) { return {v_enu.y(), v_enu.x(), -v_enu.z()}; }

@@ -1,5 +1,5 @@
-// Local <-> geodetic conversion, the one place it happens (DESIGN.md: "local <-> geodetic conversion per seed
-// eq. 6.1, in one place"). Pure functions; client_cpp links this target too.
+// Local <-> geodetic conversion, the one place it happens (eq. 6.1 of the thesis the project descends
+// from). Pure functions; client_cpp links this target too.
 //
 // Seed eq. (6.1): the local frame is centred at (lat0, lon0, alt0) and rotated by hdg0 about the vertical:
 //   [x y z]^T = Rz(hdg0) * [ R (lat - lat0),  R (lon - lon0) cos(lat0),  alt0 - alt ]^T,
@@ -15,8 +15,9 @@ namespace uavsim::server::mavlink {
 inline constexpr double kEarthRadiusM = 6378100.0;  // seed eq. (6.1) footnote
 
 // The geodetic position of the local origin (the MuJoCo world origin = EKF origin of every vehicle).
-// Default: the PX4/Gazebo Zurich test site (47.397742 N, 8.545594 E, 488 m AMSL); ArduPilot SITL's default
-// CMAC location (-35.363261, 149.165230, 584 m) works just as well (pass it in the endpoint options).
+// Default: the PX4/Gazebo Zurich test site (47.397742 N, 8.545594 E, 488 m AMSL); a world sets its own
+// (custom numeric uavsim:home) and uavsim-server --home overrides both (ArduPilot SITL's CMAC location is
+// -35.363261,149.165230,584).
 struct GeodeticOrigin {
   double lat_deg = 47.397742;
   double lon_deg = 8.545594;

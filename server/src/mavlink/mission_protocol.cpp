@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "mavlink/frames.hpp"
+#include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
@@ -24,6 +25,21 @@ constexpr std::uint8_t kMissionCancelled = 15;
 constexpr int kMaxMissionItems = 700;       // ArduPilot's SITL storage holds ~700 items
 constexpr double kRequestRetryS = 1.0;
 constexpr double kUploadTimeoutS = 8.0;
+
+// the parameters each supported command uses, in a sane range (hold times, speeds, angles)
+bool params_in_range(const msg::MissionItemInt& m) {
+  switch (m.command) {
+    case 16:  // NAV_WAYPOINT: hold time
+    case 19:  // NAV_LOITER_TIME: seconds
+      return sim::finite_in(m.param1, 0.0, limits::kDuration_s);
+    case 178:  // DO_CHANGE_SPEED: speed
+      return limits::within(m.param2, limits::kSpeed_m_s);
+    case 115:  // CONDITION_YAW: angle
+      return limits::within(m.param1, limits::kAngle_deg);
+    default:
+      return true;
+  }
+}
 
 }  // namespace
 
@@ -117,6 +133,12 @@ std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg:
     return std::nullopt;
   }
   const double lat = m.x / 1e7, lon = m.y / 1e7;
+  // every number checked before use: a position on the globe, an altitude, sane times and angles
+  if (!limits::within(m.z, limits::kPosition_m) || (!(m.x == 0 && m.y == 0) && !limits::valid_lat_lon(lat, lon)) ||
+      !params_in_range(m)) {
+    *error = kMissionError;
+    return std::nullopt;
+  }
   const double home_up = fc.home_set() ? fc.home_enu_m().z() : 0.0;
   const double up = amsl ? m.z - config_.origin.alt_m : home_up + m.z;
   item.position_valid = !(m.x == 0 && m.y == 0);
@@ -237,6 +259,12 @@ void VehicleLink::guided_goto(Link& link, const Frame& f, const msg::MissionItem
   t.position_enu_m = p;
   const fc::CommandResult r = fc.set_guided_target(t);
   send_mission_ack(link, f.sysid, f.compid, r == fc::CommandResult::kAccepted ? kMissionAccepted : kMissionError);
+}
+
+void VehicleLink::reject_mission_item(Link& link, const Frame& f) {
+  // an item that cannot even be read ends an upload in progress, as a bad item does below
+  if (link.upload.active) link.upload = MissionUpload{};
+  send_mission_ack(link, f.sysid, f.compid, kMissionError);
 }
 
 void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,

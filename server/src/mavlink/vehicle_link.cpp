@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "mavlink/input_limits.hpp"
+
 namespace uavsim::server::mavlink {
 
 EndpointStats StatCounters::snapshot() const {
@@ -41,6 +43,9 @@ VehicleLink::VehicleLink(sim::Simulation& sim, std::size_t vehicle, const Endpoi
   mav_type_ = rotors == 6 ? 13 : (rotors == 8 ? 14 : 2);
   if (const auto id = sim.fc(vehicle).param("SYSID_THISMAV")) sysid_ = static_cast<std::uint8_t>(*id);
   if (config.auto_sysid) sysid_ = static_cast<std::uint8_t>(std::min<std::size_t>(vehicle + 1, 255));
+  if (!config.tlog_dir.empty()) {
+    tlog_ = std::make_unique<TlogWriter>(config.tlog_dir + "/" + sim.vehicle_name(vehicle) + ".tlog");
+  }
   if (config.signing_key) {
     // no SETUP_SIGNING timestamp: start from the wall clock, as a client's own signing clock does
     const auto unix_us = std::chrono::duration_cast<std::chrono::microseconds>(
@@ -68,9 +73,14 @@ VehicleLink::Link* VehicleLink::find_link(std::uint64_t client) {
   return nullptr;
 }
 
+void VehicleLink::log_received(std::span<const std::uint8_t> frame) {
+  if (tlog_) tlog_->write(now_s(), frame);
+}
+
 void VehicleLink::push_frame(Link& link, std::span<const std::uint8_t> frame) {
   if (link.outbox->push(frame)) {
     StatCounters::add(stats_.frames_sent);
+    if (tlog_) tlog_->write(now_s(), frame);
   } else {
     StatCounters::add(stats_.frames_dropped_full);
   }
@@ -190,6 +200,13 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
         break;
       }
       constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+      // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
+      const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
+      if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||
+          bad(m.yaw_rate, limits::kRate_rad_s)) {
+        StatCounters::add(stats_.rejected_inputs);
+        break;
+      }
       if (std::isfinite(m.pitch)) gimbal_.pitch_deg = m.pitch * kRadToDeg;
       if (std::isfinite(m.yaw)) gimbal_.yaw_deg = m.yaw * kRadToDeg;
       gimbal_.pitch_rate_deg_s = std::isfinite(m.pitch_rate) ? m.pitch_rate * kRadToDeg : 0.0;
@@ -232,7 +249,13 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
     case msg::MissionItem::kId: {
       const auto m = msg::MissionItem::decode(f.payload.data());
       if (wrong_target(m.target_system, m.target_component)) break;
-      // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution
+      // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution; a
+      // latitude/longitude out of range would overflow that conversion, so it is refused first
+      if (!limits::valid_lat_lon(m.x, m.y)) {
+        StatCounters::add(stats_.rejected_inputs);
+        reject_mission_item(link, f);
+        break;
+      }
       msg::MissionItemInt i;
       i.param1 = m.param1;
       i.param2 = m.param2;
@@ -302,6 +325,18 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
       set_signing(m.secret_key, m.initial_timestamp);
       break;
     }
+    case msg::RcChannelsOverride::kId: {
+      const auto m = msg::RcChannelsOverride::decode(f.payload.data());
+      if (wrong_target(m.target_system, m.target_component)) break;
+      handle_rc_override(f, m, fc);
+      break;
+    }
+    case msg::ManualControl::kId: {
+      const auto m = msg::ManualControl::decode(f.payload.data());
+      if (wrong_target(m.target, 0)) break;
+      handle_manual_control(f, m, fc);
+      break;
+    }
     case msg::AutopilotVersionRequest::kId: {
       const auto m = msg::AutopilotVersionRequest::decode(f.payload.data());
       if (wrong_target(m.target_system, m.target_component)) break;
@@ -317,7 +352,10 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
 void VehicleLink::on_control_step() {
   fc::FlightController& fc = sim_.fc(vehicle_);
   // status texts and reached mission items are events: drain them even with nobody listening
-  for (const fc::StatusText& s : fc.drain_status_texts()) send_status_text(s.severity, s.text);
+  for (const fc::StatusText& s : fc.drain_status_texts()) {
+    if (config_.on_status_text) config_.on_status_text(vehicle_, s.severity, s.text);
+    send_status_text(s.severity, s.text);
+  }
   for (int seq : fc.drain_reached_items()) {
     msg::MissionItemReached r;
     r.seq = static_cast<std::uint16_t>(seq);
@@ -340,6 +378,51 @@ void VehicleLink::on_control_step() {
     ts.ts1 = static_cast<std::int64_t>(std::llround(t * 1e9)) + sysid_;
     broadcast(ts);
   }
+}
+
+
+namespace {
+constexpr std::uint8_t kSysidMyGcs = 255;  // ArduPilot's SYSID_MYGCS default
+}  // namespace
+
+void VehicleLink::handle_rc_override(const Frame& f, const msg::RcChannelsOverride& m, fc::FlightController& fc) {
+  if (f.sysid != kSysidMyGcs) {
+    StatCounters::add(stats_.unhandled_messages);
+    return;
+  }
+  // channels 1-4 are roll, pitch, throttle, yaw (ArduCopter's RCMAP defaults) in microseconds; 0
+  // releases a channel (centred, mid throttle: no radio behind it here), UINT16_MAX leaves it as it was
+  const std::uint16_t pwm[4] = {m.chan1_raw, m.chan2_raw, m.chan3_raw, m.chan4_raw};
+  fc::PilotInput in = pilot_;
+  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
+  for (int k = 0; k < 4; ++k) {
+    if (pwm[k] == UINT16_MAX) continue;
+    if (pwm[k] != 0 && (pwm[k] < 800 || pwm[k] > 2200)) {
+      StatCounters::add(stats_.rejected_inputs);
+      return;
+    }
+    const double us = pwm[k] == 0 ? 1500.0 : std::clamp<double>(pwm[k], 1000.0, 2000.0);
+    // channel 2 high is nose up (stick back); throttle runs 1000 (0) to 2000 (1)
+    *axis[k] = k == 2 ? (us - 1000.0) / 1000.0 : (us - 1500.0) / 500.0 * (k == 1 ? -1.0 : 1.0);
+  }
+  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
+}
+
+void VehicleLink::handle_manual_control(const Frame& f, const msg::ManualControl& m, fc::FlightController& fc) {
+  if (f.sysid != kSysidMyGcs) {
+    StatCounters::add(stats_.unhandled_messages);
+    return;
+  }
+  // x forward, y right, r clockwise in [-1000, 1000], z throttle in [0, 1000] (ArduPilot's reading);
+  // INT16_MAX marks an axis as unused: it keeps its value
+  fc::PilotInput in = pilot_;
+  const std::int16_t raw[4] = {m.y, m.x, m.z, m.r};
+  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
+  for (int k = 0; k < 4; ++k) {
+    if (raw[k] == INT16_MAX) continue;
+    *axis[k] = k == 2 ? std::clamp(raw[k] / 1000.0, 0.0, 1.0) : std::clamp(raw[k] / 1000.0, -1.0, 1.0);
+  }
+  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
 }
 
 }  // namespace uavsim::server::mavlink

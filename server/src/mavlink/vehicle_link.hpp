@@ -23,6 +23,7 @@
 #include "mavlink/endpoint.hpp"
 #include "mavlink/generated/messages.hpp"
 #include "mavlink/outbox.hpp"
+#include "mavlink/tlog.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::mavlink {
@@ -95,6 +96,9 @@ class VehicleLink {
   void on_frame(std::uint64_t client, const Frame& frame, fc::FlightController& fc);
   // after every control step: due telemetry, status texts, reached items, transfer retries
   void on_control_step();
+
+  // a frame a client sent, for the telemetry log (before on_frame)
+  void log_received(std::span<const std::uint8_t> frame);
 
   bool has_clients() const { return !links_.empty(); }
   const GimbalState& gimbal() const { return gimbal_; }
@@ -199,10 +203,16 @@ class VehicleLink {
                       const Eigen::Vector3d& vel_ned, const Eigen::Vector3d& acc_ned, double yaw_ned,
                       double yaw_rate_ned, fc::FlightController& fc);
   void handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc::FlightController& fc);
+  // RC_CHANNELS_OVERRIDE and MANUAL_CONTROL: the pilot's sticks (ArduCopter takes them from its own
+  // ground station only, SYSID_MYGCS 255)
+  void handle_rc_override(const Frame& f, const msg::RcChannelsOverride& m, fc::FlightController& fc);
+  void handle_manual_control(const Frame& f, const msg::ManualControl& m, fc::FlightController& fc);
   void hold_position(fc::FlightController& fc);
 
   // --- mission_protocol.cpp ---
   void handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m);
+  // answers an item whose numbers could not be read with MISSION_ACK ERROR, ending an upload in progress
+  void reject_mission_item(Link& link, const Frame& f);
   void handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
                            fc::FlightController& fc);
   void handle_mission_request(Link& link, const Frame& f, int seq, bool want_int, fc::FlightController& fc);
@@ -241,6 +251,8 @@ class VehicleLink {
   std::uint8_t mav_type_ = 2;
   double next_timesync_s_ = 0.0;
   std::uint16_t next_text_id_ = 1;  // STATUSTEXT chunk ids
+  fc::PilotInput pilot_;  // the sticks as last overridden (a channel sent as "ignore" keeps its value)
+  std::unique_ptr<TlogWriter> tlog_;  // config.tlog_dir's log of this vehicle, if any
 };
 
 }  // namespace uavsim::server::mavlink

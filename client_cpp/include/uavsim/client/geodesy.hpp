@@ -33,6 +33,8 @@ Geodetic geodetic_from_enu(const GeodeticOrigin& origin, const Eigen::Vector3d& 
 // NED <-> ENU (swap x/y, negate z); the same function both ways.
 inline Eigen::Vector3d enu_from_ned(const Eigen::Vector3d& v) { return {v.y(), v.x(), -v.z()}; }
 inline Eigen::Vector3d ned_from_enu(const Eigen::Vector3d& v) { return {v.y(), v.x(), -v.z()}; }
+// An angle wrapped to (-pi, pi] in constant time; a non-finite angle gives 0. Thread-safe (pure).
+double wrap_pi(double a_rad);
 // Yaw angles: NED yaw is clockwise from north, ENU yaw counter-clockwise from east.
 double enu_yaw_from_ned(double ned_yaw_rad);
 double ned_yaw_from_enu(double enu_yaw_rad);

@@ -128,8 +128,11 @@ class Vehicle {
   Vehicle(const Vehicle&) = delete;
   Vehicle& operator=(const Vehicle&) = delete;
 
-  // Connects to "tcp:HOST:PORT" (or "HOST:PORT") and waits for the vehicle's first heartbeat, then asks for
-  // telemetry streams. kConnectionRefused at once if nothing listens; kTimeout after timeout_s.
+  // Connects to "tcp:HOST:PORT" (or "HOST:PORT"), "udp:HOST:PORT" (datagrams to a vehicle listening
+  // there, e.g. uavsim-server --out udpin:HOST:PORT or mavlink-router) or "udpin:ADDR:PORT" (listen there
+  // for a vehicle that sends, e.g. uavsim-server --out udp:ADDR:PORT), and waits for the vehicle's first
+  // heartbeat, then asks for telemetry streams. TCP: kConnectionRefused at once if nothing listens;
+  // kTimeout after timeout_s (over UDP, no answer is only ever a timeout).
   // Can be called again after the link was lost (a restarted mission process takes over the same way).
   Result<void> connect(const std::string& address, double timeout_s = 10.0);
   // UAVSIM_MAVLINK (e.g. "tcp:127.0.0.1:5760"), else fallback.

@@ -757,6 +757,46 @@ RequestDataStream RequestDataStream::decode(const std::uint8_t* p) {
   return m;
 }
 
+void ManualControl::encode(std::uint8_t* p) const {
+  wire::put(p + 0, x);
+  wire::put(p + 2, y);
+  wire::put(p + 4, z);
+  wire::put(p + 6, r);
+  wire::put(p + 8, buttons);
+  wire::put(p + 10, target);
+  wire::put(p + 11, buttons2);
+  wire::put(p + 13, enabled_extensions);
+  wire::put(p + 14, s);
+  wire::put(p + 16, t);
+  wire::put(p + 18, aux1);
+  wire::put(p + 20, aux2);
+  wire::put(p + 22, aux3);
+  wire::put(p + 24, aux4);
+  wire::put(p + 26, aux5);
+  wire::put(p + 28, aux6);
+}
+
+ManualControl ManualControl::decode(const std::uint8_t* p) {
+  ManualControl m;
+  wire::get(p + 0, m.x);
+  wire::get(p + 2, m.y);
+  wire::get(p + 4, m.z);
+  wire::get(p + 6, m.r);
+  wire::get(p + 8, m.buttons);
+  wire::get(p + 10, m.target);
+  wire::get(p + 11, m.buttons2);
+  wire::get(p + 13, m.enabled_extensions);
+  wire::get(p + 14, m.s);
+  wire::get(p + 16, m.t);
+  wire::get(p + 18, m.aux1);
+  wire::get(p + 20, m.aux2);
+  wire::get(p + 22, m.aux3);
+  wire::get(p + 24, m.aux4);
+  wire::get(p + 26, m.aux5);
+  wire::get(p + 28, m.aux6);
+  return m;
+}
+
 void RcChannelsOverride::encode(std::uint8_t* p) const {
   wire::put(p + 0, chan1_raw);
   wire::put(p + 2, chan2_raw);

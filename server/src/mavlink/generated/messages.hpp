@@ -695,6 +695,35 @@ struct RequestDataStream {
   static RequestDataStream decode(const std::uint8_t* payload);
 };
 
+// Manual (joystick) control message. This message represents movement axes and button using standard joystick...
+struct ManualControl {
+  static constexpr std::uint32_t kId = 69;
+  static constexpr std::uint8_t kCrcExtra = 243;
+  static constexpr std::uint8_t kMinLen = 11;
+  static constexpr std::uint8_t kMaxLen = 30;
+  static constexpr const char* kName = "MANUAL_CONTROL";
+
+  std::int16_t x = 0;
+  std::int16_t y = 0;
+  std::int16_t z = 0;
+  std::int16_t r = 0;
+  std::uint16_t buttons = 0;
+  std::uint8_t target = 0;
+  std::uint16_t buttons2 = 0;  // extension
+  std::uint8_t enabled_extensions = 0;  // extension
+  std::int16_t s = 0;  // extension
+  std::int16_t t = 0;  // extension
+  std::int16_t aux1 = 0;  // extension
+  std::int16_t aux2 = 0;  // extension
+  std::int16_t aux3 = 0;  // extension
+  std::int16_t aux4 = 0;  // extension
+  std::int16_t aux5 = 0;  // extension
+  std::int16_t aux6 = 0;  // extension
+
+  void encode(std::uint8_t* payload) const;
+  static ManualControl decode(const std::uint8_t* payload);
+};
+
 // The RAW values of the RC channels sent to the MAV to override info received from the RC radio. The standard...
 struct RcChannelsOverride {
   static constexpr std::uint32_t kId = 70;
@@ -1482,6 +1511,7 @@ using AllMessages = std::tuple<
     NavControllerOutput,
     RcChannels,
     RequestDataStream,
+    ManualControl,
     RcChannelsOverride,
     MissionItemInt,
     VfrHud,

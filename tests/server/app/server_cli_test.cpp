@@ -1,0 +1,152 @@
+// uavsim-server as a user meets it: a bad option, a world it cannot find, a port in use say why (and
+// what to do); a run prints one line per event and a summary, unless --quiet.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+namespace {
+
+struct ServerRun {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+ServerRun run_server(const std::string& args) {
+  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " " + args + " 2>&1";
+  ServerRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
+  const int status = pclose(p);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+bool has(const ServerRun& r, const std::string& s) { return r.output.find(s) != std::string::npos; }
+
+const std::string kWorlds = std::string(" --models-dir ") + UAVSIM_MODELS_DIR;
+
+TEST(ServerCli, BadOptionsSayWhy) {
+  ServerRun r = run_server("empty --rate -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r, "uavsim-server: --rate needs")) << r.output;
+  r = run_server("empty --mavlink-port 99999");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r, "--mavlink-port needs a port")) << r.output;
+}
+
+TEST(ServerCli, VersionPrintsAndExitsZero) {
+  const ServerRun r = run_server("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.output.rfind("uavsim-server ", 0), 0u) << r.output;
+}
+
+TEST(ServerCli, BasePortTooHighForTheWorldsVehicles) {
+  // grid100: vehicle 99 on 65000 + 990 = 65990
+  const ServerRun r = run_server("grid100" + kWorlds + " --mavlink-port 65000 --api-port -1 --no-cameras --out none");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r, "65990")) << r.output;
+  EXPECT_TRUE(has(r, "--mavlink-port 0")) << r.output;
+}
+
+TEST(ServerCli, UnknownWorldListsTheShippedWorlds) {
+  const ServerRun r = run_server("mbzirc2099" + kWorlds);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(has(r, "no world file 'mbzirc2099'")) << r.output;
+  EXPECT_TRUE(has(r, "mbzirc2020")) << r.output;
+}
+
+TEST(ServerCli, PortInUseSuggestsEphemeralPorts) {
+  // hold a TCP port, then ask the server for it
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+  ASSERT_EQ(::listen(fd, 1), 0);
+  socklen_t len = sizeof(a);
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  const int port = ntohs(a.sin_port);
+  ServerRun r = run_server("empty" + kWorlds + " --mavlink-port " + std::to_string(port) +
+                     " --api-port -1 --out none --duration 0.1 --rate 0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(has(r, "in use")) << r.output;
+  EXPECT_TRUE(has(r, "--mavlink-port 0")) << r.output;
+  r = run_server("empty" + kWorlds + " --api-port " + std::to_string(port) +
+                 " --mavlink-port -1 --out none --duration 0.1 --rate 0 --no-cameras");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_TRUE(has(r, "--api-port 0")) << r.output;
+  ::close(fd);
+}
+
+TEST(ServerCli, NonLoopbackApiBindWarns) {
+  const ServerRun r = run_server("empty" + kWorlds +
+                           " --api-bind 0.0.0.0 --api-port 0 --mavlink-port -1 --out none --no-cameras"
+                           " --duration 0.05 --rate 0 --quiet");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, "warning: --api-bind 0.0.0.0")) << r.output;
+  EXPECT_TRUE(has(r, "no authentication")) << r.output;
+}
+
+TEST(ServerCli, DemoRunPrintsEventsAndASummary) {
+  const ServerRun r = run_server("empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, "uav0: armed")) << r.output;
+  EXPECT_TRUE(has(r, "uav0: mode GUIDED")) << r.output;
+  EXPECT_TRUE(has(r, "uav0: takeoff")) << r.output;
+  EXPECT_TRUE(has(r, "uav0: disarmed")) << r.output;
+  EXPECT_TRUE(has(r, "s of sim time in")) << r.output;
+  EXPECT_TRUE(has(r, "0 crash(es)")) << r.output;
+  const ServerRun quiet = run_server("empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none --quiet");
+  EXPECT_EQ(quiet.exit_code, 0);
+  EXPECT_FALSE(has(quiet, "uav0: armed")) << quiet.output;
+  EXPECT_FALSE(has(quiet, "s of sim time in")) << quiet.output;
+}
+
+}  // namespace
+
+namespace {
+
+TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
+  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " empty" + kWorlds +
+                          " --wait-for-clients 1 --rate 0 --duration 2 --mavlink-port 0 --api-port -1 --no-cameras"
+                          " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  std::string output;
+  int fd = -1;
+  char line[4096];
+  while (fgets(line, sizeof(line), p) != nullptr) {
+    output += line;
+    const std::string l = line;
+    const auto at = l.find("MAVLink on tcp:127.0.0.1:");
+    if (fd < 0 && at != std::string::npos) {
+      // the server waits for this client before its clock starts
+      const int port = std::stoi(l.substr(at + std::string("MAVLink on tcp:127.0.0.1:").size()));
+      fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+      sockaddr_in a{};
+      a.sin_family = AF_INET;
+      a.sin_port = htons(static_cast<uint16_t>(port));
+      a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+      ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+    }
+  }
+  const int status = pclose(p);
+  if (fd >= 0) ::close(fd);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
+  EXPECT_NE(output.find("waiting for 1 client(s)"), std::string::npos) << output;
+  // the clock was still at 0 when the client's connection was handled
+  EXPECT_NE(output.find("t=0.000 uav0: client_connected MAVLink tcp:127.0.0.1:"), std::string::npos) << output;
+  EXPECT_NE(output.find("ran 2.000 s of sim time"), std::string::npos) << output;
+}
+
+}  // namespace

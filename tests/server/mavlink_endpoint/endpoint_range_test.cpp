@@ -1,0 +1,217 @@
+// Numbers out of range at the MAVLink edge: each is refused with an error the sender can see, and the
+// values that once hung the loop thread (an angle wrap looping on 1e30) no longer stop the vehicle even
+// when they reach the flight controller directly.
+#include <cmath>
+#include <limits>
+
+#include "test_gcs.hpp"
+
+namespace uavsim::server::mavlink::testing {
+namespace {
+
+constexpr int kAccepted = 0, kDenied = 2, kFailed = 4;
+constexpr int kMissionError = 1;
+constexpr double kHeadingTolRad = 0.15;
+
+class RangeTest : public EndpointTest {
+ protected:
+  // GUIDED, arm, take off to 3 m; returns once telemetry says it is there
+  void take_off(TestGcs& g) {
+    wait_gps_ready(g);
+    ASSERT_EQ(command(g, 176, {1, 4}), kAccepted);
+    ASSERT_EQ(command(g, 400, {1}), kAccepted);
+    ASSERT_EQ(command(g, 22, {0, 0, 0, 0, 0, 0, 3}), kAccepted);
+    ASSERT_TRUE(step_until(g, [&] {
+      const auto p = g.last<msg::GlobalPositionInt>();
+      return p && std::abs(p->relative_alt / 1000.0 - 3.0) < 0.5;
+    }, 30.0));
+  }
+
+  // the vehicle still obeys: CONDITION_YAW to a heading is accepted and flown (ATTITUDE.yaw is NED)
+  void expect_turns_to(TestGcs& g, double heading_deg) {
+    ASSERT_EQ(command(g, 115, {static_cast<float>(heading_deg), 90, 0, 0}), kAccepted);
+    const double want = heading_deg * M_PI / 180.0;
+    EXPECT_TRUE(step_until(g, [&] {
+      const auto a = g.last<msg::Attitude>();
+      return a && std::abs(std::remainder(a->yaw - want, 2 * M_PI)) < kHeadingTolRad;
+    }, 15.0)) << "vehicle did not turn to " << heading_deg << " deg after the bad input";
+  }
+
+  // uploads a two-item mission (home placeholder + item) and returns the MISSION_ACK type
+  int upload_one(TestGcs& g, const msg::MissionItemInt& item) {
+    msg::MissionCount mc;
+    mc.target_system = 1;
+    mc.count = 2;
+    const std::size_t acks = g.count<msg::MissionAck>();
+    // requests come as MISSION_REQUEST until the client has sent an INT item, then as MISSION_REQUEST_INT
+    const std::size_t old_reqs = g.count<msg::MissionRequest>(), old_reqs_int = g.count<msg::MissionRequestInt>();
+    g.send(mc);
+    sync_client(g);
+    std::size_t answered = 0;
+    const bool acked = step_until(g, [&] {
+      std::vector<int> seqs;
+      const auto reqs = g.all<msg::MissionRequest>();
+      const auto reqs_int = g.all<msg::MissionRequestInt>();
+      for (std::size_t k = old_reqs; k < reqs.size(); ++k) seqs.push_back(reqs[k].seq);
+      for (std::size_t k = old_reqs_int; k < reqs_int.size(); ++k) seqs.push_back(reqs_int[k].seq);
+      while (answered < seqs.size()) {
+        const int seq = seqs[answered++];
+        msg::MissionItemInt it = seq == 0 ? msg::MissionItemInt{} : item;
+        it.target_system = 1;
+        it.seq = static_cast<std::uint16_t>(seq);
+        g.send(it);
+      }
+      return g.count<msg::MissionAck>() > acks;
+    }, 5.0);
+    if (!acked) return -1;
+    return g.last<msg::MissionAck>()->type;
+  }
+};
+
+TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
+  auto g = connect();
+  take_off(*g);
+  fc::FlightController& fc = sim_->fc(0);
+  // the three inputs that once spun the angle wrap forever, given straight to the controller
+  EXPECT_EQ(fc.condition_yaw(1e30, 0.0, 0, false), fc::CommandResult::kAccepted);
+  step_for(0.5);
+  fc::GuidedTarget t;
+  t.velocity_enu_m_s = Eigen::Vector3d::Zero();
+  t.yaw_rate_rad_s = 3.4e38;
+  EXPECT_EQ(fc.set_guided_target(t), fc::CommandResult::kAccepted);
+  step_for(0.2);
+  fc::MissionItem yaw_item;
+  yaw_item.kind = fc::MissionItem::Kind::kConditionYaw;
+  yaw_item.yaw_deg = 1e30;
+  yaw_item.position_valid = false;
+  fc.set_mission({fc::MissionItem{}, yaw_item});
+  ASSERT_EQ(command(*g, 300, {0, 0}), kAccepted);  // AUTO runs the yaw item
+  step_for(0.2);
+  // back in GUIDED the vehicle is as controllable as before
+  std::string events;
+  for (const sim::Event& e : sim_->events().all()) {
+    events += std::string(sim::event_type_name(e.type)) + " " + e.detail + "; ";
+  }
+  ASSERT_TRUE(fc.armed()) << events;
+  ASSERT_EQ(command(*g, 176, {1, 4}), kAccepted);
+  expect_turns_to(*g, 90.0);
+  EXPECT_TRUE(sim_->truth(0).position_enu_m.allFinite());
+}
+
+TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
+  auto g = connect();
+  take_off(*g);
+  EXPECT_EQ(command(*g, 115, {1e30f, 0, 0, 0}), kDenied);                                   // angle
+  EXPECT_EQ(command(*g, 115, {90, std::numeric_limits<float>::infinity(), 0, 0}), kDenied);  // rate
+  EXPECT_EQ(command(*g, 115, {90, -5, 0, 0}), kDenied);
+  // velocity setpoint with yaw_rate 3.4e38: counted as rejected, never applied
+  const auto rejected = server_->stats(0).rejected_inputs;
+  msg::SetPositionTargetLocalNed sp;
+  sp.target_system = 1;
+  sp.coordinate_frame = 1;
+  sp.type_mask = 0x05C7;  // velocity + yaw rate
+  sp.yaw_rate = 3.4e38f;
+  g->send(sp);
+  sync_client(*g);
+  step_for(0.1);
+  EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 1);
+  // body rates of 1e30 in SET_ATTITUDE_TARGET too
+  msg::SetAttitudeTarget at;
+  at.target_system = 1;
+  at.type_mask = 128;  // rates only
+  at.body_yaw_rate = 1e30f;
+  at.thrust = 0.5f;
+  g->send(at);
+  sync_client(*g);
+  step_for(0.1);
+  EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 2);
+  expect_turns_to(*g, 180.0);
+}
+
+TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
+  auto g = connect();
+  msg::MissionItemInt yaw;
+  yaw.command = 115;
+  yaw.frame = 3;
+  yaw.param1 = 1e30f;
+  EXPECT_EQ(upload_one(*g, yaw), kMissionError);
+  msg::MissionItemInt wp;
+  wp.command = 16;
+  wp.frame = 3;
+  wp.x = 1'000'000'000;  // 100 degrees of latitude
+  wp.y = 1;
+  wp.z = 10;
+  EXPECT_EQ(upload_one(*g, wp), kMissionError);
+  wp.x = 1;
+  wp.z = 1e30f;
+  EXPECT_EQ(upload_one(*g, wp), kMissionError);
+  wp.z = 10;
+  wp.param1 = -1;  // negative hold time
+  EXPECT_EQ(upload_one(*g, wp), kMissionError);
+  // the legacy float item with latitude 1e30 (its conversion to 1e-7 degrees would overflow)
+  msg::MissionItem legacy;
+  legacy.target_system = 1;
+  legacy.command = 16;
+  legacy.frame = 3;
+  legacy.current = 2;
+  legacy.x = 1e30f;
+  const std::size_t acks = g->count<msg::MissionAck>();
+  g->send(legacy);
+  sync_client(*g);
+  ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::MissionAck>() > acks; }, 1.0));
+  EXPECT_EQ(g->last<msg::MissionAck>()->type, kMissionError);
+  // a good mission still goes in
+  yaw.param1 = 90;
+  EXPECT_EQ(upload_one(*g, yaw), 0);
+  EXPECT_EQ(sim_->fc(0).mission().size(), 2u);
+}
+
+TEST_F(RangeTest, FloatToIntegerFieldsOutOfRangeAreDenied) {
+  auto g = connect();
+  wait_gps_ready(*g);
+  ASSERT_EQ(command(*g, 176, {1, 4}), kAccepted);  // GUIDED
+  // custom_mode 2^32 and 1e30 once became 0 (STABILIZE) through an undefined cast
+  EXPECT_EQ(command(*g, 176, {1, 4294967296.0f}), kDenied);
+  EXPECT_EQ(command(*g, 176, {1, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 176, {1e30f, 4}), kDenied);
+  EXPECT_EQ(command(*g, 176, {1, 4.5f}), kDenied);
+  EXPECT_EQ(sim_->fc(0).mode(), fc::Mode::kGuided);
+  EXPECT_EQ(command(*g, 300, {1e30f, 0}), kDenied);
+  EXPECT_EQ(command(*g, 300, {0, -1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 224, {4294967296.0f}), kDenied);
+  EXPECT_EQ(command(*g, 178, {1e30f, 5}), kDenied);
+  EXPECT_EQ(command(*g, 178, {1, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 512, {1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 512, {-1}), kDenied);
+  EXPECT_EQ(command(*g, 511, {1e30f, 1000}), kDenied);
+  EXPECT_EQ(command(*g, 510, {1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 205, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 1000, {0, 0, 0, 0, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, 22, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
+  // the same commands in range still work
+  EXPECT_EQ(command(*g, 512, {0}), kAccepted);
+  EXPECT_EQ(command(*g, 178, {1, 5}), kAccepted);
+  EXPECT_EQ(command(*g, 176, {1, 5}), kAccepted);  // LOITER
+  EXPECT_EQ(sim_->fc(0).mode(), fc::Mode::kLoiter);
+  EXPECT_EQ(command(*g, 176, {1, 4294967295.0f}), kDenied);  // rounds to 2^32 as a float
+  EXPECT_EQ(command(*g, 176, {1, 4000}), kFailed);            // a whole number, but no such mode
+}
+
+TEST_F(RangeTest, ParamSetOutOfRangeLeavesTheValue) {
+  auto g = connect();
+  const double before = *sim_->fc(0).param("WPNAV_SPEED");
+  for (float v : {1e30f, -1e30f, std::numeric_limits<float>::infinity()}) {
+    msg::ParamSet ps;
+    ps.target_system = 1;
+    set_string(ps.param_id, "WPNAV_SPEED");
+    ps.param_value = v;
+    g->send(ps);
+  }
+  sync_client(*g);
+  step_for(0.1);
+  EXPECT_EQ(*sim_->fc(0).param("WPNAV_SPEED"), before);
+  EXPECT_EQ(server_->stats(0).rejected_inputs, 3u);
+}
+
+}  // namespace
+}  // namespace uavsim::server::mavlink::testing
