@@ -1,0 +1,115 @@
+// SimConnection: a blocking client of the simulator's sim API (docs/protocol.md), for launchers,
+// scoring harnesses and tests. Newline-delimited JSON over TCP: requests get their reply by id;
+// streamed messages (those with an "event" field: sim_event, tick, radio, frame, sensor, ...) read
+// meanwhile are queued for take_messages() or handed to a handler registered with on_message().
+//
+// The API's ground truth is for scoring and tests; a mission decides with what a real drone has.
+//
+// Thread contract: one thread uses a connection (the thread that created it); no method is
+// thread-safe. Handlers run on that thread, inside the call that read their message.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "uavsim/client/result.hpp"
+
+namespace uavsim::client {
+
+// A message the server streamed without being asked: {"event": KIND, ...}.
+struct SimMessage {
+  nlohmann::json json;
+  std::string payload;  // a `frame`'s image bytes (exactly its header's `bytes`); empty otherwise
+  // The message's "event" field ("tick", "sim_event", "frame", ...); empty if it has none.
+  std::string kind() const;
+};
+
+class SimConnection {
+ public:
+  // Largest line accepted from the server, and largest frame payload: a longer one is a
+  // kProtocol failure that closes the connection (never an allocation of what the peer claims).
+  static constexpr std::size_t kMaxLineBytes = 16u << 20;
+  static constexpr std::size_t kMaxFrameBytes = 64u << 20;
+
+  // Connects to the sim API at host:port and reads the server's hello, within timeout_s of wall
+  // time. kConnectionRefused when nothing listens, kTimeout, kProtocol when the peer does not
+  // greet as a uavsim server (or refuses the connection: `overloaded`).
+  static Result<std::unique_ptr<SimConnection>> connect(const std::string& host, uint16_t port,
+                                                        double timeout_s = 10.0);
+  // Takes over a connected stream socket (closed by the connection) and reads the hello as
+  // connect() does.
+  static Result<std::unique_ptr<SimConnection>> adopt(int fd, double timeout_s = 10.0);
+  ~SimConnection();
+  SimConnection(const SimConnection&) = delete;
+  SimConnection& operator=(const SimConnection&) = delete;
+
+  // The server's hello ({"hello": "uavsim", "protocol": 1, "ops": [...]}).
+  const nlohmann::json& hello() const;
+  // False once the connection is closed, lost or broken by a malformed message.
+  bool connected() const;
+  // The socket, for a caller's own poll loop (readable: call poll(0)); -1 once closed.
+  int fd() const;
+
+  // Sends req (an object with "op") with the next id and waits up to timeout_s of wall time for its
+  // reply; returns the reply's "result" (an empty object when it has none). Failures: the server's
+  // error (its code mapped to an Error, message "CODE: message"), kTimeout (the late reply is
+  // discarded when it comes), kNotConnected / kConnectionLost, kProtocol (malformed or oversized
+  // message: the connection is closed), kInvalidArgument (req not an object).
+  Result<nlohmann::json> request(nlohmann::json req, double timeout_s = 30.0);
+
+  // Streamed messages of this kind go to handler as they are read instead of the queue (one
+  // handler per kind; an empty function removes it). A handler must not call this connection.
+  void on_message(const std::string& kind, std::function<void(const SimMessage&)> handler);
+  // The streamed messages read so far that no handler took, oldest first (the queue is emptied).
+  std::vector<SimMessage> take_messages();
+  // Reads and dispatches whatever has arrived, waiting up to timeout_ms for the first bytes (0: do
+  // not wait). kConnectionLost when the server closed the connection, kProtocol on a malformed
+  // message; ok otherwise, whether or not anything came.
+  Result<void> poll(int timeout_ms);
+
+  // Control (docs/protocol.md, "Control"); each returns the reply's result.
+  Result<nlohmann::json> status();
+  Result<nlohmann::json> pause();
+  Result<nlohmann::json> resume();
+  // Back to t = 0 with this seed.
+  Result<nlohmann::json> reset(uint64_t seed);
+  // Pauses and advances the clock by sim_s seconds, replying when done (wall_timeout_s to wait).
+  Result<nlohmann::json> step_for(double sim_s, double wall_timeout_s);
+  // Subscribes to sim events from the start: the reply's `events` is the backlog, later events
+  // stream as `sim_event` messages.
+  Result<nlohmann::json> subscribe_events();
+  // Ground truth of the trucks (not_available without one: kUnsupported).
+  Result<nlohmann::json> truck();
+
+  // Joins the lockstep with this tick period (sim seconds); the server drops the connection's
+  // lockstep membership after timeout_s of wall time without a `done`. Ticks stream as `tick`.
+  Result<nlohmann::json> lockstep_join(double period_s, double timeout_s);
+  Result<nlohmann::json> lockstep_leave();
+  // Done with tick `tick`: optionally busy until a later sim time (detached timing), and the last
+  // MAVLink sequence number sent on each vehicle's link ({"uav0": 17}) before this call.
+  Result<nlohmann::json> done(int64_t tick, const std::map<std::string, int>& mavlink_seq = {},
+                              std::optional<double> busy_until_s = std::nullopt);
+
+  // Sends a radio frame (1-127 bytes) from vehicle to vehicle `to` (-1: broadcast).
+  Result<nlohmann::json> radio_send(int vehicle, std::string_view bytes, int to = -1);
+  // Frames received by this vehicle (-1: every vehicle) stream as `radio` messages.
+  Result<nlohmann::json> radio_subscribe(int vehicle);
+
+ private:
+  struct Impl;
+  explicit SimConnection(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Maps the API's error code ("bad_field", "not_available", ...) to an Error.
+Error sim_api_error(std::string_view code);
+
+}  // namespace uavsim::client

@@ -1,0 +1,397 @@
+#include "uavsim/client/sim_connection.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <deque>
+#include <thread>
+#include <utility>
+
+#include "net.hpp"
+
+namespace uavsim::client {
+
+namespace {
+
+using Json = nlohmann::json;
+using SteadyClock = std::chrono::steady_clock;
+
+constexpr std::size_t kReadChunk = 1u << 16;
+
+SteadyClock::time_point deadline_after(double timeout_s) {
+  // a NaN or negative timeout is no wait; a huge one is a day (no overflow of the time point)
+  const double s = std::isfinite(timeout_s) ? std::clamp(timeout_s, 0.0, 86400.0)
+                                            : (timeout_s > 0 ? 86400.0 : 0.0);
+  return SteadyClock::now() +
+         std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(s));
+}
+
+int ms_until(SteadyClock::time_point end) {
+  const auto left =
+      std::chrono::duration_cast<std::chrono::milliseconds>(end - SteadyClock::now()).count();
+  return static_cast<int>(std::clamp<int64_t>(left, 0, 1000 * 86400));
+}
+
+std::string base64_encode(std::string_view in) {
+  static constexpr char kAlphabet[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const uint32_t v = (uint32_t(uint8_t(in[i])) << 16) | (uint32_t(uint8_t(in[i + 1])) << 8) |
+                       uint8_t(in[i + 2]);
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += kAlphabet[(v >> 6) & 63];
+    out += kAlphabet[v & 63];
+  }
+  if (i < in.size()) {
+    uint32_t v = uint32_t(uint8_t(in[i])) << 16;
+    if (i + 1 < in.size()) v |= uint32_t(uint8_t(in[i + 1])) << 8;
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += i + 1 < in.size() ? kAlphabet[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string SimMessage::kind() const {
+  if (!json.is_object()) return "";
+  const auto it = json.find("event");
+  return it != json.end() && it->is_string() ? it->get<std::string>() : "";
+}
+
+Error sim_api_error(std::string_view code) {
+  if (code == "bad_json" || code == "bad_request" || code == "line_too_long" ||
+      code == "missing_field" || code == "bad_field" || code == "unknown_vehicle" ||
+      code == "frame_too_large" || code == "bad_base64") {
+    return Error::kInvalidArgument;
+  }
+  if (code == "unknown_op" || code == "not_available") return Error::kUnsupported;
+  if (code == "not_joined" || code == "bad_state") return Error::kNotReady;
+  if (code == "busy" || code == "queue_full" || code == "overloaded") {
+    return Error::kTemporarilyRejected;
+  }
+  if (code == "unauthorized" || code == "forbidden") return Error::kDenied;
+  return Error::kFailed;
+}
+
+struct SimConnection::Impl {
+  int fd = -1;
+  std::thread::id owner = std::this_thread::get_id();
+  Json hello;
+  int64_t next_id = 0;
+  std::string buf;                    // bytes read, not yet a whole message
+  std::optional<Json> frame_header;   // a frame header whose payload is still being read
+  std::size_t frame_bytes = 0;
+  std::deque<SimMessage> queue;       // streamed messages for take_messages()
+  std::map<std::string, std::function<void(const SimMessage&)>> handlers;
+  std::deque<Json> replies;           // replies read, not yet claimed by request()
+  std::optional<Failure> broken;      // why the connection is closed
+
+  ~Impl() { close_fd(); }
+
+  void assert_owner_thread() const { assert(owner == std::this_thread::get_id()); }
+
+  void close_fd() {
+    if (fd >= 0) ::close(fd);
+    fd = -1;
+  }
+  Failure fail(Error code, std::string message) {
+    close_fd();
+    if (!broken) broken = Failure{code, std::move(message)};
+    return *broken;
+  }
+
+  // a whole message: a reply (has "ok") is kept for request(); a streamed one is dispatched
+  void deliver(Json j, std::string payload) {
+    if (!j.contains("event") && j.contains("ok")) {
+      replies.push_back(std::move(j));
+      return;
+    }
+    SimMessage m{std::move(j), std::move(payload)};
+    const auto h = handlers.find(m.kind());
+    if (h != handlers.end() && h->second) {
+      h->second(m);
+    } else {
+      queue.push_back(std::move(m));
+    }
+  }
+
+  // (buf) => whole messages delivered; a failure when the stream is malformed
+  std::optional<Failure> parse_buffer() {
+    std::size_t pos = 0;
+    std::optional<Failure> error;
+    for (;;) {
+      if (frame_header) {
+        if (buf.size() - pos < frame_bytes) break;
+        std::string payload = buf.substr(pos, frame_bytes);
+        pos += frame_bytes;
+        Json header = std::move(*frame_header);
+        frame_header.reset();
+        deliver(std::move(header), std::move(payload));
+        continue;
+      }
+      const std::size_t nl = buf.find('\n', pos);
+      if (nl == std::string::npos) {
+        if (buf.size() - pos > kMaxLineBytes) {
+          error = fail(Error::kProtocol, "sim API: a line longer than " +
+                                             std::to_string(kMaxLineBytes) + " bytes");
+        }
+        break;
+      }
+      if (nl - pos > kMaxLineBytes) {
+        error = fail(Error::kProtocol, "sim API: a line longer than " +
+                                           std::to_string(kMaxLineBytes) + " bytes");
+        break;
+      }
+      Json j = Json::parse(std::string_view(buf.data() + pos, nl - pos), nullptr, false);
+      pos = nl + 1;
+      if (!j.is_object()) {
+        error = fail(Error::kProtocol, "sim API: a line that is not a JSON object");
+        break;
+      }
+      const auto ev = j.find("event");
+      if (ev != j.end() && ev->is_string() && *ev == "frame") {
+        // a frame header: exactly `bytes` bytes of image follow
+        const auto n = j.find("bytes");
+        if (n == j.end() || !n->is_number_integer() || n->get<int64_t>() < 0 ||
+            static_cast<uint64_t>(n->get<int64_t>()) > kMaxFrameBytes) {
+          error = fail(Error::kProtocol, "sim API: a frame header without a usable `bytes` (at most " +
+                                             std::to_string(kMaxFrameBytes) + ")");
+          break;
+        }
+        frame_bytes = static_cast<std::size_t>(n->get<int64_t>());
+        frame_header = std::move(j);
+        continue;
+      }
+      deliver(std::move(j), std::string());
+    }
+    if (error) {
+      buf.clear();
+    } else {
+      buf.erase(0, pos);
+    }
+    return error;
+  }
+
+  // waits up to timeout_ms for bytes, then reads all there are and delivers the whole messages
+  std::optional<Failure> read_some(int timeout_ms) {
+    if (fd < 0) return broken ? *broken : Failure{Error::kNotConnected, "sim API: not connected"};
+    pollfd p{fd, POLLIN, 0};
+    const int r = ::poll(&p, 1, timeout_ms);
+    if (r < 0) {
+      if (errno == EINTR) return std::nullopt;
+      return fail(Error::kIo, std::string("sim API: poll: ") + std::strerror(errno));
+    }
+    if (r == 0) return std::nullopt;
+    char tmp[kReadChunk];
+    for (;;) {
+      const ssize_t n = ::recv(fd, tmp, sizeof(tmp), MSG_DONTWAIT);
+      if (n > 0) {
+        buf.append(tmp, static_cast<std::size_t>(n));
+        if (auto e = parse_buffer()) return e;
+        if (static_cast<std::size_t>(n) < sizeof(tmp)) break;
+        continue;
+      }
+      if (n == 0) return fail(Error::kConnectionLost, "sim API: the server closed the connection");
+      if (errno == EINTR) continue;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+      return fail(Error::kConnectionLost, std::string("sim API: recv: ") + std::strerror(errno));
+    }
+    return std::nullopt;
+  }
+
+  bool send_line(const std::string& line, SteadyClock::time_point end) {
+    std::size_t sent = 0;
+    while (sent < line.size()) {
+      const ssize_t n = ::send(fd, line.data() + sent, line.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+      if (n > 0) {
+        sent += static_cast<std::size_t>(n);
+        continue;
+      }
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        // the server reads only while we read its replies: keep reading while waiting to send
+        pollfd p{fd, POLLOUT | POLLIN, 0};
+        if (::poll(&p, 1, ms_until(end)) <= 0) return false;
+        if ((p.revents & POLLIN) != 0 && read_some(0)) return false;
+        if (fd < 0) return false;
+        continue;
+      }
+      return false;
+    }
+    return true;
+  }
+};
+
+SimConnection::SimConnection(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SimConnection::~SimConnection() = default;
+
+Result<std::unique_ptr<SimConnection>> SimConnection::connect(const std::string& host,
+                                                              uint16_t port, double timeout_s) {
+  const auto end = deadline_after(timeout_s);
+  auto fd = net::tcp_connect(host, port, timeout_s);
+  if (!fd) return fd.error();
+  return adopt(*fd, std::max(0.0, std::chrono::duration<double>(end - SteadyClock::now()).count()));
+}
+
+Result<std::unique_ptr<SimConnection>> SimConnection::adopt(int fd, double timeout_s) {
+  auto impl = std::make_unique<Impl>();
+  impl->fd = fd;
+  if (fd < 0) return Failure{Error::kInvalidArgument, "sim API: no socket"};
+  // hello: the first message; a connection past the server's limit gets `overloaded` instead
+  const auto end = deadline_after(timeout_s);
+  while (impl->replies.empty() && impl->queue.empty()) {
+    if (SteadyClock::now() >= end) {
+      return Failure{Error::kTimeout, "sim API: no hello from the server"};
+    }
+    if (auto e = impl->read_some(ms_until(end))) return *e;
+  }
+  if (!impl->replies.empty()) {
+    const Json& r = impl->replies.front();
+    const Json err = r.value("error", Json::object());
+    return Failure{Error::kProtocol, "sim API refused the connection: " +
+                                         (err.is_object() ? err.value("code", std::string("?")) +
+                                                                ": " + err.value("message", std::string())
+                                                          : r.dump())};
+  }
+  SimMessage first = std::move(impl->queue.front());
+  impl->queue.pop_front();
+  if (first.json.value("hello", std::string()) != "uavsim") {
+    return Failure{Error::kProtocol, "sim API: the peer did not greet as a uavsim server"};
+  }
+  impl->hello = std::move(first.json);
+  return std::unique_ptr<SimConnection>(new SimConnection(std::move(impl)));
+}
+
+const nlohmann::json& SimConnection::hello() const { return impl_->hello; }
+bool SimConnection::connected() const { return impl_->fd >= 0; }
+int SimConnection::fd() const { return impl_->fd; }
+
+Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout_s) {
+  Impl& m = *impl_;
+  m.assert_owner_thread();
+  if (!req.is_object() || !req.contains("op")) {
+    return Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""};
+  }
+  if (m.fd < 0) return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
+  const int64_t id = ++m.next_id;
+  req["id"] = id;
+  const std::string op = req["op"].is_string() ? req["op"].get<std::string>() : req["op"].dump();
+  const auto end = deadline_after(timeout_s);
+  if (!m.send_line(req.dump() + "\n", end)) {
+    if (m.broken) return *m.broken;
+    return m.fail(Error::kConnectionLost, "sim API: cannot send " + op);
+  }
+  for (;;) {
+    // replies come in request order: older ones (of requests that timed out) are dropped
+    while (!m.replies.empty()) {
+      Json r = std::move(m.replies.front());
+      m.replies.pop_front();
+      const auto rid = r.find("id");
+      if (rid != r.end() && rid->is_number_integer() && rid->get<int64_t>() == id) {
+        if (r.value("ok", false) == true) {
+          const auto res = r.find("result");
+          return res != r.end() ? *res : Json::object();
+        }
+        const Json err = r.value("error", Json::object());
+        const std::string code =
+            err.is_object() ? err.value("code", std::string("failed")) : std::string("failed");
+        const std::string msg = err.is_object() ? err.value("message", std::string()) : r.dump();
+        return Failure{sim_api_error(code), op + ": " + code + ": " + msg};
+      }
+      if (rid != r.end() && rid->is_null() && r.value("ok", true) == false) {
+        // an error not tied to a request: `overloaded` ends the connection
+        const Json err = r.value("error", Json::object());
+        if (err.is_object() && err.value("code", std::string()) == "overloaded") {
+          return m.fail(Error::kConnectionLost,
+                        "sim API: overloaded: " + err.value("message", std::string()));
+        }
+      }
+    }
+    if (SteadyClock::now() >= end) {
+      return Failure{Error::kTimeout, "sim API: no reply to " + op + " in time"};
+    }
+    if (auto e = m.read_some(ms_until(end))) return *e;
+  }
+}
+
+void SimConnection::on_message(const std::string& kind,
+                               std::function<void(const SimMessage&)> handler) {
+  impl_->assert_owner_thread();
+  if (handler) {
+    impl_->handlers[kind] = std::move(handler);
+  } else {
+    impl_->handlers.erase(kind);
+  }
+}
+
+std::vector<SimMessage> SimConnection::take_messages() {
+  impl_->assert_owner_thread();
+  std::vector<SimMessage> out(std::make_move_iterator(impl_->queue.begin()),
+                              std::make_move_iterator(impl_->queue.end()));
+  impl_->queue.clear();
+  return out;
+}
+
+Result<void> SimConnection::poll(int timeout_ms) {
+  impl_->assert_owner_thread();
+  if (auto e = impl_->read_some(std::max(0, timeout_ms))) return *e;
+  // replies nobody waits for (of requests that timed out) are dropped
+  impl_->replies.clear();
+  return ok();
+}
+
+Result<nlohmann::json> SimConnection::status() { return request({{"op", "status"}}); }
+Result<nlohmann::json> SimConnection::pause() { return request({{"op", "pause"}}); }
+Result<nlohmann::json> SimConnection::resume() { return request({{"op", "resume"}}); }
+Result<nlohmann::json> SimConnection::reset(uint64_t seed) {
+  return request({{"op", "reset"}, {"seed", seed}});
+}
+Result<nlohmann::json> SimConnection::step_for(double sim_s, double wall_timeout_s) {
+  return request({{"op", "step"}, {"duration_s", sim_s}}, wall_timeout_s);
+}
+Result<nlohmann::json> SimConnection::subscribe_events() {
+  return request({{"op", "subscribe_events"}});
+}
+Result<nlohmann::json> SimConnection::truck() { return request({{"op", "truck"}}); }
+
+Result<nlohmann::json> SimConnection::lockstep_join(double period_s, double timeout_s) {
+  return request({{"op", "lockstep_join"}, {"period_s", period_s}, {"timeout_s", timeout_s}});
+}
+Result<nlohmann::json> SimConnection::lockstep_leave() {
+  return request({{"op", "lockstep_leave"}});
+}
+Result<nlohmann::json> SimConnection::done(int64_t tick, const std::map<std::string, int>& mavlink_seq,
+                                           std::optional<double> busy_until_s) {
+  Json req = {{"op", "done"}, {"tick", tick}};
+  if (!mavlink_seq.empty()) req["mavlink_seq"] = mavlink_seq;
+  if (busy_until_s) req["busy_until"] = *busy_until_s;
+  return request(std::move(req));
+}
+
+Result<nlohmann::json> SimConnection::radio_send(int vehicle, std::string_view bytes, int to) {
+  Json req = {{"op", "radio_send"}, {"vehicle", vehicle}, {"data_b64", base64_encode(bytes)}};
+  req["to"] = to < 0 ? Json("broadcast") : Json(to);
+  return request(std::move(req));
+}
+Result<nlohmann::json> SimConnection::radio_subscribe(int vehicle) {
+  Json req = {{"op", "radio_subscribe"}};
+  if (vehicle >= 0) req["vehicle"] = vehicle;
+  return request(std::move(req));
+}
+
+}  // namespace uavsim::client
