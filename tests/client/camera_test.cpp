@@ -88,7 +88,6 @@ TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose)
     late = late || f.stamp_s > loop.now() + 0.02 + 1e-9;  // never later than the tick being handled
     frames.push_back(f);
   });
-  if (!sub && sub.message().find("not_available") != std::string::npos) GTEST_SKIP() << sub.message();
   ASSERT_TRUE(sub) << sub.message();
   EXPECT_EQ((*sub)->width(), 64);
   EXPECT_EQ((*sub)->height(), 48);
@@ -142,7 +141,6 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
   gc.format = CameraFormat::kGrey;
   gc.api_address = api;
   auto g = CameraSubscriber::subscribe(loop, gc, [&](const CameraFrame& f) { grey.push_back(f); });
-  if (!g && g.message().find("not_available") != std::string::npos) GTEST_SKIP() << g.message();
   ASSERT_TRUE(g) << g.message();
   CameraConfig jc = gc;
   jc.format = CameraFormat::kJpeg;

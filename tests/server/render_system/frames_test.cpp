@@ -295,18 +295,19 @@ TEST(FramesAcceptance, NonReaderDropsFramesWithoutSlowingSimTime) {
   EXPECT_TRUE(r["result"]["subscribed"]);
   EXPECT_GT(r["result"]["dropped"].get<int>(), 10) << r;
   // reading again, the frames of the other subscriptions arrive and say what was lost: seq gaps, dropped
+  // (seq + 1 = delivered + dropped: between two delivered frames, the seq gap is the dropped count's growth)
   bool saw_drop = false;
-  int64_t last_seq = -1;
+  int64_t last_seq = -1, last_dropped = -1;
   for (int k = 0; k < 100 && !saw_drop; ++k) {
     const Message m = next_frame(stuck);
     ASSERT_FALSE(m.json.is_null());
     if (m.json["camera"] != "uav0_front") continue;
     const int64_t seq = m.json["seq"];
-    if (m.json["dropped"].get<int>() > 0) {
-      saw_drop = true;
-      EXPECT_TRUE(last_seq < 0 || seq > last_seq + 1 || m.json["dropped"].get<int>() > 0);
-    }
+    const int64_t dropped = m.json["dropped"];
+    if (dropped > 0) saw_drop = true;
+    if (last_seq >= 0) EXPECT_EQ(seq - last_seq - 1, dropped - last_dropped) << m.json;
     last_seq = seq;
+    last_dropped = dropped;
   }
   EXPECT_TRUE(saw_drop);
 }

@@ -14,6 +14,8 @@ using testing::goto_enu;
 using testing::make_sim;
 using testing::take_off;
 
+const std::string kThreeQuads = std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/three_quads.xml";
+
 // flies a short fixed script and returns the state hash after 30 s of sim time
 uint64_t scripted_hash(uint64_t seed) {
   auto sim = make_sim("empty.xml", seed);
@@ -38,39 +40,41 @@ TEST(Simulation, ControlRateIsAnIntegerDivisorOfThePhysicsRate) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
   SimConfig c;
-  c.control_hz = 400.0;  // 1000 / 400 = 2.5: rounds to every 2 (or 3) steps, never drifts
+  // 1000 / 400 = 2.5 physics steps per control step: rounded half away from zero to every 3 steps
+  // (333.3 Hz), a whole number so the control rate never drifts
+  c.control_hz = 400.0;
   Simulation s(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", o), c);
-  EXPECT_TRUE(s.control_decimation() == 2 || s.control_decimation() == 3);
+  EXPECT_EQ(s.control_decimation(), 3);
 }
 
 TEST(Simulation, TasksRunAtTheNextControlBoundaryInVehicleOrder) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
-  Simulation sim(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/grid100.xml", o), SimConfig{});
+  Simulation sim(physics::World::load(kThreeQuads, o), SimConfig{});
   sim.step();  // now mid control period (decimation 2)
   std::vector<std::pair<size_t, double>> order;
   // posted in reverse vehicle order, from another thread
   std::thread poster([&] {
-    for (size_t v : {5u, 3u, 1u}) sim.post(v, [&order, v, &sim](fc::FlightController&) {
+    for (size_t v : {2u, 1u, 0u}) sim.post(v, [&order, v, &sim](fc::FlightController&) {
       order.push_back({v, sim.time_s()});
     });
   });
   poster.join();
-  EXPECT_FALSE(sim.post(100, [](fc::FlightController&) {}));  // unknown vehicle
+  EXPECT_FALSE(sim.post(3, [](fc::FlightController&) {}));  // unknown vehicle
   sim.step();  // step 1 -> 2: no control step yet
   EXPECT_TRUE(order.empty());
   sim.step();  // step 2 is a control boundary
   ASSERT_EQ(order.size(), 3u);
-  EXPECT_EQ(order[0].first, 1u);
-  EXPECT_EQ(order[1].first, 3u);
-  EXPECT_EQ(order[2].first, 5u);
+  EXPECT_EQ(order[0].first, 0u);
+  EXPECT_EQ(order[1].first, 1u);
+  EXPECT_EQ(order[2].first, 2u);
   EXPECT_NEAR(order[0].second, 0.002, 1e-12);
 }
 
 TEST(Simulation, VehiclesThatCollideAreBothCrashed) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
-  Simulation sim(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/grid100.xml", o), SimConfig{});
+  Simulation sim(physics::World::load(kThreeQuads, o), SimConfig{});
   take_off(sim, 5.0, 0);
   take_off(sim, 5.0, 1);
   // steer uav0 into uav1: every 50 ms its target is uav1's true position expressed in uav0's own
