@@ -103,12 +103,29 @@ void step_battery(const AirframeParams& params, const double* thrust_n, double d
   }
   // eq. 4.7: electrical power through propeller and motor efficiency; eq. 4.8: plus the electronics
   power_w = power_w / (b.prop_efficiency * b.motor_efficiency) + b.control_power_w;
-  // eq. 4.9: current at the nominal 3S voltage
-  state->current_a = power_w / b.voltage_nominal_v;
-  state->consumed_mah += state->current_a * dt_s * (1000.0 / 3600.0);
-  // voltage falls linearly from full to empty with the charge drawn
+  if (b.internal_resistance_ohm <= 0.0) {
+    // eq. 4.9: current at the nominal 3S voltage
+    state->current_a = power_w / b.voltage_nominal_v;
+    state->consumed_mah += state->current_a * dt_s * (1000.0 / 3600.0);
+    // voltage falls linearly from full to empty with the charge drawn
+    const double used = std::clamp(state->consumed_mah / b.capacity_mah, 0.0, 1.0);
+    state->voltage_v = b.voltage_full_v - (b.voltage_full_v - b.voltage_empty_v) * used;
+    return;
+  }
+  // sag: open-circuit voltage from the charge drawn, terminal voltage V = V_oc - R P / V (the larger
+  // root; past the pack's maximum power V_oc^2 / 4R it is held at V_oc / 2)
   const double used = std::clamp(state->consumed_mah / b.capacity_mah, 0.0, 1.0);
-  state->voltage_v = b.voltage_full_v - (b.voltage_full_v - b.voltage_empty_v) * used;
+  const double v_oc = b.voltage_full_v - (b.voltage_full_v - b.voltage_empty_v) * used;
+  const double disc = std::max(0.0, v_oc * v_oc - 4.0 * b.internal_resistance_ohm * power_w);
+  state->voltage_v = 0.5 * (v_oc + std::sqrt(disc));
+  state->current_a = power_w / state->voltage_v;
+  state->consumed_mah += state->current_a * dt_s * (1000.0 / 3600.0);
+}
+
+double battery_thrust_scale(const AirframeParams& params, const BatteryState& state) {
+  if (params.battery.internal_resistance_ohm <= 0.0) return 1.0;
+  const double r = std::clamp(state.voltage_v / params.battery.voltage_full_v, 0.0, 1.0);
+  return r * r;
 }
 
 }  // namespace uavsim::server::airframe

@@ -32,6 +32,10 @@ struct BatteryParams {
   double control_power_w = 5.0;     // flight controller, companion computer, radios
   double prop_efficiency = 0.7;     // eta_1 of eq. 4.7
   double motor_efficiency = 0.75;   // eta_2 of eq. 4.7
+  // Internal resistance of the pack (field conditions): the terminal voltage sags by I R under load and
+  // the rotors' top speed, hence their thrust, follows it (battery_thrust_scale). 0: no sag, thrust
+  // independent of the voltage (the ideal world).
+  double internal_resistance_ohm = 0.0;
 };
 
 // Immutable description of one vehicle type, loaded once from MJCF.
@@ -93,7 +97,14 @@ Wrench compute_wrench(const AirframeParams& params, const double* thrust_n,
 
 // (rotor thrusts, dt) => battery state: momentum-theory power (eq. 4.6) / efficiencies (eq. 4.7)
 // + control power (eq. 4.8), current at nominal voltage (eq. 4.9), a linear voltage sag with charge.
+// With an internal resistance R the open-circuit voltage V_oc (linear in charge) sags under the load P:
+// V = (V_oc + sqrt(V_oc^2 - 4 R P)) / 2 (from V = V_oc - R I, I = P / V), and I = P / V.
 void step_battery(const AirframeParams& params, const double* thrust_n, double dt_s,
                   BatteryState* state);
+
+// The fraction of rated thrust the rotors can make at the battery's terminal voltage: rotor speed at a
+// given command scales with the voltage and thrust with its square, (V / V_full)^2. Exactly 1 when the
+// pack has no internal resistance (the ideal world keeps thrust independent of the battery).
+double battery_thrust_scale(const AirframeParams& params, const BatteryState& state);
 
 }  // namespace uavsim::server::airframe

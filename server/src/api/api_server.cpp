@@ -22,7 +22,7 @@ const char* const kOps[] = {"status",        "pause",           "resume",       
                             "kill_vehicle",  "motor_failure",   "gps_glitch",     "gps_denied",
                             "link_drop",     "gimbal",          "lockstep_join",  "lockstep_leave",
                             "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe",
-                            "camera_blackout"};
+                            "camera_blackout", "wind"};
 
 Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
@@ -44,6 +44,9 @@ constexpr FieldSpec kBuiltinFields[] = {
     {"period_s", FieldType::kNumber},    {"timeout_s", FieldType::kNumber},
     {"tick", FieldType::kNumber},        {"busy_until", FieldType::kNumber},
     {"mavlink_seq", FieldType::kObject},
+    {"speed_m_s", FieldType::kNumber},   {"from_deg", FieldType::kNumber},
+    {"turbulence_sd_m_s", FieldType::kNumber}, {"gust_m_s", FieldType::kNumber},
+    {"gust_duration_s", FieldType::kNumber},
 };
 
 // ranges of the numbers the built-in ops take
@@ -624,6 +627,36 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       if (yaw_deg) g->yaw_rad = *yaw_deg * M_PI / 180.0;
       result = {{"gimbal", g->name}, {"mode", objects::gimbal_mode_name(g->mode)},
                 {"pitch_deg", g->pitch_rad * 180.0 / M_PI}, {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
+    }
+  } else if (op == "wind") {
+    // set what is given (speed, direction, turbulence), start a gust if asked; answer the wind now
+    airframe::WindParams w = sim_.wind().params();
+    const auto speed = number_field(request, "speed_m_s");
+    const auto from = number_field(request, "from_deg");
+    const auto turbulence = number_field(request, "turbulence_sd_m_s");
+    const auto gust = number_field(request, "gust_m_s");
+    const auto gust_duration = number_field(request, "gust_duration_s");
+    if (speed) w.speed_m_s = *speed;
+    if (from) w.from_deg = *from;
+    if (turbulence) w.turbulence_sd_m_s = *turbulence;
+    const std::string why = airframe::validate(w);
+    if (!why.empty() || (from && std::abs(*from) > 360.0)) {
+      fail("bad_field", why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
+    } else if ((gust && !sim::finite_in(*gust, 0.0, 50.0)) ||
+               (gust_duration && !sim::finite_in(*gust_duration, 0.01, 600.0))) {
+      fail("bad_field", "\"gust_m_s\" must be in [0, 50] and \"gust_duration_s\" in [0.01, 600]");
+    } else {
+      if (speed || from || turbulence) sim_.wind().set_params(w);
+      if (gust) sim_.wind().gust(*gust, gust_duration.value_or(w.gust_duration_s));
+      const airframe::WindField& f = sim_.wind();
+      result = {{"speed_m_s", f.params().speed_m_s},
+                {"from_deg", f.params().from_deg},
+                {"turbulence_sd_m_s", f.params().turbulence_sd_m_s},
+                {"length_scale_m", f.params().length_scale_m},
+                {"gust_m_s", f.gust_m_s()},
+                {"velocity_enu_m_s", vec3(f.velocity_enu_m_s())},
+                {"realism", sim::realism_name(sim_.config().field.realism)},
+                {"time_s", sim_.time_s()}};
     }
   } else if (op == "lockstep_join") {
     const auto period = number_field(request, "period_s");

@@ -37,6 +37,11 @@ simulation:
   --fast              same as --rate 0
   --duration S        stop after S seconds of sim time (default: run until interrupted)
   --wait-for-clients N  hold the clock at 0 until N clients (MAVLink or sim API) are connected
+  --realism LEVEL     ideal (no wind, perfect sensors, gimbal and cameras: the default) or field (wind,
+                      gusts, sensor bias and drift, gimbal lag, camera noise and latency, varied balloons,
+                      battery sag with field defaults); over the world's uavsim:realism (docs/protocol.md)
+  --wind SPEED,DIR_DEG[,GUST]  mean wind in m/s blowing from DIR_DEG (clockwise from north), turbulence
+                      of GUST m/s standard deviation (default: the realism level's)
   --home LAT,LON,ALT[,HDG]  geodetic position of the world origin (degrees, metres above sea level);
                       default: the world's <numeric name="uavsim:home" data="LAT LON ALT"/>, else
                       47.397742,8.545594,488. HDG (ArduPilot SITL's start heading) must be 0 here:
@@ -75,7 +80,8 @@ sim socket API (docs/protocol.md):
 
 cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
-                      width, height, fps, fovy, shadows, reflections, skybox, msaa (docs/protocol.md)
+                      width, height, fps, fovy, shadows, reflections, skybox, msaa; field conditions:
+                      noise (pixel sd), brightness (gain sd), latency_ms (docs/protocol.md)
   --no-cameras        no offscreen renderer (the camera ops answer not_available)
   --record FILE.mp4   write a video of the run from the world camera "overview" (else the first world
                       camera, else the first camera), 15 frames per second of sim time; in real time
@@ -140,6 +146,30 @@ std::optional<std::string> read_first_line(const std::string& flag, const std::s
     return std::nullopt;
   }
   return line.substr(first, last - first + 1);
+}
+
+std::optional<WindOption> parse_wind(const std::string& text, std::string* why) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string part;
+  while (std::getline(ss, part, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(part.c_str(), &end);
+    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
+    v.push_back(x);
+  }
+  const bool shape = (v.size() == 2 || v.size() == 3) &&
+                     std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
+  if (!shape || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 || (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
+    *why = "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 degrees "
+           "clockwise from north, turbulence 0..20 m/s standard deviation), got '" + text + "'";
+    return std::nullopt;
+  }
+  WindOption w;
+  w.speed_m_s = v[0];
+  w.from_deg = v[1];
+  if (v.size() == 3) w.turbulence_sd_m_s = v[2];
+  return w;
 }
 
 std::optional<HomeOption> parse_home(const std::string& text, std::string* why) {
@@ -319,6 +349,20 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if ((ok = value(&v))) {
         o.home = parse_home(v, &why);
         ok = o.home.has_value();
+      }
+    } else if (a == "--realism") {
+      if ((ok = value(&v))) {
+        ok = v == "field" || v == "ideal";
+        if (ok) {
+          o.realism = v;
+        } else {
+          why = "--realism needs field or ideal, got '" + v + "'";
+        }
+      }
+    } else if (a == "--wind") {
+      if ((ok = value(&v))) {
+        o.wind = parse_wind(v, &why);
+        ok = o.wind.has_value();
       }
     } else if (a == "--defaults") {
       if ((ok = value(&v))) o.defaults_files.push_back(v);

@@ -43,6 +43,14 @@ struct HomeOption {
   double heading_deg = 0.0;
 };
 
+// --wind SPEED,DIR_DEG[,GUST]: mean wind speed (m/s), where it blows from (degrees clockwise from north)
+// and the turbulence intensity (standard deviation of the gust velocity, m/s).
+struct WindOption {
+  double speed_m_s = 0.0;
+  double from_deg = 0.0;
+  std::optional<double> turbulence_sd_m_s;
+};
+
 struct Options {
   std::string world_path;
   std::string models_dir;             // empty: the built-in default
@@ -70,6 +78,8 @@ struct Options {
   std::optional<HomeOption> home;     // --home: overrides the world's home
   std::vector<std::string> defaults_files;  // --defaults FILE.parm (repeatable, applied in order)
   std::vector<std::string> camera_overrides;  // --camera CAMNAME:key=value,... (repeatable)
+  std::optional<std::string> realism;         // --realism field|ideal: over the world's uavsim:realism
+  std::optional<WindOption> wind;             // --wind: over the realism level's and the world's wind
   bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
   std::optional<std::string> record_path;     // --record out.mp4
   double record_fps = 15.0;

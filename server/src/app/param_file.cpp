@@ -92,6 +92,13 @@ const std::map<std::string, ParamDoc>& param_docs() {
       {"SIM_GYRO_SD", {"rad/s", "simulated gyro noise"}},
       {"SIM_ACCEL_SD", {"m/s/s", "simulated accelerometer noise"}},
       {"RC_OVERRIDE_TIME", {"s", "how long RC_CHANNELS_OVERRIDE / MANUAL_CONTROL sticks last; 0 ignores them, -1 never expires"}},
+      {"SIM_GPS_BIAS_SD", {"m", "simulated GPS wandering horizontal bias (Gauss-Markov, stationary sd; vertical twice)"}},
+      {"SIM_GPS_BIAS_TAU", {"s", "correlation time of the simulated GPS bias"}},
+      {"SIM_GPS_JUMP_HZ", {"Hz", "mean rate of simulated GPS position jumps"}},
+      {"SIM_GPS_JUMP_M", {"m", "size (sd) of a simulated GPS jump; it decays with the bias"}},
+      {"SIM_GPS_RTK", {"", "1: simulated RTK fixed GPS (1 cm horizontal, 2 cm vertical noise, no bias)"}},
+      {"SIM_BARO_DRIFT", {"m", "simulated barometer drift (Gauss-Markov over 300 s, stationary sd)"}},
+      {"SIM_MAG_OFS_SD", {"rad", "sd of the simulated compass heading offset drawn once per vehicle"}},
   };
   return docs;
 }

@@ -15,6 +15,7 @@
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
 #include "app/demo_flight.hpp"
+#include "app/field_setup.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/param_file.hpp"
 #include "app/run_reporter.hpp"
@@ -193,6 +194,12 @@ int run_server(const Options& given_options) {
     std::vector<std::string> names;
     for (const physics::VehicleBinding& v : world->vehicles()) names.push_back(v.name);
     config.vehicle_params = vehicle_params(names, physics::custom_texts(*world, "uavsim:params:"), options.defaults_files);
+    // field conditions: --realism / uavsim:realism, the world's settings, --wind; the field cameras' settings
+    // go before the --camera overrides
+    config.field = resolve_field_conditions(options, *world);
+    if (!config.field.camera_settings.empty()) {
+      options.camera_overrides.insert(options.camera_overrides.begin(), "*:" + config.field.camera_settings);
+    }
     origin = world_home(*world, options);
     simulation = std::make_unique<sim::Simulation>(std::move(world), config);
   } catch (const std::exception& e) {
@@ -236,6 +243,12 @@ int run_server(const Options& given_options) {
               << options.physics_hz << " Hz, control " << 1.0 / s.control_dt_s() << " Hz, seed " << options.seed
               << ", clock " << (options.rate > 0 ? std::to_string(options.rate) + "x real time" : "as fast as possible")
               << "\n";
+    const sim::FieldConditions& field = s.config().field;
+    if (field.realism == sim::Realism::kField || s.wind().active()) {
+      const airframe::WindParams& w = s.wind().params();
+      std::cout << "uavsim-server: realism " << sim::realism_name(field.realism) << ", wind " << w.speed_m_s
+                << " m/s from " << std::lround(w.from_deg) << " deg, turbulence " << w.turbulence_sd_m_s << " m/s\n";
+    }
   }
 
   // MAVLink endpoints: vehicle i on base + 10 i
@@ -323,7 +336,9 @@ int run_server(const Options& given_options) {
     }
     if (!cameras.empty()) {
       try {
-        frames = std::make_unique<render::FrameService>(s.world().model(), cameras);
+        render::FrameServiceOptions frame_options;
+        frame_options.seed = options.seed;
+        frames = std::make_unique<render::FrameService>(s.world().model(), cameras, frame_options);
       } catch (const std::exception& e) {
         if (options.record_path) {
           std::cerr << "uavsim-server: --record: " << e.what() << "\n";

@@ -88,6 +88,13 @@ constexpr ParamDef kTable[] = {
     {"SIM_GYRO_SD", &ParamValues::sim_gyro_sd, 0, 1},
     {"SIM_ACCEL_SD", &ParamValues::sim_accel_sd, 0, 10},
     {"RC_OVERRIDE_TIME", &ParamValues::rc_override_time, -1, 120},
+    {"SIM_GPS_BIAS_SD", &ParamValues::sim_gps_bias_sd, 0, 100},
+    {"SIM_GPS_BIAS_TAU", &ParamValues::sim_gps_bias_tau, 1, 36000},
+    {"SIM_GPS_JUMP_HZ", &ParamValues::sim_gps_jump_hz, 0, 1},
+    {"SIM_GPS_JUMP_M", &ParamValues::sim_gps_jump_m, 0, 100},
+    {"SIM_GPS_RTK", &ParamValues::sim_gps_rtk, 0, 1},
+    {"SIM_BARO_DRIFT", &ParamValues::sim_baro_drift, 0, 100},
+    {"SIM_MAG_OFS_SD", &ParamValues::sim_mag_ofs_sd, 0, 1},
 };
 
 const ParamDef* find(std::string_view name) {

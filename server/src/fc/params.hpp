@@ -97,6 +97,14 @@ struct ParamValues {
   double sim_mag_sd = 0.02;        // rad of heading
   double sim_gyro_sd = 0.003;      // rad/s
   double sim_accel_sd = 0.03;      // m/s^2
+  // field sensor errors (sim/field_conditions.hpp; 0 = off, the ideal world)
+  double sim_gps_bias_sd = 0.0;    // m: stationary sd of the wandering horizontal GPS bias (Gauss-Markov)
+  double sim_gps_bias_tau = 120.0; // s: its correlation time (vertical: the same, twice the sd)
+  double sim_gps_jump_hz = 0.0;    // mean rate of bias jumps (a satellite lost or gained, multipath)
+  double sim_gps_jump_m = 0.0;     // m: sd of a jump's horizontal size; it then decays with the bias
+  double sim_gps_rtk = 0.0;        // 1: RTK fixed: 1 cm / 2 cm white noise, no bias or jumps
+  double sim_baro_drift = 0.0;     // m: stationary sd of the barometer's drift (Gauss-Markov, 300 s)
+  double sim_mag_ofs_sd = 0.0;     // rad: sd of the compass heading offset drawn once per vehicle
 };
 
 // SI values derived from ParamValues by derive(); what the control step actually reads.

@@ -1,6 +1,14 @@
 // Seeded sensor models sampled from ground truth: IMU (every control step), GPS, barometer and compass
 // at their own rates. All noise comes from one std::mt19937_64 seeded by the FC's seed, drawn in a fixed
 // order, so equal seeds and equal truth give equal samples. No allocation in sample().
+// The field errors (SIM_GPS_BIAS_*, SIM_GPS_JUMP_*, SIM_BARO_DRIFT, SIM_MAG_OFS_SD; all 0 in the ideal
+// world) draw from a second generator, so switching them on leaves the white noise sequence unchanged:
+//   GPS bias: first-order Gauss-Markov b[k+1] = a b[k] + sd sqrt(1 - a^2) n, a = exp(-T / tau), started in
+//     its stationary distribution (horizontal sd SIM_GPS_BIAS_SD, vertical twice); jumps at Poisson times
+//     (SIM_GPS_JUMP_HZ) add N(0, SIM_GPS_JUMP_M) per axis to the bias, which then decays back.
+//   RTK (SIM_GPS_RTK = 1): 1 cm / 2 cm / 2 cm/s white noise and no bias or jumps (an RTK fixed solution).
+//   barometer drift: the same Gauss-Markov process with a 300 s correlation time.
+//   compass: a constant heading offset, N(0, SIM_MAG_OFS_SD) drawn once per vehicle.
 #pragma once
 
 #include <Eigen/Core>
@@ -40,7 +48,7 @@ struct SensorFrame {
 
 class Sensors {
  public:
-  explicit Sensors(uint64_t seed) : rng_(seed) {}
+  explicit Sensors(uint64_t seed);
 
   // (time, truth) => the samples due at time_s; the IMU is sampled on every call, the others when
   // their period (1 / rate from params) has elapsed since their last sample.
@@ -49,6 +57,9 @@ class Sensors {
   void set_gps_denied(bool denied) { gps_denied_ = denied; }
   void set_gps_glitch(const Eigen::Vector3d& offset_enu_m) { gps_glitch_enu_m_ = offset_enu_m; }
   bool gps_denied() const { return gps_denied_; }
+  // The present GPS bias (the field error added to truth, before the glitch offset) and baro drift.
+  const Eigen::Vector3d& gps_bias_enu_m() const { return gps_bias_enu_m_; }
+  double baro_drift_m() const { return baro_drift_m_; }
 
  private:
   double gauss(double sd) { return sd > 0.0 ? sd * normal_(rng_) : 0.0; }
@@ -61,6 +72,14 @@ class Sensors {
   double next_mag_s_ = 0.0;
   bool gps_denied_ = false;
   Eigen::Vector3d gps_glitch_enu_m_ = Eigen::Vector3d::Zero();
+  // field errors: their own generator, so the white noise above does not depend on them
+  std::mt19937_64 error_rng_;
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+  Eigen::Vector3d gps_bias_enu_m_ = Eigen::Vector3d::Zero();
+  bool gps_bias_started_ = false;
+  double baro_drift_m_ = 0.0;
+  bool baro_drift_started_ = false;
+  double mag_offset_unit_ = 0.0;  // N(0, 1), scaled by SIM_MAG_OFS_SD
 };
 
 }  // namespace uavsim::server::fc

@@ -22,13 +22,23 @@ struct SplitMix64 {
 };
 
 constexpr uint64_t kBalloonStream = 0xBA11000Full;  // keeps balloon draws apart from sensor noise
+constexpr uint64_t kHeightStream = 0xBA110011ull;   // heights apart from positions
+
+// sway: a 0.3 m balloon (Cd 0.47, A = pi 0.3^2) with its entrained air (m_eff ~ 0.1 kg) on a pole whose
+// stiffness leans the top 0.25 m in 5 m/s: F = 0.5 * 1.2 * 0.47 * 0.283 * 25 = 2.0 N, torque 2.0 * 2.7 =
+// 5.4 N m at 0.25 / 2.7 = 0.093 rad: k = 58 N m/rad; natural frequency sqrt(k / (m h^2)) = 8.9 rad/s
+constexpr double kAirDensity_kg_m3 = 1.2;
+constexpr double kBalloonCd = 0.47;
+constexpr double kBalloonMass_kg = 0.1;
+constexpr double kPoleStiffness_nm_rad = 58.0;
+constexpr double kPoleDamping_nms_rad = 1.0;  // structural, besides the aerodynamic damping
 constexpr int kMaxTries = 10000;
 
 }  // namespace
 
 BalloonField::BalloonField(sim::Simulation& sim, const std::vector<std::string>& names,
-                           std::optional<BalloonArena> arena)
-    : world_(sim.world()), arena_(arena) {
+                           std::optional<BalloonArena> arena, const sim::BalloonVariation& variation)
+    : variation_(variation), world_(sim.world()), arena_(arena) {
   for (const std::string& name : names) {
     Binding b;
     b.body_id = world_.body_id(name);
@@ -57,6 +67,7 @@ BalloonField::BalloonField(sim::Simulation& sim, const std::vector<std::string>&
 
 void BalloonField::place(uint64_t seed) {
   SplitMix64 rng{seed ^ kBalloonStream};
+  SplitMix64 height_rng{seed ^ kHeightStream};
   std::vector<Eigen::Vector2d> placed;
   for (size_t i = 0; i < bindings_.size(); ++i) {
     Eigen::Vector3d base = bindings_[i].initial_pos_enu_m;
@@ -74,12 +85,54 @@ void BalloonField::place(uint64_t seed) {
       placed.push_back(xy);
       base = Eigen::Vector3d(xy.x(), xy.y(), 0.0);
     }
-    state_[i].position_enu_m = base + bindings_[i].centre_in_body_m;
-    physics::set_mocap_pose(world_, bindings_[i].body_id, base, Eigen::Quaterniond::Identity());
+    Binding& b = bindings_[i];
+    b.lift_m = 0.0;
+    if (variation_.height_spread_m > 0) {
+      b.lift_m = height_rng.uniform(-variation_.height_spread_m, variation_.height_spread_m);
+    }
+    b.foot_enu_m = base;
+    b.lean_rad.setZero();
+    b.lean_rate_rad_s.setZero();
+    pose(i);
   }
 }
 
-void BalloonField::before_step(sim::Simulation& /*sim*/) {}
+void BalloonField::pose(size_t i) {
+  // the body tilted about the pole's foot, raised by its height variation
+  const Binding& b = bindings_[i];
+  const Eigen::Vector3d lift(0.0, 0.0, b.lift_m);
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  const double lean = b.lean_rad.norm();
+  if (lean > 0) q = Eigen::AngleAxisd(lean, Eigen::Vector3d(-b.lean_rad.y(), b.lean_rad.x(), 0.0) / lean);
+  state_[i].position_enu_m = b.foot_enu_m + q * (lift + b.centre_in_body_m);
+  physics::set_mocap_pose(world_, b.body_id, b.foot_enu_m + q * lift, q);
+}
+
+void BalloonField::before_step(sim::Simulation& sim) {
+  if (!variation_.sway) return;
+  // each pole a damped spring about its foot, driven by the drag on the balloon (header)
+  const double dt_s = sim.physics_dt_s();
+  const Eigen::Vector2d wind = sim.wind().velocity_enu_m_s().head<2>();
+  for (size_t i = 0; i < bindings_.size(); ++i) {
+    Binding& b = bindings_[i];
+    if (state_[i].popped && b.lean_rad.isZero() && b.lean_rate_rad_s.isZero()) continue;
+    const double h_m = b.centre_in_body_m.z() + b.lift_m;
+    const double area_m2 = M_PI * state_[i].radius_m * state_[i].radius_m;
+    const double inertia = kBalloonMass_kg * h_m * h_m;
+    // a popped balloon no longer catches the wind
+    Eigen::Vector2d force_n = Eigen::Vector2d::Zero();
+    if (!state_[i].popped) {
+      const Eigen::Vector2d rel = wind - h_m * b.lean_rate_rad_s;
+      force_n = 0.5 * kAirDensity_kg_m3 * kBalloonCd * area_m2 * rel.norm() * rel;
+    }
+    const Eigen::Vector2d accel =
+        (h_m * force_n - kPoleStiffness_nm_rad * b.lean_rad - kPoleDamping_nms_rad * b.lean_rate_rad_s) / inertia;
+    // semi-implicit Euler (stable at the 1 kHz physics step: omega dt ~ 0.01)
+    b.lean_rate_rad_s += accel * dt_s;
+    b.lean_rad += b.lean_rate_rad_s * dt_s;
+    pose(i);
+  }
+}
 
 bool BalloonField::on_contact(sim::Simulation& sim, const physics::VehicleContact& contact) {
   for (size_t i = 0; i < bindings_.size(); ++i) {

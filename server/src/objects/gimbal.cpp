@@ -27,22 +27,69 @@ Eigen::Quaterniond GimbalSet::pointing(const Gimbal& g, double vehicle_yaw_rad) 
                             Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitY()));
 }
 
+void step_gimbal_motion(const sim::GimbalDynamicsParams& p, const Eigen::Quaterniond& q_body_target, double dt_s,
+                        GimbalMotion* m) {
+  if (!m->started) {
+    m->q_body_cam = q_body_target;
+    m->rate_body_rad_s.setZero();
+    m->started = true;
+    return;
+  }
+  if (!(dt_s > 0)) return;
+  // pointing error as a rotation vector in the body frame (the short way round)
+  Eigen::Quaterniond q_err = q_body_target * m->q_body_cam.conjugate();
+  if (q_err.w() < 0) q_err.coeffs() *= -1.0;
+  const Eigen::AngleAxisd aa(q_err);
+  const Eigen::Vector3d err_body_rad = aa.angle() * aa.axis();
+  // first-order slew, rate-limited
+  Eigen::Vector3d want_rad_s = p.time_const_s > 0 ? Eigen::Vector3d(err_body_rad / p.time_const_s)
+                                                  : Eigen::Vector3d(err_body_rad / dt_s);
+  if (p.rate_max_rad_s > 0 && want_rad_s.norm() > p.rate_max_rad_s) {
+    want_rad_s *= p.rate_max_rad_s / want_rad_s.norm();
+  }
+  // acceleration-limited change of the slew rate
+  Eigen::Vector3d change = want_rad_s - m->rate_body_rad_s;
+  const double max_change = p.accel_max_rad_s2 * dt_s;
+  if (p.accel_max_rad_s2 > 0 && change.norm() > max_change) change *= max_change / change.norm();
+  m->rate_body_rad_s += change;
+  // integrate: rotate by rate * dt about the body-frame axis
+  const Eigen::Vector3d turn = m->rate_body_rad_s * dt_s;
+  if (turn.norm() > 0) {
+    m->q_body_cam = (Eigen::Quaterniond(Eigen::AngleAxisd(turn.norm(), turn.normalized())) * m->q_body_cam).normalized();
+  }
+}
+
+Eigen::Quaterniond GimbalSet::actual(const Gimbal& g, const Eigen::Quaterniond& q_enu_body) {
+  return (q_enu_body * g.motion.q_body_cam).normalized();
+}
+
 void GimbalSet::before_step(sim::Simulation& sim) {
   if (!initial_saved_) {
     initial_ = gimbals_;
     initial_saved_ = true;
   }
-  for (const Gimbal& g : gimbals_) {
+  const bool dynamic = dynamics_.time_const_s > 0 || dynamics_.rate_max_rad_s > 0 || dynamics_.accel_max_rad_s2 > 0;
+  const double now_s = sim.time_s();
+  for (Gimbal& g : gimbals_) {
     const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
     const Eigen::Vector3d x = t.q_enu_body * Eigen::Vector3d::UnitX();
     const double heading = std::atan2(x.y(), x.x());
-    physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m,
-                            pointing(g, heading));
+    Eigen::Quaterniond q_enu_gimbal = pointing(g, heading);
+    if (dynamic) {
+      // the camera rides on the body; the loop slews it towards the target (once per sim time: this
+      // also runs before camera captures)
+      const double dt_s = g.motion.started ? now_s - g.motion.time_s : 0.0;
+      step_gimbal_motion(dynamics_, t.q_enu_body.conjugate() * q_enu_gimbal, dt_s, &g.motion);
+      g.motion.time_s = now_s;
+      q_enu_gimbal = actual(g, t.q_enu_body);
+    }
+    physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m, q_enu_gimbal);
   }
 }
 
 void GimbalSet::reset(uint64_t /*seed*/) {
   if (initial_saved_) gimbals_ = initial_;
+  for (Gimbal& g : gimbals_) g.motion = GimbalMotion{};
 }
 
 }  // namespace uavsim::server::objects

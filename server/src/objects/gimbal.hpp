@@ -9,6 +9,10 @@
 // The gimbal body's x axis is the pointing direction; a camera with xyaxes="0 -1 0 0 0 1" looks along
 // it with the image top up. The mount is an offset in the vehicle's body frame after the mode
 // (data="uav0 down 0 0 -0.09"), else the vehicle's site VEHICLE/camera_mount, else its origin.
+//
+// Field conditions give the gimbal dynamics (sim::GimbalDynamicsParams): the camera is carried by the
+// vehicle and the stabilisation loop slews it back to its target at error / time constant, limited in
+// rate and acceleration, so a fast manoeuvre tilts the view for a moment. Time constant 0: perfect.
 #pragma once
 
 #include <string>
@@ -21,6 +25,21 @@
 namespace uavsim::server::objects {
 
 enum class GimbalMode { kDown, kForward, kTargets };
+
+// The stabilisation loop's state: where the camera points relative to the vehicle body, and how fast it
+// slews there.
+struct GimbalMotion {
+  Eigen::Quaterniond q_body_cam = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d rate_body_rad_s = Eigen::Vector3d::Zero();
+  bool started = false;   // false: the next step starts on target
+  double time_s = 0.0;    // sim time of the last step
+};
+
+// (target orientation in the body frame, dt) => the camera's orientation after dt: slew rate
+// error / time_const_s (rotation vector), at most rate_max, changed by at most accel_max * dt (limits 0:
+// none). Without limits the pointing error decays as exp(-t / time_const_s).
+void step_gimbal_motion(const sim::GimbalDynamicsParams& params, const Eigen::Quaterniond& q_body_target,
+                        double dt_s, GimbalMotion* motion);
 const char* gimbal_mode_name(GimbalMode mode);
 
 struct Gimbal {
@@ -31,11 +50,13 @@ struct Gimbal {
   GimbalMode mode = GimbalMode::kDown;
   double pitch_rad = 0.0;  // kTargets: up positive, -pi/2 = straight down (MAVLink's sign)
   double yaw_rad = 0.0;    // kTargets: relative to the vehicle's heading, counter-clockwise positive
+  GimbalMotion motion;     // with dynamics (field conditions)
 };
 
 class GimbalSet : public sim::WorldObject {
  public:
-  explicit GimbalSet(std::vector<Gimbal> gimbals) : gimbals_(std::move(gimbals)) {}
+  explicit GimbalSet(std::vector<Gimbal> gimbals, const sim::GimbalDynamicsParams& dynamics = {})
+      : gimbals_(std::move(gimbals)), dynamics_(dynamics) {}
 
   void before_step(sim::Simulation& sim) override;
   bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
@@ -45,9 +66,13 @@ class GimbalSet : public sim::WorldObject {
   std::vector<Gimbal>& gimbals() { return gimbals_; }
   // The orientation a gimbal's body takes for a vehicle heading (ENU yaw), from its mode and targets.
   static Eigen::Quaterniond pointing(const Gimbal& gimbal, double vehicle_yaw_rad);
+  // The orientation the gimbal body has now (ENU), after its dynamics. Loop thread only.
+  static Eigen::Quaterniond actual(const Gimbal& gimbal, const Eigen::Quaterniond& q_enu_body);
+  const sim::GimbalDynamicsParams& dynamics() const { return dynamics_; }
 
  private:
   std::vector<Gimbal> gimbals_;
+  sim::GimbalDynamicsParams dynamics_;
   std::vector<Gimbal> initial_;
   bool initial_saved_ = false;
 };

@@ -96,7 +96,7 @@ ObjectSet add_world_objects(sim::Simulation& sim) {
     }
   }
   if (!balloons.empty()) {
-    auto field = std::make_unique<BalloonField>(sim, balloons, balloon_arena(world));
+    auto field = std::make_unique<BalloonField>(sim, balloons, balloon_arena(world), sim.config().field.balloons);
     set.balloons = field.get();
     sim.add_object(std::move(field));
   }
@@ -139,7 +139,7 @@ ObjectSet add_world_objects(sim::Simulation& sim) {
     gimbals.push_back(g);
   }
   if (!gimbals.empty()) {
-    auto set_ptr = std::make_unique<GimbalSet>(std::move(gimbals));
+    auto set_ptr = std::make_unique<GimbalSet>(std::move(gimbals), sim.config().field.gimbal);
     set.gimbals = set_ptr.get();
     set_ptr->before_step(sim);
     sim.add_object(std::move(set_ptr));

@@ -136,6 +136,7 @@ void World::find_vehicles(const std::string& label) {
     if (auto bat = custom_numeric(m, v.name, "battery"); bat.size() >= 2) {
       a.battery.capacity_mah = bat[0];
       a.battery.control_power_w = bat[1];
+      if (bat.size() >= 3) a.battery.internal_resistance_ohm = bat[2];
     }
     vehicles_.push_back(std::move(v));
   }

@@ -53,6 +53,8 @@ class World {
   const mjData_* data() const { return d_; }
 
   const std::vector<VehicleBinding>& vehicles() const { return vehicles_; }
+  // A vehicle's airframe, for conditions set before the simulation starts (battery sag). Loop thread only.
+  airframe::AirframeParams& mutable_airframe(size_t vehicle) { return vehicles_[vehicle].airframe; }
   double time_s() const;
   double timestep_s() const;
   void set_timestep_s(double dt_s);

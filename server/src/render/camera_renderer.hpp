@@ -42,6 +42,12 @@ struct CameraConfig {
   std::optional<double> fovy_deg;  // vertical field of view; unset: the MJCF camera's fovy
   PixelFormat format = PixelFormat::kRgb8;
   RenderFlags flags;
+  // field conditions (applied by the frame service, not the renderer): sensor noise (standard deviation
+  // in pixel values 0-255, per pixel and channel), brightness variation (standard deviation of a per-frame
+  // gain around 1), and latency (a frame exposed at t is delivered when sim time reaches t + latency).
+  double noise_sd = 0.0;
+  double brightness_sd = 0.0;
+  double latency_s = 0.0;
 };
 
 // Pinhole intrinsics in OpenCV's convention: pixel (u, v) has its centre at integer coordinates, u

@@ -66,9 +66,22 @@ void apply_camera_options(const std::string& text, const std::string& where, Cam
       c->flags.skybox = int_of(key, value, where, 0, 1) != 0;
     } else if (key == "msaa") {
       c->flags.msaa_samples = int_of(key, value, where, 0, 16);
+    } else if (key == "noise") {
+      c->noise_sd = number_of(key, value, where);
+      if (!(c->noise_sd >= 0 && c->noise_sd <= 100)) throw std::invalid_argument(where + ": noise must be in [0, 100]");
+    } else if (key == "brightness") {
+      c->brightness_sd = number_of(key, value, where);
+      if (!(c->brightness_sd >= 0 && c->brightness_sd <= 1)) {
+        throw std::invalid_argument(where + ": brightness must be in [0, 1]");
+      }
+    } else if (key == "latency_ms") {
+      const double ms = number_of(key, value, where);
+      if (!(ms >= 0 && ms <= 10000)) throw std::invalid_argument(where + ": latency_ms must be in [0, 10000]");
+      c->latency_s = ms / 1000.0;
     } else {
       throw std::invalid_argument(where + ": unknown camera option '" + key +
-                                  "' (width, height, fps, fovy, shadows, reflections, skybox, msaa)");
+                                  "' (width, height, fps, fovy, shadows, reflections, skybox, msaa, noise, "
+                                  "brightness, latency_ms)");
     }
   }
 }

@@ -1,7 +1,8 @@
 // Which cameras a world has and how each is rendered (docs/protocol.md "Camera frames"): every named MJCF
 // camera, configured by the world's custom text
 //   <text name="uavsim:camera:CAMNAME" data="width=640 height=480 fps=15 shadows=0 reflections=0 skybox=0 msaa=0"/>
-// (every key optional; defaults 640 x 480 at 15 fps, all effects off: DESIGN.md's frame-rate figures),
+// (every key optional; defaults 640 x 480 at 15 fps, all effects off: DESIGN.md's frame-rate figures;
+// field conditions: noise=SD brightness=SD latency_ms=MS, all 0 by default),
 // then by command-line overrides "CAMNAME:width=W,height=H,fps=F" ("*" for every camera).
 // A camera belongs to a vehicle when its body is one of that vehicle's bodies or a gimbal body bound to it.
 #pragma once

@@ -77,6 +77,31 @@ const std::string* ReadyFrame::image(const EncodingKey& key) const {
   return nullptr;
 }
 
+void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, int camera, int64_t index,
+                          std::vector<uint8_t>* pixels) {
+  // splitmix64 from (seed, camera, index): four 16-bit uniforms per draw
+  uint64_t state = seed ^ (0xCA3E7A00ull + static_cast<uint64_t>(camera) * 0x9E3779B97F4A7C15ull) ^
+                   (static_cast<uint64_t>(index) * 0xBF58476D1CE4E5B9ull);
+  auto next = [&state] {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  // sum of four U(0, 1): mean 2, variance 4/12; scaled to unit variance
+  constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit
+  auto gauss = [&] {
+    const uint64_t r = next();
+    const double sum = static_cast<double>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48));
+    return sum * kScale - 2.0 * 65536.0 * kScale;
+  };
+  const double gain = std::clamp(1.0 + brightness_sd * gauss(), 0.2, 2.0);
+  for (uint8_t& p : *pixels) {
+    const double v = p * gain + (noise_sd > 0 ? noise_sd * gauss() : 0.0);
+    p = static_cast<uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  }
+}
+
 struct FrameService::RenderState {
   mjModel* m = nullptr;
   mjData* d = nullptr;
@@ -100,6 +125,9 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
     f.width_px = c.config.width_px;
     f.height_px = c.config.height_px;
     f.fps_hz = c.config.fps_hz;
+    f.noise_sd = c.config.noise_sd;
+    f.brightness_sd = c.config.brightness_sd;
+    f.latency_s = c.config.latency_s;
     const int id = mj_name2id(m, mjOBJ_CAMERA, c.config.camera.c_str());
     if (id < 0) throw std::invalid_argument("frames: the model has no camera named '" + c.config.camera + "'");
     const CameraIntrinsics k =
@@ -172,8 +200,16 @@ FrameServiceStats FrameService::stats() const {
 void FrameService::capture(mjData_* d) {
   const int64_t now_us = std::llround(d->time * 1e6);
   if (last_capture_us_ && now_us == *last_capture_us_) return;
-  if (last_capture_us_ && now_us < *last_capture_us_) std::fill(next_index_.begin(), next_index_.end(), 0);
+  const bool back = last_capture_us_ && now_us < *last_capture_us_;
+  if (back) std::fill(next_index_.begin(), next_index_.end(), 0);
   last_capture_us_ = now_us;
+  {
+    // frames held for their latency are released as sim time passes (a reset drops them)
+    std::lock_guard<std::mutex> lock(mutex_);
+    sim_now_us_ = now_us;
+    if (back) delayed_.clear();
+  }
+  cv_.notify_all();
 
   std::vector<Job> jobs;
   bool must = false;
@@ -247,7 +283,25 @@ void FrameService::capture(mjData_* d) {
 void FrameService::wait_delivered() {
   std::unique_lock<std::mutex> lock(mutex_);
   const uint64_t target = next_id_ - 1;
-  cv_.wait(lock, [&] { return done_id_ >= target || stop_; });
+  cv_.wait(lock, [&] { return (done_id_ >= target && !delayed_due_locked()) || stop_; });
+}
+
+bool FrameService::delayed_due_locked() const {
+  return !delayed_.empty() && delayed_.front().release_us <= sim_now_us_;
+}
+
+void FrameService::release_due() {
+  for (;;) {
+    Delayed held;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!delayed_due_locked()) break;
+      held = std::move(delayed_.front());
+      delayed_.pop_front();
+    }
+    for (FrameConsumer* consumer : held.consumers) consumer->deliver(held.frame);
+  }
+  cv_.notify_all();
 }
 
 void FrameService::render_thread_main(std::vector<CameraSetup>, std::string) {
@@ -255,13 +309,18 @@ void FrameService::render_thread_main(std::vector<CameraSetup>, std::string) {
     std::unique_ptr<Snapshot> snap;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      cv_.wait(lock, [&] { return stop_ || !queue_.empty() || delayed_due_locked(); });
       if (stop_) break;
-      snap = std::move(queue_.front());
-      queue_.pop_front();
+      if (!queue_.empty()) {
+        snap = std::move(queue_.front());
+        queue_.pop_front();
+      }
     }
+    release_due();
+    if (!snap) continue;
     cv_.notify_all();  // room in the queue
     render_snapshot(*snap);
+    release_due();
     {
       std::lock_guard<std::mutex> lock(mutex_);
       done_id_ = snap->id;
@@ -290,6 +349,10 @@ void FrameService::render_snapshot(Snapshot& s) {
   for (const Job& job : s.jobs) {
     const std::optional<int> index = r.renderer->find(cameras_[static_cast<size_t>(job.camera)].name);
     r.renderer->render(d, *index, &r.frame);
+    const FrameCamera& cam = cameras_[static_cast<size_t>(job.camera)];
+    if (cam.noise_sd > 0 || cam.brightness_sd > 0) {
+      apply_sensor_effects(cam.noise_sd, cam.brightness_sd, options_.seed, job.camera, job.index, &r.frame.pixels);
+    }
     ReadyFrame f;
     f.camera = job.camera;
     f.index = job.index;
@@ -300,6 +363,15 @@ void FrameService::render_snapshot(Snapshot& s) {
     f.R_enu_cam = r.frame.R_enu_cam;
     for (const EncodingKey& key : job.encodings) {
       f.images.emplace_back(key, encode(r.frame.pixels, r.frame.width_px, r.frame.height_px, key));
+    }
+    if (cam.latency_s > 0) {
+      // stamped at exposure, delivered once sim time reaches exposure + latency (release_due)
+      Delayed held{std::llround((s.time + cam.latency_s) * 1e6), std::move(f), job.consumers};
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), held.release_us,
+                                       [](int64_t t, const Delayed& x) { return t < x.release_us; });
+      delayed_.insert(at, std::move(held));
+      continue;
     }
     for (FrameConsumer* consumer : job.consumers) consumer->deliver(f);
   }

@@ -56,7 +56,17 @@ struct FrameCamera {
   int height_px = 0;
   double fps_hz = 0.0;
   double fx_px = 0.0, fy_px = 0.0, cx_px = 0.0, cy_px = 0.0;  // OpenCV pinhole convention
+  double noise_sd = 0.0;       // field conditions (CameraConfig)
+  double brightness_sd = 0.0;
+  double latency_s = 0.0;
 };
+
+// Field conditions on one RGB8 or grey image, in place: a per-frame gain 1 + brightness_sd * n0 and per
+// pixel and channel noise noise_sd * n, both drawn from (seed, camera, index) so a frame's pixels do not
+// depend on thread timing. n is approximately Gaussian (a centred sum of four uniforms, unit variance):
+// a full-size frame takes a few milliseconds, not the tens that std::normal_distribution would.
+void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, int camera, int64_t index,
+                          std::vector<uint8_t>* pixels);
 
 // A rendered frame as consumers receive it (render thread).
 struct ReadyFrame {
@@ -87,6 +97,7 @@ class FrameConsumer {
 
 struct FrameServiceOptions {
   size_t queue_depth = 4;            // snapshots waiting for the renderer; beyond: frames are dropped
+  uint64_t seed = 1;                 // camera noise (field conditions)
   std::string backend = "osmesa";    // make_gl_context
 };
 
@@ -118,7 +129,8 @@ class FrameService {
   // (the gate may run several times at one held step); a sim time earlier than the last one (reset)
   // restarts every camera's frame grid at k = 0.
   void capture(mjData_* d);
-  // Loop thread: waits until every snapshot taken so far has been rendered and delivered.
+  // Loop thread: waits until every snapshot taken so far has been rendered and delivered (a frame with
+  // latency: once sim time has reached its delivery time).
   void wait_delivered();
 
   FrameServiceStats stats() const;
@@ -138,8 +150,16 @@ class FrameService {
     std::vector<int> geom_group;
     std::vector<Job> jobs;
   };
+  // a frame held back by its camera's latency
+  struct Delayed {
+    int64_t release_us = 0;
+    ReadyFrame frame;
+    std::vector<FrameConsumer*> consumers;
+  };
   void render_thread_main(std::vector<CameraSetup> cameras, std::string backend);
   void render_snapshot(Snapshot& s);
+  bool delayed_due_locked() const;  // a held frame is due at sim_now_us_ (mutex_ held)
+  void release_due();               // render thread: delivers the held frames that are due
 
   const mjModel_* m_;
   std::vector<FrameCamera> cameras_;
@@ -157,6 +177,8 @@ class FrameService {
   std::deque<std::unique_ptr<Snapshot>> queue_;  // guarded by mutex_
   std::vector<std::unique_ptr<Snapshot>> spare_; // recycled snapshots, guarded by mutex_
   uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
+  std::deque<Delayed> delayed_;                  // frames waiting out their latency, guarded by mutex_
+  int64_t sim_now_us_ = 0;                       // the last capture's sim time, guarded by mutex_
   bool stop_ = false;
   FrameServiceStats stats_;
   std::string start_error_;

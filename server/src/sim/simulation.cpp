@@ -23,6 +23,9 @@ constexpr double kMaxPosition_m = 1e6;
 constexpr double kMaxSpeed_m_s = 1e4;
 constexpr double kMaxRate_rad_s = 1e4;
 
+// index of the wind's generator stream (vehicles use 0, 1, ...)
+constexpr uint64_t kWindStream = 0x57494E44ull;
+
 bool sane(const airframe::Wrench& w) {
   return w.force_enu_n.allFinite() && w.torque_body_nm.allFinite() && w.force_enu_n.norm() <= kMaxWrench &&
          w.torque_body_nm.norm() <= kMaxWrench;
@@ -52,8 +55,15 @@ Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& c
   physics_dt_s_ = 1.0 / config.physics_hz;
   control_decimation_ = std::max(1, static_cast<int>(std::lround(config.physics_hz / config.control_hz)));
   world_->set_timestep_s(physics_dt_s_);
+  if (const std::string e = airframe::validate(config.field.wind); !e.empty()) throw std::invalid_argument(e);
+  if (config.field.battery_resistance_ohm > 0) {
+    for (size_t i = 0; i < world_->vehicles().size(); ++i) {
+      world_->mutable_airframe(i).battery.internal_resistance_ohm = config.field.battery_resistance_ohm;
+    }
+  }
 
   init_vehicles();
+  init_wind();
   pending_tasks_.resize(vehicles_.size());
   running_tasks_.resize(vehicles_.size());
 }
@@ -72,6 +82,13 @@ void Simulation::init_vehicles() {
     rt.motor_cmd.assign(a.rotors.size(), 0.0);
     rt.thrust_n.assign(a.rotors.size(), 0.0);
     rt.motor_lag_alpha = airframe::motor_lag_alpha(a, physics_dt_s_);
+    // field sensor models first, so that the vehicle's own parameters override them
+    for (const auto& [name, value] : config_.field.sensor_params) {
+      if (rt.fc.set_param(name, value) != fc::CommandResult::kAccepted) {
+        throw std::invalid_argument("field conditions: parameter " + name + " = " + std::to_string(value) +
+                                    ": unknown, or out of its range");
+      }
+    }
     if (i < config_.vehicle_params.size()) {
       for (const auto& [name, value] : config_.vehicle_params[i]) {
         if (rt.fc.set_param(name, value) != fc::CommandResult::kAccepted) {
@@ -87,11 +104,20 @@ void Simulation::init_vehicles() {
   }
 }
 
+void Simulation::init_wind() {
+  // the configured wind, its direction drawn from the seed where the conditions say so
+  airframe::WindParams w = config_.field.wind;
+  const uint64_t seed = mix_seed(config_.seed, kWindStream);
+  if (config_.field.wind_from_seeded) w.from_deg = 360.0 * static_cast<double>(seed >> 11) * 0x1.0p-53;
+  wind_ = airframe::WindField(w, mix_seed(seed, 1));
+}
+
 void Simulation::reset(uint64_t seed) {
   config_.seed = seed;
   world_->reset();
   steps_ = 0;
   init_vehicles();
+  init_wind();
   {
     std::lock_guard<std::mutex> lock(tasks_mutex_);
     for (auto& q : pending_tasks_) q.clear();
@@ -116,16 +142,23 @@ fc::TruthState Simulation::truth(size_t i) const {
 void Simulation::step() {
   if (steps_ % static_cast<uint64_t>(control_decimation_) == 0) control_step();
 
+  if (wind_.active()) wind_.step(physics_dt_s_);
   for (auto& object : objects_) object->before_step(*this);
 
-  // motors -> rotor thrusts -> wrench about the body origin -> qfrc_applied
+  // motors -> rotor thrusts (at the battery's voltage) -> wrench about the body origin, with drag on the
+  // velocity relative to the air -> qfrc_applied
+  const Eigen::Vector3d& wind_enu_m_s = wind_.velocity_enu_m_s();
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     VehicleRuntime& v = vehicles_[i];
     const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
     airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
     airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
+    if (v.thrust_scale != 1.0) {
+      for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
+    }
     const fc::TruthState t = world_->truth(i);
-    const airframe::Wrench w = airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s);
+    const airframe::Wrench w =
+        airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
     if (sane(w)) {
       world_->apply_wrench(i, w);
     } else {
@@ -192,6 +225,7 @@ void Simulation::control_step() {
     v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
     if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
     airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
+    v.thrust_scale = airframe::battery_thrust_scale(a, v.battery);
 
     if (v.fc.armed() != v.was_armed) {
       record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");

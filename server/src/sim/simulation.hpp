@@ -15,8 +15,10 @@
 
 #include "airframe/airframe.hpp"
 #include "fc/flight_controller.hpp"
+#include "airframe/wind.hpp"
 #include "physics/world.hpp"
 #include "sim/events.hpp"
+#include "sim/field_conditions.hpp"
 
 namespace uavsim::server::sim {
 
@@ -30,6 +32,8 @@ struct SimConfig {
   // (--defaults files, the world's uavsim:params texts). A vehicle past the end gets none. An unknown
   // name or a value out of range is a startup error (std::invalid_argument naming it).
   std::vector<std::vector<std::pair<std::string, double>>> vehicle_params;
+  // Wind, battery sag, sensor models, gimbals, balloons (sim/field_conditions.hpp); default: ideal.
+  FieldConditions field;
 };
 
 // A vehicle's runtime state on the loop thread.
@@ -49,6 +53,7 @@ struct VehicleRuntime {
   Eigen::Vector3d start_position_enu_m = Eigen::Vector3d::Zero();
   Eigen::Quaterniond start_q_enu_body = Eigen::Quaterniond::Identity();
   bool state_fault = false;  // the one state_fault event was raised
+  double thrust_scale = 1.0;  // battery sag: fraction of rated thrust at the present terminal voltage
 };
 
 // A command or query for one vehicle, run on the loop thread at the next control boundary.
@@ -118,6 +123,10 @@ class Simulation {
   using ControlObserver = std::function<void(Simulation&)>;
   void add_control_observer(ControlObserver observer);
 
+  // The wind every vehicle flies in (and balloons sway in); set_params/gust change it. Loop thread only.
+  airframe::WindField& wind() { return wind_; }
+  const airframe::WindField& wind() const { return wind_; }
+
   // Events recorded so far (crashes, landings, failures, ...). Loop thread only.
   EventLog& events() { return events_; }
 
@@ -126,6 +135,7 @@ class Simulation {
 
  private:
   void init_vehicles();
+  void init_wind();
   void control_step();
   void check_contacts();
   // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed (one event)
@@ -141,6 +151,7 @@ class Simulation {
   std::vector<ControlObserver> observers_;
   std::vector<std::unique_ptr<WorldObject>> objects_;
   EventLog events_;
+  airframe::WindField wind_{airframe::WindParams{}, 0};
 
   std::mutex tasks_mutex_;
   std::vector<std::vector<VehicleTask>> pending_tasks_;  // per vehicle, guarded by tasks_mutex_

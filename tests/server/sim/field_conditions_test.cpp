@@ -1,0 +1,149 @@
+// Field conditions in the closed loop (sim/field_conditions.hpp): a quad hovering in wind, battery sag,
+// the estimator under field sensor errors, and seeded determinism.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "sim_fixture.hpp"
+
+namespace uavsim::server::sim {
+namespace {
+
+using testing::take_off;
+
+constexpr double kG = 9.81;
+
+std::unique_ptr<Simulation> make_field_sim(const FieldConditions& field, uint64_t seed = 1) {
+  physics::ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  SimConfig c;
+  c.seed = seed;
+  c.field = field;
+  return std::make_unique<Simulation>(
+      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", o), c);
+}
+
+// tilt of the body z axis from vertical, and its horizontal direction (ENU)
+double tilt_rad(const Eigen::Quaterniond& q) {
+  const Eigen::Vector3d z = q * Eigen::Vector3d::UnitZ();
+  return std::acos(std::clamp(z.z(), -1.0, 1.0));
+}
+
+TEST(FieldWind, HoveringQuadHoldsPositionAndTiltsIntoTheWind) {
+  FieldConditions field;
+  field.wind.speed_m_s = 5.0;
+  field.wind.from_deg = 270.0;  // from the west: the air moves towards +x (east)
+  auto sim = make_field_sim(field);
+  take_off(*sim, 5.0);
+  const Eigen::Vector3d hold = sim->truth(0).position_enu_m;
+  testing::goto_enu(*sim, Eigen::Vector3d(0.0, 0.0, hold.z()));
+  sim->run_until(sim->time_s() + 15.0);  // settle (the position loop's integrator takes up the drag)
+
+  // over 10 s: position error and the mean tilt
+  double max_err_m = 0.0, tilt_sum = 0.0, lean_x_sum = 0.0;
+  int n = 0;
+  const double end_s = sim->time_s() + 10.0;
+  while (sim->time_s() < end_s) {
+    sim->step();
+    const fc::TruthState t = sim->truth(0);
+    max_err_m = std::max(max_err_m, (t.position_enu_m - Eigen::Vector3d(0.0, 0.0, hold.z())).norm());
+    tilt_sum += tilt_rad(t.q_enu_body);
+    lean_x_sum += (t.q_enu_body * Eigen::Vector3d::UnitZ()).x();
+    ++n;
+  }
+  EXPECT_LT(max_err_m, 0.5) << "position hold in a steady 5 m/s wind";
+
+  // steady hover in wind V: the thrust's horizontal part balances the drag, its vertical part the weight:
+  //   tan(theta) = D / (m g),  D = lin V + quad V^2 (body x; the body z part is second order in theta)
+  //   quad.xml: D = 0.10 * 5 + 0.05 * 25 = 1.75 N; m g = 1.5 * 9.81 = 14.7 N: theta = atan(0.119) = 6.8 deg
+  const airframe::AirframeParams& a = sim->airframe(0);
+  const double v = 5.0;
+  const double drag_n = a.drag_lin_n_per_m_s.x() * v + a.drag_quad_n_per_m2_s2.x() * v * v;
+  const double expected_rad = std::atan(drag_n / (a.mass_kg * kG));
+  constexpr double kTiltTolerance_rad = 0.5 * M_PI / 180.0;
+  EXPECT_NEAR(tilt_sum / n, expected_rad, kTiltTolerance_rad);
+  // into the wind: thrust leans west, against the air moving east
+  EXPECT_LT(lean_x_sum / n, -0.9 * std::sin(expected_rad));
+}
+
+TEST(FieldWind, SameSeedSameFlightDifferentSeedDifferent) {
+  FieldConditions field = field_conditions(Realism::kField);
+  auto fly = [&](uint64_t seed) {
+    auto sim = make_field_sim(field, seed);
+    take_off(*sim, 3.0);
+    sim->run_until(sim->time_s() + 5.0);
+    return sim->state_hash();
+  };
+  EXPECT_EQ(fly(7), fly(7));
+  EXPECT_NE(fly(7), fly(8));
+}
+
+TEST(FieldWind, ResetRestartsTheWindFromTheSeed) {
+  FieldConditions field = field_conditions(Realism::kField);
+  auto sim = make_field_sim(field, 3);
+  std::vector<double> first;
+  for (int k = 0; k < 2000; ++k) {
+    sim->step();
+    first.push_back(sim->wind().velocity_enu_m_s().x());
+  }
+  sim->reset(3);
+  for (int k = 0; k < 2000; ++k) {
+    sim->step();
+    ASSERT_EQ(sim->wind().velocity_enu_m_s().x(), first[static_cast<size_t>(k)]) << "step " << k;
+  }
+}
+
+TEST(FieldBattery, SagUnderLoadNeedsMoreMotorCommandToHover) {
+  // hover thrust is the weight either way; with sag the rotors make less per command, so the mean
+  // command rises by about 1 / sqrt(scale) (thrust ~ command^2 at the rotor)
+  auto hover = [](double resistance_ohm, double* voltage_v) {
+    FieldConditions field;
+    field.battery_resistance_ohm = resistance_ohm;
+    auto sim = make_field_sim(field);
+    take_off(*sim, 3.0);
+    sim->run_until(sim->time_s() + 5.0);
+    double cmd = 0.0;
+    for (double c : sim->runtime(0).motor_cmd) cmd += c;
+    *voltage_v = sim->runtime(0).battery.voltage_v;
+    return cmd / static_cast<double>(sim->runtime(0).motor_cmd.size());
+  };
+  double v_ideal = 0.0, v_sag = 0.0;
+  const double cmd_ideal = hover(0.0, &v_ideal);
+  const double cmd_sag = hover(0.05, &v_sag);
+  // hover power ~ 200 W: I ~ 17 A, 0.05 ohm sags ~ 0.85 V
+  EXPECT_LT(v_sag, v_ideal - 0.5);
+  EXPECT_GT(cmd_sag, cmd_ideal * 1.02);
+}
+
+TEST(FieldSensors, EstimateWandersWithTheGpsBiasAndRtkHoldsCentimetres) {
+  // a quad resting on the ground for 150 s: the estimated horizontal position error is the GPS error
+  auto rms_error = [](double rtk) {
+    FieldConditions field = field_conditions(Realism::kField);
+    field.wind = {};
+    field.wind_from_seeded = false;
+    field.sensor_params.emplace_back("SIM_GPS_RTK", rtk);
+    auto sim = make_field_sim(field, 5);
+    double sum2 = 0.0;
+    int n = 0;
+    while (sim->time_s() < 150.0) {
+      sim->run_until(sim->time_s() + 0.1);
+      if (sim->time_s() < 20.0) continue;  // the estimator's start
+      const Eigen::Vector2d e = (sim->fc(0).estimate().position_enu_m - sim->truth(0).position_enu_m).head<2>();
+      sum2 += e.squaredNorm();
+      ++n;
+    }
+    return std::sqrt(sum2 / n);
+  };
+  // field: horizontal bias sd 0.7 m per axis (about one correlation time here: loosely), white 0.15 m
+  const double field_rms = rms_error(0.0);
+  RecordProperty("field_rms_m", std::to_string(field_rms));
+  EXPECT_GT(field_rms, 0.3);
+  EXPECT_LT(field_rms, 3.0);
+  // RTK: 1 cm per axis white noise, filtered by the estimator: well under 5 cm
+  const double rtk_rms = rms_error(1.0);
+  RecordProperty("rtk_rms_m", std::to_string(rtk_rms));
+  EXPECT_LT(rtk_rms, 0.05);
+}
+
+}  // namespace
+}  // namespace uavsim::server::sim
