@@ -73,7 +73,9 @@ class Sensors {
   bool gps_denied_ = false;
   Eigen::Vector3d gps_glitch_enu_m_ = Eigen::Vector3d::Zero();
   // field errors: their own generator, so the white noise above does not depend on them
+  // (a distribution of its own too: std::normal_distribution keeps the second value of each pair)
   std::mt19937_64 error_rng_;
+  std::normal_distribution<double> error_normal_{0.0, 1.0};
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   Eigen::Vector3d gps_bias_enu_m_ = Eigen::Vector3d::Zero();
   bool gps_bias_started_ = false;

@@ -1,0 +1,171 @@
+// World objects under field conditions (sim/field_conditions.hpp): gimbal lag and slew limits, balloon
+// heights drawn per seed, balloons swaying in the wind.
+#include <gtest/gtest.h>
+
+#include <mujoco/mujoco.h>
+
+#include <cmath>
+
+#include "objects/balloons.hpp"
+#include "objects/gimbal.hpp"
+#include "objects_fixture.hpp"
+
+namespace uavsim::server::objects {
+namespace {
+
+double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  return Eigen::AngleAxisd(a.conjugate() * b).angle();
+}
+
+TEST(GimbalDynamics, AttitudeStepGivesAPointingErrorThatDecaysWithTheTimeConstant) {
+  // the camera rides on the body: a 0.3 rad step in body roll turns the camera with it; the loop then
+  // slews back to the (earth-fixed) target: error(t) = 0.3 exp(-t / tau) without limits
+  sim::GimbalDynamicsParams p;
+  p.time_const_s = 0.05;
+  constexpr double kDt = 0.001;
+  constexpr double kStep_rad = 0.3;
+  const Eigen::Quaterniond q_enu_target = Eigen::Quaterniond::Identity();
+  GimbalMotion m;
+  step_gimbal_motion(p, q_enu_target, kDt, &m);  // starts on target, body level
+  const Eigen::Quaterniond q_enu_body(Eigen::AngleAxisd(kStep_rad, Eigen::Vector3d::UnitX()));
+  const Eigen::Quaterniond q_body_target = q_enu_body.conjugate() * q_enu_target;
+  EXPECT_NEAR(angle_between(q_enu_body * m.q_body_cam, q_enu_target), kStep_rad, 1e-9);
+  for (double t = kDt; t <= 3.0 * p.time_const_s + 1e-9; t += kDt) {
+    step_gimbal_motion(p, q_body_target, kDt, &m);
+    const double err = angle_between(q_enu_body * m.q_body_cam, q_enu_target);
+    // discrete first order: (1 - dt / tau)^k against exp(-k dt / tau): within 2 % over three tau
+    EXPECT_NEAR(err, kStep_rad * std::exp(-t / p.time_const_s), 0.02 * kStep_rad) << "t = " << t;
+  }
+}
+
+TEST(GimbalDynamics, SlewRateAndAccelerationStayWithinTheirLimits) {
+  sim::GimbalDynamicsParams p;
+  p.time_const_s = 0.02;
+  p.rate_max_rad_s = 1.0;
+  p.accel_max_rad_s2 = 20.0;
+  constexpr double kDt = 0.001;
+  GimbalMotion m;
+  step_gimbal_motion(p, Eigen::Quaterniond::Identity(), kDt, &m);
+  const Eigen::Quaterniond target(Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitY()));
+  double prev_rate = 0.0, max_rate = 0.0, max_accel = 0.0;
+  double t_reach = -1.0;
+  for (int k = 1; k <= 3000; ++k) {
+    step_gimbal_motion(p, target, kDt, &m);
+    const double rate = m.rate_body_rad_s.norm();
+    max_rate = std::max(max_rate, rate);
+    max_accel = std::max(max_accel, std::abs(rate - prev_rate) / kDt);
+    prev_rate = rate;
+    if (t_reach < 0 && angle_between(m.q_body_cam, target) < 0.01) t_reach = k * kDt;
+  }
+  EXPECT_LE(max_rate, p.rate_max_rad_s + 1e-9);
+  EXPECT_LE(max_accel, p.accel_max_rad_s2 + 1e-6);
+  // 1 rad at 1 rad/s, after 0.05 s of acceleration: a little over a second
+  EXPECT_GT(t_reach, 1.0);
+  EXPECT_LT(t_reach, 1.3);
+}
+
+TEST(GimbalDynamics, PerfectWithoutDynamics) {
+  // the ideal world: no time constant, the camera is on target every step
+  GimbalMotion m;
+  const Eigen::Quaterniond a(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
+  step_gimbal_motion(sim::GimbalDynamicsParams{}, Eigen::Quaterniond::Identity(), 0.001, &m);
+  step_gimbal_motion(sim::GimbalDynamicsParams{}, a, 0.001, &m);
+  EXPECT_LT(angle_between(m.q_body_cam, a), 1e-9);
+}
+
+std::unique_ptr<sim::Simulation> field_2020(uint64_t seed, const sim::FieldConditions& field) {
+  physics::ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  sim::SimConfig c;
+  c.seed = seed;
+  c.field = field;
+  return std::make_unique<sim::Simulation>(
+      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o), c);
+}
+
+TEST(FieldBalloons, HeightsComeFromTheSeedWithinTheSpreadAndPositionsStay) {
+  sim::FieldConditions field;
+  field.balloons.height_spread_m = 0.5;
+  bool varied = false;
+  for (uint64_t seed = 1; seed <= 10; ++seed) {
+    auto ideal = testing::make_shipped("mbzirc2020.xml", seed);
+    auto a = field_2020(seed, field);
+    auto b = field_2020(seed, field);
+    const ObjectSet si = add_world_objects(*ideal), sa = add_world_objects(*a), sb = add_world_objects(*b);
+    for (size_t i = 0; i < sa.balloons->balloons().size(); ++i) {
+      const BalloonState& x = sa.balloons->balloons()[i];
+      // top within 3.0 +- 0.5 m, the same ground position as without variation, the same per seed
+      const double top = x.position_enu_m.z() + x.radius_m;
+      EXPECT_GE(top, 2.5);
+      EXPECT_LE(top, 3.5);
+      varied = varied || std::abs(top - 3.0) > 0.05;
+      EXPECT_EQ(x.position_enu_m.head<2>(), si.balloons->balloons()[i].position_enu_m.head<2>());
+      EXPECT_EQ(x.position_enu_m, sb.balloons->balloons()[i].position_enu_m);
+    }
+  }
+  EXPECT_TRUE(varied);
+}
+
+TEST(FieldBalloons, BalloonsLeanDownwindAndSway) {
+  // 5 m/s from the west: the balloons lean east; the pole is sized for 0.25 m at the top in 5 m/s
+  // (balloons.cpp), i.e. about 0.25 * 2.7 / 3.0 = 0.23 m at the balloon's centre
+  sim::FieldConditions field;
+  field.balloons.sway = true;
+  field.wind.speed_m_s = 5.0;
+  field.wind.from_deg = 270.0;
+  auto sim = field_2020(1, field);
+  const ObjectSet set = add_world_objects(*sim);
+  const Eigen::Vector3d start = set.balloons->balloons()[0].position_enu_m;
+  double min_dx = 1e9, max_dx = -1e9;
+  sim->run_until(3.0);
+  for (int k = 0; k < 2000; ++k) {
+    sim->step();
+    const double dx = set.balloons->balloons()[0].position_enu_m.x() - start.x();
+    min_dx = std::min(min_dx, dx);
+    max_dx = std::max(max_dx, dx);
+  }
+  const double lean_m = 0.5 * (min_dx + max_dx);
+  EXPECT_NEAR(lean_m, 0.23, 0.05);
+  // settled (the damping takes the first swing out in a few seconds)
+  EXPECT_LT(max_dx - min_dx, 0.02);
+  // the body (pole and balloon) leans east about its foot: its z axis has a positive x component
+  const int body = sim->world().body_id(set.balloons->balloons()[0].name);
+  const mjtNum* q = sim->world().data()->xquat + 4 * body;  // w x y z
+  EXPECT_NEAR(2.0 * (q[1] * q[3] + q[0] * q[2]), lean_m / 2.7, 0.01);
+
+  // turbulence makes them sway
+  field.wind.turbulence_sd_m_s = 1.5;
+  auto gusty = field_2020(1, field);
+  const ObjectSet gset = add_world_objects(*gusty);
+  gusty->run_until(3.0);
+  double lo = 1e9, hi = -1e9;
+  for (int k = 0; k < 20000; ++k) {
+    gusty->step();
+    const double dx = gset.balloons->balloons()[0].position_enu_m.x() - start.x();
+    lo = std::min(lo, dx);
+    hi = std::max(hi, dx);
+  }
+  EXPECT_GT(hi - lo, 0.05);
+}
+
+TEST(FieldBalloons, ThePoleStillMeetsTheGroundAndTouchesNothing) {
+  sim::FieldConditions field;
+  field.balloons.height_spread_m = 0.5;
+  auto sim = field_2020(2, field);
+  const ObjectSet set = add_world_objects(*sim);
+  sim->run_until(0.5);
+  // no contact involves a balloon body: the pole's underground part does not touch the ground plane
+  // (mocap and world bodies do not collide), so the ideal world's contacts are as before
+  const mjModel* m = sim->world().model();
+  const mjData* d = sim->world().data();
+  for (int i = 0; i < d->ncon; ++i) {
+    for (const BalloonState& b : set.balloons->balloons()) {
+      const int body = sim->world().body_id(b.name);
+      EXPECT_NE(m->geom_bodyid[d->contact[i].geom1], body);
+      EXPECT_NE(m->geom_bodyid[d->contact[i].geom2], body);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace uavsim::server::objects
