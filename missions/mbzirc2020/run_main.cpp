@@ -8,194 +8,26 @@
 // Exit status: 0 only when every balloon is popped and no vehicle crashed (other than one killed on
 // purpose with --kill, Competition Day 2's failed UAV). 1: the mission fell short; 2: usage; 4: the
 // harness failed.
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <regex>
 #include <set>
 #include <string>
 #include <vector>
 
-extern char** environ;
+#include "uavsim/client/sim_connection.hpp"
+#include "uavsim/launch/launcher.hpp"
 
 namespace {
 
 using Json = nlohmann::json;
-using Clock = std::chrono::steady_clock;
-
-// a program installed beside this one (found through /proc/self/exe, so a PATH lookup works too)
-std::string sibling(const char* argv0, const std::string& name) {
-  char self[4096];
-  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  std::string dir = n > 0 ? std::string(self, static_cast<size_t>(n)) : std::string(argv0);
-  const size_t slash = dir.rfind('/');
-  dir = slash == std::string::npos ? "." : dir.substr(0, slash);
-  return dir + "/" + name;
-}
-
-// A child process with stdout and stderr on one pipe, read line by line without blocking.
-struct Child {
-  std::string name;
-  pid_t pid = -1;
-  int fd = -1;
-  std::string buf;
-  bool exited = false;
-  int status = 0;
-
-  bool spawn(const std::vector<std::string>& args, const std::vector<std::string>& env_extra) {
-    int fds[2];
-    if (pipe2(fds, O_CLOEXEC) != 0) return false;
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 2);
-    std::vector<std::string> env;
-    for (char** e = environ; *e != nullptr; ++e) {
-      if (std::strncmp(*e, "UAVSIM_LOCKSTEP=", 16) != 0) env.emplace_back(*e);
-    }
-    env.insert(env.end(), env_extra.begin(), env_extra.end());
-    std::vector<char*> argv, envp;
-    std::vector<std::string> a = args;
-    for (auto& s : a) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    for (auto& s : env) envp.push_back(s.data());
-    envp.push_back(nullptr);
-    const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&fa);
-    close(fds[1]);
-    if (rc != 0) {
-      close(fds[0]);
-      pid = -1;
-      return false;
-    }
-    fd = fds[0];
-    fcntl(fd, F_SETFL, O_NONBLOCK);
-    return true;
-  }
-  // reads what is there; complete lines out
-  std::vector<std::string> read_lines() {
-    std::vector<std::string> lines;
-    if (fd < 0) return lines;
-    char tmp[8192];
-    for (;;) {
-      const ssize_t n = read(fd, tmp, sizeof(tmp));
-      if (n > 0) {
-        buf.append(tmp, static_cast<size_t>(n));
-        continue;
-      }
-      if (n == 0) {  // end of output
-        close(fd);
-        fd = -1;
-        if (!buf.empty()) buf += '\n';
-      }
-      break;
-    }
-    size_t nl;
-    while ((nl = buf.find('\n')) != std::string::npos) {
-      lines.push_back(buf.substr(0, nl));
-      buf.erase(0, nl + 1);
-    }
-    return lines;
-  }
-  bool reap() {
-    if (pid <= 0 || exited) return exited;
-    if (waitpid(pid, &status, WNOHANG) == pid) exited = true;
-    return exited;
-  }
-  void stop(int sig, double wall_timeout_s) {
-    if (pid <= 0 || reap()) return;
-    kill(pid, sig);
-    const auto end = Clock::now() + std::chrono::duration<double>(wall_timeout_s);
-    while (!reap() && Clock::now() < end) usleep(10000);
-    if (!exited) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      exited = true;
-    }
-  }
-};
-
-// Line-JSON client of the sim API: requests wait for their reply (by id); events are queued.
-class Api {
- public:
-  bool connect(int port) {
-    fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) return false;
-    return read_one(10.0).has_value();  // hello
-  }
-  ~Api() {
-    if (fd_ >= 0) close(fd_);
-  }
-  int fd() const { return fd_; }
-  Json request(Json j, double wall_timeout_s = 30.0) {
-    j["id"] = ++next_id_;
-    const std::string line = j.dump() + "\n";
-    if (send(fd_, line.data(), line.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(line.size()))
-      return Json();
-    const auto end = Clock::now() + std::chrono::duration<double>(wall_timeout_s);
-    while (Clock::now() < end) {
-      auto m = read_one(std::chrono::duration<double>(end - Clock::now()).count());
-      if (!m) return Json();
-      if (m->contains("ok") && m->value("id", -1) == next_id_) return *m;
-      if (m->contains("event")) events_.push_back(*m);
-    }
-    return Json();
-  }
-  // events already read plus whatever is waiting now
-  std::vector<Json> take_events() {
-    for (;;) {
-      auto m = read_one(0.0);
-      if (!m) break;
-      if (m->contains("event")) events_.push_back(*m);
-    }
-    std::vector<Json> out;
-    out.swap(events_);
-    return out;
-  }
-
- private:
-  std::optional<Json> read_one(double wall_timeout_s) {
-    for (;;) {
-      const size_t nl = buf_.find('\n');
-      if (nl != std::string::npos) {
-        Json j = Json::parse(buf_.substr(0, nl), nullptr, false);
-        buf_.erase(0, nl + 1);
-        if (j.is_object()) return j;
-        continue;
-      }
-      pollfd p{fd_, POLLIN, 0};
-      if (poll(&p, 1, static_cast<int>(wall_timeout_s * 1000)) <= 0) return std::nullopt;
-      char tmp[65536];
-      const ssize_t n = recv(fd_, tmp, sizeof(tmp), 0);
-      if (n <= 0) return std::nullopt;
-      buf_.append(tmp, static_cast<size_t>(n));
-    }
-  }
-  int fd_ = -1;
-  int next_id_ = 0;
-  std::string buf_;
-  std::vector<Json> events_;
-};
+using uavsim::client::SimConnection;
+using uavsim::client::SimMessage;
+using uavsim::launch::Launcher;
 
 struct Options {
   uint64_t seed = 1;
@@ -203,7 +35,7 @@ struct Options {
   std::string record;  // empty: no video
   double budget_s = 400.0;
   double wall_limit_s = 1800.0;
-  std::string kill;  // vehicle to kill right after its take-off
+  std::string kill;            // vehicle to kill right after its take-off
   double gcs_loss = 0.0;       // the GCS link relay's loss probability, both vehicles
   double gcs_latency_s = 0.0;  // and its one-way latency
   std::string json_path;
@@ -240,8 +72,8 @@ int main(int argc, char** argv) {
   Options o;
   o.world = std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml";
   o.server = UAVSIM_SERVER_PATH;
-  o.uav = sibling(argv[0], "mbzirc2020-uav");
-  o.gcs = sibling(argv[0], "mbzirc2020-gcs");
+  o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
+  o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
   bool record = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -294,17 +126,7 @@ int main(int argc, char** argv) {
   const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
                                ",height=" + o.camera_size.substr(x + 1) +
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
-  const auto wall_start = Clock::now();
-  auto wall_s = [&] { return std::chrono::duration<double>(Clock::now() - wall_start).count(); };
-  auto say = [&](const std::string& s) {
-    if (!o.quiet) {
-      std::printf("%s\n", s.c_str());
-      std::fflush(stdout);
-    }
-  };
-
-  std::vector<Child> children;  // server, gcs, uav0, uav1
-  children.reserve(4);
+  Launcher launch("mbzirc2020-run", o.quiet);
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
     std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
@@ -312,45 +134,12 @@ int main(int argc, char** argv) {
   };
 
   // 1. the server, on ephemeral ports, as fast as possible
-  Child& server = children.emplace_back();
-  server.name = "server";
-  std::vector<std::string> sargs{o.server,
-                                 o.world,
-                                 "--rate",
-                                 "0",
-                                 "--seed",
-                                 std::to_string(o.seed),
-                                 "--mavlink-port",
-                                 "0",
-                                 "--api-port",
-                                 "0",
-                                 "--lockstep-timeout",
-                                 "120",
-                                 "--camera",
-                                 "uav0_front:" + cam_opts,
-                                 "--camera",
-                                 "uav1_front:" + cam_opts};
-  if (!o.record.empty()) sargs.insert(sargs.end(), {"--record", o.record});
-  std::map<std::string, int> mavlink_port;
-  int api_port = 0;
-  if (!server.spawn(sargs, {})) {
-    fail("cannot start " + o.server);
-    return 4;
-  }
-  const std::regex mav_re(R"(uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+))");
-  const std::regex api_re(R"(sim API on tcp:[0-9.]+:(\d+))");
-  while (api_port == 0 && wall_s() < 60) {
-    pollfd p{server.fd, POLLIN, 0};
-    poll(&p, 1, 200);
-    for (const std::string& l : server.read_lines()) {
-      say("[server] " + l);
-      std::smatch m;
-      if (std::regex_search(l, m, mav_re)) mavlink_port[m[1]] = std::stoi(m[2]);
-      if (std::regex_search(l, m, api_re)) api_port = std::stoi(m[1]);
-    }
-    if (server.fd < 0) break;
-  }
-  Api api;
+  uavsim::launch::ServerSpec spec;
+  spec.path = o.server;
+  spec.world = o.world;
+  spec.extra_args = {"--seed",   std::to_string(o.seed),  "--camera", "uav0_front:" + cam_opts,
+                     "--camera", "uav1_front:" + cam_opts};
+  if (!o.record.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record});
   std::set<std::string> killed;
   Json summary;
   int popped = 0, balloons_total = 0;
@@ -358,96 +147,86 @@ int main(int argc, char** argv) {
   bool collision = false;
   double first_armed_s = -1, last_pop_s = -1, end_sim_s = 0;
 
-  if (api_port == 0 || mavlink_port.size() < 2) {
+  if (auto started = launch.start_server(spec); !started) {
+    fail("the server did not start: " + started.message());
+  } else if (launch.mavlink_port("uav0") == 0 || launch.mavlink_port("uav1") == 0) {
     fail("the server did not start (no API / MAVLink ports)");
-  } else if (!api.connect(api_port)) {
-    fail("cannot connect to the sim API");
   } else {
+    SimConnection& api = launch.api();
     // 2. hold the clock and start from t = 0 with this seed, so every run of a seed starts alike
-    api.request({{"op", "pause"}});
-    api.request({{"op", "reset"}, {"seed", o.seed}});
-    api.request({{"op", "subscribe_events"}});
-    const std::string lockstep = "UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(api_port) + "/0.05";
+    (void)api.pause();
+    (void)api.reset(o.seed);
+    (void)api.subscribe_events();
+    const std::string lockstep = launch.lockstep_env(0.05);
 
     // 3. the ground station; its link ports, then the server's GCS link relay in front of each
     // (seed 6.3)
-    Child& gcs = children.emplace_back();
-    gcs.name = "gcs";
     std::map<int, int> gcs_port;
-    if (!gcs.spawn({o.gcs, "--uavs", "2"}, {lockstep})) fail("cannot start " + o.gcs);
     const std::regex gcs_re(R"(gcs: uav(\d+) link on udp:[0-9.]+:(\d+))");
-    while (!harness_error && gcs_port.size() < 2 && wall_s() < 60 && gcs.fd >= 0) {
-      pollfd p{gcs.fd, POLLIN, 0};
-      poll(&p, 1, 200);
-      for (const std::string& l : gcs.read_lines()) {
-        say("[gcs] " + l);
-        std::smatch m;
-        if (std::regex_search(l, m, gcs_re)) gcs_port[std::stoi(m[1])] = std::stoi(m[2]);
+    launch.on_line([&](const std::string& child, const std::string& l) {
+      std::smatch m;
+      if (child == "gcs" && std::regex_search(l, m, gcs_re)) {
+        gcs_port[std::stoi(m[1])] = std::stoi(m[2]);
       }
+    });
+    if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {
+      fail("cannot start " + o.gcs);
+    }
+    while (!harness_error && gcs_port.size() < 2 && launch.wall_s() < 60 &&
+           !launch.programs_done()) {
+      launch.pump(200);
     }
     if (!harness_error && gcs_port.size() < 2) fail("the ground station did not start");
     for (int i = 0; i < 2 && !harness_error; ++i) {
-      const Json r = api.request({{"op", "gcs_link_open"},
+      const auto r = api.request({{"op", "gcs_link_open"},
                                   {"vehicle", i},
                                   {"gcs_target_host", "127.0.0.1"},
                                   {"gcs_target_port", gcs_port[i]}});
-      if (!r.value("ok", false)) {
-        fail("gcs_link_open: " + r.dump());
+      if (!r) {
+        fail("gcs_link_open: " + r.message());
         break;
       }
-      const int uav_port = r["result"]["uav_port"].get<int>();
+      const int uav_port = r->value("uav_port", 0);
       if (o.gcs_loss > 0.0 || o.gcs_latency_s > 0.0) {
         // impaired from t = 0, before the UAV program sends anything
-        const Json ir = api.request({{"op", "gcs_link_impair"},
+        const auto ir = api.request({{"op", "gcs_link_impair"},
                                      {"vehicle", i},
                                      {"loss", o.gcs_loss},
                                      {"latency_s", o.gcs_latency_s}});
-        if (!ir.value("ok", false)) {
-          fail("gcs_link_impair: " + ir.dump());
+        if (!ir) {
+          fail("gcs_link_impair: " + ir.message());
           break;
         }
       }
       // 4. the UAV programs
-      Child& u = children.emplace_back();
-      u.name = "uav" + std::to_string(i);
-      if (!u.spawn({o.uav, "--index", std::to_string(i), "--mavlink",
-                    "tcp:127.0.0.1:" + std::to_string(mavlink_port[u.name]), "--gcs",
-                    "127.0.0.1:" + std::to_string(uav_port)},
-                   {lockstep})) {
+      const std::string name = "uav" + std::to_string(i);
+      if (!launch.spawn(name,
+                        {o.uav, "--index", std::to_string(i), "--mavlink",
+                         "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)), "--gcs",
+                         "127.0.0.1:" + std::to_string(uav_port)},
+                        {lockstep})) {
         fail("cannot start " + o.uav);
       }
     }
     // 5. once all three have joined the lockstep, let the clock go
-    while (!harness_error) {
-      const Json s = api.request({{"op", "status"}});
-      if (s.value("ok", false) && s["result"].value("lockstep_clients", 0) >= 3) break;
-      if (wall_s() > 120) fail("the mission programs did not join the lockstep");
-      for (Child& c : children) {
-        for (const std::string& l : c.read_lines()) say("[" + c.name + "] " + l);
-      }
-      usleep(20000);
+    if (!harness_error && !launch.wait_lockstep_clients(3, 120.0)) {
+      fail("the mission programs did not join the lockstep");
     }
     if (!harness_error) {
-      api.request({{"op", "resume"}});
-      say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " +
-          std::to_string(static_cast<int>(o.budget_s)) + " s sim" +
-          (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
+      (void)api.resume();
+      launch.say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " +
+                 std::to_string(static_cast<int>(o.budget_s)) + " s sim" +
+                 (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
     }
 
     // 6. follow the programs and the event stream until they finish or the budget is spent
-    auto last_status = Clock::now();
+    double last_status_wall_s = launch.wall_s();
     double sim_s = 0;
     while (!harness_error) {
-      std::vector<pollfd> fds{{api.fd(), POLLIN, 0}};
-      for (Child& c : children) {
-        if (c.fd >= 0) fds.push_back({c.fd, POLLIN, 0});
-      }
-      poll(fds.data(), fds.size(), 200);
-      for (Child& c : children) {
-        for (const std::string& l : c.read_lines()) say("[" + c.name + "] " + l);
-      }
-      for (const Json& e : api.take_events()) {
-        if (e.value("event", "") != "sim_event") continue;
+      launch.pump(200);
+      for (const SimMessage& m : api.take_messages()) {
+        if (m.kind() != "sim_event") continue;
+        const Json& e = m.json;
         const std::string type = e.value("type", ""), veh = e.value("vehicle_name", "");
         const double t = e.value("time", 0.0);
         const std::string detail = e.value("detail", "");
@@ -464,65 +243,58 @@ int main(int argc, char** argv) {
           char buf[256];
           std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), veh.c_str(),
                         detail.c_str());
-          say(buf);
+          launch.say(buf);
         }
         if (type == "takeoff" && veh == o.kill && !killed.count(veh)) {
-          api.request({{"op", "kill_vehicle"},
-                       {"vehicle", veh},
-                       {"reason", "Competition Day 2 malfunction"}});
+          (void)api.request({{"op", "kill_vehicle"},
+                             {"vehicle", veh},
+                             {"reason", "Competition Day 2 malfunction"}});
           killed.insert(veh);
         }
       }
-      bool all_done = true;
-      for (size_t i = 1; i < children.size(); ++i)
-        all_done = all_done && children[i].reap() && children[i].fd < 0;
-      if (Clock::now() - last_status > std::chrono::milliseconds(500) || all_done) {
-        last_status = Clock::now();
-        const Json s = api.request({{"op", "status"}});
-        if (s.value("ok", false)) sim_s = s["result"].value("time_s", 0.0);
+      const bool all_done = launch.programs_done();
+      if (launch.wall_s() - last_status_wall_s > 0.5 || all_done) {
+        last_status_wall_s = launch.wall_s();
+        if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
       }
       if (all_done) break;
       if (sim_s > o.budget_s) {
-        say("mbzirc2020-run: sim-time budget spent");
+        launch.say("mbzirc2020-run: sim-time budget spent");
         break;
       }
-      if (wall_s() > o.wall_limit_s) {
-        say("mbzirc2020-run: wall-clock limit reached");
+      if (launch.wall_s() > o.wall_limit_s) {
+        launch.say("mbzirc2020-run: wall-clock limit reached");
         break;
       }
-      if (server.reap()) {
+      if (launch.server_exited()) {
         fail("the server exited");
         break;
       }
     }
 
     // 7. score from ground truth
-    const Json b = api.request({{"op", "balloons"}});
-    if (b.value("ok", false)) {
-      end_sim_s = b["result"].value("time_s", 0.0);
-      for (const Json& x : b["result"]["balloons"]) {
+    if (const auto b = api.request({{"op", "balloons"}}); b) {
+      end_sim_s = b->value("time_s", 0.0);
+      for (const Json& x : b->at("balloons")) {
         ++balloons_total;
         if (x.value("popped", false)) {
           ++popped;
           last_pop_s = std::max(last_pop_s, x.value("popped_time_s", 0.0));
         }
       }
-      summary["balloons"] = b["result"]["balloons"];
+      summary["balloons"] = b->at("balloons");
     }
     // the relay's counters: what the impairment did to each GCS link
     summary["gcs_links"] = Json::array();
     for (int i = 0; i < 2; ++i) {
-      const Json g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}});
-      if (g.value("ok", false)) summary["gcs_links"].push_back(g["result"]);
+      if (const auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}); g) {
+        summary["gcs_links"].push_back(*g);
+      }
     }
   }
 
-  // 8. stop everything we started: the programs, then the server (SIGINT: it finishes the video)
-  for (size_t i = children.size(); i-- > 1;) children[i].stop(SIGTERM, 5.0);
-  server.stop(SIGINT, 60.0);
-  for (Child& c : children) {
-    for (const std::string& l : c.read_lines()) say("[" + c.name + "] " + l);
-  }
+  // 8. stop everything we started: the programs, then the server (it finishes the video)
+  launch.stop_all(60.0);
 
   const bool success =
       harness_error == 0 && balloons_total > 0 && popped == balloons_total && crashes.empty();
@@ -543,7 +315,7 @@ int main(int argc, char** argv) {
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   if (!killed.empty())
     std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
-  std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, wall_s());
+  std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
   std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
   std::fflush(stdout);
@@ -559,7 +331,7 @@ int main(int argc, char** argv) {
     summary["crashes"] = crashes;
     summary["killed"] = std::vector<std::string>(killed.begin(), killed.end());
     summary["sim_time_s"] = end_sim_s;
-    summary["wall_time_s"] = wall_s();
+    summary["wall_time_s"] = launch.wall_s();
     summary["video"] = o.record;
     summary["success"] = success;
     std::ofstream(o.json_path) << summary.dump(2) << "\n";

@@ -1,0 +1,90 @@
+// Launcher: what a mission launcher (mbzirc2017-run, mbzirc2020-run) does around its mission: start
+// uavsim-server on ephemeral ports (learnt from its banner) and connect a SimConnection to its API,
+// spawn the mission programs with stdout and stderr read line by line (printed prefixed with the
+// program's name unless quiet), put them on the lockstep clock, and stop and reap them all.
+//
+// Thread contract: one thread uses a Launcher (its api() included); nothing here is thread-safe.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "uavsim/client/result.hpp"
+#include "uavsim/client/sim_connection.hpp"
+
+namespace uavsim::launch {
+
+using client::Result;
+
+// How to start the server: its program, the world, and options beside the launcher's own
+// (--rate 0 --mavlink-port 0 --api-port 0 --lockstep-timeout 120).
+struct ServerSpec {
+  std::string path;
+  std::string world;
+  std::vector<std::string> extra_args;
+  double start_timeout_s = 60.0;  // wall seconds for the banner and the API's hello
+};
+
+// The program `name` in the directory of the running executable (/proc/self/exe).
+std::string sibling_program(const std::string& name);
+
+class Launcher {
+ public:
+  // name prefixes the launcher's own messages; quiet: say() and the children's lines print nothing.
+  Launcher(std::string name, bool quiet);
+  // Stops whatever still runs (stop_all(5)).
+  ~Launcher();
+  Launcher(const Launcher&) = delete;
+  Launcher& operator=(const Launcher&) = delete;
+
+  // Starts the server (child "server") as fast as possible on ephemeral ports, reads its banner
+  // until the API's port and connects api() to it. Fails when the program cannot start, exits, or
+  // prints no API port within spec.start_timeout_s, or the API does not answer.
+  Result<void> start_server(const ServerSpec& spec);
+  // The connection to the server's API; only after start_server() succeeded.
+  client::SimConnection& api();
+  // The API's TCP port (0 before start_server()).
+  int api_port() const;
+  // The TCP MAVLink port the server printed for this vehicle name; 0 if none.
+  int mavlink_port(const std::string& vehicle) const;
+
+  // Starts a program (argv[0] is its path) named `name` in the output, with this environment plus
+  // env ("KEY=value"; an inherited UAVSIM_LOCKSTEP is dropped). Fails when it cannot be started.
+  Result<void> spawn(const std::string& name, const std::vector<std::string>& argv,
+                     const std::vector<std::string>& env = {});
+  // "UAVSIM_LOCKSTEP=127.0.0.1:PORT/PERIOD": puts a client_cpp program on the server's lockstep.
+  std::string lockstep_env(double period_s) const;
+  // Waits (reading the children's output) until at least n clients have joined the lockstep.
+  Result<void> wait_lockstep_clients(int n, double timeout_s);
+
+  // Every complete output line of a child (name, line without '\n') is given to cb, in order, after
+  // it is printed. Callbacks add up; they may call this launcher's api(), not pump().
+  void on_line(std::function<void(const std::string& child, const std::string& line)> cb);
+  // Waits up to timeout_ms for output or API messages, then reads the children's lines (printed
+  // "[name] line" unless quiet, then given to on_line) and what the API has sent (queued or given
+  // to its handlers, as SimConnection::poll).
+  void pump(int timeout_ms);
+  // Prints a line unless quiet.
+  void say(const std::string& line) const;
+  // Wall seconds since the launcher was made.
+  double wall_s() const;
+  // True when every program spawned (the server aside) has exited and its output is read.
+  bool programs_done();
+  // True when the server has exited (or was never started).
+  bool server_exited();
+  // Stops the programs (SIGTERM, then SIGKILL after at most 5 s), then the server (SIGTERM: it
+  // finishes a recording; SIGKILL after timeout_s), reaps them and prints their last lines.
+  void stop_all(double timeout_s);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace uavsim::launch
