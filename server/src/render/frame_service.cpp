@@ -283,7 +283,7 @@ void FrameService::capture(mjData_* d) {
 void FrameService::wait_delivered() {
   std::unique_lock<std::mutex> lock(mutex_);
   const uint64_t target = next_id_ - 1;
-  cv_.wait(lock, [&] { return (done_id_ >= target && !delayed_due_locked()) || stop_; });
+  cv_.wait(lock, [&] { return (done_id_ >= target && !delayed_due_locked() && releasing_ == 0) || stop_; });
 }
 
 bool FrameService::delayed_due_locked() const {
@@ -298,8 +298,13 @@ void FrameService::release_due() {
       if (!delayed_due_locked()) break;
       held = std::move(delayed_.front());
       delayed_.pop_front();
+      ++releasing_;  // wait_delivered waits until it has reached its consumers
     }
     for (FrameConsumer* consumer : held.consumers) consumer->deliver(held.frame);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      --releasing_;
+    }
   }
   cv_.notify_all();
 }

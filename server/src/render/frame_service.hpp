@@ -179,6 +179,7 @@ class FrameService {
   uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
   std::deque<Delayed> delayed_;                  // frames waiting out their latency, guarded by mutex_
   int64_t sim_now_us_ = 0;                       // the last capture's sim time, guarded by mutex_
+  int releasing_ = 0;                            // held frames being delivered now, guarded by mutex_
   bool stop_ = false;
   FrameServiceStats stats_;
   std::string start_error_;
