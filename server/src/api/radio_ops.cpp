@@ -350,8 +350,9 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
 }
 
 void RadioOps::on_gate(const Send& send) {
-  // frames that arrived by now go out before this gate announces its ticks
-  radio_.advance();
+  // frames that arrived by now go out before this gate announces its ticks; frames sent at this
+  // time go on air at the step, once every lockstep client has sent its own (deterministic draws)
+  radio_.advance(false);
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
   if (arrived.empty() || subscriptions_.empty()) return;
   for (const radio::Delivery& d : arrived) {

@@ -237,7 +237,7 @@ void RadioModel::resolve(const Frame& f, std::vector<Delivery>* arrivals) {
 }
 
 void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
-                      std::vector<Delivery>* out) {
+                      std::vector<Delivery>* out, bool starting_now) {
   // schedule queued frames: after the sender's previous frame, and in TDMA at its next own slot
   bool added = false;
   for (size_t v = 0; v < vehicles_; ++v) {
@@ -259,8 +259,9 @@ void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& position
   }
 
   // due frames go on air, in (start, sender, seq) order: the order of the random draws
+  const double on_air_until_s = starting_now ? now_s + kTimeEps : now_s - kTimeEps;
   size_t due = 0;
-  while (due < scheduled_.size() && scheduled_[due].start_s <= now_s + kTimeEps) {
+  while (due < scheduled_.size() && scheduled_[due].start_s <= on_air_until_s) {
     go_on_air(scheduled_[due], positions_enu_m);
     air_.push_back(std::move(scheduled_[due]));
     ++due;

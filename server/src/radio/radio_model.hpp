@@ -112,9 +112,12 @@ class RadioModel {
   // Advances to now_s (non-decreasing) with every vehicle's position at now_s: schedules queued
   // frames, puts due ones on air, resolves finished ones and appends the frames arriving at or
   // before now_s to *out, ordered by (arrival, receiver, sender, seq). Calling it again at the same
-  // time only handles frames queued since.
+  // time only handles frames queued since. With starting_now false, frames that start at now_s
+  // stay off air (their positions and loss draws wait for a later call at now_s): a caller that
+  // may still receive frames for now_s (the API's gate, while lockstep clients are working on the
+  // tick) keeps the draws in (start, sender, seq) order whatever order the frames came in.
   void step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
-            std::vector<Delivery>* out);
+            std::vector<Delivery>* out, bool starting_now = true);
 
   // True when step(now_s) would put a frame on air (so the caller needs fresh positions).
   bool has_due(double now_s) const;

@@ -20,14 +20,14 @@ SendResult SimRadio::send(size_t from, int to, const std::vector<uint8_t>& data)
   return model_.send(from, to, data, sim_.time_s());
 }
 
-void SimRadio::advance() {
+void SimRadio::advance(bool starting_now) {
   // positions at the transmit instant, read only when a frame goes on air
   if (model_.has_due(sim_.time_s())) {
     for (size_t i = 0; i < positions_enu_m_.size(); ++i)
       positions_enu_m_[i] = sim_.truth(i).position_enu_m;
   }
   std::vector<Delivery> arrived;
-  model_.step(sim_.time_s(), positions_enu_m_, &arrived);
+  model_.step(sim_.time_s(), positions_enu_m_, &arrived, starting_now);
   for (Delivery& d : arrived) {
     // bounded: a radio nobody listens to must not grow without end
     if (inbox_.size() >= kMaxInbox) {

@@ -23,8 +23,10 @@ class SimRadio : public sim::WorldObject {
   SendResult send(size_t from, int to, const std::vector<uint8_t>& data);
   // Steps the model to the current sim time; frames arriving by now move to the inbox. Idempotent
   // at a given sim time (the API's gate calls it before announcing a tick, before_step calls it
-  // again). Loop thread only.
-  void advance();
+  // again). The gate passes starting_now = false: frames queued at this time (by any lockstep
+  // client, in whatever order their requests come) go on air together at before_step, so the
+  // loss and shadowing draws do not depend on the clients' timing. Loop thread only.
+  void advance(bool starting_now = true);
   // The frames that arrived since the last call, in arrival order. Loop thread only.
   std::vector<Delivery> take_deliveries();
   // Frames dropped because nobody took them from a full inbox. Loop thread only.
