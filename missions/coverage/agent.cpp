@@ -198,6 +198,7 @@ void Agent::fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double 
   out.action = AgentOutputs::Action::kVelocity;
   out.velocity_enu_m_s << v, altitude_rate(in, config_.altitude_m);
   out.yaw_rate_rad_s = yaw_rate_to(in, heading_rad);
+  out.yaw_enu_rad = heading_rad;
 }
 
 bool Agent::flock_in_line(const AgentInputs& in) const {
@@ -324,6 +325,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       out.velocity_enu_m_s << dir * config_.cruise_speed_m_s, vy,
           altitude_rate(in, config_.altitude_m);
       out.yaw_rate_rad_s = yaw_rate_to(in, target_heading_rad_);
+      out.yaw_enu_rad = target_heading_rad_;
       break;
     }
     case AgentState::kWaiting: {
@@ -356,6 +358,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       out.action = AgentOutputs::Action::kVelocity;
       out.velocity_enu_m_s << v, altitude_rate(in, config_.altitude_m);
       out.yaw_rate_rad_s = fo.yaw_rate_rad_s;
+      out.yaw_enu_rad = leader.heading_rad;
       break;
     }
     case AgentState::kGoingHome: {

@@ -61,6 +61,10 @@ struct AgentOutputs {
   Action action = Action::kNone;
   Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();  // kVelocity
   double yaw_rate_rad_s = 0.0;                                 // kVelocity, ENU (CCW positive)
+  // kVelocity: the heading R2 turns towards (ENU), when there is one. An autopilot with its own
+  // yaw controller (ArduCopter's GUIDED) is better given this than the rate: R2's gain on top of
+  // the autopilot's yaw lag and the telemetry delay makes the heading oscillate.
+  std::optional<double> yaw_enu_rad;
   double takeoff_altitude_m = 0.0;                             // kTakeOff
   std::vector<Frame> broadcast;                                // radio frames to send now
   std::optional<Picture> picture;                              // a picture taken at this step

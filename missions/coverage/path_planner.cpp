@@ -7,11 +7,17 @@ namespace uavsim::missions::coverage {
 
 FlockExtent flock_extent(double leader_y_m, const std::vector<double>& others_y_m,
                          double spacing_m) {
+  // the rank, capped by the measured span (a formed flock settles a little under D_R1 apart)
   int below = 0;
-  for (double y : others_y_m)
+  double lowest = leader_y_m, highest = leader_y_m;
+  for (double y : others_y_m) {
     if (y < leader_y_m) ++below;
+    lowest = std::min(lowest, y);
+    highest = std::max(highest, y);
+  }
   const int above = static_cast<int>(others_y_m.size()) - below;
-  return {below * spacing_m, above * spacing_m};
+  return {std::min(below * spacing_m, leader_y_m - lowest),
+          std::min(above * spacing_m, highest - leader_y_m)};
 }
 
 std::optional<PlannedPath> plan_side(const CoverageConfig& config, const AreaParts& covered,

@@ -25,8 +25,10 @@ struct FlockExtent {
 
 // The flock's extent from the ADB's y positions (leader's view): the leader's rank r among the n
 // agents sorted by y, at the formation's spacing: r * spacing below, (n - 1 - r) * spacing above.
-// The rank, not the measured span, because the formation converges to D_R1 spacing while a freshly
-// launched flock is still spread out.
+// The rank, because a freshly launched flock is still spread out, capped by the measured span,
+// because a formed flock settles a little under D_R1 apart (R1 only repels closer than D_R1; in
+// the simulator 5 agents spanned ~28 m, not 30, and the outermost footprint missed the rectangle's
+// edge by 0.3 m pass after pass).
 FlockExtent flock_extent(double leader_y_m, const std::vector<double>& others_y_m,
                          double spacing_m);
 

@@ -24,6 +24,14 @@ TEST(PathPlanner, FlockExtentFromTheLeadersRank) {
   EXPECT_DOUBLE_EQ(e.high_extent_m, 22.5);
 }
 
+TEST(PathPlanner, FlockExtentOfAFormedFlockIsItsMeasuredSpan) {
+  // a formed flock settles a little under D_R1 apart (R1 only repels closer than that): four
+  // agents 6.9 m apart above the leader span 27.6 m, not 4 * 7.5 = 30 m
+  const FlockExtent e = flock_extent(10.0, {16.9, 23.8, 30.7, 37.6}, 7.5);
+  EXPECT_DOUBLE_EQ(e.low_extent_m, 0.0);
+  EXPECT_NEAR(e.high_extent_m, 27.6, 1e-9);
+}
+
 TEST(PathPlanner, EmptyMapLowSideTranslatesTheFlockEdgeOntoTheFrontierWithTheMargin) {
   const CoverageConfig c = config();
   const AreaParts empty(c.stripe_count());

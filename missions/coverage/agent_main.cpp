@@ -1,0 +1,348 @@
+// coverage-agent: one or several agents of the coverage flock (the thesis the project descends
+// from, chapter 3 and fig. 4.6), each on its own vehicle's MAVLink link and radio. Every agent is
+// the pure state machine of agent.hpp, fed at a fixed rate (20 Hz) with what a real drone has: its
+// telemetry (position, velocity, heading, armed, landed), the radio frames it heard and its camera
+// footprint (computed by the agent from its own altitude and heading and the configured sensor
+// size); nothing from the simulator's ground truth. Several agents in one process behave as
+// several processes: each has its own link and radio, and frames between them go through the
+// radio. UAVSIM_LOCKSTEP puts the process on the simulator's clock; the radio rides on that
+// connection, so a frame that arrives at sim time t is seen at the first step at or after t.
+//
+// Standard output: one line per state change and note, and the agent's Area Parts Database as an
+// `APD ...` line (apd_report.hpp) when it has changed (at most every --report-period seconds) and
+// when the agent lands or fails; coverage-run scores the data that survived from them.
+//
+// usage: coverage-agent (--vehicle I | --vehicles A-B) --area WxH [options]; --help lists them.
+// Exit status: 0 when every agent landed, 3 when one failed, 1 on a link or clock failure, 2 usage.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "agent.hpp"
+#include "apd_report.hpp"
+#include "radio_link.hpp"
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/vehicle.hpp"
+
+using namespace uavsim::client;
+using namespace uavsim::missions::coverage;
+
+namespace {
+
+constexpr double kMinStep_s = 0.02;  // the agent runs at 10-50 Hz
+constexpr double kMaxStep_s = 0.1;
+constexpr double kTakeoffRetry_s = 2.0;
+constexpr double kLinger_s = 2.0;  // keep the links up a little after the end (last reports)
+
+int usage() {
+  std::fprintf(stderr, R"(usage: coverage-agent (--vehicle I | --vehicles A-B) --area WxH [options]
+  --vehicle I             fly vehicle I (its simulator index; agent id = I)
+  --vehicles A-B          fly vehicles A..B in this process (same behaviour as one process each)
+  --area WxH              the rectangle: W along x (flight direction), H along y, metres
+  --origin X,Y            its corner in the world ENU frame (default 0,0)
+  --altitude M            survey altitude (default 20)
+  --sensor XxY            sensor footprint at that altitude (default 7x10)
+  --mavlink-host H        where the vehicles' MAVLink endpoints listen (default 127.0.0.1)
+  --mavlink-base-port P   vehicle I on tcp:H:P+10*I (default 5760, ArduPilot SITL's convention)
+  --mavlink-ports P,P,..  or one port per vehicle, in order
+  --step S                agent period, sim seconds (default 0.05)
+  --report-period S       APD report period (default 2)
+  --status-period S       a status line (pose, holdings) every S seconds (default 0: none)
+)");
+  return 2;
+}
+
+bool parse_pair(const char* s, char sep, double* a, double* b) {
+  char* e = nullptr;
+  *a = std::strtod(s, &e);
+  if (e == s || *e != sep) return false;
+  const char* s2 = e + 1;
+  *b = std::strtod(s2, &e);
+  return e != s2 && *e == '\0' && std::isfinite(*a) && std::isfinite(*b);
+}
+
+bool parse_int(const char* s, long lo, long hi, int* out) {
+  char* e = nullptr;
+  const long v = std::strtol(s, &e, 10);
+  if (e == s || *e != '\0' || v < lo || v > hi) return false;
+  *out = static_cast<int>(v);
+  return true;
+}
+
+// one agent with its vehicle link and radio
+struct Flyer {
+  int id = 0;
+  std::unique_ptr<Vehicle> vehicle;
+  std::unique_ptr<RadioLink> radio;
+  std::unique_ptr<Agent> agent;
+  AgentState last_state = AgentState::kTakingOff;
+  int last_leader = -2;
+  bool takeoff_wanted = false;
+  double takeoff_altitude_m = 0.0;
+  double next_takeoff_try_s = 0.0;
+  AreaParts reported;
+  bool reported_once = false;
+  double last_report_s = -1e9;
+  double next_status_s = 0.0;
+  bool finished = false;
+  bool complete_logged = false;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int first = -1, last = -1;
+  CoverageConfig config;
+  std::string host = "127.0.0.1";
+  int base_port = 5760;
+  std::vector<int> ports;
+  double step_s = 0.05, report_period_s = 2.0, status_period_s = 0.0;
+  bool have_area = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") return usage();
+    if (i + 1 >= argc) return usage();
+    const char* v = argv[++i];
+    double x = 0, y = 0;
+    if (a == "--vehicle") {
+      if (!parse_int(v, 0, kMaxAgents - 1, &first)) return usage();
+      last = first;
+    } else if (a == "--vehicles") {
+      const char* dash = std::strchr(v, '-');
+      if (dash == nullptr) return usage();
+      const std::string lo(v, dash);
+      if (!parse_int(lo.c_str(), 0, kMaxAgents - 1, &first) ||
+          !parse_int(dash + 1, 0, kMaxAgents - 1, &last) || last < first)
+        return usage();
+    } else if (a == "--area") {
+      if (!parse_pair(v, 'x', &x, &y)) return usage();
+      config.length_x_m = x;
+      config.width_y_m = y;
+      have_area = true;
+    } else if (a == "--origin") {
+      if (!parse_pair(v, ',', &x, &y)) return usage();
+      config.origin_x_m = x;
+      config.origin_y_m = y;
+    } else if (a == "--altitude") {
+      config.altitude_m = std::strtod(v, nullptr);
+    } else if (a == "--sensor") {
+      if (!parse_pair(v, 'x', &x, &y)) return usage();
+      config.x_sensor_m = x;
+      config.y_sensor_m = y;
+    } else if (a == "--mavlink-host") {
+      host = v;
+    } else if (a == "--mavlink-base-port") {
+      if (!parse_int(v, 1, 65535, &base_port)) return usage();
+    } else if (a == "--mavlink-ports") {
+      for (const char* p = v; *p;) {
+        const char* comma = std::strchr(p, ',');
+        const std::string one = comma ? std::string(p, comma) : std::string(p);
+        int port = 0;
+        if (!parse_int(one.c_str(), 1, 65535, &port)) return usage();
+        ports.push_back(port);
+        p = comma ? comma + 1 : p + one.size();
+      }
+    } else if (a == "--step") {
+      step_s = std::strtod(v, nullptr);
+    } else if (a == "--status-period") {
+      status_period_s = std::strtod(v, nullptr);
+    } else if (a == "--report-period") {
+      report_period_s = std::strtod(v, nullptr);
+    } else {
+      return usage();
+    }
+  }
+  if (first < 0 || !have_area) return usage();
+  if (const std::string why = config.validate(); !why.empty()) {
+    std::fprintf(stderr, "coverage-agent: %s\n", why.c_str());
+    return 2;
+  }
+  if (!(step_s >= kMinStep_s && step_s <= kMaxStep_s) ||
+      !(report_period_s >= 0.1 && report_period_s <= 3600.0) ||
+      !(status_period_s >= 0.0 && status_period_s <= 3600.0)) {
+    std::fprintf(stderr,
+                 "coverage-agent: --step must be in [0.02, 0.1], --report-period in "
+                 "[0.1, 3600]\n");
+    return 2;
+  }
+  const int count = last - first + 1;
+  if (!ports.empty() && static_cast<int>(ports.size()) != count) {
+    std::fprintf(stderr, "coverage-agent: --mavlink-ports names %zu ports for %d vehicles\n",
+                 ports.size(), count);
+    return 2;
+  }
+
+  auto created = EventLoop::create();
+  if (!created) {
+    std::fprintf(stderr, "coverage-agent: event loop: %s\n", created.message().c_str());
+    return 1;
+  }
+  EventLoop& loop = **created;
+  auto log = [&](int id, const std::string& s) {
+    std::printf("agent %d t=%.2f %s\n", id, loop.now(), s.c_str());
+    std::fflush(stdout);
+  };
+
+  // 1. links: MAVLink and radio of every vehicle, then wait until each is ready to fly
+  std::vector<Flyer> flyers(static_cast<size_t>(count));
+  for (int k = 0; k < count; ++k) {
+    Flyer& f = flyers[static_cast<size_t>(k)];
+    f.id = first + k;
+    VehicleConfig vc;
+    vc.telemetry_rate_hz = 20.0;
+    vc.sim_vehicle = std::to_string(f.id);
+    f.vehicle = std::make_unique<Vehicle>(loop, vc);
+    const int port = ports.empty() ? base_port + 10 * f.id : ports[static_cast<size_t>(k)];
+    const std::string address = "tcp:" + host + ":" + std::to_string(port);
+    if (auto r = f.vehicle->connect(address, 30); !r) {
+      log(f.id, "connect " + address + ": " + r.message());
+      return 1;
+    }
+    std::string error;
+    f.radio = open_sim_radio(loop, f.id, &error);
+    if (!f.radio) {
+      log(f.id, "radio: " + error);
+      return 1;
+    }
+  }
+  for (Flyer& f : flyers) {
+    if (auto r = f.vehicle->wait_ready(120); !r) {
+      log(f.id, "wait ready: " + r.message());
+      return 1;
+    }
+    const Eigen::Vector2d home = f.vehicle->telemetry().position_enu_m.head<2>();
+    f.agent = std::make_unique<Agent>(config, f.id, home);
+    f.reported = AreaParts(config.stripe_count());
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "ready at (%.1f, %.1f)", home.x(), home.y());
+    log(f.id, buf);
+  }
+
+  // 2. the agents at a fixed rate
+  auto report = [&](Flyer& f) {
+    std::printf("%s\n", encode_apd_report(f.id, loop.now(), f.agent->own()).c_str());
+    std::fflush(stdout);
+    f.reported = f.agent->own();
+    f.reported_once = true;
+    f.last_report_s = loop.now();
+  };
+  double end_s = -1.0;
+  while (end_s < 0 || loop.now() < end_s + kLinger_s) {
+    if (auto r = loop.run_for(step_s); !r) {
+      std::fprintf(stderr, "coverage-agent: clock: %s\n", r.message().c_str());
+      return 1;
+    }
+    bool all_finished = true;
+    for (Flyer& f : flyers) {
+      if (f.finished) continue;
+      const Telemetry& t = f.vehicle->telemetry();
+      AgentInputs in;
+      in.now_s = loop.now();
+      in.armed = t.armed;
+      in.on_ground = t.landed == LandedState::kOnGround || t.landed == LandedState::kUnknown;
+      in.position_enu_m = t.position_enu_m;
+      in.velocity_enu_m_s = t.velocity_enu_m_s;
+      in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
+      in.received = f.radio->take_received();
+      const AgentOutputs out = f.agent->step(in);
+      if (!out.note.empty()) log(f.id, out.note);
+
+      // outputs: the vehicle
+      switch (out.action) {
+        case AgentOutputs::Action::kNone:
+          break;
+        case AgentOutputs::Action::kTakeOff:
+          f.takeoff_wanted = true;
+          f.takeoff_altitude_m = out.takeoff_altitude_m;
+          f.next_takeoff_try_s = loop.now();
+          break;
+        case AgentOutputs::Action::kVelocity:
+          f.takeoff_wanted = false;
+          // R2 as a heading target for the autopilot's yaw controller (agent.hpp)
+          if (auto r = out.yaw_enu_rad
+                           ? f.vehicle->set_velocity_enu_yaw(out.velocity_enu_m_s, *out.yaw_enu_rad)
+                           : f.vehicle->set_velocity_enu(out.velocity_enu_m_s, out.yaw_rate_rad_s);
+              !r)
+            log(f.id, "velocity: " + r.message());
+          break;
+        case AgentOutputs::Action::kLand:
+          f.takeoff_wanted = false;
+          if (auto r = f.vehicle->land(false); !r) log(f.id, "land: " + r.message());
+          break;
+      }
+      // take-off until the vehicle is up (a refused arm is tried again)
+      if (f.takeoff_wanted && !t.armed && loop.now() >= f.next_takeoff_try_s &&
+          f.agent->state() == AgentState::kTakingOff) {
+        f.next_takeoff_try_s = loop.now() + kTakeoffRetry_s;
+        auto r = f.vehicle->set_mode(FlightMode::kGuided);
+        if (r) r = f.vehicle->arm();
+        if (r) r = f.vehicle->takeoff(f.takeoff_altitude_m, false);
+        if (!r) log(f.id, "take-off: " + r.message() + " (trying again)");
+      }
+      // outputs: the radio
+      for (const Frame& frame : out.broadcast) (void)f.radio->broadcast(frame);
+
+      // what the launcher reads: state changes, the end of the mission, the APD
+      if (f.agent->mission_complete() && !f.complete_logged) {
+        f.complete_logged = true;
+        log(f.id, "mission complete: the query found the rectangle covered");
+      }
+      const AgentState s = f.agent->state();
+      if (s != f.last_state || f.agent->leader() != f.last_leader) {
+        f.last_state = s;
+        f.last_leader = f.agent->leader();
+        log(f.id, std::string("state ") + agent_state_name(s) + " leader " +
+                      std::to_string(f.agent->leader()));
+        if (status_period_s > 0 && s == AgentState::kDeploying && f.agent->last_map()) {
+          // what the leader's map misses (debugging aid with --status-period)
+          const AreaParts& m = *f.agent->last_map();
+          std::string gaps;
+          for (int st = 0, n = 0; st < m.stripe_count() && n < 4; ++st) {
+            if (auto lo = m.lowest_uncovered(st, config.width_y_m)) {
+              char buf[96];
+              std::snprintf(buf, sizeof buf, " [%d: from %.2f, %zu intervals]", st, *lo,
+                            m.stripe(st).size());
+              gaps += buf;
+              ++n;
+            }
+          }
+          log(f.id, "map gaps:" + gaps);
+        }
+      }
+      if (status_period_s > 0 && loop.now() >= f.next_status_s) {
+        f.next_status_s = loop.now() + status_period_s;
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "status at (%.1f, %.1f, %.1f) yaw %.2f speed %.1f, holds %.1f %%, %zu in ADB",
+                      t.position_enu_m.x(), t.position_enu_m.y(), t.position_enu_m.z(),
+                      in.yaw_enu_rad, t.velocity_enu_m_s.head<2>().norm(),
+                      100.0 * f.agent->own().covered_fraction(config.width_y_m),
+                      f.agent->adb().records().size());
+        log(f.id, buf);
+      }
+      const bool over = s == AgentState::kLanded || s == AgentState::kFailed;
+      if (over ||
+          (!(f.agent->own() == f.reported) && loop.now() - f.last_report_s >= report_period_s)) {
+        report(f);
+      }
+      if (over) {
+        f.finished = true;
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "over: %s, %d queries started, %lu radio frames refused",
+                      agent_state_name(s), f.agent->queries_started(), f.radio->refused());
+        log(f.id, buf);
+      } else {
+        all_finished = false;
+      }
+    }
+    if (all_finished && end_s < 0) end_s = loop.now();
+  }
+  for (const Flyer& f : flyers) {
+    if (f.agent->state() != AgentState::kLanded) return 3;
+  }
+  return 0;
+}

@@ -1,0 +1,588 @@
+// coverage-run: the coverage flock (the thesis the project descends from, chapters 3 and 4) in the
+// simulator: a generated world of N quads on a take-off line at the edge of a W x H rectangle,
+// uavsim-server on it, the coverage-agent programs, all on the server's lockstep clock at full
+// speed. It prints progress (coverage, leader, states), injects failures (every 10 s of sim time
+// each flying agent fails with probability p: the sim API's kill_vehicle, drawn from the seed, at
+// the launcher's own lockstep ticks so every run of a seed fails the same agents at the same
+// times), and prints a summary scored from the sim API's ground truth, which the agents never
+// see: the fraction of the rectangle covered by the data that survived (the APDs the agents still
+// alive reported), mission time (first take-off to last touchdown), energy per agent, failed
+// agents, distance flown.
+//
+// Exit status: 0 only on full coverage with every surviving agent landed; 1: the mission fell
+// short; 2: usage; 4: the harness failed.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "apd_report.hpp"
+#include "coverage_config.hpp"
+#include "coverage_world.hpp"
+#include "local_launch.hpp"
+
+using namespace uavsim::missions::coverage;
+using namespace uavsim::missions::coverage::launch;
+
+namespace {
+
+constexpr double kLauncherTick_s = 1.0;    // the launcher's lockstep period (sampling, kills)
+constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (thesis 4.3)
+constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
+constexpr double kFullCoverage = 1.0 - 1e-3;
+
+struct Options {
+  int agents = 5;
+  double length_x_m = 150.0, width_y_m = 100.0;
+  double failure_prob = 0.0;
+  uint64_t seed = 1;
+  bool gcs = false;
+  std::string json_path;
+  bool quiet = false;
+  double radio_range_m = 150.0;
+  double radio_loss = 0.0;
+  std::vector<std::pair<double, int>> kills;  // (sim time, agent)
+  int per_process = 1;
+  double budget_s = 3000.0;
+  double wall_limit_s = 3600.0;
+  double progress_period_s = 10.0;
+  double agent_status_s = 0.0;
+  std::string server = UAVSIM_SERVER_PATH;
+  std::string agent;
+  std::string models_dir = UAVSIM_MODELS_DIR;
+  std::string keep_world;  // write the generated world here too
+};
+
+int usage() {
+  std::fprintf(stderr, R"(usage: coverage-run [options]
+Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent programs, lockstep at full speed.
+  --agents N          number of quads (1-64, default 5)
+  --area WxH          rectangle: W along x (flight direction), H along y, metres (default 150x100)
+  --failure-prob P    every 10 s of sim time each flying agent fails with probability P (0-1, seeded)
+  --seed S            seed of the server (sensor noise, radio loss) and of the failures (default 1)
+  --kill A@T          kill agent A at sim time T (repeatable; e.g. the leader: 0@60)
+  --radio-range M     radio range (default 150 m)
+  --radio-loss P      probability that a frame heard in range is lost (0-1, default 0)
+  --per-process K     agents per coverage-agent process (default 1)
+  --budget S          sim-time limit (default 3000)
+  --wall-limit S      wall-clock safety bound (default 3600)
+  --progress S        progress line every S sim seconds (default 10)
+  --agent-status S    each agent prints its pose and holdings every S sim seconds (default 0: no)
+  --json FILE         write the summary as JSON
+  --world-out FILE    also write the generated world there
+  --quiet             only the summary
+  --gcs               the optimised variant with a ground station (not available yet: refused)
+  --server/--agent PATH, --models-dir DIR  programs and models (default: the build tree)
+)");
+  return 2;
+}
+
+bool number(const char* s, double lo, double hi, double* out) {
+  char* e = nullptr;
+  const double v = std::strtod(s, &e);
+  if (e == s || *e != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+std::string fmt(const char* f, double a) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, a);
+  return buf;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  o.agent = sibling("coverage-agent");
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    double v = 0, w = 0;
+    if (a == "--quiet") {
+      o.quiet = true;
+      continue;
+    }
+    if (a == "--gcs") {
+      o.gcs = true;
+      continue;
+    }
+    if (a == "--help" || a == "-h" || i + 1 >= argc) return usage();
+    const char* val = argv[++i];
+    if (a == "--agents" && number(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
+      o.agents = static_cast<int>(v);
+    } else if (a == "--area") {
+      const char* x = std::strchr(val, 'x');
+      if (x == nullptr || !number(std::string(val, x).c_str(), 10, 3000, &v) ||
+          !number(x + 1, 10, 3000, &w))
+        return usage();
+      o.length_x_m = v;
+      o.width_y_m = w;
+    } else if (a == "--failure-prob" && number(val, 0, 1, &v)) {
+      o.failure_prob = v;
+    } else if (a == "--seed" && number(val, 0, 1e15, &v) && v == std::floor(v)) {
+      o.seed = static_cast<uint64_t>(v);
+    } else if (a == "--kill") {
+      const char* at = std::strchr(val, '@');
+      if (at == nullptr || !number(std::string(val, at).c_str(), 0, kMaxAgents - 1, &v) ||
+          v != std::floor(v) || !number(at + 1, 0, 1e6, &w))
+        return usage();
+      o.kills.emplace_back(w, static_cast<int>(v));
+    } else if (a == "--radio-range" && number(val, 1, 10000, &v)) {
+      o.radio_range_m = v;
+    } else if (a == "--radio-loss" && number(val, 0, 1, &v)) {
+      o.radio_loss = v;
+    } else if (a == "--per-process" && number(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
+      o.per_process = static_cast<int>(v);
+    } else if (a == "--budget" && number(val, 1, 1e6, &v)) {
+      o.budget_s = v;
+    } else if (a == "--wall-limit" && number(val, 1, 1e6, &v)) {
+      o.wall_limit_s = v;
+    } else if (a == "--progress" && number(val, 1, 1e6, &v)) {
+      o.progress_period_s = v;
+    } else if (a == "--agent-status" && number(val, 0, 3600, &v)) {
+      o.agent_status_s = v;
+    } else if (a == "--json") {
+      o.json_path = val;
+    } else if (a == "--world-out") {
+      o.keep_world = val;
+    } else if (a == "--server") {
+      o.server = val;
+    } else if (a == "--agent") {
+      o.agent = val;
+    } else if (a == "--models-dir") {
+      o.models_dir = val;
+    } else {
+      return usage();
+    }
+  }
+  if (o.gcs) {
+    std::fprintf(stderr,
+                 "coverage-run: --gcs (the optimised variant, thesis 3.6) is not "
+                 "implemented yet\n");
+    return 2;
+  }
+  for (const auto& [t, id] : o.kills) {
+    if (id >= o.agents) {
+      std::fprintf(stderr, "coverage-run: --kill names agent %d of %d\n", id, o.agents);
+      return 2;
+    }
+  }
+  std::sort(o.kills.begin(), o.kills.end());
+  CoverageConfig config;
+  config.length_x_m = o.length_x_m;
+  config.width_y_m = o.width_y_m;
+  WorldSpec spec;
+  spec.agents = o.agents;
+  spec.length_x_m = o.length_x_m;
+  spec.width_y_m = o.width_y_m;
+  for (const std::string& why : {config.validate(), spec.validate()}) {
+    if (!why.empty()) {
+      std::fprintf(stderr, "coverage-run: %s\n", why.c_str());
+      return 2;
+    }
+  }
+  const int stripes = config.stripe_count();
+
+  const auto wall_start = WallClock::now();
+  auto wall_s = [&] {
+    return std::chrono::duration<double>(WallClock::now() - wall_start).count();
+  };
+  auto say = [&](const std::string& s) {
+    if (!o.quiet) {
+      std::printf("%s\n", s.c_str());
+      std::fflush(stdout);
+    }
+  };
+  int harness_error = 0;
+  auto fail = [&](const std::string& why) {
+    std::fprintf(stderr, "coverage-run: %s\n", why.c_str());
+    harness_error = 4;
+  };
+
+  // 1. the world, in a directory of its own
+  std::string dir_template = (std::filesystem::temp_directory_path() / "coverage-run-XXXXXX");
+  if (mkdtemp(dir_template.data()) == nullptr) {
+    fail("cannot make a temporary directory");
+    return 4;
+  }
+  const std::filesystem::path dir = dir_template;
+  const std::string world_path = (dir / "coverage.xml").string();
+  {
+    std::ofstream(world_path) << coverage_world_xml(spec);
+    if (!o.keep_world.empty()) std::ofstream(o.keep_world) << coverage_world_xml(spec);
+  }
+
+  // 2. the server, on ephemeral ports, as fast as possible
+  std::vector<Child> children;
+  children.reserve(static_cast<size_t>(o.agents) + 1);
+  Child& server = children.emplace_back();
+  server.name = "server";
+  if (!server.spawn({o.server, world_path, "--rate", "0", "--seed", std::to_string(o.seed),
+                     "--mavlink-port", "0", "--api-port", "0", "--lockstep-timeout", "120",
+                     "--no-cameras", "--models-dir", o.models_dir},
+                    {})) {
+    fail("cannot start " + o.server);
+    std::filesystem::remove_all(dir);
+    return 4;
+  }
+  std::map<std::string, int> mavlink_port;
+  int api_port = 0;
+  const std::regex mav_re(R"(uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+))");
+  const std::regex api_re(R"(sim API on tcp:[0-9.]+:(\d+))");
+  while (api_port == 0 && wall_s() < 60 && server.fd >= 0) {
+    pollfd p{server.fd, POLLIN, 0};
+    poll(&p, 1, 200);
+    for (const std::string& l : server.read_lines()) {
+      std::smatch m;
+      if (std::regex_search(l, m, mav_re)) mavlink_port[m[1]] = std::stoi(m[2]);
+      if (std::regex_search(l, m, api_re)) api_port = std::stoi(m[1]);
+      if (!std::regex_search(l, m, mav_re)) say("[server] " + l);
+    }
+  }
+
+  // what the run learns
+  std::map<int, std::string> state;  // agent -> its last state (from its output)
+  std::map<int, int> leader_of;      // agent -> the leader it believes in
+  std::map<int, ApdReport> apd;      // agent -> its last APD report
+  std::set<int> leaders;             // agents that were ever in a leader state
+  int completed_by = -1;             // the agent whose query found the rectangle covered
+  std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
+  std::set<int> crashed;             // crashes other than kills
+  std::map<int, double> distance_m;  // horizontal distance flown (ground truth, 1 s samples)
+  std::map<int, Eigen::Vector3d> last_pos;
+  double first_takeoff_s = -1, last_touchdown_s = -1, sim_s = 0;
+  Json summary;
+  std::vector<Json> vehicles_end;
+
+  auto on_agent_line = [&](const std::string& line) {
+    if (line.rfind("APD ", 0) == 0) {
+      if (auto r = decode_apd_report(line, stripes)) apd[r->agent] = std::move(*r);
+      return false;  // not printed: long
+    }
+    static const std::regex state_re(R"(^agent (\d+) t=\S+ state (.+) leader (-?\d+)$)");
+    static const std::regex complete_re(R"(^agent (\d+) t=\S+ mission complete)");
+    std::smatch m;
+    if (std::regex_search(line, m, state_re)) {
+      const int id = std::stoi(m[1]);
+      state[id] = m[2];
+      leader_of[id] = std::stoi(m[3]);
+      if (m[2] == "Querying" || m[2] == "Deploying" || m[2] == "Running" || m[2] == "Waiting")
+        leaders.insert(id);
+    } else if (std::regex_search(line, m, complete_re)) {
+      completed_by = std::stoi(m[1]);
+    }
+    return true;
+  };
+  auto read_children = [&] {
+    for (size_t i = 0; i < children.size(); ++i) {
+      for (const std::string& l : children[i].read_lines()) {
+        if (i == 0 || on_agent_line(l)) say("[" + children[i].name + "] " + l);
+      }
+    }
+  };
+  auto held_apd = [&] {
+    AreaParts held(stripes);
+    for (const auto& [id, r] : apd) {
+      if (!killed.count(id) && !crashed.count(id)) held.merge(r.apd);
+    }
+    return held;
+  };
+  auto held_fraction = [&] { return held_apd().covered_fraction(config.width_y_m); };
+
+  Api api;
+  std::mt19937_64 failure_rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  if (api_port == 0 || static_cast<int>(mavlink_port.size()) < o.agents) {
+    fail("the server did not start (no API / MAVLink ports)");
+  } else if (!api.connect(api_port)) {
+    fail("cannot connect to the sim API");
+  } else {
+    // 3. hold the clock at t = 0 with this seed; the radio; the events; the launcher's ticks
+    std::string err;
+    bool ok =
+        api.request({{"op", "pause"}}, &err) &&
+        api.request({{"op", "reset"}, {"seed", o.seed}}, &err) &&
+        api.request({{"op", "radio_config"},
+                     {"model", "range"},
+                     {"range_m", o.radio_range_m},
+                     {"loss", o.radio_loss}},
+                    &err) &&
+        api.request({{"op", "subscribe_events"}}, &err) &&
+        api.request({{"op", "lockstep_join"}, {"period_s", kLauncherTick_s}, {"timeout_s", 120}},
+                    &err);
+    if (!ok) fail("setting up the run: " + err);
+
+    // 4. the agent programs
+    const std::string lockstep =
+        "UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(api_port) + "/" + fmt("%.3f", kAgentPeriod_s);
+    int processes = 0;
+    for (int first = 0; first < o.agents && !harness_error; first += o.per_process) {
+      const int last = std::min(o.agents, first + o.per_process) - 1;
+      std::string ports;
+      for (int i = first; i <= last; ++i) {
+        const auto it = mavlink_port.find("uav" + std::to_string(i));
+        if (it == mavlink_port.end()) {
+          fail("no MAVLink port for uav" + std::to_string(i));
+          break;
+        }
+        ports += (ports.empty() ? "" : ",") + std::to_string(it->second);
+      }
+      Child& c = children.emplace_back();
+      c.name = first == last ? "agent" + std::to_string(first)
+                             : "agents" + std::to_string(first) + "-" + std::to_string(last);
+      if (!c.spawn({o.agent, "--vehicles", std::to_string(first) + "-" + std::to_string(last),
+                    "--area", fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m),
+                    "--mavlink-ports", ports, "--status-period", fmt("%.3f", o.agent_status_s)},
+                   {lockstep})) {
+        fail("cannot start " + o.agent);
+      }
+      ++processes;
+    }
+    // 5. once every program has joined the lockstep, let the clock go
+    while (!harness_error) {
+      auto s = api.request({{"op", "status"}}, &err);
+      if (s && s->value("lockstep_clients", 0) >= processes + 1) break;
+      if (wall_s() > 120) fail("the agent programs did not join the lockstep");
+      for (size_t i = 1; i < children.size(); ++i) {
+        if (children[i].reap() && children[i].fd < 0) fail(children[i].name + " exited at start");
+      }
+      read_children();
+      usleep(20000);
+    }
+    if (!harness_error) {
+      api.request({{"op", "resume"}}, &err);
+      char buf[256];
+      std::snprintf(buf, sizeof buf,
+                    "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
+                    "radio range %.0f m loss %.2f, seed %llu",
+                    o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob, o.radio_range_m,
+                    o.radio_loss, static_cast<unsigned long long>(o.seed));
+      say(buf);
+    }
+
+    // 6. follow the run: the launcher's ticks (ground truth samples, kills), events, output
+    size_t next_kill = 0;
+    double next_progress_s = o.progress_period_s;
+    while (!harness_error) {
+      read_children();
+      for (const Json& e : api.take_messages(50)) {
+        const std::string ev = e.value("event", "");
+        if (ev == "sim_event") {
+          const std::string type = e.value("type", "");
+          const double t = e.value("time", 0.0);
+          const int veh = e.value("vehicle", -1);
+          if (type == "takeoff" && first_takeoff_s < 0) first_takeoff_s = t;
+          if (type == "touchdown" && !killed.count(veh))
+            last_touchdown_s = std::max(last_touchdown_s, t);
+          if (type == "vehicle_killed") killed.insert(veh);
+          if (type == "crash" && !killed.count(veh)) crashed.insert(veh);
+          if (type == "crash" || type == "vehicle_killed") {
+            say("[event] t=" + fmt("%.2f", t) + " " + type + " " + e.value("vehicle_name", "") +
+                " " + e.value("detail", ""));
+          }
+        } else if (ev == "tick") {
+          const double t = e.value("time", 0.0);
+          sim_s = t;
+          // ground truth: distance flown, who is flying
+          std::vector<int> flying;
+          if (auto v = api.request({{"op", "vehicles"}}, &err)) {
+            for (const Json& x : (*v)["vehicles"]) {
+              const int i = x.value("index", -1);
+              const Json p = x["position_enu_m"];
+              const Eigen::Vector3d pos(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+              if (last_pos.count(i)) distance_m[i] += (pos - last_pos[i]).head<2>().norm();
+              last_pos[i] = pos;
+              if (x.value("armed", false) && !x.value("crashed", false) &&
+                  !x.value("on_ground", true))
+                flying.push_back(i);
+            }
+          }
+          // failures: scheduled kills, then every 10 s a draw per flying agent
+          std::vector<int> to_kill;
+          while (next_kill < o.kills.size() && o.kills[next_kill].first <= t + 1e-9)
+            to_kill.push_back(o.kills[next_kill++].second);
+          const long k = std::lround(t / kFailurePeriod_s);
+          if (o.failure_prob > 0 && k > 0 && std::abs(t - k * kFailurePeriod_s) < 1e-6) {
+            for (int i : flying) {
+              if (uniform(failure_rng) < o.failure_prob) to_kill.push_back(i);
+            }
+          }
+          for (int i : to_kill) {
+            if (killed.count(i)) continue;
+            if (api.request({{"op", "kill_vehicle"},
+                             {"vehicle", i},
+                             {"reason", "coverage-run: injected failure"}},
+                            &err)) {
+              killed.insert(i);
+              say("coverage-run: t=" + fmt("%.1f", t) + " killed agent " + std::to_string(i));
+            }
+          }
+          if (t + 1e-9 >= next_progress_s) {
+            next_progress_s += o.progress_period_s;
+            std::map<std::string, int> counts;
+            int leader = -1;
+            for (const auto& [id, s] : state) {
+              if (killed.count(id)) continue;
+              ++counts[s];
+              if (s == "Querying" || s == "Deploying" || s == "Running" || s == "Waiting")
+                leader = leader < 0 ? id : std::min(leader, id);
+            }
+            std::string line = "coverage-run: t=" + fmt("%.0f", t) + " s coverage " +
+                               fmt("%.1f", 100.0 * held_fraction()) + " % leader " +
+                               (leader < 0 ? std::string("-") : std::to_string(leader)) + " |";
+            for (const auto& [s, n] : counts) line += " " + s + " " + std::to_string(n);
+            line += " | wall " + fmt("%.1f", wall_s()) + " s";
+            say(line);
+          }
+          api.send_only({{"op", "done"}, {"tick", e.value("tick", 0)}});
+        }
+      }
+      bool all_done = true;
+      for (size_t i = 1; i < children.size(); ++i)
+        all_done = all_done && children[i].reap() && children[i].fd < 0;
+      if (all_done) break;
+      if (sim_s > o.budget_s) {
+        say("coverage-run: sim-time budget spent");
+        break;
+      }
+      if (wall_s() > o.wall_limit_s) {
+        say("coverage-run: wall-clock limit reached");
+        break;
+      }
+      if (server.reap() || !api.alive()) {
+        fail("the server exited");
+        break;
+      }
+    }
+    read_children();
+
+    // 7. score from ground truth
+    if (!harness_error) {
+      api.request({{"op", "lockstep_leave"}}, &err);
+      if (auto v = api.request({{"op", "vehicles"}}, &err)) {
+        sim_s = v->value("time_s", sim_s);
+        for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
+      }
+    }
+  }
+
+  // 8. stop everything we started, then the server
+  for (size_t i = children.size(); i-- > 1;) children[i].stop(SIGTERM, 5.0);
+  server.stop(SIGINT, 30.0);
+  read_children();
+  std::filesystem::remove_all(dir);
+
+  const double coverage = held_fraction();
+  int survivors = 0, landed = 0;
+  double energy_total = 0, distance_total = 0;
+  Json per_agent = Json::array();
+  for (const Json& x : vehicles_end) {
+    const int i = x.value("index", -1);
+    const bool dead = killed.count(i) || crashed.count(i) || x.value("crashed", false);
+    const bool down = x.value("on_ground", false) && !x.value("armed", true);
+    if (!dead) {
+      ++survivors;
+      if (down) ++landed;
+    }
+    const double mah = x.value("battery_used_mah", 0.0);
+    energy_total += mah;
+    distance_total += distance_m[i];
+    per_agent.push_back(
+        {{"agent", i},
+         {"failed", dead},
+         {"landed", down && !dead},
+         {"state", state.count(i) ? state[i] : ""},
+         {"energy_mah", mah},
+         {"held_fraction", apd.count(i) ? apd[i].apd.covered_fraction(config.width_y_m) : 0.0},
+         {"distance_m", distance_m[i]}});
+  }
+  const bool success = harness_error == 0 && !vehicles_end.empty() && coverage >= kFullCoverage &&
+                       survivors > 0 && landed == survivors;
+  const double mission_s = first_takeoff_s >= 0 && last_touchdown_s >= first_takeoff_s
+                               ? last_touchdown_s - first_takeoff_s
+                               : -1.0;
+  const int failed = static_cast<int>(vehicles_end.size()) - survivors;
+  std::printf("==== coverage flock: %d agents, %.0f x %.0f m, failure p %.4f, seed %llu ====\n",
+              o.agents, o.length_x_m, o.width_y_m, o.failure_prob,
+              static_cast<unsigned long long>(o.seed));
+  std::printf("coverage held by surviving agents: %.2f %%\n", 100.0 * coverage);
+  if (mission_s >= 0)
+    std::printf("mission time: %.1f s sim (first take-off %.1f s, last touchdown %.1f s)\n",
+                mission_s, first_takeoff_s, last_touchdown_s);
+  else
+    std::printf("mission time: n/a\n");
+  std::printf("failed agents: %d of %d", failed, static_cast<int>(vehicles_end.size()));
+  for (int i : killed) std::printf(" %d", i);
+  for (int i : crashed) std::printf(" %d(crash)", i);
+  std::printf("\nlanded: %d of %d surviving\n", landed, survivors);
+  // what the surviving data misses: (stripe, y from, y to), the first few
+  Json gaps = Json::array();
+  {
+    const AreaParts held = held_apd();
+    for (int st = 0; st < stripes; ++st) {
+      double y = 0.0;
+      std::vector<Interval> list = held.stripe(st);
+      list.push_back({config.width_y_m, config.width_y_m});
+      for (const Interval& iv : list) {
+        if (iv.start_m - y > kCoverageSlack_m && gaps.size() < 20)
+          gaps.push_back({st, y, std::min(iv.start_m, config.width_y_m)});
+        y = std::max(y, iv.end_m);
+      }
+    }
+  }
+  if (!gaps.empty()) std::printf("gaps (stripe, y from, y to): %s\n", gaps.dump().c_str());
+  std::printf("leaders: ");
+  for (int i : leaders) std::printf("%d ", i);
+  std::printf("(completed by %d)\n", completed_by);
+  if (!vehicles_end.empty()) {
+    std::printf("energy: %.0f mAh per agent (mean), %.0f mAh in all\n",
+                energy_total / vehicles_end.size(), energy_total);
+    std::printf("distance flown: %.0f m in all, %.0f m per agent (mean)\n", distance_total,
+                distance_total / vehicles_end.size());
+  }
+  std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
+              wall_s() > 0 ? sim_s / wall_s() : 0.0);
+  std::printf("RESULT: %s coverage=%.4f mission_s=%.1f failed=%d landed=%d/%d\n",
+              success ? "SUCCESS" : "FAILURE", coverage, mission_s, failed, landed, survivors);
+  std::fflush(stdout);
+
+  if (!o.json_path.empty()) {
+    summary["agents"] = o.agents;
+    summary["area_m"] = {o.length_x_m, o.width_y_m};
+    summary["failure_prob"] = o.failure_prob;
+    summary["radio_range_m"] = o.radio_range_m;
+    summary["radio_loss"] = o.radio_loss;
+    summary["seed"] = o.seed;
+    summary["coverage"] = coverage;
+    summary["mission_time_s"] = mission_s;
+    summary["first_takeoff_s"] = first_takeoff_s;
+    summary["last_touchdown_s"] = last_touchdown_s;
+    summary["failed"] = failed;
+    summary["killed"] = std::vector<int>(killed.begin(), killed.end());
+    summary["crashed"] = std::vector<int>(crashed.begin(), crashed.end());
+    summary["survivors"] = survivors;
+    summary["gaps"] = gaps;
+    summary["leaders"] = std::vector<int>(leaders.begin(), leaders.end());
+    summary["completed_by"] = completed_by;
+    summary["landed"] = landed;
+    summary["energy_mah_mean"] = vehicles_end.empty() ? 0.0 : energy_total / vehicles_end.size();
+    summary["distance_m_total"] = distance_total;
+    summary["per_agent"] = per_agent;
+    summary["sim_time_s"] = sim_s;
+    summary["wall_time_s"] = wall_s();
+    summary["success"] = success;
+    std::ofstream(o.json_path) << summary.dump(2) << "\n";
+  }
+  if (harness_error) return harness_error;
+  return success ? 0 : 1;
+}
