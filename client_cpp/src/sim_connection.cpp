@@ -47,8 +47,8 @@ std::string base64_encode(std::string_view in) {
   out.reserve((in.size() + 2) / 3 * 4);
   std::size_t i = 0;
   for (; i + 2 < in.size(); i += 3) {
-    const uint32_t v = (uint32_t(uint8_t(in[i])) << 16) | (uint32_t(uint8_t(in[i + 1])) << 8) |
-                       uint8_t(in[i + 2]);
+    const uint32_t v =
+        (uint32_t(uint8_t(in[i])) << 16) | (uint32_t(uint8_t(in[i + 1])) << 8) | uint8_t(in[i + 2]);
     out += kAlphabet[(v >> 18) & 63];
     out += kAlphabet[(v >> 12) & 63];
     out += kAlphabet[(v >> 6) & 63];
@@ -93,13 +93,13 @@ struct SimConnection::Impl {
   std::thread::id owner = std::this_thread::get_id();
   Json hello;
   int64_t next_id = 0;
-  std::string buf;                    // bytes read, not yet a whole message
-  std::optional<Json> frame_header;   // a frame header whose payload is still being read
+  std::string buf;                   // bytes read, not yet a whole message
+  std::optional<Json> frame_header;  // a frame header whose payload is still being read
   std::size_t frame_bytes = 0;
-  std::deque<SimMessage> queue;       // streamed messages for take_messages()
+  std::deque<SimMessage> queue;  // streamed messages for take_messages()
   std::map<std::string, std::function<void(const SimMessage&)>> handlers;
-  std::deque<Json> replies;           // replies read, not yet claimed by request()
-  std::optional<Failure> broken;      // why the connection is closed
+  std::deque<Json> replies;       // replies read, not yet claimed by request()
+  std::optional<Failure> broken;  // why the connection is closed
 
   ~Impl() { close_fd(); }
 
@@ -147,14 +147,14 @@ struct SimConnection::Impl {
       const std::size_t nl = buf.find('\n', pos);
       if (nl == std::string::npos) {
         if (buf.size() - pos > kMaxLineBytes) {
-          error = fail(Error::kProtocol, "sim API: a line longer than " +
-                                             std::to_string(kMaxLineBytes) + " bytes");
+          error = fail(Error::kProtocol,
+                       "sim API: a line longer than " + std::to_string(kMaxLineBytes) + " bytes");
         }
         break;
       }
       if (nl - pos > kMaxLineBytes) {
-        error = fail(Error::kProtocol, "sim API: a line longer than " +
-                                           std::to_string(kMaxLineBytes) + " bytes");
+        error = fail(Error::kProtocol,
+                     "sim API: a line longer than " + std::to_string(kMaxLineBytes) + " bytes");
         break;
       }
       Json j = Json::parse(std::string_view(buf.data() + pos, nl - pos), nullptr, false);
@@ -169,8 +169,9 @@ struct SimConnection::Impl {
         const auto n = j.find("bytes");
         if (n == j.end() || !n->is_number_integer() || n->get<int64_t>() < 0 ||
             static_cast<uint64_t>(n->get<int64_t>()) > kMaxFrameBytes) {
-          error = fail(Error::kProtocol, "sim API: a frame header without a usable `bytes` (at most " +
-                                             std::to_string(kMaxFrameBytes) + ")");
+          error =
+              fail(Error::kProtocol, "sim API: a frame header without a usable `bytes` (at most " +
+                                         std::to_string(kMaxFrameBytes) + ")");
           break;
         }
         frame_bytes = static_cast<std::size_t>(n->get<int64_t>());
@@ -217,7 +218,8 @@ struct SimConnection::Impl {
   bool send_line(const std::string& line, SteadyClock::time_point end) {
     std::size_t sent = 0;
     while (sent < line.size()) {
-      const ssize_t n = ::send(fd, line.data() + sent, line.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+      const ssize_t n =
+          ::send(fd, line.data() + sent, line.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
       if (n > 0) {
         sent += static_cast<std::size_t>(n);
         continue;
@@ -263,10 +265,11 @@ Result<std::unique_ptr<SimConnection>> SimConnection::adopt(int fd, double timeo
   if (!impl->replies.empty()) {
     const Json& r = impl->replies.front();
     const Json err = r.value("error", Json::object());
-    return Failure{Error::kProtocol, "sim API refused the connection: " +
-                                         (err.is_object() ? err.value("code", std::string("?")) +
-                                                                ": " + err.value("message", std::string())
-                                                          : r.dump())};
+    return Failure{Error::kProtocol,
+                   "sim API refused the connection: " +
+                       (err.is_object() ? err.value("code", std::string("?")) + ": " +
+                                              err.value("message", std::string())
+                                        : r.dump())};
   }
   SimMessage first = std::move(impl->queue.front());
   impl->queue.pop_front();
@@ -287,7 +290,8 @@ Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout
   if (!req.is_object() || !req.contains("op")) {
     return Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""};
   }
-  if (m.fd < 0) return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
+  if (m.fd < 0)
+    return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
   const int64_t id = ++m.next_id;
   req["id"] = id;
   const std::string op = req["op"].is_string() ? req["op"].get<std::string>() : req["op"].dump();
@@ -375,7 +379,8 @@ Result<nlohmann::json> SimConnection::lockstep_join(double period_s, double time
 Result<nlohmann::json> SimConnection::lockstep_leave() {
   return request({{"op", "lockstep_leave"}});
 }
-Result<nlohmann::json> SimConnection::done(int64_t tick, const std::map<std::string, int>& mavlink_seq,
+Result<nlohmann::json> SimConnection::done(int64_t tick,
+                                           const std::map<std::string, int>& mavlink_seq,
                                            std::optional<double> busy_until_s) {
   Json req = {{"op", "done"}, {"tick", tick}};
   if (!mavlink_seq.empty()) req["mavlink_seq"] = mavlink_seq;
