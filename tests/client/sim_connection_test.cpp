@@ -2,7 +2,11 @@
 // server errors, stepping, the lockstep tick/done exchange, queued events), and against a scripted
 // peer on a socketpair for what a well-behaved server never sends: frames with their binary
 // payload, malformed or oversized messages, stray replies, a closed connection, silence.
+#include "uavsim/client/sim_connection.hpp"
+
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -12,7 +16,6 @@
 #include <thread>
 
 #include "sim_harness.hpp"
-#include "uavsim/client/sim_connection.hpp"
 
 namespace uavsim::client::testing {
 namespace {

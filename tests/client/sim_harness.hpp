@@ -1,7 +1,7 @@
 // An in-process uavsim server for client tests: world + objects + MAVLink endpoints + sim API on ephemeral
 // loopback ports, its Runner on a thread of its own as fast as possible, started paused so that a lockstep
 // client joins at t = 0 (then resume()): every run of a test starts from the same state.
-// ApiClient: a blocking line-JSON client for ground truth (`vehicles`) and fault injection.
+// ApiClient: a blocking client (SimConnection) for ground truth (`vehicles`) and fault injection.
 #pragma once
 
 #include <arpa/inet.h>
@@ -28,6 +28,7 @@
 #include "physics/world.hpp"
 #include "sim/runner.hpp"
 #include "sim/simulation.hpp"
+#include "uavsim/client/sim_connection.hpp"
 
 namespace uavsim::client::testing {
 
@@ -91,26 +92,22 @@ class SimServer {
   std::thread loop_;
 };
 
-// Blocking request/reply client of the sim API (10 s wall timeout per reply).
+// Blocking request/reply client of the sim API (10 s wall timeout per reply), on SimConnection: a reply as
+// the wire has it ({"ok": true, "result": ...} or {"ok": false, "error": {"message": ...}}), null when
+// the connection failed.
 class ApiClient {
  public:
   explicit ApiClient(int port) {
-    fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
-    read_json();  // hello
+    auto c = SimConnection::connect("127.0.0.1", static_cast<uint16_t>(port), 10.0);
+    EXPECT_TRUE(c) << c.message();
+    if (c) conn_ = std::move(*c);
   }
-  ~ApiClient() { ::close(fd_); }
   Json request(Json j) {
-    const std::string line = j.dump() + "\n";
-    EXPECT_EQ(::send(fd_, line.data(), line.size(), MSG_NOSIGNAL), static_cast<ssize_t>(line.size()));
-    for (;;) {
-      Json r = read_json();
-      if (r.is_null() || r.contains("ok")) return r;
-    }
+    if (conn_ == nullptr) return Json();
+    const auto r = conn_->request(std::move(j), 10.0);
+    if (r) return Json{{"ok", true}, {"result", *r}};
+    if (r.code() == Error::kTimeout || !conn_->connected()) return Json();
+    return Json{{"ok", false}, {"error", {{"message", r.message()}}}};
   }
   // ground truth of a vehicle: the `vehicles` entry
   Json truth(int vehicle = 0) {
@@ -130,24 +127,7 @@ class ApiClient {
   }
 
  private:
-  Json read_json() {
-    for (;;) {
-      const auto nl = buf_.find('\n');
-      if (nl != std::string::npos) {
-        Json j = Json::parse(buf_.substr(0, nl), nullptr, false);
-        buf_.erase(0, nl + 1);
-        return j;
-      }
-      pollfd p{fd_, POLLIN, 0};
-      if (poll(&p, 1, 10000) <= 0) return Json();
-      char tmp[65536];
-      const ssize_t n = recv(fd_, tmp, sizeof(tmp), 0);
-      if (n <= 0) return Json();
-      buf_.append(tmp, static_cast<std::size_t>(n));
-    }
-  }
-  int fd_ = -1;
-  std::string buf_;
+  std::unique_ptr<SimConnection> conn_;
 };
 
 }  // namespace uavsim::client::testing
