@@ -86,7 +86,7 @@ struct Child {
         if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK)) {  // end of output
           close(fd);
           fd = -1;
-          if (!buf.empty()) buf += '\n';
+          if (!buf.empty() && buf.back() != '\n') buf += '\n';
         }
         break;
       }
