@@ -107,7 +107,9 @@ AgentOutputs Agent::step(const AgentInputs& in) {
 
   if (state_ == AgentState::kLanded || state_ == AgentState::kFailed) return out;
   // our own vehicle stopped flying in the air: a dead drone is silent
-  if (airborne_seen_ && !in.armed && state_ != AgentState::kGoingHome) {
+  // (Going Home ends disarmed on the ground once it has sent the landing; before that, a disarm
+  // is a failure too)
+  if (airborne_seen_ && !in.armed && (state_ != AgentState::kGoingHome || !land_sent_)) {
     enter(AgentState::kFailed, out, "vehicle disarmed in flight");
     return out;
   }

@@ -260,6 +260,8 @@ int main(int argc, char** argv) {
   std::set<int> crashed;             // crashes other than kills
   std::map<int, double> distance_m;  // horizontal distance flown (ground truth, 1 s samples)
   std::map<int, Eigen::Vector3d> last_pos;
+  std::map<int, double> energy_mah;  // battery used, sampled at the launcher's ticks until disarmed
+  std::map<int, bool> was_armed;
   double first_takeoff_s = -1, last_touchdown_s = -1, sim_s = 0;
   Json summary;
   std::vector<Json> vehicles_end;
@@ -402,6 +404,10 @@ int main(int argc, char** argv) {
               const Eigen::Vector3d pos(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
               if (last_pos.count(i)) distance_m[i] += (pos - last_pos[i]).head<2>().norm();
               last_pos[i] = pos;
+              // energy up to the disarm (a landed quad's boards would be switched off)
+              const bool armed = x.value("armed", false);
+              if (armed || !was_armed[i]) energy_mah[i] = x.value("battery_used_mah", 0.0);
+              was_armed[i] = was_armed[i] || armed;
               if (x.value("armed", false) && !x.value("crashed", false) &&
                   !x.value("on_ground", true))
                 flying.push_back(i);
@@ -494,7 +500,7 @@ int main(int argc, char** argv) {
       ++survivors;
       if (down) ++landed;
     }
-    const double mah = x.value("battery_used_mah", 0.0);
+    const double mah = energy_mah[i];
     energy_total += mah;
     distance_total += distance_m[i];
     per_agent.push_back(
