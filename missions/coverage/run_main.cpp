@@ -13,6 +13,7 @@
 // short; 2: usage; 4: the harness failed.
 #include <Eigen/Core>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,10 +29,16 @@
 #include "apd_report.hpp"
 #include "coverage_config.hpp"
 #include "coverage_world.hpp"
-#include "local_launch.hpp"
+#include "uavsim/client/sim_connection.hpp"
+#include "uavsim/launch/launcher.hpp"
 
 using namespace uavsim::missions::coverage;
-using namespace uavsim::missions::coverage::launch;
+using uavsim::client::Result;
+using uavsim::client::SimConnection;
+using uavsim::client::SimMessage;
+using uavsim::launch::Launcher;
+using Json = nlohmann::json;
+using WallClock = std::chrono::steady_clock;
 
 namespace {
 
@@ -104,7 +111,7 @@ std::string fmt(const char* f, double a) {
 
 int main(int argc, char** argv) {
   Options o;
-  o.agent = sibling("coverage-agent");
+  o.agent = uavsim::launch::sibling_program("coverage-agent");
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     double v = 0, w = 0;
@@ -222,34 +229,6 @@ int main(int argc, char** argv) {
     if (!o.keep_world.empty()) std::ofstream(o.keep_world) << coverage_world_xml(spec);
   }
 
-  // 2. the server, on ephemeral ports, as fast as possible
-  std::vector<Child> children;
-  children.reserve(static_cast<size_t>(o.agents) + 1);
-  Child& server = children.emplace_back();
-  server.name = "server";
-  if (!server.spawn({o.server, world_path, "--rate", "0", "--seed", std::to_string(o.seed),
-                     "--mavlink-port", "0", "--api-port", "0", "--lockstep-timeout", "120",
-                     "--no-cameras", "--models-dir", o.models_dir},
-                    {})) {
-    fail("cannot start " + o.server);
-    std::filesystem::remove_all(dir);
-    return 4;
-  }
-  std::map<std::string, int> mavlink_port;
-  int api_port = 0;
-  const std::regex mav_re(R"(uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+))");
-  const std::regex api_re(R"(sim API on tcp:[0-9.]+:(\d+))");
-  while (api_port == 0 && wall_s() < 60 && server.fd >= 0) {
-    pollfd p{server.fd, POLLIN, 0};
-    poll(&p, 1, 200);
-    for (const std::string& l : server.read_lines()) {
-      std::smatch m;
-      if (std::regex_search(l, m, mav_re)) mavlink_port[m[1]] = std::stoi(m[2]);
-      if (std::regex_search(l, m, api_re)) api_port = std::stoi(m[1]);
-      if (!std::regex_search(l, m, mav_re)) say("[server] " + l);
-    }
-  }
-
   // what the run learns
   std::map<int, std::string> state;  // agent -> its last state (from its output)
   std::map<int, int> leader_of;      // agent -> the leader it believes in
@@ -285,13 +264,7 @@ int main(int argc, char** argv) {
     }
     return true;
   };
-  auto read_children = [&] {
-    for (size_t i = 0; i < children.size(); ++i) {
-      for (const std::string& l : children[i].read_lines()) {
-        if (i == 0 || on_agent_line(l)) say("[" + children[i].name + "] " + l);
-      }
-    }
-  };
+
   auto held_apd = [&] {
     AreaParts held(stripes);
     for (const auto& [id, r] : apd) {
@@ -301,84 +274,94 @@ int main(int argc, char** argv) {
   };
   auto held_fraction = [&] { return held_apd().covered_fraction(config.width_y_m); };
 
-  Api api;
+  // 2. the server, on ephemeral ports, as fast as possible; the lines of every program go through
+  // on_agent_line (the launcher's own printing is off: APD reports are not for people)
+  Launcher launch("coverage-run", /*quiet=*/true);
+  launch.on_line([&](const std::string& child, const std::string& line) {
+    if (child == "server") {
+      if (line.find(": MAVLink on tcp:") == std::string::npos) say("[server] " + line);
+    } else if (on_agent_line(line)) {
+      say("[" + child + "] " + line);
+    }
+  });
+  if (auto r = launch.start_server(
+          {o.server,
+           world_path,
+           {"--seed", std::to_string(o.seed), "--no-cameras", "--models-dir", o.models_dir},
+           60.0});
+      !r) {
+    fail("the server did not start: " + r.message());
+  }
+
   std::mt19937_64 failure_rng(o.seed ^ 0x9e3779b97f4a7c15ULL);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  if (api_port == 0 || static_cast<int>(mavlink_port.size()) < o.agents) {
-    fail("the server did not start (no API / MAVLink ports)");
-  } else if (!api.connect(api_port)) {
-    fail("cannot connect to the sim API");
-  } else {
+  if (!harness_error) {
+    SimConnection& api = launch.api();
     // 3. hold the clock at t = 0 with this seed; the radio; the events; the launcher's ticks
-    std::string err;
-    bool ok =
-        api.request({{"op", "pause"}}, &err) &&
-        api.request({{"op", "reset"}, {"seed", o.seed}}, &err) &&
-        api.request({{"op", "radio_config"},
-                     {"model", "range"},
-                     {"range_m", o.radio_range_m},
-                     {"loss", o.radio_loss}},
-                    &err) &&
-        api.request({{"op", "subscribe_events"}}, &err) &&
-        api.request({{"op", "lockstep_join"}, {"period_s", kLauncherTick_s}, {"timeout_s", 120}},
-                    &err);
-    if (!ok) fail("setting up the run: " + err);
+    Result<Json> r = api.pause();
+    if (r) r = api.reset(o.seed);
+    if (r)
+      r = api.request({{"op", "radio_config"},
+                       {"model", "range"},
+                       {"range_m", o.radio_range_m},
+                       {"loss", o.radio_loss}});
+    if (r) r = api.subscribe_events();
+    if (r) r = api.lockstep_join(kLauncherTick_s, 120.0);
+    if (!r) fail("setting up the run: " + r.message());
 
     // 4. the agent programs
-    const std::string lockstep =
-        "UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(api_port) + "/" + fmt("%.3f", kAgentPeriod_s);
+    const std::string lockstep = launch.lockstep_env(kAgentPeriod_s);
     int processes = 0;
     for (int first = 0; first < o.agents && !harness_error; first += o.per_process) {
       const int last = std::min(o.agents, first + o.per_process) - 1;
       std::string ports;
       for (int i = first; i <= last; ++i) {
-        const auto it = mavlink_port.find("uav" + std::to_string(i));
-        if (it == mavlink_port.end()) {
+        const int port = launch.mavlink_port("uav" + std::to_string(i));
+        if (port == 0) {
           fail("no MAVLink port for uav" + std::to_string(i));
           break;
         }
-        ports += (ports.empty() ? "" : ",") + std::to_string(it->second);
+        ports += (ports.empty() ? "" : ",") + std::to_string(port);
       }
-      Child& c = children.emplace_back();
-      c.name = first == last ? "agent" + std::to_string(first)
-                             : "agents" + std::to_string(first) + "-" + std::to_string(last);
-      if (!c.spawn({o.agent, "--vehicles", std::to_string(first) + "-" + std::to_string(last),
-                    "--area", fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m),
-                    "--mavlink-ports", ports, "--status-period", fmt("%.3f", o.agent_status_s)},
-                   {lockstep})) {
-        fail("cannot start " + o.agent);
+      const std::string name = first == last
+                                   ? "agent" + std::to_string(first)
+                                   : "agents" + std::to_string(first) + "-" + std::to_string(last);
+      if (auto s = launch.spawn(
+              name,
+              {o.agent, "--vehicles", std::to_string(first) + "-" + std::to_string(last), "--area",
+               fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m), "--mavlink-ports", ports,
+               "--status-period", fmt("%.3f", o.agent_status_s)},
+              {lockstep});
+          !s) {
+        fail(s.message());
       }
       ++processes;
     }
     // 5. once every program has joined the lockstep, let the clock go
-    while (!harness_error) {
-      auto s = api.request({{"op", "status"}}, &err);
-      if (s && s->value("lockstep_clients", 0) >= processes + 1) break;
-      if (wall_s() > 120) fail("the agent programs did not join the lockstep");
-      for (size_t i = 1; i < children.size(); ++i) {
-        if (children[i].reap() && children[i].fd < 0) fail(children[i].name + " exited at start");
-      }
-      read_children();
-      usleep(20000);
-    }
     if (!harness_error) {
-      api.request({{"op", "resume"}}, &err);
-      char buf[256];
-      std::snprintf(buf, sizeof buf,
-                    "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                    "radio range %.0f m loss %.2f, seed %llu",
-                    o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob, o.radio_range_m,
-                    o.radio_loss, static_cast<unsigned long long>(o.seed));
-      say(buf);
+      if (auto w = launch.wait_lockstep_clients(processes + 1, 120.0); !w) {
+        fail("the agent programs did not join the lockstep: " + w.message());
+      } else if (!api.resume()) {
+        fail("resume refused");
+      } else {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
+                      "radio range %.0f m loss %.2f, seed %llu",
+                      o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob, o.radio_range_m,
+                      o.radio_loss, static_cast<unsigned long long>(o.seed));
+        say(buf);
+      }
     }
 
     // 6. follow the run: the launcher's ticks (ground truth samples, kills), events, output
     size_t next_kill = 0;
     double next_progress_s = o.progress_period_s;
     while (!harness_error) {
-      read_children();
-      for (const Json& e : api.take_messages(50)) {
-        const std::string ev = e.value("event", "");
+      launch.pump(50);
+      for (const SimMessage& msg : api.take_messages()) {
+        const Json& e = msg.json;
+        const std::string ev = msg.kind();
         if (ev == "sim_event") {
           const std::string type = e.value("type", "");
           const double t = e.value("time", 0.0);
@@ -395,9 +378,9 @@ int main(int argc, char** argv) {
         } else if (ev == "tick") {
           const double t = e.value("time", 0.0);
           sim_s = t;
-          // ground truth: distance flown, who is flying
+          // ground truth: distance flown, energy, who is flying
           std::vector<int> flying;
-          if (auto v = api.request({{"op", "vehicles"}}, &err)) {
+          if (auto v = api.request({{"op", "vehicles"}})) {
             for (const Json& x : (*v)["vehicles"]) {
               const int i = x.value("index", -1);
               const Json p = x["position_enu_m"];
@@ -408,8 +391,7 @@ int main(int argc, char** argv) {
               const bool armed = x.value("armed", false);
               if (armed || !was_armed[i]) energy_mah[i] = x.value("battery_used_mah", 0.0);
               was_armed[i] = was_armed[i] || armed;
-              if (x.value("armed", false) && !x.value("crashed", false) &&
-                  !x.value("on_ground", true))
+              if (armed && !x.value("crashed", false) && !x.value("on_ground", true))
                 flying.push_back(i);
             }
           }
@@ -427,8 +409,7 @@ int main(int argc, char** argv) {
             if (killed.count(i)) continue;
             if (api.request({{"op", "kill_vehicle"},
                              {"vehicle", i},
-                             {"reason", "coverage-run: injected failure"}},
-                            &err)) {
+                             {"reason", "coverage-run: injected failure"}})) {
               killed.insert(i);
               say("coverage-run: t=" + fmt("%.1f", t) + " killed agent " + std::to_string(i));
             }
@@ -450,13 +431,10 @@ int main(int argc, char** argv) {
             line += " | wall " + fmt("%.1f", wall_s()) + " s";
             say(line);
           }
-          api.send_only({{"op", "done"}, {"tick", e.value("tick", 0)}});
+          if (!api.done(e.value("tick", std::int64_t{0}))) fail("the launcher's done was refused");
         }
       }
-      bool all_done = true;
-      for (size_t i = 1; i < children.size(); ++i)
-        all_done = all_done && children[i].reap() && children[i].fd < 0;
-      if (all_done) break;
+      if (launch.programs_done()) break;
       if (sim_s > o.budget_s) {
         say("coverage-run: sim-time budget spent");
         break;
@@ -465,27 +443,24 @@ int main(int argc, char** argv) {
         say("coverage-run: wall-clock limit reached");
         break;
       }
-      if (server.reap() || !api.alive()) {
+      if (launch.server_exited() || !api.connected()) {
         fail("the server exited");
         break;
       }
     }
-    read_children();
 
     // 7. score from ground truth
     if (!harness_error) {
-      api.request({{"op", "lockstep_leave"}}, &err);
-      if (auto v = api.request({{"op", "vehicles"}}, &err)) {
+      (void)api.lockstep_leave();
+      if (auto v = api.request({{"op", "vehicles"}})) {
         sim_s = v->value("time_s", sim_s);
         for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
       }
     }
   }
 
-  // 8. stop everything we started, then the server
-  for (size_t i = children.size(); i-- > 1;) children[i].stop(SIGTERM, 5.0);
-  server.stop(SIGINT, 30.0);
-  read_children();
+  // 8. stop everything we started
+  launch.stop_all(30.0);
   std::filesystem::remove_all(dir);
 
   const double coverage = held_fraction();
