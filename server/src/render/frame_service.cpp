@@ -128,6 +128,7 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
     f.noise_sd = c.config.noise_sd;
     f.brightness_sd = c.config.brightness_sd;
     f.latency_s = c.config.latency_s;
+    any_latency_ = any_latency_ || f.latency_s > 0;
     const int id = mj_name2id(m, mjOBJ_CAMERA, c.config.camera.c_str());
     if (id < 0) throw std::invalid_argument("frames: the model has no camera named '" + c.config.camera + "'");
     const CameraIntrinsics k =
@@ -203,13 +204,15 @@ void FrameService::capture(mjData_* d) {
   const bool back = last_capture_us_ && now_us < *last_capture_us_;
   if (back) std::fill(next_index_.begin(), next_index_.end(), 0);
   last_capture_us_ = now_us;
-  {
+  if (any_latency_) {
     // frames held for their latency are released as sim time passes (a reset drops them)
-    std::lock_guard<std::mutex> lock(mutex_);
-    sim_now_us_ = now_us;
-    if (back) delayed_.clear();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      sim_now_us_ = now_us;
+      if (back) delayed_.clear();
+    }
+    cv_.notify_all();
   }
-  cv_.notify_all();
 
   std::vector<Job> jobs;
   bool must = false;

@@ -171,6 +171,7 @@ class FrameService {
   std::vector<int64_t> next_index_;   // per camera: the next frame index not yet taken
   std::optional<int64_t> last_capture_us_;
   uint64_t next_id_ = 1;
+  bool any_latency_ = false;          // a camera holds its frames back (else capture() skips that part)
 
   mutable std::mutex mutex_;
   std::condition_variable cv_;
