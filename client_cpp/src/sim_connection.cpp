@@ -280,9 +280,18 @@ Result<std::unique_ptr<SimConnection>> SimConnection::adopt(int fd, double timeo
   return std::unique_ptr<SimConnection>(new SimConnection(std::move(impl)));
 }
 
-const nlohmann::json& SimConnection::hello() const { return impl_->hello; }
-bool SimConnection::connected() const { return impl_->fd >= 0; }
-int SimConnection::fd() const { return impl_->fd; }
+const nlohmann::json& SimConnection::hello() const {
+  impl_->assert_owner_thread();
+  return impl_->hello;
+}
+bool SimConnection::connected() const {
+  impl_->assert_owner_thread();
+  return impl_->fd >= 0;
+}
+int SimConnection::fd() const {
+  impl_->assert_owner_thread();
+  return impl_->fd;
+}
 
 Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout_s) {
   Impl& m = *impl_;

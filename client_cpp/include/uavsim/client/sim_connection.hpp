@@ -5,8 +5,9 @@
 //
 // The API's ground truth is for scoring and tests; a mission decides with what a real drone has.
 //
-// Thread contract: one thread uses a connection (the thread that created it); no method is
-// thread-safe. Handlers run on that thread, inside the call that read their message.
+// Thread contract: a connection belongs to the thread that created it (its owner thread); no method
+// is thread-safe, and debug builds assert the owner. Handlers run on that thread, inside the call
+// that read their message.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +29,7 @@ struct SimMessage {
   nlohmann::json json;
   std::string payload;  // a `frame`'s image bytes (exactly its header's `bytes`); empty otherwise
   // The message's "event" field ("tick", "sim_event", "frame", ...); empty if it has none.
+  // Thread-safe.
   std::string kind() const;
 };
 
@@ -40,41 +42,47 @@ class SimConnection {
 
   // Connects to the sim API at host:port and reads the server's hello, within timeout_s of wall
   // time. kConnectionRefused when nothing listens, kTimeout, kProtocol when the peer does not
-  // greet as a uavsim server (or refuses the connection: `overloaded`).
+  // greet as a uavsim server (or refuses the connection: `overloaded`). Thread-safe: the calling
+  // thread owns the new connection.
   static Result<std::unique_ptr<SimConnection>> connect(const std::string& host, uint16_t port,
                                                         double timeout_s = 10.0);
   // Takes over a connected stream socket (closed by the connection) and reads the hello as
-  // connect() does.
+  // connect() does. Thread-safe, as connect().
   static Result<std::unique_ptr<SimConnection>> adopt(int fd, double timeout_s = 10.0);
   ~SimConnection();
   SimConnection(const SimConnection&) = delete;
   SimConnection& operator=(const SimConnection&) = delete;
 
-  // The server's hello ({"hello": "uavsim", "protocol": 1, "ops": [...]}).
+  // The server's hello ({"hello": "uavsim", "protocol": 1, "ops": [...]}). Owner thread only.
   const nlohmann::json& hello() const;
-  // False once the connection is closed, lost or broken by a malformed message.
+  // False once the connection is closed, lost or broken by a malformed message. Owner thread only.
   bool connected() const;
-  // The socket, for a caller's own poll loop (readable: call poll(0)); -1 once closed.
+  // The socket, for a caller's own poll loop (readable: call poll(0)); -1 once closed. Owner
+  // thread only.
   int fd() const;
 
   // Sends req (an object with "op") with the next id and waits up to timeout_s of wall time for its
   // reply; returns the reply's "result" (an empty object when it has none). Failures: the server's
   // error (its code mapped to an Error, message "CODE: message"), kTimeout (the late reply is
   // discarded when it comes), kNotConnected / kConnectionLost, kProtocol (malformed or oversized
-  // message: the connection is closed), kInvalidArgument (req not an object).
+  // message: the connection is closed), kInvalidArgument (req not an object). Owner thread only.
   Result<nlohmann::json> request(nlohmann::json req, double timeout_s = 30.0);
 
   // Streamed messages of this kind go to handler as they are read instead of the queue (one
   // handler per kind; an empty function removes it). A handler must not call this connection.
+  // Owner thread only.
   void on_message(const std::string& kind, std::function<void(const SimMessage&)> handler);
   // The streamed messages read so far that no handler took, oldest first (the queue is emptied).
+  // Owner thread only.
   std::vector<SimMessage> take_messages();
   // Reads and dispatches whatever has arrived, waiting up to timeout_ms for the first bytes (0: do
   // not wait). kConnectionLost when the server closed the connection, kProtocol on a malformed
-  // message; ok otherwise, whether or not anything came.
+  // message; ok otherwise, whether or not anything came. Owner thread only.
   Result<void> poll(int timeout_ms);
 
-  // Control (docs/protocol.md, "Control"); each returns the reply's result.
+  // The wrappers below send one request each and return its reply's result, failing as request().
+  // Owner thread only.
+  // Control (docs/protocol.md, "Control").
   Result<nlohmann::json> status();
   Result<nlohmann::json> pause();
   Result<nlohmann::json> resume();
@@ -108,7 +116,7 @@ class SimConnection {
   std::unique_ptr<Impl> impl_;
 };
 
-// Maps the API's error code ("bad_field", "not_available", ...) to an Error.
+// Maps the API's error code ("bad_field", "not_available", ...) to an Error. Thread-safe.
 Error sim_api_error(std::string_view code);
 
 }  // namespace uavsim::client

@@ -3,7 +3,8 @@
 // spawn the mission programs with stdout and stderr read line by line (printed prefixed with the
 // program's name unless quiet), put them on the lockstep clock, and stop and reap them all.
 //
-// Thread contract: one thread uses a Launcher (its api() included); nothing here is thread-safe.
+// Thread contract: a Launcher belongs to the thread that made it (its owner thread; its api() too);
+// nothing here is thread-safe.
 #pragma once
 
 #include <sys/types.h>
@@ -31,14 +32,16 @@ struct ServerSpec {
   double start_timeout_s = 60.0;  // wall seconds for the banner and the API's hello
 };
 
-// The program `name` in the directory of the running executable (/proc/self/exe).
+// The program `name` in the directory of the running executable (/proc/self/exe). Thread-safe.
 std::string sibling_program(const std::string& name);
 
 class Launcher {
  public:
   // name prefixes the launcher's own messages; quiet: say() and the children's lines print nothing.
+  // The calling thread becomes the owner thread.
   Launcher(std::string name, bool quiet);
   // Stops whatever still runs (stop_all(5)).
+  // Owner thread only.
   ~Launcher();
   Launcher(const Launcher&) = delete;
   Launcher& operator=(const Launcher&) = delete;
@@ -46,40 +49,54 @@ class Launcher {
   // Starts the server (child "server") as fast as possible on ephemeral ports, reads its banner
   // until the API's port and connects api() to it. Fails when the program cannot start, exits, or
   // prints no API port within spec.start_timeout_s, or the API does not answer.
+  // Owner thread only.
   Result<void> start_server(const ServerSpec& spec);
   // The connection to the server's API; only after start_server() succeeded.
+  // Owner thread only.
   client::SimConnection& api();
   // The API's TCP port (0 before start_server()).
+  // Owner thread only.
   int api_port() const;
   // The TCP MAVLink port the server printed for this vehicle name; 0 if none.
+  // Owner thread only.
   int mavlink_port(const std::string& vehicle) const;
 
   // Starts a program (argv[0] is its path) named `name` in the output, with this environment plus
   // env ("KEY=value"; an inherited UAVSIM_LOCKSTEP is dropped). Fails when it cannot be started.
+  // Owner thread only.
   Result<void> spawn(const std::string& name, const std::vector<std::string>& argv,
                      const std::vector<std::string>& env = {});
   // "UAVSIM_LOCKSTEP=127.0.0.1:PORT/PERIOD": puts a client_cpp program on the server's lockstep.
+  // Owner thread only.
   std::string lockstep_env(double period_s) const;
   // Waits (reading the children's output) until at least n clients have joined the lockstep.
+  // Owner thread only.
   Result<void> wait_lockstep_clients(int n, double timeout_s);
 
   // Every complete output line of a child (name, line without '\n') is given to cb, in order, after
   // it is printed. Callbacks add up; they may call this launcher's api(), not pump().
+  // Owner thread only.
   void on_line(std::function<void(const std::string& child, const std::string& line)> cb);
   // Waits up to timeout_ms for output or API messages, then reads the children's lines (printed
   // "[name] line" unless quiet, then given to on_line) and what the API has sent (queued or given
   // to its handlers, as SimConnection::poll).
+  // Owner thread only.
   void pump(int timeout_ms);
   // Prints a line unless quiet.
+  // Owner thread only.
   void say(const std::string& line) const;
   // Wall seconds since the launcher was made.
+  // Owner thread only.
   double wall_s() const;
   // True when every program spawned (the server aside) has exited and its output is read.
+  // Owner thread only.
   bool programs_done();
   // True when the server has exited (or was never started).
+  // Owner thread only.
   bool server_exited();
   // Stops the programs (SIGTERM, then SIGKILL after at most 5 s), then the server (SIGTERM: it
   // finishes a recording; SIGKILL after timeout_s), reaps them and prints their last lines.
+  // Owner thread only.
   void stop_all(double timeout_s);
 
  private:
