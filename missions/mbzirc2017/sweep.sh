@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Seed sweep of the MBZIRC 2017 landing (not a ctest: about a minute per seed). Two steps, so that any
+# Seed sweep of the MBZIRC 2017 landing (not a ctest: 20 seeds take about a minute, two at a time). Two steps, so that any
 # job runner can do the middle:
 #   missions/mbzirc2017/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] > jobs.txt   # one mbzirc2017-run per line
 #   parallel -j2 < jobs.txt                                                     # GNU parallel (or: bash jobs.txt)
