@@ -104,6 +104,20 @@ TEST(CoverageRun, ThirtyPercentRadioLossStillCoversEverything) {
   EXPECT_TRUE(r["success"].get<bool>()) << out;
 }
 
+// All five agents in one coverage-agent process (--vehicles 0-4): each still has its own MAVLink
+// link and radio, and frames between them go through the simulated radio, so the flock behaves as
+// with one process per agent (take-off commands are sent one agent after the other: a few ticks).
+TEST(CoverageRun, OneProcessFlyingAllFiveAgentsCoversTheRectangleToo) {
+  std::string out;
+  const Json r = run_flock("--per-process 5", &out);
+  ASSERT_TRUE(r.is_object()) << out;
+  EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
+  EXPECT_EQ(r["landed"].get<int>(), 5) << out;
+  EXPECT_NEAR(r["mission_time_s"].get<double>(), 211.0, 10.0)
+      << out;  // one process per agent: 211.6 s
+  EXPECT_TRUE(r["success"].get<bool>()) << out;
+}
+
 // Seeded failures (every 10 s each flying agent fails with probability p) and lossy radio, twice
 // on a smaller rectangle: the same seed gives the same run (failures, mission time, energy), bit
 // for bit. (Whether it succeeds is not the point: with this seed agent 2 fails on its way home,
