@@ -9,19 +9,22 @@ namespace uavsim::server::airframe {
 namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kMinAdvection_m_s = 1.0;  // below this the frozen field passes at walking pace
-constexpr double kVerticalSdRatio = 0.5;   // sigma_w / sigma_u near the ground (MIL-F-8785C low altitude)
+constexpr double kVerticalSdRatio =
+    0.5;  // sigma_w / sigma_u near the ground (MIL-F-8785C low altitude)
 }  // namespace
 
 std::string validate(const WindParams& p) {
-  const double v[] = {p.speed_m_s, p.from_deg, p.turbulence_sd_m_s, p.length_scale_m,
+  const double v[] = {p.speed_m_s,    p.from_deg, p.turbulence_sd_m_s, p.length_scale_m,
                       p.gust_rate_hz, p.gust_m_s, p.gust_duration_s};
   for (double x : v) {
     if (!std::isfinite(x)) return "wind values must be finite";
   }
   if (p.speed_m_s < 0 || p.speed_m_s > 50) return "wind speed must be in [0, 50] m/s";
-  if (p.turbulence_sd_m_s < 0 || p.turbulence_sd_m_s > 20) return "turbulence sd must be in [0, 20] m/s";
+  if (p.turbulence_sd_m_s < 0 || p.turbulence_sd_m_s > 20)
+    return "turbulence sd must be in [0, 20] m/s";
   if (!(p.length_scale_m > 0)) return "turbulence length scale must be > 0";
-  if (p.gust_rate_hz < 0 || p.gust_m_s < 0 || p.gust_m_s > 50) return "gust rate and peak must be >= 0";
+  if (p.gust_rate_hz < 0 || p.gust_m_s < 0 || p.gust_m_s > 50)
+    return "gust rate and peak must be >= 0";
   if (!(p.gust_duration_s > 0)) return "gust duration must be > 0";
   return "";
 }
@@ -36,7 +39,8 @@ WindField::WindField(const WindParams& params, uint64_t seed) : params_(params),
   // start from the stationary distribution so statistics hold from t = 0
   const double sd = params_.turbulence_sd_m_s;
   if (sd > 0) {
-    turbulence_enu_m_s_ = Eigen::Vector3d(sd * normal_(rng_), sd * normal_(rng_), kVerticalSdRatio * sd * normal_(rng_));
+    turbulence_enu_m_s_ = Eigen::Vector3d(sd * normal_(rng_), sd * normal_(rng_),
+                                          kVerticalSdRatio * sd * normal_(rng_));
   }
   update_velocity();
 }
@@ -68,11 +72,13 @@ void WindField::step(double dt_s) {
     const double b = std::sqrt(1.0 - a * a);
     turbulence_enu_m_s_.x() = a * turbulence_enu_m_s_.x() + b * sd * normal_(rng_);
     turbulence_enu_m_s_.y() = a * turbulence_enu_m_s_.y() + b * sd * normal_(rng_);
-    turbulence_enu_m_s_.z() = a * turbulence_enu_m_s_.z() + b * kVerticalSdRatio * sd * normal_(rng_);
+    turbulence_enu_m_s_.z() =
+        a * turbulence_enu_m_s_.z() + b * kVerticalSdRatio * sd * normal_(rng_);
   }
   // gusts: the running one advances; a new one starts with probability rate * dt
   if (gust_left_s_ > 0) gust_left_s_ = std::max(0.0, gust_left_s_ - dt_s);
-  if (params_.gust_rate_hz > 0 && uniform_(rng_) < params_.gust_rate_hz * dt_s && gust_left_s_ <= 0) {
+  if (params_.gust_rate_hz > 0 && uniform_(rng_) < params_.gust_rate_hz * dt_s &&
+      gust_left_s_ <= 0) {
     gust(params_.gust_m_s, params_.gust_duration_s);
   }
   update_velocity();

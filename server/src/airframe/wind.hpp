@@ -1,15 +1,15 @@
-// Wind: a mean wind, Dryden-type turbulence and discrete gusts, uniform in space and stepped in sim time.
-// A pure library (Eigen and a seeded generator; no clocks, no MuJoCo). The simulation steps one WindField
-// per world and subtracts its velocity from each airframe's velocity before the quadratic drag
-// (air-relative velocity); balloons sway in it.
+// Wind: a mean wind, Dryden-type turbulence and discrete gusts, uniform in space and stepped in sim
+// time. A pure library (Eigen and a seeded generator; no clocks, no MuJoCo). The simulation steps
+// one WindField per world and subtracts its velocity from each airframe's velocity before the
+// quadratic drag (air-relative velocity); balloons sway in it.
 //
-// Turbulence: each component is a first-order Gauss-Markov process, the time-domain form of the Dryden
-// longitudinal spectrum Phi(w) = sigma^2 (2 L / pi V) / (1 + (L w / V)^2) seen by a body the mean wind V
-// carries the frozen field past (Taylor's hypothesis; MIL-F-8785C, Hoblit 1988 ch. 4): correlation time
-// tau = L / V, stationary standard deviation sigma (the vertical one half of it, as near the ground).
-// Discretised exactly: u[k+1] = a u[k] + sigma sqrt(1 - a^2) n[k], a = exp(-dt / tau), so the statistics
-// do not depend on the step. Gusts: discrete "1 - cos" gusts (MIL-F-8785C) along the mean wind, at
-// Poisson times (rate gust_rate_hz) or on demand.
+// Turbulence: each component is a first-order Gauss-Markov process, the time-domain form of the
+// Dryden longitudinal spectrum Phi(w) = sigma^2 (2 L / pi V) / (1 + (L w / V)^2) seen by a body
+// the mean wind V carries the frozen field past (Taylor's hypothesis; MIL-F-8785C): correlation
+// time tau = L / V, stationary standard deviation sigma (the vertical one half of it, as near the
+// ground). Discretised exactly, u[k+1] = a u[k] + sigma sqrt(1 - a^2) n[k] with a = exp(-dt / tau),
+// so the statistics do not depend on the step. Gusts: discrete "1 - cos" gusts (MIL-F-8785C) along
+// the mean wind, at Poisson times (rate gust_rate_hz) or on demand.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,8 +20,8 @@
 namespace uavsim::server::airframe {
 
 struct WindParams {
-  double speed_m_s = 0.0;          // mean wind speed
-  double from_deg = 0.0;           // where the mean wind blows from: clockwise from north (meteorology)
+  double speed_m_s = 0.0;  // mean wind speed
+  double from_deg = 0.0;   // where the mean wind blows from: clockwise from north (meteorology)
   double turbulence_sd_m_s = 0.0;  // sigma of the horizontal turbulence components
   double length_scale_m = 30.0;    // Dryden L (near the ground: tens of metres)
   double gust_rate_hz = 0.0;       // mean rate of random discrete gusts

@@ -11,15 +11,18 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 
 // a world numeric with at most max_size finite values (empty if absent)
-std::vector<double> numeric(const physics::World& world, const std::string& name, size_t min_size, size_t max_size) {
+std::vector<double> numeric(const physics::World& world, const std::string& name, size_t min_size,
+                            size_t max_size) {
   std::vector<double> v = physics::custom_numeric(world, name);
   if (v.empty()) return v;
   if (v.size() < min_size || v.size() > max_size) {
-    throw physics::WorldError("custom numeric '" + name + "' needs " + std::to_string(min_size) + " to " +
-                              std::to_string(max_size) + " values, has " + std::to_string(v.size()));
+    throw physics::WorldError("custom numeric '" + name + "' needs " + std::to_string(min_size) +
+                              " to " + std::to_string(max_size) + " values, has " +
+                              std::to_string(v.size()));
   }
   for (double x : v) {
-    if (!std::isfinite(x)) throw physics::WorldError("custom numeric '" + name + "' has a non-finite value");
+    if (!std::isfinite(x))
+      throw physics::WorldError("custom numeric '" + name + "' has a non-finite value");
   }
   return v;
 }
@@ -35,7 +38,9 @@ sim::FieldConditions resolve_field_conditions(const Options& options, const phys
   }
   if (options.realism) level = *options.realism;
   const auto realism = sim::realism_from_name(level);
-  if (!realism) throw physics::WorldError("custom text 'uavsim:realism': '" + level + "' is not field or ideal");
+  if (!realism)
+    throw physics::WorldError("custom text 'uavsim:realism': '" + level +
+                              "' is not field or ideal");
   sim::FieldConditions c = sim::field_conditions(*realism);
 
   // the world's own settings
@@ -57,19 +62,22 @@ sim::FieldConditions resolve_field_conditions(const Options& options, const phys
     c.gimbal.accel_max_rad_s2 = g.size() > 2 ? g[2] * kDegToRad : 0.0;
     if (c.gimbal.time_const_s < 0 || c.gimbal.time_const_s > 10 || c.gimbal.rate_max_rad_s < 0 ||
         c.gimbal.accel_max_rad_s2 < 0) {
-      throw physics::WorldError("custom numeric 'uavsim:gimbal_dynamics': time constant in [0, 10] s, limits >= 0");
+      throw physics::WorldError(
+          "custom numeric 'uavsim:gimbal_dynamics': time constant in [0, 10] s, limits >= 0");
     }
   }
   if (auto b = numeric(world, "uavsim:balloon_variation", 1, 2); !b.empty()) {
     c.balloons.height_spread_m = b[0];
     c.balloons.sway = b.size() > 1 && b[1] != 0.0;
     if (b[0] < 0 || b[0] > 0.6) {
-      throw physics::WorldError("custom numeric 'uavsim:balloon_variation': height spread in [0, 0.6] m "
-                                "(the pole reaches 0.6 m under its foot)");
+      throw physics::WorldError(
+          "custom numeric 'uavsim:balloon_variation': height spread in [0, 0.6] m "
+          "(the pole reaches 0.6 m under its foot)");
     }
   }
   if (auto r = numeric(world, "uavsim:battery_sag", 1, 1); !r.empty()) {
-    if (r[0] < 0 || r[0] > 1) throw physics::WorldError("custom numeric 'uavsim:battery_sag': resistance in [0, 1] ohm");
+    if (r[0] < 0 || r[0] > 1)
+      throw physics::WorldError("custom numeric 'uavsim:battery_sag': resistance in [0, 1] ohm");
     c.battery_resistance_ohm = r[0];
   }
 
@@ -78,7 +86,8 @@ sim::FieldConditions resolve_field_conditions(const Options& options, const phys
     c.wind.speed_m_s = options.wind->speed_m_s;
     c.wind.from_deg = options.wind->from_deg;
     c.wind_from_seeded = false;
-    if (options.wind->turbulence_sd_m_s) c.wind.turbulence_sd_m_s = *options.wind->turbulence_sd_m_s;
+    if (options.wind->turbulence_sd_m_s)
+      c.wind.turbulence_sd_m_s = *options.wind->turbulence_sd_m_s;
   }
   return c;
 }

@@ -14,7 +14,7 @@ FieldConditions field_conditions(Realism realism) {
   FieldConditions c;
   c.realism = realism;
   if (realism == Realism::kIdeal) return c;
-  // wind: a fresh breeze over open desert, moderate turbulence, a gust now and then; direction per seed
+  // wind: a fresh breeze over open desert, moderate turbulence, a gust now and then; any direction
   c.wind.speed_m_s = 4.0;
   c.wind.turbulence_sd_m_s = 1.0;
   c.wind.length_scale_m = 30.0;
@@ -30,11 +30,12 @@ FieldConditions field_conditions(Realism realism) {
   c.gimbal.accel_max_rad_s2 = 1000.0 * M_PI / 180.0;
   c.balloons.height_spread_m = 0.5;
   c.balloons.sway = true;
-  // a standalone u-blox M8-class receiver: wandering bias, jumps; baro drift; a residual compass offset
-  c.sensor_params = {{"SIM_GPS_POS_H_SD", 0.15}, {"SIM_GPS_POS_V_SD", 0.3},  {"SIM_GPS_VEL_SD", 0.1},
-                     {"SIM_GPS_BIAS_SD", 0.7},   {"SIM_GPS_BIAS_TAU", 120.0}, {"SIM_GPS_JUMP_HZ", 1.0 / 300.0},
-                     {"SIM_GPS_JUMP_M", 1.5},    {"SIM_BARO_DRIFT", 0.5},    {"SIM_MAG_OFS_SD", 0.05}};
-  // a small global-shutter CMOS camera over USB: read noise, auto-exposure wander, 60 ms to the host
+  // a standalone u-blox M8-class GPS: wandering bias, jumps; baro drift; a residual compass offset
+  c.sensor_params = {
+      {"SIM_GPS_POS_H_SD", 0.15}, {"SIM_GPS_POS_V_SD", 0.3},   {"SIM_GPS_VEL_SD", 0.1},
+      {"SIM_GPS_BIAS_SD", 0.7},   {"SIM_GPS_BIAS_TAU", 120.0}, {"SIM_GPS_JUMP_HZ", 1.0 / 300.0},
+      {"SIM_GPS_JUMP_M", 1.5},    {"SIM_BARO_DRIFT", 0.5},     {"SIM_MAG_OFS_SD", 0.05}};
+  // a small global-shutter CMOS camera over USB: read noise, auto-exposure wander, 60 ms late
   c.camera_settings = "noise=3,brightness=0.08,latency_ms=60";
   return c;
 }

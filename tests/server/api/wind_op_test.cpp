@@ -1,4 +1,5 @@
-// The wind op (docs/protocol.md "Wind"): query, set at run time, a gust on demand, bad values refused.
+// The wind op (docs/protocol.md "Wind"): query, set at run time, a gust on demand, bad values
+// refused.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -34,7 +35,8 @@ TEST(WindOp, RefusesValuesOutOfRange) {
   EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"speed_m_s", -1.0}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"speed_m_s", 1e9}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"from_deg", 1000.0}})), "bad_field");
-  EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"gust_m_s", 5.0}, {"gust_duration_s", 0.0}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"gust_m_s", 5.0}, {"gust_duration_s", 0.0}})),
+            "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "wind"}, {"speed_m_s", "fast"}})), "bad_field");
   // nothing half-applied
   EXPECT_EQ(c.request({{"op", "wind"}})["result"]["speed_m_s"], 0.0);

@@ -1,21 +1,24 @@
-// The field conditions of a run (app/field_setup.hpp): --realism over the world's uavsim:realism, the
-// world's numerics over the level's defaults, --wind over both; bad values refused with their names.
+// The field conditions of a run (app/field_setup.hpp): --realism over the world's uavsim:realism,
+// the world's numerics over the level's defaults, --wind over both; bad values refused with their
+// names.
+#include "app/field_setup.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
-
-#include "app/field_setup.hpp"
 
 namespace uavsim::server::app {
 namespace {
 
 std::unique_ptr<physics::World> world_with(const std::string& label, const std::string& custom) {
   const std::string path = ::testing::TempDir() + "/uavsim_field_" + label + ".xml";
-  std::ofstream(path) << "<mujoco model=\"" << label << "\">\n"
-                      << "  <compiler angle=\"radian\"/>\n"
-                      << "  <include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/>\n"
-                      << "  <worldbody><uavsim_vehicle type=\"quad\" name=\"uav0\" pos=\"0 0 0\"/></worldbody>\n"
-                      << "  <custom>\n" << custom << "\n  </custom>\n</mujoco>\n";
+  std::ofstream(path)
+      << "<mujoco model=\"" << label << "\">\n"
+      << "  <compiler angle=\"radian\"/>\n"
+      << "  <include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/>\n"
+      << "  <worldbody><uavsim_vehicle type=\"quad\" name=\"uav0\" pos=\"0 0 0\"/></worldbody>\n"
+      << "  <custom>\n"
+      << custom << "\n  </custom>\n</mujoco>\n";
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
   return physics::World::load(path, o);
@@ -67,8 +70,8 @@ TEST(FieldSetup, WorldSettingsThenCommandLine) {
   EXPECT_EQ(c.balloons.height_spread_m, 0.3);
   EXPECT_FALSE(c.balloons.sway);
   EXPECT_EQ(c.battery_resistance_ohm, 0.02);
-  // --wind replaces the world's mean wind; --realism ideal turns the level's defaults off, the world's
-  // own settings stay
+  // --wind replaces the world's mean wind; --realism ideal turns the level's defaults off, the
+  // world's own settings stay
   c = resolve_field_conditions(parsed({"--wind", "3,180", "--realism", "ideal"}), *w);
   EXPECT_EQ(c.realism, sim::Realism::kIdeal);
   EXPECT_EQ(c.wind.speed_m_s, 3.0);
@@ -78,7 +81,8 @@ TEST(FieldSetup, WorldSettingsThenCommandLine) {
 }
 
 TEST(FieldSetup, BadWorldValuesNameTheirAttribute) {
-  auto expect_error = [](const std::string& label, const std::string& custom, const std::string& name) {
+  auto expect_error = [](const std::string& label, const std::string& custom,
+                         const std::string& name) {
     auto w = world_with(label, custom);
     try {
       resolve_field_conditions(parsed({}), *w);
@@ -90,8 +94,10 @@ TEST(FieldSetup, BadWorldValuesNameTheirAttribute) {
   expect_error("bad_level", R"(<text name="uavsim:realism" data="harsh"/>)", "uavsim:realism");
   expect_error("bad_wind", R"(<numeric name="uavsim:wind" data="-3 0"/>)", "uavsim:wind");
   expect_error("short_wind", R"(<numeric name="uavsim:wind" data="3"/>)", "uavsim:wind");
-  expect_error("bad_spread", R"(<numeric name="uavsim:balloon_variation" data="2"/>)", "uavsim:balloon_variation");
-  expect_error("bad_sag", R"(<numeric name="uavsim:battery_sag" data="-1"/>)", "uavsim:battery_sag");
+  expect_error("bad_spread", R"(<numeric name="uavsim:balloon_variation" data="2"/>)",
+               "uavsim:balloon_variation");
+  expect_error("bad_sag", R"(<numeric name="uavsim:battery_sag" data="-1"/>)",
+               "uavsim:battery_sag");
 }
 
 TEST(FieldSetup, OptionsParseWindAndRealism) {
@@ -102,11 +108,13 @@ TEST(FieldSetup, OptionsParseWindAndRealism) {
   EXPECT_EQ(o.wind->turbulence_sd_m_s.value_or(-1), 1.5);
   EXPECT_EQ(o.realism.value_or(""), "field");
   for (const char* bad : {"5", "5,", "-1,0", "5,0,99", "a,b", "5,0,1,2"}) {
-    ParseResult r = parse_args({"w.xml", "--wind", bad}, [](const std::string&) { return std::nullopt; });
+    ParseResult r =
+        parse_args({"w.xml", "--wind", bad}, [](const std::string&) { return std::nullopt; });
     EXPECT_FALSE(r.options) << bad;
     EXPECT_NE(r.error.find("--wind"), std::string::npos) << r.error;
   }
-  ParseResult r = parse_args({"w.xml", "--realism", "harsh"}, [](const std::string&) { return std::nullopt; });
+  ParseResult r =
+      parse_args({"w.xml", "--realism", "harsh"}, [](const std::string&) { return std::nullopt; });
   EXPECT_FALSE(r.options);
   EXPECT_NE(r.error.find("--realism"), std::string::npos) << r.error;
 }

@@ -1,5 +1,5 @@
-// Field sensor errors (fc/sensors.hpp): the GPS's wandering bias and jumps, RTK, barometer drift and the
-// compass offset, sampled from a vehicle at rest.
+// Field sensor errors (fc/sensors.hpp): the GPS's wandering bias and jumps, RTK, barometer drift
+// and the compass offset, sampled from a vehicle at rest.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,8 +41,8 @@ std::vector<Eigen::Vector3d> gps_errors(const ParamValues& p, double seconds, ui
 }
 
 TEST(SensorErrors, GpsBiasWandersWithItsStationaryDeviation) {
-  // bias alone: 0.7 m sd, tau 120 s; over 400 tau (N_eff ~ 200) the sample sd is within ~5 % (1 sd):
-  // allow 15 %
+  // bias alone: 0.7 m sd, tau 120 s; over 400 tau (N_eff ~ 200) the sample sd is within ~5 % (1
+  // sd): allow 15 %
   ParamValues p;
   p.sim_gps_pos_h_sd = 0.0;
   p.sim_gps_pos_v_sd = 0.0;
@@ -64,7 +64,7 @@ TEST(SensorErrors, GpsBiasWandersWithItsStationaryDeviation) {
 }
 
 TEST(SensorErrors, GpsJumpsComeAtTheirRateAndDecay) {
-  // jumps alone: 0.01 Hz for 10000 s = ~100 jumps of 1.5 m sd per axis; between them the bias decays
+  // jumps alone: 0.01 Hz for 10000 s = ~100 jumps of 1.5 m sd per axis, decaying in between
   ParamValues p;
   p.sim_gps_pos_h_sd = 0.0;
   p.sim_gps_pos_v_sd = 0.0;
@@ -100,7 +100,7 @@ TEST(SensorErrors, RtkIsCentimetreLevelWithoutBias) {
 }
 
 TEST(SensorErrors, FieldErrorsLeaveTheWhiteNoiseSequenceAlone) {
-  // the errors draw from their own generator: with them on, each sample is the ideal one plus the bias
+  // the errors draw from their own generator: with them on, a sample is the ideal one + the bias
   ParamValues ideal, field;
   field.sim_gps_bias_sd = 0.7;
   field.sim_gps_jump_hz = 0.01;

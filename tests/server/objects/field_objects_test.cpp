@@ -1,7 +1,6 @@
-// World objects under field conditions (sim/field_conditions.hpp): gimbal lag and slew limits, balloon
-// heights drawn per seed, balloons swaying in the wind.
+// World objects under field conditions (sim/field_conditions.hpp): gimbal lag and slew limits,
+// balloon heights drawn per seed, balloons swaying in the wind.
 #include <gtest/gtest.h>
-
 #include <mujoco/mujoco.h>
 
 #include <cmath>
@@ -18,8 +17,8 @@ double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
 }
 
 TEST(GimbalDynamics, AttitudeStepGivesAPointingErrorThatDecaysWithTheTimeConstant) {
-  // the camera rides on the body: a 0.3 rad step in body roll turns the camera with it; the loop then
-  // slews back to the (earth-fixed) target: error(t) = 0.3 exp(-t / tau) without limits
+  // the camera rides on the body: a 0.3 rad step in body roll turns the camera with it; the loop
+  // then slews back to the (earth-fixed) target: error(t) = 0.3 exp(-t / tau) without limits
   sim::GimbalDynamicsParams p;
   p.time_const_s = 0.05;
   constexpr double kDt = 0.001;
@@ -91,7 +90,8 @@ TEST(FieldBalloons, HeightsComeFromTheSeedWithinTheSpreadAndPositionsStay) {
     auto ideal = testing::make_shipped("mbzirc2020.xml", seed);
     auto a = field_2020(seed, field);
     auto b = field_2020(seed, field);
-    const ObjectSet si = add_world_objects(*ideal), sa = add_world_objects(*a), sb = add_world_objects(*b);
+    const ObjectSet si = add_world_objects(*ideal), sa = add_world_objects(*a),
+                    sb = add_world_objects(*b);
     for (size_t i = 0; i < sa.balloons->balloons().size(); ++i) {
       const BalloonState& x = sa.balloons->balloons()[i];
       // top within 3.0 +- 0.5 m, the same ground position as without variation, the same per seed

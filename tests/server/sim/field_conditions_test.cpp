@@ -1,5 +1,5 @@
-// Field conditions in the closed loop (sim/field_conditions.hpp): a quad hovering in wind, battery sag,
-// the estimator under field sensor errors, and seeded determinism.
+// Field conditions in the closed loop (sim/field_conditions.hpp): a quad hovering in wind, battery
+// sag, the estimator under field sensor errors, and seeded determinism.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -37,7 +37,8 @@ TEST(FieldWind, HoveringQuadHoldsPositionAndTiltsIntoTheWind) {
   take_off(*sim, 5.0);
   const Eigen::Vector3d hold = sim->truth(0).position_enu_m;
   testing::goto_enu(*sim, Eigen::Vector3d(0.0, 0.0, hold.z()));
-  sim->run_until(sim->time_s() + 15.0);  // settle (the position loop's integrator takes up the drag)
+  sim->run_until(sim->time_s() +
+                 15.0);  // settle (the position loop's integrator takes up the drag)
 
   // over 10 s: position error and the mean tilt
   double max_err_m = 0.0, tilt_sum = 0.0, lean_x_sum = 0.0;
@@ -46,16 +47,20 @@ TEST(FieldWind, HoveringQuadHoldsPositionAndTiltsIntoTheWind) {
   while (sim->time_s() < end_s) {
     sim->step();
     const fc::TruthState t = sim->truth(0);
-    max_err_m = std::max(max_err_m, (t.position_enu_m - Eigen::Vector3d(0.0, 0.0, hold.z())).norm());
+    max_err_m =
+        std::max(max_err_m, (t.position_enu_m - Eigen::Vector3d(0.0, 0.0, hold.z())).norm());
     tilt_sum += tilt_rad(t.q_enu_body);
     lean_x_sum += (t.q_enu_body * Eigen::Vector3d::UnitZ()).x();
     ++n;
   }
   EXPECT_LT(max_err_m, 0.5) << "position hold in a steady 5 m/s wind";
 
-  // steady hover in wind V: the thrust's horizontal part balances the drag, its vertical part the weight:
-  //   tan(theta) = D / (m g),  D = lin V + quad V^2 (body x; the body z part is second order in theta)
-  //   quad.xml: D = 0.10 * 5 + 0.05 * 25 = 1.75 N; m g = 1.5 * 9.81 = 14.7 N: theta = atan(0.119) = 6.8 deg
+  // steady hover in wind V: the thrust's horizontal part balances the drag, its vertical part
+  // the weight:
+  //   tan(theta) = D / (m g),  D = lin V + quad V^2
+  //   (body x; the body z part is second order in theta)
+  //   quad.xml: D = 0.10 * 5 + 0.05 * 25 = 1.75 N; m g = 1.5 * 9.81 = 14.7 N
+  //   theta = atan(0.119) = 6.8 deg
   const airframe::AirframeParams& a = sim->airframe(0);
   const double v = 5.0;
   const double drag_n = a.drag_lin_n_per_m_s.x() * v + a.drag_quad_n_per_m2_s2.x() * v * v;
@@ -147,7 +152,7 @@ TEST(FieldBattery, SagUnderLoadNeedsMoreMotorCommandToHover) {
 }
 
 TEST(FieldSensors, EstimateWandersWithTheGpsBiasAndRtkHoldsCentimetres) {
-  // a quad resting on the ground for 150 s: the estimated horizontal position error is the GPS error
+  // a quad resting on the ground for 150 s: the estimated horizontal position error is GPS's
   auto rms_error = [](double rtk) {
     FieldConditions field = field_conditions(Realism::kField);
     field.wind = {};
@@ -159,13 +164,14 @@ TEST(FieldSensors, EstimateWandersWithTheGpsBiasAndRtkHoldsCentimetres) {
     while (sim->time_s() < 150.0) {
       sim->run_until(sim->time_s() + 0.1);
       if (sim->time_s() < 20.0) continue;  // the estimator's start
-      const Eigen::Vector2d e = (sim->fc(0).estimate().position_enu_m - sim->truth(0).position_enu_m).head<2>();
+      const Eigen::Vector2d e =
+          (sim->fc(0).estimate().position_enu_m - sim->truth(0).position_enu_m).head<2>();
       sum2 += e.squaredNorm();
       ++n;
     }
     return std::sqrt(sum2 / n);
   };
-  // field: horizontal bias sd 0.7 m per axis (about one correlation time here: loosely), white 0.15 m
+  // field: horizontal bias sd 0.7 m per axis (one correlation time here: loosely), white 0.15 m
   const double field_rms = rms_error(0.0);
   RecordProperty("field_rms_m", std::to_string(field_rms));
   EXPECT_GT(field_rms, 0.3);

@@ -94,7 +94,8 @@ TEST(Wind, RandomGustsComeAtTheirRate) {
   WindField w(p, 3);
   int starts = 0;
   bool in_gust = false;
-  for (int k = 0; k < 200000; ++k) {  // 2000 s at 10 ms: ~100 gusts (fewer by the time spent in gusts)
+  for (int k = 0; k < 200000;
+       ++k) {  // 2000 s at 10 ms: ~100 gusts (fewer by the time spent in gusts)
     w.step(0.01);
     const bool now = w.gust_m_s() > 0;
     if (now && !in_gust) ++starts;
