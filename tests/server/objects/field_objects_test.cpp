@@ -82,6 +82,41 @@ std::unique_ptr<sim::Simulation> field_2020(uint64_t seed, const sim::FieldCondi
       physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o), c);
 }
 
+TEST(GimbalDynamics, AFastManoeuvreTiltsTheViewForAMoment) {
+  // mbzirc2020's forward camera with the field gimbal (50 ms): the vehicle snaps 0.3 rad nose down;
+  // the camera first turns with it, then comes back level (the target) within a few time constants
+  sim::FieldConditions field;
+  field.gimbal.time_const_s = 0.05;
+  auto sim = field_2020(1, field);
+  const ObjectSet set = add_world_objects(*sim);
+  const Gimbal& g = set.gimbals->gimbals()[0];
+  const Eigen::Quaterniond level(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  physics::set_vehicle_state(sim->world(), 0, Eigen::Vector3d(-10, -27, 3), level,
+                             Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  for (int k = 0; k < 200; ++k) sim->step();
+  auto pitch_of_view = [&] {
+    const Eigen::Vector3d x =
+        physics::body_orientation_enu(sim->world(), g.body_id) * Eigen::Vector3d::UnitX();
+    return std::asin(std::clamp(x.z(), -1.0, 1.0));
+  };
+  EXPECT_NEAR(pitch_of_view(), 0.0, 1e-6);
+  const Eigen::Quaterniond nose_down =
+      level * Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()));
+  auto hold = [&](int steps) {
+    for (int k = 0; k < steps; ++k) {
+      physics::set_vehicle_state(sim->world(), 0, Eigen::Vector3d(-10, -27, 3), nose_down,
+                                 Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+      sim->step();
+    }
+  };
+  hold(2);
+  EXPECT_LT(pitch_of_view(), -0.25);  // tilted with the body
+  hold(48);                           // 50 ms: one time constant
+  EXPECT_NEAR(pitch_of_view(), -0.3 * std::exp(-1.0), 0.03);
+  hold(200);  // 5 time constants
+  EXPECT_NEAR(pitch_of_view(), 0.0, 0.01);
+}
+
 TEST(FieldBalloons, HeightsComeFromTheSeedWithinTheSpreadAndPositionsStay) {
   sim::FieldConditions field;
   field.balloons.height_spread_m = 0.5;

@@ -127,6 +127,36 @@ TEST(FieldWind, ResetRestartsTheWindFromTheSeed) {
   }
 }
 
+TEST(FieldBattery, SagUnderLoadLowersTheAvailableThrust) {
+  // a fresh 3S pack (12.6 V open circuit), R = 20 mOhm: at power P the terminal voltage is
+  //   V = (V_oc + sqrt(V_oc^2 - 4 R P)) / 2;  full thrust scales with (V / 12.6)^2
+  airframe::AirframeParams a;
+  a.rotors.resize(4);
+  a.battery.internal_resistance_ohm = 0.02;
+  auto scale_at = [&](double thrust_each_n) {
+    airframe::BatteryState b;
+    const double thrust[4] = {thrust_each_n, thrust_each_n, thrust_each_n, thrust_each_n};
+    airframe::step_battery(a, thrust, 0.002, &b);
+    return std::make_pair(b.voltage_v, airframe::battery_thrust_scale(a, b));
+  };
+  const auto [v_light, s_light] = scale_at(1.0);
+  const auto [v_hover, s_hover] = scale_at(3.7);  // 1.5 kg / 4
+  const auto [v_full, s_full] = scale_at(9.0);    // near full throttle
+  EXPECT_GT(v_light, v_hover);
+  EXPECT_GT(v_hover, v_full);
+  EXPECT_GT(s_light, s_hover);
+  EXPECT_GT(s_hover, s_full);
+  // the voltage the quadratic gives: V_oc - V = R I = R P / V
+  airframe::BatteryState b;
+  const double thrust[4] = {9.0, 9.0, 9.0, 9.0};
+  airframe::step_battery(a, thrust, 0.002, &b);
+  EXPECT_NEAR(12.6 - b.voltage_v, 0.02 * b.current_a, 1e-9);
+  EXPECT_NEAR(s_full, (b.voltage_v / 12.6) * (b.voltage_v / 12.6), 1e-12);
+  // without resistance: the ideal world's thrust does not depend on the battery
+  a.battery.internal_resistance_ohm = 0.0;
+  EXPECT_EQ(scale_at(9.0).second, 1.0);
+}
+
 TEST(FieldBattery, SagUnderLoadNeedsMoreMotorCommandToHover) {
   // hover thrust is the weight either way; with sag the rotors make less per command, so the mean
   // command rises by about 1 / sqrt(scale) (thrust ~ command^2 at the rotor)
