@@ -434,7 +434,8 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
               {"seed", sim_.config().seed},
               {"vehicles", sim_.vehicle_count()},
               {"lockstep_clients", lockstep},
-              {"events", sim_.events().all().size()}};
+              {"events", sim_.events().all().size()},
+              {"realism", sim::realism_name(sim_.config().field.realism)}};
   } else if (op == "pause") {
     paused_ = true;
     result = {{"time_s", sim_.time_s()}, {"paused", true}};

@@ -17,6 +17,7 @@ TEST(WindOp, QuerySetAndGust) {
   ASSERT_TRUE(r["ok"]) << r;
   EXPECT_EQ(r["result"]["speed_m_s"], 0.0);
   EXPECT_EQ(r["result"]["realism"], "ideal");
+  EXPECT_EQ(c.request({{"op", "status"}})["result"]["realism"], "ideal");
   // 6 m/s from the north: the air moves towards -y
   r = c.request({{"op", "wind"}, {"speed_m_s", 6.0}, {"from_deg", 0.0}});
   ASSERT_TRUE(r["ok"]) << r;
