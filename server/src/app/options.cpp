@@ -88,6 +88,12 @@ cameras and logs:
                       it drops frames rather than slow physics, at --rate 0 it keeps every frame
   --record-fps F      frames per second of sim time in the video; default 15
   --record-size WxH   video size; default 640x480
+  --record-camera C   what the video shows: overview (the default: the camera above), follow (all
+                      vehicles in frame, a camera that tracks their bounding box smoothly, never closer
+                      than 8 m), follow:NAME (that vehicle), top (straight down over the vehicles), or
+                      the name of any camera of the world
+  --record-overlay 0|1  burn sim time, vehicle names and modes, recent events and mission counters into
+                      the video's frames; default 1
   --log-dir DIR       write VEHICLE.tlog per vehicle (every MAVLink frame each way, stamped with sim
                       time, as MAVProxy and QGroundControl write them) and events.jsonl (the server's
                       events, one JSON object a line)
@@ -429,6 +435,18 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if ((ok = value(&v))) o.record_path = v;
     } else if (a == "--record-fps") {
       ok = number({0.001, 1000, false, "frames per second"}, &o.record_fps);
+    } else if (a == "--record-camera") {
+      if ((ok = value(&v))) {
+        ok = !v.empty() && v != "follow:";
+        if (!ok) why = "--record-camera needs overview, follow, follow:NAME, top or a camera name";
+        o.record_camera = v;
+      }
+    } else if (a == "--record-overlay") {
+      if ((ok = value(&v))) {
+        ok = v == "0" || v == "1";
+        if (!ok) why = "--record-overlay needs 0 or 1, got '" + v + "'";
+        o.record_overlay = v == "1";
+      }
     } else if (a == "--record-size") {
       if ((ok = value(&v))) {
         int w = 0, h = 0;

@@ -85,6 +85,8 @@ struct Options {
   double record_fps = 15.0;
   int record_width = 640;
   int record_height = 480;
+  std::string record_camera = "overview";     // --record-camera overview|follow|follow:NAME|top|CAMERA
+  bool record_overlay = true;                 // --record-overlay 0: frames without the text
 };
 
 // What parse_args() decided: run with options, or exit with exit_code after printing output (to

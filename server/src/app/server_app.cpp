@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -20,8 +22,10 @@
 #include "app/param_file.hpp"
 #include "app/run_reporter.hpp"
 #include "mavlink/endpoint.hpp"
+#include "objects/world_objects.hpp"
 #include "physics/object_bodies.hpp"
 #include "physics/world.hpp"
+#include "render/camera_director.hpp"
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
 #include "render/video_recorder.hpp"
@@ -34,8 +38,16 @@ namespace uavsim::server::app {
 namespace {
 std::atomic<bool> g_stop_requested{false};
 
-// which camera --record films: the world camera "overview", else the first world camera, else the first
-std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& cameras) {
+// which camera --record films: the named camera, else (overview, follow, top) the world camera
+// "overview", else the first world camera, else the first
+std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& cameras, const std::string& choice) {
+  const bool directed = choice == "follow" || choice == "top" || choice.rfind("follow:", 0) == 0;
+  if (!directed && choice != "overview") {
+    for (size_t i = 0; i < cameras.size(); ++i) {
+      if (cameras[i].config.camera == choice) return i;
+    }
+    return std::nullopt;
+  }
   for (size_t i = 0; i < cameras.size(); ++i) {
     if (cameras[i].config.camera == "overview") return i;
   }
@@ -44,6 +56,69 @@ std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& came
   }
   if (!cameras.empty()) return 0;
   return std::nullopt;
+}
+
+// the director of --record-camera follow|follow:NAME|top (null for a camera posed by the model); throws
+// std::invalid_argument for a vehicle name the world does not have
+std::shared_ptr<render::CameraDirector> record_director(const std::string& choice, const render::FrameCamera& cam,
+                                                        const sim::Simulation& s) {
+  render::DirectorParams p;
+  if (choice == "top") {
+    p.mode = render::DirectorMode::kTop;
+  } else if (choice.rfind("follow", 0) == 0 && (choice.size() == 6 || choice[6] == ':')) {
+    p.mode = render::DirectorMode::kFollow;
+    if (choice.size() > 7) {
+      const std::string name = choice.substr(7);
+      for (size_t i = 0; i < s.vehicle_count(); ++i) {
+        if (s.vehicle_name(i) == name) p.vehicle = static_cast<int>(i);
+      }
+      if (!p.vehicle) throw std::invalid_argument("--record-camera " + choice + ": the world has no vehicle " + name);
+    }
+  } else {
+    return nullptr;
+  }
+  p.fovy_deg = 2.0 * std::atan(0.5 * cam.height_px / cam.fy_px) * 180.0 / 3.14159265358979323846;
+  p.aspect = static_cast<double>(cam.width_px) / cam.height_px;
+  return std::make_shared<render::CameraDirector>(p);
+}
+
+// the overlay of a recorded frame: the loop thread's view at that instant
+std::function<render::OverlayInfo()> overlay_source(sim::Simulation& s, const objects::ObjectSet& objects) {
+  constexpr double kEventShownS = 4.0;
+  constexpr size_t kEventLines = 5;
+  return [&s, balloons = objects.balloons, trucks = !objects.trucks.empty()] {
+    render::OverlayInfo info;
+    info.time_s = s.time_s();
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      info.vehicles.push_back({s.vehicle_name(i), s.runtime(i).crashed ? "CRASHED" : fc::mode_name(s.fc(i).mode())});
+    }
+    // the recent events worth a line (a vehicle's own mode shows beside it)
+    const std::vector<sim::Event>& all = s.events().all();
+    for (auto it = all.rbegin(); it != all.rend() && info.events.size() < kEventLines; ++it) {
+      if (it->time_s < info.time_s - kEventShownS) break;
+      if (it->type == sim::EventType::kModeChange || it->type == sim::EventType::kArmed ||
+          it->type == sim::EventType::kDisarmed) {
+        continue;
+      }
+      char t[24];
+      std::snprintf(t, sizeof(t), "%.1f s ", it->time_s);
+      std::string line = t;
+      if (it->vehicle >= 0 && static_cast<size_t>(it->vehicle) < s.vehicle_count()) {
+        line += s.vehicle_name(static_cast<size_t>(it->vehicle)) + " ";
+      }
+      line += sim::event_type_name(it->type);
+      if (!it->detail.empty()) line += " " + it->detail.substr(0, 40);
+      info.events.insert(info.events.begin(), line);
+    }
+    if (balloons != nullptr) {
+      info.counters.push_back("balloons popped " + std::to_string(balloons->popped_count()) + "/" +
+                              std::to_string(balloons->balloons().size()));
+    }
+    if (trucks) {
+      info.counters.push_back("landed on target " + std::to_string(s.events().count(sim::EventType::kLandedOnTarget)));
+    }
+    return info;
+  };
 }
 
 // a socket error with the option that avoids it: another process (often another uavsim-server) holds the port
@@ -308,6 +383,7 @@ int run_server(const Options& given_options) {
   // cameras: the frame service (render thread) for the API's subscriptions and --record
   std::unique_ptr<render::FrameService> frames;
   std::unique_ptr<render::VideoRecorder> recorder;
+  size_t recorded = 0;  // the camera --record films
   if (options.cameras && (options.api_port >= 0 || options.record_path)) {
     std::vector<render::CameraSetup> cameras;
     try {
@@ -317,11 +393,12 @@ int run_server(const Options& given_options) {
         for (const objects::Gimbal& g : world_objects.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
       }
       std::vector<std::string> overrides = options.camera_overrides;
-      const auto probe = record_camera(render::discover_cameras(s.world().model(), owners, overrides, 1.0 / s.control_dt_s()));
-      if (options.record_path) {
-        if (!probe) throw std::invalid_argument("--record: the world has no camera to film");
-      }
       cameras = render::discover_cameras(s.world().model(), owners, overrides, 1.0 / s.control_dt_s());
+      const auto probe = record_camera(cameras, options.record_camera);
+      if (options.record_path) {
+        if (!probe) throw std::invalid_argument("--record-camera " + options.record_camera + ": no such camera");
+        recorded = *probe;
+      }
       if (options.record_path) {
         // the recorded camera takes the recording's size and rate
         render::CameraConfig& c = cameras[*probe].config;
@@ -353,7 +430,7 @@ int run_server(const Options& given_options) {
       frames->set_before_capture([gimbals, &s] { gimbals->before_step(s); });
     }
     if (frames && options.record_path) {
-      const auto cam = record_camera(cameras);
+      const std::optional<size_t> cam = recorded;
       try {
         // as fast as possible (--rate 0) nothing is lost by waiting for the video; at a real-time rate it never waits
         recorder = std::make_unique<render::VideoRecorder>(*frames, static_cast<int>(*cam), 1, *options.record_path,
@@ -363,9 +440,22 @@ int run_server(const Options& given_options) {
         return 1;
       }
       frames->add_consumer(recorder.get());
+      // follow / top: the filmed camera is posed from the vehicles; the overlay labels them
+      std::vector<int> bodies;
+      for (const physics::VehicleBinding& v : s.world().vehicles()) bodies.push_back(v.body_id);
+      frames->set_tracked_bodies(bodies);
+      try {
+        if (auto director = record_director(options.record_camera, frames->cameras()[*cam], s)) {
+          frames->set_director(static_cast<int>(*cam), std::move(director));
+        }
+      } catch (const std::exception& e) {
+        std::cerr << "uavsim-server: " << e.what() << "\n";
+        return 2;
+      }
+      if (options.record_overlay) recorder->set_overlay(overlay_source(s, world_objects));
       if (!options.quiet) {
         std::cout << "uavsim-server: recording camera " << cameras[*cam].config.camera << " to " << *options.record_path
-                  << " (" << recorder->encoder() << ")\n";
+                  << " as " << options.record_camera << " (" << recorder->encoder() << ")\n";
       }
     }
   }

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "render/camera_director.hpp"
 #include "render/camera_renderer.hpp"
 #include "render/camera_setup.hpp"
 
@@ -283,6 +284,11 @@ void FrameService::capture(mjData_* d) {
   cv_.notify_all();
 }
 
+void FrameService::set_director(int camera, std::shared_ptr<CameraDirector> director) {
+  directors_.resize(cameras_.size());
+  directors_.at(static_cast<size_t>(camera)) = std::move(director);
+}
+
 void FrameService::wait_delivered() {
   std::unique_lock<std::mutex> lock(mutex_);
   const uint64_t target = next_id_ - 1;
@@ -354,8 +360,19 @@ void FrameService::render_snapshot(Snapshot& s) {
   std::copy(s.geom_rgba.begin(), s.geom_rgba.end(), m->geom_rgba);
   std::copy(s.geom_group.begin(), s.geom_group.end(), m->geom_group);
   mj_forward(m, d);
+  std::vector<Eigen::Vector3d> tracked;
+  for (int body : tracked_bodies_) tracked.emplace_back(Eigen::Map<const Eigen::Vector3d>(d->xpos + 3 * body));
   for (const Job& job : s.jobs) {
     const std::optional<int> index = r.renderer->find(cameras_[static_cast<size_t>(job.camera)].name);
+    if (static_cast<size_t>(job.camera) < directors_.size() && directors_[static_cast<size_t>(job.camera)]) {
+      // a directed camera: its pose from the director, written where mjv_updateScene reads it (cam_xmat is
+      // row-major, its columns MuJoCo's camera axes: OpenCV's x, -y, -z)
+      const CameraPose pose = directors_[static_cast<size_t>(job.camera)]->aim(s.time, tracked);
+      const int id = mj_name2id(m, mjOBJ_CAMERA, cameras_[static_cast<size_t>(job.camera)].name.c_str());
+      const Eigen::Matrix3d R_enu_mjcam = pose.R_enu_cam * Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+      Eigen::Map<Eigen::Vector3d>(d->cam_xpos + 3 * id) = pose.position_enu_m;
+      Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d->cam_xmat + 9 * id) = R_enu_mjcam;
+    }
     r.renderer->render(d, *index, &r.frame);
     const FrameCamera& cam = cameras_[static_cast<size_t>(job.camera)];
     if (cam.noise_sd > 0 || cam.brightness_sd > 0) {
@@ -369,6 +386,7 @@ void FrameService::render_snapshot(Snapshot& s) {
     f.info = &cameras_[static_cast<size_t>(job.camera)];
     f.position_enu_m = r.frame.position_enu_m;
     f.R_enu_cam = r.frame.R_enu_cam;
+    f.tracked_enu_m = tracked;
     for (const EncodingKey& key : job.encodings) {
       f.images.emplace_back(key, encode(r.frame.pixels, r.frame.width_px, r.frame.height_px, key));
     }

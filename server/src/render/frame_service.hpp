@@ -32,6 +32,7 @@ struct mjData_;
 namespace uavsim::server::render {
 
 struct CameraSetup;
+class CameraDirector;
 
 enum class Encoding : uint8_t { kRgb, kGrey, kJpeg };
 const char* encoding_name(Encoding e);                       // "rgb", "grey", "jpeg"
@@ -78,6 +79,8 @@ struct ReadyFrame {
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // optical centre
   Eigen::Matrix3d R_enu_cam = Eigen::Matrix3d::Identity();   // OpenCV camera frame -> ENU
   std::vector<std::pair<EncodingKey, std::shared_ptr<const std::string>>> images;
+  // the tracked bodies' positions at stamp_s (FrameService::set_tracked_bodies; empty if none)
+  std::vector<Eigen::Vector3d> tracked_enu_m;
   // the bytes of one encoding, or null if nobody asked for it
   const std::string* image(const EncodingKey& key) const;
 };
@@ -122,6 +125,13 @@ class FrameService {
 
   // Loop thread, before capture() runs for the first time with it.
   void add_consumer(FrameConsumer* consumer);
+  // Loop thread, before the first capture(): the bodies (MuJoCo body ids, e.g. the vehicles' roots) whose
+  // positions every ReadyFrame carries in tracked_enu_m, and which camera directors aim at.
+  void set_tracked_bodies(std::vector<int> body_ids) { tracked_bodies_ = std::move(body_ids); }
+  // Loop thread, before the first capture(): camera `camera` (a world camera) is posed by `director` at
+  // every frame from the tracked bodies' positions instead of by the model (--record-camera follow|top).
+  // Its subscribers see the directed view. The director is used on the render thread only.
+  void set_director(int camera, std::shared_ptr<CameraDirector> director);
   // Loop thread: called before a snapshot is taken (e.g. refresh gimbal bodies to the current vehicle pose).
   void set_before_capture(std::function<void()> fn) { before_capture_ = std::move(fn); }
 
@@ -166,6 +176,8 @@ class FrameService {
   FrameServiceOptions options_;
   std::vector<FrameConsumer*> consumers_;
   std::function<void()> before_capture_;
+  std::vector<int> tracked_bodies_;
+  std::vector<std::shared_ptr<CameraDirector>> directors_;  // per camera, null: posed by the model
 
   // loop thread
   std::vector<int64_t> next_index_;   // per camera: the next frame index not yet taken

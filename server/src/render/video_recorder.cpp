@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <opencv2/videoio.hpp>
 #include <stdexcept>
 
@@ -86,6 +87,11 @@ void VideoRecorder::want(int camera, int64_t index, int64_t, std::vector<Encodin
   if (camera == camera_ && index % every_ == 0) {
     encodings->push_back({Encoding::kRgb, 0});
     if (lossless_) *must_deliver = true;
+    if (overlay_source_) {
+      OverlayInfo info = overlay_source_();
+      std::lock_guard<std::mutex> lock(mutex_);
+      overlays_[index] = std::move(info);
+    }
   }
 }
 
@@ -93,12 +99,30 @@ void VideoRecorder::dropped(int camera, int64_t index) {
   if (camera != camera_ || index % every_ != 0) return;
   std::lock_guard<std::mutex> lock(mutex_);
   ++stats_.frames_dropped;
+  overlays_.erase(index);
 }
 
 void VideoRecorder::deliver(const ReadyFrame& frame) {
   if (frame.camera != camera_) return;
   for (const auto& [key, bytes] : frame.images) {
     if (key.encoding != Encoding::kRgb) continue;
+    std::shared_ptr<const std::string> image = bytes;
+    if (overlay_source_) {
+      // the overlay on a copy: other subscribers of this camera get the plain frame
+      std::optional<OverlayInfo> info;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        auto it = overlays_.find(frame.index);
+        if (it != overlays_.end()) info = std::move(it->second);
+        overlays_.erase(overlays_.begin(), overlays_.upper_bound(frame.index));  // this one and older
+      }
+      if (info && frame.info != nullptr) {
+        auto drawn = std::make_shared<std::string>(*bytes);
+        draw_overlay(*info, *frame.info, frame.position_enu_m, frame.R_enu_cam, frame.tracked_enu_m,
+                     reinterpret_cast<uint8_t*>(drawn->data()));
+        image = std::move(drawn);
+      }
+    }
     {
       std::unique_lock<std::mutex> lock(mutex_);
       if (lossless_) cv_.wait(lock, [&] { return finishing_ || queue_.size() < kQueueFrames; });
@@ -106,7 +130,7 @@ void VideoRecorder::deliver(const ReadyFrame& frame) {
         ++stats_.frames_dropped;
         return;
       }
-      queue_.push_back(bytes);  // shared: no copy
+      queue_.push_back(image);  // shared: no copy
     }
     cv_.notify_all();
     return;

@@ -7,12 +7,15 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
 #include "render/frame_service.hpp"
+#include "render/overlay.hpp"
 
 namespace uavsim::server::render {
 
@@ -32,6 +35,10 @@ class VideoRecorder : public FrameConsumer {
   // Flushes the queued frames and closes the file. Call after the frame service stopped delivering.
   void finish();
   RecorderStats stats() const;
+  // Burns an overlay into every frame: source is called on the loop thread when a frame is due (the state
+  // it shows is that instant's) and the text is drawn on the render thread with the frame's pose and
+  // tracked positions. Call before the first frame.
+  void set_overlay(std::function<OverlayInfo()> source) { overlay_source_ = std::move(source); }
   const std::string& encoder() const { return encoder_; }  // "ffmpeg" or "opencv"
 
   void want(int camera, int64_t index, int64_t stamp_us, std::vector<EncodingKey>* encodings,
@@ -41,6 +48,8 @@ class VideoRecorder : public FrameConsumer {
 
  private:
   void writer_main();
+  std::function<OverlayInfo()> overlay_source_;
+  std::map<int64_t, OverlayInfo> overlays_;  // by frame index, guarded by mutex_
   int camera_;
   int every_;
   bool lossless_ = false;

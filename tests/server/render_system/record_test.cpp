@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <sys/wait.h>
 #include <opencv2/videoio.hpp>
 #include <string>
 
@@ -28,6 +29,32 @@ TEST(Record, ThreeSecondsMakeAReadableMp4OfAbout45Frames) {
   }
   EXPECT_GE(frames, 44);
   EXPECT_LE(frames, 46);
+}
+
+// --record-camera follow with the demo flight: a readable video of the same length, frames not the
+// overview's (the camera moves with the vehicles)
+TEST(Record, FollowCameraRecordsTheDemoFlight) {
+  const std::string out = ::testing::TempDir() + "uavsim_record_follow_test.mp4";
+  std::remove(out.c_str());
+  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " " + UAVSIM_MODELS_DIR +
+                          "/worlds/mbzirc2020.xml --duration 3 --rate 0 --demo --record " + out +
+                          " --record-camera follow --api-port -1 --mavlink-port -1 --quiet >/dev/null";
+  (void)std::system(cmd.c_str());  // the demo has not finished after 3 s: its exit status says so
+  cv::VideoCapture video(out);
+  ASSERT_TRUE(video.isOpened()) << out;
+  int frames = 0;
+  cv::Mat img;
+  while (video.read(img)) ++frames;
+  EXPECT_GE(frames, 44);
+  EXPECT_LE(frames, 46);
+}
+
+TEST(Record, UnknownVehicleToFollowIsAUsageError) {
+  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " " + UAVSIM_MODELS_DIR +
+                          "/worlds/mbzirc2020.xml --duration 1 --rate 0 --record " + ::testing::TempDir() +
+                          "x.mp4 --record-camera follow:nobody --api-port -1 --mavlink-port -1 --quiet 2>/dev/null";
+  const int status = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 2) << status;
 }
 #endif
 
