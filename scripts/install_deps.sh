@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config ninja-build
   libmujoco-dev libqhull-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev python3 ffmpeg ccache
+  clang libclang-rt-14-dev python3 ffmpeg ccache python3-matplotlib
 )
 # node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
