@@ -1,0 +1,164 @@
+// A2aRadio against uavsim-server (a subprocess) on three quads 4 m apart: frames ride on the loop's
+// lockstep connection, so a frame is received at the first tick at or after its arrival (docs/
+// protocol.md "Radio"), never earlier, with its sender and bytes.
+#include "uavsim/client/radio.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "uavsim/client/event_loop.hpp"
+
+extern char** environ;
+
+namespace uavsim::client::testing {
+namespace {
+
+constexpr double kPeriod_s = 0.02;  // the loop's lockstep period
+constexpr double kTimeTol_s = 1e-6;
+
+// uavsim-server on ephemeral ports; the API port read from its banner
+class ServerProcess {
+ public:
+  ServerProcess() {
+    std::vector<std::string> args{
+        UAVSIM_SERVER,    std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/three_quads.xml",
+        "--rate",         "0",
+        "--mavlink-port", "0",
+        "--api-port",     "0",
+        "--no-cameras"};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    int fds[2];
+    if (pipe(fds) != 0) return;
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
+    posix_spawn_file_actions_addclose(&fa, fds[0]);
+    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+    close(fds[1]);
+    out_ = fdopen(fds[0], "r");
+    char line[1024];
+    const std::regex api(R"(sim API on tcp:[0-9.]+:(\d+))");
+    while (pid_ > 0 && fgets(line, sizeof(line), out_) != nullptr) {
+      output_ += line;
+      std::cmatch m;
+      if (std::regex_search(line, m, api)) {
+        port_ = std::stoi(m[1]);
+        break;
+      }
+    }
+  }
+  ~ServerProcess() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (out_ != nullptr) fclose(out_);
+  }
+  int api_port() const { return port_; }
+  const std::string& output() const { return output_; }
+
+ private:
+  pid_t pid_ = -1;
+  FILE* out_ = nullptr;
+  int port_ = 0;
+  std::string output_;
+};
+
+std::vector<std::uint8_t> frame(std::size_t n, std::uint8_t first) {
+  std::vector<std::uint8_t> f(n);
+  for (std::size_t i = 0; i < n; ++i) f[i] = static_cast<std::uint8_t>(first + i);
+  return f;
+}
+
+TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
+  ServerProcess server;
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  std::vector<std::unique_ptr<A2aRadio>> radio;
+  for (int v = 0; v < 3; ++v) {
+    auto r = A2aRadio::open(loop, v);
+    ASSERT_TRUE(r) << r.message();
+    radio.push_back(std::move(*r));
+  }
+  ASSERT_TRUE(loop.run_for(0.1));
+  for (auto& r : radio) EXPECT_TRUE(r->take_received().empty());
+
+  // sent at tick t0: 40 bytes take (40 + 6) * 8 / 250 kbit/s = 1.5 ms on air, so they arrive
+  // between t0 and the next tick, t0 + 0.02
+  const double t0 = loop.now();
+  const auto data = frame(40, 7);
+  ASSERT_TRUE(radio[0]->send(data));
+  EXPECT_TRUE(radio[1]->take_received().empty());  // not before the tick after its arrival
+  ASSERT_TRUE(loop.run_for(kPeriod_s));
+  EXPECT_NEAR(loop.now(), t0 + kPeriod_s, kTimeTol_s);
+  for (int v : {1, 2}) {
+    const auto got = radio[static_cast<size_t>(v)]->take_received();
+    ASSERT_EQ(got.size(), 1u) << "vehicle " << v;
+    EXPECT_EQ(got[0].from, 0);
+    EXPECT_TRUE(got[0].broadcast);
+    EXPECT_EQ(got[0].data, data);
+    EXPECT_GT(got[0].time_s, t0 + 0.0014);
+    EXPECT_LE(got[0].time_s, loop.now() + kTimeTol_s);
+  }
+  EXPECT_TRUE(radio[0]->take_received().empty());  // not to itself
+  EXPECT_EQ(radio[0]->counters().sent, 1u);
+  EXPECT_EQ(radio[1]->counters().received, 1u);
+}
+
+TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
+  ServerProcess server;
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1), r2 = A2aRadio::open(loop, 2);
+  ASSERT_TRUE(r0 && r1 && r2);
+  ASSERT_TRUE((*r1)->send(frame(127, 1), 2));  // a full 802.15.4 frame
+  ASSERT_TRUE(loop.run_for(kPeriod_s));
+  const auto to2 = (*r2)->take_received();
+  ASSERT_EQ(to2.size(), 1u);
+  EXPECT_EQ(to2[0].from, 1);
+  EXPECT_FALSE(to2[0].broadcast);
+  EXPECT_EQ(to2[0].data.size(), 127u);
+  EXPECT_TRUE((*r0)->take_received().empty());
+}
+
+TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
+  ServerProcess server;
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  auto r = A2aRadio::open(**l, 0);
+  ASSERT_TRUE(r) << r.message();
+  const auto big = (*r)->send(frame(128, 0));
+  ASSERT_FALSE(big);
+  EXPECT_EQ(big.code(), Error::kInvalidArgument);
+  const auto empty = (*r)->send({});
+  ASSERT_FALSE(empty);
+  EXPECT_EQ(empty.code(), Error::kInvalidArgument);
+  const auto unknown = A2aRadio::open(**l, 3);  // three_quads has vehicles 0-2
+  ASSERT_FALSE(unknown);
+  EXPECT_EQ(unknown.code(), Error::kDenied);
+
+  auto host = EventLoop::create(LoopConfig::host());
+  ASSERT_TRUE(host);
+  const auto on_host = A2aRadio::open(**host, 0);
+  ASSERT_FALSE(on_host);
+  EXPECT_EQ(on_host.code(), Error::kUnsupported);
+}
+
+}  // namespace
+}  // namespace uavsim::client::testing
