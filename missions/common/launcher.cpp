@@ -10,8 +10,13 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <optional>
 #include <regex>
 
 extern char** environ;
@@ -132,6 +137,94 @@ std::string sibling_program(const std::string& name) {
   return dir + "/" + name;
 }
 
+// The ground-truth sampler of record_truth: its own lockstep connection, one CSV per vehicle.
+struct TruthLog {
+  std::string dir;
+  double period_s = 0.1;
+  std::unique_ptr<client::SimConnection> conn;
+  std::map<std::string, std::unique_ptr<std::ofstream>> files;
+  std::uint64_t rows = 0;
+  bool failed = false;
+  bool trucks = true;  // ask for the truck until the world turns out to have none
+
+  // the tick's rows, then done; alone on the lockstep (the mission's programs have left), it leaves
+  // too, so that a pause armed for an empty lockstep (pause_at lockstep_empty) falls at this tick
+  void on_tick(int64_t tick) {
+    if (const auto st = conn->status(); !st || st->value("lockstep_clients", 0) <= 1) {
+      (void)conn->lockstep_leave();
+      failed = true;  // done: no more ticks
+      return;
+    }
+    const auto r = conn->request({{"op", "vehicles"}});
+    if (r) {
+      const double t = r->value("time_s", 0.0);
+      for (const auto& v : r->value("vehicles", nlohmann::json::array())) {
+        const std::string name = v.value("name", "vehicle" + std::to_string(v.value("index", 0)));
+        auto& f = files[name];
+        if (!f) {
+          f = std::make_unique<std::ofstream>(dir + "/truth_" + name + ".csv");
+          *f << "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_deg,pitch_deg,yaw_deg,battery_v,"
+                "battery_used_mah,mode,armed,crashed,on_ground\n";
+        }
+        const auto p = v.value("position_enu_m", std::vector<double>{0, 0, 0});
+        const auto vel = v.value("velocity_enu_m_s", std::vector<double>{0, 0, 0});
+        const auto q = v.value("q_enu_body", std::vector<double>{1, 0, 0, 0});  // w x y z
+        if (p.size() < 3 || vel.size() < 3 || q.size() < 4) continue;
+        // ZYX Euler angles of q_enu_body (yaw from east, counter-clockwise)
+        const double w = q[0], x = q[1], y = q[2], z = q[3];
+        constexpr double kDeg = 180.0 / 3.14159265358979323846;
+        const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * kDeg;
+        const double pitch = std::asin(std::clamp(2 * (w * y - z * x), -1.0, 1.0)) * kDeg;
+        const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * kDeg;
+        char line[512];
+        std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.3f,%.1f,%s,%d,%d,%d\n",
+                      t, p[0], p[1], p[2], vel[0], vel[1], vel[2], roll, pitch, yaw, v.value("battery_v", 0.0),
+                      v.value("battery_used_mah", 0.0), v.value("mode", std::string("?")).c_str(),
+                      v.value("armed", false) ? 1 : 0, v.value("crashed", false) ? 1 : 0,
+                      v.value("on_ground", false) ? 1 : 0);
+        *f << line;
+        ++rows;
+      }
+    }
+    // the truck (MBZIRC 2017), while the world has one
+    if (trucks) {
+      const auto tr = conn->request({{"op", "truck"}});
+      if (!tr) {
+        trucks = false;  // not_available: no truck in this world
+      } else {
+        const double t = tr->value("time_s", 0.0);
+        for (const auto& k : tr->value("trucks", nlohmann::json::array())) {
+          const std::string name = k.value("name", std::string("truck"));
+          auto& f = files["truck:" + name];
+          if (!f) {
+            f = std::make_unique<std::ofstream>(dir + "/truck_" + name + ".csv");
+            *f << "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,yaw_deg\n";
+          }
+          const auto p = k.value("position_enu_m", std::vector<double>{0, 0, 0});
+          const auto vel = k.value("velocity_enu_m_s", std::vector<double>{0, 0, 0});
+          if (p.size() < 3 || vel.size() < 3) continue;
+          char line[256];
+          std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f\n", t, p[0], p[1], p[2], vel[0],
+                        vel[1], vel[2], k.value("yaw_rad", 0.0) * 180.0 / 3.14159265358979323846);
+          *f << line;
+        }
+      }
+    }
+    if (!conn->done(tick)) failed = true;
+  }
+  // answers every tick that has arrived
+  void serve() {
+    if (!conn || failed) return;
+    if (!conn->poll(0)) {
+      failed = true;
+      return;
+    }
+    for (const client::SimMessage& msg : conn->take_messages()) {
+      if (msg.kind() == "tick") on_tick(msg.json.value("tick", int64_t{0}));
+    }
+  }
+};
+
 struct Launcher::Impl {
   std::string name;
   bool quiet = false;
@@ -142,6 +235,8 @@ struct Launcher::Impl {
   int api_port = 0;
   std::map<std::string, int> mavlink_ports;
   std::vector<std::function<void(const std::string&, const std::string&)>> line_callbacks;
+  std::optional<std::pair<std::string, double>> truth_request;  // record_truth's dir and rate
+  TruthLog truth;
 
   void say(const std::string& line) const {
     if (quiet) return;
@@ -237,7 +332,10 @@ Result<void> Launcher::wait_lockstep_clients(int n, double timeout_s) {
   for (;;) {
     const auto s = m.api->status();
     if (!s) return s.error();
-    if (s->value("lockstep_clients", 0) >= n) return client::ok();
+    if (s->value("lockstep_clients", 0) >= n) {
+      if (m.truth_request && !m.truth.conn) start_truth();
+      return client::ok();
+    }
     if (wall_s() > end_s) {
       return Failure{Error::kTimeout, std::to_string(s->value("lockstep_clients", 0)) + " of " +
                                           std::to_string(n) + " lockstep clients joined"};
@@ -255,6 +353,7 @@ void Launcher::pump(int timeout_ms) {
   Impl& m = *impl_;
   std::vector<pollfd> fds;
   if (m.api && m.api->fd() >= 0) fds.push_back({m.api->fd(), POLLIN, 0});
+  if (m.truth.conn && m.truth.conn->fd() >= 0) fds.push_back({m.truth.conn->fd(), POLLIN, 0});
   for (auto& c : m.children) {
     if (c->fd >= 0) fds.push_back({c->fd, POLLIN, 0});
   }
@@ -265,6 +364,48 @@ void Launcher::pump(int timeout_ms) {
   }
   m.read_children();
   if (m.api) (void)m.api->poll(0);
+  m.truth.serve();
+}
+
+void Launcher::record_truth(const std::string& dir, double rate_hz) {
+  impl_->truth_request = std::make_pair(dir, rate_hz > 0 ? rate_hz : 10.0);
+}
+
+std::uint64_t Launcher::truth_rows() const { return impl_->truth.rows; }
+
+void Launcher::start_truth() {
+  Impl& m = *impl_;
+  m.truth.dir = m.truth_request->first;
+  m.truth.period_s = 1.0 / m.truth_request->second;
+  auto conn = client::SimConnection::connect("127.0.0.1", static_cast<uint16_t>(m.api_port), 10.0);
+  if (!conn) {
+    m.say(m.name + ": no ground truth: " + conn.message());
+    return;
+  }
+  m.truth.conn = std::move(*conn);
+  if (auto j = m.truth.conn->lockstep_join(m.truth.period_s, 120.0); !j) {
+    m.say(m.name + ": no ground truth: lockstep_join: " + j.message());
+    m.truth.conn.reset();
+  }
+}
+
+std::string default_run_dir(const std::string& mission, uint64_t seed) {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof(stamp), "%Y%m%d-%H%M%S", &utc);
+  return "runs/" + mission + "-seed" + std::to_string(seed) + "-" + stamp;
+}
+
+bool make_run_dir(const std::string& dir, std::string* why) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    if (why != nullptr) *why = "cannot make the run directory " + dir + ": " + ec.message();
+    return false;
+  }
+  return true;
 }
 
 void Launcher::say(const std::string& line) const { impl_->say(line); }
@@ -286,6 +427,9 @@ bool Launcher::server_exited() { return impl_->server == nullptr || impl_->serve
 
 void Launcher::stop_all(double timeout_s) {
   Impl& m = *impl_;
+  // the ground truth first: its files complete, its lockstep membership gone
+  m.truth.conn.reset();
+  for (auto& [name, f] : m.truth.files) f->flush();
   // the programs first (newest first), then the server
   for (size_t i = m.children.size(); i-- > 0;) {
     if (m.children[i].get() != m.server)

@@ -13,6 +13,7 @@
 // short; 2: usage; 4: the harness failed.
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,9 +24,11 @@
 #include <random>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "agent.hpp"
 #include "apd_report.hpp"
 #include "coverage_config.hpp"
 #include "coverage_world.hpp"
@@ -67,6 +70,8 @@ struct Options {
   std::string agent;
   std::string models_dir = UAVSIM_MODELS_DIR;
   std::string keep_world;  // write the generated world here too
+  std::string run_dir;     // --run-dir: summary, events, logs, ground truth
+  double truth_hz = 10.0;
 };
 
 int usage() {
@@ -85,6 +90,9 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --progress S        progress line every S sim seconds (default 10)
   --agent-status S    each agent prints its pose and holdings every S sim seconds (default 0: no)
   --json FILE         write the summary as JSON
+  --run-dir DIR       everything of the run in DIR (auto: runs/coverage-seedN-TIME): summary.json,
+                      events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv (ground
+                      truth at --truth-hz, default 10); scripts/plot_run.py DIR plots it
   --world-out FILE    also write the generated world there
   --quiet             only the summary
   --gcs               the optimised variant with a ground station (not available yet: refused)
@@ -160,6 +168,10 @@ int main(int argc, char** argv) {
       o.agent_status_s = v;
     } else if (a == "--json") {
       o.json_path = val;
+    } else if (a == "--run-dir") {
+      o.run_dir = val;
+    } else if (a == "--truth-hz" && number(val, 0.01, 1000, &v)) {
+      o.truth_hz = v;
     } else if (a == "--world-out") {
       o.keep_world = val;
     } else if (a == "--server") {
@@ -185,6 +197,15 @@ int main(int argc, char** argv) {
     }
   }
   std::sort(o.kills.begin(), o.kills.end());
+  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("coverage", o.seed);
+  if (!o.run_dir.empty()) {
+    std::string why;
+    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
+      std::fprintf(stderr, "coverage-run: %s\n", why.c_str());
+      return 2;
+    }
+    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  }
   CoverageConfig config;
   config.length_x_m = o.length_x_m;
   config.width_y_m = o.width_y_m;
@@ -235,6 +256,7 @@ int main(int argc, char** argv) {
   std::map<int, ApdReport> apd;      // agent -> its last APD report
   std::set<int> leaders;             // agents that were ever in a leader state
   int completed_by = -1;             // the agent whose query found the rectangle covered
+  std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
   std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
   std::set<int> crashed;             // crashes other than kills
   std::map<int, double> distance_m;  // horizontal distance flown (ground truth, 1 s samples)
@@ -252,6 +274,7 @@ int main(int argc, char** argv) {
     }
     static const std::regex state_re(R"(^agent (\d+) t=\S+ state (.+) leader (-?\d+)$)");
     static const std::regex complete_re(R"(^agent (\d+) t=\S+ mission complete)");
+    static const std::regex times_re(R"(^agent (\d+) t=\S+ time in states:(.*)$)");
     std::smatch m;
     if (std::regex_search(line, m, state_re)) {
       const int id = std::stoi(m[1]);
@@ -261,6 +284,12 @@ int main(int argc, char** argv) {
         leaders.insert(id);
     } else if (std::regex_search(line, m, complete_re)) {
       completed_by = std::stoi(m[1]);
+    } else if (std::regex_search(line, m, times_re)) {
+      std::istringstream in(m[2].str());
+      double v = 0.0;
+      for (int k = 0; k < kAgentStateCount && in >> v; ++k) {
+        if (std::isfinite(v) && v >= 0.0) time_in_state_s[static_cast<size_t>(k)] += v;
+      }
     }
     return true;
   };
@@ -284,12 +313,13 @@ int main(int argc, char** argv) {
       say("[" + child + "] " + line);
     }
   });
-  if (auto r = launch.start_server(
-          {o.server,
-           world_path,
-           {"--seed", std::to_string(o.seed), "--no-cameras", "--models-dir", o.models_dir},
-           60.0});
-      !r) {
+  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--no-cameras",
+                                       "--models-dir", o.models_dir};
+  if (!o.run_dir.empty()) {
+    server_args.insert(server_args.end(), {"--log-dir", o.run_dir});
+    launch.record_truth(o.run_dir, o.truth_hz);
+  }
+  if (auto r = launch.start_server({o.server, world_path, server_args, 60.0}); !r) {
     fail("the server did not start: " + r.message());
   }
 
@@ -525,6 +555,26 @@ int main(int argc, char** argv) {
   std::printf("leaders: ");
   for (int i : leaders) std::printf("%d ", i);
   std::printf("(completed by %d)\n", completed_by);
+  {
+    // fig. 4.9: share of the agents' time in each state, Going Home, Landed and Failed left out
+    double total = 0.0;
+    for (int k = 0; k < kAgentStateCount; ++k) {
+      const auto st = static_cast<AgentState>(k);
+      if (st != AgentState::kGoingHome && st != AgentState::kLanded && st != AgentState::kFailed)
+        total += time_in_state_s[static_cast<size_t>(k)];
+    }
+    if (total > 0.0) {
+      std::printf("time in states (fig. 4.9):");
+      for (int k = 0; k < kAgentStateCount; ++k) {
+        const auto st = static_cast<AgentState>(k);
+        if (st == AgentState::kGoingHome || st == AgentState::kLanded || st == AgentState::kFailed)
+          continue;
+        std::printf(" %s %.1f %%", agent_state_name(st),
+                    100.0 * time_in_state_s[static_cast<size_t>(k)] / total);
+      }
+      std::printf("\n");
+    }
+  }
   if (!vehicles_end.empty()) {
     std::printf("energy: %.0f mAh per agent (mean), %.0f mAh in all\n",
                 energy_total / vehicles_end.size(), energy_total);
@@ -538,6 +588,9 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
+    summary["mission"] = "coverage";
+    summary["run_dir"] = o.run_dir;
+    summary["area_origin_m"] = {0.0, 0.0};
     summary["agents"] = o.agents;
     summary["area_m"] = {o.length_x_m, o.width_y_m};
     summary["failure_prob"] = o.failure_prob;
@@ -553,6 +606,11 @@ int main(int argc, char** argv) {
     summary["crashed"] = std::vector<int>(crashed.begin(), crashed.end());
     summary["survivors"] = survivors;
     summary["gaps"] = gaps;
+    Json states = Json::object();
+    for (int k = 0; k < kAgentStateCount; ++k)
+      states[agent_state_name(static_cast<AgentState>(k))] =
+          time_in_state_s[static_cast<size_t>(k)];
+    summary["time_in_state_s"] = states;
     summary["leaders"] = std::vector<int>(leaders.begin(), leaders.end());
     summary["completed_by"] = completed_by;
     summary["landed"] = landed;

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -74,6 +77,69 @@ TEST(Launcher, SiblingProgramIsBesideThisExecutable) {
   EXPECT_EQ(p.substr(p.size() - 2), "/x");
   EXPECT_NE(p.find("/tests/missions/common/"), std::string::npos) << p;
 }
+
+TEST(Launcher, DefaultRunDirNamesMissionSeedAndTime) {
+  const std::string d = default_run_dir("mbzirc2020", 7);
+  EXPECT_EQ(d.rfind("runs/mbzirc2020-seed7-", 0), 0u) << d;
+  EXPECT_EQ(d.size(), std::string("runs/mbzirc2020-seed7-YYYYMMDD-HHMMSS").size()) << d;
+  std::string why;
+  EXPECT_TRUE(make_run_dir(::testing::TempDir() + "a/b/run", &why)) << why;
+  EXPECT_FALSE(make_run_dir("/proc/no/such/run", &why));
+  EXPECT_FALSE(why.empty());
+}
+
+#ifdef UAVSIM_SERVER_BIN
+constexpr double kServerWall_s = 60.0;  // a server on a loaded machine
+
+// the ground truth of a run: a mission client on the lockstep for 2 s of sim time; the launcher's own
+// connection samples every vehicle at 10 Hz at exact sim times, then leaves when the client has left
+TEST(Launcher, RecordsGroundTruthAtItsRateWhileTheMissionRuns) {
+  Launcher launch("test", true);
+  ServerSpec spec;
+  spec.path = UAVSIM_SERVER_BIN;
+  spec.world = std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml";
+  spec.extra_args = {"--no-cameras"};
+  spec.start_timeout_s = kServerWall_s;
+  ASSERT_TRUE(launch.start_server(spec));
+  const std::string dir = ::testing::TempDir() + "truth_run";
+  std::string why;
+  ASSERT_TRUE(make_run_dir(dir, &why)) << why;
+  launch.record_truth(dir, 10.0);
+  ASSERT_TRUE(launch.api().pause());
+  auto client = client::SimConnection::connect("127.0.0.1", static_cast<uint16_t>(launch.api_port()));
+  ASSERT_TRUE(client);
+  ASSERT_TRUE((*client)->lockstep_join(0.05, kServerWall_s));
+  ASSERT_TRUE(launch.wait_lockstep_clients(1, kServerWall_s));
+  ASSERT_TRUE(launch.api().resume());
+  double t = 0.0;
+  while (t < 2.0 && launch.wall_s() < kServerWall_s) {
+    launch.pump(0);
+    ASSERT_TRUE((*client)->poll(5));
+    for (const client::SimMessage& m : (*client)->take_messages()) {
+      if (m.kind() != "tick") continue;
+      t = m.json.value("time", 0.0);
+      ASSERT_TRUE((*client)->done(m.json.value("tick", int64_t{0})));
+    }
+  }
+  ASSERT_TRUE((*client)->lockstep_leave());
+  for (int i = 0; i < 20; ++i) launch.pump(10);
+  launch.stop_all(10.0);
+
+  // truth_uav0.csv: a header, then rows 0.1 s of sim time apart up to about 2 s
+  std::ifstream f(dir + "/truth_uav0.csv");
+  ASSERT_TRUE(f) << dir;
+  std::string line;
+  std::getline(f, line);
+  EXPECT_EQ(line.rfind("t_s,x_m,y_m,z_m,vx_m_s", 0), 0u) << line;
+  std::vector<double> times;
+  while (std::getline(f, line)) times.push_back(std::stod(line));
+  ASSERT_GE(times.size(), 20u);
+  EXPECT_LE(times[0], 0.1 + 1e-6);  // the first tick after joining
+  for (size_t i = 1; i < times.size(); ++i) EXPECT_NEAR(times[i] - times[i - 1], 0.1, 1e-6) << i;
+  EXPECT_GE(times.back(), 1.9);
+  EXPECT_GE(launch.truth_rows(), 2 * times.size() - 2);  // both quads
+}
+#endif
 
 }  // namespace
 }  // namespace uavsim::launch

@@ -32,6 +32,11 @@ struct ServerSpec {
   double start_timeout_s = 60.0;  // wall seconds for the banner and the API's hello
 };
 
+// The default run directory of a launcher: "runs/MISSION-seedN-YYYYMMDD-HHMMSS" (UTC). Thread-safe.
+std::string default_run_dir(const std::string& mission, uint64_t seed);
+// Makes dir (and its parents); false with a message on failure. Thread-safe.
+bool make_run_dir(const std::string& dir, std::string* why);
+
 // The program `name` in the directory of the running executable (/proc/self/exe). Thread-safe.
 std::string sibling_program(const std::string& name);
 
@@ -73,6 +78,18 @@ class Launcher {
   // Owner thread only.
   Result<void> wait_lockstep_clients(int n, double timeout_s);
 
+  // Ground truth for the run directory: from the moment wait_lockstep_clients() has seen the mission's
+  // clients, a connection of the launcher's own joins the lockstep with period 1 / rate_hz (so it is
+  // not counted among them) and at each of its ticks writes one row per vehicle into
+  // dir/truth_NAME.csv (t_s, position and velocity ENU, roll/pitch/yaw, battery, mode, armed,
+  // crashed, on_ground) from the `vehicles` query; pump() answers the ticks. Call before
+  // wait_lockstep_clients(); dir must exist.
+  // Owner thread only.
+  void record_truth(const std::string& dir, double rate_hz);
+  // Rows written so far by record_truth (all vehicles).
+  // Owner thread only.
+  std::uint64_t truth_rows() const;
+
   // Every complete output line of a child (name, line without '\n') is given to cb, in order, after
   // it is printed. Callbacks add up; they may call this launcher's api(), not pump().
   // Owner thread only.
@@ -100,6 +117,7 @@ class Launcher {
   void stop_all(double timeout_s);
 
  private:
+  void start_truth();
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
