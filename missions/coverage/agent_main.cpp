@@ -335,6 +335,13 @@ int main(int argc, char** argv) {
         std::snprintf(buf, sizeof buf, "over: %s, %d queries started, %lu radio frames refused",
                       agent_state_name(s), f.agent->queries_started(), f.radio->refused());
         log(f.id, buf);
+        // sim seconds in each state (thesis fig. 4.9), in AgentState order
+        std::string times = "time in states:";
+        for (int k = 0; k < kAgentStateCount; ++k) {
+          std::snprintf(buf, sizeof buf, " %.2f", f.agent->time_in_state()[static_cast<size_t>(k)]);
+          times += buf;
+        }
+        log(f.id, times);
       } else {
         all_finished = false;
       }
