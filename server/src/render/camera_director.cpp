@@ -10,7 +10,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 }  // namespace
 
-Eigen::Matrix3d look_at_rotation(const Eigen::Vector3d& from_enu_m, const Eigen::Vector3d& to_enu_m) {
+Eigen::Matrix3d look_at_rotation(const Eigen::Vector3d& from_enu_m,
+                                 const Eigen::Vector3d& to_enu_m) {
   // z forward; x right = forward x up (east when looking straight down); y down = z x x
   Eigen::Vector3d z = to_enu_m - from_enu_m;
   if (z.norm() < 1e-9) z = -Eigen::Vector3d::UnitZ();
@@ -61,7 +62,8 @@ CameraPose CameraDirector::aim(double t_s, const std::vector<Eigen::Vector3d>& p
     }
     radius_m += p.vehicle_radius_m;
     target_distance_m = radius_m / std::sin(half_fov);
-    if (p.mode == DirectorMode::kTop) target_distance_m += hi.z() - target->z();  // above the highest one
+    if (p.mode == DirectorMode::kTop)
+      target_distance_m += hi.z() - target->z();  // above the highest one
     target_distance_m = std::clamp(target_distance_m, p.min_distance_m, p.max_distance_m);
   }
 

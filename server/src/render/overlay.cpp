@@ -23,8 +23,10 @@ void text(cv::Mat& img, const std::string& s, cv::Point at, const cv::Scalar& co
 }
 }  // namespace
 
-std::optional<Eigen::Vector2d> project_to_pixel(const FrameCamera& camera, const Eigen::Vector3d& position_enu_m,
-                                                const Eigen::Matrix3d& R_enu_cam, const Eigen::Vector3d& point_enu_m) {
+std::optional<Eigen::Vector2d> project_to_pixel(const FrameCamera& camera,
+                                                const Eigen::Vector3d& position_enu_m,
+                                                const Eigen::Matrix3d& R_enu_cam,
+                                                const Eigen::Vector3d& point_enu_m) {
   // p_cam = R_cam_enu (p - c); pinhole u = fx x / z + cx
   const Eigen::Vector3d p_cam = R_enu_cam.transpose() * (point_enu_m - position_enu_m);
   if (p_cam.z() <= 1e-6) return std::nullopt;
@@ -34,9 +36,9 @@ std::optional<Eigen::Vector2d> project_to_pixel(const FrameCamera& camera, const
 
 PixelRect overlay_time_rect() { return {4, 2, 140, kLineHeightPx + 2}; }
 
-void draw_overlay(const OverlayInfo& info, const FrameCamera& camera, const Eigen::Vector3d& position_enu_m,
-                  const Eigen::Matrix3d& R_enu_cam, const std::vector<Eigen::Vector3d>& vehicles_enu_m,
-                  uint8_t* rgb) {
+void draw_overlay(const OverlayInfo& info, const FrameCamera& camera,
+                  const Eigen::Vector3d& position_enu_m, const Eigen::Matrix3d& R_enu_cam,
+                  const std::vector<Eigen::Vector3d>& vehicles_enu_m, uint8_t* rgb) {
   cv::Mat img(camera.height_px, camera.width_px, CV_8UC3, rgb);
 
   // vehicle labels: name and mode beside a ring around the projected position
@@ -44,7 +46,8 @@ void draw_overlay(const OverlayInfo& info, const FrameCamera& camera, const Eige
     const auto px = project_to_pixel(camera, position_enu_m, R_enu_cam, vehicles_enu_m[i]);
     if (!px) continue;
     const cv::Point at(static_cast<int>(px->x()), static_cast<int>(px->y()));
-    if (at.x < -200 || at.y < -50 || at.x > camera.width_px + 50 || at.y > camera.height_px + 50) continue;
+    if (at.x < -200 || at.y < -50 || at.x > camera.width_px + 50 || at.y > camera.height_px + 50)
+      continue;
     cv::circle(img, at, 10, kYellow, 1, cv::LINE_AA);
     text(img, info.vehicles[i].name + " " + info.vehicles[i].mode, at + cv::Point(13, -6), kYellow);
   }

@@ -1,7 +1,7 @@
-// The text burnt into recorded frames (uavsim-server --record): sim time, each vehicle's name and flight
-// mode next to where it is in the image, the recent events (a few seconds each) and the mission counters
-// the server knows. Drawn with OpenCV on the RGB frame before it goes to the encoder: only when recording,
-// never on the physics path.
+// The text burnt into recorded frames (uavsim-server --record): sim time, each vehicle's name and
+// flight mode next to where it is in the image, the recent events (a few seconds each) and the
+// mission counters the server knows. Drawn with OpenCV on the RGB frame before it goes to the
+// encoder: only when recording, never on the physics path.
 #pragma once
 
 #include <Eigen/Core>
@@ -27,10 +27,12 @@ struct OverlayInfo {
   std::vector<std::string> counters;     // "balloons popped 2/5", "landed on target 1"
 };
 
-// The pixel (OpenCV convention) where a camera at (position_enu_m, R_enu_cam) with the intrinsics of
-// `camera` sees point_enu_m; nullopt behind the camera. Thread-safe (pure).
-std::optional<Eigen::Vector2d> project_to_pixel(const FrameCamera& camera, const Eigen::Vector3d& position_enu_m,
-                                                const Eigen::Matrix3d& R_enu_cam, const Eigen::Vector3d& point_enu_m);
+// The pixel (OpenCV convention) where a camera at (position_enu_m, R_enu_cam) with the intrinsics
+// of `camera` sees point_enu_m; nullopt behind the camera. Thread-safe (pure).
+std::optional<Eigen::Vector2d> project_to_pixel(const FrameCamera& camera,
+                                                const Eigen::Vector3d& position_enu_m,
+                                                const Eigen::Matrix3d& R_enu_cam,
+                                                const Eigen::Vector3d& point_enu_m);
 
 // The rectangle (x, y, width, height in pixels) the sim-time line takes in the top-left corner.
 struct PixelRect {
@@ -38,11 +40,11 @@ struct PixelRect {
 };
 PixelRect overlay_time_rect();
 
-// Draws info on an RGB8 image (top row first) of the camera's size, in place: the vehicles' labels at
-// their projected positions (vehicles_enu_m, vehicle order), the time and counters top left, the events
-// bottom left. Thread-safe (pure; pixels are the caller's).
-void draw_overlay(const OverlayInfo& info, const FrameCamera& camera, const Eigen::Vector3d& position_enu_m,
-                  const Eigen::Matrix3d& R_enu_cam, const std::vector<Eigen::Vector3d>& vehicles_enu_m,
-                  uint8_t* rgb);
+// Draws info on an RGB8 image (top row first) of the camera's size, in place: the vehicles' labels
+// at their projected positions (vehicles_enu_m, vehicle order), the time and counters top left, the
+// events bottom left. Thread-safe (pure; pixels are the caller's).
+void draw_overlay(const OverlayInfo& info, const FrameCamera& camera,
+                  const Eigen::Vector3d& position_enu_m, const Eigen::Matrix3d& R_enu_cam,
+                  const std::vector<Eigen::Vector3d>& vehicles_enu_m, uint8_t* rgb);
 
 }  // namespace uavsim::server::render

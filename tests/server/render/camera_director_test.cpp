@@ -1,5 +1,5 @@
-// The recording camera's director (--record-camera follow|top): vehicles in frame, smoothed in sim time,
-// never closer than the minimum distance.
+// The recording camera's director (--record-camera follow|top): vehicles in frame, smoothed in sim
+// time, never closer than the minimum distance.
 #include "render/camera_director.hpp"
 
 #include <gtest/gtest.h>
@@ -79,9 +79,11 @@ TEST(CameraDirector, SmoothsAJumpOverSimTime) {
   p.look_at_tau_s = 1.0;
   CameraDirector director(p);
   const CameraPose a = director.aim(0.0, {{0, 0, 5}});
-  // the vehicle jumps 10 m east: one 1/15 s frame later the camera has moved 1 - exp(-1/15) = 6.4 % of it
+  // the vehicle jumps 10 m east: one 1/15 s frame later the camera has moved 1 - exp(-1/15) = 6.4 %
+  // of it
   const CameraPose b = director.aim(1.0 / 15.0, {{10, 0, 5}});
-  EXPECT_NEAR(b.position_enu_m.x() - a.position_enu_m.x(), 10.0 * (1.0 - std::exp(-1.0 / 15.0)), 1e-6);
+  EXPECT_NEAR(b.position_enu_m.x() - a.position_enu_m.x(), 10.0 * (1.0 - std::exp(-1.0 / 15.0)),
+              1e-6);
   // after many time constants it has arrived
   CameraPose c = b;
   for (int k = 2; k < 200; ++k) c = director.aim(k / 15.0, {{10, 0, 5}});
@@ -112,8 +114,10 @@ TEST(Overlay, DrawsTimeLabelsAndEvents) {
   info.vehicles = {{"uav0", "GUIDED"}};
   info.events = {"12.0 s uav0 balloon_popped b1"};
   info.counters = {"balloons popped 1/5"};
-  const CameraPose pose{Eigen::Vector3d(0, -10, 0), look_at_rotation(Eigen::Vector3d(0, -10, 0), Eigen::Vector3d(0, 0, 0))};
-  draw_overlay(info, c, pose.position_enu_m, pose.R_enu_cam, {Eigen::Vector3d(0, 0, 0)}, img.data());
+  const CameraPose pose{Eigen::Vector3d(0, -10, 0),
+                        look_at_rotation(Eigen::Vector3d(0, -10, 0), Eigen::Vector3d(0, 0, 0))};
+  draw_overlay(info, c, pose.position_enu_m, pose.R_enu_cam, {Eigen::Vector3d(0, 0, 0)},
+               img.data());
   // count changed pixels in a region (x0, y0, w, h)
   auto changed = [&](int x0, int y0, int w, int h) {
     int n = 0;
@@ -126,10 +130,10 @@ TEST(Overlay, DrawsTimeLabelsAndEvents) {
     return n;
   };
   const PixelRect t = overlay_time_rect();
-  EXPECT_GT(changed(t.x_px, t.y_px, t.width_px, t.height_px), 50);   // "t = 12.3 s"
-  EXPECT_GT(changed(320, 210, 200, 40), 50);                         // the label right of the centre
-  EXPECT_GT(changed(0, 440, 300, 40), 50);                           // the event line at the bottom
-  EXPECT_EQ(changed(0, 240, 200, 150), 0);                           // elsewhere untouched
+  EXPECT_GT(changed(t.x_px, t.y_px, t.width_px, t.height_px), 50);  // "t = 12.3 s"
+  EXPECT_GT(changed(320, 210, 200, 40), 50);                        // the label right of the centre
+  EXPECT_GT(changed(0, 440, 300, 40), 50);                          // the event line at the bottom
+  EXPECT_EQ(changed(0, 240, 200, 150), 0);                          // elsewhere untouched
 }
 
 }  // namespace

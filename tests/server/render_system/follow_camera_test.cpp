@@ -1,6 +1,7 @@
-// --record-camera follow in the frame service: two quads of the MBZIRC 2020 world take off (a scripted
-// run, as fast as possible, every frame kept); the directed overview camera keeps both in frame, a
-// follow:uav0 camera shows uav0 at least kMinQuadPx across, and the overlay's text is burnt in.
+// --record-camera follow in the frame service: two quads of the MBZIRC 2020 world take off (a
+// scripted run, as fast as possible, every frame kept); the directed overview camera keeps both in
+// frame, a follow:uav0 camera shows uav0 at least kMinQuadPx across, and the overlay's text is
+// burnt in.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,9 +22,9 @@
 namespace uavsim::server::render {
 namespace {
 
-constexpr double kRunS = 6.0;            // take-off at ~1 s, climbing to 5 m
-constexpr double kQuadSpanM = 0.55;      // motor-to-motor diagonal (models/vehicles/quad.xml)
-constexpr double kMinQuadPx = 20.0;      // follow:uav0 at >= 8 m: 579 px * 0.55 m / 8 m = 40 px at most
+constexpr double kRunS = 6.0;        // take-off at ~1 s, climbing to 5 m
+constexpr double kQuadSpanM = 0.55;  // motor-to-motor diagonal (models/vehicles/quad.xml)
+constexpr double kMinQuadPx = 20.0;  // follow:uav0 at >= 8 m: 579 px * 0.55 m / 8 m = 40 px at most
 constexpr double kMinQuadFollowAllPx = 5.0;  // both quads, 20 m apart, in one 640 x 480 frame
 constexpr int kMarginPx = 10;
 
@@ -47,7 +48,8 @@ class Collector : public FrameConsumer {
   void deliver(const ReadyFrame& f) override {
     if (f.camera != camera_) return;
     std::lock_guard<std::mutex> lock(mutex_);
-    shots_.push_back({f.stamp_s, f.position_enu_m, f.R_enu_cam, f.tracked_enu_m, *f.image({Encoding::kRgb, 0})});
+    shots_.push_back(
+        {f.stamp_s, f.position_enu_m, f.R_enu_cam, f.tracked_enu_m, *f.image({Encoding::kRgb, 0})});
   }
   std::vector<Shot> shots() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -64,15 +66,19 @@ class Collector : public FrameConsumer {
 std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   physics::ComposeOptions co;
   co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-                    sim::SimConfig{});
+  sim::Simulation s(
+      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
+      sim::SimConfig{});
   objects::ObjectSet objects = objects::add_world_objects(s);
   CameraOwners owners;
-  for (const auto& v : s.world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
+  for (const auto& v : s.world().vehicles())
+    owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
   if (objects.gimbals) {
-    for (const auto& g : objects.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
+    for (const auto& g : objects.gimbals->gimbals())
+      owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
   }
-  std::vector<CameraSetup> cameras = discover_cameras(s.world().model(), owners, {}, 1.0 / s.control_dt_s());
+  std::vector<CameraSetup> cameras =
+      discover_cameras(s.world().model(), owners, {}, 1.0 / s.control_dt_s());
   int overview = -1;
   for (size_t i = 0; i < cameras.size(); ++i) {
     if (cameras[i].config.camera == "overview") overview = static_cast<int>(i);
@@ -165,7 +171,8 @@ TEST(FollowCamera, FollowingOneQuadShowsItLargeAndTheOverlayIsBurntIn) {
   for (int y = r.y_px; y < r.y_px + r.height_px; ++y) {
     for (int x = r.x_px; x < r.x_px + r.width_px; ++x) {
       const size_t i = (static_cast<size_t>(y) * cam.width_px + x) * 3;
-      changed += drawn[i] != last.rgb[i] || drawn[i + 1] != last.rgb[i + 1] || drawn[i + 2] != last.rgb[i + 2];
+      changed += drawn[i] != last.rgb[i] || drawn[i + 1] != last.rgb[i + 1] ||
+                 drawn[i + 2] != last.rgb[i + 2];
     }
   }
   EXPECT_GT(changed, 50);
@@ -174,7 +181,8 @@ TEST(FollowCamera, FollowingOneQuadShowsItLargeAndTheOverlayIsBurntIn) {
   ASSERT_TRUE(px);
   int label = 0;
   for (int y = static_cast<int>(px->y()) - 20; y < static_cast<int>(px->y()); ++y) {
-    for (int x = static_cast<int>(px->x()) + 13; x < std::min(cam.width_px, static_cast<int>(px->x()) + 100); ++x) {
+    for (int x = static_cast<int>(px->x()) + 13;
+         x < std::min(cam.width_px, static_cast<int>(px->x()) + 100); ++x) {
       if (y < 0 || y >= cam.height_px) continue;
       const size_t i = (static_cast<size_t>(y) * cam.width_px + x) * 3;
       label += drawn[i] != last.rgb[i];
