@@ -141,12 +141,14 @@ void LineServer::accept_all() {
     if (fd < 0) {
       if ((errno == EMFILE || errno == ENFILE) && spare_fd_ >= 0) {
         // out of descriptors: the waiting connection would keep the listener readable and this thread
-        // spinning; give up the spare to accept it, close it at once, and take the spare back
-        fd_exhausted_accepts_.fetch_add(1);
+        // spinning; give up the spare to accept it, close it at once, and take the spare back. accept
+        // reports EMFILE before it looks at the queue, so an empty queue shows only here: stop then
         close(spare_fd_);
         const int doomed = accept(listen_fd_, nullptr, nullptr);
         if (doomed >= 0) close(doomed);
         spare_fd_ = open_spare_fd();
+        if (doomed < 0) return;
+        fd_exhausted_accepts_.fetch_add(1);
         continue;
       }
       return;

@@ -43,6 +43,9 @@ struct InEvent {
 constexpr std::size_t kReadChunk = 64 * 1024;
 constexpr std::size_t kMaxReadPerWake = 256 * 1024;  // fairness between clients
 
+// a descriptor held in reserve for accepting (and closing) a connection when the process has none left
+int open_spare_fd() { return ::open("/dev/null", O_RDONLY | O_CLOEXEC); }
+
 std::string address_text(const sockaddr_in& sa) {
   char ip[INET_ADDRSTRLEN] = {};
   inet_ntop(AF_INET, &sa.sin_addr, ip, sizeof(ip));
@@ -100,6 +103,7 @@ struct MavlinkServer::Core {
   std::vector<std::unique_ptr<Vehicle>> vehicles;
   int epoll_fd = -1;
   int wake_fd = -1;
+  int spare_fd = -1;  // see accept_clients(); I/O thread only once it runs
   std::atomic<bool> stop{false};
   std::atomic<bool> wake_pending{false};
   std::thread io_thread;
@@ -124,6 +128,7 @@ struct MavlinkServer::Core {
     wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
     if (epoll_fd < 0 || wake_fd < 0) throw std::runtime_error("mavlink endpoint: epoll/eventfd failed");
     add_fd(wake_fd, EPOLLIN, tag_wake());
+    spare_fd = open_spare_fd();
     for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
       auto v = std::make_unique<Vehicle>();
       v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats, v->signing);
@@ -358,7 +363,23 @@ struct MavlinkServer::Core {
       sockaddr_in peer{};
       socklen_t peer_len = sizeof(peer);
       const int fd = accept4(v.listen_fd, reinterpret_cast<sockaddr*>(&peer), &peer_len, SOCK_NONBLOCK | SOCK_CLOEXEC);
-      if (fd < 0) return;  // EAGAIN, or a transient error (EMFILE, ECONNABORTED): try at the next event
+      if (fd < 0) {
+        if ((errno == EMFILE || errno == ENFILE) && spare_fd >= 0) {
+          // out of descriptors: the waiting connection would keep the (level-triggered) listener readable
+          // and this thread spinning; give up the spare to accept it, close it at once, take the spare back.
+          // accept reports EMFILE before it looks at the queue, so an empty queue shows only here: stop then
+          close(spare_fd);
+          const int doomed = accept(v.listen_fd, nullptr, nullptr);
+          if (doomed >= 0) close(doomed);
+          spare_fd = open_spare_fd();
+          if (doomed < 0) return;
+          StatCounters::add(v.stats.fd_exhausted_accepts);
+          continue;
+        }
+        // EAGAIN, or a transient error (ECONNABORTED; EMFILE with the spare lost): try at the next event
+        if (spare_fd < 0) spare_fd = open_spare_fd();
+        return;
+      }
       const int one = 1;
       setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
       auto c = std::make_unique<Client>();
@@ -569,7 +590,8 @@ struct MavlinkServer::Core {
     }
     if (epoll_fd >= 0) close(epoll_fd);
     if (wake_fd >= 0) close(wake_fd);
-    epoll_fd = wake_fd = -1;
+    if (spare_fd >= 0) close(spare_fd);
+    epoll_fd = wake_fd = spare_fd = -1;
   }
 };
 

@@ -82,6 +82,9 @@ struct EndpointStats {
   std::uint64_t bad_signature = 0;        // signed with another key (or altered)
   std::uint64_t unsigned_rejected = 0;    // unsigned (or MAVLink 1), other than RADIO_STATUS / RADIO
   std::uint64_t replayed = 0;             // correctly signed but not newer than the stream's last frame
+  // connections that arrived while the process was out of file descriptors: accepted on the spare
+  // descriptor and closed at once (the listener would otherwise stay readable and the I/O thread spin)
+  std::uint64_t fd_exhausted_accepts = 0;
 };
 
 class MavlinkServer {

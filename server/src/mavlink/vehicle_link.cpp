@@ -32,6 +32,7 @@ EndpointStats StatCounters::snapshot() const {
   s.bad_signature = r(bad_signature);
   s.unsigned_rejected = r(unsigned_rejected);
   s.replayed = r(replayed);
+  s.fd_exhausted_accepts = r(fd_exhausted_accepts);
   return s;
 }
 

@@ -34,7 +34,7 @@ struct StatCounters {
       frames_received{0}, bytes_discarded{0}, bad_crc{0}, unknown_msgid{0}, bad_length{0},
       bad_incompat_flags{0}, inbox_dropped{0}, frames_handled{0}, wrong_target{0}, unhandled_messages{0},
       rejected_inputs{0}, commands{0}, frames_sent{0}, frames_dropped_full{0}, bad_signature{0},
-      unsigned_rejected{0}, replayed{0};
+      unsigned_rejected{0}, replayed{0}, fd_exhausted_accepts{0};
   std::atomic<std::uint64_t> clients_now{0};
 
   static void add(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) {

@@ -1,11 +1,18 @@
 // Hostile and careless API input: deep nesting, structured ids, wrong field types, numbers out of
 // range, replies in request order, a half-closed request, and the connection / reply-queue limits.
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <string>
 
+#include "../../support/fd_exhaustion.hpp"
 #include "api/api_server.hpp"
+#include "api/line_server.hpp"
 #include "api/request_fields.hpp"
 #include "api_fixture.hpp"
 
@@ -140,6 +147,51 @@ TEST(ApiHardening, AReplyPastTheQueueCapEndsTheConnectionWithOverloaded) {
   EXPECT_TRUE(c.at_eof());
   TestClient next(server.port());
   EXPECT_TRUE(next.request({{"op", "status"}})["ok"]);
+}
+
+// A connection that arrives while the process has no descriptor left would keep the listener readable and
+// the I/O thread spinning; it is accepted on the spare descriptor and closed at once (the peer reads the
+// end of the stream), and connections are accepted as before once descriptors are free.
+TEST(ApiHardening, AConnectionWithNoDescriptorLeftIsClosedNotSpunOn) {
+  std::atomic<int> connects{0};
+  LineServer::Callbacks callbacks;
+  callbacks.on_connect = [&](uint64_t) { connects.fetch_add(1); };
+  LineServer server("127.0.0.1", 0, LineServer::Limits{}, callbacks);
+  server.start();
+  sockaddr_in sa{};
+  sa.sin_family = AF_INET;
+  sa.sin_port = htons(server.port());
+  sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  // waits (wall clock, bounded) for a condition the I/O thread makes true
+  auto wait_for = [](auto done) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (!done() && std::chrono::steady_clock::now() < end) poll(nullptr, 0, 1);
+    return done();
+  };
+  // the client's socket exists before the process runs out
+  const int client = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(client, 0);
+  {
+    uavsim::testing::FdExhaustion no_fds;
+    ASSERT_TRUE(no_fds.exhausted());
+    // the handshake completes in the listen backlog, without the server accepting
+    ASSERT_EQ(connect(client, reinterpret_cast<sockaddr*>(&sa), sizeof(sa)), 0);
+    EXPECT_TRUE(wait_for([&] { return server.fd_exhausted_accepts() >= 1; }));
+    pollfd p{client, POLLIN, 0};
+    ASSERT_EQ(poll(&p, 1, 5000), 1) << "the waiting connection was never closed";
+    char byte = 0;
+    EXPECT_LE(recv(client, &byte, 1, 0), 0);
+  }
+  close(client);
+  EXPECT_EQ(connects.load(), 0);
+  EXPECT_EQ(server.fd_exhausted_accepts(), 1u);
+
+  // descriptors are back: the next connection is accepted
+  const int next = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_EQ(connect(next, reinterpret_cast<sockaddr*>(&sa), sizeof(sa)), 0);
+  EXPECT_TRUE(wait_for([&] { return connects.load() == 1; }));
+  close(next);
+  server.stop();
 }
 
 }  // namespace
