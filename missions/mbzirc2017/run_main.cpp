@@ -40,6 +40,7 @@ using uavsim::launch::Launcher;
 
 constexpr double kLockstepPeriod_s = 0.05;     // the UAV program's and the fault injector's ticks
 constexpr double kStayOnDeck_s = 5.0;          // scored: still carried this long after touchdown
+constexpr double kPauseSlack_s = 0.01;  // a pause_at holds the clock within a physics step of its time
 constexpr double kFirstPassBlackout_s = 14.0;  // longer than the 12 s search of Wait Until Visible
 constexpr double kApproachBlackout_s = 4.0;    // longer than the 1 s after which the marker is lost
 constexpr double kMaxKmh = 60.0;
@@ -52,6 +53,12 @@ struct Options {
   double start_time_s = 0.0;     // the UAV starts at this sim time (480: the 5 km/h phase)
   std::string record;
   std::string json_path;
+  std::string events_path;  // the sim's event log, one JSON line per event
+  std::string realism;      // --realism for the server (empty: the world's)
+  std::string wind;         // --wind for the server
+  std::string run_dir;                   // --run-dir: video, summary, events, logs, ground truth
+  std::string record_camera = "follow";  // the server's --record-camera
+  double truth_hz = 10.0;
   bool quiet = false;
   bool blackout_first_pass = false;
   bool lose_in_approach = false;
@@ -69,8 +76,15 @@ Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV prog
   --start-time S         let the truck drive S seconds of sim time before the UAV starts (0-3600)
   --blackout-first-pass  black the camera out for 14 s when the UAV first sets off to intercept
   --lose-in-approach     black the camera out for 4 s when the UAV first starts its approach
-  --record FILE.mp4      video of the run from the overview camera
+  --record FILE.mp4      video of the run (--record-camera)
+  --realism LEVEL        field|ideal: the server's conditions (default: the world's)
+  --wind S,DIR[,GUST]    the server's mean wind (m/s, from DIR degrees) and gust peak
   --json FILE            write the summary as JSON
+  --run-dir DIR          everything of the run in DIR (auto: runs/mbzirc2017-seedN-TIME): video.mp4,
+                         summary.json, events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv
+                         and truck_NAME.csv (ground truth at --truth-hz, default 10); scripts/plot_run.py
+  --record-camera C      the video's view: follow (default), follow:VEHICLE, top, overview, a camera
+  --events FILE          write the sim's event log (JSON lines) at the end of the run
   --budget S             sim seconds the UAV gets after its start (default 300)
   --wall-limit S         wall-clock safety bound (default 1200)
   --quiet                only the summary
@@ -158,6 +172,18 @@ int main(int argc, char** argv) {
       o.record = v;
     } else if (a == "--json") {
       o.json_path = v;
+    } else if (a == "--run-dir") {
+      o.run_dir = v;
+    } else if (a == "--record-camera") {
+      o.record_camera = v;
+    } else if (a == "--truth-hz") {
+      if (!parse_double(v, 0.01, 1000.0, &o.truth_hz)) return usage();
+    } else if (a == "--events") {
+      o.events_path = v;
+    } else if (a == "--realism") {
+      o.realism = v;
+    } else if (a == "--wind") {
+      o.wind = v;
     } else if (a == "--budget") {
       if (!parse_double(v, 1.0, 36000.0, &o.budget_s)) return usage();
     } else if (a == "--wall-limit") {
@@ -173,6 +199,16 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("mbzirc2017", o.seed);
+  if (!o.run_dir.empty()) {
+    std::string why;
+    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
+      std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
+      return 2;
+    }
+    if (o.record.empty()) o.record = o.run_dir + "/video.mp4";
+    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  }
   Launcher launch("mbzirc2017-run", o.quiet);
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
@@ -199,7 +235,15 @@ int main(int argc, char** argv) {
   spec.path = o.server;
   spec.world = world;
   spec.extra_args = {"--seed", std::to_string(o.seed)};
-  if (!o.record.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record});
+  if (!o.record.empty()) {
+    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+  }
+  if (!o.run_dir.empty()) {
+    spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
+    launch.record_truth(o.run_dir, o.truth_hz);
+  }
+  if (!o.realism.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--realism", o.realism});
+  if (!o.wind.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--wind", o.wind});
   if (auto started = launch.start_server(spec); !started) {
     fail(started.message());
   } else if (launch.mavlink_port("uav0") == 0) {
@@ -217,6 +261,12 @@ int main(int argc, char** argv) {
     } else if (o.start_time_s > 0.0 &&
                !api.step_for(o.start_time_s, std::max(60.0, o.start_time_s))) {
       fail("the server did not run to the start time");
+    } else if (!api.request({{"op", "pause_at"},
+                             {"time_s", o.start_time_s + o.budget_s},
+                             {"lockstep_empty", true}})) {
+      // the clock stops by itself at the end (budget spent, the program gone, or 5 s on the deck):
+      // the end of the run is the same every run
+      fail("the server refused pause_at");
     }
     launch.on_line([&](const std::string& child, const std::string& line) {
       if (child != "uav0") return;
@@ -268,6 +318,11 @@ int main(int argc, char** argv) {
           crashes.push_back(vehicle + " at " + std::to_string(t) + " s: " + detail);
         if (type == "landed_on_target" && landed_s < 0) {
           landed_s = t;
+          // the clock is then still short of t + 5 s (a few ms of wall time at full speed)
+          const auto r = api.request({{"op", "pause_at"}, {"time_s", t + kStayOnDeck_s}});
+          if (r && r->value("time_s", 0.0) > t + kStayOnDeck_s) {
+            launch.say("mbzirc2017-run: the end-of-run pause came late (the run's end may vary)");
+          }
           std::smatch mm;
           static const std::regex re(
               R"(relative speed ([0-9.]+) m/s, ([0-9.]+) m from the marker centre)");
@@ -321,12 +376,19 @@ int main(int argc, char** argv) {
       }
       if (launch.wall_s() - last_status_wall_s > 0.5) {
         last_status_wall_s = launch.wall_s();
-        if (const auto s = api.status(); s) sim_s = s->value("time_s", sim_s);
+        if (const auto s = api.status(); s) {
+          sim_s = s->value("time_s", sim_s);
+          // the program exits 3 s after its landing and the clock holds then (pause_at): go on to
+          // the 5 s on the deck, where the next armed pause holds it again
+          if (landed_s >= 0 && s->value("paused", false) &&
+              sim_s < landed_s + kStayOnDeck_s - kPauseSlack_s)
+            (void)api.resume();
+        }
       }
       // scored: still on the deck 5 s after touchdown
-      if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s) break;
+      if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
       if (launch.programs_done() && landed_s < 0) break;
-      if (sim_s > o.start_time_s + o.budget_s) {
+      if (sim_s >= o.start_time_s + o.budget_s - kPauseSlack_s) {
         launch.say("mbzirc2017-run: sim-time budget spent");
         break;
       }
@@ -340,6 +402,18 @@ int main(int argc, char** argv) {
       }
     }
     if (faults) (void)api.lockstep_leave();
+    // the clock holds by itself at the end (pause_at): score once it does
+    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+         launch.pump(10)) {
+      const auto st = api.status();
+      if (!st || st->value("paused", false)) break;
+    }
+    if (!o.events_path.empty()) {
+      if (const auto ev = api.request({{"op", "events"}}); ev) {
+        std::ofstream f(o.events_path);
+        for (const Json& e : ev->at("events")) f << e.dump() << "\n";
+      }
+    }
 
     // 4. score from ground truth
     if (const auto t = api.truck(); t) {
@@ -355,7 +429,7 @@ int main(int argc, char** argv) {
       }
     }
     stayed_on_deck =
-        stayed_on_deck && landed_s >= 0 && end_sim_s >= landed_s + kStayOnDeck_s - 1e-6;
+        stayed_on_deck && landed_s >= 0 && end_sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s;
   }
   launch.stop_all(60.0);
   if (world != o.world) std::remove(world.c_str());
@@ -384,6 +458,8 @@ int main(int argc, char** argv) {
 
   if (!o.json_path.empty()) {
     Json summary;
+    summary["mission"] = "mbzirc2017";
+    summary["run_dir"] = o.run_dir;
     summary["seed"] = o.seed;
     summary["truck_speed_kmh"] = o.truck_speed_kmh > 0.0 ? o.truck_speed_kmh : 15.0;
     summary["start_time_s"] = o.start_time_s;

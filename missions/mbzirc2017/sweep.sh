@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Seed sweep of the MBZIRC 2017 landing (not a ctest: 20 seeds take about a minute, two at a time). Two steps, so that any
 # job runner can do the middle:
-#   missions/mbzirc2017/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] > jobs.txt   # one mbzirc2017-run per line
+#   missions/mbzirc2017/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] [REALISM] > jobs.txt   # one mbzirc2017-run per line
+#     (REALISM: field|ideal, given to every run as --realism; default the world's)
 #   parallel -j2 < jobs.txt                                                     # GNU parallel (or: bash jobs.txt)
 #   missions/mbzirc2017/sweep.sh table OUT_DIR                                  # the table, beside the seed's result
 # Each seed runs at 15 km/h from t = 0. MBZIRC2017_RUN overrides the launcher (default:
@@ -15,10 +16,11 @@ out=${2:-}
 case "$cmd" in
   jobs)
     first=${3:-1}
+    realism=${5:+--realism $5}
     count=${4:-20}
     mkdir -p "$out"
     for ((s = first; s < first + count; s++)); do
-      echo "$run --seed $s --budget 300 --quiet ${MBZIRC2017_ARGS:-} --json $out/seed$s.json > $out/seed$s.log 2>&1"
+      echo "$run --seed $s --budget 300 --quiet $realism ${MBZIRC2017_ARGS:-} --json $out/seed$s.json > $out/seed$s.log 2>&1"
     done
     ;;
   table)

@@ -47,6 +47,10 @@ struct MissionConfig {
   double pierce_coast_s = 3.0;
   double pierce_overshoot_m = 1.0;  // blades this far past the balloon's centre: done
   double pierce_timeout_s = 40.0;
+  // back off: within this horizontal range of the balloon, climb to this far above its centre (as
+  // seen) before moving back over its pole
+  double backoff_pole_clearance_m = 2.5;
+  double backoff_above_centre_m = 0.6;
   double allocation_wait_lost_s = 2.0;  // balloon unseen this long while waiting: cancel (NaN)
   double max_target_range_m = 60.0;
   // each side belongs to one UAV (seed 7.2): a UAV pierces the balloons nearer its side, plus this

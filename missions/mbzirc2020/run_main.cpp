@@ -39,8 +39,14 @@ struct Options {
   double gcs_loss = 0.0;       // the GCS link relay's loss probability, both vehicles
   double gcs_latency_s = 0.0;  // and its one-way latency
   std::string json_path;
+  std::string events_path;  // the sim's event log, one JSON line per event
+  std::string realism;      // --realism for the server (empty: the world's)
+  std::string wind;         // --wind for the server
   std::string camera_size = "384x216";
   double camera_fps = 15;
+  std::string run_dir;                   // --run-dir: video, summary, events, logs, ground truth
+  std::string record_camera = "follow";  // the server's --record-camera
+  double truth_hz = 10.0;
   bool quiet = false;
   std::string server, uav, gcs;
 };
@@ -58,7 +64,14 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   --gcs-latency S     and deliver the rest S seconds of sim time later (default 0)
   --camera-size WxH   the UAV cameras' size (default 384x216: 39 x 21 deg as the seed's oCam-1CGN-U)
   --camera-fps F      the UAV cameras' frame rate (default 15)
+  --realism LEVEL     field|ideal: the server's conditions (default: the world's; docs/results/field_conditions.md)
+  --wind S,DIR[,GUST] the server's mean wind (m/s, from DIR degrees) and gust peak
   --json FILE         write the summary as JSON
+  --run-dir DIR       everything of the run in DIR (auto: runs/mbzirc2020-seedN-TIME): video.mp4,
+                      summary.json, events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv
+                      (ground truth at --truth-hz, default 10); scripts/plot_run.py DIR plots it
+  --record-camera C   the video's view: follow (default), follow:VEHICLE, top, overview, a camera
+  --events FILE       write the sim's event log (JSON lines) at the end of the run
   --wall-limit S      wall-clock safety bound (default 1800)
   --quiet             only the summary
   --server/--uav/--gcs PATH  programs (default: beside this one / the build tree)
@@ -105,6 +118,18 @@ int main(int argc, char** argv) {
       o.gcs_latency_s = std::atof(v);
     else if (a == "--json")
       o.json_path = v;
+    else if (a == "--run-dir")
+      o.run_dir = v;
+    else if (a == "--record-camera")
+      o.record_camera = v;
+    else if (a == "--truth-hz")
+      o.truth_hz = std::atof(v);
+    else if (a == "--events")
+      o.events_path = v;
+    else if (a == "--realism")
+      o.realism = v;
+    else if (a == "--wind")
+      o.wind = v;
     else if (a == "--camera-size")
       o.camera_size = v;
     else if (a == "--camera-fps")
@@ -119,6 +144,16 @@ int main(int argc, char** argv) {
       return usage();
   }
   if (!(o.gcs_loss >= 0.0 && o.gcs_loss <= 1.0) || !(o.gcs_latency_s >= 0.0)) return usage();
+  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("mbzirc2020", o.seed);
+  if (!o.run_dir.empty()) {
+    std::string why;
+    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
+      std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
+      return 2;
+    }
+    if (o.record.empty()) o.record = o.run_dir + "/video.mp4";
+    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  }
   if (record && o.record.empty()) o.record = "mbzirc2020_seed" + std::to_string(o.seed) + ".mp4";
   if (!record) o.record.clear();
   const size_t x = o.camera_size.find('x');
@@ -139,7 +174,15 @@ int main(int argc, char** argv) {
   spec.world = o.world;
   spec.extra_args = {"--seed",   std::to_string(o.seed),  "--camera", "uav0_front:" + cam_opts,
                      "--camera", "uav1_front:" + cam_opts};
-  if (!o.record.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record});
+  if (!o.record.empty()) {
+    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+  }
+  if (!o.run_dir.empty()) {
+    spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
+    launch.record_truth(o.run_dir, o.truth_hz);
+  }
+  if (!o.realism.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--realism", o.realism});
+  if (!o.wind.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--wind", o.wind});
   std::set<std::string> killed;
   Json summary;
   int popped = 0, balloons_total = 0;
@@ -157,6 +200,9 @@ int main(int argc, char** argv) {
     (void)api.pause();
     (void)api.reset(o.seed);
     (void)api.subscribe_events();
+    // the clock stops by itself when the last program leaves the lockstep or the budget is spent, so
+    // the end of the run (its sim time, the score) is the same every run
+    (void)api.request({{"op", "pause_at"}, {"time_s", o.budget_s}, {"lockstep_empty", true}});
     const std::string lockstep = launch.lockstep_env(0.05);
 
     // 3. the ground station; its link ports, then the server's GCS link relay in front of each
@@ -258,7 +304,7 @@ int main(int argc, char** argv) {
         if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
       }
       if (all_done) break;
-      if (sim_s > o.budget_s) {
+      if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
         launch.say("mbzirc2020-run: sim-time budget spent");
         break;
       }
@@ -272,6 +318,12 @@ int main(int argc, char** argv) {
       }
     }
 
+    // the clock holds by itself at the end (pause_at): score once it does
+    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+         launch.pump(10)) {
+      const auto st = api.status();
+      if (!st || st->value("paused", false)) break;
+    }
     // 7. score from ground truth
     if (const auto b = api.request({{"op", "balloons"}}); b) {
       end_sim_s = b->value("time_s", 0.0);
@@ -283,6 +335,12 @@ int main(int argc, char** argv) {
         }
       }
       summary["balloons"] = b->at("balloons");
+    }
+    if (!o.events_path.empty()) {
+      if (const auto ev = api.request({{"op", "events"}}); ev) {
+        std::ofstream f(o.events_path);
+        for (const Json& e : ev->at("events")) f << e.dump() << "\n";
+      }
     }
     // the relay's counters: what the impairment did to each GCS link
     summary["gcs_links"] = Json::array();
@@ -321,6 +379,8 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
+    summary["mission"] = "mbzirc2020";
+    summary["run_dir"] = o.run_dir;
     summary["seed"] = o.seed;
     summary["popped"] = popped;
     summary["total"] = balloons_total;

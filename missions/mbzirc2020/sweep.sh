@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Seed sweep of the balloon mission (not a ctest: minutes per seed). Two steps, so that any job runner can
 # do the middle:
-#   missions/mbzirc2020/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] > jobs.txt   # one mbzirc2020-run per line
+#   missions/mbzirc2020/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] [REALISM] > jobs.txt   # one mbzirc2020-run per line
+#     (REALISM: field|ideal, given to every run as --realism; default the world's)
 #   parallel -j2 < jobs.txt                                                     # GNU parallel (or: bash jobs.txt)
 #   missions/mbzirc2020/sweep.sh table OUT_DIR                                  # the table, beside seed table 7.1
 # Each seed runs twice: both UAVs, and uav1 killed right after take-off (Competition Day 2).
-# MBZIRC2020_RUN overrides the launcher (default: build/missions/mbzirc2020/mbzirc2020-run).
+# MBZIRC2020_RUN overrides the launcher (default: build/missions/mbzirc2020/mbzirc2020-run); MBZIRC2020_ARGS
+# adds options to every run (e.g. --wind 6,270).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${MBZIRC2020_RUN:-$root/build/missions/mbzirc2020/mbzirc2020-run}
@@ -15,11 +17,12 @@ out=${2:-}
 case "$cmd" in
   jobs)
     first=${3:-1}
+    realism=${5:+--realism $5}
     count=${4:-10}
     mkdir -p "$out"
     for ((s = first; s < first + count; s++)); do
-      echo "$run --no-record --seed $s --budget 400 --quiet --json $out/two_seed$s.json > $out/two_seed$s.log 2>&1"
-      echo "$run --no-record --seed $s --budget 400 --quiet --kill uav1 --json $out/one_seed$s.json > $out/one_seed$s.log 2>&1"
+      echo "$run --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --json $out/two_seed$s.json > $out/two_seed$s.log 2>&1"
+      echo "$run --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --kill uav1 --json $out/one_seed$s.json > $out/one_seed$s.log 2>&1"
     done
     ;;
   table)
@@ -47,7 +50,10 @@ def stats(rows):
     ok = [j for j in rows.values() if j["success"]]
     ts = sorted(j["mission_time_s"] for j in ok)
     if not ts: return "no success"
-    return "%d/%d runs 5/5; time min %.1f, median %.1f, max %.1f s" % (len(ok), len(rows), ts[0], ts[len(ts)//2], ts[-1])
+    med = ts[len(ts)//2] if len(ts) % 2 else 0.5 * (ts[len(ts)//2 - 1] + ts[len(ts)//2])
+    crashed = sum(1 for j in rows.values() if j["crashes"])
+    return "%d/%d runs 5/5 with no crash (%.0f %%); time min %.1f, median %.1f, max %.1f s; %d run(s) with a crash" % (
+        len(ok), len(rows), 100.0 * len(ok) / len(rows), ts[0], med, ts[-1], crashed)
 print()
 print("two UAVs: " + stats(two) + "   (seed table 7.1: 126 s and 162 s, 5/5)")
 print("one UAV:  " + stats(one) + "   (seed table 7.1: 262 s and 306 s, 5/5)")

@@ -17,6 +17,7 @@ constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost
 constexpr double kSameBalloon_m = 1.5;    // a new track this close to the target is the target
 constexpr double kPoppedExclusion_m = 2.5;
 constexpr double kArenaMargin_m = 0.5;
+constexpr double kMaxPierceClimb_m = 1.5;  // a balloon seen further above or below is a bad estimate
 
 std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
   char buf[160];
@@ -316,11 +317,12 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
       const double blade_range = (b.head<2>() - blade_xy).norm();
       closest_blade_m_ = std::min(closest_blade_m_, blade_range);
       const bool seen = in.now_s - target_.last_seen_s < kFreshSighting_s;
-      // the blades ride just above the balloon's centre, never low enough for the gear to meet the
-      // pole
+      // the blades ride just above the balloon's centre as the camera sees it: the balloon's height
+      // and ours come from the same estimate, so its bias (a metre of GPS / baro error in the
+      // field) cancels; the rules' heights would not (the pole top is 0.28 m below the centre)
       const double blade_z =
-          std::clamp(b.z() + config_.pierce_blade_above_centre_m, config_.pole_top_height_m + 0.25,
-                     config_.balloon_centre_height_m + 0.3);
+          std::clamp(b.z() + config_.pierce_blade_above_centre_m,
+                     p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
       double speed = config_.pierce_speed_near_m_s;
       if (seen) {
         coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
@@ -377,8 +379,17 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
         }
       }
       const Eigen::Vector2d to_b = b.head<2>() - p.head<2>();
+      // near the pole, first climb in place to clear its top (0.28 m under the balloon's centre as
+      // the camera saw it: relative, so the estimator's height bias cancels), then go back over it;
+      // the scan altitude is a height in the estimator's frame and may lie a metre lower in truth
+      Eigen::Vector3d goal = pierce_start_enu_m_;
+      if (to_b.norm() < config_.backoff_pole_clearance_m) {
+        const double clear_z = b.z() + config_.backoff_above_centre_m;
+        goal.z() = std::max(goal.z(), clear_z);
+        if (p.z() < clear_z - 0.15) goal.head<2>() = p.head<2>();
+      }
       out.action = VehicleOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = toward(p, pierce_start_enu_m_, config_.transit_speed_m_s);
+      out.velocity_enu_m_s = toward(p, goal, config_.transit_speed_m_s);
       out.yaw_enu_rad = to_b.norm() > 0.5 ? std::atan2(to_b.y(), to_b.x()) : in.yaw_enu_rad;
       if ((pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
         out.airspace = std::optional<AirspaceArea>();

@@ -22,7 +22,7 @@ const char* const kOps[] = {"status",        "pause",           "resume",       
                             "kill_vehicle",  "motor_failure",   "gps_glitch",     "gps_denied",
                             "link_drop",     "gimbal",          "lockstep_join",  "lockstep_leave",
                             "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe",
-                            "camera_blackout", "wind"};
+                            "camera_blackout", "wind",       "pause_at"};
 
 Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
@@ -47,6 +47,7 @@ constexpr FieldSpec kBuiltinFields[] = {
     {"speed_m_s", FieldType::kNumber},   {"from_deg", FieldType::kNumber},
     {"turbulence_sd_m_s", FieldType::kNumber}, {"gust_m_s", FieldType::kNumber},
     {"gust_duration_s", FieldType::kNumber},
+    {"time_s", FieldType::kNumber},      {"lockstep_empty", FieldType::kBoolean},
 };
 
 // ranges of the numbers the built-in ops take
@@ -205,6 +206,12 @@ void ApiServer::on_gate() {
     forward_events();
     drain();
     forward_events();
+    // a pause armed with pause_at holds the clock from the first step at or after its time
+    const double held_by_s = sim_.time_s() + 0.25 * sim_.physics_dt_s();
+    if (!pause_at_s_.empty() && held_by_s >= *pause_at_s_.begin()) {
+      paused_ = true;
+      pause_at_s_.erase(pause_at_s_.begin(), pause_at_s_.upper_bound(held_by_s));
+    }
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (shutdown_) return;
@@ -260,6 +267,7 @@ void ApiServer::drain() {
         break;
       case Request::Kind::kDisconnect:
         if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
+        if (auto it = clients_.find(r.conn); it != clients_.end()) lockstep_left(r.conn, it->second);
         for (ApiExtension* e : extensions_) e->on_disconnect(r.conn);
         if (frames_) frames_->on_disconnect(r.conn);
         clients_.erase(r.conn);
@@ -335,7 +343,22 @@ void ApiServer::complete_ticks() {
   }
 }
 
+void ApiServer::lockstep_left(uint64_t conn, const Client& c) {
+  if (!c.lockstep || !pause_when_lockstep_empty_) return;
+  for (const auto& [k, other] : clients_) {
+    if (k != conn && other.lockstep) return;
+  }
+  // the clock cannot pass the client's next tick without it, so the pause falls at that tick
+  // whenever its leaving is noticed (a done already sent counts as the tick completed): the same
+  // sim time in every run
+  double at_s = std::max(sim_.time_s(), c.next_due_s);
+  if (c.awaiting) at_s = c.done_received ? c.tick_time_s + c.period_s : c.tick_time_s;
+  pause_at_s_.insert(at_s);
+  pause_when_lockstep_empty_ = false;
+}
+
 void ApiServer::drop_lockstep(uint64_t conn, Client& c, const std::string& reason) {
+  lockstep_left(conn, c);
   c.lockstep = false;
   c.awaiting = false;
   send(conn, Json{{"event", "lockstep_dropped"}, {"reason", reason}, {"time", sim_.time_s()}});
@@ -439,6 +462,21 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   } else if (op == "pause") {
     paused_ = true;
     result = {{"time_s", sim_.time_s()}, {"paused", true}};
+  } else if (op == "pause_at") {
+    // arm a pause at a sim time and/or when the last lockstep client leaves (deterministic ends)
+    const auto at = number_field(request, "time_s");
+    const bool empty = request.value("lockstep_empty", false);
+    if (!at && !empty) {
+      fail("missing_field", "\"time_s\" or \"lockstep_empty\": true is required");
+    } else if (at && !std::isfinite(*at)) {
+      fail("bad_field", "\"time_s\" must be a finite sim time");
+    } else {
+      if (at) pause_at_s_.insert(*at);
+      if (empty) pause_when_lockstep_empty_ = true;
+      result = {{"time_s", sim_.time_s()},
+                {"pause_at_s", Json(std::vector<double>(pause_at_s_.begin(), pause_at_s_.end()))},
+                {"lockstep_empty", pause_when_lockstep_empty_}};
+    }
   } else if (op == "resume") {
     paused_ = false;
     steps_remaining_ = 0;
@@ -486,6 +524,8 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
       const uint64_t s = seed.value_or(sim_.config().seed);
       sim_.reset(s);
       events_forwarded_ = 0;
+      pause_at_s_.clear();
+      pause_when_lockstep_empty_ = false;
       if (frames_) frames_->clear_blackouts();  // their times were on the old clock
       for (auto& [k, c] : clients_) {
         c.awaiting = false;
@@ -681,6 +721,7 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
                 {"timeout_s", client.timeout_s}};
     }
   } else if (op == "lockstep_leave") {
+    lockstep_left(conn, client);
     client.lockstep = false;
     client.awaiting = false;
   } else if (op == "done") {

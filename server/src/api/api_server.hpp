@@ -174,6 +174,8 @@ class ApiServer {
   void announce_ticks();
   void complete_ticks();
   void drop_lockstep(uint64_t conn, Client& c, const std::string& reason);
+  // a lockstep client stops being one (leave, drop, disconnect): arms the pause_at lockstep_empty pause
+  void lockstep_left(uint64_t conn, const Client& c);
   bool lockstep_blocked() const;
   double control_dt_s() const { return sim_.control_dt_s(); }
 
@@ -209,6 +211,8 @@ class ApiServer {
   // loop thread only
   std::map<uint64_t, Client> clients_;
   bool paused_ = false;
+  std::set<double> pause_at_s_;             // pause_at: hold the clock once sim time reaches each
+  bool pause_when_lockstep_empty_ = false;  // pause_at: hold it when the last lockstep client leaves
   uint64_t steps_remaining_ = 0;
   std::optional<std::pair<uint64_t, Json>> step_reply_;  // conn, request id: answered when the steps are done
   size_t events_forwarded_ = 0;
