@@ -24,6 +24,9 @@ struct MissionConfig {
   Eigen::Vector3d camera_offset_body_m{0.09, 0.0, -0.04};
   Eigen::Vector3d blade_offset_body_m{0.43, 0.0, 0.0};
 
+  // the estimator's height of the vehicle at rest on flat ground with no baro drift
+  double rest_height_m = 0.1;  // measured: 0.09-0.11 m (baro noise) in the ideal world
+
   // strategy (seed fig. 7.13)
   double takeoff_altitude_m = 5.0;   // "Take-off": until 5 m
   double side_inset_m = 2.0;         // scan line this far inside a long side

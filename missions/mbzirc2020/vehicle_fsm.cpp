@@ -153,8 +153,17 @@ std::optional<BalloonSighting> VehicleFsm::choose_target(const VehicleInputs& in
   return best;
 }
 
-VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
+VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
   VehicleOutputs out;
+  // heights above the take-off spot: the barometer's altitude on the ground before take-off is the
+  // estimator's offset there (its drift, up to a metre in the field, changes over minutes, not
+  // seconds); every height below, the balloons' included, is taken from it
+  if (state_ == VehicleState::kPreflight && !raw.armed && raw.on_ground) {
+    ground_z_m_ = raw.position_enu_m.z() - config_.rest_height_m;
+  }
+  VehicleInputs in = raw;
+  in.position_enu_m.z() -= ground_z_m_;
+  for (BalloonSighting& b : in.balloons) b.position_enu_m.z() -= ground_z_m_;
   now_s_ = in.now_s;
   if (in.armed) armed_seen_ = true;
 
@@ -172,7 +181,7 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& in) {
       }
       return out;
     } else if (c == GcsCommand::kStart && state_ == VehicleState::kPreflight) {
-      enter(VehicleState::kTakeOff, out, "GCS start");
+      enter(VehicleState::kTakeOff, out, fmt("GCS start (ground at z=%.2f m)", raw.position_enu_m.z()));
       out.action = VehicleOutputs::Action::kArmAndTakeOff;
       out.takeoff_altitude_m = config_.takeoff_altitude_m;
       return out;

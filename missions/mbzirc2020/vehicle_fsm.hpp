@@ -116,6 +116,7 @@ class VehicleFsm {
   bool take_over_ = false;
   bool other_side_done_ = false;
   int popped_ = 0;
+  double ground_z_m_ = 0.0;  // the estimator's height on the ground before take-off, less rest height
   std::vector<Eigen::Vector2d> popped_at_;
 
   std::vector<ScanWaypoint> scan_;
