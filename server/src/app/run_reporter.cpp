@@ -61,7 +61,11 @@ void RunReporter::on_status_text(std::size_t vehicle, int severity, const std::s
   // MAV_SEVERITY: 0 emergency, 1 alert, 2 critical, 3 error; the flight controller's failsafes say so
   if (severity > 3) return;
   const bool failsafe = text.find("ailsafe") != std::string::npos && text.find("Cleared") == std::string::npos;
-  if (failsafe) ++failsafes_;
+  if (failsafe) {
+    ++failsafes_;
+    recent_failsafes_.push_back({sim_.time_s(), static_cast<int>(vehicle), "failsafe", text});
+    if (recent_failsafes_.size() > kRecentFailsafes) recent_failsafes_.pop_front();
+  }
   report({sim_.time_s(), static_cast<int>(vehicle), failsafe ? "failsafe" : "message", text});
 }
 

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <ostream>
 #include <string>
 
@@ -47,6 +48,8 @@ class RunReporter {
   std::uint64_t clients_connected() const { return clients_connected_; }
   std::uint64_t crashes() const { return crashes_; }
   std::uint64_t failsafes() const { return failsafes_; }
+  // The last few failsafes reported, oldest first (the recording's overlay shows them). Loop thread only.
+  const std::deque<ReportedEvent>& recent_failsafes() const { return recent_failsafes_; }
 
   // The summary line(s) at exit: sim and wall time, real-time factor, vehicles, crashes, failsafes,
   // clients. extra is appended (e.g. the MAVLink frame counts). Loop thread only.
@@ -62,6 +65,8 @@ class RunReporter {
   std::uint64_t clients_connected_ = 0;
   std::uint64_t crashes_ = 0;
   std::uint64_t failsafes_ = 0;
+  static constexpr std::size_t kRecentFailsafes = 8;
+  std::deque<ReportedEvent> recent_failsafes_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
 };
 

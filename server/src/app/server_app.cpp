@@ -83,10 +83,11 @@ std::shared_ptr<render::CameraDirector> record_director(const std::string& choic
 }
 
 // the overlay of a recorded frame: the loop thread's view at that instant
-std::function<render::OverlayInfo()> overlay_source(sim::Simulation& s, const objects::ObjectSet& objects) {
+std::function<render::OverlayInfo()> overlay_source(sim::Simulation& s, const objects::ObjectSet& objects,
+                                                    const RunReporter& reporter) {
   constexpr double kEventShownS = 4.0;
   constexpr size_t kEventLines = 5;
-  return [&s, balloons = objects.balloons, trucks = !objects.trucks.empty()] {
+  return [&s, &reporter, balloons = objects.balloons, trucks = !objects.trucks.empty()] {
     render::OverlayInfo info;
     info.time_s = s.time_s();
     for (size_t i = 0; i < s.vehicle_count(); ++i) {
@@ -109,6 +110,18 @@ std::function<render::OverlayInfo()> overlay_source(sim::Simulation& s, const ob
       line += sim::event_type_name(it->type);
       if (!it->detail.empty()) line += " " + it->detail.substr(0, 40);
       info.events.insert(info.events.begin(), line);
+    }
+    // the failsafes the flight controllers announced, newest last
+    for (const ReportedEvent& f : reporter.recent_failsafes()) {
+      if (f.time_s < info.time_s - kEventShownS || f.time_s > info.time_s) continue;
+      char t[24];
+      std::snprintf(t, sizeof(t), "%.1f s ", f.time_s);
+      std::string line = t;
+      if (f.vehicle >= 0 && static_cast<size_t>(f.vehicle) < s.vehicle_count()) {
+        line += s.vehicle_name(static_cast<size_t>(f.vehicle)) + " ";
+      }
+      info.events.push_back(line + "FAILSAFE " + f.detail.substr(0, 40));
+      if (info.events.size() > kEventLines) info.events.erase(info.events.begin());
     }
     if (balloons != nullptr) {
       info.counters.push_back("balloons popped " + std::to_string(balloons->popped_count()) + "/" +
@@ -452,7 +465,7 @@ int run_server(const Options& given_options) {
         std::cerr << "uavsim-server: " << e.what() << "\n";
         return 2;
       }
-      if (options.record_overlay) recorder->set_overlay(overlay_source(s, world_objects));
+      if (options.record_overlay) recorder->set_overlay(overlay_source(s, world_objects, reporter));
       if (!options.quiet) {
         std::cout << "uavsim-server: recording camera " << cameras[*cam].config.camera << " to " << *options.record_path
                   << " as " << options.record_camera << " (" << recorder->encoder() << ")\n";
