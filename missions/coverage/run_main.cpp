@@ -583,6 +583,10 @@ int main(int argc, char** argv) {
   }
   std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
               wall_s() > 0 ? sim_s / wall_s() : 0.0);
+  if (!o.run_dir.empty()) {
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
+                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+  }
   std::printf("RESULT: %s coverage=%.4f mission_s=%.1f failed=%d landed=%d/%d\n",
               success ? "SUCCESS" : "FAILURE", coverage, mission_s, failed, landed, survivors);
   std::fflush(stdout);

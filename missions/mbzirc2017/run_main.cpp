@@ -453,6 +453,10 @@ int main(int argc, char** argv) {
   std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
+  if (!o.run_dir.empty()) {
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
+                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+  }
   std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
   std::fflush(stdout);
 

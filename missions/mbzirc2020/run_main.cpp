@@ -375,6 +375,10 @@ int main(int argc, char** argv) {
     std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
+  if (!o.run_dir.empty()) {
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
+                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+  }
   std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
   std::fflush(stdout);
 
