@@ -193,13 +193,18 @@ class ApiClient {
       in_.append(buf.begin(), buf.end());
     }
   }
-  // a request and its reply (events in between skipped); null on timeout
-  Json request(const Json& req) {
+  // a request and its reply, matched by id (events and late replies to earlier requests skipped); null
+  // after 10 s
+  Json request(Json req) {
+    const std::uint64_t id = next_id_++;
+    req["id"] = id;
     send_raw(req.dump() + "\n");
+    const auto t0 = Clock::now();
     std::string l;
-    while (line(&l)) {
+    while (since_s(t0) < 10.0) {
+      if (!line(&l)) continue;
       Json j = Json::parse(l, nullptr, false);
-      if (!j.is_discarded() && !j.contains("event")) return j;
+      if (j.is_object() && j.contains("id") && j["id"] == id) return j;
     }
     return nullptr;
   }
@@ -208,6 +213,7 @@ class ApiClient {
   int fd_ = -1;
   std::string in_;
   std::string hello_;
+  std::uint64_t next_id_ = 1;
 };
 
 // --- the server under test ---
