@@ -8,9 +8,10 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "../support/launcher_run.hpp"
 
 namespace {
 
@@ -21,22 +22,10 @@ constexpr double kBudget_s = 900.0;
 constexpr double kFullCoverage = 0.999;
 
 Json run_flock(const std::string& extra, std::string* output) {
-  static int run = 0;
-  const std::string json_path = ::testing::TempDir() + "coverage_" + std::to_string(getpid()) +
-                                "_" + std::to_string(run++) + ".json";
-  std::remove(json_path.c_str());
-  const std::string cmd =
-      std::string(COVERAGE_RUN) + " --agents 5 --area 150x100 --seed 1 --quiet --budget " +
-      std::to_string(kBudget_s) + " --wall-limit 300 --json " + json_path + " " + extra + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return Json();
-  char buf[1024];
-  while (fgets(buf, sizeof(buf), p) != nullptr) *output += buf;
-  pclose(p);
-  std::ifstream in(json_path);
-  Json j = Json::parse(in, nullptr, false);
-  std::remove(json_path.c_str());
-  return j;
+  return uavsim::tests::run_launcher(std::string(COVERAGE_RUN) +
+                                         " --agents 5 --area 150x100 --seed 1 --quiet --budget " +
+                                         std::to_string(kBudget_s) + " --wall-limit 300",
+                                     extra, output);
 }
 
 void expect_every_survivor_landed(const Json& r, const std::string& out) {

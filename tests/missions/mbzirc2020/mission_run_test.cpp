@@ -6,10 +6,10 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "../support/launcher_run.hpp"
 
 namespace {
 
@@ -19,21 +19,9 @@ constexpr double kBudget_s =
     400.0;  // sim time; the seed's table 7.1: 126-162 s with two UAVs, 262-306 s with one
 
 Json run_mission(const std::string& extra, std::string* output) {
-  const std::string json_path =
-      ::testing::TempDir() + "mbzirc2020_" + std::to_string(getpid()) + ".json";
-  std::remove(json_path.c_str());
-  const std::string cmd = std::string(MBZIRC2020_RUN) + " --no-record --budget " +
-                          std::to_string(kBudget_s) + " --wall-limit 600 --json " + json_path +
-                          " " + extra + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return Json();
-  char buf[1024];
-  while (fgets(buf, sizeof(buf), p) != nullptr) *output += buf;
-  pclose(p);
-  std::ifstream in(json_path);
-  Json j = Json::parse(in, nullptr, false);
-  std::remove(json_path.c_str());
-  return j;
+  return uavsim::tests::run_launcher(std::string(MBZIRC2020_RUN) + " --no-record --budget " +
+                                         std::to_string(kBudget_s) + " --wall-limit 600",
+                                     extra, output);
 }
 
 TEST(Mbzirc2020Mission, TwoUavsPopAllFiveBalloonsWithoutCollision) {
@@ -96,9 +84,7 @@ TEST(Mbzirc2020Mission, SameSeedInTheFieldGivesTheSameRunToTheByte) {
   Json r[2];
   for (int k = 0; k < 2; ++k) {
     r[k] = run_mission("--seed 2 --realism field --budget 30 --events " + events, &out[k]);
-    std::ifstream in(events);
-    log[k].assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    std::remove(events.c_str());
+    log[k] = uavsim::tests::take_file(events);
     ASSERT_TRUE(r[k].is_object()) << out[k];
     r[k].erase("wall_time_s");
     r[k].erase("gcs_links");
