@@ -4,6 +4,7 @@
 #include <string>
 
 #include "event_loop_impl.hpp"
+#include "lockstep_subscription.hpp"
 
 namespace uavsim::client {
 
@@ -64,7 +65,6 @@ struct A2aRadio::Impl {
   EventLoop& loop;
   int vehicle;
   std::uint64_t sink_id = 0;
-  std::optional<Json> reply;
   std::vector<RadioFrame> inbox;
   RadioCounters counters;
 
@@ -86,22 +86,12 @@ struct A2aRadio::Impl {
     inbox.push_back(std::move(f));
     ++counters.received;
   }
-
-  void remove_sink() {
-    auto& sinks = loop.impl().event_sinks;
-    for (auto it = sinks.begin(); it != sinks.end(); ++it) {
-      if (it->second.first == sink_id) {
-        sinks.erase(it);
-        return;
-      }
-    }
-  }
 };
 
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
-  impl_->remove_sink();
+  remove_event_sink(impl_->loop, impl_->sink_id);
   (void)impl_->loop.impl().api_request({{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}},
                                        [](const Json&) {});
 }
@@ -148,29 +138,12 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   if (vehicle < 0) return R::fail(Error::kInvalidArgument, "radio: vehicle index must be >= 0");
   auto impl = std::make_unique<Impl>(loop, vehicle);
   Impl* s = impl.get();
-  auto& li = loop.impl();
-  // the sink before the request: frames may follow the reply at the next gate
-  s->sink_id = li.next_event_sink++;
-  li.event_sinks.emplace("radio",
-                         std::make_pair(s->sink_id, [s](const Json& e) { s->on_event(e); }));
-  if (!li.api_request({{"op", "radio_subscribe"}, {"vehicle", vehicle}},
-                      [s](const Json& j) { s->reply = j; })) {
-    s->remove_sink();
-    return R::fail(Error::kConnectionLost, "radio: no simulator connection");
-  }
-  if (auto w = loop.run_until([s] { return s->reply.has_value(); }, timeout_s,
-                              "radio_subscribe's reply");
-      !w) {
-    s->remove_sink();
-    return R(w.error());
-  }
-  if (s->reply->value("ok", false) != true) {
-    s->remove_sink();
-    const Json e = s->reply->value("error", Json::object());
-    return R::fail(Error::kDenied, "radio of vehicle " + std::to_string(vehicle) + ": " +
-                                       e.value("code", std::string("?")) + ": " +
-                                       e.value("message", std::string("?")));
-  }
+  auto id = subscribe_lockstep_events(
+      loop, "radio", [s](const Json& e) { s->on_event(e); },
+      {{"op", "radio_subscribe"}, {"vehicle", vehicle}}, timeout_s, "radio",
+      "radio of vehicle " + std::to_string(vehicle));
+  if (!id) return R(id.error());
+  s->sink_id = *id;
   return std::unique_ptr<A2aRadio>(new A2aRadio(std::move(impl)));
 }
 

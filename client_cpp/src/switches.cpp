@@ -3,6 +3,7 @@
 #include <optional>
 
 #include "event_loop_impl.hpp"
+#include "lockstep_subscription.hpp"
 
 namespace uavsim::client {
 
@@ -15,7 +16,6 @@ struct PadSwitches::Impl {
   std::string vehicle;
   std::function<void(const SwitchState&)> on_change;
   std::uint64_t sink_id = 0;
-  std::optional<Json> reply;
   SwitchState state;
 
   Impl(EventLoop& l, std::string v) : loop(l), vehicle(std::move(v)) {}
@@ -32,22 +32,12 @@ struct PadSwitches::Impl {
     state = s;
     if (on_change) on_change(state);
   }
-
-  void remove_sink() {
-    auto& sinks = loop.impl().event_sinks;
-    for (auto it = sinks.begin(); it != sinks.end(); ++it) {
-      if (it->second.first == sink_id) {
-        sinks.erase(it);
-        return;
-      }
-    }
-  }
 };
 
 PadSwitches::PadSwitches(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 PadSwitches::~PadSwitches() {
-  impl_->remove_sink();
+  remove_event_sink(impl_->loop, impl_->sink_id);
   (void)impl_->loop.impl().api_request({{"op", "sensor_unsubscribe"}, {"vehicle", impl_->vehicle}},
                                        [](const Json&) {});
 }
@@ -66,29 +56,12 @@ Result<std::unique_ptr<PadSwitches>> PadSwitches::subscribe(
   auto impl = std::make_unique<Impl>(loop, vehicle);
   impl->on_change = std::move(on_change);
   Impl* s = impl.get();
-  auto& li = loop.impl();
-  // the sink before the request: the first reading follows the reply at the next gate
-  s->sink_id = li.next_event_sink++;
-  li.event_sinks.emplace("sensor",
-                         std::make_pair(s->sink_id, [s](const Json& e) { s->on_event(e); }));
-  if (!li.api_request({{"op", "sensor_subscribe"}, {"vehicle", vehicle}},
-                      [s](const Json& j) { s->reply = j; })) {
-    s->remove_sink();
-    return R::fail(Error::kConnectionLost, "pad switches: no simulator connection");
-  }
-  if (auto w = loop.run_until([s] { return s->reply.has_value(); }, timeout_s,
-                              "sensor_subscribe's reply");
-      !w) {
-    s->remove_sink();
-    return R(w.error());
-  }
-  if (s->reply->value("ok", false) != true) {
-    s->remove_sink();
-    const Json e = s->reply->value("error", Json::object());
-    return R::fail(Error::kDenied, "pad switches of " + vehicle + ": " +
-                                       e.value("code", std::string("?")) + ": " +
-                                       e.value("message", std::string("?")));
-  }
+  auto id = subscribe_lockstep_events(
+      loop, "sensor", [s](const Json& e) { s->on_event(e); },
+      {{"op", "sensor_subscribe"}, {"vehicle", vehicle}}, timeout_s, "pad switches",
+      "pad switches of " + vehicle);
+  if (!id) return R(id.error());
+  s->sink_id = *id;
   return std::unique_ptr<PadSwitches>(new PadSwitches(std::move(impl)));
 }
 
