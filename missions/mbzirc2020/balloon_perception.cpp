@@ -8,6 +8,9 @@ namespace {
 constexpr double kMinBalloonHeight_m =
     1.2;  // a "balloon" below this is something green on the ground
 constexpr double kMaxBalloonHeight_m = 4.5;
+// a 5 deg step of the field's gimbal (tau 50 ms, 180 deg/s, 1000 deg/s^2) is within 0.1 deg after
+// ~0.25 s; the command reaches it within a tick
+constexpr double kGimbalSettle_s = 0.35;
 
 vision::BalloonTrackerParams tracker_params() {
   vision::BalloonTrackerParams p;
@@ -26,11 +29,23 @@ BalloonPerception::BalloonPerception(const MissionConfig& config)
     : config_(config), tracker_(tracker_params()) {}
 
 vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& position_enu_m,
-                                                  double yaw_enu_rad) const {
+                                                  double yaw_enu_rad, double pitch_rad) const {
   const Eigen::Quaterniond q_enu_body = vision::q_enu_body_from_rpy(0.0, 0.0, yaw_enu_rad);
   return vision::camera_pose_from_vehicle(position_enu_m, q_enu_body,
-                                          vision::GimbalAngles{0.0, 0.0, true},
+                                          vision::GimbalAngles{pitch_rad, 0.0, true},
                                           config_.camera_offset_body_m);
+}
+
+void BalloonPerception::set_camera_pitch(double pitch_rad, double since_s) {
+  previous_pitch_rad_ = pitch_rad_;
+  pitch_rad_ = pitch_rad;
+  pitch_since_s_ = since_s;
+}
+
+std::optional<double> BalloonPerception::camera_pitch_at(double stamp_s) const {
+  if (stamp_s < pitch_since_s_) return previous_pitch_rad_;
+  if (stamp_s < pitch_since_s_ + kGimbalSettle_s) return std::nullopt;
+  return pitch_rad_;
 }
 
 int BalloonPerception::on_frame(const cv::Mat& bgr, const vision::PinholeIntrinsics& intrinsics,

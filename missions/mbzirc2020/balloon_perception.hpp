@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "mission_config.hpp"
@@ -22,10 +23,17 @@ class BalloonPerception {
  public:
   explicit BalloonPerception(const MissionConfig& config);
 
-  // The camera pose of a level, forward-looking stabilised gimbal on a vehicle at position_enu_m
-  // with heading yaw_enu_rad (roll and pitch are cancelled by the gimbal; the mount offset is a few
-  // centimetres, so the vehicle's tilt moving it is neglected).
-  vision::CameraPose camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad) const;
+  // The camera pose of the forward-looking stabilised gimbal (at the config's elevation) on a
+  // vehicle at position_enu_m with heading yaw_enu_rad (roll and pitch are cancelled by the gimbal;
+  // the mount offset is a few centimetres, so the vehicle's tilt moving it is neglected).
+  vision::CameraPose camera_pose(const Eigen::Vector3d& position_enu_m, double yaw_enu_rad,
+                                 double pitch_rad) const;
+
+  // The gimbal was told at loop time since_s to look at this elevation (it was level before the
+  // first call). A frame exposed before since_s was taken at the old one; one exposed while the
+  // gimbal slews (kGimbalSettle_s) has no known pitch.
+  void set_camera_pitch(double pitch_rad, double since_s);
+  std::optional<double> camera_pitch_at(double stamp_s) const;
 
   // (frame, its intrinsics, stamp, camera pose at the stamp) => tracks updated. Returns the
   // detections' count in this frame.
@@ -41,6 +49,8 @@ class BalloonPerception {
   vision::PinholeIntrinsics intrinsics_;
   vision::BalloonTracker tracker_;
   std::map<int, BalloonSighting> seen_;  // by track id
+  double pitch_rad_ = 0.0, previous_pitch_rad_ = 0.0;
+  double pitch_since_s_ = -1e9;
 };
 
 }  // namespace uavsim::missions::mbzirc2020

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "vehicle_fsm.hpp"
+
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
@@ -141,6 +143,24 @@ std::vector<GcsOutgoing> GroundStation::step(double now_s, std::vector<std::stri
         out.push_back({j, kTopicState, encode_command(GcsCommand::kTakeOver)});
         note("uav" + std::to_string(j) + " takes over the side of uav" + std::to_string(i));
       }
+    }
+  }
+
+  // a UAV that has done its own side's scans while balloons remain (in 6 of 15 two-UAV seeds one
+  // UAV popped four while the other had landed) goes on to the other half; its pierces there are
+  // granted below like any other, apart from the UAV still at work on that side
+  if (static_cast<int>(popped_.size()) < config_.balloon_count) {
+    for (int i = 0; i < n; ++i) {
+      Uav& u = uavs_[static_cast<size_t>(i)];
+      if (u.out || u.retask_sent || u.status.landed ||
+          u.status.state != static_cast<uint8_t>(VehicleState::kScansDone)) {
+        continue;
+      }
+      u.retask_sent = true;
+      out.push_back({i, kTopicState, encode_command(GcsCommand::kReTask)});
+      note("uav" + std::to_string(i) + " has done its scans, " + std::to_string(popped_.size()) +
+           "/" + std::to_string(config_.balloon_count) +
+           " balloons reported: re-tasked to the other half");
     }
   }
 

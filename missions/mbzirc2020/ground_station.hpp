@@ -1,6 +1,7 @@
 // The ground station's part of the balloon mission (seed 7.2), as a pure class: it starts the UAVs,
-// allocates airspace, notices a failed UAV and hands its side to the others, and lands everyone
-// once the five balloons are reported popped. The UDP/event-loop shell is gcs_main.cpp.
+// allocates airspace, notices a failed UAV and hands its side to the others, re-tasks a UAV whose
+// own scans are done while balloons remain to the other half, and lands everyone once the five
+// balloons are reported popped. The UDP/event-loop shell is gcs_main.cpp.
 //
 // Airspace (seed 7.2, note 40): "The ground control software receives AIRSPACE messages from both
 // UAVs and, therefore, knows if they are trying to get too close. If they are sufficiently apart,
@@ -63,6 +64,7 @@ class GroundStation {
     double last_status_s = -1.0;
     bool out = false;
     bool take_over_sent = false;
+    bool retask_sent = false;
     std::optional<AirspaceArea> pending;  // requested, not yet granted
     double pending_since_s = 0.0;
     std::optional<AirspaceArea> granted;

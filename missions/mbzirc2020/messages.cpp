@@ -26,7 +26,7 @@ double get_double(const std::vector<uint8_t>& in, size_t at) {
 std::vector<uint8_t> encode_command(GcsCommand c) { return {static_cast<uint8_t>(c)}; }
 
 std::optional<GcsCommand> decode_command(const std::vector<uint8_t>& p) {
-  if (p.size() != 1 || p[0] < 1 || p[0] > 3) return std::nullopt;
+  if (p.size() != 1 || p[0] < 1 || p[0] > 4) return std::nullopt;
   return static_cast<GcsCommand>(p[0]);
 }
 

@@ -1,10 +1,11 @@
 // The mission's ground-station topics (seed 6.3 protocol, seed 7.2 topics) and their payloads.
 // Topic ids with the high bit set are latest-only (a newer message replaces an unacknowledged older
 // one).
-//   STATE     GCS -> UAV, queued: start / land / take over the other side (seed: "start, monitor
-//   and land") AIRSPACE  both ways, latest-only: a UAV's request (its position and the balloon it
-//   will pierce), echoed
-//             unchanged by the GCS when granted; all NaN releases (seed 7.2, note 40)
+//   STATE     GCS -> UAV, queued: start / land / take over the other side / re-task (seed:
+//             "start, monitor and land")
+//   AIRSPACE  both ways, latest-only: a UAV's request (its position and the balloon it will
+//             pierce), echoed unchanged by the GCS when granted; all NaN releases (seed 7.2, note
+//             40)
 //   STATUS    UAV -> GCS, latest-only: FSM state, flags, position, balloons it believes it popped
 //   POPPED    UAV -> GCS, queued: where a balloon was pierced
 // Payloads are big-endian (doubles as IEEE-754 bit patterns), so any ground station can decode
@@ -23,7 +24,8 @@ inline constexpr uint16_t kTopicAirspace = 0x8002;
 inline constexpr uint16_t kTopicStatus = 0x8003;
 inline constexpr uint16_t kTopicPopped = 0x0004;
 
-enum class GcsCommand : uint8_t { kStart = 1, kLand = 2, kTakeOver = 3 };
+// kReTask: your own scans are done and balloons remain: scan the other half too (vehicle_fsm.hpp)
+enum class GcsCommand : uint8_t { kStart = 1, kLand = 2, kTakeOver = 3, kReTask = 4 };
 
 // An airspace request: the requester's position and the point it will fly to (x, y in the field
 // frame). Unset (std::nullopt) is the release, sent as NaN on the wire as the seed does.

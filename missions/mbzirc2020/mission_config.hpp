@@ -23,6 +23,14 @@ struct MissionConfig {
   // airframe (models/vehicles/quad.xml): camera mount and the middle of the blade strip, body FLU
   Eigen::Vector3d camera_offset_body_m{0.09, 0.0, -0.04};
   Eigen::Vector3d blade_offset_body_m{0.43, 0.0, 0.0};
+  // the forward camera's elevation on its stabilised gimbal (negative: down). The seed's camera
+  // looked level; ours looks 5 deg down because a balloon passing 3.5 m in front of the scan line
+  // spans +-4.9 deg itself, leaving +-5.6 deg of the 21 deg vertical field of view for its centre:
+  // level, the two scan legs (camera at 2.76 / 3.26 m) see centres 2.42-3.10 / 2.92-3.60 m there,
+  // and a low balloon (2.2-2.4 m in the field) is seen by neither; 5 deg down they see
+  // 2.11-2.80 / 2.61-3.30 m, the whole +-0.5 m spread about 2.7 m. Far balloons (a few degrees
+  // below the axis) stay well inside.
+  double camera_pitch_rad = -5.0 * 3.14159265358979323846 / 180.0;
 
   // the estimator's height of the vehicle at rest on flat ground with no baro drift
   double rest_height_m = 0.1;  // measured: 0.09-0.11 m (baro noise) in the ideal world
@@ -54,6 +62,12 @@ struct MissionConfig {
   // seen) before moving back over its pole
   double backoff_pole_clearance_m = 2.5;
   double backoff_above_centre_m = 0.6;
+  // re-tasking (vehicle_fsm.hpp): the line the other half is scanned from lies this far back from
+  // the arena's middle, in the UAV's own (scanned) half, at an altitude over every balloon; from
+  // there, 5 deg down, the camera sees balloons 9-40 m ahead (the detector's 4 px radius at 40 m)
+  double cross_line_back_m = 6.0;
+  double cross_altitude_m = 5.0;
+  double retask_wait_s = 10.0;          // no reply this long in Scans Done: land
   double allocation_wait_lost_s = 2.0;  // balloon unseen this long while waiting: cancel (NaN)
   double max_target_range_m = 60.0;
   // each side belongs to one UAV (seed 7.2): a UAV pierces the balloons nearer its side, plus this

@@ -110,7 +110,8 @@ int main(int argc, char** argv) {
     pose = {loop.now(), t.position_enu_m, t.velocity_enu_m_s, enu_yaw_from_ned(t.yaw_rad)};
   });
 
-  // the forward camera on its stabilised gimbal: level, straight ahead (seed 7.2)
+  // the forward camera on its stabilised gimbal: straight ahead, a few degrees down (seed 7.2:
+  // level; mission_config.hpp says why)
   const MissionConfig config;
   BalloonPerception perception(config);
   CameraConfig cc;
@@ -127,7 +128,10 @@ int main(int argc, char** argv) {
     k.cy_px = f.intrinsics.cy;
     k.width_px = f.image.cols;
     k.height_px = f.image.rows;
-    perception.on_frame(f.image, k, f.stamp_s, perception.camera_pose(p, pose.yaw_enu_rad));
+    const std::optional<double> pitch_rad = perception.camera_pitch_at(f.stamp_s);
+    if (!pitch_rad) return;  // the gimbal is slewing
+    perception.on_frame(f.image, k, f.stamp_s,
+                        perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
   });
   if (!sub) {
     log("camera " + camera + ": " + sub.message());
@@ -138,8 +142,20 @@ int main(int argc, char** argv) {
     log("wait ready: " + r.message());
     return 1;
   }
-  if (auto r = uav.point_gimbal(0.0, 0.0); !r)
-    log("gimbal: " + r.message() + " (keeping its default)");
+  // the gimbal follows the FSM's wanted elevation; if it refuses, the camera stays level
+  bool gimbal_ok = true;
+  double gimbal_pitch_rad = 0.0;
+  auto point_camera = [&](double pitch_rad) {
+    if (!gimbal_ok || pitch_rad == gimbal_pitch_rad) return;
+    perception.set_camera_pitch(pitch_rad, loop.now());
+    if (auto r = uav.point_gimbal(pitch_rad * 180.0 / 3.14159265358979323846, 0.0); !r) {
+      log("gimbal: " + r.message() + " (keeping it level)");
+      gimbal_ok = false;
+      perception.set_camera_pitch(0.0, loop.now());
+    }
+    gimbal_pitch_rad = pitch_rad;
+  };
+  point_camera(config.camera_pitch_rad);
   const Eigen::Vector2d home = uav.telemetry().position_enu_m.head<2>();
   const Side side = index == 0 ? Side::kSouth : Side::kNorth;
   VehicleFsm fsm(config, index, side, home);
@@ -163,6 +179,7 @@ int main(int argc, char** argv) {
     in.armed = t.armed;
     in.on_ground = t.landed == LandedState::kOnGround;
     in.position_enu_m = t.position_enu_m;
+    in.velocity_enu_m_s = t.velocity_enu_m_s;
     in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
     in.balloons = perception.sightings();
     for (const GcsMessage& m : link->take_received()) {
@@ -175,6 +192,7 @@ int main(int argc, char** argv) {
 
     const VehicleOutputs out = fsm.step(in);
     if (!out.note.empty()) log(out.note);
+    point_camera(out.camera_pitch_rad);
 
     // outputs: setpoints and GCS messages
     switch (out.action) {
@@ -193,8 +211,9 @@ int main(int argc, char** argv) {
           log("velocity: " + r.message());
         }
         break;
-      case VehicleOutputs::Action::kLand:
-        if (auto r = uav.land(false); !r) log("land: " + r.message());
+      case VehicleOutputs::Action::kDisarm:
+        // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
+        if (auto r = uav.disarm(true); !r) log("disarm: " + r.message());
         break;
     }
     if (out.airspace) link->publish(kTopicAirspace, encode_airspace(*out.airspace));

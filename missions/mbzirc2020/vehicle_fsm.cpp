@@ -18,6 +18,12 @@ constexpr double kSameBalloon_m = 1.5;    // a new track this close to the targe
 constexpr double kPoppedExclusion_m = 2.5;
 constexpr double kArenaMargin_m = 0.5;
 constexpr double kMaxPierceClimb_m = 1.5;  // a balloon seen further above or below is a bad estimate
+// The heading setpoint turns at most this fast. The flight controller's mixer keeps yaw torque
+// before collective thrust (ArduCopter keeps some thrust headroom first): a setpoint that jumps by
+// 90-180 deg saturates it and the vehicle sinks. Field seed 20 (two UAVs): backing off past a
+// balloon it had missed by 1.6 m, the heading to the balloon swung through 140 deg in 3 s; the UAV
+// sank from 3.4 m into the ground at 3.1 m/s while commanded to climb.
+constexpr double kMaxYawRate_rad_s = 1.0;
 
 std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
   char buf[160];
@@ -51,6 +57,8 @@ const char* vehicle_state_name(VehicleState s) {
       return "Landed";
     case VehicleState::kFailed:
       return "Failed";
+    case VehicleState::kScansDone:
+      return "Scans Done";
   }
   return "?";
 }
@@ -64,6 +72,11 @@ VehicleFsm::VehicleFsm(const MissionConfig& config, int index, Side side,
       landing_spot_enu_m_(landing_spot_enu_m) {}
 
 double VehicleFsm::line_y_m() const {
+  if (cross_) {
+    const double mid_y = 0.5 * (config_.arena_y_min_m + config_.arena_y_max_m);
+    return home_side_ == Side::kSouth ? mid_y - config_.cross_line_back_m
+                                      : mid_y + config_.cross_line_back_m;
+  }
   return side_ == Side::kSouth ? config_.arena_y_min_m + config_.side_inset_m
                                : config_.arena_y_max_m - config_.side_inset_m;
 }
@@ -71,7 +84,7 @@ double VehicleFsm::line_y_m() const {
 double VehicleFsm::inward_yaw_rad() const { return side_ == Side::kSouth ? kPi / 2 : -kPi / 2; }
 
 bool VehicleFsm::in_own_half(const Eigen::Vector3d& p) const {
-  if (take_over_) return true;
+  if (take_over_ || cross_) return true;
   const double mid_y = 0.5 * (config_.arena_y_min_m + config_.arena_y_max_m);
   return home_side_ == Side::kSouth ? p.y() <= mid_y + config_.own_half_margin_m
                                     : p.y() >= mid_y - config_.own_half_margin_m;
@@ -89,6 +102,8 @@ void VehicleFsm::plan_scan() {
   const double a = index_ == 0 ? config_.scan_altitude_low_m : config_.scan_altitude_high_m;
   const double b = index_ == 0 ? config_.scan_altitude_high_m : config_.scan_altitude_low_m;
   scan_ = {{first, a}, {second, b}, {centre_x, a}};
+  // re-tasked: one sweep each way over the balloons, looking at the other half
+  if (cross_) scan_ = {{first, config_.cross_altitude_m}, {second, config_.cross_altitude_m}};
   scan_leg_ = 0;
 }
 
@@ -153,8 +168,48 @@ std::optional<BalloonSighting> VehicleFsm::choose_target(const VehicleInputs& in
   return best;
 }
 
+// "Whenever a green balloon is detected, a transition to the Area Allocation Request is immediately
+// executed": the request is the segment from here to just past the balloon
+void VehicleFsm::request_airspace(const VehicleInputs& in, const BalloonSighting& b,
+                                  VehicleOutputs& out) {
+  const Eigen::Vector3d& p = in.position_enu_m;
+  target_ = b;
+  pierce_start_enu_m_ = {p.x(), line_y_m(), hold_altitude_m_};
+  const Eigen::Vector2d dir = (b.position_enu_m.head<2>() - p.head<2>()).normalized();
+  request_ =
+      AirspaceArea{p.head<2>(), b.position_enu_m.head<2>() + config_.pierce_overshoot_m * dir};
+  out.airspace = request_;
+  hover(in, out, inward_yaw_rad());
+  enter(VehicleState::kAreaAllocationRequest, out,
+        fmt("balloon at (%.1f, %.1f, %.1f)", b.position_enu_m.x(), b.position_enu_m.y(),
+            b.position_enu_m.z()));
+}
+
 VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
+  VehicleOutputs out = decide(raw);
+  limit_yaw_rate(raw, out);
+  return out;
+}
+
+void VehicleFsm::limit_yaw_rate(const VehicleInputs& in, VehicleOutputs& out) {
+  if (out.action != VehicleOutputs::Action::kVelocity) {
+    yaw_cmd_s_ = -1.0;  // the next setpoint starts from where the vehicle points
+    return;
+  }
+  if (yaw_cmd_s_ < 0.0) {
+    yaw_cmd_rad_ = in.yaw_enu_rad;
+    yaw_cmd_s_ = in.now_s;
+  }
+  const double max_step_rad = kMaxYawRate_rad_s * std::max(in.now_s - yaw_cmd_s_, 0.0);
+  yaw_cmd_rad_ = wrap_pi(yaw_cmd_rad_ + std::clamp(wrap_pi(out.yaw_enu_rad - yaw_cmd_rad_),
+                                                   -max_step_rad, max_step_rad));
+  yaw_cmd_s_ = in.now_s;
+  out.yaw_enu_rad = yaw_cmd_rad_;
+}
+
+VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
   VehicleOutputs out;
+  out.camera_pitch_rad = config_.camera_pitch_rad;
   // heights above the take-off spot: the barometer's altitude on the ground before take-off is the
   // estimator's offset there (its drift, up to a metre in the field, changes over minutes, not
   // seconds); every height below, the balloons' included, is taken from it
@@ -172,6 +227,9 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
     if (c == GcsCommand::kTakeOver && !take_over_) {
       take_over_ = true;
       out.note = "take over: the other UAV is out, every balloon is ours";
+    } else if (c == GcsCommand::kReTask && !retask_) {
+      retask_ = true;
+      out.note = "re-task: the other half's balloons are ours too";
     } else if (c == GcsCommand::kLand && state_ != VehicleState::kLand &&
                state_ != VehicleState::kLanded && state_ != VehicleState::kFailed) {
       if (state_ == VehicleState::kPreflight) {
@@ -218,8 +276,11 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
       // heading is adjusted so that the camera points towards the inner part of the arena"
       const Eigen::Vector3d target(0.5 * (config_.arena_x_min_m + config_.arena_x_max_m),
                                    line_y_m(), hold_altitude_m_);
+      // from a scan line (take-over, re-task) climb over the balloons before crossing the arena
+      Eigen::Vector3d goal = target;
+      if (p.z() < hold_altitude_m_ - 0.5) goal.head<2>() = p.head<2>();
       out.action = VehicleOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = toward(p, target, config_.transit_speed_m_s);
+      out.velocity_enu_m_s = toward(p, goal, config_.transit_speed_m_s);
       out.yaw_enu_rad = inward_yaw_rad();
       if ((target.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
         plan_scan();
@@ -246,16 +307,7 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
       // "Whenever a green balloon is detected, a transition to the Area Allocation Request is
       // immediately executed"
       if (auto b = choose_target(in)) {
-        target_ = *b;
-        pierce_start_enu_m_ = {p.x(), line_y_m(), hold_altitude_m_};
-        const Eigen::Vector2d dir = (b->position_enu_m.head<2>() - p.head<2>()).normalized();
-        request_ = AirspaceArea{p.head<2>(),
-                                b->position_enu_m.head<2>() + config_.pierce_overshoot_m * dir};
-        out.airspace = request_;
-        hover(in, out, inward_yaw_rad());
-        enter(VehicleState::kAreaAllocationRequest, out,
-              fmt("balloon at (%.1f, %.1f, %.1f)", b->position_enu_m.x(), b->position_enu_m.y(),
-                  b->position_enu_m.z()));
+        request_airspace(in, *b, out);
         break;
       }
       if (scan_leg_ >= scan_.size()) {
@@ -268,7 +320,13 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
           enter(VehicleState::kGoSideCenter, out, "scans done, taking over the other side");
           break;
         }
-        start_landing(out, "two full scans done");
+        if (!take_over_ && !cross_) {
+          // balloons may be left (the GCS lands everyone once all five are reported): ask it
+          hover(in, out, inward_yaw_rad());
+          enter(VehicleState::kScansDone, out, "own scans done: waiting for the GCS");
+          break;
+        }
+        start_landing(out, cross_ ? "the other half scanned" : "two full scans done");
         break;
       }
       const ScanWaypoint& w = scan_[scan_leg_];
@@ -284,6 +342,26 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
       break;
     }
 
+    case VehicleState::kScansDone: {
+      if (auto b = choose_target(in)) {
+        request_airspace(in, *b, out);
+        break;
+      }
+      if (retask_) {
+        cross_ = true;
+        plan_scan();
+        hold_altitude_m_ = config_.cross_altitude_m;
+        enter(VehicleState::kGoSideCenter, out, "re-tasked: to the other half, over the balloons");
+        break;
+      }
+      out.action = VehicleOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = toward(p, {p.x(), line_y_m(), hold_altitude_m_}, 0.0);
+      out.yaw_enu_rad = inward_yaw_rad();
+      if (in.now_s - state_since_s_ > config_.retask_wait_s)
+        start_landing(out, "no re-task from the GCS");
+      break;
+    }
+
     case VehicleState::kAreaAllocationRequest: {
       // follow the balloon (a new track id close to it is the same balloon)
       for (const BalloonSighting& b : in.balloons) {
@@ -293,12 +371,19 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
         }
       }
       hover(in, out, inward_yaw_rad());
+      // from over the balloons (re-tasked), go down to the blades' height while waiting
+      if (cross_) {
+        out.velocity_enu_m_s = toward(
+            p, {p.x(), p.y(), target_.position_enu_m.z() + config_.pierce_blade_above_centre_m},
+            0.0);
+      }
       bool granted = false;
       for (const auto& r : in.airspace_replies)
         granted = granted || (r && request_ && *r == *request_);
       if (granted) {
         airspace_held_ = true;
         closest_blade_m_ = 1e9;
+        pierce_level_camera_ = false;
         coast_dir_ = (target_.position_enu_m.head<2>() - p.head<2>()).normalized();
         enter(VehicleState::kPierce, out, "airspace granted");
       } else if (in.now_s - target_.last_seen_s > config_.allocation_wait_lost_s) {
@@ -348,6 +433,11 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
       const double dz = std::abs(blade_z - p.z());
       if (blade_range < 2.0 * config_.pierce_slow_range_m)
         speed *= std::clamp(1.0 - (dz - 0.1) / 0.3, 0.15, 1.0);
+      if (dz > 0.6) speed = 0.0;  // far above or below (re-tasked, over the balloons): height first
+      // the camera levels once the blades are at the balloon's height (then the balloon is on the
+      // optical axis and stays in view up to ~1.4 m; 5 deg down it would leave at ~2.7 m)
+      pierce_level_camera_ = pierce_level_camera_ || dz < 0.3;
+      out.camera_pitch_rad = pierce_level_camera_ ? 0.0 : config_.camera_pitch_rad;
       const double along_m =
           (blade_xy - b.head<2>()).dot(coast_dir_);  // > 0: blades past the centre
       out.action = VehicleOutputs::Action::kVelocity;
@@ -399,7 +489,9 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
       }
       out.action = VehicleOutputs::Action::kVelocity;
       out.velocity_enu_m_s = toward(p, goal, config_.transit_speed_m_s);
-      out.yaw_enu_rad = to_b.norm() > 0.5 ? std::atan2(to_b.y(), to_b.x()) : in.yaw_enu_rad;
+      // the pierce's heading: straight back along the line, the camera towards where the balloon
+      // was (facing the balloon itself swings the heading round when the pierce passed it close by)
+      out.yaw_enu_rad = std::atan2(coast_dir_.y(), coast_dir_.x());
       if ((pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m) {
         out.airspace = std::optional<AirspaceArea>();
         airspace_held_ = false;
@@ -435,10 +527,36 @@ VehicleOutputs VehicleFsm::step(const VehicleInputs& raw) {
         out.yaw_enu_rad = in.yaw_enu_rad;
         if ((spot.head<2>() - p.head<2>()).norm() < 0.5) {
           land_phase_ = 2;
-          out.action = VehicleOutputs::Action::kLand;
+          descent_stopped_s_ = -1.0;
           out.note = "over the landing spot: descending";
         }
-      } else if (!in.armed && in.on_ground) {
+      } else if (land_phase_ == 2) {
+        // our own descent, on velocity alone near the ground, and the motors off at touchdown. The
+        // autopilot's LAND holds the position where it began; in the field (GPS bias wandering, a
+        // gust) that hold leans the vehicle against the ground once a leg touches: field seed 1
+        // (uav1) sat 1.5 s on one leg at 27 deg roll, then tipped a propeller into the ground
+        // before LAND's land detector (1 s of low thrust) disarmed it.
+        const double h = p.z();  // above the take-off spot
+        Eigen::Vector3d v(0.0, 0.0, h > 2.0 ? -1.0 : -0.5);
+        if (h > 1.0) {
+          v.head<2>() =
+              toward(p, {landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), h}, 0.5).head<2>();
+        }
+        out.action = VehicleOutputs::Action::kVelocity;
+        out.velocity_enu_m_s = v;
+        out.yaw_enu_rad = in.yaw_enu_rad;
+        // touchdown: a commanded descent that has stopped near the ground (anywhere, for longer:
+        // the baro may have drifted), or the autopilot's land detector
+        const bool stopped = in.velocity_enu_m_s.z() > -0.1;
+        if (!stopped) descent_stopped_s_ = -1.0;
+        if (stopped && descent_stopped_s_ < 0.0) descent_stopped_s_ = in.now_s;
+        const double stopped_s = descent_stopped_s_ < 0.0 ? 0.0 : in.now_s - descent_stopped_s_;
+        if (in.on_ground || (h < 1.0 && stopped_s > 0.5) || stopped_s > 3.0) {
+          land_phase_ = 3;
+          out.action = VehicleOutputs::Action::kDisarm;
+          out.note = fmt("touchdown at %.2f m: motors off", h);
+        }
+      } else if (!in.armed) {
         enter(VehicleState::kLanded, out, "motors off");
       }
       break;

@@ -12,7 +12,10 @@
 //
 // Beyond the seed: TakeOver (GCS STATE command when the other UAV has failed, as on Competition Day
 // 2) lifts the own-half rule and, once this side's scans are done, sends the UAV to scan the other
-// side.
+// side. Re-tasking: a UAV whose own scans are done while balloons remain waits in Scans Done (its
+// STATUS tells the GCS); the GCS's ReTask sends it, over the balloons, to a line short of the
+// arena's middle, from where it scans the other half and pierces what it finds there through the
+// GCS's airspace allocator while the other UAV is still at work (without a reply it lands).
 #pragma once
 
 #include <Eigen/Core>
@@ -37,6 +40,7 @@ enum class VehicleState : uint8_t {
   kLand,
   kLanded,
   kFailed,
+  kScansDone,  // own scans done, balloons left: waiting for the GCS (re-task or land)
 };
 const char* vehicle_state_name(VehicleState s);  // "Blind Scan", ...
 
@@ -53,6 +57,7 @@ struct VehicleInputs {
   bool armed = false;
   bool on_ground = true;
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
   double yaw_enu_rad = 0.0;
   // camera
   std::vector<BalloonSighting> balloons;
@@ -62,11 +67,14 @@ struct VehicleInputs {
 };
 
 struct VehicleOutputs {
-  enum class Action { kNone, kArmAndTakeOff, kVelocity, kLand };
+  enum class Action { kNone, kArmAndTakeOff, kVelocity, kDisarm };
   Action action = Action::kNone;
   Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();  // kVelocity
   double yaw_enu_rad = 0.0;                                    // kVelocity
   double takeoff_altitude_m = 0.0;                             // kArmAndTakeOff
+  // the gimbal's wanted elevation (negative: down); level while piercing, so that the balloon stays
+  // in view up to the blades, a few degrees down otherwise (mission_config.hpp)
+  double camera_pitch_rad = 0.0;
   // GCS messages to publish: an airspace request / release (nullopt inside), a popped balloon
   std::optional<std::optional<AirspaceArea>> airspace;
   std::optional<Eigen::Vector2d> popped_enu_m;
@@ -87,18 +95,22 @@ class VehicleFsm {
   Side side() const { return side_; }
   int popped() const { return popped_; }
   bool take_over() const { return take_over_; }
+  bool crossing() const { return cross_; }
 
  private:
   struct ScanWaypoint {
     double x_m;
     double altitude_m;
   };
+  VehicleOutputs decide(const VehicleInputs& in);
+  void limit_yaw_rate(const VehicleInputs& in, VehicleOutputs& out);
   void enter(VehicleState s, VehicleOutputs& out, const std::string& why);
   void plan_scan();
   double line_y_m() const;
   double inward_yaw_rad() const;
   bool in_own_half(const Eigen::Vector3d& p) const;
   std::optional<BalloonSighting> choose_target(const VehicleInputs& in) const;
+  void request_airspace(const VehicleInputs& in, const BalloonSighting& b, VehicleOutputs& out);
   Eigen::Vector3d toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target,
                          double max_speed_m_s) const;
   void hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const;
@@ -115,6 +127,8 @@ class VehicleFsm {
   bool armed_seen_ = false;
   bool take_over_ = false;
   bool other_side_done_ = false;
+  bool retask_ = false;  // the GCS's ReTask arrived
+  bool cross_ = false;   // scanning the other half from the middle (re-tasked)
   int popped_ = 0;
   double ground_z_m_ = 0.0;  // the estimator's height on the ground before take-off, less rest height
   std::vector<Eigen::Vector2d> popped_at_;
@@ -131,10 +145,16 @@ class VehicleFsm {
   Eigen::Vector2d coast_dir_ = Eigen::Vector2d::UnitY();
   double closest_blade_m_ = 1e9;
   bool pierce_reached_ = false;
+  bool pierce_level_camera_ = false;
   bool seen_again_ = false;
 
-  // landing: climb, transit, land
+  // landing: climb, transit, descend, motors off
   int land_phase_ = 0;
+  double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
+
+  // the heading setpoint last sent and when (NaN: none yet), for its rate limit
+  double yaw_cmd_rad_ = 0.0;
+  double yaw_cmd_s_ = -1.0;
 };
 
 }  // namespace uavsim::missions::mbzirc2020

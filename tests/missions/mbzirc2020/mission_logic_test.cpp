@@ -126,6 +126,53 @@ TEST(Mbzirc2020GroundStation, SilentUavIsOut) {
   EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kTakeOver)));
 }
 
+// Re-tasking: a UAV in Scans Done while balloons remain is sent to the other half, once; its
+// pierce there is granted only apart from the UAV still at work on that side; once all five are
+// reported, a UAV whose scans are done is landed instead.
+TEST(Mbzirc2020GroundStation, ReTasksAUavWhoseScansAreDoneWhileBalloonsRemain) {
+  GroundStation gs({}, 2);
+  gs.on_status(0, status(true), 0.0);
+  gs.on_status(1, status(true), 0.0);
+  gs.step(0.1, nullptr);
+  UavStatus done = status(false, {0, -28, 3});
+  done.state = static_cast<uint8_t>(VehicleState::kScansDone);
+  UavStatus scanning = status(false, {20, 28, 3});
+  scanning.state = static_cast<uint8_t>(VehicleState::kBlindScan);
+  gs.on_popped(0, {-20, -20}, 50.0);
+  gs.on_popped(1, {20, 20}, 50.0);
+  gs.on_status(0, done, 60.0);
+  gs.on_status(1, scanning, 60.0);
+  auto out = gs.step(60.1, nullptr);
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kReTask)));
+  EXPECT_FALSE(has(out, 1, kTopicState, encode_command(GcsCommand::kReTask)));
+  gs.on_status(0, done, 60.5);
+  EXPECT_FALSE(has(gs.step(60.6, nullptr), 0, kTopicState, encode_command(GcsCommand::kReTask)));
+
+  // from the cross line (y = -6) to a balloon 3 m from the other UAV: it waits ...
+  UavStatus crossing = status(false, {0, -6, 5});
+  crossing.state = static_cast<uint8_t>(VehicleState::kAreaAllocationRequest);
+  gs.on_status(0, crossing, 61.0);
+  const AirspaceArea near_other{{0, -6}, {18, 26}};
+  gs.on_airspace(0, near_other, 61.0);
+  EXPECT_FALSE(has(gs.step(61.1, nullptr), 0, kTopicAirspace, encode_airspace(near_other)));
+  // ... until the other UAV has moved on along its line
+  scanning.position_enu_m = {35, 28, 3};
+  gs.on_status(1, scanning, 62.0);
+  EXPECT_TRUE(has(gs.step(62.1, nullptr), 0, kTopicAirspace, encode_airspace(near_other)));
+
+  // all five reported: a UAV done with its scans is landed, not re-tasked
+  GroundStation all({}, 2);
+  all.on_status(0, status(true), 0.0);
+  all.on_status(1, status(true), 0.0);
+  all.step(0.1, nullptr);
+  for (int i = 0; i < 5; ++i) all.on_popped(1, {10.0 * i, 10.0}, 40.0);
+  all.on_status(0, done, 50.0);
+  all.on_status(1, scanning, 50.0);
+  out = all.step(50.1, nullptr);
+  EXPECT_FALSE(has(out, 0, kTopicState, encode_command(GcsCommand::kReTask)));
+  EXPECT_TRUE(has(out, 0, kTopicState, encode_command(GcsCommand::kLand)));
+}
+
 // A simulated vehicle that follows velocity setpoints exactly.
 struct FakeVehicle {
   VehicleInputs in;
@@ -210,6 +257,125 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   EXPECT_EQ(fsm.popped(), 1);
   EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
   EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
+}
+
+// Flies a south UAV from the start through its two scans (no balloon in sight) to Scans Done.
+void fly_to_scans_done(VehicleFsm& fsm, FakeVehicle& v) {
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.in.position_enu_m.z() = 5.0;
+  for (int i = 0; i < 6000 && fsm.state() != VehicleState::kScansDone; ++i)
+    v.apply(fsm.step(v.in), 0.05);
+}
+
+// Own scans done: the UAV waits for the GCS on its line (and lands if it never answers); re-tasked,
+// it climbs over the balloons before it crosses, scans the other half from a line 6 m short of the
+// middle (looking at it, over the balloons), and goes down to a balloon's height before it pierces.
+TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBalloons) {
+  const MissionConfig config;
+  {
+    VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+    FakeVehicle v;
+    v.in.position_enu_m = {-10, -27, 0};
+    fly_to_scans_done(fsm, v);
+    ASSERT_EQ(fsm.state(), VehicleState::kScansDone);
+    for (int i = 0; i < 20 * config.retask_wait_s + 20 && fsm.state() == VehicleState::kScansDone;
+         ++i) {
+      v.apply(fsm.step(v.in), 0.05);
+    }
+    EXPECT_EQ(fsm.state(), VehicleState::kLand);  // no answer: land
+  }
+  VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle v;
+  v.in.position_enu_m = {-10, -27, 0};
+  fly_to_scans_done(fsm, v);
+  ASSERT_EQ(fsm.state(), VehicleState::kScansDone);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
+  const double scan_z = v.in.position_enu_m.z();
+  v.in.commands = {GcsCommand::kReTask};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.apply(fsm.step(v.in), 0.05);
+  ASSERT_EQ(fsm.state(), VehicleState::kGoSideCenter);
+  EXPECT_TRUE(fsm.crossing());
+  // it leaves the line only 0.5 m below the crossing altitude (a balloon's top is at most 3.5 m);
+  // heights above the take-off spot, where the estimator read 0 (rest height 0.1 m)
+  const Eigen::Vector3d start = v.in.position_enu_m;
+  for (int i = 0; i < 4000 && fsm.state() != VehicleState::kBlindScan; ++i) {
+    const VehicleOutputs out = fsm.step(v.in);
+    if (v.in.position_enu_m.z() + config.rest_height_m < config.cross_altitude_m - 0.5) {
+      EXPECT_LT((v.in.position_enu_m.head<2>() - start.head<2>()).norm(), 1e-9);
+    }
+    EXPECT_LT(out.camera_pitch_rad, 0.0);  // looking down while scanning
+    v.apply(out, 0.05);
+  }
+  ASSERT_EQ(fsm.state(), VehicleState::kBlindScan);
+  EXPECT_GT(config.cross_altitude_m, scan_z);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -config.cross_line_back_m, 1.0);
+  EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m, 0.2);
+  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);
+
+  // a balloon in the other half is now ours: request, and go down to its height meanwhile
+  const Eigen::Vector3d balloon(v.in.position_enu_m.x() + 2, 15.0, 2.4);
+  v.in.balloons = {{7, balloon, v.in.now_s}};
+  VehicleOutputs out = fsm.step(v.in);
+  ASSERT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);
+  const AirspaceArea request = **out.airspace;
+  for (int i = 0; i < 60; ++i) {
+    v.in.balloons[0].last_seen_s = v.in.now_s;
+    v.apply(fsm.step(v.in), 0.05);
+  }
+  EXPECT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);
+  EXPECT_NEAR(v.in.position_enu_m.z(), balloon.z() + config.pierce_blade_above_centre_m, 0.1);
+  v.in.airspace_replies = {request};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.airspace_replies.clear();
+  EXPECT_EQ(fsm.state(), VehicleState::kPierce);
+  out = fsm.step(v.in);
+  EXPECT_EQ(out.camera_pitch_rad, 0.0);  // at the balloon's height: level
+  EXPECT_GT(out.velocity_enu_m_s.y(), 3.0);
+}
+
+// Landing: climb to the transit altitude, fly over the landing spot, descend on velocity setpoints
+// (1 m/s, 0.5 m/s below 2 m, no position chasing below 1 m) and turn the motors off once the
+// descent has stopped on the ground, before the autopilot's own land detector would.
+TEST(Mbzirc2020VehicleFsm, DescendsOnVelocityAndTurnsTheMotorsOffAtTouchdown) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
+  FakeVehicle v;
+  v.in.position_enu_m = {10, -27, 0};
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.in.position_enu_m.z() = 5.0;
+  v.in.on_ground = false;  // the autopilot's land detector, which never fires here
+  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
+  v.in.commands = {GcsCommand::kLand};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  ASSERT_EQ(fsm.state(), VehicleState::kLand);
+  double top_z = 0.0, min_vz = 0.0;
+  bool disarm = false;
+  for (int i = 0; i < 4000 && !disarm; ++i) {
+    const Eigen::Vector3d before = v.in.position_enu_m;
+    const VehicleOutputs out = fsm.step(v.in);
+    disarm = out.action == VehicleOutputs::Action::kDisarm;
+    v.apply(out, 0.05);
+    v.in.position_enu_m.z() = std::max(v.in.position_enu_m.z(), 0.0);  // the ground
+    v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
+    top_z = std::max(top_z, v.in.position_enu_m.z());
+    if (v.in.position_enu_m.z() + config.rest_height_m < 1.95 && v.in.position_enu_m.z() > 0.0)
+      min_vz = std::min(min_vz, v.in.velocity_enu_m_s.z());
+  }
+  ASSERT_TRUE(disarm);
+  EXPECT_NEAR(top_z + config.rest_height_m, config.landing_transit_altitude_s1_m, 0.35);
+  EXPECT_NEAR((v.in.position_enu_m.head<2>() - Eigen::Vector2d(10, -27)).norm(), 0.0, 0.6);
+  EXPECT_EQ(v.in.position_enu_m.z(), 0.0);
+  EXPECT_GE(min_vz, -0.5 - 1e-9);  // the last 2 m at 0.5 m/s
+  v.in.armed = false;
+  fsm.step(v.in);
+  EXPECT_EQ(fsm.state(), VehicleState::kLanded);
 }
 
 TEST(Mbzirc2020VehicleFsm, DisarmedInTheAirIsFailedAndGcsLandWorksFromAnyState) {
