@@ -12,6 +12,12 @@
 // `APD ...` line (apd_report.hpp) when it has changed (at most every --report-period seconds) and
 // when the agent lands or fails; coverage-run scores the data that survived from them.
 //
+// The optimised variant (section 3.6, --gcs-ports): each agent also sends its APD to the ground
+// station (coverage-gcs) over its own GCS link, best effort, when it changed (at most every
+// --gcs-period seconds), and gives the station's latest map to its agent, whose leader merges it
+// before planning. Nothing waits for the station: with its link cut the flock flies on as in the
+// plain variant.
+//
 // usage: coverage-agent (--vehicle I | --vehicles A-B) --area WxH [options]; --help lists them.
 // Exit status: 0 when every agent landed, 3 when one failed, 1 on a link or clock failure, 2 usage.
 #include <cmath>
@@ -24,7 +30,9 @@
 
 #include "agent.hpp"
 #include "apd_report.hpp"
+#include "ground_station.hpp"
 #include "radio_link.hpp"
+#include "station_link.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/vehicle.hpp"
 
@@ -52,6 +60,10 @@ int usage() {
   --step S                agent period, sim seconds (default 0.05)
   --report-period S       APD report period (default 2)
   --status-period S       a status line (pose, holdings) every S seconds (default 0: none)
+  --gcs-ports P,P,..      the optimised variant (thesis 3.6): each vehicle's GCS link to the
+                          ground station (coverage-gcs) on udp:--gcs-host:P, one port per vehicle
+  --gcs-host H            where those ports are (default 127.0.0.1)
+  --gcs-period S          an agent sends its APD to the station at most every S seconds (default 1)
 )");
   return 2;
 }
@@ -73,11 +85,25 @@ bool parse_int(const char* s, long lo, long hi, int* out) {
   return true;
 }
 
+// "P,P,..." into ports; false if any is not a port number
+bool parse_ports(const char* v, std::vector<int>* ports) {
+  for (const char* p = v; *p;) {
+    const char* comma = std::strchr(p, ',');
+    const std::string one = comma ? std::string(p, comma) : std::string(p);
+    int port = 0;
+    if (!parse_int(one.c_str(), 1, 65535, &port)) return false;
+    ports->push_back(port);
+    p = comma ? comma + 1 : p + one.size();
+  }
+  return true;
+}
+
 // one agent with its vehicle link and radio
 struct Flyer {
   int id = 0;
   std::unique_ptr<Vehicle> vehicle;
   std::unique_ptr<RadioLink> radio;
+  std::unique_ptr<GcsLink> gcs;  // the optimised variant's link to the ground station
   std::unique_ptr<Agent> agent;
   AgentState last_state = AgentState::kTakingOff;
   int last_leader = -2;
@@ -90,6 +116,9 @@ struct Flyer {
   double next_status_s = 0.0;
   bool finished = false;
   bool complete_logged = false;
+  AreaParts sent_to_gcs;
+  double next_gcs_s = 0.0;
+  bool gcs_refused_logged = false;
 };
 
 }  // namespace
@@ -99,7 +128,9 @@ int main(int argc, char** argv) {
   CoverageConfig config;
   std::string host = "127.0.0.1";
   int base_port = 5760;
-  std::vector<int> ports;
+  std::vector<int> ports, gcs_ports;
+  std::string gcs_host = "127.0.0.1";
+  double gcs_period_s = 1.0;
   double step_s = 0.05, report_period_s = 2.0, status_period_s = 0.0;
   bool have_area = false;
   for (int i = 1; i < argc; ++i) {
@@ -138,14 +169,13 @@ int main(int argc, char** argv) {
     } else if (a == "--mavlink-base-port") {
       if (!parse_int(v, 1, 65535, &base_port)) return usage();
     } else if (a == "--mavlink-ports") {
-      for (const char* p = v; *p;) {
-        const char* comma = std::strchr(p, ',');
-        const std::string one = comma ? std::string(p, comma) : std::string(p);
-        int port = 0;
-        if (!parse_int(one.c_str(), 1, 65535, &port)) return usage();
-        ports.push_back(port);
-        p = comma ? comma + 1 : p + one.size();
-      }
+      if (!parse_ports(v, &ports)) return usage();
+    } else if (a == "--gcs-ports") {
+      if (!parse_ports(v, &gcs_ports)) return usage();
+    } else if (a == "--gcs-host") {
+      gcs_host = v;
+    } else if (a == "--gcs-period") {
+      gcs_period_s = std::strtod(v, nullptr);
     } else if (a == "--step") {
       step_s = std::strtod(v, nullptr);
     } else if (a == "--status-period") {
@@ -163,16 +193,22 @@ int main(int argc, char** argv) {
   }
   if (!(step_s >= kMinStep_s && step_s <= kMaxStep_s) ||
       !(report_period_s >= 0.1 && report_period_s <= 3600.0) ||
-      !(status_period_s >= 0.0 && status_period_s <= 3600.0)) {
+      !(status_period_s >= 0.0 && status_period_s <= 3600.0) ||
+      !(gcs_period_s >= 0.05 && gcs_period_s <= 3600.0)) {
     std::fprintf(stderr,
                  "coverage-agent: --step must be in [0.02, 0.1], --report-period in "
-                 "[0.1, 3600]\n");
+                 "[0.1, 3600], --status-period in [0, 3600], --gcs-period in [0.05, 3600]\n");
     return 2;
   }
   const int count = last - first + 1;
   if (!ports.empty() && static_cast<int>(ports.size()) != count) {
     std::fprintf(stderr, "coverage-agent: --mavlink-ports names %zu ports for %d vehicles\n",
                  ports.size(), count);
+    return 2;
+  }
+  if (!gcs_ports.empty() && static_cast<int>(gcs_ports.size()) != count) {
+    std::fprintf(stderr, "coverage-agent: --gcs-ports names %zu ports for %d vehicles\n",
+                 gcs_ports.size(), count);
     return 2;
   }
 
@@ -208,6 +244,17 @@ int main(int argc, char** argv) {
       log(f.id, "radio: " + error);
       return 1;
     }
+    if (!gcs_ports.empty()) {
+      // the vehicle calls the station (its port learns our address from the first packet)
+      f.gcs = GcsLink::open(
+          station_link_config(static_cast<uint8_t>(f.id)),
+          {"0.0.0.0", 0, gcs_host, static_cast<uint16_t>(gcs_ports[static_cast<size_t>(k)])},
+          &error);
+      if (!f.gcs) {
+        log(f.id, "GCS link: " + error);
+        return 1;
+      }
+    }
   }
   for (Flyer& f : flyers) {
     if (auto r = f.vehicle->wait_ready(120); !r) {
@@ -217,6 +264,7 @@ int main(int argc, char** argv) {
     const Eigen::Vector2d home = f.vehicle->telemetry().position_enu_m.head<2>();
     f.agent = std::make_unique<Agent>(config, f.id, home);
     f.reported = AreaParts(config.stripe_count());
+    f.sent_to_gcs = AreaParts(config.stripe_count());
     char buf[128];
     std::snprintf(buf, sizeof buf, "ready at (%.1f, %.1f)", home.x(), home.y());
     log(f.id, buf);
@@ -238,6 +286,8 @@ int main(int argc, char** argv) {
     }
     bool all_finished = true;
     for (Flyer& f : flyers) {
+      // the station's link keeps going after the end (what is still unacknowledged goes out)
+      if (f.gcs) (void)f.gcs->service(static_cast<int64_t>(std::llround(loop.now() * 1e6)));
       if (f.finished) continue;
       const Telemetry& t = f.vehicle->telemetry();
       AgentInputs in;
@@ -248,6 +298,15 @@ int main(int argc, char** argv) {
       in.velocity_enu_m_s = t.velocity_enu_m_s;
       in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
       in.received = f.radio->take_received();
+      // the station's latest map (read at the steps only: what is heard at a step does not
+      // depend on the host's timing)
+      if (f.gcs) {
+        for (const GcsMessage& m : f.gcs->take_received()) {
+          if (m.topic == kTopicStationMap) {
+            if (auto map = decode_apd(m.payload, config.stripe_count())) in.gcs_map = *map;
+          }
+        }
+      }
       const AgentOutputs out = f.agent->step(in);
       if (!out.note.empty()) log(f.id, out.note);
 
@@ -283,8 +342,17 @@ int main(int argc, char** argv) {
         if (r) r = f.vehicle->takeoff(f.takeoff_altitude_m, false);
         if (!r) log(f.id, "take-off: " + r.message() + " (trying again)");
       }
-      // outputs: the radio
+      // outputs: the radio, and what we acquired to the station (best effort)
       for (const Frame& frame : out.broadcast) (void)f.radio->broadcast(frame);
+      if (f.gcs && loop.now() >= f.next_gcs_s && !(f.agent->own() == f.sent_to_gcs)) {
+        f.next_gcs_s = loop.now() + gcs_period_s;
+        f.sent_to_gcs = f.agent->own();
+        const GcsLinkStatus st = f.gcs->publish(kTopicAgentApd, encode_apd(f.sent_to_gcs));
+        if (st != GcsLinkStatus::kOk && !f.gcs_refused_logged) {
+          f.gcs_refused_logged = true;
+          log(f.id, std::string("GCS link refused our APD: ") + gcs_link_status_name(st));
+        }
+      }
 
       // what the launcher reads: state changes, the end of the mission, the APD
       if (f.agent->mission_complete() && !f.complete_logged) {
@@ -331,6 +399,8 @@ int main(int argc, char** argv) {
       }
       if (over) {
         f.finished = true;
+        // a dead drone's link is silent: what it had not sent yet is lost with it
+        if (s == AgentState::kFailed) f.gcs.reset();
         char buf[160];
         std::snprintf(buf, sizeof buf, "over: %s, %d queries started, %lu radio frames refused",
                       agent_state_name(s), f.agent->queries_started(), f.radio->refused());

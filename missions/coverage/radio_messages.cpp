@@ -89,6 +89,62 @@ void read_state(Reader& r, AgentRecord& a, const RadioFrameOrigin& o) {
   a.vy_m_s = r.i8() / 10.0;
 }
 
+// An APD as runs of stripes with identical interval lists, ends in 0.1 m rounded inwards (a run
+// never claims more than was covered); at most max_intervals intervals a stripe (the rest dropped:
+// less is claimed, never more).
+struct Run {
+  int first = 0;
+  int repeat = 0;
+  std::vector<std::pair<unsigned, unsigned>> dm;
+};
+
+std::vector<Run> apd_runs(const AreaParts& apd, size_t max_intervals) {
+  std::vector<Run> runs;
+  for (int s = 0; s < apd.stripe_count(); ++s) {
+    std::vector<std::pair<unsigned, unsigned>> dm;
+    for (const Interval& iv : apd.stripe(s)) {
+      const long a = std::clamp(static_cast<long>(std::ceil(iv.start_m * 10.0 - 1e-6)), 0L, 65535L);
+      const long b = std::clamp(static_cast<long>(std::floor(iv.end_m * 10.0 + 1e-6)), 0L, 65535L);
+      if (b > a && dm.size() < max_intervals) dm.emplace_back(a, b);
+    }
+    if (!runs.empty() && runs.back().dm == dm && runs.back().repeat < 255) {
+      ++runs.back().repeat;
+    } else {
+      runs.push_back({s, 1, std::move(dm)});
+    }
+  }
+  return runs;
+}
+
+void write_run(Writer& w, const Run& run) {
+  w.u8(static_cast<unsigned>(run.repeat));
+  w.u8(static_cast<unsigned>(run.dm.size()));
+  for (const auto& [a, b] : run.dm) {
+    w.u16(a);
+    w.u16(b);
+  }
+}
+
+// Reads runs up to the end of the bytes into (stripe, intervals), stripes first .. first+count-1
+// exactly; false on anything malformed (an inverted interval, too many or too few stripes).
+bool read_runs(Reader& r, int first, int count,
+               std::vector<std::pair<int, std::vector<Interval>>>* stripes) {
+  int s = first;
+  while (r.pos < r.f.size()) {
+    const int repeat = static_cast<int>(r.u8());
+    const unsigned n = r.u8();
+    std::vector<Interval> list;
+    for (unsigned k = 0; k < n; ++k) {
+      const double a = r.u16() / 10.0, b = r.u16() / 10.0;
+      if (!(b > a)) return false;
+      list.push_back({a, b});
+    }
+    if (!r.ok || repeat < 1 || s + repeat > first + count) return false;
+    for (int k = 0; k < repeat; ++k) stripes->emplace_back(s++, list);
+  }
+  return r.ok && s == first + count;
+}
+
 }  // namespace
 
 std::optional<MessageType> message_type(const Frame& f) {
@@ -143,27 +199,7 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
 }
 
 std::vector<Frame> encode_aggregate(const AggregateMessage& m) {
-  // runs of identical interval lists, in 0.1 m rounded inwards
-  struct Run {
-    int first = 0;
-    int repeat = 0;
-    std::vector<std::pair<unsigned, unsigned>> dm;
-  };
-  const size_t max_intervals = (kMaxFrameBytes - kAggregateHeaderBytes - 2) / 4;
-  std::vector<Run> runs;
-  for (int s = 0; s < m.apd.stripe_count(); ++s) {
-    std::vector<std::pair<unsigned, unsigned>> dm;
-    for (const Interval& iv : m.apd.stripe(s)) {
-      const long a = std::clamp(static_cast<long>(std::ceil(iv.start_m * 10.0 - 1e-6)), 0L, 65535L);
-      const long b = std::clamp(static_cast<long>(std::floor(iv.end_m * 10.0 + 1e-6)), 0L, 65535L);
-      if (b > a && dm.size() < max_intervals) dm.emplace_back(a, b);
-    }
-    if (!runs.empty() && runs.back().dm == dm && runs.back().repeat < 255) {
-      ++runs.back().repeat;
-    } else {
-      runs.push_back({s, 1, std::move(dm)});
-    }
-  }
+  const std::vector<Run> runs = apd_runs(m.apd, (kMaxFrameBytes - kAggregateHeaderBytes - 2) / 4);
   // fragments: as many runs as fit the frame after the header
   std::vector<Frame> frames;
   std::vector<std::pair<int, int>> stripe_range;  // first, count of each fragment
@@ -175,12 +211,7 @@ std::vector<Frame> encode_aggregate(const AggregateMessage& m) {
     int count = 0;
     while (i < runs.size() &&
            kAggregateHeaderBytes + body.size() + 2 + 4 * runs[i].dm.size() <= kMaxFrameBytes) {
-      w.u8(static_cast<unsigned>(runs[i].repeat));
-      w.u8(static_cast<unsigned>(runs[i].dm.size()));
-      for (const auto& [a, b] : runs[i].dm) {
-        w.u16(a);
-        w.u16(b);
-      }
+      write_run(w, runs[i]);
       count += runs[i].repeat;
       ++i;
     }
@@ -229,20 +260,7 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
   }
   // parse the runs into (stripe, intervals) before touching any state
   std::vector<std::pair<int, std::vector<Interval>>> stripes;
-  int s = first;
-  while (r.pos < f.size()) {
-    const int repeat = static_cast<int>(r.u8());
-    const unsigned n = r.u8();
-    std::vector<Interval> list;
-    for (unsigned k = 0; k < n; ++k) {
-      const double a = r.u16() / 10.0, b = r.u16() / 10.0;
-      if (!(b > a)) return std::nullopt;
-      list.push_back({a, b});
-    }
-    if (!r.ok || repeat < 1 || s + repeat > first + count) return std::nullopt;
-    for (int k = 0; k < repeat; ++k) stripes.emplace_back(s++, list);
-  }
-  if (!r.ok || s != first + count) return std::nullopt;
+  if (!read_runs(r, first, count, &stripes)) return std::nullopt;
 
   Partial& p = partial_[sender];
   if (p.fragments != fragments || p.origin != origin || p.query_id != query_id ||
@@ -267,6 +285,24 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
   AggregateMessage done = std::move(p.message);
   partial_.erase(sender);
   return done;
+}
+
+std::vector<uint8_t> encode_apd(const AreaParts& apd) {
+  std::vector<uint8_t> out;
+  Writer w{out};
+  w.u16(static_cast<unsigned>(apd.stripe_count()));
+  for (const Run& run : apd_runs(apd, 255)) write_run(w, run);
+  return out;
+}
+
+std::optional<AreaParts> decode_apd(const std::vector<uint8_t>& bytes, int stripes) {
+  Reader r{bytes};
+  if (stripes <= 0 || static_cast<int>(r.u16()) != stripes || !r.ok) return std::nullopt;
+  std::vector<std::pair<int, std::vector<Interval>>> lists;
+  if (!read_runs(r, 0, stripes, &lists)) return std::nullopt;
+  AreaParts apd(stripes);
+  for (const auto& [index, list] : lists) apd.set_stripe(index, list);
+  return apd;
 }
 
 }  // namespace uavsim::missions::coverage

@@ -82,4 +82,12 @@ class AggregateReassembler {
   std::map<int, Partial> partial_;  // by sender
 };
 
+// An APD as one byte string, for the ground-station link (3.6), where a message is not limited to
+// a radio frame: u16 stripe_count | the runs of the aggregation fragment for every stripe (at most
+// 255 intervals a stripe are sent; ends rounded inwards to 0.1 m, so it never claims more).
+std::vector<uint8_t> encode_apd(const AreaParts& apd);
+// Bytes as encode_apd writes them for a rectangle of `stripes` stripes; nothing when they are
+// malformed or name another stripe count.
+std::optional<AreaParts> decode_apd(const std::vector<uint8_t>& bytes, int stripes);
+
 }  // namespace uavsim::missions::coverage

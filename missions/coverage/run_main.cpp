@@ -7,7 +7,9 @@
 // times), and prints a summary scored from the sim API's ground truth, which the agents never
 // see: the fraction of the rectangle covered by the data that survived (the APDs the agents still
 // alive reported), mission time (first take-off to last touchdown), energy per agent, failed
-// agents, distance flown.
+// agents, distance flown. With --gcs (the optimised variant, section 3.6) it also starts the
+// ground station (coverage-gcs) with a GCS link per vehicle through the server's relay, which can
+// cut or impair them (--gcs-cut, --gcs-loss); data delivered to the station counts as surviving.
 //
 // Exit status: 0 only on full coverage with every surviving agent landed; 1: the mission fell
 // short; 2: usage; 4: the harness failed.
@@ -49,6 +51,7 @@ constexpr double kLauncherTick_s = 1.0;    // the launcher's lockstep period (sa
 constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (thesis 4.3)
 constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
 constexpr double kFullCoverage = 1.0 - 1e-3;
+constexpr int kStationId = 255;  // the ground station's APD reports (coverage-gcs, client kGcsId)
 
 struct Options {
   int agents = 5;
@@ -56,6 +59,8 @@ struct Options {
   double failure_prob = 0.0;
   uint64_t seed = 1;
   bool gcs = false;
+  double gcs_cut_s = -1.0;  // the GCS links cut (every datagram dropped) from this sim time on
+  double gcs_loss = 0.0;    // each GCS-link datagram lost with this probability
   std::string json_path;
   bool quiet = false;
   double radio_range_m = 150.0;
@@ -68,6 +73,7 @@ struct Options {
   double agent_status_s = 0.0;
   std::string server = UAVSIM_SERVER_PATH;
   std::string agent;
+  std::string gcs_program;
   std::string models_dir = UAVSIM_MODELS_DIR;
   std::string keep_world;  // write the generated world here too
   std::string run_dir;     // --run-dir: summary, events, logs, ground truth
@@ -95,8 +101,12 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
                       truth at --truth-hz, default 10); scripts/plot_run.py DIR plots it
   --world-out FILE    also write the generated world there
   --quiet             only the summary
-  --gcs               the optimised variant with a ground station (not available yet: refused)
-  --server/--agent PATH, --models-dir DIR  programs and models (default: the build tree)
+  --gcs               the optimised variant (thesis 3.6): a ground station (coverage-gcs) that
+                      receives the agents' data over their GCS links and sends its map back
+  --gcs-cut T         cut every GCS link at sim time T (the server's relay drops all datagrams)
+  --gcs-loss P        each GCS-link datagram is lost with probability P (0-1, seeded)
+  --server/--agent/--gcs-program PATH, --models-dir DIR  programs and models (default: the build
+                      tree)
 )");
   return 2;
 }
@@ -120,6 +130,7 @@ std::string fmt(const char* f, double a) {
 int main(int argc, char** argv) {
   Options o;
   o.agent = uavsim::launch::sibling_program("coverage-agent");
+  o.gcs_program = uavsim::launch::sibling_program("coverage-gcs");
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     double v = 0, w = 0;
@@ -156,6 +167,10 @@ int main(int argc, char** argv) {
       o.radio_range_m = v;
     } else if (a == "--radio-loss" && number(val, 0, 1, &v)) {
       o.radio_loss = v;
+    } else if (a == "--gcs-cut" && number(val, 0, 1e6, &v)) {
+      o.gcs_cut_s = v;
+    } else if (a == "--gcs-loss" && number(val, 0, 1, &v)) {
+      o.gcs_loss = v;
     } else if (a == "--per-process" && number(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
       o.per_process = static_cast<int>(v);
     } else if (a == "--budget" && number(val, 1, 1e6, &v)) {
@@ -178,16 +193,16 @@ int main(int argc, char** argv) {
       o.server = val;
     } else if (a == "--agent") {
       o.agent = val;
+    } else if (a == "--gcs-program") {
+      o.gcs_program = val;
     } else if (a == "--models-dir") {
       o.models_dir = val;
     } else {
       return usage();
     }
   }
-  if (o.gcs) {
-    std::fprintf(stderr,
-                 "coverage-run: --gcs (the optimised variant, thesis 3.6) is not "
-                 "implemented yet\n");
+  if (!o.gcs && (o.gcs_cut_s >= 0.0 || o.gcs_loss > 0.0)) {
+    std::fprintf(stderr, "coverage-run: --gcs-cut and --gcs-loss need --gcs\n");
     return 2;
   }
   for (const auto& [t, id] : o.kills) {
@@ -266,6 +281,8 @@ int main(int argc, char** argv) {
   double first_takeoff_s = -1, last_touchdown_s = -1, sim_s = 0;
   Json summary;
   std::vector<Json> vehicles_end;
+  std::vector<Json> gcs_links;
+  std::map<int, int> station_port;  // vehicle -> the ground station's UDP port for its link
 
   auto on_agent_line = [&](const std::string& line) {
     if (line.rfind("APD ", 0) == 0) {
@@ -339,12 +356,47 @@ int main(int argc, char** argv) {
     if (r) r = api.lockstep_join(kLauncherTick_s, 120.0);
     if (!r) fail("setting up the run: " + r.message());
 
-    // 4. the agent programs
     const std::string lockstep = launch.lockstep_env(kAgentPeriod_s);
     int processes = 0;
+    // 4. the optimised variant: the ground station, its link ports, the server's relay in front
+    // of each vehicle's link (seed 6.3), impaired as asked
+    std::vector<int> gcs_uav_port(static_cast<size_t>(o.agents), 0);
+    if (o.gcs) {
+      static const std::regex port_re(R"(^gcs: uav(\d+) link on udp:[0-9.]+:(\d+)$)");
+      launch.on_line([&](const std::string& child, const std::string& line) {
+        std::smatch m;
+        if (child == "gcs" && std::regex_search(line, m, port_re))
+          station_port[std::stoi(m[1])] = std::stoi(m[2]);
+      });
+      if (auto g = launch.spawn("gcs",
+                                {o.gcs_program, "--uavs", std::to_string(o.agents), "--area",
+                                 fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m)},
+                                {lockstep});
+          !g) {
+        fail(g.message());
+      }
+      ++processes;
+      while (!harness_error && static_cast<int>(station_port.size()) < o.agents &&
+             launch.wall_s() < 60.0 && !launch.programs_done()) {
+        launch.pump(100);
+      }
+      if (!harness_error && static_cast<int>(station_port.size()) < o.agents)
+        fail("the ground station did not start");
+      for (int i = 0; i < o.agents && !harness_error; ++i) {
+        Result<Json> g = api.request({{"op", "gcs_link_open"},
+                                      {"vehicle", i},
+                                      {"gcs_target_host", "127.0.0.1"},
+                                      {"gcs_target_port", station_port[i]}});
+        if (g) gcs_uav_port[static_cast<size_t>(i)] = g->value("uav_port", 0);
+        if (g && o.gcs_loss > 0.0)
+          g = api.request({{"op", "gcs_link_impair"}, {"vehicle", i}, {"loss", o.gcs_loss}});
+        if (!g) fail("GCS link of vehicle " + std::to_string(i) + ": " + g.message());
+      }
+    }
+    // 5. the agent programs
     for (int first = 0; first < o.agents && !harness_error; first += o.per_process) {
       const int last = std::min(o.agents, first + o.per_process) - 1;
-      std::string ports;
+      std::string ports, gcs_ports;
       for (int i = first; i <= last; ++i) {
         const int port = launch.mavlink_port("uav" + std::to_string(i));
         if (port == 0) {
@@ -352,22 +404,28 @@ int main(int argc, char** argv) {
           break;
         }
         ports += (ports.empty() ? "" : ",") + std::to_string(port);
+        gcs_ports +=
+            (gcs_ports.empty() ? "" : ",") + std::to_string(gcs_uav_port[static_cast<size_t>(i)]);
       }
       const std::string name = first == last
                                    ? "agent" + std::to_string(first)
                                    : "agents" + std::to_string(first) + "-" + std::to_string(last);
-      if (auto s = launch.spawn(
-              name,
-              {o.agent, "--vehicles", std::to_string(first) + "-" + std::to_string(last), "--area",
-               fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m), "--mavlink-ports", ports,
-               "--status-period", fmt("%.3f", o.agent_status_s)},
-              {lockstep});
-          !s) {
+      std::vector<std::string> args{o.agent,
+                                    "--vehicles",
+                                    std::to_string(first) + "-" + std::to_string(last),
+                                    "--area",
+                                    fmt("%.3f", o.length_x_m) + "x" + fmt("%.3f", o.width_y_m),
+                                    "--mavlink-ports",
+                                    ports,
+                                    "--status-period",
+                                    fmt("%.3f", o.agent_status_s)};
+      if (o.gcs) args.insert(args.end(), {"--gcs-ports", gcs_ports});
+      if (auto s = launch.spawn(name, args, {lockstep}); !s) {
         fail(s.message());
       }
       ++processes;
     }
-    // 5. once every program has joined the lockstep, let the clock go
+    // 6. once every program has joined the lockstep, let the clock go
     if (!harness_error) {
       if (auto w = launch.wait_lockstep_clients(processes + 1, 120.0); !w) {
         fail("the agent programs did not join the lockstep: " + w.message());
@@ -377,15 +435,17 @@ int main(int argc, char** argv) {
         char buf[256];
         std::snprintf(buf, sizeof buf,
                       "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                      "radio range %.0f m loss %.2f, seed %llu",
+                      "radio range %.0f m loss %.2f, seed %llu%s",
                       o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob, o.radio_range_m,
-                      o.radio_loss, static_cast<unsigned long long>(o.seed));
+                      o.radio_loss, static_cast<unsigned long long>(o.seed),
+                      o.gcs ? ", with a ground station" : "");
         say(buf);
       }
     }
 
-    // 6. follow the run: the launcher's ticks (ground truth samples, kills), events, output
+    // 7. follow the run: the launcher's ticks (ground truth samples, kills), events, output
     size_t next_kill = 0;
+    bool gcs_cut = false;
     double next_progress_s = o.progress_period_s;
     while (!harness_error) {
       launch.pump(50);
@@ -435,6 +495,15 @@ int main(int argc, char** argv) {
               if (uniform(failure_rng) < o.failure_prob) to_kill.push_back(i);
             }
           }
+          // the ground station's links cut: every datagram dropped from now on
+          if (o.gcs && !gcs_cut && o.gcs_cut_s >= 0.0 && t + 1e-9 >= o.gcs_cut_s) {
+            gcs_cut = true;
+            for (int i = 0; i < o.agents; ++i) {
+              if (!api.request({{"op", "gcs_link_impair"}, {"vehicle", i}, {"outage_s", 1e6}}))
+                fail("cutting the GCS link of vehicle " + std::to_string(i));
+            }
+            say("coverage-run: t=" + fmt("%.1f", t) + " GCS links cut");
+          }
           for (int i : to_kill) {
             if (killed.count(i)) continue;
             if (api.request({{"op", "kill_vehicle"},
@@ -464,7 +533,7 @@ int main(int argc, char** argv) {
           if (!api.done(e.value("tick", std::int64_t{0}))) fail("the launcher's done was refused");
         }
       }
-      if (launch.programs_done()) break;
+      if (launch.programs_done(o.gcs ? "gcs" : "")) break;
       if (sim_s > o.budget_s) {
         say("coverage-run: sim-time budget spent");
         break;
@@ -479,17 +548,22 @@ int main(int argc, char** argv) {
       }
     }
 
-    // 7. score from ground truth
+    // 8. score from ground truth
     if (!harness_error) {
-      (void)api.lockstep_leave();
       if (auto v = api.request({{"op", "vehicles"}})) {
         sim_s = v->value("time_s", sim_s);
         for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
       }
+      // what the relay did to each GCS link
+      for (int i = 0; o.gcs && i < o.agents; ++i) {
+        if (auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}))
+          gcs_links.push_back(*g);
+      }
+      (void)api.lockstep_leave();
     }
   }
 
-  // 8. stop everything we started
+  // 9. stop everything we started (the ground station prints its last map as it stops)
   launch.stop_all(30.0);
   std::filesystem::remove_all(dir);
 
@@ -526,7 +600,11 @@ int main(int argc, char** argv) {
   std::printf("==== coverage flock: %d agents, %.0f x %.0f m, failure p %.4f, seed %llu ====\n",
               o.agents, o.length_x_m, o.width_y_m, o.failure_prob,
               static_cast<unsigned long long>(o.seed));
-  std::printf("coverage held by surviving agents: %.2f %%\n", 100.0 * coverage);
+  std::printf("coverage held by surviving agents%s: %.2f %%\n",
+              o.gcs ? " and the ground station" : "", 100.0 * coverage);
+  const double gcs_fraction =
+      apd.count(kStationId) ? apd[kStationId].apd.covered_fraction(config.width_y_m) : 0.0;
+  if (o.gcs) std::printf("ground station holds: %.2f %%\n", 100.0 * gcs_fraction);
   if (mission_s >= 0)
     std::printf("mission time: %.1f s sim (first take-off %.1f s, last touchdown %.1f s)\n",
                 mission_s, first_takeoff_s, last_touchdown_s);
@@ -600,6 +678,13 @@ int main(int argc, char** argv) {
     summary["failure_prob"] = o.failure_prob;
     summary["radio_range_m"] = o.radio_range_m;
     summary["radio_loss"] = o.radio_loss;
+    summary["gcs"] = o.gcs;
+    if (o.gcs) {
+      summary["gcs_cut_s"] = o.gcs_cut_s;
+      summary["gcs_loss"] = o.gcs_loss;
+      summary["gcs_held_fraction"] = gcs_fraction;
+      summary["gcs_links"] = gcs_links;
+    }
     summary["seed"] = o.seed;
     summary["coverage"] = coverage;
     summary["mission_time_s"] = mission_s;

@@ -36,17 +36,15 @@ int main(int argc, char** argv) {
   if (uav_count < 1 || uav_count > 254) return 2;
 
   // a link per UAV, each learning its UAV's address from the first packet (the UAVs call the GCS)
-  std::vector<std::unique_ptr<GcsLink>> links;
-  for (int i = 0; i < uav_count; ++i) {
-    std::string error;
-    auto l = GcsLink::open(GcsLinkConfig{kGcsId}, {"127.0.0.1", 0, "127.0.0.1", 0}, &error);
-    if (!l) {
-      std::fprintf(stderr, "gcs: %s\n", error.c_str());
-      return 1;
-    }
-    std::printf("gcs: uav%d link on udp:127.0.0.1:%u\n", i, l->local_port());
-    links.push_back(std::move(l));
+  std::string error;
+  const std::vector<std::unique_ptr<GcsLink>> links =
+      open_station_links(uav_count, GcsLinkConfig{kGcsId}, &error);
+  if (links.empty()) {
+    std::fprintf(stderr, "gcs: %s\n", error.c_str());
+    return 1;
   }
+  for (size_t i = 0; i < links.size(); ++i)
+    std::printf("gcs: uav%zu link on udp:127.0.0.1:%u\n", i, links[i]->local_port());
   std::fflush(stdout);
 
   auto created = EventLoop::create();

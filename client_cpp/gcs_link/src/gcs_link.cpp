@@ -102,4 +102,15 @@ std::vector<GcsMessage> GcsLink::take_received() { return impl_->core.take_recei
 GcsLinkCore& GcsLink::core() { return impl_->core; }
 const GcsLinkCore& GcsLink::core() const { return impl_->core; }
 
+std::vector<std::unique_ptr<GcsLink>> open_station_links(int count, const GcsLinkConfig& config,
+                                                         std::string* error) {
+  std::vector<std::unique_ptr<GcsLink>> links;
+  for (int i = 0; i < count; ++i) {
+    auto l = GcsLink::open(config, {"127.0.0.1", 0, "127.0.0.1", 0}, error);
+    if (!l) return {};
+    links.push_back(std::move(l));
+  }
+  return links;
+}
+
 }  // namespace uavsim::client

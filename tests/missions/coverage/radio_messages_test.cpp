@@ -115,5 +115,45 @@ TEST(RadioMessages, MalformedFragmentsAreIgnored) {
   EXPECT_TRUE(ok.add(f));
 }
 
+// The ground-station link's APD (3.6) is one message whatever its size: the same runs as the
+// radio's aggregation fragment after a stripe count.
+TEST(RadioMessages, AnApdForTheStationIsOneMessageOfRuns) {
+  AreaParts apd(108);
+  for (int s = 0; s < 108; ++s) apd.add(s, {0.0, 187.5});
+  for (int s = 0; s < 50; ++s) apd.add(s, {300.0, 487.5});
+  const std::vector<uint8_t> bytes = encode_apd(apd);
+  EXPECT_EQ(bytes.size(), 18u);  // 2 + two runs: 2 * 2 + 3 * 4
+  const auto d = decode_apd(bytes, 108);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(*d, apd);
+  // a different list in every stripe: 100 runs, still one message, ends rounded inwards
+  AreaParts ragged(100);
+  for (int s = 0; s < 100; ++s) ragged.add(s, {s * 0.21, 50.0 + s * 0.333});
+  const auto r = decode_apd(encode_apd(ragged), 100);
+  ASSERT_TRUE(r);
+  for (int s = 0; s < 100; ++s) {
+    ASSERT_EQ(r->stripe(s).size(), 1u);
+    EXPECT_GE(r->stripe(s)[0].start_m, ragged.stripe(s)[0].start_m - 1e-9);
+    EXPECT_LE(r->stripe(s)[0].end_m, ragged.stripe(s)[0].end_m + 1e-9);
+  }
+}
+
+TEST(RadioMessages, MalformedStationApdsAreRefused) {
+  AreaParts apd(10);
+  apd.add(3, {1.0, 5.0});
+  const std::vector<uint8_t> bytes = encode_apd(apd);
+  EXPECT_TRUE(decode_apd(bytes, 10));
+  EXPECT_FALSE(decode_apd(bytes, 11));  // another rectangle's stripes
+  EXPECT_FALSE(decode_apd(std::vector<uint8_t>(bytes.begin(), bytes.end() - 1), 10));
+  EXPECT_FALSE(decode_apd({}, 10));
+  std::vector<uint8_t> inverted = bytes;
+  // the second run (stripe 3) holds [1.0, 5.0) as dm 10, 50: swap its ends
+  const size_t at = 2 + 2;  // stripe count, then run 0 (3 stripes, no interval)
+  ASSERT_EQ(inverted[at], 1);
+  ASSERT_EQ(inverted[at + 1], 1);
+  std::swap(inverted[at + 2], inverted[at + 4]);
+  EXPECT_FALSE(decode_apd(inverted, 10));
+}
+
 }  // namespace
 }  // namespace uavsim::missions::coverage

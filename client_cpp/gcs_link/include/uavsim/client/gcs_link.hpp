@@ -150,4 +150,10 @@ class GcsLink {
   std::unique_ptr<Impl> impl_;
 };
 
+// A ground station's ends of `count` links (one per UAV) on loopback ephemeral ports, each
+// learning its UAV's address from the first packet (the UAVs call the station). Empty, with
+// *error naming the address, if one cannot be opened.
+std::vector<std::unique_ptr<GcsLink>> open_station_links(int count, const GcsLinkConfig& config,
+                                                         std::string* error);
+
 }  // namespace uavsim::client

@@ -105,9 +105,10 @@ class Launcher {
   // Wall seconds since the launcher was made.
   // Owner thread only.
   double wall_s() const;
-  // True when every program spawned (the server aside) has exited and its output is read.
+  // True when every program spawned (the server aside, and the one named `except` if given: a
+  // program that runs until stopped, like a ground station) has exited and its output is read.
   // Owner thread only.
-  bool programs_done();
+  bool programs_done(const std::string& except = "");
   // True when the server has exited (or was never started).
   // Owner thread only.
   bool server_exited();
