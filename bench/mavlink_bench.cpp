@@ -19,15 +19,16 @@
 #include <thread>
 #include <vector>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/endpoint.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "physics/world.hpp"
 #include "sim/runner.hpp"
 #include "sim/simulation.hpp"
 
 namespace mav = uavsim::server::mavlink;
+namespace cm = uavsim::common::mavlink;
 namespace sim = uavsim::server::sim;
 namespace physics = uavsim::server::physics;
 
@@ -66,7 +67,7 @@ int connect_to(std::uint16_t port) {
 
 template <class Msg>
 void send_msg(int fd, const Msg& m) {
-  const mav::EncodedFrame f = mav::encode(mav::FrameHeader{255, 190, 0, mav::Version::kV2, std::nullopt}, m);
+  const cm::EncodedFrame f = cm::encode(cm::FrameHeader{255, 190, 0, cm::Version::kV2, std::nullopt}, m);
   [[maybe_unused]] const auto n = ::send(fd, f.bytes.data(), f.size, MSG_NOSIGNAL);
 }
 
@@ -79,7 +80,7 @@ void BM_TelemetryThroughput(benchmark::State& state) {
   std::vector<int> fds;
   for (int i = 0; i < n; ++i) {
     fds.push_back(connect_to(server.port(i)));
-    mav::msg::RequestDataStream r;
+    cm::msg::RequestDataStream r;
     r.target_system = static_cast<std::uint8_t>(i + 1);
     r.req_stream_id = 0;
     r.req_message_rate = 50;
@@ -90,7 +91,7 @@ void BM_TelemetryThroughput(benchmark::State& state) {
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> frames{0};
   std::thread reader([&] {
-    std::vector<mav::Parser> parsers(fds.size());
+    std::vector<cm::Parser> parsers(fds.size());
     std::vector<pollfd> pfds;
     for (int fd : fds) pfds.push_back({fd, POLLIN, 0});
     std::vector<std::uint8_t> buf(1 << 16);
@@ -101,7 +102,7 @@ void BM_TelemetryThroughput(benchmark::State& state) {
         const ssize_t r = recv(pfds[k].fd, buf.data(), buf.size(), MSG_DONTWAIT);
         if (r <= 0) continue;
         std::uint64_t got = 0;
-        parsers[k].feed({buf.data(), static_cast<std::size_t>(r)}, [&](const mav::Frame&) { ++got; });
+        parsers[k].feed({buf.data(), static_cast<std::size_t>(r)}, [&](const cm::Frame&) { ++got; });
         frames.fetch_add(got);
       }
     }
@@ -139,16 +140,16 @@ void BM_CommandAckLatency(benchmark::State& state) {
   mav::MavlinkServer server(*s, c);
   const int fd = connect_to(server.port(0));
   // only the acks matter: stop the streams of this client
-  mav::msg::RequestDataStream r;
+  cm::msg::RequestDataStream r;
   r.target_system = 1;
   r.req_stream_id = 0;
   r.start_stop = 0;
   send_msg(fd, r);
   sim::Runner runner(*s, rate);
   std::thread loop([&] { runner.run_until(1e9); });
-  mav::Parser parser;
+  cm::Parser parser;
   std::vector<std::uint8_t> buf(1 << 16);
-  mav::msg::CommandLong cmd;
+  cm::msg::CommandLong cmd;
   cmd.target_system = 1;
   cmd.command = 31000;  // unknown: UNSUPPORTED, no side effects
   for (auto _ : state) {
@@ -157,8 +158,8 @@ void BM_CommandAckLatency(benchmark::State& state) {
     while (!acked) {
       const ssize_t got = recv(fd, buf.data(), buf.size(), 0);
       if (got <= 0) break;
-      parser.feed({buf.data(), static_cast<std::size_t>(got)}, [&](const mav::Frame& f) {
-        acked = acked || f.msgid == mav::msg::CommandAck::kId;
+      parser.feed({buf.data(), static_cast<std::size_t>(got)}, [&](const cm::Frame& f) {
+        acked = acked || f.msgid == cm::msg::CommandAck::kId;
       });
     }
   }

@@ -4,11 +4,11 @@
 
 #include <vector>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 
-namespace mav = uavsim::server::mavlink;
+namespace mav = uavsim::common::mavlink;
 
 namespace {
 

@@ -38,15 +38,15 @@
 #include <utility>
 #include <vector>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 
 #ifndef UAVSIM_SERVER_BIN
 #define UAVSIM_SERVER_BIN "uavsim-server"
 #endif
 
-namespace mav = uavsim::server::mavlink;
+namespace mav = uavsim::common::mavlink;
 using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 

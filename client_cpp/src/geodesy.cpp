@@ -2,17 +2,17 @@
 
 #include <cmath>
 
-#include "fc/angles.hpp"
-#include "mavlink/geodesy.hpp"
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/geodesy.hpp"
 
 namespace uavsim::client {
 
 namespace {
-namespace g = server::mavlink;
+namespace g = common;
 g::GeodeticOrigin to_server(const GeodeticOrigin& o) { return {o.lat_deg, o.lon_deg, o.alt_m, o.heading_rad}; }
 }  // namespace
 
-double wrap_pi(double a_rad) { return server::fc::wrap_pi(a_rad); }
+double wrap_pi(double a_rad) { return common::wrap_pi(a_rad); }
 
 Eigen::Vector3d ned_from_geodetic(const GeodeticOrigin& origin, const Geodetic& point) {
   return g::ned_from_geodetic(to_server(origin), g::Geodetic{point.lat_deg, point.lon_deg, point.alt_m});

@@ -1,4 +1,4 @@
-// Vehicle proxy: MAVLink over TCP with our codec (server/src/mavlink/codec), per the ArduCopter wire
+// Vehicle proxy: MAVLink over TCP with our codec (uavsim/common/mavlink), per the ArduCopter wire
 // behaviour in the team's mavlink/behaviour.md. The only client source that speaks MAVLink.
 #include "uavsim/client/vehicle.hpp"
 
@@ -14,15 +14,15 @@
 #include <sstream>
 
 #include "event_loop_impl.hpp"
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "net.hpp"
 
 namespace uavsim::client {
 
-namespace mav = server::mavlink;
-namespace msg = server::mavlink::msg;
+namespace mav = common::mavlink;
+namespace msg = common::mavlink::msg;
 
 namespace {
 

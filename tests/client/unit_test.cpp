@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <thread>
 
-#include "mavlink/geodesy.hpp"
+#include "uavsim/common/geodesy.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/geodesy.hpp"
 #include "uavsim/client/pid.hpp"
@@ -61,7 +61,7 @@ TEST(Geodesy, SameAsTheServersImplementation) {
   const Geodetic p{47.3980, 8.5460, 500.0};
   const Eigen::Vector3d ned = ned_from_geodetic(o, p);
   const Eigen::Vector3d ref =
-      server::mavlink::ned_from_geodetic({o.lat_deg, o.lon_deg, o.alt_m, 0.0}, {p.lat_deg, p.lon_deg, p.alt_m});
+      common::ned_from_geodetic({o.lat_deg, o.lon_deg, o.alt_m, 0.0}, {p.lat_deg, p.lon_deg, p.alt_m});
   EXPECT_EQ(ned, ref);
   const Eigen::Vector3d enu = enu_from_geodetic(o, p);
   EXPECT_DOUBLE_EQ(enu.x(), ned.y());

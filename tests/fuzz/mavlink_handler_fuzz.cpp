@@ -14,9 +14,9 @@
 #include <memory>
 #include <string>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "mavlink/vehicle_link.hpp"
 #include "physics/world.hpp"
 #include "sim/simulation.hpp"

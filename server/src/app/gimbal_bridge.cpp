@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fc/angles.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::app {
 
 namespace {
 constexpr double kDegToRad = M_PI / 180.0;
-using fc::wrap_pi;
+using common::wrap_pi;
 }  // namespace
 
 void apply_gimbal_state(const mavlink::GimbalState& s, double vehicle_yaw_enu_rad, objects::Gimbal* g) {

@@ -162,7 +162,7 @@ std::vector<std::vector<mavlink::UdpEndpoint>> udp_links(const Options& options,
 
 }  // namespace
 
-mavlink::GeodeticOrigin world_home(const physics::World& world, const Options& options) {
+common::GeodeticOrigin world_home(const physics::World& world, const Options& options) {
   mavlink::GeodeticOrigin origin;
   if (options.home) {
     origin.lat_deg = options.home->lat_deg;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "app/options.hpp"
-#include "mavlink/geodesy.hpp"
+#include "uavsim/common/geodesy.hpp"
 #include "physics/world.hpp"
 
 namespace uavsim::server::app {
@@ -24,7 +24,7 @@ std::vector<std::string> option_warnings(const Options& options);
 
 // The geodetic position of the world origin: --home, else the world's custom numeric uavsim:home
 // (LAT LON ALT), else the default. Throws physics::WorldError for a malformed uavsim:home.
-mavlink::GeodeticOrigin world_home(const physics::World& world, const Options& options);
+common::GeodeticOrigin world_home(const physics::World& world, const Options& options);
 
 // Asks a running server to stop (from a signal handler: only sets an atomic flag).
 void stop_server();

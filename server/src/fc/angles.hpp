@@ -1,21 +1,12 @@
-// Angle helpers shared by the flight-controller modules, the MAVLink frames and client_cpp (header-only, so
-// any target with server/src on its include path can use the one implementation).
+// The flight controller's angle helpers are the project's one implementation (uavsim/common/angles.hpp);
+// this header names them in uavsim::server::fc, where the controller modules use them unqualified.
 #pragma once
 
-#include <cmath>
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::fc {
 
-inline constexpr double kPi = 3.14159265358979323846;
-
-// An angle in (-pi, pi], in O(1) for any input: std::remainder is exact, so small excursions come back
-// exactly as a subtract-2pi loop would give them, and 1e30 costs no more than 1. A non-finite angle has no
-// direction; it maps to 0 so that a NaN or inf can never reach a controller through this function (the
-// MAVLink and API edges reject such values before, this is the last line).
-inline double wrap_pi(double a_rad) {
-  if (!std::isfinite(a_rad)) return 0.0;
-  const double r = std::remainder(a_rad, 2.0 * kPi);
-  return r <= -kPi ? r + 2.0 * kPi : r;
-}
+using common::kPi;
+using common::wrap_pi;  // (-pi, pi], O(1), non-finite -> 0
 
 }  // namespace uavsim::server::fc

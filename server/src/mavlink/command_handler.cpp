@@ -2,11 +2,13 @@
 // (behaviour.md §4-5). Commands are acked on the link they came from; setpoints are never acked.
 #include <cmath>
 
-#include "mavlink/frames.hpp"
+#include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
+
+namespace frames = ::uavsim::common::frames;
 
 namespace {
 
@@ -16,7 +18,7 @@ constexpr std::uint8_t kDenied = 2;
 constexpr std::uint8_t kUnsupported = 3;
 constexpr std::uint8_t kFailed = 4;
 
-constexpr double kDegToRad = frames::kPi / 180.0;
+constexpr double kDegToRad = common::kPi / 180.0;
 
 // ArduPilot answers a refused arm, disarm or take-off with FAILED (behaviour.md §4)
 std::uint8_t failed_unless_accepted(fc::CommandResult r) {

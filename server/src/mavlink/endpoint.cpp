@@ -21,7 +21,7 @@
 #include <thread>
 #include <unordered_map>
 
-#include "mavlink/codec/parser.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/tlog.hpp"
 #include "mavlink/vehicle_link.hpp"
 

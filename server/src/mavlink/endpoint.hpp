@@ -20,11 +20,17 @@
 #include <string>
 #include <vector>
 
-#include "mavlink/geodesy.hpp"
+#include "uavsim/common/geodesy.hpp"
 #include "mavlink/gimbal_state.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::mavlink {
+
+// The geodetic origin and conversions are the common ones (uavsim/common/geodesy.hpp).
+using ::uavsim::common::Geodetic;
+using ::uavsim::common::geodetic_from_ned;
+using ::uavsim::common::GeodeticOrigin;
+using ::uavsim::common::ned_from_geodetic;
 
 // One UDP link of a vehicle (ArduPilot's udpclient / udpin serial protocols, mavlink-router's endpoints).
 struct UdpEndpoint {

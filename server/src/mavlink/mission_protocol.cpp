@@ -5,11 +5,13 @@
 // sim time: an unanswered request is repeated after 1 s, the upload is cancelled after 8 s of silence.
 #include <cmath>
 
-#include "mavlink/frames.hpp"
+#include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
+
+namespace frames = ::uavsim::common::frames;
 
 namespace {
 

@@ -11,14 +11,16 @@
 #include <limits>
 
 #include "airframe/airframe.hpp"
-#include "mavlink/frames.hpp"
+#include "uavsim/common/frames.hpp"
 #include "mavlink/vehicle_link.hpp"
 
 namespace uavsim::server::mavlink {
 
+namespace frames = ::uavsim::common::frames;
+
 namespace {
 
-constexpr double kRadToDeg = 180.0 / frames::kPi;
+constexpr double kRadToDeg = 180.0 / common::kPi;
 // SYSTEM_TIME.time_unix_usec: a fixed epoch (2024-01-01 00:00:00 UTC) plus sim time, so runs are reproducible
 constexpr std::uint64_t kSimEpochUnixUs = 1704067200ULL * 1000000ULL;
 
@@ -491,7 +493,7 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
         send(link, m);
         return true;
       }
-      constexpr double kDegToRad = frames::kPi / 180.0;
+      constexpr double kDegToRad = common::kPi / 180.0;
       constexpr std::uint16_t kRollLock = 4, kPitchLock = 8, kYawLock = 16, kYawInVehicleFrame = 32,
                               kYawInEarthFrame = 64;
       const double q_yaw_deg = gimbal_.yaw_earth_frame ? yaw_north_deg : yaw_body_deg;

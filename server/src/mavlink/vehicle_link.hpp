@@ -18,15 +18,18 @@
 #include <vector>
 
 #include "fc/flight_controller.hpp"
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/signing.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/signing.hpp"
 #include "mavlink/endpoint.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "mavlink/outbox.hpp"
 #include "mavlink/tlog.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::mavlink {
+
+// The link speaks the common codec: its frames, messages and enums are used unqualified here.
+using namespace ::uavsim::common::mavlink;
 
 // EndpointStats as relaxed atomics, written by both threads.
 struct StatCounters {

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "assets/mesh_convert.hpp"
-#include "mavlink/codec/sha256.hpp"
+#include "uavsim/common/mavlink/sha256.hpp"
 
 namespace uavsim::server::physics {
 
@@ -228,7 +228,7 @@ bool mujoco_reads(const fs::path& file) {
 // SHA-256 of the cache version and the file's bytes, in hex: the cache file's name. A cryptographic hash,
 // so no other content can be made to hit an entry (the project's one SHA-256, from MAVLink signing).
 std::string content_hash(const fs::path& file) {
-  mavlink::Sha256 h;
+  common::mavlink::Sha256 h;
   const std::string_view version = kMeshCacheVersion;
   h.update({reinterpret_cast<const std::uint8_t*>(version.data()), version.size()});
   std::ifstream in(file, std::ios::binary);

@@ -24,7 +24,7 @@ namespace uavsim::server::api {
 namespace {
 
 using mavlink::testing::TestGcs;
-namespace msg = mavlink::msg;
+namespace msg = common::mavlink::msg;
 using testing::Json;
 using testing::TestClient;
 
@@ -164,7 +164,7 @@ std::vector<std::string> fly_scripted() {
     const auto local = gcs.last<msg::LocalPositionNed>();
     const uint64_t sent_before = gcs.sent_frames();
     if (k == 0) {
-      mavlink::msg::Heartbeat hb;
+      msg::Heartbeat hb;
       hb.type = 6;  // MAV_TYPE_GCS
       hb.autopilot = 8;
       gcs.send(hb);
@@ -172,7 +172,7 @@ std::vector<std::string> fly_scripted() {
       set_interval(gcs, msg::LocalPositionNed::kId, 0.02);
       set_interval(gcs, msg::SysStatus::kId, 0.1);
     } else if (k % 20 == 0) {
-      mavlink::msg::Heartbeat hb;
+      msg::Heartbeat hb;
       hb.type = 6;
       hb.autopilot = 8;
       gcs.send(hb);

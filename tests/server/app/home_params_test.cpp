@@ -38,7 +38,7 @@ std::vector<std::string> names_of(const physics::World& w) {
 TEST(HomeParams, TheWorldsHomeUnlessHomeIsGiven) {
   const auto world = load_world();
   Options o;
-  mavlink::GeodeticOrigin h = world_home(*world, o);
+  common::GeodeticOrigin h = world_home(*world, o);
   EXPECT_DOUBLE_EQ(h.lat_deg, -35.363261);
   EXPECT_DOUBLE_EQ(h.lon_deg, 149.165230);
   EXPECT_DOUBLE_EQ(h.alt_m, 584.0);

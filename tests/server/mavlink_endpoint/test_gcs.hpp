@@ -20,12 +20,17 @@
 #include <optional>
 #include <vector>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/codec/parser.hpp"
-#include "mavlink/codec/signing.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
+#include "uavsim/common/mavlink/signing.hpp"
 #include "mavlink/endpoint.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "sim/sim_fixture.hpp"
+
+// the endpoint tests speak the common codec unqualified, as the endpoint does
+namespace uavsim::server::mavlink {
+using namespace ::uavsim::common::mavlink;
+}  // namespace uavsim::server::mavlink
 
 namespace uavsim::server::mavlink::testing {
 

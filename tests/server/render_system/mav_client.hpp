@@ -11,8 +11,8 @@
 #include <cstring>
 #include <string>
 
-#include "mavlink/codec/codec.hpp"
-#include "mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 
 namespace uavsim::server::render::testing {
 
@@ -31,11 +31,11 @@ class MavClient {
   // sends one message; returns its sequence number
   template <class Msg>
   uint8_t send(const Msg& m) {
-    mavlink::FrameHeader h;
+    common::mavlink::FrameHeader h;
     h.sysid = 255;
     h.compid = 190;
     h.seq = seq_;
-    const mavlink::EncodedFrame f = mavlink::encode(h, m);
+    const common::mavlink::EncodedFrame f = common::mavlink::encode(h, m);
     const auto v = f.view();
     size_t off = 0;
     while (off < v.size()) {
@@ -46,7 +46,7 @@ class MavClient {
     return seq_++;
   }
   uint8_t command(uint16_t cmd, std::array<float, 7> p = {}) {
-    mavlink::msg::CommandLong c;
+    common::mavlink::msg::CommandLong c;
     c.command = cmd;
     c.target_system = 1;
     c.target_component = 1;
@@ -55,13 +55,13 @@ class MavClient {
     return send(c);
   }
   uint8_t heartbeat() {
-    mavlink::msg::Heartbeat hb;
+    common::mavlink::msg::Heartbeat hb;
     hb.type = 6;        // MAV_TYPE_GCS
     hb.autopilot = 8;   // MAV_AUTOPILOT_INVALID
     return send(hb);
   }
   uint8_t param_set(const std::string& name, float value) {
-    mavlink::msg::ParamSet p;
+    common::mavlink::msg::ParamSet p;
     p.target_system = 1;
     p.target_component = 1;
     std::memcpy(p.param_id.data(), name.data(), std::min<size_t>(16, name.size()));

@@ -1,5 +1,5 @@
 // Local <-> geodetic conversion for mission code (seed eq. 6.1), re-exported from the project's one
-// implementation (server/src/mavlink/geodesy.hpp, target uavsim_geodesy).
+// implementation (uavsim/common/geodesy.hpp, target uavsim_common).
 //
 // The local frame is centred at the origin (lat0, lon0, alt0) and rotated by heading_rad about the vertical;
 // with heading 0 the NED axes are north, east, down and the ENU axes east, north, up. Flat-earth

@@ -1,0 +1,79 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "uavsim/common/frames.hpp"
+#include "uavsim/common/geodesy.hpp"
+
+namespace uavsim::common {
+namespace {
+
+TEST(Geodesy, OriginMapsToZero) {
+  const GeodeticOrigin o;
+  const Eigen::Vector3d p = ned_from_geodetic(o, {o.lat_deg, o.lon_deg, o.alt_m});
+  EXPECT_NEAR(p.norm(), 0.0, 1e-9);
+}
+
+TEST(Geodesy, FollowsSeedEquation61) {
+  const GeodeticOrigin o;
+  // 1e-5 deg of latitude: R * 1e-5 * pi/180 = 6378100 * 1.7453293e-7 = 1.1131885 m north
+  const Eigen::Vector3d n = ned_from_geodetic(o, {o.lat_deg + 1e-5, o.lon_deg, o.alt_m});
+  EXPECT_NEAR(n.x(), 1.1131885, 1e-6);
+  // 1e-5 deg of longitude: 1.1131885 m * cos(47.397742 deg) = 1.1131885 * 0.676906 = 0.7535228 m east
+  const Eigen::Vector3d e = ned_from_geodetic(o, {o.lat_deg, o.lon_deg + 1e-5, o.alt_m});
+  EXPECT_NEAR(e.y(), 0.7535228, 1e-6);
+  // 10 m higher is 10 m less down
+  EXPECT_NEAR(ned_from_geodetic(o, {o.lat_deg, o.lon_deg, o.alt_m + 10.0}).z(), -10.0, 1e-12);
+}
+
+TEST(Geodesy, HeadingRotatesTheLocalFrame) {
+  GeodeticOrigin o;
+  o.heading_rad = kPi / 2.0;
+  // a point north of the origin lies on -y of a frame rotated by 90 deg: Rz * (n, 0) = (0, -n)
+  const Eigen::Vector3d p = ned_from_geodetic(o, {o.lat_deg + 1e-4, o.lon_deg, o.alt_m});
+  EXPECT_NEAR(p.x(), 0.0, 1e-9);
+  EXPECT_NEAR(p.y(), -11.131885, 1e-5);
+}
+
+TEST(Geodesy, RoundTripsWithinAMillimetre) {
+  GeodeticOrigin o;
+  o.heading_rad = 0.3;
+  const Eigen::Vector3d p(1234.5, -987.25, -55.5);
+  const Eigen::Vector3d back = ned_from_geodetic(o, geodetic_from_ned(o, p));
+  EXPECT_NEAR((back - p).norm(), 0.0, 1e-6);
+}
+
+TEST(Frames, EnuNedSwapAxesAndFlipUp) {
+  const Eigen::Vector3d enu(1.0, 2.0, 3.0);
+  EXPECT_EQ(frames::ned_from_enu(enu), Eigen::Vector3d(2.0, 1.0, -3.0));
+  EXPECT_EQ(frames::enu_from_ned(frames::ned_from_enu(enu)), enu);
+}
+
+TEST(Frames, VehicleFacingEastHasNedYaw90) {
+  // identity q_enu_flu: body x along ENU x = east => NED yaw +90 deg, level
+  const auto e = frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(Eigen::Quaterniond::Identity()));
+  EXPECT_NEAR(e.yaw_rad, kPi / 2.0, 1e-12);
+  EXPECT_NEAR(e.roll_rad, 0.0, 1e-12);
+  EXPECT_NEAR(e.pitch_rad, 0.0, 1e-12);
+  EXPECT_NEAR(frames::yaw_ned_from_yaw_enu(0.0), kPi / 2.0, 1e-12);
+}
+
+TEST(Frames, NoseUpPitchIsPositiveInBothConventions) {
+  // FLU: nose up = negative rotation about +y (left); FRD pitch up is positive
+  const Eigen::Quaterniond q_enu_flu(Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitY()));
+  const auto e = frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(q_enu_flu));
+  EXPECT_NEAR(e.pitch_rad, 0.2, 1e-12);
+  // and the attitude round-trips
+  const Eigen::Quaterniond back = frames::q_enu_flu_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(q_enu_flu));
+  EXPECT_NEAR(back.angularDistance(q_enu_flu), 0.0, 1e-12);
+}
+
+TEST(Frames, BodyYawRotatesForwardIntoHeading) {
+  // facing east (NED yaw 90 deg), 1 m forward is 1 m east
+  const Eigen::Vector3d v = frames::ned_from_body_yaw({1.0, 0.0, 0.0}, kPi / 2.0);
+  EXPECT_NEAR(v.x(), 0.0, 1e-12);
+  EXPECT_NEAR(v.y(), 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace uavsim::common
