@@ -11,13 +11,17 @@
 // ground station (coverage-gcs) with a GCS link per vehicle through the server's relay, which can
 // cut or impair them (--gcs-cut, --gcs-loss); data delivered to the station counts as surviving.
 //
+// SIGINT or SIGTERM stops the run cleanly: the agents, the station and the server are stopped and
+// the summary so far is printed (JSON "interrupted": true).
+//
 // Exit status: 0 only on full coverage with every surviving agent landed; 1: the mission fell
-// short; 2: usage; 4: the harness failed.
+// short; 2: usage; 4: the harness failed; 130: interrupted.
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -51,7 +55,13 @@ constexpr double kLauncherTick_s = 1.0;    // the launcher's lockstep period (sa
 constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (thesis 4.3)
 constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
 constexpr double kFullCoverage = 1.0 - 1e-3;
-constexpr int kStationId = 255;  // the ground station's APD reports (coverage-gcs, client kGcsId)
+constexpr int kStationId = 255;
+
+// set by SIGINT / SIGTERM: the run loop ends at its next turn and everything is stopped in order
+volatile std::sig_atomic_t g_interrupted = 0;
+void on_interrupt(int) {
+  g_interrupted = 1;
+}  // the ground station's APD reports (coverage-gcs, client kGcsId)
 
 struct Options {
   int agents = 5;
@@ -236,6 +246,8 @@ int main(int argc, char** argv) {
   }
   const int stripes = config.stripe_count();
 
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
   const auto wall_start = WallClock::now();
   auto wall_s = [&] {
     return std::chrono::duration<double>(WallClock::now() - wall_start).count();
@@ -534,6 +546,10 @@ int main(int argc, char** argv) {
         }
       }
       if (launch.programs_done(o.gcs ? "gcs" : "")) break;
+      if (g_interrupted) {
+        say("coverage-run: interrupted");
+        break;
+      }
       if (sim_s > o.budget_s) {
         say("coverage-run: sim-time budget spent");
         break;
@@ -591,8 +607,8 @@ int main(int argc, char** argv) {
          {"held_fraction", apd.count(i) ? apd[i].apd.covered_fraction(config.width_y_m) : 0.0},
          {"distance_m", distance_m[i]}});
   }
-  const bool success = harness_error == 0 && !vehicles_end.empty() && coverage >= kFullCoverage &&
-                       survivors > 0 && landed == survivors;
+  const bool success = harness_error == 0 && !g_interrupted && !vehicles_end.empty() &&
+                       coverage >= kFullCoverage && survivors > 0 && landed == survivors;
   const double mission_s = first_takeoff_s >= 0 && last_touchdown_s >= first_takeoff_s
                                ? last_touchdown_s - first_takeoff_s
                                : -1.0;
@@ -665,8 +681,9 @@ int main(int argc, char** argv) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
   }
-  std::printf("RESULT: %s coverage=%.4f mission_s=%.1f failed=%d landed=%d/%d\n",
-              success ? "SUCCESS" : "FAILURE", coverage, mission_s, failed, landed, survivors);
+  std::printf("RESULT: %s coverage=%.4f mission_s=%.1f failed=%d landed=%d/%d%s\n",
+              success ? "SUCCESS" : "FAILURE", coverage, mission_s, failed, landed, survivors,
+              g_interrupted ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -709,8 +726,10 @@ int main(int argc, char** argv) {
     summary["sim_time_s"] = sim_s;
     summary["wall_time_s"] = wall_s();
     summary["success"] = success;
+    summary["interrupted"] = g_interrupted != 0;
     std::ofstream(o.json_path) << summary.dump(2) << "\n";
   }
   if (harness_error) return harness_error;
+  if (g_interrupted) return 130;
   return success ? 0 : 1;
 }
