@@ -14,15 +14,21 @@
 #include <sstream>
 
 #include "event_loop_impl.hpp"
-#include "uavsim/common/mavlink/codec.hpp"
-#include "uavsim/common/mavlink/parser.hpp"
-#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "net.hpp"
+#include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/generated/enums.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
+#include "uavsim/common/mavlink/mission_item.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
 
 namespace uavsim::client {
 
 namespace mav = common::mavlink;
 namespace msg = common::mavlink::msg;
+using mav::MavCmd;
+using mav::MavFrame;
+using mav::MavResult;
+using mav::to_underlying;
 
 namespace {
 
@@ -30,19 +36,39 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint32_t kPrearmBit = 0x10000000;
 constexpr std::uint16_t kEkfPredPosHorizAbs = 512;
 constexpr std::uint16_t kEkfPosHorizAbs = 16;
-// SET_POSITION_TARGET type masks (ignore bits)
-constexpr std::uint16_t kMaskPos = 3576, kMaskPosYaw = 2552, kMaskVel = 3527, kMaskVelYaw = 2503,
-                        kMaskVelYawRate = 1479;
+// SET_POSITION_TARGET type masks: what a setpoint sets, everything else ignored
+constexpr std::uint16_t ignore(std::initializer_list<mav::PositionTargetTypemask> bits) {
+  std::uint16_t m = 0;
+  for (auto b : bits) m = static_cast<std::uint16_t>(m | to_underlying(b));
+  return m;
+}
+using Ignore = mav::PositionTargetTypemask;
+constexpr std::uint16_t kIgnoreVel = ignore({Ignore::VxIgnore, Ignore::VyIgnore, Ignore::VzIgnore});
+constexpr std::uint16_t kIgnorePos = ignore({Ignore::XIgnore, Ignore::YIgnore, Ignore::ZIgnore});
+constexpr std::uint16_t kIgnoreAcc = ignore({Ignore::AxIgnore, Ignore::AyIgnore, Ignore::AzIgnore});
+constexpr std::uint16_t kIgnoreYaw = ignore({Ignore::YawIgnore});
+constexpr std::uint16_t kIgnoreYawRate = ignore({Ignore::YawRateIgnore});
+constexpr std::uint16_t kMaskPos = kIgnoreVel | kIgnoreAcc | kIgnoreYaw | kIgnoreYawRate;  // 3576
+constexpr std::uint16_t kMaskPosYaw = kIgnoreVel | kIgnoreAcc | kIgnoreYawRate;            // 2552
+constexpr std::uint16_t kMaskVel = kIgnorePos | kIgnoreAcc | kIgnoreYaw | kIgnoreYawRate;  // 3527
+constexpr std::uint16_t kMaskVelYaw = kIgnorePos | kIgnoreAcc | kIgnoreYawRate;            // 2503
+constexpr std::uint16_t kMaskVelYawRate = kIgnorePos | kIgnoreAcc | kIgnoreYaw;            // 1479
+static_assert(kMaskPos == 3576 && kMaskPosYaw == 2552 && kMaskVel == 3527 && kMaskVelYaw == 2503 &&
+              kMaskVelYawRate == 1479);
+
+constexpr std::uint16_t mav_command(MavCmd c) { return static_cast<std::uint16_t>(to_underlying(c)); }
+constexpr std::uint8_t mav_frame(MavFrame f) { return static_cast<std::uint8_t>(to_underlying(f)); }
+constexpr std::uint8_t kMissionTypeMission = to_underlying(mav::MavMissionType::Mission);
 
 const char* mav_result_name(int r) {
-  switch (r) {
-    case 0: return "ACCEPTED";
-    case 1: return "TEMPORARILY_REJECTED";
-    case 2: return "DENIED";
-    case 3: return "UNSUPPORTED";
-    case 4: return "FAILED";
-    case 5: return "IN_PROGRESS";
-    case 6: return "CANCELLED";
+  switch (static_cast<MavResult>(r)) {
+    case MavResult::Accepted: return "ACCEPTED";
+    case MavResult::TemporarilyRejected: return "TEMPORARILY_REJECTED";
+    case MavResult::Denied: return "DENIED";
+    case MavResult::Unsupported: return "UNSUPPORTED";
+    case MavResult::Failed: return "FAILED";
+    case MavResult::InProgress: return "IN_PROGRESS";
+    case MavResult::Cancelled: return "CANCELLED";
     default: return "UNKNOWN";
   }
 }
@@ -56,30 +82,30 @@ const char* mission_result_name(int r) {
 }
 
 std::string command_name(std::uint16_t c) {
-  switch (c) {
-    case 16: return "NAV_WAYPOINT";
-    case 17: return "NAV_LOITER_UNLIM";
-    case 20: return "NAV_RETURN_TO_LAUNCH";
-    case 21: return "NAV_LAND";
-    case 22: return "NAV_TAKEOFF";
-    case 115: return "CONDITION_YAW";
-    case 176: return "DO_SET_MODE";
-    case 205: return "DO_MOUNT_CONTROL";
-    case 300: return "MISSION_START";
-    case 400: return "COMPONENT_ARM_DISARM";
-    case 410: return "GET_HOME_POSITION";
-    case 511: return "SET_MESSAGE_INTERVAL";
-    case 512: return "REQUEST_MESSAGE";
+  switch (static_cast<MavCmd>(c)) {
+    case MavCmd::NavWaypoint: return "NAV_WAYPOINT";
+    case MavCmd::NavLoiterUnlim: return "NAV_LOITER_UNLIM";
+    case MavCmd::NavReturnToLaunch: return "NAV_RETURN_TO_LAUNCH";
+    case MavCmd::NavLand: return "NAV_LAND";
+    case MavCmd::NavTakeoff: return "NAV_TAKEOFF";
+    case MavCmd::ConditionYaw: return "CONDITION_YAW";
+    case MavCmd::DoSetMode: return "DO_SET_MODE";
+    case MavCmd::DoMountControl: return "DO_MOUNT_CONTROL";
+    case MavCmd::MissionStart: return "MISSION_START";
+    case MavCmd::ComponentArmDisarm: return "COMPONENT_ARM_DISARM";
+    case MavCmd::GetHomePosition: return "GET_HOME_POSITION";
+    case MavCmd::SetMessageInterval: return "SET_MESSAGE_INTERVAL";
+    case MavCmd::RequestMessage: return "REQUEST_MESSAGE";
     default: return "MAV_CMD " + std::to_string(c);
   }
 }
 
 Error error_of_mav_result(int r) {
-  switch (r) {
-    case 1: return Error::kTemporarilyRejected;
-    case 2: return Error::kDenied;
-    case 3: return Error::kUnsupported;
-    case 6: return Error::kCancelled;
+  switch (static_cast<MavResult>(r)) {
+    case MavResult::TemporarilyRejected: return Error::kTemporarilyRejected;
+    case MavResult::Denied: return Error::kDenied;
+    case MavResult::Unsupported: return Error::kUnsupported;
+    case MavResult::Cancelled: return Error::kCancelled;
     default: return Error::kFailed;
   }
 }
@@ -146,13 +172,13 @@ const char* mode_name(FlightMode m) {
 
 MissionItem MissionItem::takeoff(double rel_alt_m) {
   MissionItem m;
-  m.command = 22;
+  m.command = mav_command(MavCmd::NavTakeoff);
   m.alt_m = static_cast<float>(rel_alt_m);
   return m;
 }
 MissionItem MissionItem::waypoint(double lat_deg, double lon_deg, double rel_alt_m, double hold_s) {
   MissionItem m;
-  m.command = 16;
+  m.command = mav_command(MavCmd::NavWaypoint);
   m.param1 = static_cast<float>(hold_s);
   m.lat_deg = lat_deg;
   m.lon_deg = lon_deg;
@@ -161,12 +187,12 @@ MissionItem MissionItem::waypoint(double lat_deg, double lon_deg, double rel_alt
 }
 MissionItem MissionItem::land() {
   MissionItem m;
-  m.command = 21;
+  m.command = mav_command(MavCmd::NavLand);
   return m;
 }
 MissionItem MissionItem::rtl() {
   MissionItem m;
-  m.command = 20;
+  m.command = mav_command(MavCmd::NavReturnToLaunch);
   return m;
 }
 
@@ -202,7 +228,7 @@ struct Vehicle::Impl {
   std::map<std::uint16_t, msg::CommandAck> acks;
   struct ParamSeen {
     float value = 0;
-    std::uint8_t type = 9;
+    std::uint8_t type = to_underlying(mav::MavParamType::Real32);
     std::uint64_t count = 0;
   };
   std::map<std::string, ParamSeen> params;
@@ -313,34 +339,40 @@ struct Vehicle::Impl {
 
   void send_heartbeat() {
     msg::Heartbeat hb;
-    hb.type = 6;        // MAV_TYPE_GCS
-    hb.autopilot = 8;   // MAV_AUTOPILOT_INVALID
+    hb.type = to_underlying(mav::MavType::Gcs);
+    hb.autopilot = to_underlying(mav::MavAutopilot::Invalid);
     hb.base_mode = 0;
     hb.custom_mode = 0;
-    hb.system_status = 4;  // MAV_STATE_ACTIVE
+    hb.system_status = to_underlying(mav::MavState::Active);
     hb.mavlink_version = 3;
     send(hb);
   }
 
   void request_streams() {
     const auto rate = static_cast<std::uint16_t>(std::clamp(std::lround(config.telemetry_rate_hz), 1L, 50L));
-    const std::pair<std::uint8_t, std::uint16_t> groups[] = {{2, 2}, {6, rate}, {10, rate}, {11, 4}, {12, 2}};
+    using Stream = mav::MavDataStream;
+    const std::pair<Stream, std::uint16_t> groups[] = {
+        {Stream::ExtendedStatus, 2}, {Stream::Position, rate}, {Stream::Extra1, rate}, {Stream::Extra2, 4},
+        {Stream::Extra3, 2}};
     for (const auto& [id, hz] : groups) {
       msg::RequestDataStream r;
       r.target_system = target_sysid;
       r.target_component = target_compid;
-      r.req_stream_id = id;
+      r.req_stream_id = static_cast<std::uint8_t>(to_underlying(id));
       r.req_message_rate = hz;
       r.start_stop = 1;
       send(r);
     }
     // not in any stream group: ask for them by interval (acks are not awaited)
-    const std::pair<std::uint32_t, double> intervals[] = {{242, 1.0}, {245, 1.0}, {49, 5.0}, {158, 0.5}};
+    const std::pair<std::uint32_t, double> intervals[] = {{msg::HomePosition::kId, 1.0},
+                                                           {msg::ExtendedSysState::kId, 1.0},
+                                                           {msg::GpsGlobalOrigin::kId, 5.0},
+                                                           {msg::MountStatus::kId, 0.5}};
     for (const auto& [id, period] : intervals) {
       msg::CommandLong c;
       c.target_system = target_sysid;
       c.target_component = target_compid;
-      c.command = 511;
+      c.command = mav_command(MavCmd::SetMessageInterval);
       c.param1 = static_cast<float>(id);
       c.param2 = static_cast<float>(period * 1e6);
       send(c);
@@ -349,8 +381,13 @@ struct Vehicle::Impl {
 
   // ------------------------------------------------------------------ incoming
   static bool vehicle_heartbeat(const mav::Frame& f, const msg::Heartbeat& hb) {
-    if (hb.type == 6 || hb.type == 26 || hb.type == 27 || hb.type == 18) return false;
-    return hb.autopilot != 8 && f.compid != 154;
+    using mav::MavType;
+    if (mav::is_one_of<MavType>(hb.type,
+                                {MavType::Gcs, MavType::Gimbal, MavType::Adsb, MavType::OnboardController})) {
+      return false;
+    }
+    return hb.autopilot != to_underlying(mav::MavAutopilot::Invalid) &&
+           f.compid != to_underlying(mav::MavComponent::CompIdGimbal);
   }
 
   void handle(const mav::Frame& f) {
@@ -481,31 +518,19 @@ struct Vehicle::Impl {
       case msg::MissionRequest::kId: {
         // both carry (seq, target_system, target_component, mission_type) in the same layout
         const auto m = msg::MissionRequestInt::decode(f.payload.data());
-        if (!mission_active || m.mission_type != 0) return;
+        if (!mission_active || m.mission_type != kMissionTypeMission) return;
         if (m.seq >= mission.size()) return;
         ++mission_requests;
         if (f.msgid == msg::MissionRequestInt::kId) {
           send(mission[m.seq]);
         } else {
-          const msg::MissionItemInt& it = mission[m.seq];
-          msg::MissionItem legacy;
-          legacy.target_system = it.target_system;
-          legacy.target_component = it.target_component;
-          legacy.seq = it.seq;
-          legacy.frame = it.frame == 5 ? 0 : (it.frame == 6 ? 3 : it.frame);
-          legacy.command = it.command;
-          legacy.autocontinue = it.autocontinue;
-          legacy.param1 = it.param1, legacy.param2 = it.param2, legacy.param3 = it.param3, legacy.param4 = it.param4;
-          legacy.x = static_cast<float>(it.x / 1e7);
-          legacy.y = static_cast<float>(it.y / 1e7);
-          legacy.z = it.z;
-          send(legacy);
+          send(mav::legacy_mission_item(mission[m.seq]));
         }
         return;
       }
       case msg::MissionAck::kId: {
         const auto m = msg::MissionAck::decode(f.payload.data());
-        if (mission_active && m.mission_type == 0) mission_ack = m.type;
+        if (mission_active && m.mission_type == kMissionTypeMission) mission_ack = m.type;
         return;
       }
       case msg::Statustext::kId: {
@@ -556,11 +581,11 @@ struct Vehicle::Impl {
         auto it = acks.find(cmd);
         if (it == acks.end()) break;  // silence: try again
         const int result = it->second.result;
-        if (result == 5) {  // IN_PROGRESS: the final ack follows
+        if (result == to_underlying(MavResult::InProgress)) {  // the final ack follows
           acks.erase(it);
           continue;
         }
-        if (result == 0) return {};
+        if (result == to_underlying(MavResult::Accepted)) return {};
         return Result<void>::fail(error_of_mav_result(result),
                                   command_name(cmd) + " refused by the vehicle: MAV_RESULT_" + mav_result_name(result) +
                                       " (" + std::to_string(result) + ")",
@@ -593,7 +618,7 @@ struct Vehicle::Impl {
     msg::SetPositionTargetLocalNed sp;
     sp.target_system = target_sysid;
     sp.target_component = target_compid;
-    sp.coordinate_frame = 1;  // MAV_FRAME_LOCAL_NED
+    sp.coordinate_frame = mav_frame(MavFrame::LocalNed);
     sp.type_mask = mask;
     sp.time_boot_ms = static_cast<std::uint32_t>(std::max(0.0, loop.now()) * 1000.0);
     return sp;
@@ -691,8 +716,8 @@ Result<void> Vehicle::connect(const std::string& address, double timeout_s) {
     msg::CommandLong c;
     c.target_system = s.target_sysid;
     c.target_component = s.target_compid;
-    c.command = 512;  // REQUEST_MESSAGE HOME_POSITION
-    c.param1 = 242;
+    c.command = mav_command(MavCmd::RequestMessage);
+    c.param1 = static_cast<float>(msg::HomePosition::kId);
     s.send(c);
   });
   return {};
@@ -820,7 +845,7 @@ Result<void> Vehicle::goto_geodetic(const Geodetic& p, double yaw_ned_rad) {
   msg::SetPositionTargetGlobalInt sp;
   sp.target_system = s.target_sysid;
   sp.target_component = s.target_compid;
-  sp.coordinate_frame = 5;  // MAV_FRAME_GLOBAL_INT: altitude AMSL
+  sp.coordinate_frame = mav_frame(MavFrame::GlobalInt);  // altitude AMSL
   sp.type_mask = std::isfinite(yaw_ned_rad) ? kMaskPosYaw : kMaskPos;
   sp.lat_int = e7(p.lat_deg);
   sp.lon_int = e7(p.lon_deg);
@@ -932,11 +957,11 @@ Result<void> Vehicle::upload_mission(const std::vector<MissionItem>& items, doub
     m.x = e7(it.lat_deg);
     m.y = e7(it.lon_deg);
     m.z = it.alt_m;
-    m.mission_type = 0;
+    m.mission_type = kMissionTypeMission;
     return m;
   };
   MissionItem home;  // item 0: home (ArduPilot overwrites it with the real home)
-  home.frame = 0;
+  home.frame = mav_frame(MavFrame::Global);
   home.lat_deg = s.tm.home.lat_deg;
   home.lon_deg = s.tm.home.lon_deg;
   home.alt_m = static_cast<float>(s.tm.home.alt_m);
@@ -953,7 +978,7 @@ Result<void> Vehicle::upload_mission(const std::vector<MissionItem>& items, doub
     c.target_system = s.target_sysid;
     c.target_component = s.target_compid;
     c.count = static_cast<std::uint16_t>(s.mission.size());
-    c.mission_type = 0;
+    c.mission_type = kMissionTypeMission;
     if (!s.send(c)) break;
     const double sent_at = s.loop.now();
     (void)s.loop.run_until(
@@ -1017,7 +1042,8 @@ Result<float> Vehicle::set_param(const std::string& name, float value, double ti
   if (name.empty() || name.size() > 16) return Result<float>::fail(Error::kInvalidArgument, "parameter names have 1-16 characters");
   if (!std::isfinite(value)) return Result<float>::fail(Error::kInvalidArgument, "parameter values must be finite");
   const std::uint64_t before = s.params[name].count;
-  const std::uint8_t type = s.params[name].count > 0 ? s.params[name].type : 9;  // MAV_PARAM_TYPE_REAL32
+  const std::uint8_t type =
+      s.params[name].count > 0 ? s.params[name].type : to_underlying(mav::MavParamType::Real32);
   const double deadline = s.loop.now() + timeout_s;
   while (s.loop.now() < deadline && s.fd >= 0) {
     msg::ParamSet ps;

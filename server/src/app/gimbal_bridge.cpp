@@ -8,12 +8,18 @@
 namespace uavsim::server::app {
 
 namespace {
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = common::kPi / 180.0;
 using common::wrap_pi;
+using common::mavlink::MavMountMode;
+
+// RETRACT and NEUTRAL: level and straight ahead
+bool mount_at_rest(std::uint8_t mount_mode) {
+  return common::mavlink::is_one_of<MavMountMode>(mount_mode, {MavMountMode::Retract, MavMountMode::Neutral});
+}
 }  // namespace
 
 void apply_gimbal_state(const mavlink::GimbalState& s, double vehicle_yaw_enu_rad, objects::Gimbal* g) {
-  if (s.mount_mode <= 1) {  // RETRACT, NEUTRAL: level and straight ahead
+  if (mount_at_rest(s.mount_mode)) {
     g->mode = objects::GimbalMode::kForward;
     g->pitch_rad = 0.0;
     g->yaw_rad = 0.0;
@@ -42,7 +48,8 @@ void MavlinkGimbalBridge::update(sim::Simulation& sim) {
     if (s.stamp_s < 0) continue;  // never commanded: the world's mode stays
     const bool fresh = s.stamp_s != applied_stamp_[k];
     // an earth-frame yaw is held while the vehicle turns: re-apply it every step
-    if (!fresh && !(s.yaw_earth_frame && s.mount_mode > 1 && g.mode == objects::GimbalMode::kTargets)) continue;
+    const bool held = s.yaw_earth_frame && !mount_at_rest(s.mount_mode) && g.mode == objects::GimbalMode::kTargets;
+    if (!fresh && !held) continue;
     const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
     const Eigen::Vector3d x = t.q_enu_body * Eigen::Vector3d::UnitX();
     apply_gimbal_state(s, std::atan2(x.y(), x.x()), &g);

@@ -12,18 +12,17 @@ namespace frames = ::uavsim::common::frames;
 
 namespace {
 
-// MAV_RESULT
-constexpr std::uint8_t kAccepted = 0;
-constexpr std::uint8_t kDenied = 2;
-constexpr std::uint8_t kUnsupported = 3;
-constexpr std::uint8_t kFailed = 4;
+constexpr std::uint8_t kAccepted = to_underlying(MavResult::Accepted);
+constexpr std::uint8_t kDenied = to_underlying(MavResult::Denied);
+constexpr std::uint8_t kUnsupported = to_underlying(MavResult::Unsupported);
+constexpr std::uint8_t kFailed = to_underlying(MavResult::Failed);
 
 constexpr double kDegToRad = common::kPi / 180.0;
 
 // ArduPilot answers a refused arm, disarm or take-off with FAILED (behaviour.md §4)
 std::uint8_t failed_unless_accepted(fc::CommandResult r) {
-  if (r == fc::CommandResult::kAccepted) return 0;
-  return r == fc::CommandResult::kUnsupported ? 3 : 4;
+  if (r == fc::CommandResult::kAccepted) return kAccepted;
+  return r == fc::CommandResult::kUnsupported ? kUnsupported : kFailed;
 }
 
 std::uint8_t mav_result(fc::CommandResult r) {
@@ -38,12 +37,15 @@ std::uint8_t mav_result(fc::CommandResult r) {
 }
 
 // type_mask groups: any bit of a group set ignores the whole group (ArduCopter)
-constexpr std::uint16_t kPosMask = 1 | 2 | 4;
-constexpr std::uint16_t kVelMask = 8 | 16 | 32;
-constexpr std::uint16_t kAccMask = 64 | 128 | 256;
-constexpr std::uint16_t kForceSet = 512;
-constexpr std::uint16_t kYawIgnore = 1024;
-constexpr std::uint16_t kYawRateIgnore = 2048;
+using Mask = PositionTargetTypemask;
+constexpr std::uint16_t bits(Mask m) { return static_cast<std::uint16_t>(to_underlying(m)); }
+constexpr std::uint16_t kPosMask = bits(Mask::XIgnore) | bits(Mask::YIgnore) | bits(Mask::ZIgnore);
+constexpr std::uint16_t kVelMask = bits(Mask::VxIgnore) | bits(Mask::VyIgnore) | bits(Mask::VzIgnore);
+constexpr std::uint16_t kAccMask = bits(Mask::AxIgnore) | bits(Mask::AyIgnore) | bits(Mask::AzIgnore);
+constexpr std::uint16_t kForceSet = bits(Mask::ForceSet);
+constexpr std::uint16_t kYawIgnore = bits(Mask::YawIgnore);
+constexpr std::uint16_t kYawRateIgnore = bits(Mask::YawRateIgnore);
+
 
 using limits::within;
 using sim::checked_integer;
@@ -68,8 +70,8 @@ void VehicleLink::ack_command(Link& link, const Frame& frame, std::uint16_t comm
 
 std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::FlightController& fc) {
   const auto& p = c.p;
-  switch (c.command) {
-    case 400: {  // MAV_CMD_COMPONENT_ARM_DISARM
+  switch (static_cast<MavCmd>(c.command)) {
+    case MavCmd::ComponentArmDisarm: {
       if (p[0] == 1.0) {
         if (fc.armed()) return kAccepted;
         const bool force = p[1] == 2989.0 || p[1] == 21196.0;  // both magic values force arming
@@ -81,28 +83,30 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       }
       return kUnsupported;
     }
-    case 176: {  // MAV_CMD_DO_SET_MODE (and the SET_MODE message): needs CUSTOM_MODE_ENABLED
+    case MavCmd::DoSetMode: {  // also the SET_MODE message; needs CUSTOM_MODE_ENABLED
       // both are integers on the wire (SET_MODE); anything a uint8/uint32 cannot hold is refused
       const auto base_mode = checked_integer<std::uint8_t>(p[0]);
       const auto custom_mode = checked_integer<std::uint32_t>(p[1]);
       if (!base_mode || !custom_mode) return kDenied;
-      if ((*base_mode & 1u) == 0) return kFailed;
+      if ((*base_mode & to_underlying(MavModeFlag::CustomModeEnabled)) == 0) return kFailed;
       const auto mode = fc::mode_from_number(*custom_mode);
       if (!mode) return kFailed;
       return mav_result(fc.set_mode(*mode));
     }
-    case 22: {  // MAV_CMD_NAV_TAKEOFF: COMMAND_LONG is GLOBAL_RELATIVE_ALT; COMMAND_INT must be too
-      if (c.is_int && c.frame != 3 && c.frame != 6) return kDenied;
+    case MavCmd::NavTakeoff: {  // COMMAND_LONG is GLOBAL_RELATIVE_ALT; COMMAND_INT must be too
+      if (c.is_int && !is_one_of<MavFrame>(c.frame, {MavFrame::GlobalRelativeAlt, MavFrame::GlobalRelativeAltInt})) {
+        return kDenied;
+      }
       if (!within(p[6], limits::kPosition_m)) return kDenied;
       return failed_unless_accepted(fc.takeoff(p[6]));
     }
-    case 21:  // MAV_CMD_NAV_LAND
+    case MavCmd::NavLand:
       return mav_result(fc.land());
-    case 20:  // MAV_CMD_NAV_RETURN_TO_LAUNCH
+    case MavCmd::NavReturnToLaunch:
       return mav_result(fc.rtl());
-    case 17:  // MAV_CMD_NAV_LOITER_UNLIM
+    case MavCmd::NavLoiterUnlim:
       return mav_result(fc.set_mode(fc::Mode::kLoiter));
-    case 115: {  // MAV_CMD_CONDITION_YAW: angle, rate, direction, relative
+    case MavCmd::ConditionYaw: {  // angle, rate, direction, relative
       if (!within(p[0], limits::kAngle_deg) || !sim::finite_in(p[1], 0.0, limits::kYawRate_deg_s) ||
           !std::isfinite(p[2]) || !std::isfinite(p[3])) {
         return kDenied;
@@ -110,23 +114,23 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       const int dir = p[2] > 0 ? 1 : (p[2] < 0 ? -1 : 0);
       return mav_result(fc.condition_yaw(p[0], p[1], dir, p[3] != 0.0));
     }
-    case 178: {  // MAV_CMD_DO_CHANGE_SPEED: speed type (0..3), speed
+    case MavCmd::DoChangeSpeed: {  // speed type (0..3), speed
       const auto type = checked_integer<int>(p[0], 0, 3);
       if (!type || !within(p[1], limits::kSpeed_m_s)) return kDenied;
       return mav_result(fc.change_speed(*type, p[1]));
     }
-    case 300: {  // MAV_CMD_MISSION_START: first, last item (0, 0 = all)
+    case MavCmd::MissionStart: {  // first, last item (0, 0 = all)
       const auto first = checked_integer<int>(p[0], 0, kMaxSeq);
       const auto last = checked_integer<int>(p[1], 0, kMaxSeq);
       if (!first || !last) return kDenied;
       return mav_result(fc.mission_start(*first, *last));
     }
-    case 224: {  // MAV_CMD_DO_SET_MISSION_CURRENT
+    case MavCmd::DoSetMissionCurrent: {
       const auto seq = checked_integer<int>(p[0], 0, kMaxSeq);
       if (!seq) return kDenied;
       return mav_result(fc.set_mission_current(*seq));
     }
-    case 192: {  // MAV_CMD_DO_REPOSITION (COMMAND_INT): go to lat/lon/alt in GUIDED
+    case MavCmd::DoReposition: {  // COMMAND_INT only: go to lat/lon/alt in GUIDED
       if (!c.is_int) return kUnsupported;
       // NaN altitude means "keep the current one" (MAVLink's convention); any other non-number is refused
       if (!limits::valid_lat_lon(c.x / 1e7, c.y / 1e7) ||
@@ -145,13 +149,13 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
         pos.y() = xy.y();
       }
       if (std::isfinite(p[6])) {
-        const bool amsl = c.frame == 0 || c.frame == 5;
+        const bool amsl = is_one_of<MavFrame>(c.frame, {MavFrame::Global, MavFrame::GlobalInt});
         pos.z() = amsl ? p[6] - config_.origin.alt_m : fc.home_enu_m().z() + p[6];
       }
       t.position_enu_m = pos;
       return mav_result(fc.set_guided_target(t));
     }
-    case 205: {  // MAV_CMD_DO_MOUNT_CONTROL: pitch, roll, yaw (deg), mode in param7
+    case MavCmd::DoMountControl: {  // pitch, roll, yaw (deg), mode in param7
       // NaN leaves an axis as it is; MAV_MOUNT_MODE is 0..6 (0 here also leaves the mode)
       for (int i : {0, 1, 2}) {
         if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
@@ -167,7 +171,7 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       gimbal_.stamp_s = now_s();
       return kAccepted;
     }
-    case 1000: {  // MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW: pitch, yaw (deg), rates (deg/s), flags
+    case MavCmd::DoGimbalManagerPitchyaw: {  // pitch, yaw (deg), rates (deg/s), flags
       // NaN leaves an angle as it is and means rate 0 / no flags
       for (int i : {0, 1}) {
         if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
@@ -181,27 +185,27 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       if (std::isfinite(p[1])) gimbal_.yaw_deg = p[1];
       gimbal_.pitch_rate_deg_s = std::isfinite(p[2]) ? p[2] : 0.0;
       gimbal_.yaw_rate_deg_s = std::isfinite(p[3]) ? p[3] : 0.0;
-      gimbal_.yaw_earth_frame = (*flags & 16u) != 0;
-      gimbal_.mount_mode = 2;
+      gimbal_.yaw_earth_frame = (*flags & to_underlying(GimbalManagerFlags::YawLock)) != 0;
+      gimbal_.mount_mode = to_underlying(MavMountMode::MavlinkTargeting);
       gimbal_.stamp_s = now_s();
       return kAccepted;
     }
-    case 410:  // MAV_CMD_GET_HOME_POSITION
+    case MavCmd::GetHomePosition:
       if (!fc.home_set()) return kFailed;
       send_home(link);
       send_message_by_id(link, msg::GpsGlobalOrigin::kId);
       return kAccepted;
-    case 520:  // MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES
+    case MavCmd::RequestAutopilotCapabilities:
       if (p[0] == 1.0) send_autopilot_version(link);
       return kAccepted;
-    case 512: {  // MAV_CMD_REQUEST_MESSAGE: sent at the next control step, after this ack
+    case MavCmd::RequestMessage: {  // sent at the next control step, after this ack
       const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
       if (!id) return kDenied;
       if (!can_send(*id)) return kFailed;
       link.one_shot.push_back(*id);
       return kAccepted;
     }
-    case 511: {  // MAV_CMD_SET_MESSAGE_INTERVAL: msgid, interval us (0 default, -1 stop)
+    case MavCmd::SetMessageInterval: {  // msgid, interval us (0 default, -1 stop)
       const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
       if (!id || !std::isfinite(p[1])) return kDenied;
       Stream* stream = nullptr;
@@ -222,7 +226,7 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       stream->next_due_s = now_s();  // first one at the next control step
       return kAccepted;
     }
-    case 510: {  // MAV_CMD_GET_MESSAGE_INTERVAL -> MESSAGE_INTERVAL
+    case MavCmd::GetMessageInterval: {  // -> MESSAGE_INTERVAL
       const auto checked_id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
       if (!checked_id) return kDenied;
       const std::uint32_t id = *checked_id;
@@ -235,8 +239,8 @@ std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::F
       send(link, mi);
       return kAccepted;
     }
-    case 42428:  // MAV_CMD_DO_SEND_BANNER
-      send_status_text(6, "ArduCopter V4.5.0 (uavsim)");
+    case MavCmd::DoSendBanner:
+      send_status_text(to_underlying(MavSeverity::Info), "ArduCopter V4.5.0 (uavsim)");
       return kAccepted;
     default:
       return kUnsupported;
@@ -266,8 +270,10 @@ void VehicleLink::apply_setpoint(std::uint16_t mask, int frame, std::optional<Ei
   const fc::EstimatedState& est = fc.estimate();
   const double yaw_now_ned =
       frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(est.q_enu_body)).yaw_rad;
-  const bool body = frame == 8 || frame == 9;            // BODY_NED, BODY_OFFSET_NED
-  const bool offset = frame == 7 || frame == 8 || frame == 9;  // relative to the current position
+  const bool body = is_one_of<MavFrame>(frame, {MavFrame::BodyNed, MavFrame::BodyOffsetNed});
+  // relative to the current position
+  const bool offset =
+      is_one_of<MavFrame>(frame, {MavFrame::LocalOffsetNed, MavFrame::BodyNed, MavFrame::BodyOffsetNed});
   Eigen::Vector3d vel_ned = vel_ned_in, acc_ned = acc_ned_in;
   // sanity: every used field finite and of a size a vehicle could be asked for
   if ((use_vel && (!within(vel_ned, limits::kSpeed_m_s) || vel_ned.norm() > limits::kSpeed_m_s)) ||
@@ -304,7 +310,8 @@ void VehicleLink::apply_setpoint(std::uint16_t mask, int frame, std::optional<Ei
 void VehicleLink::handle_set_position_target_local(const msg::SetPositionTargetLocalNed& m,
                                                    fc::FlightController& fc) {
   const int frame = m.coordinate_frame;
-  if (frame != 1 && frame != 7 && frame != 8 && frame != 9) {
+  if (!is_one_of<MavFrame>(
+          frame, {MavFrame::LocalNed, MavFrame::LocalOffsetNed, MavFrame::BodyNed, MavFrame::BodyOffsetNed})) {
     hold_position(fc);
     return;
   }
@@ -315,8 +322,10 @@ void VehicleLink::handle_set_position_target_local(const msg::SetPositionTargetL
 void VehicleLink::handle_set_position_target_global(const msg::SetPositionTargetGlobalInt& m,
                                                     fc::FlightController& fc) {
   const int frame = m.coordinate_frame;
-  const bool amsl = frame == 0 || frame == 5;
-  const bool relative = frame == 3 || frame == 6 || frame == 10 || frame == 11;  // terrain treated as relative
+  const bool amsl = is_one_of<MavFrame>(frame, {MavFrame::Global, MavFrame::GlobalInt});
+  const bool relative = is_one_of<MavFrame>(frame, {MavFrame::GlobalRelativeAlt, MavFrame::GlobalRelativeAltInt,
+                                         MavFrame::GlobalTerrainAlt,  // terrain treated as relative
+                                         MavFrame::GlobalTerrainAltInt});
   if (!amsl && !relative) {
     hold_position(fc);
     return;

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 
+#include "uavsim/common/mavlink/generated/enums.hpp"
+
 namespace uavsim::server::mavlink {
 
 struct GimbalState {
@@ -14,7 +16,8 @@ struct GimbalState {
   bool yaw_earth_frame = false;          // yaw is a heading (0 = north) instead of relative to the body
   double pitch_rate_deg_s = 0.0;         // rate commands (NaN-free; 0 when not given)
   double yaw_rate_deg_s = 0.0;
-  std::uint8_t mount_mode = 2;           // MAV_MOUNT_MODE (2 = MAVLINK_TARGETING)
+  std::uint8_t mount_mode =  // MAV_MOUNT_MODE
+      common::mavlink::to_underlying(common::mavlink::MavMountMode::MavlinkTargeting);
   double stamp_s = -1.0;                 // sim time of the last command; < 0: never commanded
 };
 

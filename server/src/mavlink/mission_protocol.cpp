@@ -8,6 +8,7 @@
 #include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "uavsim/common/mavlink/mission_item.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -15,14 +16,21 @@ namespace frames = ::uavsim::common::frames;
 
 namespace {
 
-// MAV_MISSION_RESULT
-constexpr std::uint8_t kMissionAccepted = 0;
-constexpr std::uint8_t kMissionError = 1;
-constexpr std::uint8_t kMissionUnsupportedFrame = 2;
-constexpr std::uint8_t kMissionUnsupported = 3;
-constexpr std::uint8_t kMissionNoSpace = 4;
-constexpr std::uint8_t kMissionInvalidSequence = 13;
-constexpr std::uint8_t kMissionCancelled = 15;
+constexpr std::uint8_t result(MavMissionResult r) { return static_cast<std::uint8_t>(to_underlying(r)); }
+constexpr std::uint8_t kMissionAccepted = result(MavMissionResult::Accepted);
+constexpr std::uint8_t kMissionError = result(MavMissionResult::Error);
+constexpr std::uint8_t kMissionUnsupportedFrame = result(MavMissionResult::UnsupportedFrame);
+constexpr std::uint8_t kMissionUnsupported = result(MavMissionResult::Unsupported);
+constexpr std::uint8_t kMissionNoSpace = result(MavMissionResult::NoSpace);
+constexpr std::uint8_t kMissionInvalidSequence = result(MavMissionResult::InvalidSequence);
+constexpr std::uint8_t kMissionCancelled = result(MavMissionResult::OperationCancelled);
+
+// the mission proper (no fence or rally points)
+constexpr std::uint8_t kMissionTypeMission = to_underlying(MavMissionType::Mission);
+
+// a MAV_CMD as MISSION_ITEM_INT's command field holds it
+constexpr std::uint16_t mav_command(MavCmd c) { return static_cast<std::uint16_t>(to_underlying(c)); }
+constexpr std::uint8_t mav_frame(MavFrame f) { return static_cast<std::uint8_t>(to_underlying(f)); }
 
 constexpr int kMaxMissionItems = 700;       // ArduPilot's SITL storage holds ~700 items
 constexpr double kRequestRetryS = 1.0;
@@ -30,13 +38,13 @@ constexpr double kUploadTimeoutS = 8.0;
 
 // the parameters each supported command uses, in a sane range (hold times, speeds, angles)
 bool params_in_range(const msg::MissionItemInt& m) {
-  switch (m.command) {
-    case 16:  // NAV_WAYPOINT: hold time
-    case 19:  // NAV_LOITER_TIME: seconds
+  switch (static_cast<MavCmd>(m.command)) {
+    case MavCmd::NavWaypoint:  // hold time
+    case MavCmd::NavLoiterTime:  // seconds
       return sim::finite_in(m.param1, 0.0, limits::kDuration_s);
-    case 178:  // DO_CHANGE_SPEED: speed
+    case MavCmd::DoChangeSpeed:  // speed
       return limits::within(m.param2, limits::kSpeed_m_s);
-    case 115:  // CONDITION_YAW: angle
+    case MavCmd::ConditionYaw:  // angle
       return limits::within(m.param1, limits::kAngle_deg);
     default:
       return true;
@@ -60,13 +68,15 @@ msg::MissionCurrent VehicleLink::mission_current() const {
   msg::MissionCurrent m;
   m.seq = static_cast<std::uint16_t>(std::max(0, fc.mission_current()));
   m.total = static_cast<std::uint16_t>(fc.mission().empty() ? 0 : fc.mission().size() - 1);
-  m.mission_state = fc.mission().size() <= 1 ? 1 : (fc.mode() == fc::Mode::kAuto ? 3 : 2);  // NO_MISSION/ACTIVE/NOT_STARTED
+  const MissionState state = fc.mission().size() <= 1 ? MissionState::NoMission
+                             : (fc.mode() == fc::Mode::kAuto ? MissionState::Active : MissionState::NotStarted);
+  m.mission_state = static_cast<std::uint8_t>(to_underlying(state));
   m.mission_mode = fc.mode() == fc::Mode::kAuto ? 1 : 0;
   return m;
 }
 
 void VehicleLink::handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m) {
-  if (m.mission_type != 0) {  // no fence or rally support
+  if (m.mission_type != kMissionTypeMission) {  // no fence or rally support
     send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, m.mission_type);
     return;
   }
@@ -126,10 +136,11 @@ std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg:
   const fc::FlightController& fc = sim_.fc(vehicle_);
   fc::MissionItem item;
   // frame: global AMSL, relative to home, or terrain (treated as relative); local frames are not missions
-  const int frame = m.frame;
-  const bool amsl = frame == 0 || frame == 5;
-  const bool relative = frame == 3 || frame == 6 || frame == 10 || frame == 11;
-  const bool needs_position = m.command == 16 || m.command == 22 || m.command == 21 || m.command == 19;
+  const bool amsl = is_one_of<MavFrame>(m.frame, {MavFrame::Global, MavFrame::GlobalInt});
+  const bool relative = is_one_of<MavFrame>(m.frame, {MavFrame::GlobalRelativeAlt, MavFrame::GlobalRelativeAltInt,
+                                                      MavFrame::GlobalTerrainAlt, MavFrame::GlobalTerrainAltInt});
+  const bool needs_position = is_one_of<MavCmd>(
+      m.command, {MavCmd::NavWaypoint, MavCmd::NavTakeoff, MavCmd::NavLand, MavCmd::NavLoiterTime});
   if (needs_position && !amsl && !relative) {
     *error = kMissionUnsupportedFrame;
     return std::nullopt;
@@ -150,32 +161,32 @@ std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg:
   } else {
     item.position_enu_m = {0.0, 0.0, up};
   }
-  switch (m.command) {
-    case 16:  // NAV_WAYPOINT: param1 = hold time
+  switch (static_cast<MavCmd>(m.command)) {
+    case MavCmd::NavWaypoint:  // param1 = hold time
       item.kind = fc::MissionItem::Kind::kWaypoint;
       item.param_s_or_m_s = m.param1;
       break;
-    case 22:  // NAV_TAKEOFF: altitude above home
+    case MavCmd::NavTakeoff:  // altitude above home
       item.kind = fc::MissionItem::Kind::kTakeoff;
       item.position_enu_m.z() = amsl ? m.z - config_.origin.alt_m - home_up : m.z;
       break;
-    case 21:  // NAV_LAND
+    case MavCmd::NavLand:
       item.kind = fc::MissionItem::Kind::kLand;
       break;
-    case 20:  // NAV_RETURN_TO_LAUNCH
+    case MavCmd::NavReturnToLaunch:
       item.kind = fc::MissionItem::Kind::kRtl;
       item.position_valid = false;
       break;
-    case 19:  // NAV_LOITER_TIME: param1 = seconds
+    case MavCmd::NavLoiterTime:  // param1 = seconds
       item.kind = fc::MissionItem::Kind::kLoiterTime;
       item.param_s_or_m_s = m.param1;
       break;
-    case 178:  // DO_CHANGE_SPEED: param2 = speed
+    case MavCmd::DoChangeSpeed:  // param2 = speed
       item.kind = fc::MissionItem::Kind::kChangeSpeed;
       item.param_s_or_m_s = m.param2;
       item.position_valid = false;
       break;
-    case 115:  // CONDITION_YAW: param1 = angle
+    case MavCmd::ConditionYaw:  // param1 = angle
       item.kind = fc::MissionItem::Kind::kConditionYaw;
       item.yaw_deg = m.param1;
       item.position_valid = false;
@@ -196,7 +207,7 @@ msg::MissionItemInt VehicleLink::mission_item_to_mavlink(const fc::MissionItem& 
   const double home_up = fc.home_set() ? fc.home_enu_m().z() : 0.0;
   msg::MissionItemInt m;
   m.seq = static_cast<std::uint16_t>(seq);
-  m.frame = 6;  // GLOBAL_RELATIVE_ALT_INT
+  m.frame = mav_frame(MavFrame::GlobalRelativeAltInt);
   m.autocontinue = 1;
   m.current = (seq == fc.mission_current()) ? 1 : 0;
   if (item.position_valid) {
@@ -207,33 +218,33 @@ msg::MissionItemInt VehicleLink::mission_item_to_mavlink(const fc::MissionItem& 
   m.z = static_cast<float>(item.position_enu_m.z() - home_up);
   switch (item.kind) {
     case fc::MissionItem::Kind::kWaypoint:
-      m.command = 16;
+      m.command = mav_command(MavCmd::NavWaypoint);
       m.param1 = static_cast<float>(item.param_s_or_m_s);
       break;
     case fc::MissionItem::Kind::kTakeoff:
-      m.command = 22;
+      m.command = mav_command(MavCmd::NavTakeoff);
       m.z = static_cast<float>(item.position_enu_m.z());
       break;
-    case fc::MissionItem::Kind::kLand: m.command = 21; break;
-    case fc::MissionItem::Kind::kRtl: m.command = 20; break;
+    case fc::MissionItem::Kind::kLand: m.command = mav_command(MavCmd::NavLand); break;
+    case fc::MissionItem::Kind::kRtl: m.command = mav_command(MavCmd::NavReturnToLaunch); break;
     case fc::MissionItem::Kind::kLoiterTime:
-      m.command = 19;
+      m.command = mav_command(MavCmd::NavLoiterTime);
       m.param1 = static_cast<float>(item.param_s_or_m_s);
       break;
     case fc::MissionItem::Kind::kChangeSpeed:
-      m.command = 178;
-      m.param1 = 1;  // ground speed
+      m.command = mav_command(MavCmd::DoChangeSpeed);
+      m.param1 = static_cast<float>(to_underlying(SpeedType::Groundspeed));
       m.param2 = static_cast<float>(item.param_s_or_m_s);
       m.param3 = -1;
       break;
     case fc::MissionItem::Kind::kConditionYaw:
-      m.command = 115;
+      m.command = mav_command(MavCmd::ConditionYaw);
       m.param1 = static_cast<float>(item.yaw_deg);
       break;
   }
   if (seq == 0) {  // home: absolute altitude, frame GLOBAL, as ArduPilot sends it
-    m.frame = 0;
-    m.command = 16;
+    m.frame = mav_frame(MavFrame::Global);
+    m.command = mav_command(MavCmd::NavWaypoint);
     m.z = static_cast<float>(config_.origin.alt_m + item.position_enu_m.z());
   }
   return m;
@@ -243,7 +254,7 @@ void VehicleLink::guided_goto(Link& link, const Frame& f, const msg::MissionItem
                               fc::FlightController& fc) {
   std::uint8_t error = kMissionError;
   msg::MissionItemInt item = m;
-  item.command = 16;
+  item.command = mav_command(MavCmd::NavWaypoint);
   auto target_item = mission_item_from_mavlink(item, is_int, &error);
   if (!target_item || fc.mode() != fc::Mode::kGuided) {
     send_mission_ack(link, f.sysid, f.compid, target_item ? kMissionError : error);
@@ -276,7 +287,7 @@ void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::Mis
     return;
   }
   MissionUpload& u = link.upload;
-  if (!u.active || m.mission_type != 0) {
+  if (!u.active || m.mission_type != kMissionTypeMission) {
     StatCounters::add(stats_.rejected_inputs);
     return;
   }
@@ -321,7 +332,9 @@ void VehicleLink::handle_mission_request_list(Link& link, const Frame& f, int mi
   c.target_system = f.sysid;
   c.target_component = f.compid;
   c.mission_type = static_cast<std::uint8_t>(mission_type);
-  c.count = mission_type == 0 ? static_cast<std::uint16_t>(std::max<std::size_t>(fc.mission().size(), 1)) : 0;
+  c.count = mission_type == kMissionTypeMission
+                ? static_cast<std::uint16_t>(std::max<std::size_t>(fc.mission().size(), 1))
+                : 0;
   send(link, c);
 }
 
@@ -346,28 +359,12 @@ void VehicleLink::handle_mission_request(Link& link, const Frame& f, int seq, bo
     send(link, m);
     return;
   }
-  // legacy MISSION_ITEM: degrees as float
-  msg::MissionItem legacy;
-  legacy.param1 = m.param1;
-  legacy.param2 = m.param2;
-  legacy.param3 = m.param3;
-  legacy.param4 = m.param4;
-  legacy.x = static_cast<float>(m.x / 1e7);
-  legacy.y = static_cast<float>(m.y / 1e7);
-  legacy.z = m.z;
-  legacy.seq = m.seq;
-  legacy.command = m.command;
-  legacy.target_system = m.target_system;
-  legacy.target_component = m.target_component;
-  legacy.frame = m.frame == 6 ? 3 : (m.frame == 5 ? 0 : m.frame);
-  legacy.current = m.current;
-  legacy.autocontinue = m.autocontinue;
-  send(link, legacy);
+  send(link, legacy_mission_item(m));
 }
 
 void VehicleLink::handle_mission_clear_all(Link& link, const Frame& f, int mission_type,
                                            fc::FlightController& fc) {
-  if (mission_type != 0 && mission_type != 255) {
+  if (!is_one_of<MavMissionType>(mission_type, {MavMissionType::Mission, MavMissionType::All})) {
     send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, static_cast<std::uint8_t>(mission_type));
     return;
   }

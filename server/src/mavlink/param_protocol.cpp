@@ -26,8 +26,9 @@ void VehicleLink::send_param(Link& link, std::size_t index) {
 
 void VehicleLink::handle_param_request_list(Link& link) {
   // banner first, as ArduPilot does, then the whole table paced over the next control steps
-  send_status_text(6, "ArduCopter V4.5.0 (uavsim)");
-  send_status_text(6, mav_type_ == 13 ? "Frame: HEXA" : "Frame: QUAD");
+  send_status_text(to_underlying(MavSeverity::Info), "ArduCopter V4.5.0 (uavsim)");
+  send_status_text(to_underlying(MavSeverity::Info),
+                   mav_type_ == to_underlying(MavType::Hexarotor) ? "Frame: HEXA" : "Frame: QUAD");
   link.param_next = 0;
 }
 

@@ -21,6 +21,18 @@ namespace frames = ::uavsim::common::frames;
 namespace {
 
 constexpr double kRadToDeg = 180.0 / common::kPi;
+
+// an enumerator (or an or of bitmask enumerators) as a message field of type T holds it
+template <class T, class E>
+constexpr T field(std::initializer_list<E> values) {
+  std::uint64_t v = 0;
+  for (E e : values) v |= static_cast<std::uint64_t>(to_underlying(e));
+  return static_cast<T>(v);
+}
+template <class T, class E>
+constexpr T field(E value) {
+  return field<T>({value});
+}
 // SYSTEM_TIME.time_unix_usec: a fixed epoch (2024-01-01 00:00:00 UTC) plus sim time, so runs are reproducible
 constexpr std::uint64_t kSimEpochUnixUs = 1704067200ULL * 1000000ULL;
 
@@ -77,12 +89,12 @@ T clamp_to(double v) {
 
 std::uint8_t landed_state_number(fc::LandedState s) {
   switch (s) {
-    case fc::LandedState::kOnGround: return 1;
-    case fc::LandedState::kInAir: return 2;
-    case fc::LandedState::kTakeoff: return 3;
-    case fc::LandedState::kLanding: return 4;
+    case fc::LandedState::kOnGround: return field<std::uint8_t>(MavLandedState::OnGround);
+    case fc::LandedState::kInAir: return field<std::uint8_t>(MavLandedState::InAir);
+    case fc::LandedState::kTakeoff: return field<std::uint8_t>(MavLandedState::Takeoff);
+    case fc::LandedState::kLanding: return field<std::uint8_t>(MavLandedState::Landing);
   }
-  return 0;
+  return field<std::uint8_t>(MavLandedState::Undefined);
 }
 
 }  // namespace
@@ -172,21 +184,22 @@ msg::Heartbeat VehicleLink::heartbeat() const {
   const fc::Mode mode = fc.mode();
   msg::Heartbeat h;
   h.type = mav_type_;
-  h.autopilot = 3;  // MAV_AUTOPILOT_ARDUPILOTMEGA
+  h.autopilot = field<std::uint8_t>(MavAutopilot::Ardupilotmega);
   // CUSTOM_MODE_ENABLED | STABILIZE_ENABLED | MANUAL_INPUT_ENABLED always; GUIDED_ENABLED when the horizontal
   // position controller runs; SAFETY_ARMED when armed (behaviour.md §1)
-  h.base_mode = 1 | 16 | 64;
+  h.base_mode = field<std::uint8_t>(
+      {MavModeFlag::CustomModeEnabled, MavModeFlag::StabilizeEnabled, MavModeFlag::ManualInputEnabled});
   const bool ne_control = mode == fc::Mode::kGuided || mode == fc::Mode::kAuto || mode == fc::Mode::kLoiter ||
                           mode == fc::Mode::kRtl || mode == fc::Mode::kLand || mode == fc::Mode::kBrake;
-  if (fc.armed()) h.base_mode |= 128;
-  if (fc.armed() && ne_control) h.base_mode |= 8;
+  if (fc.armed()) h.base_mode |= field<std::uint8_t>(MavModeFlag::SafetyArmed);
+  if (fc.armed() && ne_control) h.base_mode |= field<std::uint8_t>(MavModeFlag::GuidedEnabled);
   h.custom_mode = static_cast<std::uint32_t>(mode);
   if (sim_.runtime(vehicle_).crashed) {
-    h.system_status = 5;  // CRITICAL
+    h.system_status = field<std::uint8_t>(MavState::Critical);
   } else if (fc.landed_state() == fc::LandedState::kOnGround) {
-    h.system_status = 3;  // STANDBY
+    h.system_status = field<std::uint8_t>(MavState::Standby);
   } else {
-    h.system_status = 4;  // ACTIVE
+    h.system_status = field<std::uint8_t>(MavState::Active);
   }
   h.mavlink_version = 3;
   return h;
@@ -386,35 +399,36 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
       if (!target) return true;  // nothing to report outside guided control
       msg::PositionTargetLocalNed m;
       m.time_boot_ms = t_ms;
-      m.coordinate_frame = 1;  // MAV_FRAME_LOCAL_NED
+      m.coordinate_frame = field<std::uint8_t>(MavFrame::LocalNed);
+      using Ignore = PositionTargetTypemask;
       std::uint16_t mask = 0;
       if (target->position_enu_m) {
         const Eigen::Vector3d p = frames::ned_from_enu(*target->position_enu_m);
         m.x = static_cast<float>(p.x()), m.y = static_cast<float>(p.y()), m.z = static_cast<float>(p.z());
       } else {
-        mask |= 1 | 2 | 4;
+        mask |= field<std::uint16_t>({Ignore::XIgnore, Ignore::YIgnore, Ignore::ZIgnore});
       }
       if (target->velocity_enu_m_s) {
         const Eigen::Vector3d v = frames::ned_from_enu(*target->velocity_enu_m_s);
         m.vx = static_cast<float>(v.x()), m.vy = static_cast<float>(v.y()), m.vz = static_cast<float>(v.z());
       } else {
-        mask |= 8 | 16 | 32;
+        mask |= field<std::uint16_t>({Ignore::VxIgnore, Ignore::VyIgnore, Ignore::VzIgnore});
       }
       if (target->accel_enu_m_s2) {
         const Eigen::Vector3d a = frames::ned_from_enu(*target->accel_enu_m_s2);
         m.afx = static_cast<float>(a.x()), m.afy = static_cast<float>(a.y()), m.afz = static_cast<float>(a.z());
       } else {
-        mask |= 64 | 128 | 256;
+        mask |= field<std::uint16_t>({Ignore::AxIgnore, Ignore::AyIgnore, Ignore::AzIgnore});
       }
       if (target->yaw_enu_rad) {
         m.yaw = static_cast<float>(frames::yaw_ned_from_yaw_enu(*target->yaw_enu_rad));
       } else {
-        mask |= 1024;
+        mask |= field<std::uint16_t>(Ignore::YawIgnore);
       }
       if (target->yaw_rate_rad_s) {
         m.yaw_rate = static_cast<float>(-*target->yaw_rate_rad_s);
       } else {
-        mask |= 2048;
+        mask |= field<std::uint16_t>(Ignore::YawRateIgnore);
       }
       m.type_mask = mask;
       send(link, m);
@@ -424,8 +438,8 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
       const airframe::BatteryState& b = sim_.runtime(vehicle_).battery;
       msg::BatteryStatus m;
       m.id = 0;
-      m.battery_function = 0;  // MAV_BATTERY_FUNCTION_UNKNOWN
-      m.type = 0;              // MAV_BATTERY_TYPE_UNKNOWN
+      m.battery_function = field<std::uint8_t>(MavBatteryFunction::Unknown);
+      m.type = field<std::uint8_t>(MavBatteryType::Unknown);
       m.temperature = std::numeric_limits<std::int16_t>::max();  // unknown
       m.voltages.fill(std::numeric_limits<std::uint16_t>::max());
       m.voltages[0] = clamp_to<std::uint16_t>(b.voltage_v * 1000.0);
@@ -440,7 +454,12 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
     case msg::EkfStatusReport::kId: {
       msg::EkfStatusReport m;
       // attitude, velocities, relative and absolute horizontal/vertical position, predicted positions
-      m.flags = est.gps_ok ? (1 | 2 | 4 | 8 | 16 | 32 | 256 | 512) : (1 | 2 | 4 | 128);
+      using Ekf = EkfStatusFlags;
+      m.flags = est.gps_ok ? field<std::uint16_t>({Ekf::Attitude, Ekf::VelocityHoriz, Ekf::VelocityVert,
+                                                   Ekf::PosHorizRel, Ekf::PosHorizAbs, Ekf::PosVertAbs,
+                                                   Ekf::PredPosHorizRel, Ekf::PredPosHorizAbs})
+                           : field<std::uint16_t>({Ekf::Attitude, Ekf::VelocityHoriz, Ekf::VelocityVert,
+                                                   Ekf::ConstPosMode});
       m.velocity_variance = m.pos_horiz_variance = m.pos_vert_variance = m.compass_variance = 0.05f;
       send(link, m);
       return true;
@@ -459,7 +478,7 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
     }
     case msg::ExtendedSysState::kId: {
       msg::ExtendedSysState m;
-      m.vtol_state = 0;  // MAV_VTOL_STATE_UNDEFINED
+      m.vtol_state = field<std::uint8_t>(MavVtolState::Undefined);
       m.landed_state = landed_state_number(fc.landed_state());
       send(link, m);
       return true;
@@ -494,8 +513,7 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
         return true;
       }
       constexpr double kDegToRad = common::kPi / 180.0;
-      constexpr std::uint16_t kRollLock = 4, kPitchLock = 8, kYawLock = 16, kYawInVehicleFrame = 32,
-                              kYawInEarthFrame = 64;
+      using Gimbal = GimbalDeviceFlags;
       const double q_yaw_deg = gimbal_.yaw_earth_frame ? yaw_north_deg : yaw_body_deg;
       // FRD attitude of the camera: yaw, then pitch, then roll (ZYX), w x y z
       const Eigen::Quaterniond q = Eigen::AngleAxisd(q_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()) *
@@ -508,8 +526,10 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
       m.angular_velocity_x = 0.0f;
       m.angular_velocity_y = static_cast<float>(gimbal_.pitch_rate_deg_s * kDegToRad);
       m.angular_velocity_z = static_cast<float>(gimbal_.yaw_rate_deg_s * kDegToRad);
-      m.flags = kRollLock | kPitchLock |
-                (gimbal_.yaw_earth_frame ? (kYawLock | kYawInEarthFrame) : kYawInVehicleFrame);
+      m.flags = gimbal_.yaw_earth_frame
+                    ? field<std::uint16_t>({Gimbal::RollLock, Gimbal::PitchLock, Gimbal::YawLock,
+                                            Gimbal::YawInEarthFrame})
+                    : field<std::uint16_t>({Gimbal::RollLock, Gimbal::PitchLock, Gimbal::YawInVehicleFrame});
       m.delta_yaw = static_cast<float>(yaw_body_deg * kDegToRad);
       m.delta_yaw_velocity = std::numeric_limits<float>::quiet_NaN();
       m.gimbal_device_id = 1;  // the autopilot reports for its first (non-MAVLink) gimbal

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "mavlink/input_limits.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -41,7 +42,9 @@ VehicleLink::VehicleLink(sim::Simulation& sim, std::size_t vehicle, const Endpoi
     : sim_(sim), vehicle_(vehicle), config_(config), stats_(stats), signing_cell_(signing_cell) {
   // MAV_TYPE from the rotor count, as ArduPilot's motors matrix reports it
   const std::size_t rotors = sim.airframe(vehicle).rotors.size();
-  mav_type_ = rotors == 6 ? 13 : (rotors == 8 ? 14 : 2);
+  const MavType type =
+      rotors == 6 ? MavType::Hexarotor : (rotors == 8 ? MavType::Octorotor : MavType::Quadrotor);
+  mav_type_ = static_cast<std::uint8_t>(to_underlying(type));
   if (const auto id = sim.fc(vehicle).param("SYSID_THISMAV")) sysid_ = static_cast<std::uint8_t>(*id);
   if (config.auto_sysid) sysid_ = static_cast<std::uint8_t>(std::min<std::size_t>(vehicle + 1, 255));
   if (!config.tlog_dir.empty()) {
@@ -136,7 +139,7 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
     case msg::Heartbeat::kId: {
       // any heartbeat from a ground station keeps the GCS-loss failsafe fed
       const auto m = msg::Heartbeat::decode(f.payload.data());
-      if (m.type == 6 /* MAV_TYPE_GCS */ || m.autopilot == 8 /* MAV_AUTOPILOT_INVALID */) {
+      if (m.type == to_underlying(MavType::Gcs) || m.autopilot == to_underlying(MavAutopilot::Invalid)) {
         fc.on_gcs_heartbeat(now_s());
       }
       break;
@@ -170,7 +173,7 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
       if (wrong_target(m.target_system, 0)) break;
       StatCounters::add(stats_.commands);
       CommandArgs c;
-      c.command = 176;  // same path as MAV_CMD_DO_SET_MODE
+      c.command = to_underlying(MavCmd::DoSetMode);  // the same path as the command
       c.p[0] = m.base_mode;
       c.p[1] = m.custom_mode;
       ack_command(link, f, msg::SetMode::kId, handle_command(link, c, fc));
@@ -200,7 +203,7 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
         StatCounters::add(stats_.wrong_target);
         break;
       }
-      constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+      constexpr double kRadToDeg = 180.0 / common::kPi;
       // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
       const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
       if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||
@@ -212,7 +215,7 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
       if (std::isfinite(m.yaw)) gimbal_.yaw_deg = m.yaw * kRadToDeg;
       gimbal_.pitch_rate_deg_s = std::isfinite(m.pitch_rate) ? m.pitch_rate * kRadToDeg : 0.0;
       gimbal_.yaw_rate_deg_s = std::isfinite(m.yaw_rate) ? m.yaw_rate * kRadToDeg : 0.0;
-      gimbal_.yaw_earth_frame = (m.flags & 16) != 0;  // GIMBAL_MANAGER_FLAGS_YAW_LOCK
+      gimbal_.yaw_earth_frame = (m.flags & to_underlying(GimbalManagerFlags::YawLock)) != 0;
       gimbal_.stamp_s = now_s();
       break;
     }

@@ -21,6 +21,7 @@
 #include "uavsim/common/mavlink/codec.hpp"
 #include "uavsim/common/mavlink/signing.hpp"
 #include "mavlink/endpoint.hpp"
+#include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/generated/messages.hpp"
 #include "mavlink/outbox.hpp"
 #include "mavlink/tlog.hpp"
@@ -71,20 +72,20 @@ class SigningKeyCell {
 // Unsigned messages ArduPilot accepts on a signed link (GCS_Signing.cpp accept_unsigned_callback): the
 // radios' own status reports, which a radio cannot sign.
 inline bool accepted_unsigned(std::uint32_t msgid) {
-  return msgid == 109 /* RADIO_STATUS */ || msgid == 166 /* RADIO */;
+  return msgid == msg::RadioStatus::kId || msgid == 166 /* RADIO (ardupilotmega; no struct generated) */;
 }
 
 // A message a client may have streamed, with the data-stream group REQUEST_DATA_STREAM addresses it by.
 enum class StreamGroup : std::uint8_t {
   kNone = 0,  // only by SET_MESSAGE_INTERVAL
-  kExtendedStatus = 2,
-  kPosition = 6,
-  kExtra1 = 10,
-  kExtra2 = 11,
-  kExtra3 = 12,
+  kExtendedStatus = to_underlying(MavDataStream::ExtendedStatus),
+  kPosition = to_underlying(MavDataStream::Position),
+  kExtra1 = to_underlying(MavDataStream::Extra1),
+  kExtra2 = to_underlying(MavDataStream::Extra2),
+  kExtra3 = to_underlying(MavDataStream::Extra3),
 };
 
-inline constexpr std::uint8_t kCompIdAutopilot = 1;
+inline constexpr std::uint8_t kCompIdAutopilot = to_underlying(MavComponent::CompIdAutopilot1);
 
 class VehicleLink {
  public:
@@ -251,7 +252,7 @@ class VehicleLink {
   std::uint64_t signing_initial_10us_ = 0;
   double signing_set_s_ = 0.0;  // sim time of the last set_signing()
   std::uint8_t sysid_ = 1;
-  std::uint8_t mav_type_ = 2;
+  std::uint8_t mav_type_ = to_underlying(MavType::Quadrotor);
   double next_timesync_s_ = 0.0;
   std::uint16_t next_text_id_ = 1;  // STATUSTEXT chunk ids
   fc::PilotInput pilot_;  // the sticks as last overridden (a channel sent as "ignore" keeps its value)

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <type_traits>
 
 namespace uavsim::common::mavlink {
@@ -14,6 +15,20 @@ namespace uavsim::common::mavlink {
 template <class E>
 constexpr std::underlying_type_t<E> to_underlying(E e) {
   return static_cast<std::underlying_type_t<E>>(e);
+}
+
+// Whether a number read from a message field is one of these enumerators (any value is allowed,
+// so a number outside the enum is simply none of them).
+template <class E, class V>
+constexpr bool is_one_of(V value, std::initializer_list<E> any_of) {
+  static_assert(std::is_integral_v<V>);
+  if constexpr (std::is_signed_v<V>) {
+    if (value < 0) return false;
+  }
+  for (E e : any_of) {
+    if (static_cast<std::uint64_t>(value) == static_cast<std::uint64_t>(to_underlying(e))) return true;
+  }
+  return false;
 }
 
 // ACCELCAL_VEHICLE_POS
