@@ -408,6 +408,24 @@ bool make_run_dir(const std::string& dir, std::string* why) {
   return true;
 }
 
+Result<RunFiles> resolve_run_files(const std::string& mission, uint64_t seed,
+                                   const std::string& run_dir_option, const std::string& video,
+                                   const std::string& summary, bool record) {
+  RunFiles f;
+  if (run_dir_option.empty() || run_dir_option == "auto") {
+    f.dir = default_run_dir(mission, seed);
+  } else if (run_dir_option != "none") {
+    f.dir = run_dir_option;
+  }
+  if (!f.dir.empty()) {
+    std::string why;
+    if (!make_run_dir(f.dir, &why)) return Failure{Error::kIo, why};
+  }
+  f.video = !record ? std::string() : !video.empty() ? video : f.dir.empty() ? "" : f.dir + "/video.mp4";
+  f.summary = !summary.empty() ? summary : f.dir.empty() ? "" : f.dir + "/summary.json";
+  return f;
+}
+
 void Launcher::say(const std::string& line) const { impl_->say(line); }
 
 double Launcher::wall_s() const {

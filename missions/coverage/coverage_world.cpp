@@ -60,6 +60,33 @@ std::string coverage_world_xml(const WorldSpec& spec) {
   x += "    <geom name=\"ground\" type=\"plane\" pos=\"" + num(0.5 * (x0 + x1)) + " " +
        num(0.5 * (y0 + y1)) + " 0\" size=\"" + num(0.5 * (x1 - x0)) + " " + num(0.5 * (y1 - y0)) +
        " 0.1\" material=\"ground\" condim=\"3\" friction=\"0.9 0.02 0.01\"/>\n";
+  // for the video (coverage-run --record): a camera "overview" straight down (north up) on the
+  // rectangle and the take-off line, high enough that both fit a 45 deg x 4:3 view with a quarter
+  // to spare (the flock flies at 20-30 m, which spreads it a little in the image), and the
+  // rectangle's outline, drawn only (no contacts), a few pixels wide at that height
+  const double vx0 = std::min(spec.origin_x_m - spec.line_offset_m, spec.origin_x_m) - 5.0;
+  const double vx1 = spec.origin_x_m + spec.length_x_m + 5.0;
+  const double vy0 = spec.origin_y_m - 5.0;
+  const double vy1 = std::max(spec.origin_y_m + spec.width_y_m, line_end) + 5.0;
+  constexpr double kTanHalfFovy = 0.41421356;  // tan(22.5 deg)
+  const double height_m = 1.25 * std::max(0.5 * (vx1 - vx0) / (kTanHalfFovy * 4.0 / 3.0),
+                                          0.5 * (vy1 - vy0) / kTanHalfFovy);
+  x += "    <camera name=\"overview\" pos=\"" + num(0.5 * (vx0 + vx1)) + " " +
+       num(0.5 * (vy0 + vy1)) + " " + num(height_m) + "\" xyaxes=\"1 0 0 0 1 0\" fovy=\"45\"/>\n";
+  const double cx = spec.origin_x_m + 0.5 * spec.length_x_m;
+  const double cy = spec.origin_y_m + 0.5 * spec.width_y_m;
+  const double hx = 0.5 * spec.length_x_m, hy = 0.5 * spec.width_y_m;
+  const std::string w = num(std::max(0.25, 0.004 * height_m));  // half width: ~4 px
+  const std::string line =
+      " 0.02\" type=\"box\" contype=\"0\" conaffinity=\"0\" rgba=\"1 1 1 0.8\"/>\n";
+  x += "    <geom name=\"area_s\" pos=\"" + num(cx) + " " + num(cy - hy) + " 0.02\" size=\"" +
+       num(hx) + " " + w + line;
+  x += "    <geom name=\"area_n\" pos=\"" + num(cx) + " " + num(cy + hy) + " 0.02\" size=\"" +
+       num(hx) + " " + w + line;
+  x += "    <geom name=\"area_w\" pos=\"" + num(cx - hx) + " " + num(cy) + " 0.02\" size=\"" + w +
+       " " + num(hy) + line;
+  x += "    <geom name=\"area_e\" pos=\"" + num(cx + hx) + " " + num(cy) + " 0.02\" size=\"" + w +
+       " " + num(hy) + line;
   for (int i = 0; i < spec.agents; ++i) {
     double px = 0.0, py = 0.0;
     takeoff_point(spec, i, &px, &py);

@@ -86,7 +86,10 @@ struct Options {
   std::string gcs_program;
   std::string models_dir = UAVSIM_MODELS_DIR;
   std::string keep_world;  // write the generated world here too
-  std::string run_dir;     // --run-dir: summary, events, logs, ground truth
+  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
+  std::string record;                    // --record: the video (default video.mp4 in the run dir)
+  bool no_record = false;                // --no-record
+  std::string record_camera = "overview";  // the server's --record-camera: the whole rectangle
   double truth_hz = 10.0;
 };
 
@@ -106,9 +109,14 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --progress S        progress line every S sim seconds (default 10)
   --agent-status S    each agent prints its pose and holdings every S sim seconds (default 0: no)
   --json FILE         write the summary as JSON
-  --run-dir DIR       everything of the run in DIR (auto: runs/coverage-seedN-TIME): summary.json,
-                      events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv (ground
-                      truth at --truth-hz, default 10); scripts/plot_run.py DIR plots it
+  --run-dir DIR       everything of the run in DIR (default auto: runs/coverage-seedN-TIME):
+                      video.mp4, summary.json, events.jsonl and tlogs (the server's --log-dir),
+                      truth_VEHICLE.csv (ground truth at --truth-hz, default 10);
+                      scripts/plot_run.py DIR plots it
+  --no-run-dir        no run directory (same as --run-dir none)
+  --record FILE.mp4   video of the run (default video.mp4 in the run directory); --no-record: none
+  --record-camera C   the video's view: overview (default: the whole rectangle from the south),
+                      follow (the flock), follow:VEHICLE, top
   --world-out FILE    also write the generated world there
   --quiet             only the summary
   --gcs               the optimised variant (thesis 3.6): a ground station (coverage-gcs) that
@@ -150,6 +158,11 @@ int main(int argc, char** argv) {
     }
     if (a == "--gcs") {
       o.gcs = true;
+      continue;
+    }
+    if (a == "--no-record" || a == "--no-run-dir") {
+      if (a == "--no-record") o.no_record = true;
+      if (a == "--no-run-dir") o.run_dir = "none";
       continue;
     }
     if (a == "--help" || a == "-h" || i + 1 >= argc) return usage();
@@ -195,6 +208,10 @@ int main(int argc, char** argv) {
       o.json_path = val;
     } else if (a == "--run-dir") {
       o.run_dir = val;
+    } else if (a == "--record") {
+      o.record = val;
+    } else if (a == "--record-camera") {
+      o.record_camera = val;
     } else if (a == "--truth-hz" && number(val, 0.01, 1000, &v)) {
       o.truth_hz = v;
     } else if (a == "--world-out") {
@@ -222,14 +239,15 @@ int main(int argc, char** argv) {
     }
   }
   std::sort(o.kills.begin(), o.kills.end());
-  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("coverage", o.seed);
-  if (!o.run_dir.empty()) {
-    std::string why;
-    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
-      std::fprintf(stderr, "coverage-run: %s\n", why.c_str());
-      return 2;
-    }
-    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  if (const auto files = uavsim::launch::resolve_run_files("coverage", o.seed, o.run_dir, o.record,
+                                                           o.json_path, !o.no_record);
+      !files) {
+    std::fprintf(stderr, "coverage-run: %s\n", files.message().c_str());
+    return 2;
+  } else {
+    o.run_dir = files->dir;
+    o.record = files->video;
+    o.json_path = files->summary;
   }
   CoverageConfig config;
   config.length_x_m = o.length_x_m;
@@ -342,8 +360,13 @@ int main(int argc, char** argv) {
       say("[" + child + "] " + line);
     }
   });
-  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--no-cameras",
-                                       "--models-dir", o.models_dir};
+  // cameras only for the video: the world's overview camera, which the agents never see
+  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--models-dir", o.models_dir};
+  if (o.record.empty()) {
+    server_args.push_back("--no-cameras");
+  } else {
+    server_args.insert(server_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+  }
   if (!o.run_dir.empty()) {
     server_args.insert(server_args.end(), {"--log-dir", o.run_dir});
     launch.record_truth(o.run_dir, o.truth_hz);
@@ -525,6 +548,12 @@ int main(int argc, char** argv) {
               say("coverage-run: t=" + fmt("%.1f", t) + " killed agent " + std::to_string(i));
             }
           }
+          // the video's coverage counter: what the surviving agents' reports hold, as scored
+          if (!o.record.empty()) {
+            (void)api.request({{"op", "overlay_counter"},
+                               {"name", "coverage"},
+                               {"text", "coverage " + fmt("%.1f", 100.0 * held_fraction()) + " %"}});
+          }
           if (t + 1e-9 >= next_progress_s) {
             next_progress_s += o.progress_period_s;
             std::map<std::string, int> counts;
@@ -677,6 +706,7 @@ int main(int argc, char** argv) {
   }
   std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
               wall_s() > 0 ? sim_s / wall_s() : 0.0);
+  std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
   if (!o.run_dir.empty()) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
@@ -689,6 +719,7 @@ int main(int argc, char** argv) {
   if (!o.json_path.empty()) {
     summary["mission"] = "coverage";
     summary["run_dir"] = o.run_dir;
+    summary["video"] = o.record;
     summary["area_origin_m"] = {0.0, 0.0};
     summary["agents"] = o.agents;
     summary["area_m"] = {o.length_x_m, o.width_y_m};

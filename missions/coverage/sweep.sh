@@ -24,10 +24,10 @@ case "$cmd" in
     mkdir -p "$out"
     for ((s = 1; s <= seeds; s++)); do
       for n in 5 10 15 20 25; do
-        echo "$run --agents $n --area $area --seed $s --quiet --budget 5000 --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
+        echo "$run --no-run-dir --no-record --agents $n --area $area --seed $s --quiet --budget 5000 --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
       done
       for p in 0.0005 0.0007 0.0009 0.001 0.003 0.005 0.007 0.009; do
-        echo "$run --agents 25 --area $area --seed $s --failure-prob $p --quiet --budget 5000 --json $out/n25_p${p}_seed$s.json > $out/n25_p${p}_seed$s.log 2>&1"
+        echo "$run --no-run-dir --no-record --agents 25 --area $area --seed $s --failure-prob $p --quiet --budget 5000 --json $out/n25_p${p}_seed$s.json > $out/n25_p${p}_seed$s.log 2>&1"
       done
     done
     ;;

@@ -56,8 +56,10 @@ struct Options {
   std::string events_path;  // the sim's event log, one JSON line per event
   std::string realism;      // --realism for the server (empty: the world's)
   std::string wind;         // --wind for the server
-  std::string run_dir;                   // --run-dir: video, summary, events, logs, ground truth
+  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
+  bool no_record = false;                // --no-record: no video
   std::string record_camera = "follow";  // the server's --record-camera
+  std::string record_layout = "tiled";   // the server's --record-layout: the UAV's camera beside
   double truth_hz = 10.0;
   bool quiet = false;
   bool blackout_first_pass = false;
@@ -76,14 +78,18 @@ Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV prog
   --start-time S         let the truck drive S seconds of sim time before the UAV starts (0-3600)
   --blackout-first-pass  black the camera out for 14 s when the UAV first sets off to intercept
   --lose-in-approach     black the camera out for 4 s when the UAV first starts its approach
-  --record FILE.mp4      video of the run (--record-camera)
+  --record FILE.mp4      video of the run (--record-camera; default video.mp4 in the run directory)
+  --no-record            no video
   --realism LEVEL        field|ideal: the server's conditions (default: the world's)
   --wind S,DIR[,GUST]    the server's mean wind (m/s, from DIR degrees) and gust peak
   --json FILE            write the summary as JSON
-  --run-dir DIR          everything of the run in DIR (auto: runs/mbzirc2017-seedN-TIME): video.mp4,
-                         summary.json, events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv
-                         and truck_NAME.csv (ground truth at --truth-hz, default 10); scripts/plot_run.py
+  --run-dir DIR          everything of the run in DIR (default auto: runs/mbzirc2017-seedN-TIME):
+                         video.mp4, summary.json, events.jsonl and tlogs (the server's --log-dir),
+                         truth_VEHICLE.csv and truck_NAME.csv (ground truth at --truth-hz, default
+                         10); scripts/plot_run.py DIR plots it
+  --no-run-dir           no run directory (same as --run-dir none)
   --record-camera C      the video's view: follow (default), follow:VEHICLE, top, overview, a camera
+  --record-layout L      tiled (default: the UAV's camera beside the main view) or single
   --events FILE          write the sim's event log (JSON lines) at the end of the run
   --budget S             sim seconds the UAV gets after its start (default 300)
   --wall-limit S         wall-clock safety bound (default 1200)
@@ -150,6 +156,10 @@ int main(int argc, char** argv) {
       o.blackout_first_pass = true;
     } else if (a == "--lose-in-approach") {
       o.lose_in_approach = true;
+    } else if (a == "--no-record") {
+      o.no_record = true;
+    } else if (a == "--no-run-dir") {
+      o.run_dir = "none";
     } else if (a == "--help" || a == "-h") {
       return usage();
     } else if ((v = next()) == nullptr) {
@@ -176,6 +186,8 @@ int main(int argc, char** argv) {
       o.run_dir = v;
     } else if (a == "--record-camera") {
       o.record_camera = v;
+    } else if (a == "--record-layout") {
+      o.record_layout = v;
     } else if (a == "--truth-hz") {
       if (!parse_double(v, 0.01, 1000.0, &o.truth_hz)) return usage();
     } else if (a == "--events") {
@@ -199,15 +211,15 @@ int main(int argc, char** argv) {
     }
   }
 
-  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("mbzirc2017", o.seed);
-  if (!o.run_dir.empty()) {
-    std::string why;
-    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
-      std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
-      return 2;
-    }
-    if (o.record.empty()) o.record = o.run_dir + "/video.mp4";
-    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2017", o.seed, o.run_dir, o.record,
+                                                           o.json_path, !o.no_record);
+      !files) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", files.message().c_str());
+    return 2;
+  } else {
+    o.run_dir = files->dir;
+    o.record = files->video;
+    o.json_path = files->summary;
   }
   Launcher launch("mbzirc2017-run", o.quiet);
   int harness_error = 0;
@@ -236,7 +248,8 @@ int main(int argc, char** argv) {
   spec.world = world;
   spec.extra_args = {"--seed", std::to_string(o.seed)};
   if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera,
+                                                   "--record-layout", o.record_layout});
   }
   if (!o.run_dir.empty()) {
     spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
@@ -453,6 +466,7 @@ int main(int argc, char** argv) {
   std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
+  std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
   if (!o.run_dir.empty()) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
@@ -464,6 +478,7 @@ int main(int argc, char** argv) {
     Json summary;
     summary["mission"] = "mbzirc2017";
     summary["run_dir"] = o.run_dir;
+    summary["video"] = o.record;
     summary["seed"] = o.seed;
     summary["truck_speed_kmh"] = o.truck_speed_kmh > 0.0 ? o.truck_speed_kmh : 15.0;
     summary["start_time_s"] = o.start_time_s;

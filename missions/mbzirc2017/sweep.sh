@@ -20,7 +20,7 @@ case "$cmd" in
     count=${4:-20}
     mkdir -p "$out"
     for ((s = first; s < first + count; s++)); do
-      echo "$run --seed $s --budget 300 --quiet $realism ${MBZIRC2017_ARGS:-} --json $out/seed$s.json > $out/seed$s.log 2>&1"
+      echo "$run --no-run-dir --seed $s --budget 300 --quiet $realism ${MBZIRC2017_ARGS:-} --json $out/seed$s.json > $out/seed$s.log 2>&1"
     done
     ;;
   table)

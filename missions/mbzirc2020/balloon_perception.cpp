@@ -58,10 +58,12 @@ int BalloonPerception::on_frame(const cv::Mat& bgr, const vision::PinholeIntrins
   }
   // (image) => balloon centres in the camera frame => in the field frame
   std::vector<Eigen::Vector3d> positions_enu_m;
+  last_detections_.clear();
   for (const vision::BalloonDetection& d : detector_->detect(bgr)) {
     const Eigen::Vector3d p = pose.cam_to_enu(d.position_cam_m);
     if (p.z() < kMinBalloonHeight_m || p.z() > kMaxBalloonHeight_m) continue;
     positions_enu_m.push_back(p);
+    last_detections_.push_back(d);
   }
   const int64_t stamp_us = static_cast<int64_t>(std::llround(stamp_s * 1e6));
   for (const vision::BalloonTrack& t : tracker_.update(stamp_us, positions_enu_m)) {

@@ -43,6 +43,9 @@ class BalloonPerception {
   // Confirmed balloons still tracked, with the time they were last seen.
   std::vector<BalloonSighting> sightings() const;
 
+  // The last frame's detections that passed the height check (for a video log's drawings).
+  const std::vector<vision::BalloonDetection>& last_detections() const { return last_detections_; }
+
  private:
   MissionConfig config_;
   std::unique_ptr<vision::BalloonDetector> detector_;
@@ -51,6 +54,7 @@ class BalloonPerception {
   std::map<int, BalloonSighting> seen_;  // by track id
   double pitch_rad_ = 0.0, previous_pitch_rad_ = 0.0;
   double pitch_since_s_ = -1e9;
+  std::vector<vision::BalloonDetection> last_detections_;
 };
 
 }  // namespace uavsim::missions::mbzirc2020

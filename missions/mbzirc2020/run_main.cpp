@@ -44,8 +44,9 @@ struct Options {
   std::string wind;         // --wind for the server
   std::string camera_size = "384x216";
   double camera_fps = 15;
-  std::string run_dir;                   // --run-dir: video, summary, events, logs, ground truth
+  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
   std::string record_camera = "follow";  // the server's --record-camera
+  std::string record_layout = "tiled";   // the server's --record-layout: the UAVs' cameras beside
   double truth_hz = 10.0;
   bool quiet = false;
   std::string server, uav, gcs;
@@ -56,7 +57,7 @@ int usage() {
 Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV programs, lockstep at full speed.
   --seed N            balloon positions and sensor noise (default 1)
   --world FILE        default models/worlds/mbzirc2020.xml
-  --record FILE.mp4   video of the run (default mbzirc2020_seedN.mp4); --no-record: none
+  --record FILE.mp4   video of the run (default video.mp4 in the run directory); --no-record: none
   --budget S          sim-time limit of the mission (default 400)
   --kill VEHICLE      kill this vehicle right after its take-off (Competition Day 2)
   --gcs-loss P        impair both UAVs' GCS links in the server's relay: drop each datagram with
@@ -67,10 +68,13 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   --realism LEVEL     field|ideal: the server's conditions (default: the world's; docs/results/field_conditions.md)
   --wind S,DIR[,GUST] the server's mean wind (m/s, from DIR degrees) and gust peak
   --json FILE         write the summary as JSON
-  --run-dir DIR       everything of the run in DIR (auto: runs/mbzirc2020-seedN-TIME): video.mp4,
-                      summary.json, events.jsonl and tlogs (the server's --log-dir), truth_VEHICLE.csv
-                      (ground truth at --truth-hz, default 10); scripts/plot_run.py DIR plots it
+  --run-dir DIR       everything of the run in DIR (default auto: runs/mbzirc2020-seedN-TIME):
+                      video.mp4, summary.json, events.jsonl and tlogs (the server's --log-dir),
+                      truth_VEHICLE.csv (ground truth at --truth-hz, default 10); scripts/plot_run.py
+                      DIR plots it
+  --no-run-dir        no run directory (same as --run-dir none)
   --record-camera C   the video's view: follow (default), follow:VEHICLE, top, overview, a camera
+  --record-layout L   tiled (default: the UAVs' cameras beside the main view) or single
   --events FILE       write the sim's event log (JSON lines) at the end of the run
   --wall-limit S      wall-clock safety bound (default 1800)
   --quiet             only the summary
@@ -94,6 +98,8 @@ int main(int argc, char** argv) {
     const char* v = nullptr;
     if (a == "--no-record")
       record = false;
+    else if (a == "--no-run-dir")
+      o.run_dir = "none";
     else if (a == "--quiet")
       o.quiet = true;
     else if (a == "--help" || a == "-h")
@@ -122,6 +128,8 @@ int main(int argc, char** argv) {
       o.run_dir = v;
     else if (a == "--record-camera")
       o.record_camera = v;
+    else if (a == "--record-layout")
+      o.record_layout = v;
     else if (a == "--truth-hz")
       o.truth_hz = std::atof(v);
     else if (a == "--events")
@@ -144,18 +152,16 @@ int main(int argc, char** argv) {
       return usage();
   }
   if (!(o.gcs_loss >= 0.0 && o.gcs_loss <= 1.0) || !(o.gcs_latency_s >= 0.0)) return usage();
-  if (o.run_dir == "auto") o.run_dir = uavsim::launch::default_run_dir("mbzirc2020", o.seed);
-  if (!o.run_dir.empty()) {
-    std::string why;
-    if (!uavsim::launch::make_run_dir(o.run_dir, &why)) {
-      std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
-      return 2;
-    }
-    if (o.record.empty()) o.record = o.run_dir + "/video.mp4";
-    if (o.json_path.empty()) o.json_path = o.run_dir + "/summary.json";
+  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2020", o.seed, o.run_dir, o.record,
+                                                           o.json_path, record);
+      !files) {
+    std::fprintf(stderr, "mbzirc2020-run: %s\n", files.message().c_str());
+    return 2;
+  } else {
+    o.run_dir = files->dir;
+    o.record = files->video;
+    o.json_path = files->summary;
   }
-  if (record && o.record.empty()) o.record = "mbzirc2020_seed" + std::to_string(o.seed) + ".mp4";
-  if (!record) o.record.clear();
   const size_t x = o.camera_size.find('x');
   if (x == std::string::npos) return usage();
   const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
@@ -175,7 +181,8 @@ int main(int argc, char** argv) {
   spec.extra_args = {"--seed",   std::to_string(o.seed),  "--camera", "uav0_front:" + cam_opts,
                      "--camera", "uav1_front:" + cam_opts};
   if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera,
+                                                   "--record-layout", o.record_layout});
   }
   if (!o.run_dir.empty()) {
     spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
@@ -187,6 +194,7 @@ int main(int argc, char** argv) {
   Json summary;
   int popped = 0, balloons_total = 0;
   std::vector<std::string> crashes;
+  std::vector<std::string> vision_logs;  // the UAV programs' video logs, in the run directory
   bool collision = false;
   double first_armed_s = -1, last_pop_s = -1, end_sim_s = 0;
 
@@ -213,6 +221,12 @@ int main(int argc, char** argv) {
       std::smatch m;
       if (child == "gcs" && std::regex_search(l, m, gcs_re)) {
         gcs_port[std::stoi(m[1])] = std::stoi(m[2]);
+      }
+      // the ground station's failover (a UAV out, the other taking its side over) is the
+      // mission's, not the server's: told to the video's overlay
+      static const std::regex failover_re(R"(^gcs t=\S+ ((uav\d+) .*(out of the mission|takes over).*)$)");
+      if (!o.record.empty() && child == "gcs" && std::regex_search(l, m, failover_re)) {
+        (void)api.request({{"op", "overlay_note"}, {"text", m[1].str().substr(0, 80)}, {"vehicle", m[2].str()}});
       }
     });
     if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {
@@ -246,11 +260,15 @@ int main(int argc, char** argv) {
       }
       // 4. the UAV programs
       const std::string name = "uav" + std::to_string(i);
-      if (!launch.spawn(name,
-                        {o.uav, "--index", std::to_string(i), "--mavlink",
-                         "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)), "--gcs",
-                         "127.0.0.1:" + std::to_string(uav_port)},
-                        {lockstep})) {
+      std::vector<std::string> argv{o.uav, "--index", std::to_string(i), "--mavlink",
+                                    "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)),
+                                    "--gcs", "127.0.0.1:" + std::to_string(uav_port)};
+      if (!o.run_dir.empty()) {
+        // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
+        vision_logs.push_back(o.run_dir + "/" + name + "_vision.vlog");
+        argv.insert(argv.end(), {"--video-log", vision_logs.back()});
+      }
+      if (!launch.spawn(name, argv, {lockstep})) {
         fail("cannot start " + o.uav);
       }
     }
@@ -375,6 +393,9 @@ int main(int argc, char** argv) {
     std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
+  for (const std::string& v : vision_logs) {
+    std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", v.c_str(), v.c_str());
+  }
   if (!o.run_dir.empty()) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
@@ -397,6 +418,7 @@ int main(int argc, char** argv) {
     summary["sim_time_s"] = end_sim_s;
     summary["wall_time_s"] = launch.wall_s();
     summary["video"] = o.record;
+    summary["vision_logs"] = vision_logs;
     summary["success"] = success;
     std::ofstream(o.json_path) << summary.dump(2) << "\n";
   }

@@ -21,8 +21,8 @@ case "$cmd" in
     count=${4:-10}
     mkdir -p "$out"
     for ((s = first; s < first + count; s++)); do
-      echo "$run --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --json $out/two_seed$s.json > $out/two_seed$s.log 2>&1"
-      echo "$run --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --kill uav1 --json $out/one_seed$s.json > $out/one_seed$s.log 2>&1"
+      echo "$run --no-run-dir --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --json $out/two_seed$s.json > $out/two_seed$s.log 2>&1"
+      echo "$run --no-run-dir --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --kill uav1 --json $out/one_seed$s.json > $out/one_seed$s.log 2>&1"
     done
     ;;
   table)

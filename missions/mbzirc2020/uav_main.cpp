@@ -4,11 +4,15 @@
 // sim time.
 //
 // usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME]
-// [--vehicle NAME]
+// [--vehicle NAME] [--video-log FILE.vlog]
+// --video-log: every camera frame with what the vision saw drawn on it (the detections' circles and
+// ranges, the confirmed balloons' count), vision/'s VLOG (uavsim-videolog-export makes an MP4 of
+// it); written on its own thread, it changes nothing the UAV decides.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 
 #include "balloon_perception.hpp"
@@ -18,6 +22,7 @@
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/vision/video_log.hpp"
 #include "vehicle_fsm.hpp"
 
 using namespace uavsim::client;
@@ -33,7 +38,7 @@ int usage() {
   std::fprintf(
       stderr,
       "usage: mbzirc2020-uav --index I --mavlink tcp:HOST:PORT --gcs HOST:PORT [--camera NAME] "
-      "[--vehicle NAME]\n");
+      "[--vehicle NAME] [--video-log FILE.vlog]\n");
   return 2;
 }
 
@@ -41,7 +46,7 @@ int usage() {
 
 int main(int argc, char** argv) {
   int index = -1;
-  std::string mavlink, gcs, camera, vehicle;
+  std::string mavlink, gcs, camera, vehicle, video_log;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--index")
@@ -54,6 +59,8 @@ int main(int argc, char** argv) {
       camera = argv[i + 1];
     else if (a == "--vehicle")
       vehicle = argv[i + 1];
+    else if (a == "--video-log")
+      video_log = argv[i + 1];
     else
       return usage();
   }
@@ -114,6 +121,15 @@ int main(int argc, char** argv) {
   // level; mission_config.hpp says why)
   const MissionConfig config;
   BalloonPerception perception(config);
+  std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
+  if (!video_log.empty()) {
+    auto opened = uavsim::vision::VideoLogWriter::open(video_log);
+    if (!opened) {
+      log("--video-log " + video_log + ": " + uavsim::vision::to_string(opened.error()));
+      return 1;
+    }
+    vlog = std::move(*opened);
+  }
   CameraConfig cc;
   cc.camera = camera;
   cc.format = CameraFormat::kBgr;
@@ -130,8 +146,29 @@ int main(int argc, char** argv) {
     k.height_px = f.image.rows;
     const std::optional<double> pitch_rad = perception.camera_pitch_at(f.stamp_s);
     if (!pitch_rad) return;  // the gimbal is slewing
-    perception.on_frame(f.image, k, f.stamp_s,
-                        perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
+    const int seen = perception.on_frame(f.image, k, f.stamp_s,
+                                         perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
+    if (vlog) {
+      // what the vision saw: each detection's circle and range, the confirmed balloons
+      uavsim::vision::VideoLogFrame frame;
+      frame.stamp_us = static_cast<int64_t>(std::llround(f.stamp_s * 1e6));
+      frame.image = f.image;
+      const cv::Scalar magenta(255, 0, 255);  // BGR: stands out on green balloons and grass
+      for (const uavsim::vision::BalloonDetection& d : perception.last_detections()) {
+        const cv::Point2f c(static_cast<float>(d.centre_px.x), static_cast<float>(d.centre_px.y));
+        frame.overlays.push_back(uavsim::vision::Overlay::circle(
+            c, static_cast<float>(d.radius_px) + 2.0f, magenta, 2.0f));
+        char range[32];
+        std::snprintf(range, sizeof(range), "%.1f m", d.range_m);
+        frame.overlays.push_back(uavsim::vision::Overlay::label(
+            c + cv::Point2f(static_cast<float>(d.radius_px) + 4.0f, 0.0f), range, magenta, 0.4f));
+      }
+      char text[96];
+      std::snprintf(text, sizeof(text), "%s t=%.2f detections %d confirmed %zu", me.c_str(),
+                    f.stamp_s, seen, perception.sightings().size());
+      frame.text = text;
+      (void)vlog->submit(frame);  // a full queue drops the frame, never waits
+    }
   });
   if (!sub) {
     log("camera " + camera + ": " + sub.message());

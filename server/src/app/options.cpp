@@ -94,6 +94,8 @@ cameras and logs:
                       the name of any camera of the world
   --record-overlay 0|1  burn sim time, vehicle names and modes, recent events and mission counters into
                       the video's frames; default 1
+  --record-layout L   single (the default: the main view alone) or tiled (the vehicles' onboard
+                      cameras, up to 4, in a column beside the main view, each labelled)
   --log-dir DIR       write VEHICLE.tlog per vehicle (every MAVLink frame each way, stamped with sim
                       time, as MAVProxy and QGroundControl write them) and events.jsonl (the server's
                       events, one JSON object a line)
@@ -446,6 +448,12 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         ok = v == "0" || v == "1";
         if (!ok) why = "--record-overlay needs 0 or 1, got '" + v + "'";
         o.record_overlay = v == "1";
+      }
+    } else if (a == "--record-layout") {
+      if ((ok = value(&v))) {
+        ok = v == "single" || v == "tiled";
+        if (!ok) why = "--record-layout needs single or tiled, got '" + v + "'";
+        o.record_tiled = v == "tiled";
       }
     } else if (a == "--record-size") {
       if ((ok = value(&v))) {

@@ -87,6 +87,7 @@ struct Options {
   int record_height = 480;
   std::string record_camera = "overview";     // --record-camera overview|follow|follow:NAME|top|CAMERA
   bool record_overlay = true;                 // --record-overlay 0: frames without the text
+  bool record_tiled = false;                  // --record-layout tiled: onboard cameras beside the view
 };
 
 // What parse_args() decided: run with options, or exit with exit_code after printing output (to

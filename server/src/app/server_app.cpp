@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -14,12 +15,14 @@
 #include <thread>
 
 #include "api/api_server.hpp"
+#include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
 #include "app/demo_flight.hpp"
 #include "app/field_setup.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/param_file.hpp"
+#include "app/recording.hpp"
 #include "app/run_reporter.hpp"
 #include "mavlink/endpoint.hpp"
 #include "objects/world_objects.hpp"
@@ -37,102 +40,6 @@ namespace uavsim::server::app {
 
 namespace {
 std::atomic<bool> g_stop_requested{false};
-
-// which camera --record films: the named camera, else (overview, follow, top) the world camera
-// "overview", else the first world camera, else the first
-std::optional<size_t> record_camera(const std::vector<render::CameraSetup>& cameras, const std::string& choice) {
-  const bool directed = choice == "follow" || choice == "top" || choice.rfind("follow:", 0) == 0;
-  if (!directed && choice != "overview") {
-    for (size_t i = 0; i < cameras.size(); ++i) {
-      if (cameras[i].config.camera == choice) return i;
-    }
-    return std::nullopt;
-  }
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    if (cameras[i].config.camera == "overview") return i;
-  }
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    if (cameras[i].vehicle < 0) return i;
-  }
-  if (!cameras.empty()) return 0;
-  return std::nullopt;
-}
-
-// the director of --record-camera follow|follow:NAME|top (null for a camera posed by the model); throws
-// std::invalid_argument for a vehicle name the world does not have
-std::shared_ptr<render::CameraDirector> record_director(const std::string& choice, const render::FrameCamera& cam,
-                                                        const sim::Simulation& s) {
-  render::DirectorParams p;
-  if (choice == "top") {
-    p.mode = render::DirectorMode::kTop;
-  } else if (choice.rfind("follow", 0) == 0 && (choice.size() == 6 || choice[6] == ':')) {
-    p.mode = render::DirectorMode::kFollow;
-    if (choice.size() > 7) {
-      const std::string name = choice.substr(7);
-      for (size_t i = 0; i < s.vehicle_count(); ++i) {
-        if (s.vehicle_name(i) == name) p.vehicle = static_cast<int>(i);
-      }
-      if (!p.vehicle) throw std::invalid_argument("--record-camera " + choice + ": the world has no vehicle " + name);
-    }
-  } else {
-    return nullptr;
-  }
-  p.fovy_deg = 2.0 * std::atan(0.5 * cam.height_px / cam.fy_px) * 180.0 / 3.14159265358979323846;
-  p.aspect = static_cast<double>(cam.width_px) / cam.height_px;
-  return std::make_shared<render::CameraDirector>(p);
-}
-
-// the overlay of a recorded frame: the loop thread's view at that instant
-std::function<render::OverlayInfo()> overlay_source(sim::Simulation& s, const objects::ObjectSet& objects,
-                                                    const RunReporter& reporter) {
-  constexpr double kEventShownS = 4.0;
-  constexpr size_t kEventLines = 5;
-  return [&s, &reporter, balloons = objects.balloons, trucks = !objects.trucks.empty()] {
-    render::OverlayInfo info;
-    info.time_s = s.time_s();
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      info.vehicles.push_back({s.vehicle_name(i), s.runtime(i).crashed ? "CRASHED" : fc::mode_name(s.fc(i).mode())});
-    }
-    // the recent events worth a line (a vehicle's own mode shows beside it)
-    const std::vector<sim::Event>& all = s.events().all();
-    for (auto it = all.rbegin(); it != all.rend() && info.events.size() < kEventLines; ++it) {
-      if (it->time_s < info.time_s - kEventShownS) break;
-      if (it->type == sim::EventType::kModeChange || it->type == sim::EventType::kArmed ||
-          it->type == sim::EventType::kDisarmed) {
-        continue;
-      }
-      char t[24];
-      std::snprintf(t, sizeof(t), "%.1f s ", it->time_s);
-      std::string line = t;
-      if (it->vehicle >= 0 && static_cast<size_t>(it->vehicle) < s.vehicle_count()) {
-        line += s.vehicle_name(static_cast<size_t>(it->vehicle)) + " ";
-      }
-      line += sim::event_type_name(it->type);
-      if (!it->detail.empty()) line += " " + it->detail.substr(0, 40);
-      info.events.insert(info.events.begin(), line);
-    }
-    // the failsafes the flight controllers announced, newest last
-    for (const ReportedEvent& f : reporter.recent_failsafes()) {
-      if (f.time_s < info.time_s - kEventShownS || f.time_s > info.time_s) continue;
-      char t[24];
-      std::snprintf(t, sizeof(t), "%.1f s ", f.time_s);
-      std::string line = t;
-      if (f.vehicle >= 0 && static_cast<size_t>(f.vehicle) < s.vehicle_count()) {
-        line += s.vehicle_name(static_cast<size_t>(f.vehicle)) + " ";
-      }
-      info.events.push_back(line + "FAILSAFE " + f.detail.substr(0, 40));
-      if (info.events.size() > kEventLines) info.events.erase(info.events.begin());
-    }
-    if (balloons != nullptr) {
-      info.counters.push_back("balloons popped " + std::to_string(balloons->popped_count()) + "/" +
-                              std::to_string(balloons->balloons().size()));
-    }
-    if (trucks) {
-      info.counters.push_back("landed on target " + std::to_string(s.events().count(sim::EventType::kLandedOnTarget)));
-    }
-    return info;
-  };
-}
 
 // a socket error with the option that avoids it: another process (often another uavsim-server) holds the port
 std::string with_port_hint(const std::string& what, const char* flag) {
@@ -393,6 +300,9 @@ int run_server(const Options& given_options) {
     s.add_control_observer([&gimbal_bridge](sim::Simulation& sim) { gimbal_bridge->update(sim); });
   }
 
+  // the launchers' counters and notes for the video's overlay (overlay_* ops)
+  api::OverlayOps overlay_ops(s);
+
   // cameras: the frame service (render thread) for the API's subscriptions and --record
   std::unique_ptr<render::FrameService> frames;
   std::unique_ptr<render::VideoRecorder> recorder;
@@ -446,8 +356,17 @@ int run_server(const Options& given_options) {
       const std::optional<size_t> cam = recorded;
       try {
         // as fast as possible (--rate 0) nothing is lost by waiting for the video; at a real-time rate it never waits
-        recorder = std::make_unique<render::VideoRecorder>(*frames, static_cast<int>(*cam), 1, *options.record_path,
-                                                           options.rate == 0.0);
+        render::RecorderOptions ro;
+        ro.lossless = options.rate == 0.0;
+        if (options.record_tiled) {
+          // the vehicles' onboard cameras, the first kMaxTiles of the world's order
+          constexpr size_t kMaxTiles = 4;
+          for (size_t i = 0; i < frames->cameras().size() && ro.tiles.size() < kMaxTiles; ++i) {
+            if (frames->cameras()[i].vehicle >= 0 && i != *cam) ro.tiles.push_back(static_cast<int>(i));
+          }
+        }
+        recorder = std::make_unique<render::VideoRecorder>(*frames, static_cast<int>(*cam), *options.record_path,
+                                                           std::move(ro));
       } catch (const std::exception& e) {
         std::cerr << "uavsim-server: " << e.what() << "\n";
         return 1;
@@ -465,10 +384,11 @@ int run_server(const Options& given_options) {
         std::cerr << "uavsim-server: " << e.what() << "\n";
         return 2;
       }
-      if (options.record_overlay) recorder->set_overlay(overlay_source(s, world_objects, reporter));
+      if (options.record_overlay) recorder->set_overlay(record_overlay_source(s, world_objects, reporter, overlay_ops));
       if (!options.quiet) {
         std::cout << "uavsim-server: recording camera " << cameras[*cam].config.camera << " to " << *options.record_path
-                  << " as " << options.record_camera << " (" << recorder->encoder() << ")\n";
+                  << " as " << options.record_camera << ", " << recorder->width_px() << "x" << recorder->height_px()
+                  << (options.record_tiled ? " tiled" : "") << " (" << recorder->encoder() << ")\n";
       }
     }
   }
@@ -511,6 +431,7 @@ int run_server(const Options& given_options) {
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);
     api_server->add_extension(sensor_ops.get());
+    api_server->add_extension(&overlay_ops);
     api_server->start();
     if (!options.quiet) {
       std::cout << "uavsim-server: sim API on tcp:" << api_config.bind_address << ":" << api_server->port()

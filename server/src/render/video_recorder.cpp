@@ -3,6 +3,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <opencv2/videoio.hpp>
@@ -12,6 +13,9 @@ namespace uavsim::server::render {
 
 namespace {
 constexpr size_t kQueueFrames = 16;
+// a tile's frames are wanted a recorded frame's period apart, less this: the frames fall on
+// control steps, so their spacing jitters by less than a step
+constexpr int64_t kTileSlackUs = 1000;
 
 std::string shell_quote(const std::string& s) {
   std::string out = "'";
@@ -30,13 +34,67 @@ struct VideoRecorder::CvWriter {
   cv::VideoWriter writer;
 };
 
+TileLayout tile_layout(int main_width_px, int main_height_px,
+                       const std::vector<std::pair<int, int>>& tile_sizes) {
+  TileLayout layout;
+  layout.width_px = main_width_px;
+  layout.height_px = main_height_px;
+  if (tile_sizes.empty()) return layout;
+  const int slots = std::max<int>(2, static_cast<int>(tile_sizes.size()));
+  const int tile_h = std::max(2, (main_height_px / slots) & ~1);
+  int column_w = 0;
+  for (size_t i = 0; i < tile_sizes.size(); ++i) {
+    const auto [w, h] = tile_sizes[i];
+    const double aspect = h > 0 ? static_cast<double>(w) / h : 4.0 / 3.0;
+    const int tile_w = std::max(2, static_cast<int>(std::lround(tile_h * aspect)) & ~1);
+    layout.tiles.push_back({main_width_px, static_cast<int>(i) * tile_h, tile_w, tile_h});
+    column_w = std::max(column_w, tile_w);
+  }
+  layout.width_px = main_width_px + column_w;
+  return layout;
+}
+
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, int every, const std::string& path,
                              bool lossless)
-    : camera_(camera), every_(std::max(1, every)), lossless_(lossless), path_(path) {
+    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr}) {}
+
+VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std::string& path,
+                             RecorderOptions options)
+    : options_(std::move(options)), camera_(camera), every_(std::max(1, options_.every)),
+      lossless_(options_.lossless), path_(path) {
   const FrameCamera& cam = service.cameras().at(static_cast<size_t>(camera));
-  width_ = cam.width_px;
-  height_ = cam.height_px;
+  main_width_ = cam.width_px;
+  main_height_ = cam.height_px;
   const double fps = cam.fps_hz / every_;
+  period_us_ = std::llround(1e6 / fps);
+  // the tiles: a column beside the main view
+  std::vector<std::pair<int, int>> sizes;
+  for (int t : options_.tiles) {
+    const FrameCamera& c = service.cameras().at(static_cast<size_t>(t));
+    if (t == camera) throw std::invalid_argument("--record-layout: the recorded camera cannot be a tile");
+    sizes.emplace_back(c.width_px, c.height_px);
+  }
+  const TileLayout layout = tile_layout(main_width_, main_height_, sizes);
+  width_ = layout.width_px;
+  height_ = layout.height_px;
+  for (size_t i = 0; i < options_.tiles.size(); ++i) {
+    const FrameCamera& c = service.cameras()[static_cast<size_t>(options_.tiles[i])];
+    Tile tile;
+    tile.camera = options_.tiles[i];
+    tile.rect = layout.tiles[i];
+    tile.vehicle = c.vehicle;
+    tile.label = c.vehicle_name.empty() ? c.name : c.vehicle_name + " " + c.name;
+    // no frame yet: dark grey, labelled
+    tile.image.assign(static_cast<size_t>(tile.rect.width_px) * tile.rect.height_px * 3, 40);
+    draw_tile_label(tile.label, tile.vehicle, tile.rect.width_px, tile.rect.height_px,
+                    reinterpret_cast<uint8_t*>(tile.image.data()));
+    tiles_.push_back(std::move(tile));
+  }
+  if (options_.sink) {
+    encoder_ = "sink";
+    thread_ = std::thread([this] { writer_main(); });
+    return;
+  }
   std::signal(SIGPIPE, SIG_IGN);  // an encoder that exits early must not kill the server
   if (std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
     char size[32];
@@ -63,7 +121,11 @@ VideoRecorder::~VideoRecorder() { finish(); }
 void VideoRecorder::finish() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (finished_) return;
+    if (finished_ || finishing_) return;
+  }
+  flush_pending();  // the frame service has stopped delivering: the last main frame goes as it is
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
     finishing_ = true;
   }
   cv_.notify_all();
@@ -82,7 +144,7 @@ RecorderStats VideoRecorder::stats() const {
   return stats_;
 }
 
-void VideoRecorder::want(int camera, int64_t index, int64_t, std::vector<EncodingKey>* encodings,
+void VideoRecorder::want(int camera, int64_t index, int64_t stamp_us, std::vector<EncodingKey>* encodings,
                          bool* must_deliver) {
   if (camera == camera_ && index % every_ == 0) {
     encodings->push_back({Encoding::kRgb, 0});
@@ -92,6 +154,17 @@ void VideoRecorder::want(int camera, int64_t index, int64_t, std::vector<Encodin
       std::lock_guard<std::mutex> lock(mutex_);
       overlays_[index] = std::move(info);
     }
+    return;
+  }
+  // a tile's camera: a frame per recorded frame's period at most (a reset starts again)
+  for (Tile& tile : tiles_) {
+    if (tile.camera != camera) continue;
+    if (stamp_us + period_us_ < tile.next_want_us) tile.next_want_us = 0;
+    if (stamp_us < tile.next_want_us) return;
+    tile.next_want_us = stamp_us + period_us_ - kTileSlackUs;
+    encodings->push_back({Encoding::kRgb, 0});
+    if (lossless_) *must_deliver = true;
+    return;
   }
 }
 
@@ -103,38 +176,83 @@ void VideoRecorder::dropped(int camera, int64_t index) {
 }
 
 void VideoRecorder::deliver(const ReadyFrame& frame) {
-  if (frame.camera != camera_) return;
-  for (const auto& [key, bytes] : frame.images) {
-    if (key.encoding != Encoding::kRgb) continue;
-    std::shared_ptr<const std::string> image = bytes;
-    if (overlay_source_) {
-      // the overlay on a copy: other subscribers of this camera get the plain frame
-      std::optional<OverlayInfo> info;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        auto it = overlays_.find(frame.index);
-        if (it != overlays_.end()) info = std::move(it->second);
-        overlays_.erase(overlays_.begin(), overlays_.upper_bound(frame.index));  // this one and older
-      }
-      if (info && frame.info != nullptr) {
-        auto drawn = std::make_shared<std::string>(*bytes);
-        draw_overlay(*info, *frame.info, frame.position_enu_m, frame.R_enu_cam, frame.tracked_enu_m,
-                     reinterpret_cast<uint8_t*>(drawn->data()));
-        image = std::move(drawn);
-      }
-    }
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      if (lossless_) cv_.wait(lock, [&] { return finishing_ || queue_.size() < kQueueFrames; });
-      if (finishing_ || queue_.size() >= kQueueFrames) {
-        ++stats_.frames_dropped;
-        return;
-      }
-      queue_.push_back(image);  // shared: no copy
-    }
-    cv_.notify_all();
+  // a main frame waits for the tiles of its instant, which come after it in the same snapshot; a
+  // frame of another instant means they all came
+  if (pending_ && (frame.camera == camera_ || frame.stamp_us != pending_->stamp_us)) flush_pending();
+  for (Tile& tile : tiles_) {
+    if (tile.camera != frame.camera) continue;
+    const std::string* rgb = frame.image({Encoding::kRgb, 0});
+    if (rgb == nullptr || frame.info == nullptr) return;
+    const cv::Mat src(frame.info->height_px, frame.info->width_px, CV_8UC3, const_cast<char*>(rgb->data()));
+    cv::Mat dst(tile.rect.height_px, tile.rect.width_px, CV_8UC3, tile.image.data());
+    cv::resize(src, dst, dst.size(), 0, 0, cv::INTER_AREA);
+    draw_tile_label(tile.label, tile.vehicle, tile.rect.width_px, tile.rect.height_px,
+                    reinterpret_cast<uint8_t*>(tile.image.data()));
     return;
   }
+  if (frame.camera != camera_) return;
+  const std::string* bytes = frame.image({Encoding::kRgb, 0});
+  if (bytes == nullptr) return;
+  std::shared_ptr<const std::string> image;
+  if (overlay_source_) {
+    // the overlay on a copy: other subscribers of this camera get the plain frame
+    std::optional<OverlayInfo> info;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      auto it = overlays_.find(frame.index);
+      if (it != overlays_.end()) info = std::move(it->second);
+      overlays_.erase(overlays_.begin(), overlays_.upper_bound(frame.index));  // this one and older
+    }
+    if (info && frame.info != nullptr) {
+      auto drawn = std::make_shared<std::string>(*bytes);
+      draw_overlay(*info, *frame.info, frame.position_enu_m, frame.R_enu_cam, frame.tracked_enu_m,
+                   reinterpret_cast<uint8_t*>(drawn->data()));
+      image = std::move(drawn);
+    }
+  }
+  if (!image) {
+    for (const auto& [key, b] : frame.images) {
+      if (key.encoding == Encoding::kRgb) image = b;  // shared: no copy
+    }
+  }
+  if (tiles_.empty()) {
+    enqueue(std::move(image));
+  } else {
+    pending_ = Pending{frame.stamp_us, std::move(image)};
+  }
+}
+
+void VideoRecorder::flush_pending() {
+  if (!pending_) return;
+  Pending p = std::move(*pending_);
+  pending_.reset();
+  // the main view left, the tiles in a column right of it, black around them
+  auto out = std::make_shared<std::string>(static_cast<size_t>(width_) * height_ * 3, '\0');
+  const size_t main_row = static_cast<size_t>(main_width_) * 3;
+  for (int y = 0; y < main_height_ && y < height_; ++y) {
+    std::memcpy(out->data() + static_cast<size_t>(y) * width_ * 3, p.main->data() + y * main_row, main_row);
+  }
+  for (const Tile& tile : tiles_) {
+    const size_t row = static_cast<size_t>(tile.rect.width_px) * 3;
+    for (int y = 0; y < tile.rect.height_px && tile.rect.y_px + y < height_; ++y) {
+      std::memcpy(out->data() + (static_cast<size_t>(tile.rect.y_px + y) * width_ + tile.rect.x_px) * 3,
+                  tile.image.data() + y * row, row);
+    }
+  }
+  enqueue(std::move(out));
+}
+
+void VideoRecorder::enqueue(std::shared_ptr<const std::string> image) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (lossless_) cv_.wait(lock, [&] { return finishing_ || queue_.size() < kQueueFrames; });
+    if (finishing_ || queue_.size() >= kQueueFrames) {
+      ++stats_.frames_dropped;
+      return;
+    }
+    queue_.push_back(std::move(image));
+  }
+  cv_.notify_all();
 }
 
 void VideoRecorder::writer_main() {
@@ -149,7 +267,9 @@ void VideoRecorder::writer_main() {
     }
     cv_.notify_all();  // room for a lossless deliver
     bool ok = true;
-    if (pipe_ != nullptr) {
+    if (options_.sink) {
+      options_.sink(*frame, width_, height_);
+    } else if (pipe_ != nullptr) {
       ok = std::fwrite(frame->data(), 1, frame->size(), pipe_) == frame->size();
     } else {
       const cv::Mat rgb(height_, width_, CV_8UC3, const_cast<char*>(frame->data()));

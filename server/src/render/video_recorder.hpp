@@ -11,13 +11,43 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "render/frame_service.hpp"
 #include "render/overlay.hpp"
 
 namespace uavsim::server::render {
+
+// The frame of a tiled recording (--record-layout tiled): the main view at (0, 0), the onboard
+// cameras' tiles in a column right of it, tile i at (main_width, i * tile height) where the tile
+// height is main_height / max(2, tiles) and each tile's width keeps its camera's aspect; the
+// column is as wide as its widest tile. Sizes are even (H.264 in yuv420p needs that).
+struct TileLayout {
+  int width_px = 0, height_px = 0;  // the whole frame
+  std::vector<PixelRect> tiles;     // per tile camera, in the order given
+};
+// tile_sizes: each tile camera's (width, height) in pixels. Thread-safe (pure).
+TileLayout tile_layout(int main_width_px, int main_height_px,
+                       const std::vector<std::pair<int, int>>& tile_sizes);
+
+struct RecorderOptions {
+  int every = 1;  // every every-th frame of the camera (fps = camera fps / every)
+  // never drop a frame (the clock waits for the renderer and the encoder) -- for runs as fast as
+  // possible (--rate 0), where waiting distorts nothing; otherwise frames are dropped, physics
+  // never waits
+  bool lossless = false;
+  // onboard cameras (indices into FrameService::cameras(), not the recorded one) tiled beside the
+  // main view, each labelled with its vehicle's name (tile_layout); their latest frame at each
+  // recorded frame's instant
+  std::vector<int> tiles;
+  // the composed RGB8 frames go to this function (on the recorder's thread) instead of an encoder
+  // (tests)
+  std::function<void(const std::string& rgb, int width_px, int height_px)> sink;
+};
 
 struct RecorderStats {
   uint64_t frames_written = 0;
@@ -31,6 +61,8 @@ class VideoRecorder : public FrameConsumer {
   // lossless: never drop a frame (the clock waits for the renderer and the encoder) -- for runs as fast as
   // possible (--rate 0), where waiting distorts nothing; otherwise frames are dropped, physics never waits.
   VideoRecorder(const FrameService& service, int camera, int every, const std::string& path, bool lossless = false);
+  // The same with tiles or a sink (RecorderOptions); path is unused with a sink.
+  VideoRecorder(const FrameService& service, int camera, const std::string& path, RecorderOptions options);
   ~VideoRecorder() override;  // finish() if not done
   // Flushes the queued frames and closes the file. Call after the frame service stopped delivering.
   void finish();
@@ -39,7 +71,9 @@ class VideoRecorder : public FrameConsumer {
   // it shows is that instant's) and the text is drawn on the render thread with the frame's pose and
   // tracked positions. Call before the first frame.
   void set_overlay(std::function<OverlayInfo()> source) { overlay_source_ = std::move(source); }
-  const std::string& encoder() const { return encoder_; }  // "ffmpeg" or "opencv"
+  const std::string& encoder() const { return encoder_; }  // "ffmpeg", "opencv" or "sink"
+  int width_px() const { return width_; }    // of the frames written (tiles included)
+  int height_px() const { return height_; }
 
   void want(int camera, int64_t index, int64_t stamp_us, std::vector<EncodingKey>* encodings,
             bool* must_deliver) override;
@@ -47,8 +81,27 @@ class VideoRecorder : public FrameConsumer {
   void deliver(const ReadyFrame& frame) override;
 
  private:
+  struct Tile {
+    int camera = -1;
+    PixelRect rect;
+    std::string label;
+    int vehicle = -1;
+    int64_t next_want_us = 0;
+    std::string image;  // the latest frame, tile-sized and labelled; render thread only
+  };
+  struct Pending {
+    int64_t stamp_us = 0;
+    std::shared_ptr<const std::string> main;
+  };
   void writer_main();
+  void enqueue(std::shared_ptr<const std::string> image);  // render thread
+  void flush_pending();                                    // render thread: composes and enqueues
   std::function<OverlayInfo()> overlay_source_;
+  RecorderOptions options_;
+  int main_width_ = 0, main_height_ = 0;
+  int64_t period_us_ = 0;          // between recorded frames
+  std::vector<Tile> tiles_;        // want() on the loop thread: next_want_us; the rest render thread
+  std::optional<Pending> pending_; // a main frame waiting for the tiles of its instant (render thread)
   std::map<int64_t, OverlayInfo> overlays_;  // by frame index, guarded by mutex_
   int camera_;
   int every_;

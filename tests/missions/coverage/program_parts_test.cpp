@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "apd_report.hpp"
 #include "coverage_world.hpp"
@@ -59,6 +62,38 @@ TEST(CoverageWorld, QuadsOnATakeOffLineBeforeTheRectangle) {
   // the ground holds the rectangle with a 50 m margin: x in [-60, 200], y in [-50, 150]
   EXPECT_NE(xml.find(R"(pos="70.000 50.000 0" size="130.000 100.000 0.1")"), std::string::npos)
       << xml;
+}
+
+// coverage-run's video: the world's camera "overview" looks straight down (north up) and sees the
+// whole rectangle and the take-off line, on the ground and at the flock's 20-30 m
+TEST(CoverageWorld, OverviewCameraSeesTheRectangleAndTheTakeOffLine) {
+  WorldSpec s;
+  s.agents = 5;
+  const std::string xml = coverage_world_xml(s);
+  const size_t at = xml.find(R"(<camera name="overview" pos=")");
+  ASSERT_NE(at, std::string::npos) << xml;
+  double cx = 0, cy = 0, cz = 0;
+  ASSERT_EQ(
+      std::sscanf(xml.c_str() + at, R"(<camera name="overview" pos="%lf %lf %lf")", &cx, &cy, &cz),
+      3);
+  EXPECT_NE(xml.find(R"(xyaxes="1 0 0 0 1 0" fovy="45")", at), std::string::npos);
+  // 640 x 480 at fovy 45 deg: f = 240 / tan(22.5 deg) = 579.4 px; x east, y south in the image
+  const double f_px = 240.0 / std::tan(22.5 * M_PI / 180.0);
+  for (const double z : {0.0, 20.0, 30.0}) {
+    for (const auto& [x, y] : std::vector<std::pair<double, double>>{
+             {0, 0}, {150, 0}, {0, 100}, {150, 100}, {-10, 0}, {-10, 40}}) {
+      const double u = 319.5 + f_px * (x - cx) / (cz - z);
+      const double v = 239.5 - f_px * (y - cy) / (cz - z);
+      EXPECT_TRUE(u > 0 && u < 640 && v > 0 && v < 480)
+          << x << " " << y << " " << z << ": " << u << " " << v;
+    }
+  }
+  // the outline: four drawn-only boxes
+  for (const char* side : {"area_s", "area_n", "area_w", "area_e"}) {
+    const size_t g = xml.find(std::string("name=\"") + side + "\"");
+    ASSERT_NE(g, std::string::npos) << side;
+    EXPECT_NE(xml.find(R"(contype="0" conaffinity="0")", g), std::string::npos) << side;
+  }
 }
 
 TEST(CoverageWorld, OutOfRangeNumbersAreRefusedByName) {

@@ -23,15 +23,16 @@ inline std::string take_file(const std::string& path) {
   return text;
 }
 
-// Runs `command extra --json FILE` (stdout and stderr into *output) and returns the summary it
-// wrote, or a null JSON value when it wrote none (the output says why).
+// Runs `command --no-run-dir extra --json FILE` (stdout and stderr into *output) and returns the
+// summary it wrote, or a null JSON value when it wrote none (the output says why). No run
+// directory (the launchers make one under ./runs by default): the tests leave nothing behind.
 inline nlohmann::json run_launcher(const std::string& command, const std::string& extra,
                                    std::string* output) {
   static int run = 0;
   const std::string json_path = ::testing::TempDir() + "launcher_" + std::to_string(getpid()) +
                                 "_" + std::to_string(run++) + ".json";
   std::remove(json_path.c_str());
-  const std::string cmd = command + " --json " + json_path + " " + extra + " 2>&1";
+  const std::string cmd = command + " --no-run-dir --json " + json_path + " " + extra + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return nlohmann::json();
   char buf[1024];

@@ -56,6 +56,7 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"w.xml", "--duration", "nan"}, {"--duration"});
   expect_refused({"w.xml", "--wait-for-clients", "-3"}, {"--wait-for-clients"});
   expect_refused({"w.xml", "--record-size", "640x"}, {"--record-size"});
+  expect_refused({"w.xml", "--record-layout", "mosaic"}, {"--record-layout", "single or tiled"});
   expect_refused({"w.xml", "--rate"}, {"--rate needs a value"});
   expect_refused({"w.xml", "--bogus"}, {"unknown option --bogus"});
   expect_refused({}, {"no world given"});

@@ -162,7 +162,7 @@ TEST(FollowCamera, FollowingOneQuadShowsItLargeAndTheOverlayIsBurntIn) {
   OverlayInfo info;
   info.time_s = last.t_s;
   info.vehicles = {{"uav0", "GUIDED"}, {"uav1", "GUIDED"}};
-  info.events = {"1.0 s uav0 takeoff"};
+  info.events = {{"1.0 s uav0 takeoff", 0}};
   std::string drawn = last.rgb;
   draw_overlay(info, cam, last.position_enu_m, last.R_enu_cam, last.vehicles,
                reinterpret_cast<uint8_t*>(drawn.data()));

@@ -37,6 +37,22 @@ std::string default_run_dir(const std::string& mission, uint64_t seed);
 // Makes dir (and its parents); false with a message on failure. Thread-safe.
 bool make_run_dir(const std::string& dir, std::string* why);
 
+// Where a launcher's run goes: its run directory ("" for none), the video ("" for none) and the
+// summary JSON ("" for none).
+struct RunFiles {
+  std::string dir;
+  std::string video;
+  std::string summary;
+};
+// The run files from a launcher's options, the run directory made: run_dir_option "" or "auto"
+// (the default) is default_run_dir(mission, seed), "none" (--no-run-dir) no directory, anything
+// else that directory. video and summary are --record and --json as given; empty, they go into the
+// run directory (video.mp4, summary.json) if there is one. record false (--no-record): no video.
+// Fails (kIo) when the directory cannot be made. Thread-safe.
+Result<RunFiles> resolve_run_files(const std::string& mission, uint64_t seed,
+                                   const std::string& run_dir_option, const std::string& video,
+                                   const std::string& summary, bool record);
+
 // The program `name` in the directory of the running executable (/proc/self/exe). Thread-safe.
 std::string sibling_program(const std::string& name);
 
