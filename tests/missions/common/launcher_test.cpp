@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -86,6 +87,31 @@ TEST(Launcher, DefaultRunDirNamesMissionSeedAndTime) {
   EXPECT_TRUE(make_run_dir(::testing::TempDir() + "a/b/run", &why)) << why;
   EXPECT_FALSE(make_run_dir("/proc/no/such/run", &why));
   EXPECT_FALSE(why.empty());
+}
+
+// the run files from a launcher's options (the "auto" default makes a directory under ./runs, so
+// it is not exercised here: the test leaves nothing behind)
+TEST(Launcher, RunFilesGoIntoTheRunDirectoryUnlessGivenOrOptedOut) {
+  const std::string dir = ::testing::TempDir() + "run_files/r1";
+  auto f = resolve_run_files("m", 1, dir, "", "", true);
+  ASSERT_TRUE(f) << f.message();
+  EXPECT_EQ(f->dir, dir);
+  EXPECT_EQ(f->video, dir + "/video.mp4");
+  EXPECT_EQ(f->summary, dir + "/summary.json");
+  EXPECT_TRUE(std::filesystem::is_directory(dir));
+  // --record / --json given: kept; --no-record: no video
+  f = resolve_run_files("m", 1, dir, "/tmp/v.mp4", "/tmp/s.json", true);
+  EXPECT_EQ(f->video, "/tmp/v.mp4");
+  EXPECT_EQ(f->summary, "/tmp/s.json");
+  EXPECT_EQ(resolve_run_files("m", 1, dir, "", "", false)->video, "");
+  // --no-run-dir: nothing unless given
+  f = resolve_run_files("m", 1, "none", "", "", true);
+  EXPECT_EQ(f->dir, "");
+  EXPECT_EQ(f->video, "");
+  EXPECT_EQ(f->summary, "");
+  EXPECT_EQ(resolve_run_files("m", 1, "none", "/tmp/v.mp4", "", true)->video, "/tmp/v.mp4");
+  // a directory that cannot be made
+  EXPECT_FALSE(resolve_run_files("m", 1, "/proc/no/such/run", "", "", true));
 }
 
 #ifdef UAVSIM_SERVER_BIN

@@ -112,8 +112,11 @@ TEST(Overlay, DrawsTimeLabelsAndEvents) {
   OverlayInfo info;
   info.time_s = 12.3;
   info.vehicles = {{"uav0", "GUIDED"}};
-  info.events = {"12.0 s uav0 balloon_popped b1"};
+  info.events = {{"12.0 s uav0 balloon_popped b1", 0}};
   info.counters = {"balloons popped 1/5"};
+  // where the balloon was popped: 2 m east of the vehicle, 10 m in front of the camera: u = 319.5 +
+  // 579.4 * 2 / 10 = 435
+  info.markers = {{Eigen::Vector3d(2, 0, 0), 0, "uav0 pop 1"}};
   const CameraPose pose{Eigen::Vector3d(0, -10, 0),
                         look_at_rotation(Eigen::Vector3d(0, -10, 0), Eigen::Vector3d(0, 0, 0))};
   draw_overlay(info, c, pose.position_enu_m, pose.R_enu_cam, {Eigen::Vector3d(0, 0, 0)},
@@ -134,6 +137,16 @@ TEST(Overlay, DrawsTimeLabelsAndEvents) {
   EXPECT_GT(changed(320, 210, 200, 40), 50);                        // the label right of the centre
   EXPECT_GT(changed(0, 440, 300, 40), 50);                          // the event line at the bottom
   EXPECT_EQ(changed(0, 240, 200, 150), 0);                          // elsewhere untouched
+  // the ring around the vehicle (at the centre), kVehicleRingPx out, in uav0's colour
+  uint8_t yellow[3];
+  vehicle_colour_rgb(0, yellow);
+  const size_t ring = (static_cast<size_t>(240) * 640 + 320 - kVehicleRingPx) * 3;
+  EXPECT_NEAR(img[ring], yellow[0], 40);
+  EXPECT_NEAR(img[ring + 1], yellow[1], 40);
+  EXPECT_NEAR(img[ring + 2], yellow[2], 40);
+  EXPECT_EQ(changed(316, 236, 8, 8), 0);  // the vehicle itself is not painted over
+  // the marker's cross at (435, 240)
+  EXPECT_GT(changed(429, 234, 13, 13), 30);
 }
 
 }  // namespace
