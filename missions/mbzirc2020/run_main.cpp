@@ -224,9 +224,10 @@ int main(int argc, char** argv) {
       }
       // the ground station's failover (a UAV out, the other taking its side over) is the
       // mission's, not the server's: told to the video's overlay
-      static const std::regex failover_re(R"(^gcs t=\S+ ((uav\d+) .*(out of the mission|takes over).*)$)");
+      // ("gcs t=3.65 uav1 failed: out of the mission" => uav1's line "failed: out of the mission")
+      static const std::regex failover_re(R"(^gcs t=\S+ (uav\d+) (.*(out of the mission|takes over).*)$)");
       if (!o.record.empty() && child == "gcs" && std::regex_search(l, m, failover_re)) {
-        (void)api.request({{"op", "overlay_note"}, {"text", m[1].str().substr(0, 80)}, {"vehicle", m[2].str()}});
+        (void)api.request({{"op", "overlay_note"}, {"text", m[2].str().substr(0, 80)}, {"vehicle", m[1].str()}});
       }
     });
     if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {

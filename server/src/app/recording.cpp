@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <set>
 #include <stdexcept>
 #include <utility>
 
@@ -70,6 +71,7 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
     size_t events_seen = 0;
     int pops = 0;
     std::vector<render::OverlayMarker> markers;
+    std::set<int> killed;  // vehicles killed (their crash is not marked again)
     std::vector<std::deque<std::pair<double, Eigen::Vector3d>>> trails;
   };
   auto memory = std::make_shared<Memory>();
@@ -107,8 +109,10 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
       } else if (e.type == sim::EventType::kLandedOnTarget) {
         what = "landed";
       } else if (e.type == sim::EventType::kCrash) {
+        if (mem.killed.count(e.vehicle) != 0) continue;  // a kill's consequence: marked already
         what = "crash";
       } else if (e.type == sim::EventType::kVehicleKilled) {
+        mem.killed.insert(e.vehicle);
         what = "killed";
       } else {
         continue;

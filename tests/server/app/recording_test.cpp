@@ -79,13 +79,20 @@ TEST(RecordOverlay, EventLinesNameTheirVehicleAndMarkersStayWhereItHappened) {
   EXPECT_EQ(info.markers[2].text, "uav1 crash");
   EXPECT_TRUE(info.markers[2].position_enu_m.isApprox(uav1, 1e-9));
 
+  // a killed vehicle's crash is the kill's: one marker
+  s.record(sim::EventType::kVehicleKilled, 0, "test");
+  s.record(sim::EventType::kCrash, 0, "killed: test");
+  const render::OverlayInfo killed = r.source();
+  ASSERT_EQ(killed.markers.size(), 4u);
+  EXPECT_EQ(killed.markers[3].text, "uav0 killed");
+
   // 9 s later the lines are gone (shown 4 s), the markers stay, the trails hold 10 s
   s.run_until(9.5);
   const render::OverlayInfo later = r.source();
   EXPECT_TRUE(later.events.empty() || !line_with(later, "balloon_popped"));
-  EXPECT_EQ(later.markers.size(), 3u);
+  EXPECT_EQ(later.markers.size(), 4u);
   ASSERT_EQ(later.trails_enu_m.size(), 2u);
-  EXPECT_EQ(later.trails_enu_m[0].size(), 2u);  // the frames at 0.5 s and 9.5 s
+  EXPECT_EQ(later.trails_enu_m[0].size(), 3u);  // the frames at 0.5 s (twice) and 9.5 s
 }
 
 TEST(RecordOverlay, LaunchersCountersFollowTheServersOwn) {
