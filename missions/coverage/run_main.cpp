@@ -115,7 +115,7 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
                       scripts/plot_run.py DIR plots it
   --no-run-dir        no run directory (same as --run-dir none)
   --record FILE.mp4   video of the run (default video.mp4 in the run directory); --no-record: none
-  --record-camera C   the video's view: overview (default: the whole rectangle from the south),
+  --record-camera C   the video's view: overview (default: the whole rectangle from above),
                       follow (the flock), follow:VEHICLE, top
   --world-out FILE    also write the generated world there
   --quiet             only the summary
