@@ -1,0 +1,61 @@
+# Install and export rules for the client package. After `cmake --install build --prefix P`:
+#   find_package(uavsim) (CMAKE_PREFIX_PATH=P) gives uavsim::client, uavsim::common, uavsim::client_gcs and,
+#   when vision/ was built, uavsim::vision; pkg-config uavsim-client (PKG_CONFIG_PATH=P/lib/pkgconfig) gives
+#   the flags of the client. The build tree exports the same targets (build/uavsimTargets.cmake).
+# The server is not part of the package: it is a program (uavsim-server), not a library.
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(uavsim_package_targets uavsim_common)
+set_target_properties(uavsim_common PROPERTIES EXPORT_NAME common)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/common/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+
+set(UAVSIM_INSTALL_OPENCV_COMPONENTS "")
+set(UAVSIM_PC_REQUIRES "eigen3 nlohmann_json")
+set(UAVSIM_PC_CFLAGS "")
+if(TARGET uavsim_client)
+  list(APPEND uavsim_package_targets uavsim_client)
+  set_target_properties(uavsim_client PROPERTIES EXPORT_NAME client)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/client_cpp/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  get_target_property(client_defs uavsim_client INTERFACE_COMPILE_DEFINITIONS)
+  if("UAVSIM_CLIENT_HAS_CAMERA=1" IN_LIST client_defs)
+    list(APPEND UAVSIM_INSTALL_OPENCV_COMPONENTS core imgproc imgcodecs)
+    string(APPEND UAVSIM_PC_REQUIRES " opencv4")
+    set(UAVSIM_PC_CFLAGS "-DUAVSIM_CLIENT_HAS_CAMERA=1")
+  endif()
+endif()
+if(TARGET uavsim_client_gcs)
+  list(APPEND uavsim_package_targets uavsim_client_gcs)
+  set_target_properties(uavsim_client_gcs PROPERTIES EXPORT_NAME client_gcs)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/client_cpp/gcs_link/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endif()
+if(TARGET uavsim_vision)
+  list(APPEND uavsim_package_targets uavsim_vision)
+  set_target_properties(uavsim_vision PROPERTIES EXPORT_NAME vision)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/vision/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  list(APPEND UAVSIM_INSTALL_OPENCV_COMPONENTS core imgproc imgcodecs videoio)
+endif()
+list(REMOVE_DUPLICATES UAVSIM_INSTALL_OPENCV_COMPONENTS)
+if(UAVSIM_INSTALL_OPENCV_COMPONENTS)
+  set(UAVSIM_INSTALL_NEEDS_OPENCV TRUE)
+  string(REPLACE ";" " " UAVSIM_INSTALL_OPENCV_COMPONENTS "${UAVSIM_INSTALL_OPENCV_COMPONENTS}")
+else()
+  set(UAVSIM_INSTALL_NEEDS_OPENCV FALSE)
+endif()
+
+install(TARGETS ${uavsim_package_targets} EXPORT uavsimTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+set(uavsim_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/uavsim)
+install(EXPORT uavsimTargets NAMESPACE uavsim:: DESTINATION ${uavsim_cmake_dir})
+export(EXPORT uavsimTargets NAMESPACE uavsim:: FILE ${PROJECT_BINARY_DIR}/uavsimTargets.cmake)
+
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/uavsimConfig.cmake.in
+                              ${PROJECT_BINARY_DIR}/uavsimConfig.cmake INSTALL_DESTINATION ${uavsim_cmake_dir})
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/uavsimConfigVersion.cmake VERSION ${PROJECT_VERSION}
+                                 COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/uavsimConfig.cmake ${PROJECT_BINARY_DIR}/uavsimConfigVersion.cmake
+        DESTINATION ${uavsim_cmake_dir})
+
+configure_file(${PROJECT_SOURCE_DIR}/cmake/uavsim-client.pc.in ${PROJECT_BINARY_DIR}/uavsim-client.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/uavsim-client.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
