@@ -42,6 +42,7 @@ Eigen::Quaterniond body_orientation_enu(const World& world, int body_id) {
 void set_vehicle_state(World& world, size_t vehicle, const Eigen::Vector3d& pos_enu_m,
                        const Eigen::Quaterniond& q_enu_body, const Eigen::Vector3d& velocity_enu_m_s,
                        const Eigen::Vector3d& rate_body_rad_s) {
+  world.wake(vehicle);  // a vehicle that is moved is no longer held
   const VehicleBinding& v = world.vehicles()[vehicle];
   mjData* d = world.data();
   mjtNum* q = d->qpos + v.qpos_adr;

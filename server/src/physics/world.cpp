@@ -13,6 +13,11 @@ namespace {
 
 constexpr const char* kVehicleTextPrefix = "uavsim:vehicle:";
 constexpr int kRotorUserFields = 5;  // spin_dir max_thrust_n torque_coef_m time_const_s prop_diameter_m
+// The collision bit that moving geoms carry in contype and parked vehicles' geoms in conaffinity (and
+// nothing else), so that only something that moves touches a parked vehicle (models/README.md reserves it).
+constexpr int kWakeBit = 1 << 30;
+// A vehicle whose geoms are this close to static geometry at the start rests on it.
+constexpr double kRestingMargin_m = 0.005;
 
 std::string name_of(const mjModel* m, int type, int id) {
   const char* n = mj_id2name(m, type, id);
@@ -58,11 +63,13 @@ std::unique_ptr<World> World::from_mjcf(const std::string& mjcf, const std::stri
 World::World(mjModel* m, mjData* d, const std::string& label) : m_(m), d_(d) {
   try {
     find_vehicles(label);
+    init_parking();
   } catch (...) {
     mj_deleteData(d_);
     mj_deleteModel(m_);
     throw;
   }
+  park_resting();
   mj_forward(m_, d_);
 }
 
@@ -156,6 +163,132 @@ void World::find_vehicles(const std::string& label) {
   }
 }
 
+void World::init_parking() {
+  const mjModel* m = m_;
+  // a body moves if it has a joint between it and the world, or rides on a kinematic (mocap) body
+  body_static_.assign(m->nbody, 0);
+  for (int b = 0; b < m->nbody; ++b) {
+    bool moves = m->body_weldid[b] != 0;
+    for (int a = b; a > 0 && !moves; a = m->body_parentid[a]) moves = m->body_mocapid[a] >= 0;
+    body_static_[b] = moves ? 0 : 1;
+  }
+  // each vehicle's collidable geoms, and the (contype, conaffinity) pairs they use
+  parked_.assign(vehicles_.size(), Parking{});
+  std::vector<std::pair<int, int>> vehicle_bits;
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int ct = m->geom_contype[g], ca = m->geom_conaffinity[g];
+    if ((ct | ca) & kWakeBit) {
+      throw WorldError("geom '" + name_of(m, mjOBJ_GEOM, g) + "' uses collision bit 30 (contype/conaffinity " +
+                       std::to_string(kWakeBit) + "), which uavsim reserves for parked vehicles");
+    }
+    const int v = body_vehicle_[m->geom_bodyid[g]];
+    if (v < 0 || (ct | ca) == 0) continue;
+    parked_[v].geoms.push_back(g);
+    if (std::find(vehicle_bits.begin(), vehicle_bits.end(), std::make_pair(ct, ca)) == vehicle_bits.end()) {
+      vehicle_bits.emplace_back(ct, ca);
+    }
+  }
+  // moving geoms that can touch some vehicle geom can touch (and wake) a parked vehicle
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (body_static_[m->geom_bodyid[g]]) continue;
+    const int ct = m->geom_contype[g], ca = m->geom_conaffinity[g];
+    for (const auto& [vct, vca] : vehicle_bits) {
+      if ((ct & vca) || (vct & ca)) {
+        m_->geom_contype[g] |= kWakeBit;
+        break;
+      }
+    }
+  }
+  geom_contype0_.assign(m->geom_contype, m->geom_contype + m->ngeom);
+  geom_conaffinity0_.assign(m->geom_conaffinity, m->geom_conaffinity + m->ngeom);
+}
+
+void World::set_parked_bits(size_t vehicle, bool parked) {
+  for (int g : parked_[vehicle].geoms) {
+    m_->geom_contype[g] = parked ? 0 : geom_contype0_[g];
+    m_->geom_conaffinity[g] = parked ? kWakeBit : geom_conaffinity0_[g];
+  }
+}
+
+void World::park(size_t vehicle) {
+  Parking& p = parked_[vehicle];
+  if (p.on) return;
+  const VehicleBinding& v = vehicles_[vehicle];
+  std::copy(d_->qpos + v.qpos_adr, d_->qpos + v.qpos_adr + 7, p.qpos);
+  std::fill(d_->qvel + v.dof_adr, d_->qvel + v.dof_adr + 6, 0.0);
+  std::fill(d_->qfrc_applied + v.dof_adr, d_->qfrc_applied + v.dof_adr + 6, 0.0);
+  set_parked_bits(vehicle, true);
+  p.on = true;
+  ++parked_count_;
+  forwarded_ = false;
+}
+
+void World::wake(size_t vehicle) {
+  Parking& p = parked_[vehicle];
+  if (!p.on) return;
+  set_parked_bits(vehicle, false);
+  p.on = false;
+  --parked_count_;
+  forwarded_ = false;
+}
+
+void World::park_resting() {
+  // contacts of the initial pose, with the vehicles' margins widened so that gear standing exactly on
+  // the ground (distance 0) counts
+  mj_kinematics(m_, d_);
+  std::vector<std::pair<int, mjtNum>> margins;
+  for (const Parking& p : parked_) {
+    for (int g : p.geoms) {
+      margins.emplace_back(g, m_->geom_margin[g]);
+      m_->geom_margin[g] = std::max(m_->geom_margin[g], kRestingMargin_m);
+    }
+  }
+  mj_collision(m_, d_);
+  for (const auto& [g, margin] : margins) m_->geom_margin[g] = margin;
+  std::vector<int> support(vehicles_.size(), 0);  // static contacts, or -1 once anything moving touches
+  for (int i = 0; i < d_->ncon; ++i) {
+    const mjContact& c = d_->contact[i];
+    const int b[2] = {m_->geom_bodyid[c.geom1], m_->geom_bodyid[c.geom2]};
+    for (int side = 0; side < 2; ++side) {
+      const int v = body_vehicle_[b[side]];
+      if (v < 0 || v == body_vehicle_[b[1 - side]] || support[v] < 0) continue;
+      support[v] = body_static_[b[1 - side]] ? support[v] + 1 : -1;
+    }
+  }
+  d_->ncon = 0;
+  for (size_t v = 0; v < vehicles_.size(); ++v) {
+    const mjtNum* dq = d_->qvel + vehicles_[v].dof_adr;
+    const bool still = std::all_of(dq, dq + 6, [](mjtNum x) { return x == 0.0; });
+    if (support[v] > 0 && still) park(v);
+  }
+}
+
+void World::hold_parked() {
+  woken_.clear();
+  if (parked_count_ == 0) return;
+  // something moving touched a parked vehicle: it wakes with the state this step gave it
+  for (int i = 0; i < d_->ncon; ++i) {
+    const mjContact& c = d_->contact[i];
+    for (int g : {c.geom1, c.geom2}) {
+      const int v = body_vehicle_[m_->geom_bodyid[g]];
+      if (v >= 0 && parked_[v].on) woken_.push_back(v);
+    }
+  }
+  std::sort(woken_.begin(), woken_.end());
+  woken_.erase(std::unique(woken_.begin(), woken_.end()), woken_.end());
+  for (int v : woken_) wake(static_cast<size_t>(v));
+  // the others go back exactly where they are held, at rest
+  for (size_t v = 0; v < vehicles_.size(); ++v) {
+    if (!parked_[v].on) continue;
+    std::copy(parked_[v].qpos, parked_[v].qpos + 7, d_->qpos + vehicles_[v].qpos_adr);
+    std::fill(d_->qvel + vehicles_[v].dof_adr, d_->qvel + vehicles_[v].dof_adr + 6, 0.0);
+  }
+}
+
+int World::buffer_overflows() const {
+  return d_->warning[mjWARN_CONTACTFULL].number + d_->warning[mjWARN_CNSTRFULL].number;
+}
+
 double World::time_s() const { return d_->time; }
 double World::timestep_s() const { return m_->opt.timestep; }
 void World::set_timestep_s(double dt_s) { m_->opt.timestep = dt_s; }
@@ -166,6 +299,13 @@ fc::TruthState World::truth(size_t vehicle) const {
   const mjtNum* dq = d_->qvel + v.dof_adr;
   const mjtNum* ddq = d_->qacc + v.dof_adr;
   fc::TruthState s;
+  if (parked_[vehicle].on) {
+    // held at rest: no velocity, no acceleration (the accelerometer reads 1 g up, as on the ground)
+    const double* h = parked_[vehicle].qpos;
+    s.position_enu_m = Eigen::Vector3d(h[0], h[1], h[2]);
+    s.q_enu_body = Eigen::Quaterniond(h[3], h[4], h[5], h[6]).normalized();
+    return s;
+  }
   s.position_enu_m = Eigen::Vector3d(q[0], q[1], q[2]);
   s.q_enu_body = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized();
   // free joint: linear velocity in the world frame, angular velocity in the body frame
@@ -186,13 +326,29 @@ void World::apply_wrench(size_t vehicle, const airframe::Wrench& wrench) {
 }
 
 void World::set_pose(size_t vehicle, const double pos_enu_m[3], const double quat_wxyz[4]) {
+  wake(vehicle);
   const VehicleBinding& v = vehicles_[vehicle];
   std::copy(pos_enu_m, pos_enu_m + 3, d_->qpos + v.qpos_adr);
   std::copy(quat_wxyz, quat_wxyz + 4, d_->qpos + v.qpos_adr + 3);
   std::fill(d_->qvel + v.dof_adr, d_->qvel + v.dof_adr + 6, 0.0);
 }
 
-void World::step() { mj_step(m_, d_); }
+void World::step() {
+  // nothing can move: every dof is a parked vehicle's, nothing kinematic or actuated; only the clock runs
+  // (with the kinematics made current once, for cameras and queries)
+  if (parked_count_ > 0 && parked_count_ == vehicles_.size() && m_->nv == 6 * static_cast<int>(parked_count_) &&
+      m_->nmocap == 0 && m_->nu == 0) {
+    woken_.clear();
+    if (!forwarded_) {
+      mj_forward(m_, d_);
+      forwarded_ = true;
+    }
+    d_->time += m_->opt.timestep;
+    return;
+  }
+  mj_step(m_, d_);
+  hold_parked();
+}
 
 void World::vehicle_contacts(std::vector<VehicleContact>* out) const {
   out->clear();
@@ -211,6 +367,7 @@ void World::vehicle_contacts(std::vector<VehicleContact>* out) const {
       vc.geom = g[side];
       vc.other_geom = g[1 - side];
       vc.other_body = b[1 - side];
+      vc.other_static = body_static_[b[1 - side]] != 0;
       out->push_back(vc);
     }
   }
@@ -218,6 +375,8 @@ void World::vehicle_contacts(std::vector<VehicleContact>* out) const {
 
 void World::reset() {
   mj_resetData(m_, d_);
+  for (size_t v = 0; v < parked_.size(); ++v) wake(v);
+  park_resting();
   mj_forward(m_, d_);
 }
 

@@ -34,6 +34,7 @@ struct VehicleContact {
   int geom = -1;           // the vehicle's geom
   int other_geom = -1;
   int other_body = -1;     // the other geom's body
+  bool other_static = false;  // the other body cannot move (welded to the world, not kinematic)
 };
 
 class World {
@@ -67,8 +68,29 @@ class World {
   // Places a vehicle (teleport) at rest; used by resets and crash handling in tests.
   void set_pose(size_t vehicle, const double pos_enu_m[3], const double quat_wxyz[4]);
 
-  // Advances physics by one timestep (mj_step).
+  // Advances physics by one timestep (mj_step; when every dof belongs to a parked vehicle and nothing
+  // is kinematic, only the clock advances). Parked vehicles are then put back where they are held;
+  // one that something touched wakes instead.
   void step();
+
+  // Parking: a vehicle at rest on static geometry is held exactly where it is (qpos fixed, qvel zero)
+  // and its geoms stop touching static geometry (no contact constraints: a grounded quad's resting
+  // contacts are most of its step), while moving bodies (awake vehicles, kinematic objects) still
+  // collide with it and wake it. truth() of a parked vehicle is that pose at rest (zero velocity and
+  // acceleration). Loop thread only.
+  bool parked(size_t vehicle) const { return parked_[vehicle].on; }
+  size_t parked_count() const { return parked_count_; }
+  // Holds the vehicle at its present pose, at rest. Parking a parked vehicle does nothing.
+  void park(size_t vehicle);
+  // Gives the vehicle its contacts back, at rest where it was held.
+  void wake(size_t vehicle);
+  // Parks every vehicle whose geoms touch (within 5 mm) static geometry only, as at the start of a
+  // world: vehicles that start on the ground cost no contacts until they arm.
+  void park_resting();
+  // Vehicles that the last step woke because something touched them.
+  const std::vector<int>& woken_by_contact() const { return woken_; }
+  // Times the constraint or contact buffer overflowed (MuJoCo drops contacts then).
+  int buffer_overflows() const;
   // The contacts of the last step that involve a vehicle, each reported once per vehicle side.
   void vehicle_contacts(std::vector<VehicleContact>* out) const;
   // Back to the initial state (qpos0, zero velocities, time 0).
@@ -83,11 +105,27 @@ class World {
   World(mjModel_* m, mjData_* d, const std::string& label);
   void find_vehicles(const std::string& label);
 
+  void init_parking();
+  void hold_parked();
+  void set_parked_bits(size_t vehicle, bool parked);
+
+  struct Parking {
+    bool on = false;
+    double qpos[7] = {};
+    std::vector<int> geoms;  // the vehicle's collidable geoms
+  };
+
   mjModel_* m_ = nullptr;
   mjData_* d_ = nullptr;
   std::vector<VehicleBinding> vehicles_;
   std::vector<int> body_vehicle_;   // body id -> vehicle index or -1 (via the root body)
   std::vector<char> geom_is_gear_;  // geom id -> landing gear
+  std::vector<char> body_static_;   // body id -> cannot move (welded to the world, not kinematic)
+  std::vector<int> geom_contype0_, geom_conaffinity0_;  // awake collision bits
+  std::vector<Parking> parked_;
+  size_t parked_count_ = 0;
+  bool forwarded_ = false;  // kinematics are current for the clock-only step
+  std::vector<int> woken_;
 };
 
 }  // namespace uavsim::server::physics

@@ -16,6 +16,7 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "assets/mesh_convert.hpp"
@@ -36,13 +37,14 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxCoordinate_m = 1e5;  // MuJoCo resets (t = 0, forever) on positions past 1e10
 constexpr double kMaxYaw_deg = 360.0;
 constexpr double kMaxSpacing_m = 1e4;
-// MuJoCo 2.2 sizes its constraint buffers densely (njmax^2 doubles) and fails to allocate the
-// simulation state for a few thousand vehicles; 1000 is the most the benchmarks run
-constexpr long kMaxVehicles = 1000;
+// MuJoCo 2.2 sizes its constraint buffers densely (njmax x (nv + njmax)), so the rows left for contacts
+// shrink as vehicles are added (auto_njmax); 3000 is the most the benchmarks run
+constexpr long kMaxVehicles = 3000;
 // includes: total files and bytes over the whole world, so that a fan-out (each file including the
 // next several times) fails at once instead of growing exponentially
 constexpr int kMaxIncludedFiles = 256;
 constexpr std::uintmax_t kMaxIncludedBytes = 64u << 20;
+constexpr size_t kMaxCollisionWords = 32;  // collision="...": geom-name prefixes
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what) {
   std::ostringstream s;
@@ -466,6 +468,79 @@ class Composer {
     return templates_.emplace(key, std::move(t)).first->second;
   }
 
+  // collision="..." of a vehicle element: the local geom-name prefixes whose geoms stay collidable, or
+  // empty for "full" (the template as written). "lean" stands for "hull gear". Each word must name some
+  // geom of the template, and the set must keep landing gear (without it the vehicle falls through the
+  // ground); errors name the world file and line and list the template's geoms.
+  std::vector<std::string> collision_set(XMLElement* at, const Template& t) {
+    const char* text = at->Attribute("collision");
+    if (text == nullptr) return {};
+    std::vector<std::string> words;
+    std::istringstream in(text);
+    for (std::string w; in >> w;) {
+      if (w == "lean") {
+        words.insert(words.end(), {"hull", "gear"});
+      } else {
+        words.push_back(w);
+      }
+    }
+    if (words.size() == 1 && words[0] == "full") return {};
+    std::vector<std::string> geoms;
+    collect_geom_names(t.body, &geoms);
+    std::string known;
+    for (const std::string& g : geoms) known += " " + g;
+    if (words.empty() || words.size() > kMaxCollisionWords) {
+      fail(world_path_, at->GetLineNum(),
+           "collision=\"" + std::string(text) + "\" must be full, lean, or 1 to " +
+               std::to_string(kMaxCollisionWords) + " geom-name prefixes of '" + required(at, "type") +
+               "' (geoms:" + known + ")");
+    }
+    bool gear = false;
+    for (const std::string& w : words) {
+      bool matched = false;
+      for (const std::string& g : geoms) {
+        if (g.rfind(w, 0) != 0) continue;
+        matched = true;
+        gear = gear || g.rfind("gear", 0) == 0;
+      }
+      if (!matched || w == "full") {
+        fail(world_path_, at->GetLineNum(),
+             "collision=\"" + std::string(text) + "\": '" + w + "' names no geom of '" + required(at, "type") +
+                 "' (full and lean stand alone; geoms:" + known + ")");
+      }
+    }
+    if (!gear) {
+      fail(world_path_, at->GetLineNum(),
+           "collision=\"" + std::string(text) + "\" leaves out the landing gear (gear* geoms): the vehicle "
+           "would fall through the ground");
+    }
+    return words;
+  }
+
+  static void collect_geom_names(const XMLElement* body, std::vector<std::string>* out) {
+    for (const XMLElement* c = body->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      const std::string tag = c->Name();
+      if (tag == "geom" && c->Attribute("name") != nullptr) out->push_back(c->Attribute("name"));
+      if (tag == "body") collect_geom_names(c, out);
+    }
+  }
+
+  // geoms (of the clone, before its names are prefixed) outside the set get no collision bits
+  static void apply_collision_set(XMLElement* body, const std::vector<std::string>& keep) {
+    for (XMLElement* c = body->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      const std::string tag = c->Name();
+      if (tag == "body") apply_collision_set(c, keep);
+      if (tag != "geom") continue;
+      const char* n = c->Attribute("name");
+      const bool kept = n != nullptr && std::any_of(keep.begin(), keep.end(), [n](const std::string& w) {
+                          return std::string_view(n).substr(0, w.size()) == w;
+                        });
+      if (kept) continue;
+      c->SetAttribute("contype", 0);
+      c->SetAttribute("conaffinity", 0);
+    }
+  }
+
   void instantiate(XMLElement* worldbody, XMLElement* at, const std::string& kind,
                    const std::string& name, const double pos[3], double yaw_rad) {
     if (name.find('/') != std::string::npos || name.find(':') != std::string::npos) {
@@ -480,6 +555,13 @@ class Composer {
 
     // clone the body, prefix every name inside it, and place it
     XMLElement* body = t.body->DeepClone(world_.get())->ToElement();
+    if (kind == "vehicles") {
+      if (const std::vector<std::string> keep = collision_set(at, t); !keep.empty()) {
+        apply_collision_set(body, keep);
+      }
+    } else if (at->Attribute("collision") != nullptr) {
+      fail(world_path_, at->GetLineNum(), "collision= applies to vehicles only");
+    }
     prefix_names(body, name + "/");
     body->SetAttribute("name", name.c_str());
     double base[3];
@@ -587,26 +669,39 @@ class Composer {
   }
 
   // sizes the composed model needs: user data slots of the rotor sites, contact and constraint buffers
-  // for every vehicle resting on its gear (MuJoCo 2.2's defaults, 100 contacts and 500 constraint rows,
-  // drop contacts beyond a few vehicles), the offscreen buffer
+  // (MuJoCo 2.2's defaults, 100 contacts and 500 constraint rows, drop contacts beyond a few vehicles),
+  // the offscreen buffer
   void finish(XMLElement* root) {
     XMLElement* size = child_or_create(*world_, root, "size", true);
     if (nuser_site_ > 0) {
       size->SetAttribute("nuser_site", std::max(nuser_site_, size->IntAttribute("nuser_site", 0)));
     }
-    // a grounded vehicle: up to 4 gear contacts x 4 pyramid rows; MuJoCo 2.2 allocates njmax^2 doubles
-    // (efc_AR), so the automatic size stops growing at kAutoSizedVehicles: larger worlds that start on
-    // the ground set <size nconmax njmax> themselves
-    constexpr int kAutoSizedVehicles = 300;
-    const int n = std::min(static_cast<int>(names_.size()), kAutoSizedVehicles);
-    if (size->Attribute("nconmax") == nullptr) size->SetAttribute("nconmax", 100 + 6 * n);
-    if (size->Attribute("njmax") == nullptr) size->SetAttribute("njmax", 500 + 16 * n);
+    const long n = static_cast<long>(names_.size());
+    if (size->Attribute("nconmax") == nullptr) size->SetAttribute("nconmax", static_cast<int>(100 + 8 * n));
+    if (size->Attribute("njmax") == nullptr) size->SetAttribute("njmax", auto_njmax(n));
     XMLElement* visual = child_or_create(*world_, root, "visual");
     XMLElement* global = child_or_create(*world_, visual, "global");
     global->SetAttribute("offwidth",
                          std::max(options_.offscreen_width_px, global->IntAttribute("offwidth", 0)));
     global->SetAttribute("offheight",
                          std::max(options_.offscreen_height_px, global->IntAttribute("offheight", 0)));
+  }
+
+  // Constraint rows for what can be in contact at once. A vehicle on its gear needs up to 4 contacts x
+  // 4 pyramid rows; vehicles at rest are parked (physics/world.hpp) and flying ones touch nothing, so
+  // only those taking off, landing or armed on the ground need rows. Contacts are cheap (nconmax: every
+  // vehicle), rows are not: MuJoCo 2.2 allocates per row a dense Jacobian row of nv doubles twice (efc_J,
+  // efc_JT, with column indices) and a dense row of njmax (efc_AR), in one buffer whose size is an int:
+  // bytes = njmax (24 nv + 12 njmax) must stay well below 2^31 (njmax >= 11000 fails for 1000 quads).
+  // So: every vehicle on its gear at once up to a buffer of kRowBudgetBytes, then as many as fit.
+  static int auto_njmax(long vehicles) {
+    constexpr double kRowBudgetBytes = 1.0 * (1u << 30);
+    constexpr long kRowsPerGroundedVehicle = 16;
+    const double nv = 6.0 * static_cast<double>(vehicles) + 60.0;  // free joints, and some for objects
+    // 12 r^2 + 24 nv r = budget
+    const double fit = (-24.0 * nv + std::sqrt(576.0 * nv * nv + 48.0 * kRowBudgetBytes)) / 24.0;
+    const double wanted = 500.0 + static_cast<double>(kRowsPerGroundedVehicle * vehicles);
+    return static_cast<int>(std::min(wanted, std::floor(fit)));
   }
 
   std::string world_path_;

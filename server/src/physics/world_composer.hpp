@@ -5,6 +5,9 @@
 //   <uavsim_vehicle type="quad" name="uav0" pos="0 0 0" yaw_deg="0"/>            one vehicle
 //   <uavsim_grid type="quad" prefix="uav" rows="10" cols="10" spacing="4" pos="0 0 0"/>   rows*cols vehicles
 //   <uavsim_object type="balloon" name="balloon0" pos="..."/>                   one object from models/objects
+// A vehicle element may choose the template's collision set: collision="full" (default: as written),
+// "lean" (hull and landing gear: hull* and gear* geoms) or geom-name prefixes ("lean blade", "hull gear
+// prop"); the other geoms get contype = conaffinity = 0 (still drawn, never touching anything).
 // <include file="..."/> is inlined here (MuJoCo would resolve it relative to the composed file otherwise), and
 // every asset file path is made absolute, so the composed text loads from anywhere (--write-world).
 // Meshes in formats MuJoCo 2.2 does not read are converted (assets/mesh_convert.hpp) into a cache directory

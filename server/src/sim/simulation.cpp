@@ -23,6 +23,15 @@ constexpr double kMaxPosition_m = 1e6;
 constexpr double kMaxSpeed_m_s = 1e4;
 constexpr double kMaxRate_rad_s = 1e4;
 
+// parking: a disarmed vehicle slower than these, its rotors lifting less than kParkLiftRatio of its
+// weight, touching static geometry only, for kParkAfter_s (a settled resting contact creeps at
+// micrometres per second; a vehicle still sliding or rocking does not park)
+constexpr double kParkSpeed_m_s = 0.01;
+constexpr double kParkRate_rad_s = 0.02;
+constexpr double kParkLiftRatio = 0.01;
+constexpr double kParkAfter_s = 0.5;
+constexpr double kGravity_m_s2 = 9.81;
+
 // index of the wind's generator stream (vehicles use 0, 1, ...)
 constexpr uint64_t kWindStream = 0x57494E44ull;
 
@@ -156,6 +165,7 @@ void Simulation::step() {
     if (v.thrust_scale != 1.0) {
       for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
     }
+    if (world_->parked(i)) continue;  // held in place: no wrench (zeroed when it parked)
     const fc::TruthState t = world_->truth(i);
     const airframe::Wrench w =
         airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
@@ -224,6 +234,7 @@ void Simulation::control_step() {
     const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
     v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
     if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
+    if (v.fc.armed() && world_->parked(i)) world_->wake(i);  // before the motors spin up
     airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
     v.thrust_scale = airframe::battery_thrust_scale(a, v.battery);
 
@@ -235,11 +246,23 @@ void Simulation::control_step() {
   for (ControlObserver& observer : observers_) observer(*this);
 }
 
+bool Simulation::resting(size_t i) const {
+  const VehicleRuntime& v = vehicles_[i];
+  if (v.fc.armed()) return false;
+  double lift_n = 0.0;
+  for (double thrust : v.thrust_n) lift_n += thrust;
+  if (lift_n > kParkLiftRatio * airframe(i).mass_kg * kGravity_m_s2) return false;
+  const fc::TruthState t = world_->truth(i);
+  return t.velocity_enu_m_s.norm() < kParkSpeed_m_s && t.rate_body_rad_s.norm() < kParkRate_rad_s;
+}
+
 void Simulation::check_contacts() {
   std::vector<char> touching(vehicles_.size(), 0);
+  std::vector<char> touching_moving(vehicles_.size(), 0);
   world_->vehicle_contacts(&contacts_);
   for (const physics::VehicleContact& c : contacts_) {
     VehicleRuntime& v = vehicles_[c.vehicle];
+    if (!c.other_static) touching_moving[c.vehicle] = 1;
     bool handled = false;
     for (auto& object : objects_) handled = handled || object->on_contact(*this, c);
     if (handled) {
@@ -265,6 +288,16 @@ void Simulation::check_contacts() {
   const double now_s = world_->time_s();
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     VehicleRuntime& v = vehicles_[i];
+    // parked: on the ground; standing still on static geometry long enough: parks
+    if (world_->parked(i)) {
+      touching[i] = 1;
+    } else if (touching[i] && !touching_moving[i] && resting(i)) {
+      v.rest_s += physics_dt_s_;
+      if (v.rest_s >= kParkAfter_s) world_->park(i);
+    } else {
+      v.rest_s = 0.0;
+    }
+    if (world_->parked(i)) v.rest_s = 0.0;
     if (touching[i]) v.last_contact_s = now_s;
     const bool grounded = touching[i] || now_s - v.last_contact_s < config_.airborne_after_s;
     if (grounded != v.on_ground) {

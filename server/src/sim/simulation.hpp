@@ -3,6 +3,10 @@
 // first runs the queued vehicle tasks (commands) in vehicle order, then each vehicle's flight controller,
 // so inputs take effect at control-step boundaries in a fixed order, never in arrival order (DESIGN.md:
 // determinism). The same world, seed and inputs give bit-identical trajectories.
+// Parking (physics/world.hpp): a disarmed vehicle with its motors stopped that has stood still on static
+// geometry for kParkAfter_s is parked (held exactly, no contact constraints; its flight controller and
+// sensors run on, seeing a vehicle at rest), as is every vehicle that starts on the ground; it wakes when
+// it arms, when something moving touches it, or when it is moved (a reset, a carried vehicle).
 #pragma once
 
 #include <cstdint>
@@ -54,6 +58,7 @@ struct VehicleRuntime {
   Eigen::Quaterniond start_q_enu_body = Eigen::Quaterniond::Identity();
   bool state_fault = false;  // the one state_fault event was raised
   double thrust_scale = 1.0;  // battery sag: fraction of rated thrust at the present terminal voltage
+  double rest_s = 0.0;        // how long it has stood still on static geometry, disarmed (parking)
 };
 
 // A command or query for one vehicle, run on the loop thread at the next control boundary.
@@ -138,6 +143,8 @@ class Simulation {
   void init_wind();
   void control_step();
   void check_contacts();
+  // disarmed, rotors stopped, (almost) still: a candidate for parking
+  bool resting(size_t vehicle) const;
   // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed (one event)
   void fault_vehicle(size_t vehicle, const std::string& what);
 

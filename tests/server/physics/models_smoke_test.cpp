@@ -38,6 +38,8 @@ TEST(ModelsSmoke, EveryWorldComposesLoadsAndSteps) {
   int count = 0;
   for (const auto& f : fs::directory_iterator(fs::path(UAVSIM_MODELS_DIR) / "worlds")) {
     if (f.path().extension() != ".xml") continue;
+    // the 1000-quad scale world loads for seconds: its own scenario test flies it (sim_scale_tests)
+    if (f.path().filename() == "grid1000.xml") continue;
     ComposeOptions o;
     o.models_dir = UAVSIM_MODELS_DIR;
     auto world = World::load(f.path().string(), o);

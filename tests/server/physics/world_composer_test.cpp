@@ -4,9 +4,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include "physics/world.hpp"
+
+#include <mujoco/mujoco.h>
 
 namespace uavsim::server::physics {
 namespace {
@@ -116,6 +119,101 @@ TEST(WorldComposer, GridMakesRowsTimesColsVehiclesWithPrefixedNames) {
   EXPECT_GE(world->body_id("q3"), 0);
   const std::string mjcf = compose_world(path, options());
   EXPECT_NE(mjcf.find("\"q3/hull\""), std::string::npos);  // names inside templates are prefixed
+}
+
+// collidable geoms of vehicle v by local name ("hull", "gear_left", ...)
+std::set<std::string> collidable_geoms(const World& world, const std::string& vehicle) {
+  std::set<std::string> out;
+  const mjModel* m = world.model();
+  for (int g = 0; g < m->ngeom; ++g) {
+    const std::string name = world.geom_name(g);
+    if (name.rfind(vehicle + "/", 0) != 0) continue;
+    if (m->geom_contype[g] != 0 || m->geom_conaffinity[g] != 0) out.insert(name.substr(vehicle.size() + 1));
+  }
+  return out;
+}
+
+TEST(WorldComposer, CollisionSetKeepsOnlyTheNamedGeomsCollidable) {
+  const std::string path = write_temp("collision_sets.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <geom name="ground" type="plane" size="50 50 0.1"/>
+    <uavsim_vehicle type="quad" name="full" pos="0 0 0"/>
+    <uavsim_vehicle type="quad" name="lean" pos="5 0 0" collision="lean"/>
+    <uavsim_vehicle type="quad" name="popper" pos="10 0 0" collision="lean blade"/>
+    <uavsim_grid type="quad" prefix="flock" rows="1" cols="2" spacing="4" pos="0 10 0" collision="hull gear"/>
+  </worldbody>
+</mujoco>)");
+  auto world = World::load(path, options());
+  // they start parked on the ground (their geoms then touch only what moves): awake, as composed
+  for (size_t v = 0; v < world->vehicles().size(); ++v) world->wake(v);
+  // the quad template: hull, 4 prop discs, 2 skids, 5 blades collide (12 geoms)
+  const std::set<std::string> full = collidable_geoms(*world, "full");
+  EXPECT_EQ(full.size(), 12u);
+  EXPECT_TRUE(full.count("prop0") && full.count("blade4") && full.count("gear_left"));
+  const std::set<std::string> lean = {"hull", "gear_left", "gear_right"};
+  EXPECT_EQ(collidable_geoms(*world, "lean"), lean);
+  EXPECT_EQ(collidable_geoms(*world, "flock0"), lean);
+  EXPECT_EQ(collidable_geoms(*world, "flock1"), lean);
+  std::set<std::string> popper = lean;
+  for (int k = 0; k < 5; ++k) popper.insert("blade" + std::to_string(k));
+  EXPECT_EQ(collidable_geoms(*world, "popper"), popper);
+  // the blades keep their own bits (2: balloons only), the hull its 1
+  const mjModel* m = world->model();
+  EXPECT_EQ(m->geom_conaffinity[mj_name2id(m, mjOBJ_GEOM, "popper/blade0")], 2);
+  EXPECT_EQ(m->geom_conaffinity[mj_name2id(m, mjOBJ_GEOM, "popper/hull")], 1);
+}
+
+TEST(WorldComposer, LeanQuadsStillRestOnTheirGear) {
+  const std::string path = write_temp("lean_rest.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <geom name="ground" type="plane" size="50 50 0.1"/>
+    <uavsim_vehicle type="quad" name="uav0" pos="0 0 0.05" collision="lean"/>
+  </worldbody>
+</mujoco>)");
+  auto world = World::load(path, options());
+  for (int i = 0; i < 1000; ++i) world->step();
+  // dropped 5 cm, it stands on its skids: the body origin 0.16 m up (gear bottom 0.15 + 0.01 below it),
+  // less the soft contact's few millimetres
+  EXPECT_NEAR(world->truth(0).position_enu_m.z(), 0.16, 0.005);
+  EXPECT_LT(world->truth(0).velocity_enu_m_s.norm(), 0.01);
+}
+
+TEST(WorldComposer, BadCollisionSetNamesFileLineAndTheGeoms) {
+  const struct {
+    const char* value;
+    const char* says;
+  } cases[] = {
+      {"", "must be full, lean"},
+      {"hull wing gear", "'wing' names no geom"},
+      {"hull prop", "leaves out the landing gear"},
+      {"lean full", "'full' names no geom"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = write_temp("bad_collision.xml", std::string(R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <uavsim_grid type="quad" rows="1" cols="2" collision=")") + c.value + R"("/>
+  </worldbody>
+</mujoco>)");
+    try {
+      compose_world(path, options());
+      ADD_FAILURE() << "collision=\"" << c.value << "\" was accepted";
+    } catch (const WorldError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path + ":4:"), std::string::npos) << what;
+      EXPECT_NE(what.find(c.says), std::string::npos) << what;
+    }
+  }
+  // on an object it is an error too
+  const std::string path = write_temp("object_collision.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <uavsim_object type="balloon" name="b" collision="lean"/>
+  </worldbody>
+</mujoco>)");
+  EXPECT_THROW(compose_world(path, options()), WorldError);
 }
 
 TEST(WorldComposer, IncludeIsInlinedRelativeToTheIncludingFile) {

@@ -124,6 +124,7 @@ TEST(World, RestingVehicleTouchesGroundOnlyWithLandingGear) {
   o.models_dir = UAVSIM_MODELS_DIR;
   for (const char* w : {"/worlds/empty.xml", "/worlds/hexa.xml"}) {
     auto world = World::load(std::string(UAVSIM_MODELS_DIR) + w, o);
+    world->wake(0);  // it starts parked (no contacts at all): standing on its own gear instead
     for (int i = 0; i < 500; ++i) world->step();
     std::vector<VehicleContact> contacts;
     world->vehicle_contacts(&contacts);
