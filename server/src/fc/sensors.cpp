@@ -20,8 +20,8 @@ double gauss_markov(double x, double sd, double tau_s, double dt_s, double n) {
 }
 }  // namespace
 
-Sensors::Sensors(uint64_t seed) : rng_(seed), error_rng_(seed ^ kErrorStream) {
-  mag_offset_unit_ = error_normal_(error_rng_);
+Sensors::Sensors(uint64_t seed) : noise_(seed), errors_(seed ^ kErrorStream) {
+  mag_offset_unit_ = errors_();
 }
 
 bool Sensors::due(double time_s, double rate_hz, double* next_s) {
@@ -59,13 +59,13 @@ void Sensors::sample(double time_s, const TruthState& truth, const ParamValues& 
       const double sd[3] = {p.sim_gps_bias_sd, p.sim_gps_bias_sd, 2.0 * p.sim_gps_bias_sd};
       const double period_s = 1.0 / p.sim_gps_hz;
       for (int i = 0; i < 3; ++i) {
-        const double n = error_normal_(error_rng_);
+        const double n = errors_();
         gps_bias_enu_m_[i] = gps_bias_started_ ? gauss_markov(gps_bias_enu_m_[i], sd[i], p.sim_gps_bias_tau, period_s, n)
                                                : sd[i] * n;
       }
       gps_bias_started_ = true;
-      if (uniform_(error_rng_) < p.sim_gps_jump_hz * period_s) {
-        for (int i = 0; i < 3; ++i) gps_bias_enu_m_[i] += (i < 2 ? 1.0 : 2.0) * p.sim_gps_jump_m * error_normal_(error_rng_);
+      if (errors_.uniform() < p.sim_gps_jump_hz * period_s) {
+        for (int i = 0; i < 3; ++i) gps_bias_enu_m_[i] += (i < 2 ? 1.0 : 2.0) * p.sim_gps_jump_m * errors_();
       }
     } else {
       gps_bias_enu_m_.setZero();
@@ -89,7 +89,7 @@ void Sensors::sample(double time_s, const TruthState& truth, const ParamValues& 
   out->baro_new = due(time_s, p.sim_baro_hz, &next_baro_s_);
   if (out->baro_new) {
     if (p.sim_baro_drift > 0) {
-      const double n = error_normal_(error_rng_);
+      const double n = errors_();
       baro_drift_m_ = baro_drift_started_
                           ? gauss_markov(baro_drift_m_, p.sim_baro_drift, kBaroDriftTau_s, 1.0 / p.sim_baro_hz, n)
                           : p.sim_baro_drift * n;

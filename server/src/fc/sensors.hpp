@@ -1,6 +1,8 @@
 // Seeded sensor models sampled from ground truth: IMU (every control step), GPS, barometer and compass
-// at their own rates. All noise comes from one std::mt19937_64 seeded by the FC's seed, drawn in a fixed
-// order, so equal seeds and equal truth give equal samples. No allocation in sample().
+// at their own rates. All noise comes from one seeded generator (fc/gaussian.hpp: a ziggurat on
+// xoshiro256++, several times cheaper than std::normal_distribution and the same sequence with any
+// standard library), drawn in a fixed order, so equal seeds and equal truth give equal samples. No
+// allocation in sample().
 // The field errors (SIM_GPS_BIAS_*, SIM_GPS_JUMP_*, SIM_BARO_DRIFT, SIM_MAG_OFS_SD; all 0 in the ideal
 // world) draw from a second generator, so switching them on leaves the white noise sequence unchanged:
 //   GPS bias: first-order Gauss-Markov b[k+1] = a b[k] + sd sqrt(1 - a^2) n, a = exp(-T / tau), started in
@@ -13,7 +15,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <random>
+
+#include "fc/gaussian.hpp"
 
 #include "fc/fc_types.hpp"
 #include "fc/params.hpp"
@@ -62,21 +65,17 @@ class Sensors {
   double baro_drift_m() const { return baro_drift_m_; }
 
  private:
-  double gauss(double sd) { return sd > 0.0 ? sd * normal_(rng_) : 0.0; }
+  double gauss(double sd) { return sd > 0.0 ? sd * noise_() : 0.0; }
   static bool due(double time_s, double rate_hz, double* next_s);
 
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
+  Gaussian noise_;
   double next_gps_s_ = 0.0;
   double next_baro_s_ = 0.0;
   double next_mag_s_ = 0.0;
   bool gps_denied_ = false;
   Eigen::Vector3d gps_glitch_enu_m_ = Eigen::Vector3d::Zero();
   // field errors: their own generator, so the white noise above does not depend on them
-  // (a distribution of its own too: std::normal_distribution keeps the second value of each pair)
-  std::mt19937_64 error_rng_;
-  std::normal_distribution<double> error_normal_{0.0, 1.0};
-  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+  Gaussian errors_;
   Eigen::Vector3d gps_bias_enu_m_ = Eigen::Vector3d::Zero();
   bool gps_bias_started_ = false;
   double baro_drift_m_ = 0.0;
