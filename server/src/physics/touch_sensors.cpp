@@ -16,13 +16,18 @@ std::vector<std::vector<TouchSensor>> vehicle_touch_sensors(const World& world) 
       std::string name = n != nullptr ? n : "touch" + std::to_string(s);
       const size_t slash = name.rfind('/');
       if (slash != std::string::npos) name = name.substr(slash + 1);
-      out[v].push_back(TouchSensor{name, m->sensor_adr[s]});
+      out[v].push_back(TouchSensor{name, m->sensor_adr[s], v, 0.0});
     }
+  }
+  for (size_t v = 0; v < out.size(); ++v) {
+    const double weight_n = world.vehicles()[v].airframe.mass_kg * -m->opt.gravity[2];
+    for (TouchSensor& t : out[v]) t.parked_force_n = weight_n / static_cast<double>(out[v].size());
   }
   return out;
 }
 
 double touch_force_n(const World& world, const TouchSensor& sensor) {
+  if (world.parked(sensor.vehicle)) return sensor.parked_force_n;
   return world.data()->sensordata[sensor.sensor_adr];
 }
 
