@@ -1,16 +1,26 @@
-// Physics + flight control per vehicle-step, beside bare mj_step on the same world (issue 2's benchmark).
-//   BM_BareMjStep/N      N hovering quads, constant hover force written into qfrc_applied, mj_step only
-//   BM_SimStep/N         N quads hovering under their flight controllers: Simulation::step (motors, wrench,
-//                        FC at 500 Hz with sensors and estimator, mj_step, contact checks)
-//   BM_MjStepSameState/N mj_step alone on BM_SimStep's own world and state: the like-for-like baseline
-// items/s = vehicle-steps per second; compare the two at the same N in one run.
+// The whole simulation per vehicle-step beside bare mj_step on the same world (issue 17's
+// benchmark). Worlds: N lean quads (collision="lean") on a 4 m grid, started on the ground.
+//   BM_Sim/parked/N     all parked on the ground (disarmed, at rest): Simulation::step (flight
+//   controllers
+//                       at 500 Hz with sensors and estimator, motors, parking, contact checks)
+//   BM_MjStep/parked/N  mj_step alone on the same world and state
+//   BM_Sim/hover/N      all took off from the ground (launched as fast as the constraint rows
+//   allow) and
+//                       hover 5 m above their grid points: a formation
+//   BM_MjStep/hover/N   mj_step alone on the same world and state (rotor wrenches of the last step)
+//   BM_BareMjStep/full|lean/N  free-flying quads held by a constant m g in qfrc_applied, 10 m up:
+//   the
+//                       cost of the collision set alone
+// Counters: us_per_vehicle_step (wall), realtime_x, startup_s (compose + load + Simulation), rss_mb
+// (the process after start-up), flying. items/s = vehicle-steps per second: compare rows of one run
+// only.
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,33 +32,146 @@ namespace {
 
 using namespace uavsim::server;
 
-std::string grid_world(int n) {
+enum Kind { kParked = 0, kHover = 1 };
+
+std::string grid_world(int n, double z_m, const char* collision) {
   // the most square grid of exactly n: rows = the largest divisor of n not above sqrt(n)
   int rows = 1;
   for (int r = 1; r * r <= n; ++r) {
     if (n % r == 0) rows = r;
   }
   const int cols = n / rows;
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("uavsim_bench_grid" + std::to_string(n) + ".xml")).string();
-  // the vehicles start 10 m up (see BM_SimStep): no ground contacts, which for 1000 grounded quads
-  // would need more constraint rows than MuJoCo 2.2's dense njmax x njmax buffer allows
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("uavsim_bench_grid" + std::to_string(n) + collision + ".xml"))
+                               .string();
   std::ofstream(path) << "<mujoco><compiler angle=\"radian\"/><option timestep=\"0.001\"/>"
                       << "<worldbody><geom name=\"ground\" type=\"plane\" size=\"500 500 0.1\"/>"
                       << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\""
-                      << cols << "\" spacing=\"4\" pos=\"0 0 10\"/></worldbody></mujoco>";
+                      << cols << "\" spacing=\"4\" pos=\"0 0 " << z_m << "\" collision=\""
+                      << collision << "\"/></worldbody></mujoco>";
   return path;
 }
 
-std::unique_ptr<physics::World> load(int n) {
+std::unique_ptr<physics::World> load(int n, double z_m, const char* collision) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
-  return physics::World::load(grid_world(n), o);
+  return physics::World::load(grid_world(n, z_m, collision), o);
 }
 
-void BM_BareMjStep(benchmark::State& state) {
+double rss_mb() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
+struct Rig {
+  int kind = -1;
+  int n = 0;
+  std::unique_ptr<sim::Simulation> sim;
+  double startup_s = 0.0;
+  double rss_mb = 0.0;
+  size_t flying = 0;
+};
+
+// launch: GUIDED, arm and take off to 5 m, as many at a time as the constraint rows hold (a quad
+// armed on its gear needs up to 16; world_composer.cpp auto_njmax), then hover 10 s
+void launch_all(sim::Simulation& s) {
+  const int rows = s.world().model()->njmax;
+  const size_t n = s.vehicle_count();
+  size_t next = 0;
+  const double give_up_s = s.time_s() + 20.0 + 0.05 * static_cast<double>(n);
+  while (next < n && s.time_s() < give_up_s) {
+    size_t grounded_awake = 0;
+    for (size_t i = 0; i < next; ++i)
+      grounded_awake += s.truth(i).on_ground && !s.world().parked(i);
+    while (next < n && static_cast<int>(16 * (grounded_awake + 1)) <= rows - 500) {
+      s.post(next++, [](fc::FlightController& f) {
+        f.set_mode(fc::Mode::kGuided);
+        f.arm(false);
+        f.takeoff(5.0);
+      });
+      ++grounded_awake;
+    }
+    s.run_until(s.time_s() + 0.1);
+  }
+  s.run_until(s.time_s() + 10.0);
+}
+
+Rig& rig(int kind, int n) {
+  static Rig r;
+  if (r.kind == kind && r.n == n) return r;
+  r = Rig{};
+  const auto t0 = std::chrono::steady_clock::now();
+  r.sim = std::make_unique<sim::Simulation>(load(n, 0.0, "lean"), sim::SimConfig{});
+  r.startup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.rss_mb = rss_mb();
+  r.kind = kind;
+  r.n = n;
+  sim::Simulation& s = *r.sim;
+  while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
+  if (kind == kHover) launch_all(s);
+  for (size_t i = 0; i < s.vehicle_count(); ++i)
+    r.flying += s.fc(i).armed() && !s.runtime(i).crashed;
+  return r;
+}
+
+void report(benchmark::State& state, const Rig& r, double dt_s) {
+  state.SetItemsProcessed(state.iterations() * r.n);
+  state.counters["us_per_vehicle_step"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * r.n) * 1e-6,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_x"] = benchmark::Counter(static_cast<double>(state.iterations()) * dt_s,
+                                                    benchmark::Counter::kIsRate);
+  state.counters["startup_s"] = r.startup_s;
+  state.counters["rss_mb"] = r.rss_mb;
+  state.counters["flying"] = static_cast<double>(r.flying);
+  state.counters["parked"] = static_cast<double>(r.sim->world().parked_count());
+  state.counters["overflows"] = r.sim->world().buffer_overflows();
+}
+
+void BM_Sim(benchmark::State& state, int kind) {
+  Rig& r = rig(kind, static_cast<int>(state.range(0)));
+  for (auto _ : state) r.sim->step();
+  report(state, r, r.sim->physics_dt_s());
+}
+
+// mj_step on the rig's own world and state, restored every kBatch steps (MuJoCo 2.2 has no
+// mj_getState: time, qpos, qvel, act) so that the state being measured does not drift away
+void BM_MjStep(benchmark::State& state, int kind) {
+  constexpr int kBatch = 200;
+  Rig& r = rig(kind, static_cast<int>(state.range(0)));
+  physics::World& world = r.sim->world();
+  const mjModel* m = world.model();
+  mjData* d = world.data();
+  const double time0 = d->time;
+  const std::vector<mjtNum> qpos0(d->qpos, d->qpos + m->nq), qvel0(d->qvel, d->qvel + m->nv),
+      act0(d->act, d->act + m->na);
+  auto restore = [&] {
+    d->time = time0;
+    std::copy(qpos0.begin(), qpos0.end(), d->qpos);
+    std::copy(qvel0.begin(), qvel0.end(), d->qvel);
+    std::copy(act0.begin(), act0.end(), d->act);
+    mj_forward(m, d);
+  };
+  int k = 0;
+  for (auto _ : state) {
+    mj_step(m, d);
+    if (++k == kBatch) {
+      state.PauseTiming();
+      k = 0;
+      restore();
+      state.ResumeTiming();
+    }
+  }
+  restore();
+  report(state, r, m->opt.timestep);
+}
+
+void BM_BareMjStep(benchmark::State& state, const char* collision) {
   const int n = static_cast<int>(state.range(0));
-  auto world = load(n);
+  auto world = load(n, 10.0, collision);
   // hold every quad where it starts, 10 m up, with a constant force m*g
   for (size_t i = 0; i < world->vehicles().size(); ++i) {
     airframe::Wrench w;
@@ -58,101 +181,41 @@ void BM_BareMjStep(benchmark::State& state) {
   for (int i = 0; i < 100; ++i) world->step();
   for (auto _ : state) world->step();
   state.SetItemsProcessed(state.iterations() * n);
-  state.counters["realtime_x"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * world->timestep_s(), benchmark::Counter::kIsRate);
+  state.counters["us_per_vehicle_step"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * n) * 1e-6,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["realtime_x"] = benchmark::Counter(
+      static_cast<double>(state.iterations()) * world->timestep_s(), benchmark::Counter::kIsRate);
 }
 
-// One warmed-up simulation per N, shared by BM_SimStep and BM_MjStepSameState so that both step the
-// same world in the same state (hovering quads, and any that did not make it through the warm-up).
-sim::Simulation& warmed(int n, size_t* flying_out) {
-  static std::map<int, std::pair<std::unique_ptr<sim::Simulation>, size_t>> cache;
-  auto it = cache.find(n);
-  if (it != cache.end()) {
-    *flying_out = it->second.second;
-    return *it->second.first;
+// each world's two benchmarks next to each other, so that one warmed-up rig serves both
+const int registered = [] {
+  for (int n : {1, 10, 100, 300, 1000, 3000}) {
+    benchmark::RegisterBenchmark("BM_Sim/parked", BM_Sim, kParked)
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("BM_MjStep/parked", BM_MjStep, kParked)
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
   }
-  auto owned = std::make_unique<sim::Simulation>(load(n), sim::SimConfig{});
-  sim::Simulation& s = *owned;
-  // warm-up: the flight controllers boot without gravity (they believe they stand on the ground: the
-  // accelerometer reads 1 g, nothing moves); then GUIDED, arm and take off to 5 m while gravity is ramped
-  // in over 1 s, so that the climb takes the weight before any controller could judge itself landed
-  // (low thrust, no motion); 10 s later the quads hover
-  mjModel* m = s.world().mutable_model();
-  const double gravity_z = m->opt.gravity[2];
-  m->opt.gravity[2] = 0.0;
-  auto all_ready = [&s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (!s.fc(i).prearm_ok()) return false;
-    }
-    return true;
-  };
-  while (s.time_s() < 20.0 && !all_ready()) s.step();
-  for (size_t i = 0; i < s.vehicle_count(); ++i) {
-    s.post(i, [](fc::FlightController& f) {
-      f.set_mode(fc::Mode::kGuided);
-      f.arm(true);
-      f.takeoff(5.0);
-    });
+  for (int n : {1, 10, 100, 300, 1000}) {
+    benchmark::RegisterBenchmark("BM_Sim/hover", BM_Sim, kHover)
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("BM_MjStep/hover", BM_MjStep, kHover)
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
   }
-  const double ramp_start = s.time_s();
-  constexpr double kRampS = 1.0;
-  while (s.time_s() < ramp_start + kRampS) {
-    m->opt.gravity[2] = gravity_z * (s.time_s() - ramp_start) / kRampS;
-    s.step();
+  for (int n : {1, 100, 1000}) {
+    benchmark::RegisterBenchmark("BM_BareMjStep/full", BM_BareMjStep, "full")
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("BM_BareMjStep/lean", BM_BareMjStep, "lean")
+        ->Arg(n)
+        ->Unit(benchmark::kMicrosecond);
   }
-  m->opt.gravity[2] = gravity_z;
-  s.run_until(s.time_s() + 10.0);
-  size_t flying = 0;
-  for (size_t i = 0; i < s.vehicle_count(); ++i) flying += s.fc(i).armed() && !s.runtime(i).crashed;
-  *flying_out = flying;
-  return *cache.emplace(n, std::make_pair(std::move(owned), flying)).first->second.first;
-}
-
-void BM_SimStep(benchmark::State& state) {
-  const int n = static_cast<int>(state.range(0));
-  size_t flying = 0;
-  sim::Simulation& s = warmed(n, &flying);
-  state.counters["flying"] = static_cast<double>(flying);
-  for (auto _ : state) s.step();
-  state.SetItemsProcessed(state.iterations() * n);
-  state.counters["realtime_x"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * s.physics_dt_s(), benchmark::Counter::kIsRate);
-}
-
-// Bare mj_step on the warmed-up simulation's own world: the rotor wrenches of its last step stay in
-// qfrc_applied; the state is saved and restored every kBatch steps (MuJoCo 2.2 has no mj_getState: time,
-// qpos, qvel, act) so the quads do not drift away from the hover being measured.
-void BM_MjStepSameState(benchmark::State& state) {
-  constexpr int kBatch = 200;
-  const int n = static_cast<int>(state.range(0));
-  size_t flying = 0;
-  physics::World& world = warmed(n, &flying).world();
-  const mjModel* m = world.model();
-  mjData* d = world.data();
-  const double time0 = d->time;
-  const std::vector<mjtNum> qpos0(d->qpos, d->qpos + m->nq), qvel0(d->qvel, d->qvel + m->nv),
-      act0(d->act, d->act + m->na);
-  int k = 0;
-  for (auto _ : state) {
-    world.step();
-    if (++k == kBatch) {
-      state.PauseTiming();
-      k = 0;
-      d->time = time0;
-      std::copy(qpos0.begin(), qpos0.end(), d->qpos);
-      std::copy(qvel0.begin(), qvel0.end(), d->qvel);
-      std::copy(act0.begin(), act0.end(), d->act);
-      mj_forward(m, d);
-      state.ResumeTiming();
-    }
-  }
-  state.counters["flying"] = static_cast<double>(flying);
-  state.SetItemsProcessed(state.iterations() * n);
-}
-
-BENCHMARK(BM_BareMjStep)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_SimStep)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_MjStepSameState)->Arg(1)->Arg(10)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+  return 0;
+}();
 
 }  // namespace
 
