@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Plots a launcher's run directory (mbzirc2020-run, mbzirc2017-run, coverage-run --run-dir DIR).
 
-usage: plot_run.py RUN_DIR
+usage: plot_run.py RUN_DIR [--coverage-map FILE.png]
 
 Reads RUN_DIR/truth_VEHICLE.csv (the launcher's ground truth), RUN_DIR/truck_NAME.csv (the truck, if
 any), RUN_DIR/events.jsonl (the server's events) and RUN_DIR/summary.json (which mission: the balloons,
@@ -9,6 +9,9 @@ the coverage rectangle), and writes into RUN_DIR:
   trajectories.png  the vehicles' tracks over the world map (balloons / the truck's eight / the rectangle)
   altitude_speed.png  altitude and speed over sim time, events marked
   battery.png       battery voltage and charge used over sim time, events marked
+  coverage_map.png  (coverage-run) the rectangle as the agents' APD reports left it: covered once, by two or
+                    more agents, lost with a dead agent, lost then covered again, delivered to the ground
+                    station only, not covered; and the tracks (--coverage-map: write it to FILE.png instead)
 Exit status 0; 1 when the directory holds no ground truth; 3 when matplotlib is missing.
 """
 import csv
@@ -55,8 +58,86 @@ def event_kind(e):
     return e.get("event") or e.get("type") or ""
 
 
+STATION = 255  # the ground station's APD reports (coverage-gcs)
+
+
+def parse_apd(report, stripes):
+    """An `APD <agent> <t> <stripe>:<a>-<b>,...;...` line (centimetres) -> {stripe: [(a_m, b_m)]}."""
+    parts = report.split(" ", 3)
+    out = {}
+    if len(parts) < 4 or parts[3] == "-":
+        return out
+    for item in parts[3].split(";"):
+        s, _, ivs = item.partition(":")
+        s = int(s)
+        if 0 <= s < stripes:
+            out[s] = [(int(a) / 100.0, int(b) / 100.0) for a, b in (iv.split("-") for iv in ivs.split(","))]
+    return out
+
+
+def coverage_map(plt, summary, truth, title, path):
+    """The coverage map of a coverage-run summary (its apd_reports) with the tracks over it."""
+    import numpy as np
+    w, h = summary["area_m"]
+    ox, oy = summary.get("area_origin_m", [0.0, 0.0])
+    stripes = int(summary["stripes"])
+    cell_m = 0.1
+    ny = max(1, int(round(h / cell_m)))
+
+    def mask(apd):
+        m = np.zeros((ny, stripes), dtype=bool)
+        for s, ivs in apd.items():
+            for a, b in ivs:
+                m[int(math.ceil(a / cell_m)):int(math.floor(b / cell_m)), s] = True
+        return m
+
+    count = np.zeros((ny, stripes), dtype=int)  # agents whose pictures cover a cell, the dead included
+    dead = np.zeros((ny, stripes), dtype=bool)
+    alive = np.zeros((ny, stripes), dtype=bool)
+    station = np.zeros((ny, stripes), dtype=bool)
+    for r in summary.get("apd_reports", []):
+        m = mask(parse_apd(r["report"], stripes))
+        if r["agent"] == STATION:
+            station |= m
+        else:
+            count += m
+            if r["failed"]:
+                dead |= m
+            else:
+                alive |= m
+    classes = [("not covered", "white"), ("covered", "#b7e4b0"), ("covered by 2+ agents", "#4caf50"),
+               ("lost with a dead agent", "#e53935"), ("lost, then covered again", "#ff9800"),
+               ("delivered to the station only", "#42a5f5")]
+    img = np.zeros((ny, stripes), dtype=int)
+    img[count == 1] = 1
+    img[count >= 2] = 2
+    img[dead] = 3
+    img[dead & alive] = 4
+    img[station & ~alive] = 5
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+    fig, ax = plt.subplots(figsize=(8, 7))
+    ax.imshow(img, origin="lower", extent=(ox, ox + w, oy, oy + h), aspect="equal", interpolation="nearest",
+              cmap=ListedColormap([c for _, c in classes]), vmin=0, vmax=len(classes) - 1)
+    for name, c in truth.items():
+        ax.plot(c["x_m"], c["y_m"], lw=0.5, color="0.2", alpha=0.6)
+    ax.add_patch(plt.Rectangle((ox, oy), w, h, fill=False, ls="--", color="green"))
+    used = sorted(set(np.unique(img).tolist()))
+    ax.legend(handles=[Patch(facecolor=classes[k][1], edgecolor="0.5", label=classes[k][0]) for k in used]
+              + [plt.Line2D([], [], color="0.2", lw=0.8, label="tracks")], fontsize=8, loc="upper right")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.set_title(f"{title}: coverage map, {100.0 * summary.get('coverage', 0.0):.2f} % held")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main(argv):
-    if len(argv) != 2:
+    map_path = None
+    if len(argv) == 4 and argv[2] == "--coverage-map":
+        map_path = argv[3]
+    elif len(argv) != 2:
         print(__doc__.strip().splitlines()[2], file=sys.stderr)
         return 2
     run_dir = argv[1]
@@ -164,7 +245,14 @@ def main(argv):
     fig.tight_layout()
     fig.savefig(os.path.join(run_dir, "battery.png"), dpi=100)
     plt.close(fig)
-    print(f"plot_run.py: wrote trajectories.png, altitude_speed.png, battery.png in {run_dir}")
+    wrote = "trajectories.png, altitude_speed.png, battery.png"
+
+    # 4. the coverage map
+    if mission == "coverage" and "apd_reports" in summary and "stripes" in summary:
+        path = map_path or os.path.join(run_dir, "coverage_map.png")
+        coverage_map(plt, summary, truth, title, path)
+        wrote += ", " + path
+    print(f"plot_run.py: wrote {wrote} in {run_dir}")
     return 0
 
 

@@ -86,10 +86,11 @@ struct Options {
   std::string gcs_program;
   std::string models_dir = UAVSIM_MODELS_DIR;
   std::string keep_world;  // write the generated world here too
-  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
-  std::string record;                    // --record: the video (default video.mp4 in the run dir)
-  bool no_record = false;                // --no-record
+  std::string run_dir = "auto";            // --run-dir: video, summary, events, logs, ground truth
+  std::string record;                      // --record: the video (default video.mp4 in the run dir)
+  bool no_record = false;                  // --no-record
   std::string record_camera = "overview";  // the server's --record-camera: the whole rectangle
+  std::string map_png;  // --map: the coverage map (scripts/plot_run.py on the run directory)
   double truth_hz = 10.0;
 };
 
@@ -117,6 +118,9 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --record FILE.mp4   video of the run (default video.mp4 in the run directory); --no-record: none
   --record-camera C   the video's view: overview (default: the whole rectangle from above),
                       follow (the flock), follow:VEHICLE, top
+  --map FILE.png      the coverage map as a picture: covered once, by two or more agents, lost with
+                      a dead agent, lost then covered again, delivered to the station, and the
+                      tracks (scripts/plot_run.py on the run directory, which it needs)
   --world-out FILE    also write the generated world there
   --quiet             only the summary
   --gcs               the optimised variant (thesis 3.6): a ground station (coverage-gcs) that
@@ -214,6 +218,8 @@ int main(int argc, char** argv) {
       o.record_camera = val;
     } else if (a == "--truth-hz" && number(val, 0.01, 1000, &v)) {
       o.truth_hz = v;
+    } else if (a == "--map" && std::strchr(val, '\'') == nullptr) {
+      o.map_png = val;
     } else if (a == "--world-out") {
       o.keep_world = val;
     } else if (a == "--server") {
@@ -248,6 +254,10 @@ int main(int argc, char** argv) {
     o.run_dir = files->dir;
     o.record = files->video;
     o.json_path = files->summary;
+  }
+  if (!o.map_png.empty() && o.run_dir.empty()) {
+    std::fprintf(stderr, "coverage-run: --map needs a run directory (its ground truth)\n");
+    return 2;
   }
   CoverageConfig config;
   config.length_x_m = o.length_x_m;
@@ -754,11 +764,30 @@ int main(int argc, char** argv) {
     summary["energy_mah_mean"] = vehicles_end.empty() ? 0.0 : energy_total / vehicles_end.size();
     summary["distance_m_total"] = distance_total;
     summary["per_agent"] = per_agent;
+    // every agent's last APD report, the dead's and the station's (255) too: the coverage map
+    summary["stripes"] = stripes;
+    Json apds = Json::array();
+    for (const auto& [id, r] : apd) {
+      apds.push_back({{"agent", id},
+                      {"failed", killed.count(id) > 0 || crashed.count(id) > 0},
+                      {"report", encode_apd_report(id, r.time_s, r.apd)}});
+    }
+    summary["apd_reports"] = apds;
     summary["sim_time_s"] = sim_s;
     summary["wall_time_s"] = wall_s();
     summary["success"] = success;
     summary["interrupted"] = g_interrupted != 0;
     std::ofstream(o.json_path) << summary.dump(2) << "\n";
+    const std::string run_summary = o.run_dir + "/summary.json";
+    if (!o.map_png.empty() && o.json_path != run_summary)
+      std::ofstream(run_summary) << summary.dump(2) << "\n";  // what plot_run.py reads
+  }
+  if (!o.map_png.empty() && !o.json_path.empty() && o.run_dir.find('\'') == std::string::npos) {
+    // the picture from the run directory (ground truth, summary); matplotlib's script
+    const std::string cmd = "'" + std::string(UAVSIM_SCRIPTS_DIR) + "/plot_run.py' '" + o.run_dir +
+                            "' --coverage-map '" + o.map_png + "'";
+    if (std::system(cmd.c_str()) != 0)
+      std::fprintf(stderr, "coverage-run: the coverage map was not drawn (%s)\n", cmd.c_str());
   }
   if (harness_error) return harness_error;
   if (g_interrupted) return 130;
