@@ -285,14 +285,17 @@ void ApiServer::drain() {
 }
 
 void ApiServer::forward_events() {
-  const std::vector<sim::Event>& all = sim_.events().all();
-  if (events_forwarded_ > all.size()) events_forwarded_ = 0;  // the log was cleared (reset)
-  for (; events_forwarded_ < all.size(); ++events_forwarded_) {
-    const Json e = event_json(all[events_forwarded_]);
+  const sim::EventLog& log = sim_.events();
+  if (events_forwarded_ > log.next_seq()) events_forwarded_ = 0;  // the log was cleared (reset)
+  // events_forwarded_ is a seq; the log holds first_seq() onwards (called every step, so none is missed)
+  for (const sim::Event& event : log.recent()) {
+    if (event.seq < events_forwarded_) continue;
+    const Json e = event_json(event);
     for (auto& [conn, c] : clients_) {
       if (c.events) send(conn, e);
     }
   }
+  events_forwarded_ = log.next_seq();
 }
 
 bool ApiServer::lockstep_blocked() const {
@@ -457,7 +460,7 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
               {"seed", sim_.config().seed},
               {"vehicles", sim_.vehicle_count()},
               {"lockstep_clients", lockstep},
-              {"events", sim_.events().all().size()},
+              {"events", sim_.events().next_seq()},
               {"realism", sim::realism_name(sim_.config().field.realism)}};
   } else if (op == "pause") {
     paused_ = true;
@@ -579,19 +582,18 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
     if (!from) {
       fail("bad_field", "\"from_seq\" must be a non-negative integer");
     } else {
+      // the events already forwarded (later ones stream to subscribers), from from_seq or the oldest
+      // still held: first_seq > from_seq tells the client that the ones between were dropped
       const uint64_t from_seq = *from;
+      const sim::EventLog& log = sim_.events();
       Json list = Json::array();
-      const auto& all = sim_.events().all();
-      for (size_t k = 0; k < events_forwarded_ && k < all.size(); ++k) {
-        if (all[k].seq >= from_seq) list.push_back(event_json(all[k]));
+      for (const sim::Event& e : log.recent()) {
+        if (e.seq >= from_seq && e.seq < events_forwarded_) list.push_back(event_json(e));
       }
-      if (op == "subscribe_events") {
-        // the backlog in the reply; later events stream as {"event": "sim_event", ...}
-        client.events = true;
-        result = {{"events", list}, {"next_seq", events_forwarded_}};
-      } else {
-        result = {{"events", list}, {"next_seq", events_forwarded_}};
-      }
+      const uint64_t first_seq = std::min<uint64_t>(log.first_seq(), events_forwarded_);
+      // a subscriber gets the backlog in the reply; later events stream as {"event": "sim_event", ...}
+      if (op == "subscribe_events") client.events = true;
+      result = {{"events", list}, {"first_seq", first_seq}, {"next_seq", events_forwarded_}};
     }
   } else if (op == "unsubscribe_events") {
     client.events = false;

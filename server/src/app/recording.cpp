@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <deque>
 #include <set>
@@ -68,7 +69,7 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
   constexpr size_t kEventLines = 5;
   constexpr double kTrailS = 10.0;
   struct Memory {
-    size_t events_seen = 0;
+    uint64_t events_seen = 0;  // the seq of the next event to mark
     int pops = 0;
     std::vector<render::OverlayMarker> markers;
     std::set<int> killed;  // vehicles killed (their crash is not marked again)
@@ -79,9 +80,10 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
           trucks = !objects.trucks.empty()] {
     render::OverlayInfo info;
     info.time_s = s.time_s();
-    const std::vector<sim::Event>& all = s.events().all();
+    const sim::EventLog& log = s.events();
+    const std::deque<sim::Event>& all = log.recent();
     Memory& mem = *memory;
-    if (all.size() < mem.events_seen) *memory = Memory{};  // a reset: the run starts afresh
+    if (log.next_seq() < mem.events_seen) *memory = Memory{};  // a reset: the run starts afresh
     for (size_t i = 0; i < s.vehicle_count(); ++i) {
       info.vehicles.push_back(
           {s.vehicle_name(i), s.runtime(i).crashed ? "CRASHED" : fc::mode_name(s.fc(i).mode())});
@@ -100,8 +102,8 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
 
     // the places of what happened: where the vehicle is when the event is first seen (within a
     // frame period of it)
-    for (; mem.events_seen < all.size(); ++mem.events_seen) {
-      const sim::Event& e = all[mem.events_seen];
+    for (const sim::Event& e : all) {
+      if (e.seq < mem.events_seen) continue;
       if (e.vehicle < 0 || static_cast<size_t>(e.vehicle) >= s.vehicle_count()) continue;
       std::string what;
       if (e.type == sim::EventType::kBalloonPopped) {
@@ -120,6 +122,7 @@ std::function<render::OverlayInfo()> record_overlay_source(sim::Simulation& s,
       mem.markers.push_back({s.truth(static_cast<size_t>(e.vehicle)).position_enu_m, e.vehicle,
                              s.vehicle_name(static_cast<size_t>(e.vehicle)) + " " + what});
     }
+    mem.events_seen = log.next_seq();
     info.markers = mem.markers;
 
     // the recent events worth a line (a vehicle's own mode shows beside it)

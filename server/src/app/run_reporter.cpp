@@ -40,15 +40,16 @@ void RunReporter::report(const ReportedEvent& event) {
 }
 
 void RunReporter::on_control_step() {
-  const std::vector<sim::Event>& all = sim_.events().all();
+  const sim::EventLog& log = sim_.events();
   // a reset (sim API) clears the simulation's log: start again from its beginning
-  if (all.size() < next_event_) next_event_ = 0;
-  for (; next_event_ < all.size(); ++next_event_) {
-    const sim::Event& e = all[next_event_];
+  if (log.next_seq() < next_event_) next_event_ = 0;
+  for (const sim::Event& e : log.recent()) {
+    if (e.seq < next_event_) continue;
     if (e.type == sim::EventType::kCrash) ++crashes_;
     std::string kind = e.type == sim::EventType::kModeChange ? "mode" : sim::event_type_name(e.type);
     report({e.time_s, e.vehicle, std::move(kind), e.detail});
   }
+  next_event_ = log.next_seq();
 }
 
 void RunReporter::on_client(std::size_t vehicle, bool connected, const std::string& peer) {

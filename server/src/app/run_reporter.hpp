@@ -61,7 +61,7 @@ class RunReporter {
   sim::Simulation& sim_;
   std::ostream* console_;
   std::ostream* json_;
-  std::size_t next_event_ = 0;  // index into sim_.events().all()
+  std::uint64_t next_event_ = 0;  // the seq of the next event to report
   std::uint64_t clients_connected_ = 0;
   std::uint64_t crashes_ = 0;
   std::uint64_t failsafes_ = 0;

@@ -1,7 +1,5 @@
 #include "sim/events.hpp"
 
-#include <algorithm>
-
 namespace uavsim::server::sim {
 
 const char* event_type_name(EventType type) {
@@ -22,24 +20,29 @@ const char* event_type_name(EventType type) {
 }
 
 const Event& EventLog::add(double time_s, EventType type, int vehicle, std::string detail) {
+  // the oldest event makes room once the log is full
+  if (events_.size() == kCapacity) events_.pop_front();
   Event e;
-  e.seq = events_.size();
+  e.seq = next_seq_++;
   e.time_s = time_s;
   e.type = type;
   e.vehicle = vehicle;
   e.detail = std::move(detail);
+  ++counts_[static_cast<size_t>(type)];
   events_.push_back(std::move(e));
   return events_.back();
 }
 
 std::vector<Event> EventLog::since(uint64_t from_seq) const {
-  if (from_seq >= events_.size()) return {};
-  return std::vector<Event>(events_.begin() + static_cast<long>(from_seq), events_.end());
+  if (from_seq >= next_seq_) return {};
+  const uint64_t skip = from_seq > first_seq() ? from_seq - first_seq() : 0;
+  return std::vector<Event>(events_.begin() + static_cast<long>(skip), events_.end());
 }
 
-size_t EventLog::count(EventType type) const {
-  return static_cast<size_t>(std::count_if(events_.begin(), events_.end(),
-                                           [type](const Event& e) { return e.type == type; }));
+void EventLog::clear() {
+  events_.clear();
+  next_seq_ = 0;
+  counts_ = {};
 }
 
 }  // namespace uavsim::server::sim

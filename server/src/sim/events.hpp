@@ -2,8 +2,10 @@
 // API streams them; tests and scoring read them.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -32,18 +34,31 @@ struct Event {
   std::string detail;
 };
 
-// An append-only log: readers keep their own cursor (next seq), so several subscribers can follow it.
+// The log of one run (since the last reset): readers keep their own cursor (the next seq they want), so
+// several subscribers can follow it. It holds only the latest kCapacity events, so that a long run with
+// many vehicles and flights keeps a bounded log (and bounded `events from_seq 0` replies); seq numbers and
+// per-type counts go on across what was dropped.
 class EventLog {
  public:
+  static constexpr size_t kCapacity = 4096;
+
   const Event& add(double time_s, EventType type, int vehicle, std::string detail);
-  const std::vector<Event>& all() const { return events_; }
-  // Events with seq >= from_seq.
+  // The events still held, oldest first: seq first_seq() .. next_seq() - 1.
+  const std::deque<Event>& recent() const { return events_; }
+  // The seq of the oldest event still held (next_seq() when none is).
+  uint64_t first_seq() const { return next_seq_ - events_.size(); }
+  // The seq the next event will get: the number of events recorded since the last clear.
+  uint64_t next_seq() const { return next_seq_; }
+  // Events still held with seq >= from_seq (those before first_seq() are gone).
   std::vector<Event> since(uint64_t from_seq) const;
-  size_t count(EventType type) const;
-  void clear() { events_.clear(); }
+  // Events of this type recorded since the last clear, dropped ones included.
+  size_t count(EventType type) const { return counts_[static_cast<size_t>(type)]; }
+  void clear();
 
  private:
-  std::vector<Event> events_;
+  std::deque<Event> events_;
+  uint64_t next_seq_ = 0;
+  std::array<size_t, static_cast<size_t>(EventType::kStateFault) + 1> counts_{};
 };
 
 }  // namespace uavsim::server::sim

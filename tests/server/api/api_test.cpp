@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <string>
 
 #include "api_fixture.hpp"
+#include "sim/events.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -131,6 +133,38 @@ TEST(Api, SubscribersGetEventsWithSequenceNumbers) {
   const Json later = c.request({{"op", "events"}, {"from_seq", 1}})["result"]["events"];
   ASSERT_EQ(later.size(), 1u);
   EXPECT_EQ(later[0]["type"], "crash");
+}
+
+TEST(Api, TheEventLogKeepsTheLatestEventsAndSaysWhereItsBacklogStarts) {
+  TestServer server("mbzirc2020.xml", paused());
+  TestClient c(server.port()), watcher(server.port());
+  // more events than the log holds: each motor_failure request records one (pipelined, then every reply)
+  constexpr size_t kOver = 100;
+  constexpr size_t kRecorded = sim::EventLog::kCapacity + kOver;
+  std::string burst;
+  for (size_t k = 0; k < kRecorded; ++k) {
+    burst += Json({{"op", "motor_failure"}, {"vehicle", "uav1"}, {"rotor", 0}, {"failed", k % 2 == 0}}).dump() + "\n";
+  }
+  c.send_raw(burst);
+  for (size_t k = 0; k < kRecorded; ++k) ASSERT_TRUE(c.reply()["ok"]) << k;
+  // the backlog from 0 starts at the oldest event still held, and first_seq says which that is
+  const Json all = c.request({{"op", "events"}, {"from_seq", 0}})["result"];
+  EXPECT_EQ(all["first_seq"], kOver);
+  EXPECT_EQ(all["next_seq"], kRecorded);
+  ASSERT_EQ(all["events"].size(), sim::EventLog::kCapacity);
+  EXPECT_EQ(all["events"][0]["seq"], kOver);
+  EXPECT_EQ(all["events"][0]["type"], "motor_failure");
+  // a query from a seq still held gets just the events from there
+  const Json tail = c.request({{"op", "events"}, {"from_seq", kRecorded - 2}})["result"];
+  ASSERT_EQ(tail["events"].size(), 2u);
+  EXPECT_EQ(tail["events"][1]["seq"], kRecorded - 1);
+  EXPECT_EQ(c.request({{"op", "status"}})["result"]["events"], kRecorded);
+  // a subscriber gets the same backlog, then the stream goes on from next_seq
+  const Json sub = watcher.request({{"op", "subscribe_events"}})["result"];
+  EXPECT_EQ(sub["first_seq"], kOver);
+  EXPECT_EQ(sub["events"].size(), sim::EventLog::kCapacity);
+  ASSERT_TRUE(c.request({{"op", "kill_vehicle"}, {"vehicle", "uav1"}})["ok"]);
+  EXPECT_EQ(watcher.next_event("sim_event")["seq"], kRecorded);
 }
 
 class FakeLink : public LinkControl {

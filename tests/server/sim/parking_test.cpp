@@ -37,7 +37,7 @@ TEST(Parking, AVehicleThatStartsOnTheGroundIsParkedAndHeldExactly) {
   // the flight controller sees a vehicle at rest on the ground: ready to arm, nothing recorded
   EXPECT_TRUE(sim->fc(0).prearm_ok());
   EXPECT_TRUE(sim->truth(0).on_ground);
-  EXPECT_EQ(sim->events().all().size(), 0u);
+  EXPECT_EQ(sim->events().recent().size(), 0u);
 }
 
 TEST(Parking, AVehicleInTheAirIsNotParked) {

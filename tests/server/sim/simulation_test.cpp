@@ -109,7 +109,7 @@ TEST(Simulation, HardLandingFromGearContactIsACrash) {
   sim->world().set_pose(0, pos, quat);
   sim->run_until(2.0);
   ASSERT_EQ(sim->events().count(EventType::kCrash), 1u);
-  for (const Event& e : sim->events().all()) {
+  for (const Event& e : sim->events().recent()) {
     if (e.type == EventType::kCrash) EXPECT_NE(e.detail.find("hard landing"), std::string::npos) << e.detail;
   }
 }
@@ -119,7 +119,7 @@ TEST(Simulation, CommandedArmingAndModeChangesAreEvents) {
   take_off(*sim, 3.0);  // GUIDED + arm in one control step
   ASSERT_EQ(sim->events().count(EventType::kArmed), 1u);
   ASSERT_EQ(sim->events().count(EventType::kModeChange), 1u);
-  for (const Event& e : sim->events().all()) {
+  for (const Event& e : sim->events().recent()) {
     if (e.type == EventType::kModeChange) EXPECT_EQ(e.detail, "GUIDED");
   }
 }
