@@ -35,6 +35,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -221,6 +222,7 @@ class ApiClient {
 struct Sample {
   double wall_s = 0, sim_s = 0;
   long rss_kb = 0, threads = 0, fds = 0;
+  long events = 0;  // events recorded by the server since start (status "events")
 };
 
 long status_field_kb(pid_t pid, const std::string& key) {
@@ -401,7 +403,7 @@ int run(int argc, char** argv, pid_t* child) {
   }
   const auto wall0 = Clock::now();
   std::unique_ptr<ApiClient> monitor;
-  while (since_s(wall0) < 60) {
+  while (since_s(wall0) < 600) {  // a loaded machine can take minutes to compose 100 vehicles
     monitor = std::make_unique<ApiClient>(api_port);
     if (monitor->ok()) break;
     if (waitpid(pid, nullptr, WNOHANG) == pid) break;
@@ -412,16 +414,20 @@ int run(int argc, char** argv, pid_t* child) {
     kill(pid, SIGKILL);
     return 1;
   }
-  auto sim_time = [&] {
+  // the server's sim time and event count (-1 without a status reply)
+  auto server_status = [&]() -> std::pair<double, long> {
     const Json r = monitor->request({{"op", "status"}});
-    if (r.is_object() && r.contains("result") && r["result"].is_object()) return r["result"].value("time_s", -1.0);
+    if (r.is_object() && r.contains("result") && r["result"].is_object()) {
+      return {r["result"].value("time_s", -1.0), r["result"].value("events", -1L)};
+    }
     std::fprintf(stderr, "soak_bench: unexpected status reply: %s\n", r.dump().c_str());
-    return -1.0;
+    return {-1.0, -1};
   };
+  auto sim_time = [&] { return server_status().first; };
   auto sample = [&] {
     Sample s;
     s.wall_s = since_s(wall0);
-    s.sim_s = sim_time();
+    std::tie(s.sim_s, s.events) = server_status();
     s.rss_kb = status_field_kb(pid, "VmRSS");
     s.threads = status_field_kb(pid, "Threads");
     s.fds = count_fds(pid);
@@ -444,7 +450,8 @@ int run(int argc, char** argv, pid_t* child) {
       }
     });
   }
-  double next_print_s = 0;
+  // progress: every 1/60 of the sim time asked for, and at least once a wall minute
+  double next_print_s = 0, next_print_wall_s = 0;
   int monitor_failures = 0;
   while (since_s(wall0) < max_wall_s) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
@@ -455,12 +462,15 @@ int run(int argc, char** argv, pid_t* child) {
     }
     monitor_failures = 0;
     samples.push_back(s);
-    if (s.sim_s >= next_print_s) {
-      std::printf("  wall %6.0f s  sim %7.1f s  rss %7.1f MiB  fds %4ld  threads %3ld  episodes mav %ld api %ld\n",
-                  s.wall_s, s.sim_s, s.rss_kb / 1024.0, s.fds, s.threads, counts.mav_episodes.load(),
-                  counts.api_episodes.load());
+    if (s.sim_s >= next_print_s || s.wall_s >= next_print_wall_s) {
+      std::printf(
+          "  wall %6.0f s  sim %7.1f s  rss %7.1f MiB  fds %4ld  threads %3ld  events %6ld  "
+          "episodes mav %ld api %ld\n",
+          s.wall_s, s.sim_s, s.rss_kb / 1024.0, s.fds, s.threads, s.events,
+          counts.mav_episodes.load(), counts.api_episodes.load());
       std::fflush(stdout);
-      next_print_s += sim_s / 20;
+      while (next_print_s <= s.sim_s) next_print_s += sim_s / 60;
+      next_print_wall_s = s.wall_s + 60;
     }
     if (s.sim_s >= sim_s) break;
   }
@@ -539,8 +549,11 @@ int run(int argc, char** argv, pid_t* child) {
   std::printf("episodes: MAVLink %ld, API %ld; acks %ld, API replies %ld; failed connects %ld\n",
               counts.mav_episodes.load(), counts.api_episodes.load(), counts.acks.load(),
               counts.api_replies.load(), counts.connect_failures.load());
-  std::printf("RSS MiB: start %.1f, at %.0f s sim %.1f, end of churn %.1f, max %.1f\n", samples.front().rss_kb / 1024.0,
-              warm->sim_s, warm->rss_kb / 1024.0, after_churn.rss_kb / 1024.0, rss_max / 1024.0);
+  std::printf(
+      "RSS MiB: start %.1f, at %.0f s sim %.1f, end of churn %.1f, max %.1f, after the final check %.1f\n",
+      samples.front().rss_kb / 1024.0, warm->sim_s, warm->rss_kb / 1024.0, after_churn.rss_kb / 1024.0,
+      rss_max / 1024.0, end.rss_kb / 1024.0);
+  std::printf("events recorded by the server: %ld\n", after_churn.events);
   std::printf("fds: start %ld, at %.0f s sim %ld, end of churn %ld, max %ld, after the final check %ld\n",
               samples.front().fds, warm->sim_s, warm->fds, after_churn.fds, fds_max, end.fds);
   std::printf("threads: start %ld, end %ld\n", samples.front().threads, end.threads);
