@@ -8,8 +8,10 @@ packages=(
   build-essential cmake pkg-config ninja-build
   libmujoco-dev libqhull-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev python3 ffmpeg ccache python3-matplotlib
+  clang libclang-rt-14-dev llvm python3 ffmpeg ccache python3-matplotlib
 )
+# clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm), which turns
+# sanitizer reports into file:line, are only recommended by clang: named here for --no-install-recommends
 # node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
