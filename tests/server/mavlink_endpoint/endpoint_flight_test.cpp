@@ -126,12 +126,6 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
   const GeodeticOrigin& o = server_->config().origin;
   // home + three waypoints at 10 m relative: (10,0), (10,10), (0,10) NED metres
   const Eigen::Vector3d wps[3] = {{10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
-  msg::MissionCount mc;
-  mc.target_system = 1;
-  mc.target_component = 1;
-  mc.count = 5;  // home, takeoff, 3 waypoints
-  g->send(mc);
-  sync_client(*g);
   auto item_for = [&](int seq) {
     msg::MissionItemInt it;
     it.target_system = 1;
@@ -154,23 +148,7 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
     }
     return it;
   };
-  // answer each request until the ack
-  std::size_t answered = 0;
-  ASSERT_TRUE(step_until(*g, [&] {
-    for (const Frame& f : g->frames()) {
-      (void)f;
-    }
-    const auto reqs = g->all<msg::MissionRequest>();
-    const auto reqs_int = g->all<msg::MissionRequestInt>();
-    std::vector<int> seqs;
-    for (const auto& r : reqs) seqs.push_back(r.seq);
-    for (const auto& r : reqs_int) seqs.push_back(r.seq);
-    while (answered < seqs.size()) {
-      g->send(item_for(seqs[answered++]));
-    }
-    return g->count<msg::MissionAck>() > 0;
-  }, 5.0));
-  EXPECT_EQ(g->last<msg::MissionAck>()->type, 0);
+  ASSERT_EQ(upload_mission(*g, 5, item_for), 0);  // home, takeoff, 3 waypoints
   ASSERT_EQ(sim_->fc(0).mission().size(), 5u);
 
   // download it back with MISSION_REQUEST_LIST / MISSION_REQUEST_INT

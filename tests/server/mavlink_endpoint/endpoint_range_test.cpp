@@ -39,32 +39,7 @@ class RangeTest : public EndpointTest {
 
   // uploads a two-item mission (home placeholder + item) and returns the MISSION_ACK type
   int upload_one(TestGcs& g, const msg::MissionItemInt& item) {
-    msg::MissionCount mc;
-    mc.target_system = 1;
-    mc.count = 2;
-    const std::size_t acks = g.count<msg::MissionAck>();
-    // requests come as MISSION_REQUEST until the client has sent an INT item, then as MISSION_REQUEST_INT
-    const std::size_t old_reqs = g.count<msg::MissionRequest>(), old_reqs_int = g.count<msg::MissionRequestInt>();
-    g.send(mc);
-    sync_client(g);
-    std::size_t answered = 0;
-    const bool acked = step_until(g, [&] {
-      std::vector<int> seqs;
-      const auto reqs = g.all<msg::MissionRequest>();
-      const auto reqs_int = g.all<msg::MissionRequestInt>();
-      for (std::size_t k = old_reqs; k < reqs.size(); ++k) seqs.push_back(reqs[k].seq);
-      for (std::size_t k = old_reqs_int; k < reqs_int.size(); ++k) seqs.push_back(reqs_int[k].seq);
-      while (answered < seqs.size()) {
-        const int seq = seqs[answered++];
-        msg::MissionItemInt it = seq == 0 ? msg::MissionItemInt{} : item;
-        it.target_system = 1;
-        it.seq = static_cast<std::uint16_t>(seq);
-        g.send(it);
-      }
-      return g.count<msg::MissionAck>() > acks;
-    }, 5.0);
-    if (!acked) return -1;
-    return g.last<msg::MissionAck>()->type;
+    return upload_mission(g, 2, [&](int seq) { return seq == 0 ? msg::MissionItemInt{} : item; });
   }
 };
 

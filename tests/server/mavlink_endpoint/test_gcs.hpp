@@ -225,6 +225,53 @@ class EndpointTest : public ::testing::Test {
     return false;
   }
 
+  // steps one control period (the loop thread handles what the endpoint has parsed) and then waits, wall clock
+  // bounded, until pred() holds over what g received: a request-reply exchange that does not depend on how
+  // fast the I/O thread runs, unlike step_until whose sim time can run ahead of a slow thread
+  bool step_and_await(TestGcs& g, const std::function<bool()>& pred) {
+    for (int k = 0; k < sim_->control_decimation(); ++k) sim_->step();
+    return wait_for([&] {
+      g.poll_once(1);
+      return pred();
+    });
+  }
+
+  // uploads a mission of count items with the MISSION_COUNT / MISSION_REQUEST(_INT) / MISSION_ITEM_INT
+  // handshake, one exchange at a time, answering each request with item_for(seq); returns the MISSION_ACK
+  // type, or -1 when a reply never came
+  int upload_mission(TestGcs& g, int count, const std::function<msg::MissionItemInt(int)>& item_for) {
+    const std::size_t acks = g.count<msg::MissionAck>();
+    // requests come as MISSION_REQUEST until the client has sent an INT item, then as MISSION_REQUEST_INT
+    std::size_t reqs = g.count<msg::MissionRequest>(), reqs_int = g.count<msg::MissionRequestInt>();
+    msg::MissionCount mc;
+    mc.target_system = 1;
+    mc.target_component = 1;
+    mc.count = static_cast<std::uint16_t>(count);
+    g.send(mc);
+    for (int exchanges = 0; exchanges <= count; ++exchanges) {
+      sync_client(g);
+      std::optional<int> seq;
+      const bool replied = step_and_await(g, [&] {
+        if (g.count<msg::MissionAck>() > acks) return true;
+        const auto r = g.all<msg::MissionRequest>();
+        const auto ri = g.all<msg::MissionRequestInt>();
+        if (r.size() > reqs) seq = r[reqs].seq;
+        if (ri.size() > reqs_int) seq = ri[reqs_int].seq;
+        return seq.has_value();
+      });
+      if (!replied) return -1;
+      if (g.count<msg::MissionAck>() > acks) return g.last<msg::MissionAck>()->type;
+      reqs = g.count<msg::MissionRequest>();
+      reqs_int = g.count<msg::MissionRequestInt>();
+      msg::MissionItemInt it = item_for(*seq);
+      it.target_system = 1;
+      it.target_component = 1;
+      it.seq = static_cast<std::uint16_t>(*seq);
+      g.send(it);
+    }
+    return -1;  // more requests than items: the handshake went wrong
+  }
+
   // steps until SYS_STATUS reports GPS and pre-arm healthy (GUIDED can be entered then), at most 30 s
   void wait_gps_ready(TestGcs& g) {
     constexpr std::uint32_t kPrearm = 0x10000000, kGps = 32;
