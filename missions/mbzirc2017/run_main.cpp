@@ -241,6 +241,7 @@ int main(int argc, char** argv) {
   double end_sim_s = 0.0;
   bool stayed_on_deck = false;
   std::vector<std::string> crashes, states;
+  std::string vision_log;  // the UAV program's video log, in the run directory
   double first_blackout_s = -1.0, approach_blackout_s = -1.0;  // when the faults were injected
 
   uavsim::launch::ServerSpec spec;
@@ -290,10 +291,14 @@ int main(int argc, char** argv) {
     });
     // 2. the UAV program (and the fault injector) on the lockstep clock, then let the clock go
     if (!harness_error) {
-      auto u = launch.spawn(
-          "uav0",
-          {o.uav, "--mavlink", "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port("uav0"))},
-          {launch.lockstep_env(kLockstepPeriod_s)});
+      std::vector<std::string> argv{
+          o.uav, "--mavlink", "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port("uav0"))};
+      if (!o.run_dir.empty()) {
+        // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
+        vision_log = o.run_dir + "/uav0_vision.vlog";
+        argv.insert(argv.end(), {"--video-log", vision_log});
+      }
+      auto u = launch.spawn("uav0", argv, {launch.lockstep_env(kLockstepPeriod_s)});
       if (!u) fail(u.message());
     }
     if (!harness_error && faults) {
@@ -467,6 +472,10 @@ int main(int argc, char** argv) {
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
+  if (!vision_log.empty()) {
+    std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", vision_log.c_str(),
+                vision_log.c_str());
+  }
   if (!o.run_dir.empty()) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
@@ -479,6 +488,7 @@ int main(int argc, char** argv) {
     summary["mission"] = "mbzirc2017";
     summary["run_dir"] = o.run_dir;
     summary["video"] = o.record;
+    summary["vision_log"] = vision_log;
     summary["seed"] = o.seed;
     summary["truck_speed_kmh"] = o.truck_speed_kmh > 0.0 ? o.truck_speed_kmh : 15.0;
     summary["start_time_s"] = o.start_time_s;

@@ -10,6 +10,20 @@ constexpr double kInterceptHorizon_s = 120.0;
 int64_t to_us(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
 }  // namespace
 
+const char* frame_outcome_name(FrameOutcome::Kind kind) {
+  switch (kind) {
+    case FrameOutcome::Kind::kNoMarker:
+      return "no marker";
+    case FrameOutcome::Kind::kOffTheDeck:
+      return "off the deck";
+    case FrameOutcome::Kind::kRejected:
+      return "rejected";
+    case FrameOutcome::Kind::kAccepted:
+      return "accepted";
+  }
+  return "?";
+}
+
 TruckPerception::TruckPerception(const MissionConfig& config)
     : config_(config), filter_(vision::EightTrack(config.track)) {}
 
@@ -28,16 +42,22 @@ vision::CameraPose TruckPerception::camera_pose(const Eigen::Vector3d& position_
 std::optional<Eigen::Vector2d> TruckPerception::on_frame(
     const cv::Mat& grey, const vision::PinholeIntrinsics& intrinsics, int64_t stamp_us,
     const vision::CameraPose& pose) {
+  last_ = FrameOutcome{};
   const std::optional<vision::MarkerDetection> d = detector_.detect(grey);
   if (!d) return std::nullopt;
+  last_.detection = d;
+  last_.kind = FrameOutcome::Kind::kOffTheDeck;
   const std::optional<Eigen::Vector3d> p =
       vision::marker_position_enu(*d, intrinsics, pose, config_.deck_height_m);
   if (!p) return std::nullopt;
+  last_.deck_enu_m = p->head<2>();
   const vision::MeasurementResult r = filter_.add_measurement(stamp_us, p->head<2>());
   if (r == vision::MeasurementResult::kRejected) {
+    last_.kind = FrameOutcome::Kind::kRejected;
     ++rejected_;
     return std::nullopt;
   }
+  last_.kind = FrameOutcome::Kind::kAccepted;
   ++detections_;
   last_seen_s_ = std::max(last_seen_s_, stamp_us * 1e-6);
   return p->head<2>();

@@ -19,6 +19,21 @@
 
 namespace uavsim::missions::mbzirc2017 {
 
+// What one frame gave: the detector's best candidate, and what became of it.
+struct FrameOutcome {
+  enum class Kind {
+    kNoMarker,     // the detector found nothing
+    kOffTheDeck,   // a marker in the image whose ray never meets the deck plane (camera above it?)
+    kRejected,     // placed on the deck, but the filter's gate refused it (far from the track)
+    kAccepted,     // placed on the deck and fed to the filter
+  };
+  Kind kind = Kind::kNoMarker;
+  std::optional<vision::MarkerDetection> detection;
+  std::optional<Eigen::Vector2d> deck_enu_m;  // where it was placed (kRejected, kAccepted)
+};
+
+const char* frame_outcome_name(FrameOutcome::Kind kind);
+
 class TruckPerception {
  public:
   explicit TruckPerception(const MissionConfig& config);
@@ -36,6 +51,9 @@ class TruckPerception {
   // What is known at now_s (the filter extrapolated; the interception from uav_xy at cruise speed).
   TruckKnowledge knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const;
 
+  // What the last on_frame() call saw (for a video log's drawings).
+  const FrameOutcome& last_outcome() const { return last_; }
+
   int detections() const { return detections_; }
   int rejected() const { return rejected_; }
 
@@ -43,6 +61,7 @@ class TruckPerception {
   MissionConfig config_;
   vision::MarkerDetector detector_;
   vision::TrackKalman filter_;
+  FrameOutcome last_;
   double last_seen_s_ = -1e18;
   int detections_ = 0;
   int rejected_ = 0;

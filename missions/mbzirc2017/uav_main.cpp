@@ -4,14 +4,18 @@
 // program would fly a real drone (frames from its camera driver, switches from its GPIO);
 // UAVSIM_LOCKSTEP puts it on sim time.
 //
-// usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME]
+// usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME] [--video-log FILE.vlog]
+// --video-log: every processed camera frame with what the vision saw drawn on it (the marker's ring,
+// whether the filter took it, the deck position it gave, the FSM state; detection_drawing.hpp)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "detection_drawing.hpp"
 #include "landing_fsm.hpp"
 #include "mission_config.hpp"
 #include "truck_perception.hpp"
@@ -20,6 +24,7 @@
 #include "uavsim/client/geodesy.hpp"
 #include "uavsim/client/switches.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/vision/video_log.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::mbzirc2017;
@@ -34,14 +39,15 @@ constexpr double kBudget_s =
 
 int usage() {
   std::fprintf(stderr,
-               "usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME]\n");
+               "usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME] "
+               "[--video-log FILE.vlog]\n");
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string mavlink, vehicle = "uav0", camera;
+  std::string mavlink, vehicle = "uav0", camera, video_log;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--mavlink") {
@@ -50,6 +56,8 @@ int main(int argc, char** argv) {
       vehicle = argv[i + 1];
     } else if (a == "--camera") {
       camera = argv[i + 1];
+    } else if (a == "--video-log") {
+      video_log = argv[i + 1];
     } else {
       return usage();
     }
@@ -106,6 +114,15 @@ int main(int argc, char** argv) {
     uavsim::vision::CameraPose pose;
   };
   std::optional<Pending> pending;
+  std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
+  if (!video_log.empty()) {
+    auto opened = uavsim::vision::VideoLogWriter::open(video_log);
+    if (!opened) {
+      log("--video-log " + video_log + ": " + uavsim::vision::to_string(opened.error()));
+      return 1;
+    }
+    vlog = std::move(*opened);
+  }
   CameraConfig cc;
   cc.camera = camera;
   cc.format = CameraFormat::kGrey;
@@ -172,6 +189,16 @@ int main(int argc, char** argv) {
         log(buf);
       }
       reported_detections = perception.detections();
+      if (vlog) {
+        DrawingContext context;
+        context.vehicle = vehicle;
+        context.fsm_state = landing_state_name(fsm.state());
+        context.detections = perception.detections();
+        context.truck = perception.knowledge(loop.now(), uav.telemetry().position_enu_m.head<2>());
+        // a full queue drops the frame, never waits
+        (void)vlog->submit(detection_log_frame(frame.grey, frame.stamp_us * 1e-6,
+                                               perception.last_outcome(), context));
+      }
     } else {
       (void)loop.run_until(
           [&] { return pending.has_value() || loop.now() - last_step_s >= kStep_s - 1e-9; },
