@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 
 namespace uavsim::missions::mbzirc2017 {
 
 namespace {
+
+constexpr double kLabelScale = 0.35;  // Hershey simplex: about 7 px a character, 9 px capitals
 
 // BGR; chosen to stand out on sand, the grey deck and the marker's black and white
 cv::Scalar colour_of(FrameOutcome::Kind kind) {
@@ -48,25 +51,31 @@ vision::VideoLogFrame detection_log_frame(const cv::Mat& image, double stamp_s,
     } else {
       std::snprintf(label, sizeof(label), "%s", frame_outcome_name(outcome.kind));
     }
-    frame.overlays.push_back(
-        vision::Overlay::label(c + cv::Point2f(r + 6.0f, -4.0f), label, colour, 0.45f));
+    // under the ring (above it near the bottom edge), kept inside the image: the camera's frames
+    // are small (384 x 168 on the 2017 hexa)
+    int baseline = 0;
+    const cv::Size size =
+        cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, kLabelScale, 1, &baseline);
+    const float below = c.y + r + 6.0f + static_cast<float>(size.height);
+    const float y = below < static_cast<float>(image.rows - 2) ? below : c.y - r - 6.0f;
+    const float x = std::clamp(c.x - 0.5f * static_cast<float>(size.width), 2.0f,
+                               std::max(2.0f, static_cast<float>(image.cols - size.width - 2)));
+    frame.overlays.push_back(vision::Overlay::label({x, y}, label, colour, kLabelScale));
   }
-  // the caption: the log's per-frame text, also burnt in at the top left for the exported video
+  // the caption, the log's per-frame text (the exporter burns it in at the top left): short lines,
+  // to fit the camera's small frames
   char caption[192];
-  const int n = std::snprintf(caption, sizeof(caption), "%s t=%.2f %s, %s, %d detections",
-                              context.vehicle.c_str(), stamp_s, context.fsm_state.c_str(),
-                              frame_outcome_name(outcome.kind), context.detections);
-  std::string text(caption,
-                   static_cast<size_t>(std::clamp(n, 0, static_cast<int>(sizeof(caption)) - 1)));
+  std::snprintf(caption, sizeof(caption), "%s t=%.2f %s\n%s, %d detections",
+                context.vehicle.c_str(), stamp_s, context.fsm_state.c_str(),
+                frame_outcome_name(outcome.kind), context.detections);
+  frame.text = caption;
   if (context.truck.initialised) {
     char est[96];
-    std::snprintf(est, sizeof(est), "; truck (%.1f, %.1f) at %.1f m/s",
+    std::snprintf(est, sizeof(est), "\ntruck (%.1f, %.1f) %.1f m/s",
                   context.truck.position_enu_m.x(), context.truck.position_enu_m.y(),
                   context.truck.velocity_enu_m_s.norm());
-    text += est;
+    frame.text += est;
   }
-  frame.text = text;
-  frame.overlays.push_back(vision::Overlay::label({6.0f, 16.0f}, text, {255, 255, 255}, 0.4f));
   return frame;
 }
 
