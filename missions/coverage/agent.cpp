@@ -25,6 +25,9 @@ constexpr double kAltitudeGain_1_s = 1.0;
 constexpr double kMaxClimb_m_s = 2.0;
 constexpr double kApproachGain_1_s = 0.5;
 constexpr double kHomeReached_m = 1.0;
+// the last metres home: the speed falls with the distance left (1 m/s a metre), twice as steep as
+// kApproachGain_1_s: nothing is photographed here, so only stopping at home matters
+constexpr double kHomeApproachGain_1_s = 1.0;
 // Going Home: agents of the same altitude layer closer than this push each other apart
 constexpr double kHomeSeparation_m = 5.0;
 constexpr double kHomeSeparationSpeed_m_s = 1.5;
@@ -302,7 +305,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
     }
     case AgentState::kDeploying: {
       const Eigen::Vector2d start = path_->points_enu_m.front();
-      fly_to(in, start, config_.cruise_speed_m_s, target_heading_rad_, out);
+      fly_to(in, start, config_.deploy_speed_m_s, target_heading_rad_, out);
       const bool aligned =
           std::abs(angle_diff(in.yaw_enu_rad, target_heading_rad_)) < config_.heading_tolerance_rad;
       if ((here - start).norm() < kAtStart_m && aligned && flock_in_line(in)) {
@@ -384,7 +387,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
         break;
       }
       Eigen::Vector2d v =
-          d / d.norm() * std::min(config_.cruise_speed_m_s, kApproachGain_1_s * d.norm());
+          d / d.norm() * std::min(config_.home_speed_m_s, kHomeApproachGain_1_s * d.norm());
       // steer away from agents in our layer (their ids tell their layers)
       for (const auto& [id, r] : adb_.records()) {
         if (id % config_.home_layers != id_ % config_.home_layers) continue;

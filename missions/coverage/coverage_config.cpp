@@ -48,6 +48,7 @@ std::string CoverageConfig::validate() const {
            check("max_age_per_hop_s", max_age_per_hop_s, 0.0, 60.0),
            check("query_retransmit_s", query_retransmit_s, 0.02, 10.0),
            check("cruise_speed_m_s", cruise_speed_m_s, 0.5, 20.0),
+           check("deploy_speed_m_s", deploy_speed_m_s, 0.5, 30.0),
            check("edge_margin_fraction", edge_margin_fraction, 0.0, 0.9),
            check("lateral_threshold_m", lateral_threshold_m, 0.5, 1e4),
            check("smoothing_half_window", smoothing_half_window, 0, 50),
@@ -55,6 +56,7 @@ std::string CoverageConfig::validate() const {
            check("deploy_timeout_s", deploy_timeout_s, 1.0, 3600.0),
            check("home_layers", home_layers, 1, 20),
            check("home_layer_m", home_layer_m, 0.0, 50.0),
+           check("home_speed_m_s", home_speed_m_s, 0.5, 30.0),
            check("max_speed_m_s", max_speed_m_s, 0.5, 30.0),
        }) {
     if (!e.empty()) return e;

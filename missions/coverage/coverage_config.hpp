@@ -58,6 +58,10 @@ struct CoverageConfig {
   // with the frontier (fraction of y_sensor), the lateral step that thresholds a control point
   // out, and the half-width of the moving-average smoothing (control points)
   double cruise_speed_m_s = 5.0;
+  // Deploying (fig. 4.6): the leader's speed to the start of its next path. A transit, outside the
+  // rectangle (the flock's pictures are all taken at cruise_speed_m_s), usually one swath sideways:
+  // ~170 m for 25 agents, 34 s at the cruise speed
+  double deploy_speed_m_s = 8.0;
   double edge_margin_fraction = 0.2;
   double lateral_threshold_m = 30.0;
   int smoothing_half_window = 2;
@@ -67,10 +71,15 @@ struct CoverageConfig {
   double deploy_timeout_s = 60.0;
 
   // going home (fig. 4.6): each agent returns at altitude_m + (id % home_layers) * home_layer_m so
-  // that crossing tracks are separated vertically, then lands at its take-off point
+  // that crossing tracks are separated vertically, at home_speed_m_s (no pictures are taken on the
+  // way home, so nothing ties it to the cruise speed; the autopilot's WPNAV_SPEED caps it at 12
+  // m/s), then lands at its take-off point
   int home_layers = 4;
   double home_layer_m = 3.0;
-  double max_speed_m_s = 8.0;
+  double home_speed_m_s = 10.0;
+  // a follower's commanded speed is capped here (above deploy_speed_m_s, so it can catch up; the
+  // autopilot's own cap is 1.2 x WPNAV_SPEED, 12 m/s)
+  double max_speed_m_s = 11.0;
 
   // Empty when usable, else what is wrong (names the field).
   std::string validate() const;

@@ -18,6 +18,11 @@ struct WorldSpec {
   double origin_y_m = 0.0;
   double line_offset_m = 10.0;   // the take-off line lies this far before the x = origin edge
   double line_spacing_m = 10.0;  // between neighbours on the line
+  // the autopilots' LAND descent (ArduCopter LAND_SPEED below 10 m, LAND_SPEED_HIGH above): the
+  // flock lands from 20-29 m at the end of the mission, which at ArduCopter's defaults (0.5 and
+  // 1.5 m/s) takes 27-33 s; 1 m/s at touchdown is a third of the simulator's hard-impact speed
+  double land_speed_m_s = 1.0;
+  double land_speed_high_m_s = 3.0;
 
   // Empty when usable, else what is wrong (names the field).
   std::string validate() const;

@@ -69,12 +69,20 @@ std::optional<PlannedPath> plan_side(const CoverageConfig& config, const AreaPar
   path.frontier_m = frontier;
   for (const auto& p : smooth)
     path.points_enu_m.emplace_back(config.origin_x_m + p.x(), config.origin_y_m + p.y() + offset);
-  // run-in and run-out: start a footprint before the first stripe's edge, end a footprint past
-  // the last, so every agent's camera sweeps over both end stripes
+  // run-in and run-out: start a footprint before the first frontier stripe's edge, end a footprint
+  // past the last, so every agent's camera sweeps over both end stripes. The frontier's, not the
+  // kept points': the threshold removes control points (the flock does not swing towards them), not
+  // the stripes they stand for, and the thesis's flock runs "until the overall flock reaches the
+  // other end" (3.5). Over the dropped end stripes the flock holds the end point's y; their
+  // frontier, when it lies inside the swath, is covered on the way. (Ending at the last kept point
+  // instead, 25 quads over 600 x 600 m left the first ~80 m of the second and third passes, whose
+  // frontier lay over 30 m off the median, to three extra passes: 117 s of a 771 s mission.)
   const Eigen::Vector2d first = path.points_enu_m.front(), last = path.points_enu_m.back();
+  const double x_first = config.origin_x_m + frontier.front().x();
+  const double x_last = config.origin_x_m + frontier.back().x();
   path.points_enu_m.insert(path.points_enu_m.begin(),
-                           {first.x() - 0.5 * h - config.x_sensor_m, first.y()});
-  path.points_enu_m.emplace_back(last.x() + 0.5 * h + config.x_sensor_m, last.y());
+                           {x_first - 0.5 * h - config.x_sensor_m, first.y()});
+  path.points_enu_m.emplace_back(x_last + 0.5 * h + config.x_sensor_m, last.y());
 
   // direction: start at the end nearer to the leader
   if (std::abs(leader_enu_m.x() - path.points_enu_m.back().x()) <

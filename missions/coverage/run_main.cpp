@@ -311,6 +311,7 @@ int main(int argc, char** argv) {
   std::map<int, ApdReport> apd;      // agent -> its last APD report
   std::set<int> leaders;             // agents that were ever in a leader state
   int completed_by = -1;             // the agent whose query found the rectangle covered
+  double completed_at_s = -1.0;      // and the sim time it found it (the going-home broadcast)
   std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
   std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
   std::set<int> crashed;             // crashes other than kills
@@ -330,7 +331,7 @@ int main(int argc, char** argv) {
       return false;  // not printed: long
     }
     static const std::regex state_re(R"(^agent (\d+) t=\S+ state (.+) leader (-?\d+)$)");
-    static const std::regex complete_re(R"(^agent (\d+) t=\S+ mission complete)");
+    static const std::regex complete_re(R"(^agent (\d+) t=(\S+) mission complete)");
     static const std::regex times_re(R"(^agent (\d+) t=\S+ time in states:(.*)$)");
     std::smatch m;
     if (std::regex_search(line, m, state_re)) {
@@ -341,6 +342,8 @@ int main(int argc, char** argv) {
         leaders.insert(id);
     } else if (std::regex_search(line, m, complete_re)) {
       completed_by = std::stoi(m[1]);
+      const double t = std::strtod(m[2].str().c_str(), nullptr);
+      if (std::isfinite(t) && t >= 0.0) completed_at_s = t;
     } else if (std::regex_search(line, m, times_re)) {
       std::istringstream in(m[2].str());
       double v = 0.0;
@@ -651,6 +654,11 @@ int main(int argc, char** argv) {
   const double mission_s = first_takeoff_s >= 0 && last_touchdown_s >= first_takeoff_s
                                ? last_touchdown_s - first_takeoff_s
                                : -1.0;
+  // the thesis's fig. 4.7 and table 4.2 count "from take-off to landing" (mission_s); the time to
+  // coverage ends where the leader's query found the rectangle covered, before the flight home
+  const double coverage_s = first_takeoff_s >= 0 && completed_at_s >= first_takeoff_s
+                                ? completed_at_s - first_takeoff_s
+                                : -1.0;
   const int failed = static_cast<int>(vehicles_end.size()) - survivors;
   std::printf("==== coverage flock: %d agents, %.0f x %.0f m, failure p %.4f, seed %llu ====\n",
               o.agents, o.length_x_m, o.width_y_m, o.failure_prob,
@@ -665,6 +673,11 @@ int main(int argc, char** argv) {
                 mission_s, first_takeoff_s, last_touchdown_s);
   else
     std::printf("mission time: n/a\n");
+  if (coverage_s >= 0)
+    std::printf(
+        "coverage complete: %.1f s after the first take-off (the leader's query at %.1f s); "
+        "going home and landing: %.1f s\n",
+        coverage_s, completed_at_s, mission_s >= 0 ? mission_s - coverage_s : 0.0);
   std::printf("failed agents: %d of %d", failed, static_cast<int>(vehicles_end.size()));
   for (int i : killed) std::printf(" %d", i);
   for (int i : crashed) std::printf(" %d(crash)", i);
@@ -721,9 +734,9 @@ int main(int argc, char** argv) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
   }
-  std::printf("RESULT: %s coverage=%.4f mission_s=%.1f failed=%d landed=%d/%d%s\n",
-              success ? "SUCCESS" : "FAILURE", coverage, mission_s, failed, landed, survivors,
-              g_interrupted ? " (interrupted)" : "");
+  std::printf("RESULT: %s coverage=%.4f mission_s=%.1f coverage_s=%.1f failed=%d landed=%d/%d%s\n",
+              success ? "SUCCESS" : "FAILURE", coverage, mission_s, coverage_s, failed, landed,
+              survivors, g_interrupted ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -748,6 +761,8 @@ int main(int argc, char** argv) {
     summary["mission_time_s"] = mission_s;
     summary["first_takeoff_s"] = first_takeoff_s;
     summary["last_touchdown_s"] = last_touchdown_s;
+    summary["coverage_complete_s"] = coverage_s;
+    summary["completed_at_s"] = completed_at_s;
     summary["failed"] = failed;
     summary["killed"] = std::vector<int>(killed.begin(), killed.end());
     summary["crashed"] = std::vector<int>(crashed.begin(), crashed.end());

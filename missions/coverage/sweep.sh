@@ -2,32 +2,44 @@
 # Sweeps of the coverage flock in the simulator (not a ctest: minutes per run), the thesis's section
 # 4.3 experiments: fig. 4.7 (mission time and energy against the number of agents, no failures) and
 # tables 4.2/4.3 (failure probability against failed agents, mission time, energy and the extra
-# distance flown to recover). Two steps, so that any job runner can do the middle:
+# distance flown to recover). Three steps, so that any job runner can do the middle:
 #   missions/coverage/sweep.sh jobs OUT_DIR [AREA] [SEEDS] > jobs.txt   # one coverage-run per line
-#   parallel -j2 < jobs.txt                                            # GNU parallel (or: bash jobs.txt)
-#   missions/coverage/sweep.sh table OUT_DIR                           # the tables
-# AREA defaults to 600x600 (the thesis's), SEEDS to 3. Agents: 5 10 15 20 25 without failures;
-# failure probabilities 0.0005 .. 0.009 (table 4.3) with 25 agents. Extra distance: the distance
-# flown by the flock beyond the failure-free run of the same seed and size.
-# COVERAGE_RUN overrides the launcher (default: build/missions/coverage/coverage-run).
+#   parallel -j2 < jobs.txt                      # GNU parallel (or: xargs -P2 -d '\n' -n1 bash -c < jobs.txt)
+#   missions/coverage/sweep.sh table OUT_DIR                           # the tables, beside the thesis's
+#   missions/coverage/sweep.sh plot OUT_DIR [PNG_DIR]                  # fig. 4.7 and 4.9 (matplotlib)
+# AREA defaults to 600x600 (the thesis's), SEEDS to 3. Environment (space-separated lists):
+#   SWEEP_AGENTS       flock sizes flown without failures (default "5 10 15 20 25")
+#   SWEEP_FAIL_AGENTS  flock size of the failure runs (default 25; empty: no failure runs)
+#   SWEEP_PROBS        failure probabilities (default table 4.3's, 0.0005 .. 0.009)
+# Extra distance: the distance flown by the flock beyond the failure-free run of the same seed and
+# size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS). COVERAGE_RUN overrides the launcher (default:
+# build/missions/coverage/coverage-run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}
 cmd=${1:-}
 out=${2:-}
-[[ -n "$cmd" && -n "$out" ]] || { sed -n 2,13p "$0"; exit 2; }
+usage() { sed -n 2,17p "$0"; exit 2; }
+[[ -n "$cmd" && -n "$out" ]] || usage
 case "$cmd" in
   jobs)
     area=${3:-600x600}
     seeds=${4:-3}
-    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[0-9]+$ ]] || { sed -n 2,13p "$0"; exit 2; }
+    agents=${SWEEP_AGENTS-5 10 15 20 25}
+    fail_agents=${SWEEP_FAIL_AGENTS-25}
+    probs=${SWEEP_PROBS-0.0005 0.0007 0.0009 0.001 0.003 0.005 0.007 0.009}
+    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[0-9]+$ ]] || usage
+    for n in $agents $fail_agents; do [[ "$n" =~ ^[0-9]+$ ]] || usage; done
+    for p in $probs; do [[ "$p" =~ ^0?\.[0-9]+$ ]] || usage; done
     mkdir -p "$out"
+    common="--no-run-dir --no-record --area $area --quiet --budget 5000"
     for ((s = 1; s <= seeds; s++)); do
-      for n in 5 10 15 20 25; do
-        echo "$run --no-run-dir --no-record --agents $n --area $area --seed $s --quiet --budget 5000 --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
+      for n in $agents; do
+        echo "$run $common --agents $n --seed $s --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
       done
-      for p in 0.0005 0.0007 0.0009 0.001 0.003 0.005 0.007 0.009; do
-        echo "$run --no-run-dir --no-record --agents 25 --area $area --seed $s --failure-prob $p --quiet --budget 5000 --json $out/n25_p${p}_seed$s.json > $out/n25_p${p}_seed$s.log 2>&1"
+      [[ -n "$fail_agents" ]] || continue
+      for p in $probs; do
+        echo "$run $common --agents $fail_agents --seed $s --failure-prob $p --json $out/n${fail_agents}_p${p}_seed$s.json > $out/n${fail_agents}_p${p}_seed$s.log 2>&1"
       done
     done
     ;;
@@ -36,38 +48,53 @@ case "$cmd" in
 import glob, json, os, statistics, sys
 out = sys.argv[1]
 runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "*.json")))]
+# the thesis's table 4.3: failure probability -> (failed agents, extra distance), both in %
+THESIS_43 = {0.0005: (2.50, 0.0000), 0.0007: (3.75, 0.1493), 0.0009: (5.00, 0.2095),
+             0.001: (3.75, 0.1924), 0.003: (12.16, 0.5015), 0.005: (10.94, 0.7475),
+             0.007: (38.33, 0.6517), 0.009: (28.57, 1.3916)}
 def mean_sd(xs):
     if not xs: return "-", "-"
     return "%.0f" % statistics.mean(xs), ("%.0f" % statistics.stdev(xs)) if len(xs) > 1 else "-"
 ok = lambda j: j["success"]
-print("fig. 4.7: no failures")
-print("| agents | runs ok | mission time [s] mean | sd | energy per agent [mAh] mean | sd | speed [x real time] |")
-print("|---|---|---|---|---|---|---|")
-for n in sorted({j["agents"] for j in runs if j["failure_prob"] == 0}):
-    rs = [j for j in runs if j["agents"] == n and j["failure_prob"] == 0]
+area = lambda j: "%gx%g" % tuple(j["area_m"])
+print("fig. 4.7: no failures (thesis: mission time and energy fall up to 25 agents, then flatten;")
+print("its table 4.2 gives 719 +- 63 s and 479 +- 44 mAh for 25 agents over 600 x 600 m, 0-10 failed)")
+print("| area | agents | runs ok | mission time [s] | sd | coverage complete [s] | energy per agent [mAh] | sd | speed [x real time] |")
+print("|---|---|---|---|---|---|---|---|---|")
+for a, n in sorted({(area(j), j["agents"]) for j in runs if j["failure_prob"] == 0}):
+    rs = [j for j in runs if area(j) == a and j["agents"] == n and j["failure_prob"] == 0]
     good = [j for j in rs if ok(j)]
     t = mean_sd([j["mission_time_s"] for j in good])
+    c = mean_sd([j["coverage_complete_s"] for j in good if j.get("coverage_complete_s", -1) >= 0])
     e = mean_sd([j["energy_mah_mean"] for j in good])
     speed = statistics.mean(j["sim_time_s"] / j["wall_time_s"] for j in rs) if rs else 0
-    print("| %d | %d/%d | %s | %s | %s | %s | %.1f |" % (n, len(good), len(rs), *t, *e, speed))
+    print("| %s | %d | %d/%d | %s | %s | %s | %s | %s | %.1f |" % (a, n, len(good), len(rs), *t, c[0], *e, speed))
 print()
-print("tables 4.2/4.3: 25 agents with failures (extra distance against the seed's p = 0 run)")
-print("| failure p | runs ok | failed agents | coverage held (mean) | mission time [s] | energy [mAh] | extra distance |")
-print("|---|---|---|---|---|---|---|")
-base = {(j["seed"], j["agents"]): j for j in runs if j["failure_prob"] == 0}
-for p in sorted({j["failure_prob"] for j in runs if j["failure_prob"] > 0}):
-    rs = [j for j in runs if j["failure_prob"] == p and j["agents"] == 25]
+print("tables 4.2/4.3: with failures (extra distance against the seed's p = 0 run of the same size)")
+print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance (thesis) |")
+print("|---|---|---|---|---|---|---|---|---|")
+base = {(area(j), j["seed"], j["agents"]): j for j in runs if j["failure_prob"] == 0}
+for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs if j["failure_prob"] > 0}):
+    rs = [j for j in runs if area(j) == a and j["agents"] == n and j["failure_prob"] == p]
     good = [j for j in rs if ok(j)]
-    failed = statistics.mean(j["failed"] / j["agents"] for j in rs) if rs else 0
-    cov = statistics.mean(j["coverage"] for j in rs) if rs else 0
-    extra = [j["distance_m_total"] / base[(j["seed"], 25)]["distance_m_total"] - 1
-             for j in rs if (j["seed"], 25) in base]
+    failed = statistics.mean(j["failed"] / j["agents"] for j in rs)
+    cov = statistics.mean(j["coverage"] for j in rs)
+    extra = [j["distance_m_total"] / base[(a, j["seed"], n)]["distance_m_total"] - 1
+             for j in rs if (a, j["seed"], n) in base]
     t = mean_sd([j["mission_time_s"] for j in good])
     e = mean_sd([j["energy_mah_mean"] for j in good])
-    print("| %g | %d/%d | %.2f %% | %.2f %% | %s (sd %s) | %s (sd %s) | %s |" % (
-        p, len(good), len(rs), 100 * failed, 100 * cov, *t, *e,
-        ("%.2f %%" % (100 * statistics.mean(extra))) if extra else "-"))
+    th = THESIS_43.get(p)
+    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s (%s) |" % (
+        a, n, p, len(good), len(rs), 100 * failed, ("%.2f %%" % th[0]) if th else "-", 100 * cov, *t, *e,
+        ("%+.2f %%" % (100 * statistics.mean(extra))) if extra else "-",
+        ("%.4f %%" % th[1]) if th else "-"))
 PY
     ;;
-  *) sed -n 2,13p "$0"; exit 2 ;;
+  plot)
+    # Debian's python3-matplotlib belongs to Debian's python3 (another python3 may come first in PATH)
+    py=/usr/bin/python3
+    [[ -x "$py" ]] || py=python3
+    "$py" "$root/missions/coverage/plot_sweep.py" "$out" "${3:-$out}"
+    ;;
+  *) usage ;;
 esac

@@ -102,8 +102,9 @@ TEST(CoverageRun, OneProcessFlyingAllFiveAgentsCoversTheRectangleToo) {
   ASSERT_TRUE(r.is_object()) << out;
   EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
   EXPECT_EQ(r["landed"].get<int>(), 5) << out;
-  EXPECT_NEAR(r["mission_time_s"].get<double>(), 211.0, 10.0)
-      << out;  // one process per agent: 211.6 s
+  // one process per agent: 172.2 s; one process for all has flown 172-189 s (its agents' steps
+  // are not in the same order every run: once in a while a 1 % sliver needs one more short pass)
+  EXPECT_NEAR(r["mission_time_s"].get<double>(), 172.0, 25.0) << out;
   EXPECT_TRUE(r["success"].get<bool>()) << out;
 }
 
@@ -162,11 +163,12 @@ TEST(CoverageRun, GroundStationLinksCutMidMissionTheFlockStillCompletes) {
 
 // Seeded failures (every 10 s each flying agent fails with probability p) and lossy radio, twice
 // on a smaller rectangle: the same seed gives the same run (failures, mission time, energy), bit
-// for bit. (Whether it succeeds is not the point: with this seed agent 2 fails on its way home,
-// after the flock completed, and its pictures are lost with it.)
+// for bit. (Whether it succeeds is not the point: with this seed agent 4 fails at 60 s, its
+// stripes are flown again, and agent 1 fails at 130 s on its way home, after the flock completed,
+// and its pictures are lost with it.)
 TEST(CoverageRun, SameSeedSameRunWithFailuresAndLoss) {
   std::string out1, out2;
-  const std::string args = "--area 100x60 --failure-prob 0.03 --radio-loss 0.2 --seed 4";
+  const std::string args = "--area 100x60 --failure-prob 0.03 --radio-loss 0.2 --seed 3";
   const Json a = run_flock(args, &out1);
   const Json b = run_flock(args, &out2);
   ASSERT_TRUE(a.is_object()) << out1;

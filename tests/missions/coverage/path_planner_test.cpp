@@ -92,6 +92,23 @@ TEST(PathPlanner, ThresholdDropsAnIsolatedHoleAndSmoothingAverages) {
   EXPECT_DOUBLE_EQ(p->points_enu_m[5].y(), 30.0 + 3.0);
 }
 
+TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {
+  // the first two stripes covered up to 90 m (a flock still forming on its first pass spreads
+  // wider), the rest up to 40 m: their frontier is 50 m off the median 40, over the 30 m threshold
+  CoverageConfig c = config();
+  AreaParts map(c.stripe_count());
+  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, i < 2 ? 90.0 : 40.0});
+  auto p = plan_side(c, map, {-10.0, 0.0}, {0.0, 30.0}, true);
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->points_enu_m.size(), 10u);  // stripes 2..9 + run-in + run-out
+  // the run-in still starts a footprint before stripe 0 (centre 2.8 - 2.8 - 7 = -7), at the first
+  // kept point's y (40 + 5 - 2): the flock passes over the dropped stripes without swinging
+  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, 1e-9);
+  EXPECT_DOUBLE_EQ(p->points_enu_m.front().y(), 43.0);
+  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, 1e-9);
+  EXPECT_DOUBLE_EQ(path_y_at(*p, 2.8), 43.0);
+}
+
 TEST(PathPlanner, NothingToPlanWhenCovered) {
   const CoverageConfig c = config();
   AreaParts map(c.stripe_count());

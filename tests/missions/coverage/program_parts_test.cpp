@@ -109,6 +109,21 @@ TEST(CoverageWorld, OutOfRangeNumbersAreRefusedByName) {
   refused([](WorldSpec& s) { s.width_y_m = std::nan(""); }, "width");
   refused([](WorldSpec& s) { s.line_spacing_m = 0.5; }, "line_spacing_m");
   refused([](WorldSpec& s) { s.origin_x_m = -1e6; }, "origin");
+  refused([](WorldSpec& s) { s.land_speed_m_s = 0.2; }, "land_speed_m_s");
+  refused([](WorldSpec& s) { s.land_speed_high_m_s = 6.0; }, "land_speed_high_m_s");
+}
+
+// the autopilots land the flock at 1 m/s below 10 m and 3 m/s above (ArduCopter's LAND_SPEED and
+// LAND_SPEED_HIGH, cm/s), every quad: the world's uavsim:params:* text
+TEST(CoverageWorld, EveryQuadLandsAtTheSpecsDescentSpeeds) {
+  WorldSpec s;
+  EXPECT_NE(coverage_world_xml(s).find(
+                R"(<text name="uavsim:params:*" data="LAND_SPEED 100; LAND_SPEED_HIGH 300"/>)"),
+            std::string::npos);
+  s.land_speed_m_s = 0.5;
+  s.land_speed_high_m_s = 0.0;  // ArduCopter: WPNAV_SPEED_DN instead
+  EXPECT_NE(coverage_world_xml(s).find(R"(data="LAND_SPEED 50; LAND_SPEED_HIGH 0")"),
+            std::string::npos);
 }
 
 }  // namespace
