@@ -12,14 +12,14 @@
 #   SWEEP_FAIL_AGENTS  flock size of the failure runs (default 25; empty: no failure runs)
 #   SWEEP_PROBS        failure probabilities (default table 4.3's, 0.0005 .. 0.009)
 # Extra distance: the distance flown by the flock beyond the failure-free run of the same seed and
-# size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS). COVERAGE_RUN overrides the launcher (default:
-# build/missions/coverage/coverage-run).
+# size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS), all agents' and the survivors' only.
+# COVERAGE_RUN overrides the launcher (default: build/missions/coverage/coverage-run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}
 cmd=${1:-}
 out=${2:-}
-usage() { sed -n 2,17p "$0"; exit 2; }
+usage() { sed -n 2,16p "$0"; exit 2; }
 [[ -n "$cmd" && -n "$out" ]] || usage
 case "$cmd" in
   jobs)
@@ -71,8 +71,8 @@ for a, n in sorted({(area(j), j["agents"]) for j in runs if j["failure_prob"] ==
     print("| %s | %d | %d/%d | %s | %s | %s | %s | %s | %.1f |" % (a, n, len(good), len(rs), *t, c[0], *e, speed))
 print()
 print("tables 4.2/4.3: with failures (extra distance against the seed's p = 0 run of the same size)")
-print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance (thesis) |")
-print("|---|---|---|---|---|---|---|---|---|")
+print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance: all agents | survivors (thesis) |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 base = {(area(j), j["seed"], j["agents"]): j for j in runs if j["failure_prob"] == 0}
 for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs if j["failure_prob"] > 0}):
     rs = [j for j in runs if area(j) == a and j["agents"] == n and j["failure_prob"] == p]
@@ -81,13 +81,20 @@ for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs i
     cov = statistics.mean(j["coverage"] for j in rs)
     extra = [j["distance_m_total"] / base[(a, j["seed"], n)]["distance_m_total"] - 1
              for j in rs if (a, j["seed"], n) in base]
+    # the survivors' distance beyond what the same agents flew without failures (a dead agent's
+    # unflown distance does not offset what the others fly again), over the failure-free total
+    def survivors_extra(j, b):
+        bd = {x["agent"]: x["distance_m"] for x in b["per_agent"]}
+        more = sum(x["distance_m"] - bd[x["agent"]] for x in j["per_agent"] if not x["failed"])
+        return more / b["distance_m_total"]
+    extra_s = [survivors_extra(j, base[(a, j["seed"], n)]) for j in rs if (a, j["seed"], n) in base]
     t = mean_sd([j["mission_time_s"] for j in good])
     e = mean_sd([j["energy_mah_mean"] for j in good])
     th = THESIS_43.get(p)
-    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s (%s) |" % (
+    pct = lambda xs: ("%+.2f %%" % (100 * statistics.mean(xs))) if xs else "-"
+    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s (%s) |" % (
         a, n, p, len(good), len(rs), 100 * failed, ("%.2f %%" % th[0]) if th else "-", 100 * cov, *t, *e,
-        ("%+.2f %%" % (100 * statistics.mean(extra))) if extra else "-",
-        ("%.4f %%" % th[1]) if th else "-"))
+        pct(extra), pct(extra_s), ("%.4f %%" % th[1]) if th else "-"))
 PY
     ;;
   plot)
