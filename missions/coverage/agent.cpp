@@ -15,6 +15,8 @@ constexpr double kDiscovery_s = 3.0;
 constexpr double kQueryTimeout_s = 20.0;
 // Waiting ends at the latest after this long
 constexpr double kWaitTimeout_s = 30.0;
+// a pass that added less than this fraction of the rectangle made no progress
+constexpr double kNoProgressFraction = 1e-3;
 // the leader is at the start of its path when this close
 constexpr double kAtStart_m = 1.5;
 // Running: the leader aims at its path this far ahead, and corrects sideways with this gain
@@ -239,7 +241,18 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
   std::vector<double> others_y;
   for (const auto& [id, r] : adb_.records()) others_y.push_back(r.y_m);
   const FlockExtent extent = flock_extent(in.position_enu_m.y(), others_y, config_.gains.d_r1_m);
-  path_ = plan_path(config_, map, in.position_enu_m.head<2>(), extent);
+  // a path that covered (almost) nothing: plan the other side. The nearer side is the thesis's
+  // rule, but a sliver left along the flock's far edge, where the outermost agent sits a metre or
+  // two off the extent the leader measured, is missed pass after pass (5 quads over 600 x 600 m
+  // flew the same 500 m path at 99.9 % until the 5000 s budget); planned from the other side, the
+  // sliver lies under the leader's own footprint, on its own track.
+  std::optional<PlannedPath> next;
+  if (path_ && fraction < planned_fraction_ + kNoProgressFraction) {
+    next = plan_side(config_, map, in.position_enu_m.head<2>(), extent, !path_->low_side);
+  }
+  if (!next) next = plan_path(config_, map, in.position_enu_m.head<2>(), extent);
+  path_ = next;
+  planned_fraction_ = fraction;
   if (!path_) {
     complete_ = true;
     enter(AgentState::kGoingHome, out, "nothing left to plan");

@@ -144,6 +144,7 @@ class Agent {
   std::optional<AreaParts> gcs_map_;
   std::optional<AreaParts> last_map_;
   std::optional<PlannedPath> path_;
+  double planned_fraction_ = 0.0;  // the map's covered fraction when path_ was planned
 
   std::array<double, kAgentStateCount> time_in_state_{};
 };

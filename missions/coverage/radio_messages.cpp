@@ -10,7 +10,7 @@ namespace {
 constexpr size_t kBeaconHeaderBytes = 14;
 constexpr size_t kRecordBytes = 14;
 constexpr size_t kAggregateHeaderBytes = 29;
-constexpr int kMaxFragments = 64;
+constexpr int kMaxFragments = 255;
 constexpr uint8_t kFlagGoingHome = 1;
 
 // little-endian writer and bounds-checked reader
@@ -279,9 +279,8 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
   p.message.responded = responded;
   p.message.acked = acked;
   for (const auto& [index, list] : stripes) p.message.apd.set_stripe(index, list);
-  p.received |= uint64_t{1} << fragment;
-  const uint64_t all = fragments == 64 ? ~uint64_t{0} : (uint64_t{1} << fragments) - 1;
-  if (p.received != all) return std::nullopt;
+  p.received.set(static_cast<size_t>(fragment));
+  if (p.received.count() != static_cast<size_t>(fragments)) return std::nullopt;
   AggregateMessage done = std::move(p.message);
   partial_.erase(sender);
   return done;

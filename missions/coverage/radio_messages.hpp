@@ -23,6 +23,7 @@
 // Positions are relative to the area origin, so any rectangle up to 3000 m fits 16 bits.
 #pragma once
 
+#include <bitset>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -75,7 +76,7 @@ class AggregateReassembler {
     uint16_t query_id = 0;
     uint16_t version = 0;
     int fragments = 0;
-    uint64_t received = 0;  // bit per fragment (<= 64 fragments)
+    std::bitset<256> received;  // bit per fragment (<= 255 fragments)
     AggregateMessage message;
   };
   int stripes_;

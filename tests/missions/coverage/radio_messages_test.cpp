@@ -102,6 +102,29 @@ TEST(RadioMessages, AFragmentedMapIsReassembledInAnyOrderAndRoundedInwards) {
   }
 }
 
+// One agent of 5 over 600 x 600 m after 16 passes: 16 bands (one per pass) in each of the 108
+// stripes, every stripe a little different: 108 one-stripe fragments. Up to 64 fragments, the
+// stripes past the 64th were dropped, so the leader's map lost them and replanned them for ever.
+TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
+  AggregateMessage m;
+  m.sender = 3;
+  m.apd = AreaParts(108);
+  for (int s = 0; s < 108; ++s)
+    for (int band = 0; band < 16; ++band)
+      m.apd.add(s, {37.0 * band + 0.1 * s, 37.0 * band + 20.0});
+  const auto frames = encode_aggregate(m);
+  ASSERT_EQ(frames.size(), 108u);
+  AggregateReassembler r(108);
+  std::optional<AggregateMessage> d;
+  for (const Frame& f : frames) {
+    EXPECT_FALSE(d);
+    d = r.add(f);
+  }
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->apd.covered_fraction(600.0), m.apd.covered_fraction(600.0), 1e-3);
+  ASSERT_EQ(d->apd.stripe(107).size(), 16u);
+}
+
 TEST(RadioMessages, MalformedFragmentsAreIgnored) {
   AggregateMessage m;
   m.apd = AreaParts(10);
