@@ -457,13 +457,21 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       }
     } else if (a == "--record-size") {
       if ((ok = value(&v))) {
-        int w = 0, h = 0;
-        char xc = 0, extra = 0;
-        ok = std::sscanf(v.c_str(), "%d%c%d%c", &w, &xc, &h, &extra) == 3 && xc == 'x' && w > 0 && h > 0 &&
-             w <= 8192 && h <= 8192;
+        // each side digits only, range-checked as a long before the cast (sscanf's %d overflows
+        // undefined: it read 4294967936x480, 2^32 + 640, as 640x480)
+        auto side = [](const std::string& text, long* out) {
+          char* end = nullptr;
+          *out = std::strtol(text.c_str(), &end, 10);
+          return !text.empty() && std::isdigit(static_cast<unsigned char>(text[0])) &&
+                 *end == '\0' && *out >= 1 && *out <= 8192;
+        };
+        const auto x_at = v.find('x');
+        long w = 0, h = 0;
+        ok = x_at != std::string::npos && side(v.substr(0, x_at), &w) &&
+             side(v.substr(x_at + 1), &h);
         if (!ok) why = "--record-size needs WIDTHxHEIGHT (1 to 8192 each), got '" + v + "'";
-        o.record_width = w;
-        o.record_height = h;
+        o.record_width = static_cast<int>(w);
+        o.record_height = static_cast<int>(h);
       }
     } else if (a == "--log-dir") {
       if ((ok = value(&v))) o.log_dir = v;

@@ -63,6 +63,173 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"a.xml", "b.xml"}, {"more than one world"});
 }
 
+TEST(Options, ValidFlagsSetTheirFields) {
+  const ParseResult r = parse({"w.xml",       "--seed",
+                               "42",          "--physics-hz",
+                               "2000",        "--control-hz",
+                               "400",         "--rate",
+                               "2.5",         "--duration",
+                               "90",          "--wait-for-clients",
+                               "3",           "--realism",
+                               "field",       "--wind",
+                               "6,270,1.5",   "--mavlink-port",
+                               "-1",          "--api-port",
+                               "0",           "--lockstep-timeout",
+                               "0.5",         "--record",
+                               "o.mp4",       "--record-fps",
+                               "30",          "--record-size",
+                               "1280x720",    "--record-overlay",
+                               "0",           "--record-layout",
+                               "tiled",       "--record-camera",
+                               "follow:uav1", "--no-cameras",
+                               "--quiet"});
+  ASSERT_TRUE(r.options) << r.error;
+  const Options& o = *r.options;
+  EXPECT_EQ(o.world_path, "w.xml");
+  EXPECT_EQ(o.seed, 42u);
+  EXPECT_EQ(o.physics_hz, 2000.0);
+  EXPECT_EQ(o.control_hz, 400.0);
+  EXPECT_EQ(o.rate, 2.5);
+  EXPECT_EQ(o.duration_s, 90.0);
+  EXPECT_EQ(o.wait_for_clients, 3);
+  EXPECT_EQ(o.realism, "field");
+  ASSERT_TRUE(o.wind);
+  EXPECT_EQ(o.wind->speed_m_s, 6.0);
+  EXPECT_EQ(o.wind->from_deg, 270.0);
+  EXPECT_EQ(o.wind->turbulence_sd_m_s, 1.5);
+  EXPECT_EQ(o.mavlink_base_port, -1);
+  EXPECT_EQ(o.api_port, 0);
+  EXPECT_EQ(o.lockstep_timeout_s, 0.5);
+  EXPECT_EQ(o.record_path, "o.mp4");
+  EXPECT_EQ(o.record_fps, 30.0);
+  EXPECT_EQ(o.record_width, 1280);
+  EXPECT_EQ(o.record_height, 720);
+  EXPECT_FALSE(o.record_overlay);
+  EXPECT_TRUE(o.record_tiled);
+  EXPECT_EQ(o.record_camera, "follow:uav1");
+  EXPECT_FALSE(o.cameras);
+  EXPECT_TRUE(o.quiet);
+  // --fast is --rate 0; a wind without gust leaves the turbulence to the realism level
+  const ParseResult fast = parse({"w.xml", "--fast", "--wind", "3,90"});
+  ASSERT_TRUE(fast.options) << fast.error;
+  EXPECT_EQ(fast.options->rate, 0.0);
+  EXPECT_FALSE(fast.options->wind->turbulence_sd_m_s);
+}
+
+TEST(Options, RangeEdgesAreInclusive) {
+  auto accepted = [](std::vector<std::string> args) {
+    const ParseResult r = parse(args);
+    EXPECT_TRUE(r.options) << args[1] << " " << args[2] << ": " << r.error;
+    return r.options ? *r.options : Options{};
+  };
+  EXPECT_EQ(accepted({"w.xml", "--mavlink-port", "-1"}).mavlink_base_port, -1);
+  EXPECT_EQ(accepted({"w.xml", "--mavlink-port", "65535"}).mavlink_base_port, 65535);
+  expect_refused({"w.xml", "--mavlink-port", "65536"},
+                 {"--mavlink-port", "'65536'", "-1 to 65535"});
+  expect_refused({"w.xml", "--api-port", "65536"}, {"--api-port", "'65536'"});
+  // seeds: integers 0 .. 2^53 (exact in a double)
+  EXPECT_EQ(accepted({"w.xml", "--seed", "0"}).seed, 0u);
+  EXPECT_EQ(accepted({"w.xml", "--seed", "9007199254740992"}).seed, 9007199254740992u);
+  expect_refused({"w.xml", "--seed", "18014398509481984"}, {"--seed", "an integer"});  // 2^54
+  expect_refused({"w.xml", "--seed", "-1"}, {"--seed", "'-1'"});
+  expect_refused({"w.xml", "--seed", "1.5"}, {"--seed", "'1.5'"});
+  EXPECT_EQ(accepted({"w.xml", "--rate", "0"}).rate, 0.0);
+  EXPECT_EQ(accepted({"w.xml", "--rate", "1000000"}).rate, 1e6);
+  expect_refused({"w.xml", "--rate", "1000001"}, {"--rate", "from 0 to 1e+06"});
+  EXPECT_EQ(accepted({"w.xml", "--wait-for-clients", "100000"}).wait_for_clients, 100000);
+  expect_refused({"w.xml", "--wait-for-clients", "100001"}, {"--wait-for-clients"});
+  expect_refused({"w.xml", "--physics-hz", "0.5"}, {"--physics-hz", "from 1 to 100000"});
+  expect_refused({"w.xml", "--control-hz", "100001"}, {"--control-hz"});
+  expect_refused({"w.xml", "--lockstep-timeout", "0"}, {"--lockstep-timeout", "wall seconds"});
+  expect_refused({"w.xml", "--record-fps", "0"}, {"--record-fps", "frames per second"});
+  expect_refused({"w.xml", "--duration", "-1"}, {"--duration", "seconds of sim time"});
+}
+
+TEST(Options, HugeNonFiniteAndMalformedNumbersAreRefusedByName) {
+  // every numeric option refuses what is not a finite number in its range, quoting the text
+  for (const char* flag :
+       {"--seed", "--physics-hz", "--control-hz", "--rate", "--duration", "--wait-for-clients",
+        "--mavlink-port", "--api-port", "--lockstep-timeout", "--record-fps"}) {
+    for (const char* text :
+         {"1e400", "-1e400", "nan", "inf", "-inf", "1e30", "", "12abc", "abc", " "}) {
+      SCOPED_TRACE(std::string(flag) + " '" + text + "'");
+      expect_refused({"w.xml", flag, text}, {flag, "needs", "got '" + std::string(text) + "'"});
+    }
+  }
+}
+
+TEST(Options, AnOptionAtTheEndWithoutItsValueIsNamed) {
+  for (const char* flag : {"--seed",
+                           "--physics-hz",
+                           "--control-hz",
+                           "--rate",
+                           "--duration",
+                           "--wait-for-clients",
+                           "--home",
+                           "--realism",
+                           "--wind",
+                           "--defaults",
+                           "--write-world",
+                           "--models-dir",
+                           "--mavlink-port",
+                           "--bind",
+                           "--out",
+                           "--mavlink-key",
+                           "--mavlink-key-file",
+                           "--api-port",
+                           "--api-bind",
+                           "--api-token-file",
+                           "--lockstep-timeout",
+                           "--camera",
+                           "--record",
+                           "--record-fps",
+                           "--record-camera",
+                           "--record-overlay",
+                           "--record-layout",
+                           "--record-size",
+                           "--log-dir"}) {
+    expect_refused({"w.xml", flag}, {std::string(flag) + " needs a value"});
+  }
+  // the next option is taken as the value, and refused as one
+  expect_refused({"w.xml", "--rate", "--fast"}, {"--rate", "got '--fast'"});
+}
+
+TEST(Options, WindIsShapedAndRangeChecked) {
+  // speed 0..50 m/s, direction -360..360 degrees, turbulence 0..20 m/s
+  for (const char* ok : {"0,0", "50,360", "50,-360,20", "7.5,45,0"}) {
+    EXPECT_TRUE(parse({"w.xml", "--wind", ok}).options) << ok;
+  }
+  for (const char* bad : {"51,0", "-1,0", "5,361", "5,-361", "5,0,21", "5,0,-1", "5", "5,0,1,2",
+                          "5,,1", ",5", "5,0,", "nan,0", "5,inf", "1e400,0", "5;0", ""}) {
+    SCOPED_TRACE(bad);
+    expect_refused({"w.xml", "--wind", bad}, {"--wind needs SPEED,DIR_DEG[,GUST]", bad});
+  }
+}
+
+TEST(Options, RecordSizeRefusesWhatIsNotTwoSizesInRange) {
+  for (const char* bad : {"0x480", "640x0", "8193x480", "640x8193", "-640x480", "640x480x2",
+                          "640X480", "640x480px", "x480", "640*480",
+                          // 2^32 + 640 and 2^32 + 480: a parser that wraps at 32 bits reads 640x480
+                          "4294967936x480", "640x4294967776", "99999999999999999999x480"}) {
+    SCOPED_TRACE(bad);
+    expect_refused({"w.xml", "--record-size", bad}, {"--record-size needs WIDTHxHEIGHT", bad});
+  }
+  const ParseResult r = parse({"w.xml", "--record-size", "8192x1"});
+  ASSERT_TRUE(r.options) << r.error;
+  EXPECT_EQ(r.options->record_width, 8192);
+  EXPECT_EQ(r.options->record_height, 1);
+}
+
+TEST(Options, WordChoicesAreExact) {
+  expect_refused({"w.xml", "--realism", "Field"}, {"--realism needs field or ideal", "'Field'"});
+  expect_refused({"w.xml", "--realism", ""}, {"--realism"});
+  expect_refused({"w.xml", "--record-overlay", "yes"}, {"--record-overlay needs 0 or 1", "'yes'"});
+  expect_refused({"w.xml", "--record-camera", ""}, {"--record-camera needs"});
+  expect_refused({"w.xml", "--record-camera", "follow:"}, {"--record-camera needs"});
+  expect_refused({"w.xml", "-x"}, {"unknown option -x"});
+  expect_refused({"w.xml", "--Rate", "2"}, {"unknown option --Rate"});
+}
+
 TEST(Options, VersionAndHelpExitZeroWithText) {
   ParseResult r = parse({"--version"});
   EXPECT_FALSE(r.options);
