@@ -74,5 +74,34 @@ TEST(Runner, RateChangeReanchorsWithoutAJump) {
   EXPECT_NEAR(clock.now_s() - wall_at_change, (3.0 - sim_at_change) / 4.0, kTolS);
 }
 
+TEST(Runner, RateZeroTakesNoWallTimeAndStopsOnTheEndTime) {
+  // as fast as possible: the runner never sleeps, so the fake wall clock does not move; it ends on
+  // the physics step nearest the end time (within half a step)
+  auto sim = testing::make_sim("empty.xml");
+  FakeWallClock clock;
+  Runner runner(*sim, 0.0, &clock);
+  const double start = clock.now_s();
+  runner.run_until(2.0);
+  EXPECT_EQ(clock.now_s(), start);
+  EXPECT_NEAR(sim->time_s(), 2.0, 0.5 * sim->physics_dt_s() + 1e-9);
+}
+
+TEST(Runner, StopFromTheGateEndsTheRunAfterThatStep) {
+  // stop() is honoured at the next step: the step the gate opened still runs, no other
+  auto sim = testing::make_sim("empty.xml");
+  FakeWallClock clock;
+  Runner runner(*sim, 0.0, &clock);
+  double stopped_at = -1.0;
+  runner.set_control_gate([&](double t) {
+    if (stopped_at < 0.0 && t >= 1.0) {
+      stopped_at = t;
+      runner.stop();
+    }
+  });
+  runner.run_until(10.0);
+  ASSERT_GE(stopped_at, 1.0);
+  EXPECT_NEAR(sim->time_s(), stopped_at + sim->physics_dt_s(), 1e-9);
+}
+
 }  // namespace
 }  // namespace uavsim::server::sim
