@@ -132,6 +132,10 @@ class MavlinkServer {
   // bounded by timeout_s of wall time (false then, or when the server is stopping). Any thread but the I/O
   // thread; in practice the loop thread, in the control gate.
   bool flush_queued(double timeout_s = 2.0);
+  // How many times the I/O thread was asked to wake up (an eventfd write each, fewer when it is behind and
+  // one write covers several): only control steps that queued a frame, handled client input, or a flush
+  // or link change ask. For tests and benches.
+  std::uint64_t io_wakeups() const;
 
   struct Core;
 

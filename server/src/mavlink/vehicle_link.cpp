@@ -83,6 +83,7 @@ void VehicleLink::log_received(std::span<const std::uint8_t> frame) {
 
 void VehicleLink::push_frame(Link& link, std::span<const std::uint8_t> frame) {
   if (link.outbox->push(frame)) {
+    queued_ = true;
     StatCounters::add(stats_.frames_sent);
     if (tlog_) tlog_->write(now_s(), frame);
   } else {

@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "fc/flight_controller.hpp"
@@ -105,6 +106,9 @@ class VehicleLink {
   void log_received(std::span<const std::uint8_t> frame);
 
   bool has_clients() const { return !links_.empty(); }
+  // whether a frame was queued for a client since the last call: the endpoint wakes its I/O thread only
+  // then
+  bool take_queued() { return std::exchange(queued_, false); }
   const GimbalState& gimbal() const { return gimbal_; }
   bool signing() const { return signing_key_.has_value(); }
 
@@ -246,6 +250,7 @@ class VehicleLink {
   const EndpointConfig& config_;
   StatCounters& stats_;
   std::vector<Link> links_;
+  bool queued_ = false;  // a frame queued since take_queued() (loop thread only)
   GimbalState gimbal_;
   SigningKeyCell& signing_cell_;
   std::optional<SecretKey> signing_key_;

@@ -54,6 +54,38 @@ TEST_F(EndpointTest, StreamsDefaultTelemetryInSimTime) {
   EXPECT_NEAR(gp->lon / 1e7, server_->config().origin.lon_deg, 1e-4);
 }
 
+TEST_F(EndpointTest, TheIoThreadIsWokenOnlyByControlStepsThatQueuedFrames) {
+  auto g = connect();
+  step_for(0.5);
+  // default streams (1-4 Hz, ATTITUDE and a few more at 10 Hz or less): far fewer steps send a frame than
+  // the 400 control steps a second, and no wake-up goes without a frame
+  const double control_steps_per_s = 1.0 / (sim_->physics_dt_s() * sim_->control_decimation());
+  std::uint64_t w0 = server_->io_wakeups(), f0 = server_->stats(0).frames_sent;
+  step_for(5.0);
+  const std::uint64_t streaming = server_->io_wakeups() - w0;
+  EXPECT_GT(streaming, 0u);
+  EXPECT_LE(streaming, server_->stats(0).frames_sent - f0);
+  EXPECT_LT(static_cast<double>(streaming), 0.25 * 5.0 * control_steps_per_s);
+  // every stream off: only the 1 Hz heartbeat is left to send, and it still arrives
+  msg::RequestDataStream r;
+  r.target_system = 1;
+  r.req_stream_id = 0;
+  r.start_stop = 0;
+  g->send(r);
+  sync_client(*g);
+  step_for(0.5);
+  ASSERT_TRUE(server_->flush_queued());  // everything so far on the wire, and read
+  g->poll_once(50);
+  w0 = server_->io_wakeups();
+  const std::size_t heartbeats = g->count<msg::Heartbeat>();
+  step_for(3.0);
+  EXPECT_LE(server_->io_wakeups() - w0, 4u);  // 3 heartbeats (+1 for a boundary)
+  EXPECT_TRUE(wait_for([&] {
+    g->poll_once(5);
+    return g->count<msg::Heartbeat>() >= heartbeats + 3;
+  })) << "heartbeats queued without a per-step wake-up never reached the client";
+}
+
 TEST_F(EndpointTest, SysStatusReportsPrearmAndGpsHealthOnceReady) {
   auto g = connect();
   const std::uint32_t kPrearm = 0x10000000, kGps = 32;
