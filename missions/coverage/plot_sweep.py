@@ -87,7 +87,7 @@ def main():
         bottom = [b + v for b, v in zip(bottom, share)]
     ax.set_xlabel("agents")
     ax.set_ylabel("share of time [%] (the rest: Non-Leader)")
-    ax.legend(fontsize=6, loc="lower right")
+    ax.legend(fontsize=6, loc="upper right")
     ax.set_title("fig. 4.9: time in each state (%g x %g m)" % area, fontsize=9)
     fig.tight_layout()
     fig.savefig(os.path.join(png_dir, "fig4_9.png"))
