@@ -533,6 +533,7 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         if ((spot.head<2>() - p.head<2>()).norm() < 0.5) {
           land_phase_ = 2;
           descent_stopped_s_ = -1.0;
+          steady_descent_s_ = -1.0;
           out.note = "over the landing spot: descending";
         }
       } else if (land_phase_ == 2) {
@@ -556,7 +557,17 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         // the upwind leg: field seed 15 (uav0) rolled from 8 to 43 deg in 0.6 s on the ground, prop
         // into the ground. The height only bounds it loosely: the baro had drifted +1.0 m since
         // take-off there (estimated 1.12 m at rest on the ground).
-        const bool stopped = h < 2.5 && in.velocity_enu_m_s.z() > -0.2;
+        // Only a stop that ends a steady 0.5 m/s descent (a second of it) counts: one-UAV field
+        // seed 9 sank at 2.1 m/s (the controller's vertical loop gives way while braking), and its
+        // recovery passed -0.16 m/s at 2 m: disarmed there, it fell at 5.3 m/s.
+        const double vz = in.velocity_enu_m_s.z();
+        if (vz < -0.3 && vz > -0.8) {
+          if (steady_descent_s_ < 0.0) steady_descent_s_ = in.now_s;
+        } else if (vz <= -0.8) {
+          steady_descent_s_ = -1.0;
+        }
+        const bool steady = steady_descent_s_ >= 0.0 && in.now_s - steady_descent_s_ >= 1.0;
+        const bool stopped = h < 2.5 && vz > -0.2 && steady;
         if (!stopped) descent_stopped_s_ = -1.0;
         if (stopped && descent_stopped_s_ < 0.0) descent_stopped_s_ = in.now_s;
         const double stopped_s = descent_stopped_s_ < 0.0 ? -1.0 : in.now_s - descent_stopped_s_;

@@ -151,6 +151,7 @@ class VehicleFsm {
   // landing: climb, transit, descend, motors off
   int land_phase_ = 0;
   double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
+  double steady_descent_s_ = -1.0;   // since when it has been a steady ~0.5 m/s descent
 
   // the heading setpoint last sent and when (NaN: none yet), for its rate limit
   double yaw_cmd_rad_ = 0.0;
