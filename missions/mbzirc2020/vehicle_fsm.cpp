@@ -534,6 +534,7 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
           land_phase_ = 2;
           descent_stopped_s_ = -1.0;
           steady_descent_s_ = -1.0;
+          steady_descent_ = false;
           out.note = "over the landing spot: descending";
         }
       } else if (land_phase_ == 2) {
@@ -560,14 +561,19 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         // Only a stop that ends a steady 0.5 m/s descent (a second of it) counts: one-UAV field
         // seed 9 sank at 2.1 m/s (the controller's vertical loop gives way while braking), and its
         // recovery passed -0.16 m/s at 2 m: disarmed there, it fell at 5.3 m/s.
+        // The second must be unbroken: a recovery that passes through the band and overshoots
+        // upwards does not count.
         const double vz = in.velocity_enu_m_s.z();
-        if (vz < -0.3 && vz > -0.8) {
+        if (vz <= -0.8) {
+          steady_descent_s_ = -1.0;
+          steady_descent_ = false;
+        } else if (vz < -0.3) {
           if (steady_descent_s_ < 0.0) steady_descent_s_ = in.now_s;
-        } else if (vz <= -0.8) {
+          steady_descent_ = steady_descent_ || in.now_s - steady_descent_s_ >= 1.0;
+        } else if (!steady_descent_) {
           steady_descent_s_ = -1.0;
         }
-        const bool steady = steady_descent_s_ >= 0.0 && in.now_s - steady_descent_s_ >= 1.0;
-        const bool stopped = h < 2.5 && vz > -0.2 && steady;
+        const bool stopped = h < 2.5 && vz > -0.2 && steady_descent_;
         if (!stopped) descent_stopped_s_ = -1.0;
         if (stopped && descent_stopped_s_ < 0.0) descent_stopped_s_ = in.now_s;
         const double stopped_s = descent_stopped_s_ < 0.0 ? -1.0 : in.now_s - descent_stopped_s_;

@@ -152,6 +152,7 @@ class VehicleFsm {
   int land_phase_ = 0;
   double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
   double steady_descent_s_ = -1.0;   // since when it has been a steady ~0.5 m/s descent
+  bool steady_descent_ = false;      // a second of it, unbroken, since the last sink
 
   // the heading setpoint last sent and when (NaN: none yet), for its rate limit
   double yaw_cmd_rad_ = 0.0;

@@ -378,6 +378,64 @@ TEST(Mbzirc2020VehicleFsm, DescendsOnVelocityAndTurnsTheMotorsOffAtTouchdown) {
   EXPECT_EQ(fsm.state(), VehicleState::kLanded);
 }
 
+// One-UAV field seed 9: over the landing spot the vehicle sank at 2.1 m/s (the controller's
+// vertical loop gave way) and its recovery passed -0.16 m/s 2 m up; a touchdown rule that took
+// any stop below 2.5 m for the ground disarmed it there. Only a stop that ends an unbroken second
+// of the 0.5 m/s descent is a touchdown.
+TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
+  FakeVehicle v;
+  v.in.position_enu_m = {10, -27, 0};
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.in.position_enu_m = {10, -27, 2.3};  // over the spot already, in the 0.5 m/s band soon
+  v.in.on_ground = false;
+  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
+  v.in.commands = {GcsCommand::kLand};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  // climb to the transit altitude, transit (none: over the spot) and descend to 2.3 m
+  double top_z = 0.0;
+  for (int i = 0; i < 4000 && (top_z < 6.0 || v.in.position_enu_m.z() > 2.3); ++i) {
+    const Eigen::Vector3d before = v.in.position_enu_m;
+    top_z = std::max(top_z, before.z());
+    const VehicleOutputs out = fsm.step(v.in);
+    ASSERT_NE(out.action, VehicleOutputs::Action::kDisarm);
+    v.apply(out, 0.05);
+    v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
+  }
+  ASSERT_GE(top_z, 6.0);
+  ASSERT_LE(v.in.position_enu_m.z(), 2.3);
+  // the sink and its recovery (20 Hz telemetry): 2.1 m/s down, through the 0.5 m/s band for a
+  // sample, then stopped and bobbing for 1.5 s before the commanded descent resumes
+  std::vector<double> vz_m_s = {-2.1, -2.1, -1.4, -0.5, -0.16};
+  for (int i = 0; i < 30; ++i) vz_m_s.push_back(i % 2 == 0 ? 0.05 : -0.12);
+  for (double vz : vz_m_s) {
+    v.in.velocity_enu_m_s.z() = vz;
+    v.in.position_enu_m.z() += vz * 0.05;
+    v.in.now_s += 0.05;
+    const VehicleOutputs o = fsm.step(v.in);
+    EXPECT_NE(o.action, VehicleOutputs::Action::kDisarm) << "vz " << vz;
+  }
+  // an unbroken second and more at 0.5 m/s, then the gear meets the ground: that is a touchdown
+  bool disarm = false;
+  for (int i = 0; i < 25 && !disarm; ++i) {
+    v.in.velocity_enu_m_s.z() = -0.5;
+    v.in.position_enu_m.z() -= 0.025;
+    v.in.now_s += 0.05;
+    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kDisarm;
+  }
+  EXPECT_FALSE(disarm);
+  for (int i = 0; i < 3 && !disarm; ++i) {
+    v.in.velocity_enu_m_s.z() = 0.0;
+    v.in.now_s += 0.05;
+    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kDisarm;
+  }
+  EXPECT_TRUE(disarm);
+}
+
 TEST(Mbzirc2020VehicleFsm, DisarmedInTheAirIsFailedAndGcsLandWorksFromAnyState) {
   const MissionConfig config;
   VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
