@@ -57,6 +57,10 @@ struct MissionConfig {
   // the balloon
   double pierce_coast_s = 3.0;
   double pierce_overshoot_m = 1.0;  // blades this far past the balloon's centre: done
+  // from the blades this far before the balloon's centre (its near side), climb this fast on top
+  // of the height hold, so that the hull clears the pole behind the balloon
+  double pierce_exit_climb_from_m = 0.35;
+  double pierce_exit_climb_m_s = 0.8;
   double pierce_timeout_s = 40.0;
   // back off: within this horizontal range of the balloon, climb to this far above its centre (as
   // seen) before moving back over its pole

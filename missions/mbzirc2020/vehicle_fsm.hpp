@@ -143,6 +143,7 @@ class VehicleFsm {
   bool airspace_held_ = false;
   Eigen::Vector3d pierce_start_enu_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector2d coast_dir_ = Eigen::Vector2d::UnitY();
+  Eigen::Vector2d pierce_dir_ = Eigen::Vector2d::UnitY();  // towards the target at the start
   double closest_blade_m_ = 1e9;
   bool pierce_reached_ = false;
   bool pierce_level_camera_ = false;

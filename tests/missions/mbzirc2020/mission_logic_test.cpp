@@ -409,9 +409,10 @@ TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
   ASSERT_GE(top_z, 6.0);
   ASSERT_LE(v.in.position_enu_m.z(), 2.3);
   // the sink and its recovery (20 Hz telemetry): 2.1 m/s down, through the 0.5 m/s band for a
-  // sample, then stopped and bobbing for 1.5 s before the commanded descent resumes
+  // sample, then bobbing about a stop for 1.5 s before the commanded descent resumes (never
+  // stopped for a second: that would be the ground)
   std::vector<double> vz_m_s = {-2.1, -2.1, -1.4, -0.5, -0.16};
-  for (int i = 0; i < 30; ++i) vz_m_s.push_back(i % 2 == 0 ? 0.05 : -0.12);
+  for (int i = 0; i < 30; ++i) vz_m_s.push_back(i % 3 == 0 ? 0.05 : i % 3 == 1 ? -0.1 : -0.25);
   for (double vz : vz_m_s) {
     v.in.velocity_enu_m_s.z() = vz;
     v.in.position_enu_m.z() += vz * 0.05;
