@@ -66,6 +66,9 @@ struct MissionConfig {
   // seen) before moving back over its pole
   double backoff_pole_clearance_m = 2.5;
   double backoff_above_centre_m = 0.6;
+  // and back over the arena this high: the poles' tops are 0.28 m under their balloons' centres,
+  // 2.4 +- 0.5 m in the field; the scan line (which no pole stands on) is then met from above
+  double backoff_altitude_m = 3.6;
   // re-tasking (vehicle_fsm.hpp): the line the other half is scanned from lies this far back from
   // the arena's middle, in the UAV's own (scanned) half, at an altitude over every balloon; from
   // there, 5 deg down, the camera sees balloons 9-40 m ahead (the detector's 4 px radius at 40 m)

@@ -508,7 +508,11 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       // near the pole, first climb in place to clear its top (0.28 m under the balloon's centre as
       // the camera saw it: relative, so the estimator's height bias cancels), then go back over it;
       // the scan altitude is a height in the estimator's frame and may lie a metre lower in truth
+      // Back over the arena above every pole: the scan line has none, but the way back to it may
+      // cross the pole of a balloon popped earlier (one-UAV field seed 12: back from its second
+      // balloon at the low leg's height, a propeller met the pole of the first, 12 m behind it).
       Eigen::Vector3d goal = pierce_start_enu_m_;
+      goal.z() = std::max(goal.z(), config_.backoff_altitude_m);
       if (to_b.norm() < config_.backoff_pole_clearance_m) {
         const double clear_z = b.z() + config_.backoff_above_centre_m;
         goal.z() = std::max(goal.z(), clear_z);

@@ -246,12 +246,19 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   // backing off, the camera looks back: the balloon is gone, so it counts as popped
   v.in.balloons.clear();
   bool released = false, reported = false;
+  double min_z_away = 1e9;  // on the way back, beyond the climb in place at the balloon
   for (int i = 0; i < 2000 && fsm.state() == VehicleState::kBackOff; ++i) {
     out = fsm.step(v.in);
     released = released || (out.airspace && !*out.airspace);
     reported = reported || out.popped_enu_m.has_value();
     v.apply(out, dt);
+    const double range = (balloon.head<2>() - v.in.position_enu_m.head<2>()).norm();
+    if (range > 4.0 && range < 8.0) min_z_away = std::min(min_z_away, v.in.position_enu_m.z());
   }
+  // back over the arena above any pole (tops 0.28 m under balloon centres of 2.2-3.2 m), not at
+  // the low scan leg's 2.8 m
+  ASSERT_LT(min_z_away, 100.0);  // it flew that stretch
+  EXPECT_GT(min_z_away, 3.2 + config.rest_height_m);
   EXPECT_TRUE(released);  // NaN once back on the scan line
   EXPECT_TRUE(reported);
   EXPECT_EQ(fsm.popped(), 1);
