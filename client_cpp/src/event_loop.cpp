@@ -24,6 +24,7 @@
 
 #include "event_loop_impl.hpp"
 #include "net.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::client {
 
@@ -60,17 +61,20 @@ LoopConfig LoopConfig::from_env() {
   if (env == nullptr || *env == '\0') return c;
   std::string spec = env;
   double period = c.lockstep_period_s;
+  // a period or port that is not a whole number in range leaves the port invalid: create() reports it
+  bool ok = true;
   if (const auto slash = spec.find('/'); slash != std::string::npos) {
-    period = std::strtod(spec.c_str() + slash + 1, nullptr);
+    ok = common::parse_double(spec.c_str() + slash + 1, 1e-4, 10.0, &period);
     spec.resize(slash);
   }
   const auto colon = spec.rfind(':');
-  if (colon == std::string::npos) {
+  int port = -1;
+  if (colon == std::string::npos || !ok || !common::parse_integer(spec.c_str() + colon + 1, 1, 65535, &port)) {
     c.clock = Clock::kLockstep;
     c.lockstep_port = -1;  // reported by create()
     return c;
   }
-  c = lockstep(spec.substr(0, colon), std::atoi(spec.c_str() + colon + 1), period > 0 ? period : 0.01);
+  c = lockstep(spec.substr(0, colon), port, period);
   return c;
 }
 

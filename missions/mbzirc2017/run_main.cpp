@@ -30,6 +30,7 @@
 
 #include "uavsim/client/sim_connection.hpp"
 #include "uavsim/launch/launcher.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace {
 
@@ -100,13 +101,8 @@ Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV prog
   return 2;
 }
 
-bool parse_double(const char* s, double lo, double hi, double* out) {
-  char* end = nullptr;
-  const double v = std::strtod(s, &end);
-  if (end == s || *end != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
+using uavsim::common::parse_double;
+using uavsim::common::parse_integer;
 
 // The world with the truck's first speed replaced, written beside the temporary files (its include
 // made absolute). Empty on failure.
@@ -165,9 +161,7 @@ int main(int argc, char** argv) {
     } else if ((v = next()) == nullptr) {
       return usage();
     } else if (a == "--seed") {
-      char* end = nullptr;
-      o.seed = std::strtoull(v, &end, 10);
-      if (end == v || *end != '\0') return usage();
+      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
     } else if (a == "--truck-speed-kmh") {
       if (!parse_double(v, 0.0, kMaxKmh, &o.truck_speed_kmh)) return usage();
     } else if (a == "--phase") {

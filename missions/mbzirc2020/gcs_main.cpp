@@ -15,6 +15,7 @@
 #include "messages.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::mbzirc2020;
@@ -24,16 +25,18 @@ int main(int argc, char** argv) {
   double max_time_s = 3600.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
+    bool ok = true;
     if (a == "--uavs")
-      uav_count = std::atoi(argv[i + 1]);
+      ok = uavsim::common::parse_integer(argv[i + 1], 1, 254, &uav_count);
     else if (a == "--max-time")
-      max_time_s = std::atof(argv[i + 1]);
-    else {
+      ok = uavsim::common::parse_double(argv[i + 1], 1.0, 1e6, &max_time_s);
+    else
+      ok = false;
+    if (!ok) {
       std::fprintf(stderr, "usage: mbzirc2020-gcs [--uavs N] [--max-time S]\n");
       return 2;
     }
   }
-  if (uav_count < 1 || uav_count > 254) return 2;
 
   // a link per UAV, each learning its UAV's address from the first packet (the UAVs call the GCS)
   std::string error;

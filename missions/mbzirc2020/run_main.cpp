@@ -21,6 +21,7 @@
 
 #include "uavsim/client/sim_connection.hpp"
 #include "uavsim/launch/launcher.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace {
 
@@ -51,6 +52,9 @@ struct Options {
   bool quiet = false;
   std::string server, uav, gcs;
 };
+
+using uavsim::common::parse_double;
+using uavsim::common::parse_integer;
 
 int usage() {
   std::fprintf(stderr, R"(usage: mbzirc2020-run [options]
@@ -96,6 +100,7 @@ int main(int argc, char** argv) {
     const std::string a = argv[i];
     auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
     const char* v = nullptr;
+    bool ok = true;  // a number's text was whole and in range
     if (a == "--no-record")
       record = false;
     else if (a == "--no-run-dir")
@@ -106,22 +111,23 @@ int main(int argc, char** argv) {
       return usage();
     else if ((v = next()) == nullptr)
       return usage();
-    else if (a == "--seed")
-      o.seed = std::strtoull(v, nullptr, 10);
+    else if (a == "--seed") {
+      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
+    }
     else if (a == "--world")
       o.world = v;
     else if (a == "--record")
       o.record = v;
     else if (a == "--budget")
-      o.budget_s = std::atof(v);
+      ok = parse_double(v, 1.0, 36000.0, &o.budget_s);
     else if (a == "--wall-limit")
-      o.wall_limit_s = std::atof(v);
+      ok = parse_double(v, 1.0, 1e6, &o.wall_limit_s);
     else if (a == "--kill")
       o.kill = v;
     else if (a == "--gcs-loss")
-      o.gcs_loss = std::atof(v);
+      ok = parse_double(v, 0.0, 1.0, &o.gcs_loss);
     else if (a == "--gcs-latency")
-      o.gcs_latency_s = std::atof(v);
+      ok = parse_double(v, 0.0, 60.0, &o.gcs_latency_s);
     else if (a == "--json")
       o.json_path = v;
     else if (a == "--run-dir")
@@ -131,7 +137,7 @@ int main(int argc, char** argv) {
     else if (a == "--record-layout")
       o.record_layout = v;
     else if (a == "--truth-hz")
-      o.truth_hz = std::atof(v);
+      ok = parse_double(v, 0.01, 1000.0, &o.truth_hz);
     else if (a == "--events")
       o.events_path = v;
     else if (a == "--realism")
@@ -141,7 +147,7 @@ int main(int argc, char** argv) {
     else if (a == "--camera-size")
       o.camera_size = v;
     else if (a == "--camera-fps")
-      o.camera_fps = std::atof(v);
+      ok = parse_double(v, 0.1, 1000.0, &o.camera_fps);
     else if (a == "--server")
       o.server = v;
     else if (a == "--uav")
@@ -150,8 +156,8 @@ int main(int argc, char** argv) {
       o.gcs = v;
     else
       return usage();
+    if (!ok) return usage();
   }
-  if (!(o.gcs_loss >= 0.0 && o.gcs_loss <= 1.0) || !(o.gcs_latency_s >= 0.0)) return usage();
   if (const auto files = uavsim::launch::resolve_run_files("mbzirc2020", o.seed, o.run_dir, o.record,
                                                            o.json_path, record);
       !files) {

@@ -22,6 +22,7 @@
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/common/parse_number.hpp"
 #include "uavsim/vision/video_log.hpp"
 #include "vehicle_fsm.hpp"
 
@@ -49,8 +50,9 @@ int main(int argc, char** argv) {
   std::string mavlink, gcs, camera, vehicle, video_log;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
-    if (a == "--index")
-      index = std::atoi(argv[i + 1]);
+    if (a == "--index") {
+      if (!uavsim::common::parse_integer(argv[i + 1], 0, 1, &index)) return usage();
+    }
     else if (a == "--mavlink")
       mavlink = argv[i + 1];
     else if (a == "--gcs")
@@ -64,8 +66,10 @@ int main(int argc, char** argv) {
     else
       return usage();
   }
-  if (index < 0 || index > 1 || mavlink.empty() || gcs.empty() ||
-      gcs.find(':') == std::string::npos)
+  int gcs_port = 0;
+  const size_t colon = gcs.rfind(':');
+  if (index < 0 || mavlink.empty() || colon == std::string::npos ||
+      !uavsim::common::parse_integer(gcs.c_str() + colon + 1, 1, 65535, &gcs_port))
     return usage();
   if (vehicle.empty()) vehicle = "uav" + std::to_string(index);
   if (camera.empty()) camera = vehicle + "_front";
@@ -93,10 +97,8 @@ int main(int argc, char** argv) {
 
   // the ground-station link (seed 6.3)
   std::string error;
-  const size_t colon = gcs.rfind(':');
   auto link = GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
-                            {"127.0.0.1", 0, gcs.substr(0, colon),
-                             static_cast<uint16_t>(std::atoi(gcs.c_str() + colon + 1))},
+                            {"127.0.0.1", 0, gcs.substr(0, colon), static_cast<uint16_t>(gcs_port)},
                             &error);
   if (!link) {
     log("GCS link: " + error);
