@@ -35,6 +35,7 @@
 #include "station_link.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::coverage;
@@ -77,21 +78,13 @@ bool parse_pair(const char* s, char sep, double* a, double* b) {
   return e != s2 && *e == '\0' && std::isfinite(*a) && std::isfinite(*b);
 }
 
-bool parse_int(const char* s, long lo, long hi, int* out) {
-  char* e = nullptr;
-  const long v = std::strtol(s, &e, 10);
-  if (e == s || *e != '\0' || v < lo || v > hi) return false;
-  *out = static_cast<int>(v);
-  return true;
-}
-
 // "P,P,..." into ports; false if any is not a port number
 bool parse_ports(const char* v, std::vector<int>* ports) {
   for (const char* p = v; *p;) {
     const char* comma = std::strchr(p, ',');
     const std::string one = comma ? std::string(p, comma) : std::string(p);
     int port = 0;
-    if (!parse_int(one.c_str(), 1, 65535, &port)) return false;
+    if (!uavsim::common::parse_integer(one.c_str(), 1, 65535, &port)) return false;
     ports->push_back(port);
     p = comma ? comma + 1 : p + one.size();
   }
@@ -140,14 +133,14 @@ int main(int argc, char** argv) {
     const char* v = argv[++i];
     double x = 0, y = 0;
     if (a == "--vehicle") {
-      if (!parse_int(v, 0, kMaxAgents - 1, &first)) return usage();
+      if (!uavsim::common::parse_integer(v, 0, kMaxAgents - 1, &first)) return usage();
       last = first;
     } else if (a == "--vehicles") {
       const char* dash = std::strchr(v, '-');
       if (dash == nullptr) return usage();
       const std::string lo(v, dash);
-      if (!parse_int(lo.c_str(), 0, kMaxAgents - 1, &first) ||
-          !parse_int(dash + 1, 0, kMaxAgents - 1, &last) || last < first)
+      if (!uavsim::common::parse_integer(lo.c_str(), 0, kMaxAgents - 1, &first) ||
+          !uavsim::common::parse_integer(dash + 1, 0, kMaxAgents - 1, &last) || last < first)
         return usage();
     } else if (a == "--area") {
       if (!parse_pair(v, 'x', &x, &y)) return usage();
@@ -167,7 +160,7 @@ int main(int argc, char** argv) {
     } else if (a == "--mavlink-host") {
       host = v;
     } else if (a == "--mavlink-base-port") {
-      if (!parse_int(v, 1, 65535, &base_port)) return usage();
+      if (!uavsim::common::parse_integer(v, 1, 65535, &base_port)) return usage();
     } else if (a == "--mavlink-ports") {
       if (!parse_ports(v, &ports)) return usage();
     } else if (a == "--gcs-ports") {
