@@ -66,7 +66,7 @@ TEST(ExternalProject, BuildsAgainstTheInstalledPackageAndFlies) {
                       " " + q + UAVSIM_SOURCE_DIR +
                       "/client_cpp/examples/external_project/hop.cpp" + q +
                       " $(PKG_CONFIG_PATH=" + q + (staging / "lib/pkgconfig").string() + q +
-                      " pkg-config --cflags --libs uavsim-client)",
+                      " pkg-config --cflags --libs uavsim-client) " + UAVSIM_EXTRA_LINK_FLAGS,
                   log))
       << read_file(log);
 
