@@ -13,6 +13,9 @@ using uavsim::testing::FdExhaustion;
 // listener readable and the I/O thread spinning; it is accepted on the spare descriptor and closed at once
 // (the peer reads the end of the stream), and clients connect as before once descriptors are free.
 TEST_F(EndpointTest, AConnectionWithNoDescriptorLeftIsClosedNotSpunOn) {
+  // the I/O thread is running (a ground station accepted) before the process runs out: under UBSan
+  // the vptr check of a thread's first call probes memory through a pipe, which needs descriptors
+  const auto first = connect();
   // the client's socket exists before the process runs out
   const int client = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   ASSERT_GE(client, 0);
@@ -32,12 +35,12 @@ TEST_F(EndpointTest, AConnectionWithNoDescriptorLeftIsClosedNotSpunOn) {
     EXPECT_LE(recv(client, &byte, 1, 0), 0);
   }
   close(client);
-  EXPECT_EQ(server_->stats(0).clients_accepted, 0u);
+  EXPECT_EQ(server_->stats(0).clients_accepted, 1u);
   EXPECT_EQ(server_->stats(0).fd_exhausted_accepts, 1u);
 
   // descriptors are back: a ground station connects and is answered (31000: no such command)
   auto g = connect();
-  EXPECT_EQ(server_->client_count(0), 1u);
+  EXPECT_EQ(server_->client_count(0), 2u);  // the first one and this
   EXPECT_EQ(command(*g, 31000), 3);  // MAV_RESULT_UNSUPPORTED
 }
 
