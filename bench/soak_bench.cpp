@@ -42,6 +42,7 @@
 #include "uavsim/common/mavlink/codec.hpp"
 #include "uavsim/common/mavlink/parser.hpp"
 #include "uavsim/common/mavlink/generated/messages.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 #ifndef UAVSIM_SERVER_BIN
 #define UAVSIM_SERVER_BIN "uavsim-server"
@@ -369,21 +370,51 @@ Json vehicles(ApiClient& api) {
 
 }  // namespace
 
+constexpr const char* kUsage =
+    "usage: soak_bench [--sim-s S] [--max-wall-s W] [--port-base P] [--server PATH] [--world W]\n"
+    "  --sim-s S        sim seconds of churn (default 1800)\n"
+    "  --max-wall-s W   wall-time limit of the churn (default 3600)\n"
+    "  --port-base P    MAVLink port of vehicle 0 (default 46000; the API listens on P - 10)\n"
+    "  --server PATH    the uavsim-server binary (default: the one built beside this bench)\n"
+    "  --world W        the world (default grid100; it must have 100 vehicles)\n";
+
+// the wall time since the start, for the phase lines (a hang shows as the phase it is stuck in)
+void phase(Clock::time_point wall0, const char* what) {
+  std::printf("[wall %6.0f s] %s\n", since_s(wall0), what);
+  std::fflush(stdout);
+}
+
+// "" while the server runs, else how it ended (the soak is over then: nothing left to check)
+std::string server_ended(pid_t pid) {
+  int status = 0;
+  if (waitpid(pid, &status, WNOHANG) != pid) return "";
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+  return "exited with status " + std::to_string(WEXITSTATUS(status));
+}
+
 int run(int argc, char** argv, pid_t* child) {
   double sim_s = 1800, max_wall_s = 3600;
   int port_base = 46000;
   std::string server = UAVSIM_SERVER_BIN, world = "grid100";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--sim-s") sim_s = std::stod(v);
-    else if (a == "--max-wall-s") max_wall_s = std::stod(v);
-    else if (a == "--port-base") port_base = std::stoi(v);
-    else if (a == "--server") server = v;
-    else if (a == "--world") world = v;
-    else {
-      std::fprintf(stderr, "soak_bench: unknown option %s\n", a.c_str());
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
+    bool ok = v != nullptr;
+    if (ok && a == "--sim-s") ok = uavsim::common::parse_double(v, 1.0, 1e6, &sim_s);
+    else if (ok && a == "--max-wall-s") ok = uavsim::common::parse_double(v, 1.0, 1e6, &max_wall_s);
+    else if (ok && a == "--port-base") ok = uavsim::common::parse_integer(v, 1034, 64535 - 10 * kVehicles, &port_base);
+    else if (ok && a == "--server") server = v;
+    else if (ok && a == "--world") world = v;
+    else ok = false;
+    if (!ok) {
+      std::fprintf(stderr, "soak_bench: bad option or value at '%s'\n%s", a.c_str(), kUsage);
       return 2;
     }
+    ++i;
   }
   const int api_port = port_base - 10;
   signal(SIGPIPE, SIG_IGN);
@@ -453,11 +484,19 @@ int run(int argc, char** argv, pid_t* child) {
   // progress: every 1/60 of the sim time asked for, and at least once a wall minute
   double next_print_s = 0, next_print_wall_s = 0;
   int monitor_failures = 0;
+  std::string churn_end = "the wall-time limit";
   while (since_s(wall0) < max_wall_s) {
     std::this_thread::sleep_for(std::chrono::seconds(2));
+    if (const std::string ended = server_ended(pid); !ended.empty()) {
+      churn_end = "the server " + ended;
+      break;
+    }
     const Sample s = sample();
     if (s.sim_s < 0) {  // no status reply: give up after a few in a row (reported below)
-      if (++monitor_failures >= 5) break;
+      if (++monitor_failures >= 5) {
+        churn_end = "the server's API not answering status (5 times in a row)";
+        break;
+      }
       continue;
     }
     monitor_failures = 0;
@@ -472,15 +511,28 @@ int run(int argc, char** argv, pid_t* child) {
       while (next_print_s <= s.sim_s) next_print_s += sim_s / 60;
       next_print_wall_s = s.wall_s + 60;
     }
-    if (s.sim_s >= sim_s) break;
+    if (s.sim_s >= sim_s) {
+      churn_end = "the sim time asked for";
+      break;
+    }
   }
+  phase(wall0, ("churn ended at " + churn_end + "; stopping the client threads").c_str());
   stop = true;
   for (auto& t : churn) t.join();
   std::this_thread::sleep_for(std::chrono::seconds(1));
   const Sample after_churn = sample();
   const bool reached = after_churn.sim_s >= sim_s;
+  // a dead or mute server leaves nothing to check: say so now instead of waiting out every bounded wait
+  if (const std::string ended = server_ended(pid); !ended.empty() || after_churn.sim_s < 0) {
+    std::printf("FAIL: the server %s after %.0f s of wall time (its log: /tmp/uavsim_soak_server.log)\n",
+                ended.empty() ? "stopped answering the API" : ended.c_str(), since_s(wall0));
+    kill(pid, SIGKILL);
+    waitpid(pid, nullptr, 0);
+    return 1;
+  }
 
   // every vehicle back on the ground: LAND for any still armed, then wait (bounded) until all are disarmed
+  phase(wall0, "landing the vehicles still armed");
   Json vs = vehicles(*monitor);
   for (const Json& v : vs) {
     if (!v["armed"].get<bool>()) continue;
@@ -497,11 +549,17 @@ int run(int argc, char** argv, pid_t* child) {
   } while (armed > 0 && since_s(land0) < 120);
 
   // every vehicle controllable: GUIDED, arm and take off to 5 m accepted, and it climbs past 2 m
+  phase(wall0, "final check: GUIDED, arm and take off on every vehicle");
   const double check_sim0 = sim_time();
   std::vector<std::unique_ptr<MavClient>> gcs;
   int accepted = 0;
   std::map<std::string, int> refusals;
+  int silent_in_a_row = 0;  // vehicles that acknowledged nothing, one after the other
   for (int v = 0; v < kVehicles; ++v) {
+    if (silent_in_a_row >= 5) {  // the endpoint is mute: 10 s a vehicle would only delay the verdict
+      refusals["not tried: 5 vehicles in a row acknowledged nothing"] = kVehicles - v;
+      break;
+    }
     auto c = std::make_unique<MavClient>(port_base + 10 * v);
     mav::msg::Heartbeat hb;
     hb.type = 6;
@@ -512,6 +570,7 @@ int run(int argc, char** argv, pid_t* child) {
     const auto a = c->acks(3, 10.0);
     const bool ok = a.size() == 3 && std::all_of(a.begin(), a.end(), [](const auto& kv) { return kv.second == 0; });
     accepted += ok ? 1 : 0;
+    silent_in_a_row = a.empty() ? silent_in_a_row + 1 : 0;
     if (!ok) {
       std::ostringstream why;
       for (const auto& [cmd, result] : a) why << cmd << "=" << result << " ";
@@ -519,6 +578,7 @@ int run(int argc, char** argv, pid_t* child) {
     }
     gcs.push_back(std::move(c));
   }
+  phase(wall0, "final check: waiting for every vehicle to climb past 2 m");
   const auto climb0 = Clock::now();
   int climbed = 0;
   do {
