@@ -9,7 +9,10 @@ packages=(
   libmujoco-dev libqhull-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev llvm python3 ffmpeg ccache python3-matplotlib
+  libegl-dev libegl-mesa0 libgl1-mesa-dri
 )
+# EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
+# libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
 # clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm), which turns
 # sanitizer reports into file:line, are only recommended by clang: named here for --no-install-recommends
 # node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)

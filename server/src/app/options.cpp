@@ -83,6 +83,10 @@ cameras and logs:
                       width, height, fps, fovy, shadows, reflections, skybox, msaa; field conditions:
                       noise (pixel sd), brightness (gain sd), latency_ms (docs/protocol.md)
   --no-cameras        no offscreen renderer (the camera ops answer not_available)
+  --gl B              how cameras get OpenGL: osmesa (the default: Mesa's off-screen software
+                      renderer), egl (EGL without a display: a GPU where there is one, else Mesa's
+                      llvmpipe through the surfaceless platform) or auto (egl if it creates a
+                      context, else osmesa); the start-up log says which one renders
   --record FILE.mp4   write a video of the run from the world camera "overview" (else the first world
                       camera, else the first camera), 15 frames per second of sim time; in real time
                       it drops frames rather than slow physics, at --rate 0 it keeps every frame
@@ -433,6 +437,12 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {
       o.cameras = false;
+    } else if (a == "--gl") {
+      if ((ok = value(&v))) {
+        ok = v == "egl" || v == "osmesa" || v == "auto";
+        if (!ok) why = "--gl needs egl, osmesa or auto, got '" + v + "'";
+        o.gl_backend = v;
+      }
     } else if (a == "--record") {
       if ((ok = value(&v))) o.record_path = v;
     } else if (a == "--record-fps") {

@@ -81,6 +81,7 @@ struct Options {
   std::optional<std::string> realism;         // --realism field|ideal: over the world's uavsim:realism
   std::optional<WindOption> wind;             // --wind: over the realism level's and the world's wind
   bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
+  std::string gl_backend = "osmesa";          // --gl egl|osmesa|auto (render::make_gl_context)
   std::optional<std::string> record_path;     // --record out.mp4
   double record_fps = 15.0;
   int record_width = 640;

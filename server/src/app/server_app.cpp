@@ -338,7 +338,12 @@ int run_server(const Options& given_options) {
       try {
         render::FrameServiceOptions frame_options;
         frame_options.seed = options.seed;
+        frame_options.backend = options.gl_backend;
         frames = std::make_unique<render::FrameService>(s.world().model(), cameras, frame_options);
+        if (!options.quiet) {
+          std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered with " << frames->gl_summary()
+                    << "\n";
+        }
       } catch (const std::exception& e) {
         if (options.record_path) {
           std::cerr << "uavsim-server: --record: " << e.what() << "\n";

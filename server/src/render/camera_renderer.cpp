@@ -70,6 +70,7 @@ CameraIntrinsics pinhole_intrinsics(int width_px, int height_px, double fovy_deg
 struct CameraRenderer::Impl {
   const mjModel* m = nullptr;
   std::unique_ptr<GlContext> gl;
+  std::string gl_summary;
   std::thread::id thread;
   std::vector<CameraSlot> cameras;
   std::vector<std::unique_ptr<MjrSlot>> mjr;
@@ -151,8 +152,11 @@ CameraRenderer::CameraRenderer(const mjModel* m, std::vector<CameraConfig> camer
   }
 
   // GL context, then one MuJoCo render context per MSAA sample count in use
-  s.gl = make_gl_context(options.backend);
+  std::string fallback_reason;
+  s.gl = make_gl_context(options.backend, &fallback_reason);
   s.make_current();
+  s.gl_summary = std::string(s.gl->name()) + " (" + s.gl->detail() + ")";
+  if (!fallback_reason.empty()) s.gl_summary += "; auto: EGL unavailable: " + fallback_reason;
   for (CameraSlot& cam : s.cameras)
     cam.mjr = s.mjr_for_samples(std::max(0, cam.config.flags.msaa_samples));
 
@@ -198,6 +202,10 @@ std::optional<int> CameraRenderer::find(std::string_view camera_name) const {
   }
   return std::nullopt;
 }
+
+std::string_view CameraRenderer::gl_backend() const { return impl_->gl->name(); }
+
+const std::string& CameraRenderer::gl_summary() const { return impl_->gl_summary; }
 
 CameraIntrinsics CameraRenderer::intrinsics(int index) const {
   const CameraSlot& cam = impl_->cameras.at(index);

@@ -90,13 +90,14 @@ struct OffscreenSize {
 OffscreenSize required_offscreen_size(const std::vector<CameraConfig>& cameras);
 
 struct RendererOptions {
-  std::string backend = "osmesa";  // see make_gl_context
+  std::string backend = "osmesa";  // "osmesa", "egl" or "auto": see make_gl_context
 };
 
 class CameraRenderer {
  public:
   // Creates a GL context on the calling thread, which becomes this renderer's thread, and uploads
-  // the model's meshes and textures. The model must outlive the renderer. Throws
+  // the model's meshes and textures. Renderers on several threads must be constructed one at a
+  // time: MuJoCo loads its GL entry points at the first one, unguarded. The model must outlive the renderer. Throws
   // std::invalid_argument for a camera the model does not have, a camera whose size exceeds the
   // model's offscreen buffer (the message names the camera and the offwidth/offheight needed), or a
   // non-positive size, fps or fovy; std::runtime_error if the GL context cannot be created.
@@ -117,6 +118,12 @@ class CameraRenderer {
   std::optional<int> find(std::string_view camera_name) const;
   // Intrinsics of camera `index` (with its fovy override applied). Thread-safe.
   CameraIntrinsics intrinsics(int index) const;
+
+  // The GL backend that renders ("osmesa", "egl"). Thread-safe.
+  std::string_view gl_backend() const;
+  // For the startup log: the backend, what renders (platform, GL renderer and version) and, where
+  // "auto" fell back to OSMesa, why EGL did not work. Thread-safe.
+  const std::string& gl_summary() const;
 
   // Whether camera `index` is due for a frame at d->time: frames fall on the grid k * period_us,
   // and a camera is due once sim time reaches the first grid point after its last frame (the first

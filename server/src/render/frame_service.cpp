@@ -160,6 +160,7 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
       RendererOptions ro;
       ro.backend = backend;
       rs_->renderer = std::make_unique<CameraRenderer>(rs_->m, std::move(configs), ro);
+      gl_summary_ = rs_->renderer->gl_summary();
     } catch (...) {
       rs_.reset();
       p.set_exception(std::current_exception());

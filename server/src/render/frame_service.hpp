@@ -101,7 +101,7 @@ class FrameConsumer {
 struct FrameServiceOptions {
   size_t queue_depth = 4;            // snapshots waiting for the renderer; beyond: frames are dropped
   uint64_t seed = 1;                 // camera noise (field conditions)
-  std::string backend = "osmesa";    // make_gl_context
+  std::string backend = "osmesa";    // make_gl_context: "osmesa", "egl" or "auto"
 };
 
 struct FrameServiceStats {
@@ -144,6 +144,9 @@ class FrameService {
   void wait_delivered();
 
   FrameServiceStats stats() const;
+
+  // The GL backend and renderer, for the startup log (CameraRenderer::gl_summary). Thread-safe.
+  const std::string& gl_summary() const { return gl_summary_; }
 
  private:
   struct Job {
@@ -196,6 +199,7 @@ class FrameService {
   bool stop_ = false;
   FrameServiceStats stats_;
   std::string start_error_;
+  std::string gl_summary_;  // written by the render thread before the constructor returns
   bool started_ = false;
   std::thread thread_;
   struct RenderState;

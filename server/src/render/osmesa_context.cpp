@@ -3,6 +3,7 @@
 #include <GL/osmesa.h>
 
 #include <stdexcept>
+#include <string>
 
 namespace uavsim::server::render {
 
@@ -35,6 +36,20 @@ void OsmesaContext::release() {
   if (OSMesaGetCurrentContext() == static_cast<OSMesaContext>(context_)) {
     OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
   }
+}
+
+std::string OsmesaContext::detail() const {
+  // through OSMesa's own lookup: a plain glGetString call could bind to libGL's, which knows
+  // nothing of OSMesa's context
+  if (OSMesaGetCurrentContext() != static_cast<OSMesaContext>(context_)) return "software";
+  using GetString = const GLubyte* (*)(GLenum);
+  auto get_string = reinterpret_cast<GetString>(OSMesaGetProcAddress("glGetString"));
+  const GLubyte* renderer = get_string ? get_string(GL_RENDERER) : nullptr;
+  const GLubyte* version = get_string ? get_string(GL_VERSION) : nullptr;
+  std::string text = "software";
+  if (renderer) text += std::string(", ") + reinterpret_cast<const char*>(renderer);
+  if (version) text += std::string(", OpenGL ") + reinterpret_cast<const char*>(version);
+  return text;
 }
 
 }  // namespace uavsim::server::render

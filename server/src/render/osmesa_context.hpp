@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "render/gl_context.hpp"
@@ -20,6 +21,7 @@ class OsmesaContext final : public GlContext {
   bool make_current() override;
   void release() override;
   std::string_view name() const override { return "osmesa"; }
+  std::string detail() const override;
 
  private:
   void* context_ = nullptr;  // OSMesaContext

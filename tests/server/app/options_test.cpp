@@ -44,6 +44,7 @@ TEST(Options, DefaultsAreSitlLike) {
   EXPECT_FALSE(r.options->udp_outs_explicit);
   EXPECT_FALSE(r.options->mavlink_key);
   EXPECT_EQ(r.options->wait_for_clients, 0);
+  EXPECT_EQ(r.options->gl_backend, "osmesa");
 }
 
 TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
@@ -57,6 +58,7 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"w.xml", "--wait-for-clients", "-3"}, {"--wait-for-clients"});
   expect_refused({"w.xml", "--record-size", "640x"}, {"--record-size"});
   expect_refused({"w.xml", "--record-layout", "mosaic"}, {"--record-layout", "single or tiled"});
+  expect_refused({"w.xml", "--gl", "vulkan"}, {"--gl", "egl, osmesa or auto", "'vulkan'"});
   expect_refused({"w.xml", "--rate"}, {"--rate needs a value"});
   expect_refused({"w.xml", "--bogus"}, {"unknown option --bogus"});
   expect_refused({}, {"no world given"});
@@ -82,6 +84,7 @@ TEST(Options, ValidFlagsSetTheirFields) {
                                "0",           "--record-layout",
                                "tiled",       "--record-camera",
                                "follow:uav1", "--no-cameras",
+                               "--gl",        "auto",
                                "--quiet"});
   ASSERT_TRUE(r.options) << r.error;
   const Options& o = *r.options;
@@ -108,6 +111,7 @@ TEST(Options, ValidFlagsSetTheirFields) {
   EXPECT_TRUE(o.record_tiled);
   EXPECT_EQ(o.record_camera, "follow:uav1");
   EXPECT_FALSE(o.cameras);
+  EXPECT_EQ(o.gl_backend, "auto");
   EXPECT_TRUE(o.quiet);
   // --fast is --rate 0; a wind without gust leaves the turbulence to the realism level
   const ParseResult fast = parse({"w.xml", "--fast", "--wind", "3,90"});

@@ -11,6 +11,8 @@
 #include <string>
 #include <thread>
 
+#include "pixel_blob.hpp"
+
 namespace uavsim::server::render {
 namespace {
 
@@ -64,38 +66,12 @@ ModelPtr load_model(const std::string& xml, const std::string& file_name) {
   return m;
 }
 
+using testing::Blob;
+using testing::project;
+
 // pixels of the green ball: centroid and the radius of the disc of equal area
-struct Blob {
-  double u = 0.0;
-  double v = 0.0;
-  double area_px = 0.0;
-  double radius_px() const { return std::sqrt(area_px / M_PI); }
-};
-
 Blob find_green(const CameraFrame& f) {
-  Blob b;
-  for (int v = 0; v < f.height_px; ++v) {
-    for (int u = 0; u < f.width_px; ++u) {
-      const uint8_t* p = f.pixels.data() + (static_cast<size_t>(v) * f.width_px + u) * 3;
-      if (p[1] > 128 && p[0] < 64 && p[2] < 64) {
-        b.u += u;
-        b.v += v;
-        b.area_px += 1.0;
-      }
-    }
-  }
-  if (b.area_px > 0) {
-    b.u /= b.area_px;
-    b.v /= b.area_px;
-  }
-  return b;
-}
-
-// the world point in OpenCV pixels, through the frame's pose and intrinsics
-Eigen::Vector2d project(const CameraFrame& f, const Eigen::Vector3d& p_enu) {
-  const Eigen::Vector3d x = f.R_enu_cam.transpose() * (p_enu - f.position_enu_m);
-  const CameraIntrinsics& k = f.intrinsics;
-  return {k.fx_px * x.x() / x.z() + k.cx_px, k.fy_px * x.y() / x.z() + k.cy_px};
+  return testing::find_blob(f, [](int r, int g, int b) { return g > 128 && r < 64 && b < 64; });
 }
 
 // the silhouette of a true sphere, ray-cast through every pixel centre with the frame's pose and
