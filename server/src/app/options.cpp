@@ -87,6 +87,9 @@ cameras and logs:
                       renderer), egl (EGL without a display: a GPU where there is one, else Mesa's
                       llvmpipe through the surfaceless platform) or auto (egl if it creates a
                       context, else osmesa); the start-up log says which one renders
+  --render-threads N  threads rendering camera frames, each with its own GL context: cameras of
+                      different vehicles render in parallel (1 to 64); default: the hardware threads, at
+                      most 8, at most one per camera. Frames and their order do not depend on it
   --record FILE.mp4   write a video of the run from the world camera "overview" (else the first world
                       camera, else the first camera), 15 frames per second of sim time; in real time
                       it drops frames rather than slow physics, at --rate 0 it keeps every frame
@@ -443,6 +446,9 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         if (!ok) why = "--gl needs egl, osmesa or auto, got '" + v + "'";
         o.gl_backend = v;
       }
+    } else if (a == "--render-threads") {
+      ok = number({1, 64, true, "a thread count"}, &x);
+      o.render_threads = static_cast<int>(x);
     } else if (a == "--record") {
       if ((ok = value(&v))) o.record_path = v;
     } else if (a == "--record-fps") {

@@ -82,6 +82,7 @@ struct Options {
   std::optional<WindOption> wind;             // --wind: over the realism level's and the world's wind
   bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
   std::string gl_backend = "osmesa";          // --gl egl|osmesa|auto (render::make_gl_context)
+  int render_threads = 0;                     // --render-threads N: camera render threads; 0 = automatic
   std::optional<std::string> record_path;     // --record out.mp4
   double record_fps = 15.0;
   int record_width = 640;

@@ -339,10 +339,11 @@ int run_server(const Options& given_options) {
         render::FrameServiceOptions frame_options;
         frame_options.seed = options.seed;
         frame_options.backend = options.gl_backend;
+        frame_options.render_threads = options.render_threads;
         frames = std::make_unique<render::FrameService>(s.world().model(), cameras, frame_options);
         if (!options.quiet) {
-          std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered with " << frames->gl_summary()
-                    << "\n";
+          std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered by " << frames->render_threads()
+                    << " thread(s) with " << frames->gl_summary() << "\n";
         }
       } catch (const std::exception& e) {
         if (options.record_path) {

@@ -103,15 +103,54 @@ void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, 
   }
 }
 
-struct FrameService::RenderState {
+int default_render_threads(size_t camera_count) {
+  const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
+  const size_t threads = std::min({hardware, static_cast<size_t>(kMaxDefaultRenderThreads), camera_count});
+  return static_cast<int>(std::max<size_t>(1, threads));
+}
+
+std::vector<int> assign_cameras(const std::vector<FrameCamera>& cameras, int threads) {
+  std::vector<double> load(static_cast<size_t>(std::max(1, threads)), 0.0);
+  std::vector<int> thread_of;
+  for (const FrameCamera& c : cameras) {
+    // min_element takes the first of equal loads: ties go to the lower index
+    const auto least = std::min_element(load.begin(), load.end());
+    *least += static_cast<double>(c.width_px) * c.height_px * c.fps_hz;
+    thread_of.push_back(static_cast<int>(least - load.begin()));
+  }
+  return thread_of;
+}
+
+// One render thread's state. The renderer, model and data belong to the worker's thread (built and freed
+// there); the hand-off fields pass one snapshot at a time from the render thread to a helper and back.
+struct FrameService::Worker {
   mjModel* m = nullptr;
   mjData* d = nullptr;
   std::unique_ptr<CameraRenderer> renderer;
   CameraFrame frame;
-  ~RenderState() {
+  std::vector<int> renderer_index;  // per service camera: its index in this renderer; -1: another worker's
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  const Snapshot* snapshot = nullptr;  // work posted to a helper; null again when it is done
+  std::vector<std::optional<ReadyFrame>>* out = nullptr;
+  bool stop = false;
+  std::thread thread;  // helpers only: worker 0 runs on the render thread
+
+  void free_gl() {  // on the worker's thread
     renderer.reset();
     if (d) mj_deleteData(d);
     if (m) mj_deleteModel(m);
+    d = nullptr;
+    m = nullptr;
+  }
+  void stop_helper() {  // on the render thread
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    cv.notify_all();
+    if (thread.joinable()) thread.join();
   }
 };
 
@@ -143,36 +182,83 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
   next_index_.assign(cameras_.size(), 0);
   if (options_.queue_depth == 0) options_.queue_depth = 1;
 
-  // the renderer lives on its thread: build it there and report how that went
+  if (options_.render_threads < 0) {
+    throw std::invalid_argument("frames: render_threads must be 0 (automatic) or more, got " +
+                                std::to_string(options_.render_threads));
+  }
+  const int threads = std::min(options_.render_threads > 0 ? options_.render_threads
+                                                           : default_render_threads(cameras_.size()),
+                               std::max(1, static_cast<int>(cameras_.size())));
+  camera_thread_ = assign_cameras(cameras_, threads);
+  for (int k = 0; k < threads; ++k) workers_.push_back(std::make_unique<Worker>());
+
+  // the render thread builds its renderer and starts the helpers, then reports how that went
   std::promise<void> ready;
   std::future<void> started = ready.get_future();
-  thread_ = std::thread([this, cameras, backend = options_.backend, p = std::move(ready)]() mutable {
+  thread_ = std::thread([this, cameras, p = std::move(ready)]() mutable {
     try {
-      rs_ = std::make_unique<RenderState>();
-      rs_->m = mj_copyModel(nullptr, m_);
-      if (rs_->m == nullptr) throw std::runtime_error("frames: cannot copy the model");
-      std::vector<CameraConfig> configs;
-      for (const CameraSetup& c : cameras) configs.push_back(c.config);
-      const OffscreenSize need = required_offscreen_size(configs);
-      rs_->m->vis.global.offwidth = std::max(rs_->m->vis.global.offwidth, need.width_px);
-      rs_->m->vis.global.offheight = std::max(rs_->m->vis.global.offheight, need.height_px);
-      rs_->d = mj_makeData(rs_->m);
-      RendererOptions ro;
-      ro.backend = backend;
-      rs_->renderer = std::make_unique<CameraRenderer>(rs_->m, std::move(configs), ro);
-      gl_summary_ = rs_->renderer->gl_summary();
+      start_workers(cameras);
     } catch (...) {
-      rs_.reset();
       p.set_exception(std::current_exception());
       return;
     }
     p.set_value();
-    render_thread_main({}, {});
+    render_thread_main();
   });
   try {
     started.get();
   } catch (...) {
     thread_.join();
+    throw;
+  }
+}
+
+void FrameService::build_worker(int k, const std::vector<CameraSetup>& cameras) {
+  // this worker's cameras, and a model copy whose offscreen buffer fits them
+  Worker& w = *workers_[static_cast<size_t>(k)];
+  std::vector<CameraConfig> configs;
+  w.renderer_index.assign(cameras.size(), -1);
+  for (size_t c = 0; c < cameras.size(); ++c) {
+    if (camera_thread_[c] != k) continue;
+    w.renderer_index[c] = static_cast<int>(configs.size());
+    configs.push_back(cameras[c].config);
+  }
+  w.m = mj_copyModel(nullptr, m_);
+  if (w.m == nullptr) throw std::runtime_error("frames: cannot copy the model");
+  const OffscreenSize need = required_offscreen_size(configs);
+  w.m->vis.global.offwidth = std::max(w.m->vis.global.offwidth, need.width_px);
+  w.m->vis.global.offheight = std::max(w.m->vis.global.offheight, need.height_px);
+  w.d = mj_makeData(w.m);
+  RendererOptions ro;
+  ro.backend = options_.backend;
+  w.renderer = std::make_unique<CameraRenderer>(w.m, std::move(configs), ro);
+}
+
+void FrameService::start_workers(const std::vector<CameraSetup>& cameras) {
+  // one at a time: MuJoCo loads its GL entry points in the first renderer, unguarded (CameraRenderer)
+  try {
+    build_worker(0, cameras);
+    gl_summary_ = workers_[0]->renderer->gl_summary();
+    for (size_t k = 1; k < workers_.size(); ++k) {
+      std::promise<void> ready;
+      std::future<void> built = ready.get_future();
+      workers_[k]->thread = std::thread([this, k, &cameras, p = std::move(ready)]() mutable {
+        try {
+          build_worker(static_cast<int>(k), cameras);
+        } catch (...) {
+          workers_[k]->free_gl();
+          p.set_exception(std::current_exception());
+          return;
+        }
+        p.set_value();
+        helper_main(static_cast<int>(k));
+      });
+      built.get();
+    }
+  } catch (...) {
+    // stop the helpers started so far (a failed one has returned already), free this thread's renderer
+    for (size_t k = 1; k < workers_.size(); ++k) workers_[k]->stop_helper();
+    workers_[0]->free_gl();
     throw;
   }
 }
@@ -319,7 +405,7 @@ void FrameService::release_due() {
   cv_.notify_all();
 }
 
-void FrameService::render_thread_main(std::vector<CameraSetup>, std::string) {
+void FrameService::render_thread_main() {
   for (;;) {
     std::unique_ptr<Snapshot> snap;
     {
@@ -345,13 +431,75 @@ void FrameService::render_thread_main(std::vector<CameraSetup>, std::string) {
     }
     cv_.notify_all();
   }
-  rs_.reset();  // GL resources are freed on this thread
+  // the helpers free their GL resources on their threads, the render thread its own
+  for (size_t k = 1; k < workers_.size(); ++k) workers_[k]->stop_helper();
+  workers_[0]->free_gl();
+}
+
+void FrameService::helper_main(int k) {
+  // render this worker's share of each snapshot the render thread posts, until stopped
+  Worker& w = *workers_[static_cast<size_t>(k)];
+  for (;;) {
+    std::unique_lock<std::mutex> lock(w.mutex);
+    w.cv.wait(lock, [&] { return w.stop || w.snapshot != nullptr; });
+    if (w.stop) break;
+    const Snapshot* snapshot = w.snapshot;
+    std::vector<std::optional<ReadyFrame>>* out = w.out;
+    lock.unlock();
+    render_share(k, *snapshot, out);
+    lock.lock();
+    w.snapshot = nullptr;
+    w.cv.notify_all();
+  }
+  w.free_gl();
 }
 
 void FrameService::render_snapshot(Snapshot& s) {
-  RenderState& r = *rs_;
-  mjModel* m = r.m;
-  mjData* d = r.d;
+  // the workers with a camera due render their frames in parallel, each into its jobs' slots
+  std::vector<std::optional<ReadyFrame>> out(s.jobs.size());
+  std::vector<bool> busy(workers_.size(), false);
+  for (const Job& job : s.jobs) busy[static_cast<size_t>(camera_thread_[static_cast<size_t>(job.camera)])] = true;
+  for (size_t k = 1; k < workers_.size(); ++k) {
+    if (!busy[k]) continue;
+    Worker& w = *workers_[k];
+    {
+      std::lock_guard<std::mutex> lock(w.mutex);
+      w.snapshot = &s;
+      w.out = &out;
+    }
+    w.cv.notify_all();
+  }
+  if (busy[0]) render_share(0, s, &out);
+  for (size_t k = 1; k < workers_.size(); ++k) {
+    if (!busy[k]) continue;
+    Worker& w = *workers_[k];
+    std::unique_lock<std::mutex> lock(w.mutex);
+    w.cv.wait(lock, [&] { return w.snapshot == nullptr; });
+  }
+
+  // then to the consumers in the snapshot's camera order, as one thread would have delivered them
+  for (size_t i = 0; i < s.jobs.size(); ++i) {
+    const Job& job = s.jobs[i];
+    ReadyFrame& f = *out[i];
+    const FrameCamera& cam = cameras_[static_cast<size_t>(job.camera)];
+    if (cam.latency_s > 0) {
+      // stamped at exposure, delivered once sim time reaches exposure + latency (release_due)
+      Delayed held{std::llround((s.time + cam.latency_s) * 1e6), std::move(f), job.consumers};
+      std::lock_guard<std::mutex> lock(mutex_);
+      const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), held.release_us,
+                                       [](int64_t t, const Delayed& x) { return t < x.release_us; });
+      delayed_.insert(at, std::move(held));
+      continue;
+    }
+    for (FrameConsumer* consumer : job.consumers) consumer->deliver(f);
+  }
+}
+
+void FrameService::render_share(int k, const Snapshot& s, std::vector<std::optional<ReadyFrame>>* out) {
+  // worker k's copy of the state at the snapshot, forwarded
+  Worker& w = *workers_[static_cast<size_t>(k)];
+  mjModel* m = w.m;
+  mjData* d = w.d;
   d->time = s.time;
   std::copy(s.qpos.begin(), s.qpos.end(), d->qpos);
   std::copy(s.qvel.begin(), s.qvel.end(), d->qvel);
@@ -363,44 +511,38 @@ void FrameService::render_snapshot(Snapshot& s) {
   mj_forward(m, d);
   std::vector<Eigen::Vector3d> tracked;
   for (int body : tracked_bodies_) tracked.emplace_back(Eigen::Map<const Eigen::Vector3d>(d->xpos + 3 * body));
-  for (const Job& job : s.jobs) {
-    const std::optional<int> index = r.renderer->find(cameras_[static_cast<size_t>(job.camera)].name);
-    if (static_cast<size_t>(job.camera) < directors_.size() && directors_[static_cast<size_t>(job.camera)]) {
+
+  // this worker's cameras among the jobs: render, field conditions, encodings
+  for (size_t i = 0; i < s.jobs.size(); ++i) {
+    const Job& job = s.jobs[i];
+    const size_t c = static_cast<size_t>(job.camera);
+    if (camera_thread_[c] != k) continue;
+    if (c < directors_.size() && directors_[c]) {
       // a directed camera: its pose from the director, written where mjv_updateScene reads it (cam_xmat is
-      // row-major, its columns MuJoCo's camera axes: OpenCV's x, -y, -z)
-      const CameraPose pose = directors_[static_cast<size_t>(job.camera)]->aim(s.time, tracked);
-      const int id = mj_name2id(m, mjOBJ_CAMERA, cameras_[static_cast<size_t>(job.camera)].name.c_str());
+      // row-major, its columns MuJoCo's camera axes: OpenCV's x, -y, -z); only this worker aims it
+      const CameraPose pose = directors_[c]->aim(s.time, tracked);
+      const int id = mj_name2id(m, mjOBJ_CAMERA, cameras_[c].name.c_str());
       const Eigen::Matrix3d R_enu_mjcam = pose.R_enu_cam * Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
       Eigen::Map<Eigen::Vector3d>(d->cam_xpos + 3 * id) = pose.position_enu_m;
       Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d->cam_xmat + 9 * id) = R_enu_mjcam;
     }
-    r.renderer->render(d, *index, &r.frame);
-    const FrameCamera& cam = cameras_[static_cast<size_t>(job.camera)];
+    w.renderer->render(d, w.renderer_index[c], &w.frame);
+    const FrameCamera& cam = cameras_[c];
     if (cam.noise_sd > 0 || cam.brightness_sd > 0) {
-      apply_sensor_effects(cam.noise_sd, cam.brightness_sd, options_.seed, job.camera, job.index, &r.frame.pixels);
+      apply_sensor_effects(cam.noise_sd, cam.brightness_sd, options_.seed, job.camera, job.index, &w.frame.pixels);
     }
-    ReadyFrame f;
+    ReadyFrame& f = (*out)[i].emplace();
     f.camera = job.camera;
     f.index = job.index;
-    f.stamp_us = r.frame.stamp_us;
+    f.stamp_us = w.frame.stamp_us;
     f.stamp_s = s.time;
-    f.info = &cameras_[static_cast<size_t>(job.camera)];
-    f.position_enu_m = r.frame.position_enu_m;
-    f.R_enu_cam = r.frame.R_enu_cam;
+    f.info = &cam;
+    f.position_enu_m = w.frame.position_enu_m;
+    f.R_enu_cam = w.frame.R_enu_cam;
     f.tracked_enu_m = tracked;
     for (const EncodingKey& key : job.encodings) {
-      f.images.emplace_back(key, encode(r.frame.pixels, r.frame.width_px, r.frame.height_px, key));
+      f.images.emplace_back(key, encode(w.frame.pixels, w.frame.width_px, w.frame.height_px, key));
     }
-    if (cam.latency_s > 0) {
-      // stamped at exposure, delivered once sim time reaches exposure + latency (release_due)
-      Delayed held{std::llround((s.time + cam.latency_s) * 1e6), std::move(f), job.consumers};
-      std::lock_guard<std::mutex> lock(mutex_);
-      const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), held.release_us,
-                                       [](int64_t t, const Delayed& x) { return t < x.release_us; });
-      delayed_.insert(at, std::move(held));
-      continue;
-    }
-    for (FrameConsumer* consumer : job.consumers) consumer->deliver(f);
   }
 }
 

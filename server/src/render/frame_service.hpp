@@ -7,9 +7,14 @@
 //                 geom colours and groups: gimbals, trucks and popped balloons included) into a bounded
 //                 queue. A full queue drops the frame (FrameConsumer::dropped) unless a consumer needs it
 //                 (lockstep): then the loop thread waits for room. Physics otherwise never waits.
-//   render thread owns a CameraRenderer, its own mjModel copy (offscreen buffer sized for the cameras) and its
-//                 own mjData: per snapshot it copies the state in, mj_forward's, renders each camera due,
-//                 encodes (RGB, grey, JPEG via OpenCV) and hands the frame to the consumers that wanted it.
+//   render threads  a pool of render_threads(); each owns a CameraRenderer with its own GL context, its own
+//                 mjModel copy (offscreen buffer sized for its cameras) and its own mjData, and renders a
+//                 fixed share of the cameras (assign_cameras). The first, the render thread, takes the
+//                 snapshots in order; per snapshot every thread with a camera due copies the state in,
+//                 mj_forward's, renders and encodes (RGB, grey, JPEG via OpenCV) its cameras in parallel
+//                 with the others, and the render thread then hands the frames to the consumers in the
+//                 snapshot's camera order. So consumers see the same frames in the same order for any
+//                 thread count; only the wall time differs.
 //
 // This header does not include MuJoCo: users outside render/ see only forward declarations.
 #pragma once
@@ -102,7 +107,20 @@ struct FrameServiceOptions {
   size_t queue_depth = 4;            // snapshots waiting for the renderer; beyond: frames are dropped
   uint64_t seed = 1;                 // camera noise (field conditions)
   std::string backend = "osmesa";    // make_gl_context: "osmesa", "egl" or "auto"
+  int render_threads = 0;            // 0: default_render_threads(); more than the cameras: one per camera
 };
+
+// Render threads when none are asked for: the hardware threads, at most kMaxDefaultRenderThreads, at most
+// one per camera, at least one. Each is a GL context with its own copy of the meshes and textures, and on
+// llvmpipe each context starts its own rasteriser threads (LP_NUM_THREADS, default: one per CPU), so more
+// threads than cores only add memory and switching. Thread-safe.
+inline constexpr int kMaxDefaultRenderThreads = 8;
+int default_render_threads(size_t camera_count);
+
+// Which of `threads` render threads renders each camera: in camera order, each goes to the thread with the
+// least work so far (pixels x fps; ties to the lower index), so cameras of different vehicles spread over
+// the threads and the split depends only on the cameras. Pure.
+std::vector<int> assign_cameras(const std::vector<FrameCamera>& cameras, int threads);
 
 struct FrameServiceStats {
   uint64_t snapshots = 0;            // control steps at which frames were taken
@@ -112,10 +130,11 @@ struct FrameServiceStats {
 
 class FrameService {
  public:
-  // Starts the render thread and builds its renderer there. Throws std::invalid_argument /
-  // std::runtime_error as CameraRenderer does (e.g. no GL), from this thread. m must outlive the service.
+  // Starts the render threads and builds their renderers there, one at a time (CameraRenderer). Throws
+  // std::invalid_argument / std::runtime_error as CameraRenderer does (e.g. no GL), from this thread, and
+  // std::invalid_argument for a negative render_threads. m must outlive the service.
   FrameService(const mjModel_* m, const std::vector<CameraSetup>& cameras, const FrameServiceOptions& options = {});
-  ~FrameService();  // stops the render thread; frames not yet rendered are not delivered
+  ~FrameService();  // stops the render threads; frames not yet rendered are not delivered
   FrameService(const FrameService&) = delete;
   FrameService& operator=(const FrameService&) = delete;
 
@@ -147,6 +166,8 @@ class FrameService {
 
   // The GL backend and renderer, for the startup log (CameraRenderer::gl_summary). Thread-safe.
   const std::string& gl_summary() const { return gl_summary_; }
+  // How many threads render (options.render_threads, or the default; at most one per camera). Thread-safe.
+  int render_threads() const { return static_cast<int>(workers_.size()); }
 
  private:
   struct Job {
@@ -169,8 +190,13 @@ class FrameService {
     ReadyFrame frame;
     std::vector<FrameConsumer*> consumers;
   };
-  void render_thread_main(std::vector<CameraSetup> cameras, std::string backend);
+  struct Worker;  // one render thread's renderer, model and data (frame_service.cpp)
+  void start_workers(const std::vector<CameraSetup>& cameras);        // render thread
+  void build_worker(int k, const std::vector<CameraSetup>& cameras);  // on worker k's thread
+  void render_thread_main();
+  void helper_main(int k);
   void render_snapshot(Snapshot& s);
+  void render_share(int k, const Snapshot& s, std::vector<std::optional<ReadyFrame>>* out);
   bool delayed_due_locked() const;  // a held frame is due at sim_now_us_ (mutex_ held)
   void release_due();               // render thread: delivers the held frames that are due
 
@@ -201,9 +227,9 @@ class FrameService {
   std::string start_error_;
   std::string gl_summary_;  // written by the render thread before the constructor returns
   bool started_ = false;
-  std::thread thread_;
-  struct RenderState;
-  std::unique_ptr<RenderState> rs_;  // render thread only
+  std::thread thread_;                            // the render thread: worker 0, and the helpers' owner
+  std::vector<int> camera_thread_;                // per camera: the worker that renders it (assign_cameras)
+  std::vector<std::unique_ptr<Worker>> workers_;  // sized before any thread starts; thread k uses worker k
 };
 
 }  // namespace uavsim::server::render

@@ -45,6 +45,7 @@ TEST(Options, DefaultsAreSitlLike) {
   EXPECT_FALSE(r.options->mavlink_key);
   EXPECT_EQ(r.options->wait_for_clients, 0);
   EXPECT_EQ(r.options->gl_backend, "osmesa");
+  EXPECT_EQ(r.options->render_threads, 0);
 }
 
 TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
@@ -59,6 +60,8 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"w.xml", "--record-size", "640x"}, {"--record-size"});
   expect_refused({"w.xml", "--record-layout", "mosaic"}, {"--record-layout", "single or tiled"});
   expect_refused({"w.xml", "--gl", "vulkan"}, {"--gl", "egl, osmesa or auto", "'vulkan'"});
+  expect_refused({"w.xml", "--render-threads", "0"}, {"--render-threads", "from 1 to 64"});
+  expect_refused({"w.xml", "--render-threads", "65"}, {"--render-threads", "'65'"});
   expect_refused({"w.xml", "--rate"}, {"--rate needs a value"});
   expect_refused({"w.xml", "--bogus"}, {"unknown option --bogus"});
   expect_refused({}, {"no world given"});
@@ -85,6 +88,7 @@ TEST(Options, ValidFlagsSetTheirFields) {
                                "tiled",       "--record-camera",
                                "follow:uav1", "--no-cameras",
                                "--gl",        "auto",
+                               "--render-threads", "3",
                                "--quiet"});
   ASSERT_TRUE(r.options) << r.error;
   const Options& o = *r.options;
@@ -112,6 +116,7 @@ TEST(Options, ValidFlagsSetTheirFields) {
   EXPECT_EQ(o.record_camera, "follow:uav1");
   EXPECT_FALSE(o.cameras);
   EXPECT_EQ(o.gl_backend, "auto");
+  EXPECT_EQ(o.render_threads, 3);
   EXPECT_TRUE(o.quiet);
   // --fast is --rate 0; a wind without gust leaves the turbulence to the realism level
   const ParseResult fast = parse({"w.xml", "--fast", "--wind", "3,90"});
