@@ -76,6 +76,9 @@ void LineServer::stop() {
 }
 
 void LineServer::wake() {
+  // output is queued before wake() is called, and the I/O thread clears the flag before it looks at
+  // the queues: a wake-up skipped here finds its output in that look
+  if (wake_pending_.exchange(true)) return;
   const char b = 1;
   [[maybe_unused]] ssize_t n = write(wake_fds_[1], &b, 1);  // full pipe: a wake-up is pending anyway
 }
@@ -272,6 +275,7 @@ void LineServer::run() {
       char drain[256];
       while (read(wake_fds_[0], drain, sizeof(drain)) > 0) {
       }
+      wake_pending_.store(false);  // before the queues are looked at below (see wake())
     }
     if (fds[1].revents & POLLIN) accept_all();
 

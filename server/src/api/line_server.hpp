@@ -102,6 +102,10 @@ class LineServer {
   std::atomic<uint64_t> fd_exhausted_accepts_{0};
   int listen_fd_ = -1;
   int wake_fds_[2] = {-1, -1};
+  // a byte is in (or on its way into) the wake pipe: further wake() calls skip the write until the
+  // I/O thread has drained it (a radio fan-out queues thousands of events a sim second, one syscall and
+  // one thread wake-up each before)
+  std::atomic<bool> wake_pending_{false};
   uint16_t port_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
