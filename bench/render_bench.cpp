@@ -3,8 +3,25 @@
 //   BM_BareMujocoRender/WxH/cams:N   mjv_updateScene + mjr_render + mjr_readPixels, same flags
 //   BM_RenderVsBarePaired/WxH        both, alternating frame by frame; counters give the ratio
 //   BM_BareMujocoRenderDefaults/WxH  bare, MuJoCo's defaults (shadows, reflections, skybox, MSAA)
+//   BM_Cameras/B/WxH/cams:N/threads:T  the frame service (issue 17, "Cameras"): N cameras (1, 4,
+//   16),
+//                                    backend B (osmesa, egl), T render threads (1: serial; more:
+//                                    the cameras split over T threads, each with its own GL
+//                                    context); this thread plays the loop thread: capture at each
+//                                    frame instant, then wait until every camera's RGB frame
+//                                    reached a consumer
+//   BM_CamerasPaired/A_vs_B/WxH        two such frame services, A and B (backend:cameras:threads),
+//   frame
+//                                    instant by frame instant in one loop, so that the load of
+//                                    other processes on a shared machine falls on both alike:
+//                                    a_fps_per_camera, b_fps_per_camera and ratio = b / a (per
+//                                    camera)
 // Counter fps: frames (all cameras together) per second of wall time, not the CPU time that the
-// "CPU" column shows, because llvmpipe rasterises on its own threads.
+// "CPU" column shows, because llvmpipe rasterises on its own threads; fps_per_camera = fps / N.
+// llvmpipe starts LP_NUM_THREADS rasteriser threads per context (default: one per CPU), read once
+// per process: compare LP_NUM_THREADS settings by running the bench once with each.
+// Both backends in one process: on Mesa they share one GL dispatch, so MuJoCo's entry points (taken
+// once, from the first backend that renders: gl_context.hpp) serve both in any order.
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 
@@ -14,9 +31,12 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "render/camera_renderer.hpp"
+#include "render/camera_setup.hpp"
+#include "render/frame_service.hpp"
 #include "render/gl_context.hpp"
 
 namespace {
@@ -45,6 +65,8 @@ constexpr char kSceneXml[] = R"(
     <camera name="cam1" pos="8 0 3" xyaxes="0 1 0 -0.3 0 1"/>
     <camera name="cam2" pos="0 -8 3" xyaxes="1 0 0 0 0.3 1"/>
     <camera name="cam3" pos="0 0 12" xyaxes="1 0 0 0 1 0"/>
+    <!-- cam4..cam15 (BM_Cameras): a ring around the quad, each aimed at it -->
+    CAMERA_RING
     <body name="quad" pos="0 0 2">
       <freejoint/>
       <geom type="box" size="0.15 0.15 0.04" rgba="0.2 0.2 0.2 1"/>
@@ -63,12 +85,28 @@ constexpr char kSceneXml[] = R"(
 </mujoco>
 )";
 
+constexpr int kMaxCameras = 16;
+
+// cam4..cam15 on a circle of 9 m radius, 2 to 5 m high, looking at the quad
+std::string camera_ring() {
+  std::string xml;
+  for (int c = 4; c < kMaxCameras; ++c) {
+    const double a = 2.0 * 3.14159265358979 * (c - 4) / (kMaxCameras - 4);
+    xml += "<camera name=\"cam" + std::to_string(c) + "\" pos=\"" +
+           std::to_string(9.0 * std::cos(a)) + " " + std::to_string(9.0 * std::sin(a)) + " " +
+           std::to_string(2.0 + (c % 4)) + "\" mode=\"targetbody\" target=\"quad\"/>\n";
+  }
+  return xml;
+}
+
 struct Scene {
   mjModel* m = nullptr;
   mjData* d = nullptr;
   Scene() {
     const std::string path = "/tmp/uavsim_render_bench.xml";
-    std::ofstream(path) << kSceneXml;
+    std::string xml = kSceneXml;
+    xml.replace(xml.find("CAMERA_RING"), std::string("CAMERA_RING").size(), camera_ring());
+    std::ofstream(path) << xml;
     char error[1000] = "";
     m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
     if (m == nullptr) throw std::runtime_error(std::string("render_bench: ") + error);
@@ -210,6 +248,115 @@ void BM_RenderVsBarePaired(benchmark::State& state, int width, int height) {
   state.counters["ratio"] = renderer_fps / bare_fps;
 }
 
+namespace render = uavsim::server::render;
+
+// wants every frame as RGB and must have it (lockstep): the frame service never drops one
+class RgbConsumer : public render::FrameConsumer {
+ public:
+  void want(int, int64_t, int64_t, std::vector<render::EncodingKey>* encodings,
+            bool* must) override {
+    encodings->push_back({render::Encoding::kRgb, 0});
+    *must = true;
+  }
+  void dropped(int, int64_t) override {}
+  void deliver(const render::ReadyFrame& f) override {
+    benchmark::DoNotOptimize(f.image({render::Encoding::kRgb, 0}));
+  }
+};
+
+// cameras cam0.. of the bench scene, each as if a different vehicle's, all due every frame instant
+std::unique_ptr<render::FrameService> camera_service(const Scene& s, const std::string& backend,
+                                                     int width, int height, int cameras,
+                                                     int threads, double fps) {
+  std::vector<render::CameraSetup> setups;
+  for (int c = 0; c < cameras; ++c) {
+    render::CameraSetup setup;
+    setup.config.camera = "cam" + std::to_string(c);
+    setup.config.width_px = width;
+    setup.config.height_px = height;
+    setup.config.fps_hz = fps;
+    setup.vehicle = c;
+    setups.push_back(setup);
+  }
+  render::FrameServiceOptions options;
+  options.backend = backend;
+  options.render_threads = threads;
+  options.queue_depth = 1;
+  return std::make_unique<render::FrameService>(s.m, setups, options);
+}
+
+constexpr double kInstantsPerSimSecond = 10.0;  // frame period of every camera: 0.1 s of sim time
+
+// one frame instant: every camera due, rendered and delivered (lockstep) before it returns
+std::chrono::steady_clock::duration frame_instant(const Scene& s, render::FrameService& service,
+                                                  double t) {
+  const auto t0 = std::chrono::steady_clock::now();
+  s.d->time = t;
+  service.capture(s.d);
+  service.wait_delivered();
+  return std::chrono::steady_clock::now() - t0;
+}
+
+void BM_Cameras(benchmark::State& state, const std::string& backend, int width, int height,
+                int cameras, int threads) {
+  Scene& s = scene();
+  const auto service =
+      camera_service(s, backend, width, height, cameras, threads, kInstantsPerSimSecond);
+  RgbConsumer consumer;
+  service->add_consumer(&consumer);
+  double t = 0.0;
+  // warm-up: shaders, textures, first allocations
+  for (int k = 0; k < 3; ++k, t += 1.0 / kInstantsPerSimSecond) frame_instant(s, *service, t);
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    frame_instant(s, *service, t);
+    t += 1.0 / kInstantsPerSimSecond;
+  }
+  report_fps(state, cameras, start);
+  state.counters["fps_per_camera"] = state.counters["fps"] / cameras;
+  state.counters["threads"] = service->render_threads();
+}
+
+// one of the two sides of BM_CamerasPaired
+struct ServiceSpec {
+  std::string backend;
+  int cameras = 1;
+  int threads = 1;
+  std::string name() const {
+    return backend + ":" + std::to_string(cameras) + ":" + std::to_string(threads);
+  }
+};
+
+void BM_CamerasPaired(benchmark::State& state, const ServiceSpec& a, const ServiceSpec& b,
+                      int width, int height) {
+  Scene& s = scene();
+  const auto service_a =
+      camera_service(s, a.backend, width, height, a.cameras, a.threads, kInstantsPerSimSecond);
+  const auto service_b =
+      camera_service(s, b.backend, width, height, b.cameras, b.threads, kInstantsPerSimSecond);
+  RgbConsumer consumer;
+  service_a->add_consumer(&consumer);
+  service_b->add_consumer(&consumer);
+  std::chrono::steady_clock::duration time_a{}, time_b{};
+  double t = 0.0;
+  for (int k = 0; k < 3; ++k, t += 1.0 / kInstantsPerSimSecond) {
+    frame_instant(s, *service_a, t);
+    frame_instant(s, *service_b, t);
+  }
+  for (auto _ : state) {
+    time_a += frame_instant(s, *service_a, t);
+    time_b += frame_instant(s, *service_b, t);
+    t += 1.0 / kInstantsPerSimSecond;
+  }
+  // frame instants per second = frames per second of each camera
+  const double n = static_cast<double>(state.iterations());
+  const double a_fps = n / std::chrono::duration<double>(time_a).count();
+  const double b_fps = n / std::chrono::duration<double>(time_b).count();
+  state.counters["a_fps_per_camera"] = a_fps;
+  state.counters["b_fps_per_camera"] = b_fps;
+  state.counters["ratio"] = b_fps / a_fps;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -230,6 +377,45 @@ int main(int argc, char** argv) {
     benchmark::RegisterBenchmark(("BM_BareMujocoRenderDefaults/" + size).c_str(),
                                  BM_BareMujocoRender, w, h, 1, false)
         ->Unit(benchmark::kMillisecond);
+  }
+  // BM_Cameras: per backend, size and camera count, serial then parallel
+  const int parallel = std::max(2, static_cast<int>(std::thread::hardware_concurrency()));
+  for (const std::string backend : {"osmesa", "egl"}) {
+    for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
+      for (int cams : {1, 4, kMaxCameras}) {
+        for (int threads : {1, std::min(cams, parallel)}) {
+          const std::string name = "BM_Cameras/" + backend + "/" + std::to_string(w) + "x" +
+                                   std::to_string(h) + "/cams:" + std::to_string(cams) +
+                                   "/threads:" + std::to_string(threads);
+          benchmark::RegisterBenchmark(name.c_str(), BM_Cameras, backend, w, h, cams, threads)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime()
+              ->Iterations(cams * w >= kMaxCameras * 640 ? 6 : 20);
+          if (cams == 1) break;  // one camera: one thread either way
+        }
+      }
+    }
+  }
+  // paired: serial vs parallel, OSMesa vs EGL, and the issue's goal (1 camera vs 4, per camera)
+  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
+    std::vector<std::pair<ServiceSpec, ServiceSpec>> pairs;
+    for (const std::string backend : {"osmesa", "egl"}) {
+      for (int cams : {4, kMaxCameras}) {
+        pairs.push_back({{backend, cams, 1}, {backend, cams, std::min(cams, parallel)}});
+      }
+      pairs.push_back({{backend, 1, 1}, {backend, 4, std::min(4, parallel)}});
+    }
+    for (int cams : {1, 4, kMaxCameras}) pairs.push_back({{"osmesa", cams, 1}, {"egl", cams, 1}});
+    for (const auto& [a, b] : pairs) {
+      const std::string name = "BM_CamerasPaired/" + a.name() + "_vs_" + b.name() + "/" +
+                               std::to_string(w) + "x" + std::to_string(h);
+      // a fixed count of frame instants: building the services (GL contexts, llvmpipe's shaders)
+      // takes longer than the instants, and Google Benchmark would build them again per estimate
+      const int instants = std::max(a.cameras, b.cameras) * w >= kMaxCameras * 640 ? 6 : 15;
+      benchmark::RegisterBenchmark(name.c_str(), BM_CamerasPaired, a, b, w, h)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(instants);
+    }
   }
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
