@@ -220,6 +220,8 @@ int main(int argc, char** argv) {
     in.position_enu_m = t.position_enu_m;
     in.velocity_enu_m_s = t.velocity_enu_m_s;
     in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
+    in.roll_rad = t.roll_rad;
+    in.pitch_rad = t.pitch_rad;
     in.balloons = perception.sightings();
     for (const GcsMessage& m : link->take_received()) {
       if (m.topic == kTopicState) {

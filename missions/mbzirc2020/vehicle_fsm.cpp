@@ -569,6 +569,9 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
           descent_stopped_s_ = -1.0;
           steady_descent_s_ = -1.0;
           steady_descent_ = false;
+          touchdown_gate_.reset();
+          descent_paused_ = false;
+          stop_rule_from_s_ = in.now_s;
           out.note = "over the landing spot: descending";
         }
       } else if (land_phase_ == 2) {
@@ -583,9 +586,36 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
           v.head<2>() =
               toward(p, {landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), h}, 0.5).head<2>();
         }
+        // The last 2 m (the 0.5 m/s band) go on only while the gate says calm: no sideways speed
+        // and, once the hover's lean tells the wind, the skids along it (touchdown_gate.hpp;
+        // two-UAV field seeds 1 and 12 tipped over their gear at touchdown in gusts). The heading
+        // turns to the skids' one from the spot on.
+        const bool calm = touchdown_gate_.update(in.now_s, in.velocity_enu_m_s.head<2>(),
+                                                 in.roll_rad, in.pitch_rad, in.yaw_enu_rad);
+        const std::optional<double> skid_yaw = touchdown_gate_.skid_yaw_enu_rad(in.yaw_enu_rad);
+        const bool pause = h <= 2.0 && !calm;
+        if (pause != descent_paused_) {
+          descent_paused_ = pause;
+          out.note =
+              pause ? fmt("descent paused at %.2f m: %.2f m/s sideways, %.0f deg off the wind", h,
+                          in.velocity_enu_m_s.head<2>().norm(),
+                          skid_yaw ? std::abs(wrap_pi(*skid_yaw - in.yaw_enu_rad)) * 180.0 / kPi
+                                   : 0.0)
+                    : fmt("descent resumed at %.2f m", h);
+        }
+        if (pause) {
+          // a commanded stop is neither the end of a steady descent nor the ground; the stop rule
+          // counts again a second after the descent resumes (the vehicle needs a few tenths of a
+          // second to reach 0.2 m/s down again)
+          v.z() = 0.0;
+          steady_descent_s_ = -1.0;
+          steady_descent_ = false;
+          descent_stopped_s_ = -1.0;
+          stop_rule_from_s_ = in.now_s + 1.0;
+        }
         out.action = VehicleOutputs::Action::kVelocity;
         out.velocity_enu_m_s = v;
-        out.yaw_enu_rad = in.yaw_enu_rad;
+        out.yaw_enu_rad = skid_yaw.value_or(in.yaw_enu_rad);
         // touchdown: the 0.5 m/s descent stops within a telemetry sample or two when the gear
         // meets the ground (in the air the velocity loop holds it to a few cm/s; turbulence's
         // vertical drag is ~0.4 % of the weight), and the vehicle must be off before it pivots on
@@ -598,7 +628,9 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         // The second must be unbroken: a recovery that passes through the band and overshoots
         // upwards does not count.
         const double vz = in.velocity_enu_m_s.z();
-        if (vz <= -0.8) {
+        if (pause) {
+          // (reset above)
+        } else if (vz <= -0.8) {
           steady_descent_s_ = -1.0;
           steady_descent_ = false;
         } else if (vz < -0.3) {
@@ -610,7 +642,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         // Without that second (a sink ended on the ground: one-UAV field seed 9 bounced there,
         // its motors on), a stop held for a second is the ground too: in the air the commanded
         // 0.5 m/s descent does not stay stopped that long.
-        const bool stopped = h < 2.5 && vz > -0.2 && vz < 0.2;
+        const bool stopped =
+            !pause && in.now_s >= stop_rule_from_s_ && h < 2.5 && vz > -0.2 && vz < 0.2;
         if (!stopped) descent_stopped_s_ = -1.0;
         if (stopped && descent_stopped_s_ < 0.0) descent_stopped_s_ = in.now_s;
         const double stopped_s = descent_stopped_s_ < 0.0 ? -1.0 : in.now_s - descent_stopped_s_;

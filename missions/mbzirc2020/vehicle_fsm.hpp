@@ -25,6 +25,7 @@
 
 #include "messages.hpp"
 #include "mission_config.hpp"
+#include "touchdown_gate.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 
@@ -59,6 +60,7 @@ struct VehicleInputs {
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
   double yaw_enu_rad = 0.0;
+  double roll_rad = 0.0, pitch_rad = 0.0;  // ATTITUDE (NED: right wing down, nose up positive)
   // camera
   std::vector<BalloonSighting> balloons;
   // GCS link: commands and the airspace echoes received since the last step, oldest first
@@ -154,6 +156,9 @@ class VehicleFsm {
   double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
   double steady_descent_s_ = -1.0;   // since when it has been a steady ~0.5 m/s descent
   bool steady_descent_ = false;      // a second of it, unbroken, since the last sink
+  TouchdownGate touchdown_gate_;     // the last metres wait for calm, skids along the wind
+  bool descent_paused_ = false;
+  double stop_rule_from_s_ = 0.0;  // a descent resumed from a pause is not "stopped" before this
 
   // the heading setpoint last sent and when (NaN: none yet), for its rate limit
   double yaw_cmd_rad_ = 0.0;

@@ -8,6 +8,7 @@
 
 #include "ground_station.hpp"
 #include "messages.hpp"
+#include "touchdown_gate.hpp"
 #include "vehicle_fsm.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
@@ -344,6 +345,22 @@ TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBa
   EXPECT_GT(out.velocity_enu_m_s.y(), 3.0);
 }
 
+// Started, flown at z metres above the landing spot (10, -27) for 5 s, then landed by the GCS;
+// the autopilot's land detector never fires (on_ground false), so the FSM's own touchdown rule is
+// what turns the motors off.
+void start_and_land(VehicleFsm& fsm, FakeVehicle& v, double z_m) {
+  v.in.position_enu_m = {10, -27, 0};
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  v.in.position_enu_m.z() = z_m;
+  v.in.on_ground = false;
+  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
+  v.in.commands = {GcsCommand::kLand};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+}
+
 // Landing: climb to the transit altitude, fly over the landing spot, descend on velocity setpoints
 // (1 m/s, 0.5 m/s below 2 m, no position chasing below 1 m) and turn the motors off once the
 // descent has stopped on the ground, before the autopilot's own land detector would.
@@ -351,16 +368,7 @@ TEST(Mbzirc2020VehicleFsm, DescendsOnVelocityAndTurnsTheMotorsOffAtTouchdown) {
   const MissionConfig config;
   VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
   FakeVehicle v;
-  v.in.position_enu_m = {10, -27, 0};
-  v.in.commands = {GcsCommand::kStart};
-  v.apply(fsm.step(v.in), 0.05);
-  v.in.commands.clear();
-  v.in.position_enu_m.z() = 5.0;
-  v.in.on_ground = false;  // the autopilot's land detector, which never fires here
-  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
-  v.in.commands = {GcsCommand::kLand};
-  v.apply(fsm.step(v.in), 0.05);
-  v.in.commands.clear();
+  start_and_land(fsm, v, 5.0);
   ASSERT_EQ(fsm.state(), VehicleState::kLand);
   double top_z = 0.0, min_vz = 0.0;
   bool disarm = false;
@@ -393,16 +401,7 @@ TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
   const MissionConfig config;
   VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
   FakeVehicle v;
-  v.in.position_enu_m = {10, -27, 0};
-  v.in.commands = {GcsCommand::kStart};
-  v.apply(fsm.step(v.in), 0.05);
-  v.in.commands.clear();
-  v.in.position_enu_m = {10, -27, 2.3};  // over the spot already, in the 0.5 m/s band soon
-  v.in.on_ground = false;
-  for (int i = 0; i < 100; ++i) v.apply(fsm.step(v.in), 0.05);
-  v.in.commands = {GcsCommand::kLand};
-  v.apply(fsm.step(v.in), 0.05);
-  v.in.commands.clear();
+  start_and_land(fsm, v, 2.3);  // over the spot already, in the 0.5 m/s band soon
   // climb to the transit altitude, transit (none: over the spot) and descend to 2.3 m
   double top_z = 0.0;
   for (int i = 0; i < 4000 && (top_z < 6.0 || v.in.position_enu_m.z() > 2.3); ++i) {
@@ -469,6 +468,129 @@ TEST(Mbzirc2020VehicleFsm, DisarmedInTheAirIsFailedAndGcsLandWorksFromAnyState) 
   w.in.armed = false;  // killed
   other.step(w.in);
   EXPECT_EQ(other.state(), VehicleState::kFailed);
+}
+
+// Two-UAV field seed 12: under 1 m a gust gave the landing UAV 1 m/s sideways and it touched down
+// so, then tipped over its gear. The descent now stops while the gust lasts (a stopped descent in
+// the air is then not taken for the ground) and goes on after a calm second.
+TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
+  FakeVehicle v;
+  start_and_land(fsm, v, 5.0);
+  auto step = [&] {
+    const Eigen::Vector3d before = v.in.position_enu_m;
+    const VehicleOutputs out = fsm.step(v.in);
+    v.apply(out, 0.05);
+    v.in.position_enu_m.z() = std::max(v.in.position_enu_m.z(), 0.0);
+    v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
+    return out;
+  };
+  for (int i = 0;
+       i < 4000 && !(fsm.state() == VehicleState::kLand && v.in.position_enu_m.z() < 0.8); ++i) {
+    ASSERT_NE(step().action, VehicleOutputs::Action::kDisarm);
+  }
+  ASSERT_LT(v.in.position_enu_m.z(), 0.8);
+  // the gust: 0.8 m/s east for 2 s, then still for 0.5 s: the descent holds, no touchdown
+  for (int i = 0; i < 50; ++i) {
+    const VehicleOutputs out = fsm.step(v.in);
+    ASSERT_EQ(out.action, VehicleOutputs::Action::kVelocity) << i;
+    if (i >= 1) {
+      EXPECT_EQ(out.velocity_enu_m_s.z(), 0.0) << i;
+    }
+    v.in.velocity_enu_m_s = {i < 40 ? 0.8 : 0.0, 0.0, 0.0};
+    v.in.now_s += 0.05;
+  }
+  // calm: the descent goes on, and ends in a touchdown on the ground
+  bool disarm = false, descending = false;
+  for (int i = 0; i < 400 && !disarm; ++i) {
+    const VehicleOutputs out = step();
+    descending = descending || out.velocity_enu_m_s.z() < 0.0;
+    disarm = out.action == VehicleOutputs::Action::kDisarm;
+  }
+  EXPECT_TRUE(descending);
+  EXPECT_TRUE(disarm);
+  EXPECT_EQ(v.in.position_enu_m.z(), 0.0);
+}
+
+// The wind from the hover's lean: the thrust tilts into the wind by atan(drag / weight). The
+// quad's drag at 4 m/s is 0.10 * 4 + 0.05 * 16 = 1.2 N on 1.5 kg: 4.7 deg. Facing east (ENU yaw 0)
+// nose down by that much, the wind comes from the east: the skids lie east-west, nose or tail into
+// it, whichever is the shorter turn. Right wing down facing north: the wind comes from the east
+// too.
+TEST(Mbzirc2020TouchdownGate, LaysTheSkidsAlongTheWindFromTheHoversLean) {
+  const double lean_rad = std::atan(1.2 / (1.5 * 9.81));
+  EXPECT_NEAR(lean_rad * 180.0 / kPi, 4.7, 0.05);
+  TouchdownGate gate;
+  EXPECT_FALSE(gate.skid_yaw_enu_rad(0.0));  // no sample yet: wind unknown
+  for (int i = 0; i < 60; ++i) gate.update(0.05 * i, {0, 0}, 0.0, -lean_rad, 0.0);
+  ASSERT_TRUE(gate.skid_yaw_enu_rad(0.3));
+  EXPECT_NEAR(*gate.skid_yaw_enu_rad(0.3), 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(*gate.skid_yaw_enu_rad(2.0)), kPi, 1e-9);  // tail into the wind
+  EXPECT_NEAR(gate.lean_enu().norm(), std::sin(lean_rad), 1e-9);
+
+  TouchdownGate north;
+  for (int i = 0; i < 60; ++i) north.update(0.05 * i, {0, 0}, lean_rad, 0.0, kPi / 2);
+  ASSERT_TRUE(north.skid_yaw_enu_rad(kPi / 2));
+  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 - 0.2)), 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 + 0.2)), kPi, 1e-9);
+
+  // a lean of 1 deg (a calm day, sensor bias) tells no direction: the heading is left alone
+  TouchdownGate calm;
+  for (int i = 0; i < 60; ++i) calm.update(0.05 * i, {0, 0}, 0.0, -kPi / 180.0, 0.0);
+  EXPECT_FALSE(calm.skid_yaw_enu_rad(0.0));
+}
+
+// A gust's sideways speed pauses the descent; it goes on once the speed has stayed under
+// 0.25 m/s for a second (a bounce under it restarts the second), and a heading across the wind
+// pauses it as well. Paused 20 s in all, the descent goes on whatever the wind does.
+TEST(Mbzirc2020TouchdownGate, PausesForSidewaysSpeedAndACrossWindHeadingUntilCalm) {
+  constexpr double kDt = 1.0 / 16;  // 16 Hz telemetry: the times add up exactly
+  TouchdownGate gate;
+  double t = 0.0;
+  auto feed = [&](Eigen::Vector2d v, double yaw_rad, double pitch_rad = 0.0) {
+    t += kDt;
+    return gate.update(t, v, 0.0, pitch_rad, yaw_rad);
+  };
+  EXPECT_TRUE(feed({0.3, 0}, 0.0));  // under 0.5 m/s: go on
+  EXPECT_FALSE(feed({0.8, 0.3}, 0.0));
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(feed({0.1, 0}, 0.0));
+  EXPECT_FALSE(feed({0.3, 0}, 0.0));  // over 0.25 m/s: the second starts again
+  for (int i = 0; i < 16; ++i) EXPECT_FALSE(feed({0.1, 0}, 0.0)) << i;
+  EXPECT_TRUE(feed({0.1, 0}, 0.0));  // 1.0 s under 0.25 m/s
+
+  // wind from the north, a 6 deg lean: the skids want yaw +-90 deg. The attitude a heading sees:
+  // the lean's (forward, left) parts are (-sin(pitch) cos(roll), -sin(roll)).
+  TouchdownGate across;
+  t = 0.0;
+  auto feed_across = [&](double yaw_rad) {
+    const double lean = std::sin(6.0 * kPi / 180.0);
+    const double fwd = lean * std::cos(kPi / 2 - yaw_rad),
+                 left = lean * std::sin(kPi / 2 - yaw_rad);
+    const double roll = -std::asin(left), pitch = -std::asin(fwd / std::cos(roll));
+    t += kDt;
+    return across.update(t, {0, 0}, roll, pitch, yaw_rad);
+  };
+  EXPECT_FALSE(feed_across(kPi / 4));  // 45 deg off: paused
+  ASSERT_TRUE(across.skid_yaw_enu_rad(kPi / 4));
+  EXPECT_NEAR(*across.skid_yaw_enu_rad(kPi / 4), kPi / 2, 1e-9);
+  EXPECT_NEAR(*across.skid_yaw_enu_rad(-kPi / 4), -kPi / 2, 1e-9);
+  for (int i = 0; i < 40; ++i) EXPECT_FALSE(feed_across(kPi / 2 - 0.25));  // 14 deg off
+  for (int i = 0; i < 16; ++i) EXPECT_FALSE(feed_across(kPi / 2 - 0.15));  // 8.6 deg off
+  EXPECT_TRUE(feed_across(kPi / 2 - 0.15));
+
+  // gusty for ever: 20 s of pauses, then the descent goes on
+  TouchdownGate gusty;
+  t = 0.0;
+  bool go = true;
+  int paused_samples = 0;
+  for (int i = 0; i < 1000 && !(go && paused_samples > 0); ++i) {
+    t += kDt;
+    go = gusty.update(t, {0.9, 0}, 0.0, 0.0, 0.0);
+    if (!go) ++paused_samples;
+  }
+  EXPECT_TRUE(go);
+  EXPECT_EQ(paused_samples * kDt, 20.0);
 }
 
 }  // namespace
