@@ -27,20 +27,16 @@ bool TouchdownGate::update(double now_s, const Eigen::Vector2d& velocity_enu_m_s
   const double a = first ? 1.0 : 1.0 - std::exp(-dt_s / config_.wind_tau_s);
   lean_enu_ += a * (lean - lean_enu_);
 
-  const std::optional<double> skid = skid_yaw_enu_rad(yaw_enu_rad);
-  const double yaw_error_rad = skid ? std::abs(wrap_pi(*skid - yaw_enu_rad)) : 0.0;
   const double speed_m_s = velocity_enu_m_s.norm();
   if (!paused_) {
-    if (paused_total_s_ < config_.max_pause_s &&
-        (speed_m_s > config_.pause_speed_m_s || yaw_error_rad > config_.pause_yaw_error_rad)) {
+    if (paused_total_s_ < config_.max_pause_s && speed_m_s > config_.pause_speed_m_s) {
       paused_ = true;
       calm_since_s_ = -1.0;
     }
     return !paused_;
   }
   paused_total_s_ += dt_s;
-  const bool calm =
-      speed_m_s < config_.calm_speed_m_s && yaw_error_rad < config_.calm_yaw_error_rad;
+  const bool calm = speed_m_s < config_.calm_speed_m_s;
   if (!calm) {
     calm_since_s_ = -1.0;
   } else if (calm_since_s_ < 0.0) {

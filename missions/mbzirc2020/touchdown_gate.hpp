@@ -24,9 +24,7 @@ struct TouchdownGateConfig {
   double calm_speed_m_s = 0.25;  // go on once under this ...
   double calm_for_s = 1.0;       // ... for this long
   double wind_tau_s = 3.0;       // low-pass of the lean that estimates the wind
-  double wind_min_tilt_rad = 2.0 * 3.14159265358979323846 / 180.0;     // less: wind unknown
-  double pause_yaw_error_rad = 30.0 * 3.14159265358979323846 / 180.0;  // skids off the wind
-  double calm_yaw_error_rad = 10.0 * 3.14159265358979323846 / 180.0;
+  double wind_min_tilt_rad = 2.0 * 3.14159265358979323846 / 180.0;  // less: wind unknown
   double max_pause_s = 20.0;  // paused this long in all: descend whatever the wind does
 };
 

@@ -36,6 +36,13 @@ constexpr double kPierceMaxTurn_rad = 60.0 * kPi / 180.0;
 // 19 deg)
 constexpr double kLandingApproachDecel_m_s2 = 1.5;
 constexpr double kLandingStillSpeed_m_s = 0.5;
+constexpr double kLandingPauseClimb_m_s = 0.3;  // the last 2 m paused for a gust (touchdown_gate)
+// over the spot, the lean is read this long before the heading turns the skids along the wind,
+// and the descent starts once they are within kLandingSkidAlign_rad of it (or after
+// kLandingAlignMax_s whatever the heading)
+constexpr double kLandingWindRead_s = 2.0;
+constexpr double kLandingSkidAlign_rad = 10.0 * kPi / 180.0;
+constexpr double kLandingAlignMax_s = 10.0;
 // A pierce that ended without the blades going through (the camera lost the balloon at close
 // range) reports POPPED only after this long back on the line facing where the balloon was, a
 // sighting within kSeenAgain_m of it meaning it is still there. Two-UAV field seeds 2 and 5: the
@@ -95,14 +102,16 @@ VehicleFsm::VehicleFsm(const MissionConfig& config, int index, Side side,
 double VehicleFsm::line_y_m() const {
   if (cross_) {
     const double mid_y = 0.5 * (config_.arena_y_min_m + config_.arena_y_max_m);
-    return home_side_ == Side::kSouth ? mid_y - config_.cross_line_back_m
-                                      : mid_y + config_.cross_line_back_m;
+    const bool south_of_middle = (home_side_ == Side::kSouth) != look_home_;
+    return south_of_middle ? mid_y - config_.cross_line_back_m : mid_y + config_.cross_line_back_m;
   }
   return side_ == Side::kSouth ? config_.arena_y_min_m + config_.side_inset_m
                                : config_.arena_y_max_m - config_.side_inset_m;
 }
 
-double VehicleFsm::inward_yaw_rad() const { return side_ == Side::kSouth ? kPi / 2 : -kPi / 2; }
+double VehicleFsm::inward_yaw_rad() const {
+  return (side_ == Side::kSouth) != look_home_ ? kPi / 2 : -kPi / 2;
+}
 
 bool VehicleFsm::in_own_half(const Eigen::Vector3d& p) const {
   if (take_over_ || cross_) return true;
@@ -346,13 +355,34 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
           enter(VehicleState::kGoSideCenter, out, "scans done, taking over the other half");
           break;
         }
+        if (take_over_ && cross_ && !look_home_) {
+          // the UAV alone, both halves scanned and balloons left (the GCS lands it once five are
+          // reported): its own half once more, from over the balloons 6 m beyond the middle,
+          // looking back at it, one leg from where it is to the other end. One-UAV field seeds 4
+          // and 17: a balloon 3.4 / 5.7 m in front of the own line at the height spread's edge
+          // (2.20 / 3.17 m), which from so close the camera sees only within a few tenths of a
+          // metre of its own height, was missed by both legs there (GPS bias and baro drift move
+          // them); from 28 m it lies near the 5 deg down camera's axis.
+          look_home_ = true;
+          const double east = config_.arena_x_max_m - config_.scan_corner_inset_m;
+          const double west = config_.arena_x_min_m + config_.scan_corner_inset_m;
+          const double end = std::abs(p.x() - east) < std::abs(p.x() - west) ? west : east;
+          scan_ = {{p.x(), config_.cross_altitude_m}, {end, config_.cross_altitude_m}};
+          scan_leg_ = 0;
+          hold_altitude_m_ = config_.cross_altitude_m;
+          hover(in, out, in.yaw_enu_rad);
+          out.note = "both halves scanned: the own half again, from beyond the middle";
+          break;
+        }
         if (!take_over_ && !cross_) {
           // balloons may be left (the GCS lands everyone once all five are reported): ask it
           hover(in, out, inward_yaw_rad());
           enter(VehicleState::kScansDone, out, "own scans done: waiting for the GCS");
           break;
         }
-        start_landing(out, cross_ ? "the other half scanned" : "two full scans done");
+        start_landing(out, look_home_ ? "both halves scanned from the middle"
+                           : cross_   ? "the other half scanned"
+                                      : "two full scans done");
         break;
       }
       const ScanWaypoint& w = scan_[scan_leg_];
@@ -538,8 +568,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       // popped.
       out.yaw_enu_rad = to_b.norm() > kBackOffFaceBalloon_m ? std::atan2(to_b.y(), to_b.x())
                                                             : in.yaw_enu_rad;
-      const bool back = (pierce_start_enu_m_.head<2>() - p.head<2>()).norm() <
-                        config_.position_tolerance_m;
+      const bool back =
+          (pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m;
       if (back && pierce_reached_ && !pierce_through_ && !seen_again_) {
         if (look_back_since_s_ < 0.0) look_back_since_s_ = in.now_s;
         if (in.now_s - look_back_since_s_ < kLookBack_s) {
@@ -592,10 +622,39 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
           steady_descent_ = false;
           touchdown_gate_.reset();
           descent_paused_ = false;
+          descent_since_s_ = in.now_s;
           stop_rule_from_s_ = in.now_s;
-          out.note = "over the landing spot: descending";
+          out.note = "over the landing spot: laying the skids along the wind";
         }
       } else if (land_phase_ == 2) {
+        // at the transit altitude over the spot: the hover's lean tells the wind (touchdown_gate),
+        // and the heading turns the skids along it here, high up. A turn near the ground
+        // saturated the mixer's collective (it keeps yaw torque first) and the UAV sank at
+        // 2.5 m/s onto the ground, commanded to climb (two-UAV field seed 1, uav0, with the turn
+        // made during the descent).
+        touchdown_gate_.update(in.now_s, in.velocity_enu_m_s.head<2>(), in.roll_rad, in.pitch_rad,
+                               in.yaw_enu_rad);
+        const std::optional<double> skid_yaw = touchdown_gate_.skid_yaw_enu_rad(in.yaw_enu_rad);
+        const double spent_s = in.now_s - descent_since_s_;
+        out.action = VehicleOutputs::Action::kVelocity;
+        out.velocity_enu_m_s =
+            toward(p, {landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), transit_z}, 0.5);
+        out.yaw_enu_rad =
+            spent_s < kLandingWindRead_s ? in.yaw_enu_rad : skid_yaw.value_or(in.yaw_enu_rad);
+        const bool aligned =
+            !skid_yaw || std::abs(wrap_pi(*skid_yaw - in.yaw_enu_rad)) < kLandingSkidAlign_rad;
+        if ((spent_s >= kLandingWindRead_s && aligned) || spent_s >= kLandingAlignMax_s) {
+          land_phase_ = 3;
+          landing_yaw_rad_ = in.yaw_enu_rad;
+          stop_rule_from_s_ = in.now_s;
+          out.note =
+              skid_yaw
+                  ? fmt("skids along the wind (from %.0f deg): descending",
+                        std::atan2(touchdown_gate_.lean_enu().y(), touchdown_gate_.lean_enu().x()) *
+                            180.0 / kPi)
+                  : std::string("no wind to read: descending");
+        }
+      } else if (land_phase_ == 3) {
         // our own descent, on velocity alone near the ground, and the motors off at touchdown. The
         // autopilot's LAND holds the position where it began; in the field (GPS bias wandering, a
         // gust) that hold leans the vehicle against the ground once a leg touches: field seed 1
@@ -608,27 +667,26 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
               toward(p, {landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), h}, 0.5).head<2>();
         }
         // The last 2 m (the 0.5 m/s band) go on only while the gate says calm: no sideways speed
-        // and, once the hover's lean tells the wind, the skids along it (touchdown_gate.hpp;
-        // two-UAV field seeds 1 and 12 tipped over their gear at touchdown in gusts). The heading
-        // turns to the skids' one from the spot on.
+        // (touchdown_gate.hpp; two-UAV field seeds 1 and 12 tipped over their gear at touchdown
+        // in gusts). The heading stays where the skids were laid along the wind.
         const bool calm = touchdown_gate_.update(in.now_s, in.velocity_enu_m_s.head<2>(),
                                                  in.roll_rad, in.pitch_rad, in.yaw_enu_rad);
-        const std::optional<double> skid_yaw = touchdown_gate_.skid_yaw_enu_rad(in.yaw_enu_rad);
         const bool pause = h <= 2.0 && !calm;
         if (pause != descent_paused_) {
           descent_paused_ = pause;
-          out.note =
-              pause ? fmt("descent paused at %.2f m: %.2f m/s sideways, %.0f deg off the wind", h,
-                          in.velocity_enu_m_s.head<2>().norm(),
-                          skid_yaw ? std::abs(wrap_pi(*skid_yaw - in.yaw_enu_rad)) * 180.0 / kPi
-                                   : 0.0)
-                    : fmt("descent resumed at %.2f m", h);
+          out.note = pause ? fmt("descent paused (climbing) at %.2f m: %.2f m/s sideways", h,
+                                 in.velocity_enu_m_s.head<2>().norm())
+                           : fmt("descent resumed at %.2f m", h);
         }
         if (pause) {
-          // a commanded stop is neither the end of a steady descent nor the ground; the stop rule
-          // counts again a second after the descent resumes (the vehicle needs a few tenths of a
-          // second to reach 0.2 m/s down again)
-          v.z() = 0.0;
+          // not a hover but a slow climb: the height is the barometer's, which may have drifted
+          // by a metre and more since take-off (one-UAV field seed 17: on the ground at 1.96 m),
+          // and a hover commanded on the ground holds the vehicle there at hover thrust, light on
+          // its skids, where it slid about in the gust and tipped a propeller into the ground 11 s
+          // later; a climb lifts it off instead. A commanded climb is neither the end of a steady
+          // descent nor the ground; the stop rule counts again a second after the descent resumes
+          // (the vehicle needs a few tenths of a second to reach 0.2 m/s down again)
+          v.z() = kLandingPauseClimb_m_s;
           steady_descent_s_ = -1.0;
           steady_descent_ = false;
           descent_stopped_s_ = -1.0;
@@ -636,7 +694,7 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         }
         out.action = VehicleOutputs::Action::kVelocity;
         out.velocity_enu_m_s = v;
-        out.yaw_enu_rad = skid_yaw.value_or(in.yaw_enu_rad);
+        out.yaw_enu_rad = landing_yaw_rad_;
         // touchdown: the 0.5 m/s descent stops within a telemetry sample or two when the gear
         // meets the ground (in the air the velocity loop holds it to a few cm/s; turbulence's
         // vertical drag is ~0.4 % of the weight), and the vehicle must be off before it pivots on
@@ -669,7 +727,7 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         if (stopped && descent_stopped_s_ < 0.0) descent_stopped_s_ = in.now_s;
         const double stopped_s = descent_stopped_s_ < 0.0 ? -1.0 : in.now_s - descent_stopped_s_;
         if (in.on_ground || (steady_descent_ && stopped_s >= 0.05) || stopped_s >= 1.0) {
-          land_phase_ = 3;
+          land_phase_ = 4;
           out.action = VehicleOutputs::Action::kDisarm;
           out.note = fmt("touchdown at %.2f m: motors off", h);
         }

@@ -131,6 +131,7 @@ class VehicleFsm {
   bool other_side_done_ = false;
   bool retask_ = false;  // the GCS's ReTask arrived
   bool cross_ = false;   // scanning the other half from the middle (re-tasked)
+  bool look_home_ = false;  // taken over, both halves scanned: the own half from beyond the middle
   int popped_ = 0;
   double ground_z_m_ = 0.0;  // the estimator's height on the ground before take-off, less rest height
   std::vector<Eigen::Vector2d> popped_at_;
@@ -153,7 +154,7 @@ class VehicleFsm {
   bool pierce_through_ = false;   // the pierce ended with the blades past the balloon, unseen
   double look_back_since_s_ = -1.0;  // back on the line, looking for the balloon since then
 
-  // landing: climb, transit, descend, motors off
+  // landing: climb, transit, skids along the wind, descend, motors off
   int land_phase_ = 0;
   double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
   double steady_descent_s_ = -1.0;   // since when it has been a steady ~0.5 m/s descent
@@ -161,6 +162,8 @@ class VehicleFsm {
   TouchdownGate touchdown_gate_;     // the last metres wait for calm, skids along the wind
   bool descent_paused_ = false;
   double stop_rule_from_s_ = 0.0;  // a descent resumed from a pause is not "stopped" before this
+  double descent_since_s_ = 0.0;   // over the spot since
+  double landing_yaw_rad_ = 0.0;   // the heading of the descent: skids along the wind
 
   // the heading setpoint last sent and when (NaN: none yet), for its rate limit
   double yaw_cmd_rad_ = 0.0;

@@ -401,6 +401,44 @@ TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBa
   EXPECT_GT(out.velocity_enu_m_s.y(), 3.0);
 }
 
+// Alone (the other UAV out), with balloons left after both halves: the own half once more, from
+// over the balloons 6 m beyond the middle, looking back at it, one leg end to end; then it lands.
+// One-UAV field seeds 4 and 17: a balloon 3.4-5.7 m in front of the own line at the edge of the
+// height spread was seen by neither leg there.
+TEST(Mbzirc2020VehicleFsm, AloneItScansItsOwnHalfAgainFromBeyondTheMiddle) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle v;
+  v.in.position_enu_m = {-10, -27, 0};
+  v.in.commands = {GcsCommand::kStart};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands = {GcsCommand::kTakeOver};
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.commands.clear();
+  ASSERT_TRUE(fsm.take_over());
+  v.in.position_enu_m.z() = 5.0;
+  double min_x = 1e9, max_x = -1e9;
+  int look_home_samples = 0;
+  for (int i = 0; i < 20000 && fsm.state() != VehicleState::kLand; ++i) {
+    const VehicleOutputs out = fsm.step(v.in);
+    if (fsm.state() == VehicleState::kBlindScan && v.in.position_enu_m.y() > 3.0 &&
+        std::abs(v.in.position_enu_m.y() - config.cross_line_back_m) < 1.2) {
+      ++look_home_samples;
+      EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m, 0.2);
+      min_x = std::min(min_x, v.in.position_enu_m.x());
+      max_x = std::max(max_x, v.in.position_enu_m.x());
+      if (std::abs(v.in.position_enu_m.x()) < 30.0) {
+        EXPECT_NEAR(v.in.yaw_enu_rad, -kPi / 2, 1e-6);  // looking south, home
+      }
+    }
+    v.apply(out, 0.05);
+  }
+  EXPECT_EQ(fsm.state(), VehicleState::kLand);
+  EXPECT_GT(look_home_samples, 0);
+  EXPECT_LT(min_x, config.arena_x_min_m + config.scan_corner_inset_m + 1.5);
+  EXPECT_GT(max_x, config.arena_x_max_m - config.scan_corner_inset_m - 1.5);
+}
+
 // Started, flown at z metres above the landing spot (10, -27) for 5 s, then landed by the GCS;
 // the autopilot's land detector never fires (on_ground false), so the FSM's own touchdown rule is
 // what turns the motors off.
@@ -527,8 +565,8 @@ TEST(Mbzirc2020VehicleFsm, DisarmedInTheAirIsFailedAndGcsLandWorksFromAnyState) 
 }
 
 // Two-UAV field seed 12: under 1 m a gust gave the landing UAV 1 m/s sideways and it touched down
-// so, then tipped over its gear. The descent now stops while the gust lasts (a stopped descent in
-// the air is then not taken for the ground) and goes on after a calm second.
+// so, then tipped over its gear. The descent now turns into a slow climb while the gust lasts (not
+// taken for the ground) and goes on after a calm second.
 TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
   const MissionConfig config;
   VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
@@ -547,12 +585,13 @@ TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
     ASSERT_NE(step().action, VehicleOutputs::Action::kDisarm);
   }
   ASSERT_LT(v.in.position_enu_m.z(), 0.8);
-  // the gust: 0.8 m/s east for 2 s, then still for 0.5 s: the descent holds, no touchdown
+  // the gust: 0.8 m/s east for 2 s, then still for 0.5 s: the descent stops (a slow climb: on a
+  // drifted barometer the vehicle may be on the ground already), no touchdown
   for (int i = 0; i < 50; ++i) {
     const VehicleOutputs out = fsm.step(v.in);
     ASSERT_EQ(out.action, VehicleOutputs::Action::kVelocity) << i;
     if (i >= 1) {
-      EXPECT_EQ(out.velocity_enu_m_s.z(), 0.0) << i;
+      EXPECT_GT(out.velocity_enu_m_s.z(), 0.0) << i;  // a slow climb, not a hover
     }
     v.in.velocity_enu_m_s = {i < 40 ? 0.8 : 0.0, 0.0, 0.0};
     v.in.now_s += 0.05;
@@ -567,6 +606,44 @@ TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
   EXPECT_TRUE(descending);
   EXPECT_TRUE(disarm);
   EXPECT_EQ(v.in.position_enu_m.z(), 0.0);
+}
+
+// Over the landing spot, at the transit altitude, the UAV reads the wind from its lean and turns
+// its skids along it before it descends, and keeps that heading all the way down: a heading turn
+// near the ground saturated the mixer's collective (two-UAV field seed 1: a 2.5 m/s sink onto the
+// ground). Wind from the north, 5 deg of lean, the UAV facing east: it turns to +-90 deg.
+TEST(Mbzirc2020VehicleFsm, LandsWithItsSkidsAlongTheWindTurningHighUp) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 1, Side::kNorth, {10, -27});
+  FakeVehicle v;
+  start_and_land(fsm, v, 5.0);
+  const double lean = std::sin(5.0 * kPi / 180.0);
+  double descent_yaw = 0.0;
+  bool descending = false, disarm = false;
+  for (int i = 0; i < 4000 && !disarm; ++i) {
+    // the lean that holds the UAV still against a north wind, as its ATTITUDE reports it
+    const double fwd = lean * std::cos(kPi / 2 - v.in.yaw_enu_rad);
+    const double left = lean * std::sin(kPi / 2 - v.in.yaw_enu_rad);
+    v.in.roll_rad = -std::asin(left);
+    v.in.pitch_rad = -std::asin(fwd / std::cos(v.in.roll_rad));
+    const Eigen::Vector3d before = v.in.position_enu_m;
+    const VehicleOutputs out = fsm.step(v.in);
+    disarm = out.action == VehicleOutputs::Action::kDisarm;
+    v.apply(out, 0.05);
+    v.in.position_enu_m.z() = std::max(v.in.position_enu_m.z(), 0.0);
+    v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
+    if (!descending && out.velocity_enu_m_s.z() < -0.4 &&
+        v.in.position_enu_m.z() < config.landing_transit_altitude_s1_m - 1.0) {
+      descending = true;
+      descent_yaw = v.in.yaw_enu_rad;
+      EXPECT_NEAR(std::abs(descent_yaw), kPi / 2, 10.0 * kPi / 180.0);
+    }
+    if (descending) {
+      EXPECT_EQ(v.in.yaw_enu_rad, descent_yaw);
+    }
+  }
+  EXPECT_TRUE(descending);
+  EXPECT_TRUE(disarm);
 }
 
 // The wind from the hover's lean: the thrust tilts into the wind by atan(drag / weight). The
@@ -598,9 +675,9 @@ TEST(Mbzirc2020TouchdownGate, LaysTheSkidsAlongTheWindFromTheHoversLean) {
 }
 
 // A gust's sideways speed pauses the descent; it goes on once the speed has stayed under
-// 0.25 m/s for a second (a bounce under it restarts the second), and a heading across the wind
-// pauses it as well. Paused 20 s in all, the descent goes on whatever the wind does.
-TEST(Mbzirc2020TouchdownGate, PausesForSidewaysSpeedAndACrossWindHeadingUntilCalm) {
+// 0.25 m/s for a second (a bounce under it restarts the second). Paused 20 s in all, the descent
+// goes on whatever the wind does.
+TEST(Mbzirc2020TouchdownGate, PausesForSidewaysSpeedUntilCalm) {
   constexpr double kDt = 1.0 / 16;  // 16 Hz telemetry: the times add up exactly
   TouchdownGate gate;
   double t = 0.0;
@@ -614,26 +691,6 @@ TEST(Mbzirc2020TouchdownGate, PausesForSidewaysSpeedAndACrossWindHeadingUntilCal
   EXPECT_FALSE(feed({0.3, 0}, 0.0));  // over 0.25 m/s: the second starts again
   for (int i = 0; i < 16; ++i) EXPECT_FALSE(feed({0.1, 0}, 0.0)) << i;
   EXPECT_TRUE(feed({0.1, 0}, 0.0));  // 1.0 s under 0.25 m/s
-
-  // wind from the north, a 6 deg lean: the skids want yaw +-90 deg. The attitude a heading sees:
-  // the lean's (forward, left) parts are (-sin(pitch) cos(roll), -sin(roll)).
-  TouchdownGate across;
-  t = 0.0;
-  auto feed_across = [&](double yaw_rad) {
-    const double lean = std::sin(6.0 * kPi / 180.0);
-    const double fwd = lean * std::cos(kPi / 2 - yaw_rad),
-                 left = lean * std::sin(kPi / 2 - yaw_rad);
-    const double roll = -std::asin(left), pitch = -std::asin(fwd / std::cos(roll));
-    t += kDt;
-    return across.update(t, {0, 0}, roll, pitch, yaw_rad);
-  };
-  EXPECT_FALSE(feed_across(kPi / 4));  // 45 deg off: paused
-  ASSERT_TRUE(across.skid_yaw_enu_rad(kPi / 4));
-  EXPECT_NEAR(*across.skid_yaw_enu_rad(kPi / 4), kPi / 2, 1e-9);
-  EXPECT_NEAR(*across.skid_yaw_enu_rad(-kPi / 4), -kPi / 2, 1e-9);
-  for (int i = 0; i < 40; ++i) EXPECT_FALSE(feed_across(kPi / 2 - 0.25));  // 14 deg off
-  for (int i = 0; i < 16; ++i) EXPECT_FALSE(feed_across(kPi / 2 - 0.15));  // 8.6 deg off
-  EXPECT_TRUE(feed_across(kPi / 2 - 0.15));
 
   // gusty for ever: 20 s of pauses, then the descent goes on
   TouchdownGate gusty;
