@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "api/request_fields.hpp"
@@ -16,46 +17,14 @@ using Json = nlohmann::json;
 constexpr auto kIdleWait = std::chrono::milliseconds(50);   // stop-check polling while held
 constexpr auto kSeqPoll = std::chrono::milliseconds(1);     // MAVLink seq polling while a done waits
 
-const char* const kOps[] = {"status",        "pause",           "resume",         "step",
-                            "set_rate",      "reset",           "vehicles",       "truck",
-                            "balloons",      "events",          "subscribe_events", "unsubscribe_events",
-                            "kill_vehicle",  "motor_failure",   "gps_glitch",     "gps_denied",
-                            "link_drop",     "gimbal",          "lockstep_join",  "lockstep_leave",
-                            "done",          "camera_list",     "camera_subscribe", "camera_unsubscribe",
-                            "camera_blackout", "wind",       "pause_at"};
-
-Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
-
 std::string dump(const Json& j) {
   return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
-
-// The fields the built-in ops read, with their types: a request naming one with another type gets
-// bad_field before its op runs (so no op half-applies a request). Extensions check their own.
-constexpr FieldSpec kBuiltinFields[] = {
-    {"steps", FieldType::kNumber},       {"duration_s", FieldType::kNumber},
-    {"rate", FieldType::kNumber},        {"seed", FieldType::kNumber},
-    {"from_seq", FieldType::kNumber},    {"vehicle", FieldType::kIndexOrName},
-    {"reason", FieldType::kString},      {"rotor", FieldType::kNumber},
-    {"failed", FieldType::kBoolean},     {"offset_enu_m", FieldType::kArray},
-    {"denied", FieldType::kBoolean},     {"down", FieldType::kBoolean},
-    {"gimbal", FieldType::kString},      {"mode", FieldType::kString},
-    {"pitch_deg", FieldType::kNumber},   {"yaw_deg", FieldType::kNumber},
-    {"period_s", FieldType::kNumber},    {"timeout_s", FieldType::kNumber},
-    {"tick", FieldType::kNumber},        {"busy_until", FieldType::kNumber},
-    {"mavlink_seq", FieldType::kObject},
-    {"speed_m_s", FieldType::kNumber},   {"from_deg", FieldType::kNumber},
-    {"turbulence_sd_m_s", FieldType::kNumber}, {"gust_m_s", FieldType::kNumber},
-    {"gust_duration_s", FieldType::kNumber},
-    {"time_s", FieldType::kNumber},      {"lockstep_empty", FieldType::kBoolean},
-};
 
 // ranges of the numbers the built-in ops take
 constexpr double kMaxRate = 1e6;            // set_rate: above this "as fast as possible" (0) is meant
 constexpr double kMinRate = 1e-3;           // below, a control step would take minutes of wall time
 constexpr double kMaxLockstepTimeout_s = 1e6;
-constexpr double kMaxGlitch_m = 1e5;
-constexpr double kMaxGimbalAngle_deg = 360.0;
 
 Json error_reply(const Json& id, const std::string& code, const std::string& message) {
   return Json{{"id", id}, {"ok", false}, {"error", {{"code", code}, {"message", message}}}};
@@ -72,14 +41,16 @@ bool same_secret(const std::string& a, const std::string& b) {
 
 ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects,
                      const ApiConfig& config)
-    : sim_(sim), runner_(runner), objects_(std::move(objects)), config_(config), paused_(config.start_paused) {
+    : sim_(sim),
+      runner_(runner),
+      config_(config),
+      vehicle_ops_(sim, std::move(objects)),
+      paused_(config.start_paused) {
+  register_own_ops();
+  add_group(&vehicle_ops_);
   LineServer::Callbacks cb;
   cb.on_connect = [this](uint64_t conn) {
-    Json ops = Json::array();
-    for (const char* op : kOps) ops.push_back(op);
-    for (const std::string& op : extension_ops_) ops.push_back(op);
-    ops.push_back("auth");
-    Json hello{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops}};
+    Json hello{{"hello", "uavsim"}, {"protocol", kProtocolVersion}, {"ops", ops_.names()}};
     if (config_.token) hello["auth_required"] = true;
     send(conn, hello);
     ++connections_;
@@ -106,7 +77,9 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
       }
       authenticated_.insert(conn);
     }
-    if (op == "auth") {
+    const OpSpec* spec = ops_.find(op);
+    if (spec == nullptr) return reply_in_order(conn, error_reply(id, "unknown_op", "unknown op '" + op + "'"));
+    if (spec->thread == OpThread::kIo) {  // auth, the one op answered here
       return reply_in_order(conn,
                             Json{{"id", id}, {"ok", true}, {"result", {{"authenticated", config_.token.has_value()}}}});
     }
@@ -121,11 +94,6 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
                                                 "gcs_target_host must be this client's own address (" + peer +
                                                     ") unless the server runs with --allow-remote-gcs"));
       }
-    }
-    if (std::find_if(std::begin(kOps), std::end(kOps), [&](const char* o) { return op == o; }) ==
-            std::end(kOps) &&
-        std::find(extension_ops_.begin(), extension_ops_.end(), op) == extension_ops_.end()) {
-      return reply_in_order(conn, error_reply(id, "unknown_op", "unknown op '" + op + "'"));
     }
     enqueue({Request::Kind::kLine, conn, std::move(parsed.body)});
   };
@@ -152,21 +120,24 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
 
 ApiServer::~ApiServer() { shutdown(); }
 
-void ApiServer::start() { server_->start(); }
+void ApiServer::start() {
+  if (!frames_) FrameStream::register_unavailable(ops_);
+  server_->start();
+}
 
-void ApiServer::add_extension(ApiExtension* extension) {
-  extensions_.push_back(extension);
-  for (std::string& op : extension->ops()) extension_ops_.push_back(std::move(op));
+void ApiServer::add_group(OpGroup* group) {
+  group->register_ops(ops_);
+  groups_.push_back(group);
 }
 
 void ApiServer::set_frame_service(render::FrameService* service) {
-  frame_service_ = service;
   if (service == nullptr) return;
-  frames_ = std::make_unique<FrameStream>(*service, *server_, [this](uint64_t conn) {
+  frames_ = std::make_unique<FrameStream>(sim_, *service, *server_, [this](uint64_t conn) {
     auto it = clients_.find(conn);
     return it != clients_.end() && it->second.lockstep;
   });
   service->add_consumer(frames_.get());
+  add_group(frames_.get());
 }
 
 void ApiServer::shutdown() {
@@ -217,7 +188,7 @@ void ApiServer::on_gate() {
       if (shutdown_) return;
     }
     if (stop_check_ && stop_check_()) return;
-    for (ApiExtension* e : extensions_) e->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
+    for (OpGroup* g : groups_) g->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
     announce_ticks();
     complete_ticks();
 
@@ -268,8 +239,7 @@ void ApiServer::drain() {
       case Request::Kind::kDisconnect:
         if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
         if (auto it = clients_.find(r.conn); it != clients_.end()) lockstep_left(r.conn, it->second);
-        for (ApiExtension* e : extensions_) e->on_disconnect(r.conn);
-        if (frames_) frames_->on_disconnect(r.conn);
+        for (OpGroup* g : groups_) g->on_disconnect(r.conn);
         clients_.erase(r.conn);
         // every request of the connection has been answered: the socket may go once that is written
         server_->close_when_sent(r.conn);
@@ -321,7 +291,7 @@ void ApiServer::announce_ticks() {
     c.tick = std::llround(now / c.period_s);
     c.tick_time_s = now;
     // the frames due at this tick reach the client before the tick (docs/protocol.md)
-    if (frames_ && frames_->has_subscriptions(conn)) frame_service_->wait_delivered();
+    for (OpGroup* g : groups_) g->before_tick(conn);
     c.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                     std::chrono::duration<double>(c.timeout_s));
     send(conn, Json{{"event", "tick"}, {"tick", c.tick}, {"time", now}});
@@ -370,51 +340,6 @@ void ApiServer::drop_lockstep(uint64_t conn, Client& c, const std::string& reaso
 // ---------------------------------------------------------------------------------------------------
 // requests
 
-std::optional<size_t> ApiServer::vehicle_arg(const Json& request, Error* error) const {
-  auto it = request.find("vehicle");
-  if (it == request.end()) {
-    *error = {"missing_field", "\"vehicle\" (index or name) is required"};
-    return std::nullopt;
-  }
-  if (it->is_number_integer() || it->is_number_unsigned()) {
-    const int64_t i = it->get<int64_t>();
-    if (i >= 0 && static_cast<size_t>(i) < sim_.vehicle_count()) return static_cast<size_t>(i);
-  } else if (it->is_string()) {
-    for (size_t i = 0; i < sim_.vehicle_count(); ++i) {
-      if (sim_.vehicle_name(i) == it->get<std::string>()) return i;
-    }
-  } else {
-    *error = {"bad_field", "\"vehicle\" must be an index or a name"};
-    return std::nullopt;
-  }
-  *error = {"unknown_vehicle", "no vehicle " + it->dump() + " (" + std::to_string(sim_.vehicle_count()) +
-                                   " vehicles)"};
-  return std::nullopt;
-}
-
-Json ApiServer::vehicle_json(size_t i) const {
-  const fc::TruthState t = const_cast<sim::Simulation&>(sim_).truth(i);
-  const sim::VehicleRuntime& rt = sim_.runtime(i);
-  Json failed = Json::array();
-  for (size_t k = 0; k < rt.motors.failed.size(); ++k) {
-    if (rt.motors.failed[k]) failed.push_back(k);
-  }
-  return Json{{"index", i},
-              {"name", sim_.vehicle_name(i)},
-              {"frame", sim_.airframe(i).frame},
-              {"position_enu_m", vec3(t.position_enu_m)},
-              {"velocity_enu_m_s", vec3(t.velocity_enu_m_s)},
-              {"q_enu_body", {t.q_enu_body.w(), t.q_enu_body.x(), t.q_enu_body.y(), t.q_enu_body.z()}},
-              {"rate_body_rad_s", vec3(t.rate_body_rad_s)},
-              {"armed", sim_.fc(i).armed()},
-              {"mode", fc::mode_name(sim_.fc(i).mode())},
-              {"crashed", rt.crashed},
-              {"on_ground", rt.on_ground},
-              {"battery_v", rt.battery.voltage_v},
-              {"battery_used_mah", rt.battery.consumed_mah},
-              {"failed_motors", failed}};
-}
-
 Json ApiServer::event_json(const sim::Event& e) const {
   return Json{{"event", "sim_event"},
               {"seq", e.seq},
@@ -430,358 +355,224 @@ Json ApiServer::event_json(const sim::Event& e) const {
 void ApiServer::handle(uint64_t conn, const Json& request) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);
   const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
+  const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
+  if (const auto bad = mistyped_field(request, spec->typed_fields)) return reply_error(conn, id, "bad_field", *bad);
+  OpReply reply;
+  spec->handler(conn, request, &reply);
+  if (reply.failed()) return reply_error(conn, id, reply.code, reply.message);
+  if (!reply.deferred) send(conn, Json{{"id", id}, {"ok", true}, {"result", reply.result}});
+}
+
+// ---------------------------------------------------------------------------------------------------
+// this server's own ops: the clock, events and lockstep
+
+void ApiServer::register_own_ops() {
+  using Member = void (ApiServer::*)(uint64_t, const Json&, OpReply*);
+  const auto add = [this](const char* name, const char* group, Member op) {
+    ops_.add({name, group, std::bind_front(op, this), core_op_fields()});
+  };
+  add("status", "clock", &ApiServer::op_status);
+  add("pause", "clock", &ApiServer::op_pause);
+  add("pause_at", "clock", &ApiServer::op_pause_at);
+  add("resume", "clock", &ApiServer::op_resume);
+  add("step", "clock", &ApiServer::op_step);
+  add("set_rate", "clock", &ApiServer::op_set_rate);
+  add("reset", "clock", &ApiServer::op_reset);
+  add("events", "events", &ApiServer::op_events);
+  add("subscribe_events", "events", &ApiServer::op_subscribe_events);
+  add("unsubscribe_events", "events", &ApiServer::op_unsubscribe_events);
+  add("lockstep_join", "lockstep", &ApiServer::op_lockstep_join);
+  add("lockstep_leave", "lockstep", &ApiServer::op_lockstep_leave);
+  add("done", "lockstep", &ApiServer::op_done);
+  // answered by the transport on the I/O thread (--api-token-file), before any request is queued
+  ops_.add({"auth", "connection", nullptr, {}, OpThread::kIo});
+}
+
+void ApiServer::op_status(uint64_t, const Json&, OpReply* reply) {
+  int lockstep = 0;
+  for (const auto& [k, c] : clients_) lockstep += c.lockstep ? 1 : 0;
+  reply->result = {{"protocol", kProtocolVersion},
+                   {"time_s", sim_.time_s()},
+                   {"steps", sim_.step_count()},
+                   {"paused", paused_},
+                   {"rate", runner_ ? Json(runner_->rate()) : Json(nullptr)},
+                   {"physics_hz", 1.0 / sim_.physics_dt_s()},
+                   {"control_hz", 1.0 / sim_.control_dt_s()},
+                   {"seed", sim_.config().seed},
+                   {"vehicles", sim_.vehicle_count()},
+                   {"lockstep_clients", lockstep},
+                   {"events", sim_.events().next_seq()},
+                   {"realism", sim::realism_name(sim_.config().field.realism)}};
+}
+
+void ApiServer::op_pause(uint64_t, const Json&, OpReply* reply) {
+  paused_ = true;
+  reply->result = {{"time_s", sim_.time_s()}, {"paused", true}};
+}
+
+void ApiServer::op_pause_at(uint64_t, const Json& request, OpReply* reply) {
+  // arm a pause at a sim time and/or when the last lockstep client leaves (deterministic ends)
+  const auto at = number_field(request, "time_s");
+  const bool empty = request.value("lockstep_empty", false);
+  if (!at && !empty) return reply->fail("missing_field", "\"time_s\" or \"lockstep_empty\": true is required");
+  if (at && !std::isfinite(*at)) return reply->fail("bad_field", "\"time_s\" must be a finite sim time");
+  if (at) pause_at_s_.insert(*at);
+  if (empty) pause_when_lockstep_empty_ = true;
+  reply->result = {{"time_s", sim_.time_s()},
+                   {"pause_at_s", Json(std::vector<double>(pause_at_s_.begin(), pause_at_s_.end()))},
+                   {"lockstep_empty", pause_when_lockstep_empty_}};
+}
+
+void ApiServer::op_resume(uint64_t, const Json&, OpReply* reply) {
+  paused_ = false;
+  steps_remaining_ = 0;
+  reply->result = {{"time_s", sim_.time_s()}, {"paused", false}};
+}
+
+void ApiServer::op_step(uint64_t conn, const Json& request, OpReply* reply) {
+  // N control steps (default 1) or a duration rounded to whole control steps; pauses first
+  const auto steps = number_field(request, "steps");
+  const auto duration = number_field(request, "duration_s");
+  double n = 1;
+  if (steps) n = *steps;
+  if (duration) n = std::round(*duration / control_dt_s());
+  if (!(n >= 1 && n <= 1e9) || std::floor(n) != n) {
+    return reply->fail("bad_field",
+                       "\"steps\" must be an integer in [1, 1e9] (or \"duration_s\" at least one control step)");
+  }
+  if (step_reply_) return reply->fail("busy", "another step request is in progress");
+  paused_ = true;
+  steps_remaining_ = static_cast<uint64_t>(n);
+  step_reply_ = std::make_pair(conn, request.contains("id") ? request["id"] : Json(nullptr));
+  reply->deferred = true;  // answered when the steps are done
+}
+
+void ApiServer::op_set_rate(uint64_t, const Json& request, OpReply* reply) {
+  const auto rate = number_field(request, "rate");
+  if (!rate) {
+    return reply->fail("missing_field", "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
+  }
+  if (*rate != 0.0 && !sim::finite_in(*rate, kMinRate, kMaxRate)) {
+    return reply->fail("bad_field", "\"rate\" must be 0 (as fast as possible) or in [0.001, 1e6]");
+  }
+  if (runner_ == nullptr) return reply->fail("not_available", "this server has no clock runner");
+  runner_->set_rate(*rate);
+  reply->result = {{"rate", *rate}};
+}
+
+void ApiServer::op_reset(uint64_t, const Json& request, OpReply* reply) {
+  // an integer seed travels exactly; a number in double form must be a whole one below 2^64
+  const auto it = request.find("seed");
+  std::optional<uint64_t> seed;
+  if (it != request.end()) {
+    seed = it->is_number_unsigned() ? std::optional<uint64_t>(it->get<uint64_t>())
+                                    : sim::checked_integer<uint64_t>(it->get<double>());
+  }
+  if (it != request.end() && !seed) return reply->fail("bad_field", "\"seed\" must be an integer in [0, 2^64)");
+  const uint64_t s = seed.value_or(sim_.config().seed);
+  sim_.reset(s);
+  events_forwarded_ = 0;
+  pause_at_s_.clear();
+  pause_when_lockstep_empty_ = false;
+  for (OpGroup* g : groups_) g->on_reset();
+  for (auto& [k, c] : clients_) {
+    c.awaiting = false;
+    c.next_due_s = 0.0;
+    if (c.events) send(k, Json{{"event", "reset"}, {"seed", s}});
+  }
+  reply->result = {{"seed", s}, {"time_s", sim_.time_s()}};
+}
+
+void ApiServer::op_events(uint64_t, const Json& request, OpReply* reply) {
+  const auto from_number = number_field(request, "from_seq");
+  const auto from = from_number ? sim::checked_integer<uint64_t>(*from_number) : std::optional<uint64_t>(0);
+  if (!from) return reply->fail("bad_field", "\"from_seq\" must be a non-negative integer");
+  // the events already forwarded (later ones stream to subscribers), from from_seq or the oldest
+  // still held: first_seq > from_seq tells the client that the ones between were dropped
+  const uint64_t from_seq = *from;
+  const sim::EventLog& log = sim_.events();
+  Json list = Json::array();
+  for (const sim::Event& e : log.recent()) {
+    if (e.seq >= from_seq && e.seq < events_forwarded_) list.push_back(event_json(e));
+  }
+  const uint64_t first_seq = std::min<uint64_t>(log.first_seq(), events_forwarded_);
+  reply->result = {{"events", list}, {"first_seq", first_seq}, {"next_seq", events_forwarded_}};
+}
+
+void ApiServer::op_subscribe_events(uint64_t conn, const Json& request, OpReply* reply) {
+  // a subscriber gets the backlog in the reply; later events stream as {"event": "sim_event", ...}
+  op_events(conn, request, reply);
+  if (!reply->failed()) clients_[conn].events = true;
+}
+
+void ApiServer::op_unsubscribe_events(uint64_t conn, const Json&, OpReply*) { clients_[conn].events = false; }
+
+void ApiServer::op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply) {
+  const auto period = number_field(request, "period_s");
+  const auto timeout = number_field(request, "timeout_s");
+  if (!period) return reply->fail("missing_field", "\"period_s\" (sim seconds between ticks) is required");
+  if (!(*period > 0.0) || !std::isfinite(*period) || *period > 3600.0) {
+    return reply->fail("bad_field", "\"period_s\" must be in (0, 3600]");
+  }
+  if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
+    // the deadline is a steady_clock time point: 1e10 s would overflow it and count as expired
+    return reply->fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
+  }
+  // whole control steps, at least one; the first tick is the next multiple of the period
   Client& client = clients_[conn];
-  Error error;
-  Json result = Json::object();
-  auto fail = [&](const std::string& code, const std::string& message) { error = {code, message}; };
+  client.period_steps = std::max<int64_t>(1, std::llround(*period / control_dt_s()));
+  client.period_s = client.period_steps * control_dt_s();
+  client.lockstep = true;
+  client.awaiting = false;
+  client.timeout_s = timeout.value_or(config_.lockstep_timeout_s);
+  client.next_due_s = std::ceil(sim_.time_s() / client.period_s - 1e-9) * client.period_s;
+  reply->result = {{"period_s", client.period_s}, {"first_tick_time", client.next_due_s},
+                   {"timeout_s", client.timeout_s}};
+}
 
-  // an extension's op (radio_ops.hpp, ...)
-  for (ApiExtension* e : extensions_) {
-    const std::vector<std::string> ops = e->ops();
-    if (std::find(ops.begin(), ops.end(), op) == ops.end()) continue;
-    if (!e->handle(conn, op, request, &result, &error.code, &error.message)) {
-      return reply_error(conn, id, error.code, error.message);
-    }
-    return send(conn, Json{{"id", id}, {"ok", true}, {"result", result}});
+void ApiServer::op_lockstep_leave(uint64_t conn, const Json&, OpReply*) {
+  Client& client = clients_[conn];
+  lockstep_left(conn, client);
+  client.lockstep = false;
+  client.awaiting = false;
+}
+
+void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
+  Client& client = clients_[conn];
+  const auto tick = number_field(request, "tick");
+  const auto busy = number_field(request, "busy_until");
+  auto seqs = request.find("mavlink_seq");
+  if (!client.lockstep) return reply->fail("not_joined", "\"done\" without lockstep_join");
+  if (!client.awaiting || client.done_received) return reply->fail("bad_state", "no tick is waiting for \"done\"");
+  if (has_field(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
+    return reply->fail("bad_field", "the tick waiting is " + std::to_string(client.tick));
   }
-
-  if (const auto bad = mistyped_field(request, kBuiltinFields)) return reply_error(conn, id, "bad_field", *bad);
-
-  if (op == "status") {
-    int lockstep = 0;
-    for (const auto& [k, c] : clients_) lockstep += c.lockstep ? 1 : 0;
-    result = {{"protocol", kProtocolVersion},
-              {"time_s", sim_.time_s()},
-              {"steps", sim_.step_count()},
-              {"paused", paused_},
-              {"rate", runner_ ? Json(runner_->rate()) : Json(nullptr)},
-              {"physics_hz", 1.0 / sim_.physics_dt_s()},
-              {"control_hz", 1.0 / sim_.control_dt_s()},
-              {"seed", sim_.config().seed},
-              {"vehicles", sim_.vehicle_count()},
-              {"lockstep_clients", lockstep},
-              {"events", sim_.events().next_seq()},
-              {"realism", sim::realism_name(sim_.config().field.realism)}};
-  } else if (op == "pause") {
-    paused_ = true;
-    result = {{"time_s", sim_.time_s()}, {"paused", true}};
-  } else if (op == "pause_at") {
-    // arm a pause at a sim time and/or when the last lockstep client leaves (deterministic ends)
-    const auto at = number_field(request, "time_s");
-    const bool empty = request.value("lockstep_empty", false);
-    if (!at && !empty) {
-      fail("missing_field", "\"time_s\" or \"lockstep_empty\": true is required");
-    } else if (at && !std::isfinite(*at)) {
-      fail("bad_field", "\"time_s\" must be a finite sim time");
-    } else {
-      if (at) pause_at_s_.insert(*at);
-      if (empty) pause_when_lockstep_empty_ = true;
-      result = {{"time_s", sim_.time_s()},
-                {"pause_at_s", Json(std::vector<double>(pause_at_s_.begin(), pause_at_s_.end()))},
-                {"lockstep_empty", pause_when_lockstep_empty_}};
-    }
-  } else if (op == "resume") {
-    paused_ = false;
-    steps_remaining_ = 0;
-    result = {{"time_s", sim_.time_s()}, {"paused", false}};
-  } else if (op == "step") {
-    // N control steps (default 1) or a duration rounded to whole control steps; pauses first
-    const auto steps = number_field(request, "steps");
-    const auto duration = number_field(request, "duration_s");
-    double n = 1;
-    if (steps) n = *steps;
-    if (duration) n = std::round(*duration / control_dt_s());
-    if (!(n >= 1 && n <= 1e9) || std::floor(n) != n) {
-      fail("bad_field", "\"steps\" must be an integer in [1, 1e9] (or \"duration_s\" at least one control step)");
-    } else if (step_reply_) {
-      fail("busy", "another step request is in progress");
-    } else {
-      paused_ = true;
-      steps_remaining_ = static_cast<uint64_t>(n);
-      step_reply_ = std::make_pair(conn, id);
-      return;  // answered when the steps are done
-    }
-  } else if (op == "set_rate") {
-    const auto rate = number_field(request, "rate");
-    if (!rate) {
-      fail("missing_field", "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
-    } else if (*rate != 0.0 && !sim::finite_in(*rate, kMinRate, kMaxRate)) {
-      fail("bad_field", "\"rate\" must be 0 (as fast as possible) or in [0.001, 1e6]");
-    } else if (runner_ == nullptr) {
-      fail("not_available", "this server has no clock runner");
-    } else {
-      runner_->set_rate(*rate);
-      result = {{"rate", *rate}};
-    }
-  } else if (op == "reset") {
-    // an integer seed travels exactly; a number in double form must be a whole one below 2^64
-    const auto it = request.find("seed");
-    std::optional<uint64_t> seed;
-    if (it != request.end()) {
-      seed = it->is_number_unsigned() ? std::optional<uint64_t>(it->get<uint64_t>())
-                                      : sim::checked_integer<uint64_t>(it->get<double>());
-    }
-    if (it != request.end() && !seed) {
-      fail("bad_field", "\"seed\" must be an integer in [0, 2^64)");
-    } else {
-      const uint64_t s = seed.value_or(sim_.config().seed);
-      sim_.reset(s);
-      events_forwarded_ = 0;
-      pause_at_s_.clear();
-      pause_when_lockstep_empty_ = false;
-      if (frames_) frames_->clear_blackouts();  // their times were on the old clock
-      for (auto& [k, c] : clients_) {
-        c.awaiting = false;
-        c.next_due_s = 0.0;
-        if (c.events) send(k, Json{{"event", "reset"}, {"seed", s}});
+  if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
+    return reply->fail("bad_field", "\"busy_until\" must be a sim time in seconds");
+  }
+  if (seqs != request.end() && !seqs->is_object()) {
+    return reply->fail("bad_field", "\"mavlink_seq\" must be an object {vehicle: seq}");
+  }
+  std::map<size_t, uint8_t> wait;
+  if (seqs != request.end()) {
+    for (auto it = seqs->begin(); it != seqs->end(); ++it) {
+      Json probe = {{"vehicle", it.key()}};
+      // "0" names vehicle 0; any other string a vehicle name
+      char* end = nullptr;
+      const long index = std::strtol(it.key().c_str(), &end, 10);
+      if (!it.key().empty() && *end == '\0') probe["vehicle"] = index;
+      const auto v = vehicle_field(sim_, probe, reply);
+      if (!v) return;
+      if (!it.value().is_number_integer() || it.value().get<int64_t>() < 0 || it.value().get<int64_t>() > 255) {
+        return reply->fail("bad_field", "MAVLink sequence numbers are integers in [0, 255]");
       }
-      result = {{"seed", s}, {"time_s", sim_.time_s()}};
-    }
-  } else if (op == "vehicles") {
-    result = Json::array();
-    for (size_t i = 0; i < sim_.vehicle_count(); ++i) result.push_back(vehicle_json(i));
-    result = {{"time_s", sim_.time_s()}, {"vehicles", result}};
-  } else if (op == "truck") {
-    if (objects_.trucks.empty()) {
-      fail("not_available", "this world has no truck");
-    } else {
-      Json trucks = Json::array();
-      for (const objects::Truck* truck : objects_.trucks) {
-        const objects::TruckState s = truck->state(sim_.time_s());
-        trucks.push_back({{"name", s.name},
-                          {"position_enu_m", vec3(s.position_enu_m)},
-                          {"velocity_enu_m_s", vec3(s.velocity_enu_m_s)},
-                          {"yaw_rad", s.yaw_rad},
-                          {"speed_m_s", s.speed_m_s},
-                          {"s_m", s.s_m},
-                          {"laps", s.laps},
-                          {"track_length_m", truck->track().length_m()},
-                          {"deck_centre_enu_m", vec3(s.deck_centre_enu_m)},
-                          {"carried_vehicles", s.carried_vehicles}});
-      }
-      result = {{"time_s", sim_.time_s()}, {"trucks", trucks}};
-    }
-  } else if (op == "balloons") {
-    if (objects_.balloons == nullptr) {
-      fail("not_available", "this world has no balloons");
-    } else {
-      Json balloons = Json::array();
-      for (const objects::BalloonState& b : objects_.balloons->balloons()) {
-        balloons.push_back({{"name", b.name},
-                            {"position_enu_m", vec3(b.position_enu_m)},
-                            {"radius_m", b.radius_m},
-                            {"popped", b.popped},
-                            {"popped_by", b.popped ? Json(b.popped_by) : Json(nullptr)},
-                            {"popped_time_s", b.popped ? Json(b.popped_time_s) : Json(nullptr)}});
-      }
-      result = {{"time_s", sim_.time_s()}, {"balloons", balloons}};
-    }
-  } else if (op == "events" || op == "subscribe_events") {
-    const auto from_number = number_field(request, "from_seq");
-    const auto from = from_number ? sim::checked_integer<uint64_t>(*from_number) : std::optional<uint64_t>(0);
-    if (!from) {
-      fail("bad_field", "\"from_seq\" must be a non-negative integer");
-    } else {
-      // the events already forwarded (later ones stream to subscribers), from from_seq or the oldest
-      // still held: first_seq > from_seq tells the client that the ones between were dropped
-      const uint64_t from_seq = *from;
-      const sim::EventLog& log = sim_.events();
-      Json list = Json::array();
-      for (const sim::Event& e : log.recent()) {
-        if (e.seq >= from_seq && e.seq < events_forwarded_) list.push_back(event_json(e));
-      }
-      const uint64_t first_seq = std::min<uint64_t>(log.first_seq(), events_forwarded_);
-      // a subscriber gets the backlog in the reply; later events stream as {"event": "sim_event", ...}
-      if (op == "subscribe_events") client.events = true;
-      result = {{"events", list}, {"first_seq", first_seq}, {"next_seq", events_forwarded_}};
-    }
-  } else if (op == "unsubscribe_events") {
-    client.events = false;
-  } else if (op == "kill_vehicle" || op == "motor_failure" || op == "gps_glitch" || op == "gps_denied" ||
-             op == "link_drop") {
-    const auto v = vehicle_arg(request, &error);
-    if (v) {
-      if (op == "kill_vehicle") {
-        const std::string reason = string_field(request, "reason").value_or("fault injection");
-        sim_.record(sim::EventType::kVehicleKilled, static_cast<int>(*v), reason);
-        sim_.kill_vehicle(*v, "killed: " + reason);
-      } else if (op == "motor_failure") {
-        const auto rotor = number_field(request, "rotor");
-        const size_t rotors = sim_.airframe(*v).rotors.size();
-        if (!rotor) {
-          fail("missing_field", "\"rotor\" (index) is required");
-        } else if (*rotor < 0 || *rotor >= static_cast<double>(rotors) || std::floor(*rotor) != *rotor) {
-          fail("bad_field", "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
-        } else {
-          sim_.set_motor_failed(*v, static_cast<size_t>(*rotor), bool_field(request, "failed").value_or(true));
-        }
-      } else if (op == "gps_glitch") {
-        auto it = request.find("offset_enu_m");
-        if (it == request.end()) {
-          fail("missing_field", "\"offset_enu_m\" [x, y, z] is required ([0, 0, 0] clears the glitch)");
-        } else if (it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() || !(*it)[2].is_number() ||
-                   std::abs((*it)[0].get<double>()) > kMaxGlitch_m || std::abs((*it)[1].get<double>()) > kMaxGlitch_m ||
-                   std::abs((*it)[2].get<double>()) > kMaxGlitch_m) {
-          fail("bad_field", "\"offset_enu_m\" must be three numbers of at most 1e5 m");
-        } else {
-          sim_.fc(*v).set_gps_glitch(
-              Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()));
-        }
-      } else if (op == "gps_denied") {
-        sim_.fc(*v).set_gps_denied(bool_field(request, "denied").value_or(true));
-      } else if (op == "link_drop") {
-        if (link_ == nullptr) {
-          fail("not_available", "no MAVLink endpoint is attached to this server");
-        } else if (!link_->set_link_down(*v, bool_field(request, "down").value_or(true))) {
-          fail("not_available", "vehicle " + std::to_string(*v) + " has no MAVLink link");
-        }
-      }
-      if (error.code.empty()) result = {{"vehicle", *v}, {"time_s", sim_.time_s()}};
-    }
-  } else if (op == "gimbal") {
-    const auto name = string_field(request, "gimbal");
-    objects::Gimbal* g = nullptr;
-    if (objects_.gimbals != nullptr && name) {
-      for (objects::Gimbal& x : objects_.gimbals->gimbals()) {
-        if (x.name == *name) g = &x;
-      }
-    }
-    const auto mode = string_field(request, "mode");
-    const auto pitch_deg = number_field(request, "pitch_deg");
-    const auto yaw_deg = number_field(request, "yaw_deg");
-    const auto angle_ok = [](const std::optional<double>& a) {
-      return !a || sim::finite_in(*a, -kMaxGimbalAngle_deg, kMaxGimbalAngle_deg);
-    };
-    if (!name) {
-      fail("missing_field", "\"gimbal\" (the gimbal body's name) is required");
-    } else if (g == nullptr) {
-      fail("bad_field", "no gimbal named '" + *name + "'");
-    } else if (mode && *mode != "down" && *mode != "forward" && *mode != "targets") {
-      fail("bad_field", "\"mode\" must be down, forward or targets");
-    } else if (!angle_ok(pitch_deg) || !angle_ok(yaw_deg)) {
-      fail("bad_field", "\"pitch_deg\" and \"yaw_deg\" must be in [-360, 360]");
-    } else {
-      if (mode) {
-        g->mode = *mode == "down"      ? objects::GimbalMode::kDown
-                  : *mode == "forward" ? objects::GimbalMode::kForward
-                                       : objects::GimbalMode::kTargets;
-      }
-      if (pitch_deg) g->pitch_rad = *pitch_deg * M_PI / 180.0;
-      if (yaw_deg) g->yaw_rad = *yaw_deg * M_PI / 180.0;
-      result = {{"gimbal", g->name}, {"mode", objects::gimbal_mode_name(g->mode)},
-                {"pitch_deg", g->pitch_rad * 180.0 / M_PI}, {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
-    }
-  } else if (op == "wind") {
-    // set what is given (speed, direction, turbulence), start a gust if asked; answer the wind now
-    airframe::WindParams w = sim_.wind().params();
-    const auto speed = number_field(request, "speed_m_s");
-    const auto from = number_field(request, "from_deg");
-    const auto turbulence = number_field(request, "turbulence_sd_m_s");
-    const auto gust = number_field(request, "gust_m_s");
-    const auto gust_duration = number_field(request, "gust_duration_s");
-    if (speed) w.speed_m_s = *speed;
-    if (from) w.from_deg = *from;
-    if (turbulence) w.turbulence_sd_m_s = *turbulence;
-    const std::string why = airframe::validate(w);
-    if (!why.empty() || (from && std::abs(*from) > 360.0)) {
-      fail("bad_field", why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
-    } else if ((gust && !sim::finite_in(*gust, 0.0, 50.0)) ||
-               (gust_duration && !sim::finite_in(*gust_duration, 0.01, 600.0))) {
-      fail("bad_field", "\"gust_m_s\" must be in [0, 50] and \"gust_duration_s\" in [0.01, 600]");
-    } else {
-      if (speed || from || turbulence) sim_.wind().set_params(w);
-      if (gust) sim_.wind().gust(*gust, gust_duration.value_or(w.gust_duration_s));
-      const airframe::WindField& f = sim_.wind();
-      result = {{"speed_m_s", f.params().speed_m_s},
-                {"from_deg", f.params().from_deg},
-                {"turbulence_sd_m_s", f.params().turbulence_sd_m_s},
-                {"length_scale_m", f.params().length_scale_m},
-                {"gust_m_s", f.gust_m_s()},
-                {"velocity_enu_m_s", vec3(f.velocity_enu_m_s())},
-                {"realism", sim::realism_name(sim_.config().field.realism)},
-                {"time_s", sim_.time_s()}};
-    }
-  } else if (op == "lockstep_join") {
-    const auto period = number_field(request, "period_s");
-    const auto timeout = number_field(request, "timeout_s");
-    if (!period) {
-      fail("missing_field", "\"period_s\" (sim seconds between ticks) is required");
-    } else if (!(*period > 0.0) || !std::isfinite(*period) || *period > 3600.0) {
-      fail("bad_field", "\"period_s\" must be in (0, 3600]");
-    } else if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
-      // the deadline is a steady_clock time point: 1e10 s would overflow it and count as expired
-      fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
-    } else {
-      // whole control steps, at least one; the first tick is the next multiple of the period
-      client.period_steps = std::max<int64_t>(1, std::llround(*period / control_dt_s()));
-      client.period_s = client.period_steps * control_dt_s();
-      client.lockstep = true;
-      client.awaiting = false;
-      client.timeout_s = timeout.value_or(config_.lockstep_timeout_s);
-      client.next_due_s = std::ceil(sim_.time_s() / client.period_s - 1e-9) * client.period_s;
-      result = {{"period_s", client.period_s}, {"first_tick_time", client.next_due_s},
-                {"timeout_s", client.timeout_s}};
-    }
-  } else if (op == "lockstep_leave") {
-    lockstep_left(conn, client);
-    client.lockstep = false;
-    client.awaiting = false;
-  } else if (op == "done") {
-    const auto tick = number_field(request, "tick");
-    const auto busy = number_field(request, "busy_until");
-    auto seqs = request.find("mavlink_seq");
-    if (!client.lockstep) {
-      fail("not_joined", "\"done\" without lockstep_join");
-    } else if (!client.awaiting || client.done_received) {
-      fail("bad_state", "no tick is waiting for \"done\"");
-    } else if (has_field(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
-      fail("bad_field", "the tick waiting is " + std::to_string(client.tick));
-    } else if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
-      fail("bad_field", "\"busy_until\" must be a sim time in seconds");
-    } else if (seqs != request.end() && !seqs->is_object()) {
-      fail("bad_field", "\"mavlink_seq\" must be an object {vehicle: seq}");
-    } else {
-      std::map<size_t, uint8_t> wait;
-      if (seqs != request.end()) {
-        for (auto it = seqs->begin(); it != seqs->end() && error.code.empty(); ++it) {
-          Json probe = {{"vehicle", it.key()}};
-          // "0" names vehicle 0; any other string a vehicle name
-          char* end = nullptr;
-          const long index = std::strtol(it.key().c_str(), &end, 10);
-          if (!it.key().empty() && *end == '\0') probe["vehicle"] = index;
-          const auto v = vehicle_arg(probe, &error);
-          if (v && (!it.value().is_number_integer() || it.value().get<int64_t>() < 0 ||
-                    it.value().get<int64_t>() > 255)) {
-            fail("bad_field", "MAVLink sequence numbers are integers in [0, 255]");
-          } else if (v) {
-            wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
-          }
-        }
-      }
-      if (error.code.empty()) {
-        client.done_received = true;
-        client.wait_seq = wait;
-        if (busy) client.busy_until_s = *busy;
-        result = {{"tick", client.tick},
-                  {"mavlink_seq_checked", seq_waiter_ != nullptr}};
-      }
-    }
-  } else if (op == "camera_list" || op == "camera_subscribe" || op == "camera_unsubscribe") {
-    if (!frames_) {
-      fail("not_available", "this server renders no camera frames");
-    } else if (!frames_->handle(conn, op, request, &result, &error.code, &error.message)) {
-      // error set
-    }
-  } else if (op == "camera_blackout") {
-    if (!frames_) {
-      fail("not_available", "this server renders no camera frames");
-    } else if (!frames_->blackout(request, sim_.time_s(), &result, &error.code, &error.message)) {
-      // error set
+      wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
     }
   }
-
-  if (!error.code.empty()) return reply_error(conn, id, error.code, error.message);
-  send(conn, Json{{"id", id}, {"ok", true}, {"result", result}});
+  client.done_received = true;
+  client.wait_seq = wait;
+  if (busy) client.busy_until_s = *busy;
+  reply->result = {{"tick", client.tick}, {"mavlink_seq_checked", seq_waiter_ != nullptr}};
 }
 
 }  // namespace uavsim::server::api

@@ -3,6 +3,11 @@
 // the event stream, fault injection, gimbal pointing and the lockstep contract (seed 5.3/6.5: gzuav's
 // Begin-Tick/End-Tick).
 //
+// Ops: every op is an entry of one OpTable (op_table.hpp), registered by its group: this server's clock,
+// event and lockstep ops, VehicleOps (ground truth, faults, gimbals, wind), FrameStream (camera frames)
+// and the groups added with add_group (radio, sensors, overlay). The hello's op list, the unknown_op
+// check and the dispatch all read that table.
+//
 // Threads: socket I/O runs on the LineServer's thread; every request that touches the simulation is
 // queued and executed on the loop thread inside the control gate (gate(), installed with
 // Runner::set_control_gate), before the control step, in arrival order. The gate is also where pause,
@@ -27,6 +32,8 @@
 
 #include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
+#include "api/op_table.hpp"
+#include "api/vehicle_ops.hpp"
 #include "objects/world_objects.hpp"
 #include "sim/runner.hpp"
 #include "sim/simulation.hpp"
@@ -34,15 +41,6 @@
 namespace uavsim::server::api {
 
 inline constexpr int kProtocolVersion = 1;
-
-// Implemented by the MAVLink endpoint: cut or restore a vehicle's MAVLink link (fault injection).
-class LinkControl {
- public:
-  virtual ~LinkControl() = default;
-  // Drops (down = true) or restores a vehicle's link: while down, nothing is delivered either way.
-  // Thread-safe. False if the vehicle has no link.
-  virtual bool set_link_down(size_t vehicle, bool down) = 0;
-};
 
 // Implemented by the MAVLink endpoint: has the message with this sequence number, sent by a client on
 // a vehicle's link, been handled (its commands posted to the simulation)? The lockstep contract waits
@@ -58,25 +56,6 @@ class SeqWaiter {
   // announced, so a lockstep client has its vehicles' telemetry stamped before the tick when the tick
   // arrives. The default does nothing (an endpoint that writes synchronously). Loop thread only.
   virtual void flush_sent() {}
-};
-
-// Ops served by another module (e.g. radio_ops.hpp). Their requests run on the loop thread like the
-// built-in ones; at every pass of the gate, before ticks are announced, the extension may push async
-// messages, so what it sends for sim time t reaches a lockstep client before tick t.
-class ApiExtension {
- public:
-  using Json = nlohmann::json;
-  using Send = std::function<void(uint64_t conn, const Json& message)>;
-  virtual ~ApiExtension() = default;
-  // The op names served; constant (read on the I/O thread). Thread-safe.
-  virtual std::vector<std::string> ops() const = 0;
-  // Handles one request: true with *result, or false with *code and *message. Loop thread only.
-  virtual bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
-                      std::string* message) = 0;
-  // At every pass of the gate, before tick announcements: push async messages with send. Loop thread only.
-  virtual void on_gate(const Send& send) = 0;
-  // A connection closed. Loop thread only.
-  virtual void on_disconnect(uint64_t conn) = 0;
 };
 
 struct ApiConfig {
@@ -108,13 +87,16 @@ class ApiServer {
   ApiServer& operator=(const ApiServer&) = delete;
 
   // Optional endpoint hooks. Before start().
-  void set_link_control(LinkControl* link) { link_ = link; }
+  void set_link_control(LinkControl* link) { vehicle_ops_.set_link_control(link); }
   void set_seq_waiter(SeqWaiter* waiter) { seq_waiter_ = waiter; }
-  // Camera frames (camera_list, camera_subscribe, camera_unsubscribe); without one they answer
-  // not_available. The service's capture() runs in the runner's gate before this server's gate. Before start().
+  // Camera frames (the FrameStream group's camera_* ops); without one they answer not_available. The
+  // service's capture() runs in the runner's gate before this server's gate. Before start().
   void set_frame_service(render::FrameService* service);
-  // Serves an extension's ops; it must outlive this server. Before start().
-  void add_extension(ApiExtension* extension);
+  // Serves a group's ops (registers them in the op table) and calls its hooks; it must outlive this
+  // server. Throws std::logic_error if it registers an op name already served. Before start().
+  void add_group(OpGroup* group);
+  // Every op served, in registration order (the hello's "ops"). After start(). Thread-safe.
+  std::vector<std::string> op_names() const { return ops_.names(); }
   // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
   void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
 
@@ -170,6 +152,21 @@ class ApiServer {
   void on_gate();
   void drain();
   void handle(uint64_t conn, const Json& request);
+  // the ops this server serves itself (loop thread): (conn, request) => reply
+  void register_own_ops();
+  void op_status(uint64_t conn, const Json& request, OpReply* reply);
+  void op_pause(uint64_t conn, const Json& request, OpReply* reply);
+  void op_pause_at(uint64_t conn, const Json& request, OpReply* reply);
+  void op_resume(uint64_t conn, const Json& request, OpReply* reply);
+  void op_step(uint64_t conn, const Json& request, OpReply* reply);
+  void op_set_rate(uint64_t conn, const Json& request, OpReply* reply);
+  void op_reset(uint64_t conn, const Json& request, OpReply* reply);
+  void op_events(uint64_t conn, const Json& request, OpReply* reply);
+  void op_subscribe_events(uint64_t conn, const Json& request, OpReply* reply);
+  void op_unsubscribe_events(uint64_t conn, const Json& request, OpReply* reply);
+  void op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply);
+  void op_lockstep_leave(uint64_t conn, const Json& request, OpReply* reply);
+  void op_done(uint64_t conn, const Json& request, OpReply* reply);
   void forward_events();
   void announce_ticks();
   void complete_ticks();
@@ -179,26 +176,18 @@ class ApiServer {
   bool lockstep_blocked() const;
   double control_dt_s() const { return sim_.control_dt_s(); }
 
-  // op handlers (loop thread); each returns the result object or sets *error
-  struct Error {
-    std::string code;
-    std::string message;
-  };
-  std::optional<size_t> vehicle_arg(const Json& request, Error* error) const;
-  Json vehicle_json(size_t i) const;
   Json event_json(const sim::Event& e) const;
 
   sim::Simulation& sim_;
   sim::Runner* runner_;
-  objects::ObjectSet objects_;
   ApiConfig config_;
-  LinkControl* link_ = nullptr;
   SeqWaiter* seq_waiter_ = nullptr;
   std::function<bool()> stop_check_;
   std::unique_ptr<LineServer> server_;
-  std::vector<ApiExtension*> extensions_;  // set before start()
-  std::vector<std::string> extension_ops_;
-  render::FrameService* frame_service_ = nullptr;
+  // every op, registered before start() and read-only afterwards (the I/O thread looks names up)
+  OpTable ops_;
+  std::vector<OpGroup*> groups_;  // their hooks; set before start()
+  VehicleOps vehicle_ops_;
   std::unique_ptr<FrameStream> frames_;
 
   std::mutex mutex_;                 // guards queue_ and shutdown_

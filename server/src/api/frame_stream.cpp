@@ -12,11 +12,42 @@ constexpr int kDefaultJpegQuality = 90;
 constexpr size_t kMaxQueuedFrames = 2;
 
 std::string dump(const nlohmann::json& j) { return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+constexpr std::string_view kCameraOps[] = {"camera_list", "camera_subscribe", "camera_unsubscribe",
+                                           "camera_blackout"};
 }  // namespace
 
-FrameStream::FrameStream(render::FrameService& service, LineServer& server,
+FrameStream::FrameStream(const sim::Simulation& sim, render::FrameService& service, LineServer& server,
                          std::function<bool(uint64_t)> is_lockstep)
-    : service_(service), server_(server), is_lockstep_(std::move(is_lockstep)) {}
+    : sim_(sim), service_(service), server_(server), is_lockstep_(std::move(is_lockstep)) {}
+
+void FrameStream::register_ops(OpTable& table) {
+  for (std::string_view name : kCameraOps) {
+    const std::string op(name);
+    table.add({op, "camera",
+               [this, op](uint64_t conn, const Json& request, OpReply* reply) {
+                 if (op == "camera_blackout") {
+                   blackout(request, sim_.time_s(), &reply->result, &reply->code, &reply->message);
+                 } else {
+                   handle(conn, op, request, &reply->result, &reply->code, &reply->message);
+                 }
+               },
+               core_op_fields()});
+  }
+}
+
+void FrameStream::register_unavailable(OpTable& table) {
+  for (std::string_view name : kCameraOps) {
+    table.add({std::string(name), "camera",
+               [](uint64_t, const Json&, OpReply* reply) {
+                 reply->fail("not_available", "this server renders no camera frames");
+               },
+               core_op_fields()});
+  }
+}
+
+void FrameStream::before_tick(uint64_t conn) {
+  if (has_subscriptions(conn)) service_.wait_delivered();
+}
 
 FrameStream::Json FrameStream::camera_json(int index) const {
   const render::FrameCamera& c = service_.cameras().at(static_cast<size_t>(index));

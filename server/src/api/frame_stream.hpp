@@ -1,7 +1,7 @@
 // The API's camera-frame subscriptions (docs/protocol.md "Camera frames"): camera_list, camera_subscribe,
-// camera_unsubscribe, and the frame messages (a JSON header line, then the raw image bytes) with their
-// back-pressure rules. A render::FrameConsumer: want() and the ops run on the loop thread, deliver() on the
-// render thread.
+// camera_unsubscribe, camera_blackout, and the frame messages (a JSON header line, then the raw image
+// bytes) with their back-pressure rules. An op group like the others, and a render::FrameConsumer:
+// want() and the ops run on the loop thread, deliver() on the render thread.
 #pragma once
 
 #include <atomic>
@@ -16,15 +16,28 @@
 #include <nlohmann/json.hpp>
 
 #include "api/line_server.hpp"
+#include "api/op_table.hpp"
 #include "render/frame_service.hpp"
+#include "sim/simulation.hpp"
 
 namespace uavsim::server::api {
 
-class FrameStream : public render::FrameConsumer {
+class FrameStream : public OpGroup, public render::FrameConsumer {
  public:
-  using Json = nlohmann::json;
-  // is_lockstep(conn): whether a connection has joined lockstep (its frames are never dropped). Loop thread.
-  FrameStream(render::FrameService& service, LineServer& server, std::function<bool(uint64_t)> is_lockstep);
+  // is_lockstep(conn): whether a connection has joined lockstep (its frames are never dropped). Loop
+  // thread. sim (for the sim time of a blackout), service and server must outlive this object.
+  FrameStream(const sim::Simulation& sim, render::FrameService& service, LineServer& server,
+              std::function<bool(uint64_t)> is_lockstep);
+
+  // The camera ops, served by this stream.
+  void register_ops(OpTable& table) override;
+  // The camera ops of a server that renders no frames: each answers not_available.
+  static void register_unavailable(OpTable& table);
+  // A tick is due for conn: the frames due at it reach the client before the tick (docs/protocol.md).
+  void before_tick(uint64_t conn) override;
+  // A reset ends every blackout: their times were on the old clock.
+  void on_reset() override { clear_blackouts(); }
+  void on_disconnect(uint64_t conn) override;  // Loop thread.
 
   // The camera ops. Loop thread. Returns false and sets code/message for an error reply.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
@@ -35,7 +48,6 @@ class FrameStream : public render::FrameConsumer {
   bool blackout(const Json& request, double now_s, Json* result, std::string* code, std::string* message);
   // Ends every blackout (a reset: sim time restarts). Loop thread.
   void clear_blackouts();
-  void on_disconnect(uint64_t conn);                // Loop thread.
   bool has_subscriptions(uint64_t conn) const;      // Loop thread.
 
   void want(int camera, int64_t index, int64_t stamp_us, std::vector<render::EncodingKey>* encodings,
@@ -61,6 +73,7 @@ class FrameStream : public render::FrameConsumer {
   };
   Json camera_json(int index) const;
 
+  const sim::Simulation& sim_;
   render::FrameService& service_;
   LineServer& server_;
   std::function<bool(uint64_t)> is_lockstep_;

@@ -1,6 +1,7 @@
 #include "api/overlay_ops.hpp"
 
 #include <algorithm>
+#include <functional>
 
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
@@ -17,7 +18,10 @@ bool overlay_text(const std::string& s, size_t max_bytes) {
 
 }  // namespace
 
-std::vector<std::string> OverlayOps::ops() const { return {"overlay_counter", "overlay_note"}; }
+void OverlayOps::register_ops(OpTable& table) {
+  static constexpr std::string_view kOps[] = {"overlay_counter", "overlay_note"};
+  table.add_named("overlay", kOps, std::bind_front(&OverlayOps::handle, this));
+}
 
 std::vector<std::string> OverlayOps::counters() const {
   std::vector<std::string> out;

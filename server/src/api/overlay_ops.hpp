@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "api/api_server.hpp"
+#include "api/op_table.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::api {
@@ -31,16 +31,16 @@ struct OverlayNote {
   std::string text;
 };
 
-class OverlayOps : public ApiExtension {
+class OverlayOps : public OpGroup {
  public:
   // sim must outlive this object. Before the loop.
   explicit OverlayOps(const sim::Simulation& sim) : sim_(sim) {}
 
-  std::vector<std::string> ops() const override;
+  // overlay_counter, overlay_note.
+  void register_ops(OpTable& table) override;
+  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message) override;
-  void on_gate(const Send&) override {}
-  void on_disconnect(uint64_t) override {}
+              std::string* code, std::string* message);
 
   // The counters' texts in name order. Loop thread only.
   std::vector<std::string> counters() const;

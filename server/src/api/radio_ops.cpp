@@ -1,6 +1,7 @@
 #include "api/radio_ops.hpp"
 
 #include <cmath>
+#include <functional>
 
 #include "api/vehicle_arg.hpp"
 
@@ -75,9 +76,13 @@ std::optional<std::vector<uint8_t>> base64_decode(const std::string& text) {
 RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays)
     : sim_(sim), radio_(radio), relays_(relays) {}
 
-std::vector<std::string> RadioOps::ops() const {
-  return {"radio_send",   "radio_subscribe", "radio_unsubscribe", "radio_stats",
-          "radio_config", "gcs_link_open",   "gcs_link_impair",   "gcs_link_stats"};
+void RadioOps::register_ops(OpTable& table) {
+  static constexpr std::string_view kRadio[] = {"radio_send", "radio_subscribe", "radio_unsubscribe",
+                                                "radio_stats", "radio_config"};
+  static constexpr std::string_view kGcsLink[] = {"gcs_link_open", "gcs_link_impair", "gcs_link_stats"};
+  const auto handler = std::bind_front(&RadioOps::handle, this);
+  table.add_named("radio", kRadio, handler);
+  table.add_named("gcs_link", kGcsLink, handler);
 }
 
 std::optional<size_t> RadioOps::vehicle(const Json& value, std::string* code,

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "api/api_server.hpp"
+#include "api/op_table.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
 #include "sim/simulation.hpp"
@@ -25,14 +25,16 @@ std::string base64_encode(const std::vector<uint8_t>& bytes);
 // Nullopt for characters outside the alphabet, misplaced padding or an impossible length.
 std::optional<std::vector<uint8_t>> base64_decode(const std::string& text);
 
-class RadioOps : public ApiExtension {
+class RadioOps : public OpGroup {
  public:
   // relays may be null (the gcs_link_* ops then answer not_available). All must outlive the server.
   RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays);
 
-  std::vector<std::string> ops() const override;
+  // radio_send, radio_subscribe, radio_unsubscribe, radio_stats, radio_config and the gcs_link_* ops.
+  void register_ops(OpTable& table) override;
+  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message) override;
+              std::string* code, std::string* message);
   void on_gate(const Send& send) override;
   void on_disconnect(uint64_t conn) override;
 

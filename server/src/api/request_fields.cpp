@@ -30,7 +30,27 @@ const char* type_name(FieldType type) {
   return "?";
 }
 
+constexpr FieldSpec kCoreOpFields[] = {
+    {"steps", FieldType::kNumber},       {"duration_s", FieldType::kNumber},
+    {"rate", FieldType::kNumber},        {"seed", FieldType::kNumber},
+    {"from_seq", FieldType::kNumber},    {"vehicle", FieldType::kIndexOrName},
+    {"reason", FieldType::kString},      {"rotor", FieldType::kNumber},
+    {"failed", FieldType::kBoolean},     {"offset_enu_m", FieldType::kArray},
+    {"denied", FieldType::kBoolean},     {"down", FieldType::kBoolean},
+    {"gimbal", FieldType::kString},      {"mode", FieldType::kString},
+    {"pitch_deg", FieldType::kNumber},   {"yaw_deg", FieldType::kNumber},
+    {"period_s", FieldType::kNumber},    {"timeout_s", FieldType::kNumber},
+    {"tick", FieldType::kNumber},        {"busy_until", FieldType::kNumber},
+    {"mavlink_seq", FieldType::kObject},
+    {"speed_m_s", FieldType::kNumber},   {"from_deg", FieldType::kNumber},
+    {"turbulence_sd_m_s", FieldType::kNumber}, {"gust_m_s", FieldType::kNumber},
+    {"gust_duration_s", FieldType::kNumber},
+    {"time_s", FieldType::kNumber},      {"lockstep_empty", FieldType::kBoolean},
+};
+
 }  // namespace
+
+std::span<const FieldSpec> core_op_fields() { return kCoreOpFields; }
 
 ParsedLine parse_request_line(std::string_view line) {
   ParsedLine out;

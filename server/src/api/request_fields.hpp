@@ -41,6 +41,11 @@ ParsedLine parse_request_line(std::string_view line);
 // Absent fields are the op's business. Thread-safe (pure).
 std::optional<std::string> mistyped_field(const nlohmann::json& request, std::span<const FieldSpec> specs);
 
+// The fields the core op groups (clock, events, lockstep, vehicle, camera) read, with their types: a
+// request to one of their ops naming one with another type gets bad_field before the op runs (so no op
+// half-applies a request). The other groups check their own fields. Thread-safe (constant).
+std::span<const FieldSpec> core_op_fields();
+
 // A field of the given type; nullopt when absent or of another type. Thread-safe (pure).
 std::optional<double> number_field(const nlohmann::json& request, std::string_view key);
 std::optional<bool> bool_field(const nlohmann::json& request, std::string_view key);

@@ -1,5 +1,7 @@
 #include "api/sensor_ops.hpp"
 
+#include <functional>
+
 #include "api/vehicle_arg.hpp"
 
 namespace uavsim::server::api {
@@ -11,8 +13,10 @@ constexpr const char* kSwitchesSensor = "switches";
 SensorOps::SensorOps(sim::Simulation& sim)
     : sim_(sim), switches_(physics::vehicle_touch_sensors(sim.world())) {}
 
-std::vector<std::string> SensorOps::ops() const {
-  return {"sensor_list", "sensor_read", "sensor_subscribe", "sensor_unsubscribe"};
+void SensorOps::register_ops(OpTable& table) {
+  static constexpr std::string_view kOps[] = {"sensor_list", "sensor_read", "sensor_subscribe",
+                                              "sensor_unsubscribe"};
+  table.add_named("sensor", kOps, std::bind_front(&SensorOps::handle, this));
 }
 
 std::vector<bool> SensorOps::read(size_t vehicle) const {

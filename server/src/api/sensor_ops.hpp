@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "api/api_server.hpp"
+#include "api/op_table.hpp"
 #include "physics/touch_sensors.hpp"
 #include "sim/simulation.hpp"
 
@@ -28,15 +28,17 @@ namespace uavsim::server::api {
 // (16.7 N), well above contact noise while airborne (none) and below a touchdown's first contact.
 inline constexpr double kSwitchClosedForce_n = 1.0;
 
-class SensorOps : public ApiExtension {
+class SensorOps : public OpGroup {
  public:
   // Finds every vehicle's touch sensors in sim's world. sim must outlive this object. Before the
   // loop.
   explicit SensorOps(sim::Simulation& sim);
 
-  std::vector<std::string> ops() const override;
+  // sensor_list, sensor_read, sensor_subscribe, sensor_unsubscribe.
+  void register_ops(OpTable& table) override;
+  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message) override;
+              std::string* code, std::string* message);
   void on_gate(const Send& send) override;
   void on_disconnect(uint64_t conn) override;
 

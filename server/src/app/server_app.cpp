@@ -433,11 +433,11 @@ int run_server(const Options& given_options) {
     // the A2A radio and the GCS link relay (seed 6.2, 6.3), served as radio_* / gcs_link_* ops
     radio_ops = std::make_unique<api::RadioOps>(s, radio::SimRadio::attach(s, radio::RadioConfig{}),
                                                 &radio::GcsRelaySet::attach(s, options.api_bind_address));
-    api_server->add_extension(radio_ops.get());
+    api_server->add_group(radio_ops.get());
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);
-    api_server->add_extension(sensor_ops.get());
-    api_server->add_extension(&overlay_ops);
+    api_server->add_group(sensor_ops.get());
+    api_server->add_group(&overlay_ops);
     api_server->start();
     if (!options.quiet) {
       std::cout << "uavsim-server: sim API on tcp:" << api_config.bind_address << ":" << api_server->port()

@@ -37,7 +37,7 @@ class RadioServer {
     config.port = 0;
     config.start_paused = true;
     api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
-    api_->add_extension(ops_.get());
+    api_->add_group(ops_.get());
     runner_->set_control_gate(api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });

@@ -1,0 +1,41 @@
+#include "api/op_table.hpp"
+
+#include <cassert>
+#include <stdexcept>
+
+namespace uavsim::server::api {
+
+void OpTable::add(OpSpec spec) {
+  if (const OpSpec* earlier = find(spec.name)) {
+    throw std::logic_error("sim API op '" + spec.name + "' registered twice (groups '" +
+                           earlier->group + "' and '" + spec.group + "')");
+  }
+  index_.emplace(spec.name, ops_.size());
+  ops_.push_back(std::move(spec));
+}
+
+void OpTable::add_named(const std::string& group, std::span<const std::string_view> names,
+                        const NamedHandler& handle) {
+  for (std::string_view name : names) {
+    std::string op(name);
+    add({op, group, [handle, op](uint64_t conn, const nlohmann::json& request, OpReply* reply) {
+           const bool ok = handle(conn, op, request, &reply->result, &reply->code, &reply->message);
+           assert(ok || !reply->code.empty());  // a failing handler names its error
+           (void)ok;
+         }});
+  }
+}
+
+const OpSpec* OpTable::find(std::string_view name) const {
+  auto it = index_.find(name);
+  return it == index_.end() ? nullptr : &ops_[it->second];
+}
+
+std::vector<std::string> OpTable::names() const {
+  std::vector<std::string> names;
+  names.reserve(ops_.size());
+  for (const OpSpec& op : ops_) names.push_back(op.name);
+  return names;
+}
+
+}  // namespace uavsim::server::api

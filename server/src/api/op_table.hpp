@@ -1,0 +1,113 @@
+// The sim API's ops by name (docs/protocol.md): every op group (the server's clock, event and
+// lockstep ops, VehicleOps, FrameStream, RadioOps, SensorOps, OverlayOps) registers its ops here,
+// and the server dispatches requests, lists the ops in its hello and refuses unknown ones from this
+// one table.
+//
+// Threads: the table is filled before the server starts and only read afterwards (the I/O thread
+// looks names up, the loop thread runs the handlers).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "api/request_fields.hpp"
+
+namespace uavsim::server::api {
+
+// What an op handler answers: a result, an error (code set), or nothing yet (deferred: the op
+// replies later itself, as step does once its steps have run).
+struct OpReply {
+  nlohmann::json result = nlohmann::json::object();
+  std::string code;  // an error reply when set
+  std::string message;
+  bool deferred = false;
+
+  void fail(std::string error_code, std::string error_message) {
+    code = std::move(error_code);
+    message = std::move(error_message);
+  }
+  bool failed() const { return !code.empty(); }
+};
+
+// Where an op is answered.
+enum class OpThread {
+  kLoop,  // on the loop thread inside the control gate, in arrival order (every op that reads the
+          // sim)
+  kIo,    // by the transport on the I/O thread, before any queueing (auth); it has no handler
+};
+
+// Handles one request of its op on the loop thread; conn is the requesting connection.
+using OpHandler = std::function<void(uint64_t conn, const nlohmann::json& request, OpReply* reply)>;
+
+struct OpSpec {
+  OpSpec(std::string op_name, std::string op_group, OpHandler op_handler,
+         std::span<const FieldSpec> fields = {}, OpThread op_thread = OpThread::kLoop)
+      : name(std::move(op_name)),
+        group(std::move(op_group)),
+        handler(std::move(op_handler)),
+        typed_fields(fields),
+        thread(op_thread) {}
+
+  std::string name;
+  std::string
+      group;  // the op group that registered it ("clock", "vehicle", "camera", "radio", ...)
+  OpHandler handler;  // null for OpThread::kIo
+  // fields checked before the handler runs: a request naming one with another type gets bad_field
+  // and the handler never sees it (no op half-applies a request); groups that check their own leave
+  // it empty
+  std::span<const FieldSpec> typed_fields;
+  OpThread thread = OpThread::kLoop;
+};
+
+class OpTable {
+ public:
+  // Registers an op. A name registered twice is a programming error between groups: throws
+  // std::logic_error naming it (at startup, before the server starts).
+  void add(OpSpec spec);
+  // Registers ops a group dispatches by name itself: handle(conn, op, request, &result, &code,
+  // &message) returns false with code and message set for an error reply.
+  using NamedHandler =
+      std::function<bool(uint64_t conn, const std::string& op, const nlohmann::json& request,
+                         nlohmann::json* result, std::string* code, std::string* message)>;
+  void add_named(const std::string& group, std::span<const std::string_view> names,
+                 const NamedHandler& handle);
+
+  // The op with this name, or null. Thread-safe once the server runs (read-only).
+  const OpSpec* find(std::string_view name) const;
+  // Every op name, in registration order (the hello's "ops"). Thread-safe once the server runs.
+  std::vector<std::string> names() const;
+
+ private:
+  std::vector<OpSpec> ops_;                           // in registration order
+  std::map<std::string, size_t, std::less<>> index_;  // name -> ops_ index
+};
+
+// An op group: registers its ops in the server's table and hears the loop-side hooks of the server.
+// Every hook runs on the loop thread; the group must outlive the server.
+class OpGroup {
+ public:
+  using Json = nlohmann::json;
+  using Send = std::function<void(uint64_t conn, const Json& message)>;
+  virtual ~OpGroup() = default;
+  // Adds this group's ops to table. Called once, by ApiServer::add_group, before the server starts.
+  virtual void register_ops(OpTable& table) = 0;
+  // At every pass of the gate, before tick announcements: push async messages with send, so what
+  // the group sends for sim time t reaches a lockstep client before tick t.
+  virtual void on_gate(const Send& send) { (void)send; }
+  // A tick is about to be announced to conn: whatever is due for it at the tick must be sent by
+  // now.
+  virtual void before_tick(uint64_t conn) { (void)conn; }
+  // The simulation was reset: sim time starts again at 0.
+  virtual void on_reset() {}
+  // A connection closed.
+  virtual void on_disconnect(uint64_t conn) { (void)conn; }
+};
+
+}  // namespace uavsim::server::api
