@@ -45,6 +45,8 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
       runner_(runner),
       config_(config),
       vehicle_ops_(sim, std::move(objects)),
+      lockstep_(sim.control_dt_s(), sim.physics_dt_s(), config.lockstep_timeout_s,
+                [this] { return wall_clock_.now_s(); }),
       paused_(config.start_paused) {
   register_own_ops();
   add_group(&vehicle_ops_);
@@ -54,7 +56,6 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     if (config_.token) hello["auth_required"] = true;
     send(conn, hello);
     ++connections_;
-    enqueue({Request::Kind::kConnect, conn, {}});
   };
   cb.on_line = [this](uint64_t conn, std::string line) {
     // parse on the I/O thread; a malformed request's error is queued behind the requests before it, so
@@ -125,6 +126,14 @@ void ApiServer::start() {
   server_->start();
 }
 
+void ApiServer::set_seq_waiter(SeqWaiter* waiter) {
+  seq_waiter_ = waiter;
+  seq_processed_ = nullptr;
+  if (waiter != nullptr) {
+    seq_processed_ = [waiter](size_t vehicle, uint8_t seq) { return waiter->seq_processed(vehicle, seq); };
+  }
+}
+
 void ApiServer::add_group(OpGroup* group) {
   group->register_ops(ops_);
   groups_.push_back(group);
@@ -132,10 +141,8 @@ void ApiServer::add_group(OpGroup* group) {
 
 void ApiServer::set_frame_service(render::FrameService* service) {
   if (service == nullptr) return;
-  frames_ = std::make_unique<FrameStream>(sim_, *service, *server_, [this](uint64_t conn) {
-    auto it = clients_.find(conn);
-    return it != clients_.end() && it->second.lockstep;
-  });
+  frames_ = std::make_unique<FrameStream>(sim_, *service, *server_,
+                                          [this](uint64_t conn) { return lockstep_.joined(conn); });
   service->add_consumer(frames_.get());
   add_group(frames_.get());
 }
@@ -190,23 +197,23 @@ void ApiServer::on_gate() {
     if (stop_check_ && stop_check_()) return;
     for (OpGroup* g : groups_) g->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
     announce_ticks();
-    complete_ticks();
+    lockstep_.complete(seq_processed_);
 
     bool waiting_seq = false;
     Clock::time_point next_deadline = Clock::now() + kIdleWait;
-    if (lockstep_blocked()) {
+    if (lockstep_.blocked()) {
       // drop clients that let their tick time out (wall clock), then wait for the others
-      const Clock::time_point now = Clock::now();
-      for (auto& [conn, c] : clients_) {
-        if (!c.awaiting) continue;
-        if (now >= c.deadline) {
-          drop_lockstep(conn, c, "timeout");
-          continue;
-        }
-        next_deadline = std::min(next_deadline, c.deadline);
-        waiting_seq = waiting_seq || c.done_received;
+      for (const LockstepCoordinator::Dropped& d : lockstep_.expire(sim_.time_s())) {
+        lockstep_left(d.last_left_at_s);
+        send(d.conn, Json{{"event", "lockstep_dropped"}, {"reason", "timeout"}, {"time", sim_.time_s()}});
       }
-      if (!lockstep_blocked()) continue;
+      if (!lockstep_.blocked()) continue;
+      const double until_deadline_s = std::max(0.0, *lockstep_.deadline_s() - wall_clock_.now_s());
+      if (until_deadline_s < std::chrono::duration<double>(kIdleWait).count()) {
+        next_deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(until_deadline_s));
+      }
+      waiting_seq = lockstep_.waiting_on_seq();
     } else if (!paused_) {
       return;
     } else if (steps_remaining_ > 0) {
@@ -233,14 +240,11 @@ void ApiServer::drain() {
   }
   for (Request& r : batch) {
     switch (r.kind) {
-      case Request::Kind::kConnect:
-        clients_[r.conn] = Client{};
-        break;
       case Request::Kind::kDisconnect:
         if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
-        if (auto it = clients_.find(r.conn); it != clients_.end()) lockstep_left(r.conn, it->second);
+        lockstep_left(lockstep_.leave(r.conn, sim_.time_s()));
+        event_subscribers_.erase(r.conn);
         for (OpGroup* g : groups_) g->on_disconnect(r.conn);
-        clients_.erase(r.conn);
         // every request of the connection has been answered: the socket may go once that is written
         server_->close_when_sent(r.conn);
         break;
@@ -261,80 +265,30 @@ void ApiServer::forward_events() {
   for (const sim::Event& event : log.recent()) {
     if (event.seq < events_forwarded_) continue;
     const Json e = event_json(event);
-    for (auto& [conn, c] : clients_) {
-      if (c.events) send(conn, e);
-    }
+    for (uint64_t conn : event_subscribers_) send(conn, e);
   }
   events_forwarded_ = log.next_seq();
 }
 
-bool ApiServer::lockstep_blocked() const {
-  for (const auto& [conn, c] : clients_) {
-    if (c.awaiting) return true;
-  }
-  return false;
-}
-
 void ApiServer::announce_ticks() {
   const double now = sim_.time_s();
-  const double eps = 0.25 * sim_.physics_dt_s();
-  bool mavlink_flushed = false;
-  for (auto& [conn, c] : clients_) {
-    if (!c.lockstep || c.awaiting || now + eps < c.next_due_s) continue;
-    // the MAVLink bytes of the control steps before this tick reach the client before the tick
-    if (!mavlink_flushed && seq_waiter_ != nullptr) seq_waiter_->flush_sent();
-    mavlink_flushed = true;
-    c.awaiting = true;
-    c.done_received = false;
-    c.wait_seq.clear();
-    c.busy_until_s.reset();
-    c.tick = std::llround(now / c.period_s);
-    c.tick_time_s = now;
-    // the frames due at this tick reach the client before the tick (docs/protocol.md)
+  const std::vector<uint64_t> due = lockstep_.due(now);
+  // the MAVLink bytes of the control steps before this tick reach the client before the tick
+  if (!due.empty() && seq_waiter_ != nullptr) seq_waiter_->flush_sent();
+  for (uint64_t conn : due) {
+    // what else is due at this tick (the frames) reaches the client before the tick (docs/protocol.md)
     for (OpGroup* g : groups_) g->before_tick(conn);
-    c.deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                    std::chrono::duration<double>(c.timeout_s));
-    send(conn, Json{{"event", "tick"}, {"tick", c.tick}, {"time", now}});
+    const int64_t tick = lockstep_.begin_tick(conn, now);
+    send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
   }
 }
 
-void ApiServer::complete_ticks() {
-  for (auto& [conn, c] : clients_) {
-    if (!c.awaiting || !c.done_received) continue;
-    // the MAVLink messages the client sent before "done" must have been handled
-    bool seq_ok = true;
-    if (seq_waiter_ != nullptr) {
-      for (const auto& [vehicle, seq] : c.wait_seq) seq_ok = seq_ok && seq_waiter_->seq_processed(vehicle, seq);
-    }
-    if (!seq_ok) continue;
-    c.awaiting = false;
-    c.next_due_s = c.tick_time_s + c.period_s;
-    if (c.busy_until_s && *c.busy_until_s > c.next_due_s) {
-      // detached timing: the next tick for this client is the first one at or after busy_until
-      c.next_due_s = std::ceil(*c.busy_until_s / c.period_s - 1e-9) * c.period_s;
-    }
-  }
-}
-
-void ApiServer::lockstep_left(uint64_t conn, const Client& c) {
-  if (!c.lockstep || !pause_when_lockstep_empty_) return;
-  for (const auto& [k, other] : clients_) {
-    if (k != conn && other.lockstep) return;
-  }
-  // the clock cannot pass the client's next tick without it, so the pause falls at that tick
-  // whenever its leaving is noticed (a done already sent counts as the tick completed): the same
-  // sim time in every run
-  double at_s = std::max(sim_.time_s(), c.next_due_s);
-  if (c.awaiting) at_s = c.done_received ? c.tick_time_s + c.period_s : c.tick_time_s;
-  pause_at_s_.insert(at_s);
+void ApiServer::lockstep_left(std::optional<double> last_at_s) {
+  // pause_at lockstep_empty: the last client's tick is the same sim time in every run, whenever its
+  // leaving is noticed
+  if (!last_at_s || !pause_when_lockstep_empty_) return;
+  pause_at_s_.insert(*last_at_s);
   pause_when_lockstep_empty_ = false;
-}
-
-void ApiServer::drop_lockstep(uint64_t conn, Client& c, const std::string& reason) {
-  lockstep_left(conn, c);
-  c.lockstep = false;
-  c.awaiting = false;
-  send(conn, Json{{"event", "lockstep_dropped"}, {"reason", reason}, {"time", sim_.time_s()}});
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -389,8 +343,6 @@ void ApiServer::register_own_ops() {
 }
 
 void ApiServer::op_status(uint64_t, const Json&, OpReply* reply) {
-  int lockstep = 0;
-  for (const auto& [k, c] : clients_) lockstep += c.lockstep ? 1 : 0;
   reply->result = {{"protocol", kProtocolVersion},
                    {"time_s", sim_.time_s()},
                    {"steps", sim_.step_count()},
@@ -400,7 +352,7 @@ void ApiServer::op_status(uint64_t, const Json&, OpReply* reply) {
                    {"control_hz", 1.0 / sim_.control_dt_s()},
                    {"seed", sim_.config().seed},
                    {"vehicles", sim_.vehicle_count()},
-                   {"lockstep_clients", lockstep},
+                   {"lockstep_clients", lockstep_.client_count()},
                    {"events", sim_.events().next_seq()},
                    {"realism", sim::realism_name(sim_.config().field.realism)}};
 }
@@ -435,7 +387,7 @@ void ApiServer::op_step(uint64_t conn, const Json& request, OpReply* reply) {
   const auto duration = number_field(request, "duration_s");
   double n = 1;
   if (steps) n = *steps;
-  if (duration) n = std::round(*duration / control_dt_s());
+  if (duration) n = std::round(*duration / sim_.control_dt_s());
   if (!(n >= 1 && n <= 1e9) || std::floor(n) != n) {
     return reply->fail("bad_field",
                        "\"steps\" must be an integer in [1, 1e9] (or \"duration_s\" at least one control step)");
@@ -475,11 +427,8 @@ void ApiServer::op_reset(uint64_t, const Json& request, OpReply* reply) {
   pause_at_s_.clear();
   pause_when_lockstep_empty_ = false;
   for (OpGroup* g : groups_) g->on_reset();
-  for (auto& [k, c] : clients_) {
-    c.awaiting = false;
-    c.next_due_s = 0.0;
-    if (c.events) send(k, Json{{"event", "reset"}, {"seed", s}});
-  }
+  lockstep_.reset();
+  for (uint64_t conn : event_subscribers_) send(conn, Json{{"event", "reset"}, {"seed", s}});
   reply->result = {{"seed", s}, {"time_s", sim_.time_s()}};
 }
 
@@ -502,10 +451,10 @@ void ApiServer::op_events(uint64_t, const Json& request, OpReply* reply) {
 void ApiServer::op_subscribe_events(uint64_t conn, const Json& request, OpReply* reply) {
   // a subscriber gets the backlog in the reply; later events stream as {"event": "sim_event", ...}
   op_events(conn, request, reply);
-  if (!reply->failed()) clients_[conn].events = true;
+  if (!reply->failed()) event_subscribers_.insert(conn);
 }
 
-void ApiServer::op_unsubscribe_events(uint64_t conn, const Json&, OpReply*) { clients_[conn].events = false; }
+void ApiServer::op_unsubscribe_events(uint64_t conn, const Json&, OpReply*) { event_subscribers_.erase(conn); }
 
 void ApiServer::op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply) {
   const auto period = number_field(request, "period_s");
@@ -515,37 +464,26 @@ void ApiServer::op_lockstep_join(uint64_t conn, const Json& request, OpReply* re
     return reply->fail("bad_field", "\"period_s\" must be in (0, 3600]");
   }
   if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
-    // the deadline is a steady_clock time point: 1e10 s would overflow it and count as expired
+    // the protocol's range: a deadline further out is no different from none
     return reply->fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
   }
-  // whole control steps, at least one; the first tick is the next multiple of the period
-  Client& client = clients_[conn];
-  client.period_steps = std::max<int64_t>(1, std::llround(*period / control_dt_s()));
-  client.period_s = client.period_steps * control_dt_s();
-  client.lockstep = true;
-  client.awaiting = false;
-  client.timeout_s = timeout.value_or(config_.lockstep_timeout_s);
-  client.next_due_s = std::ceil(sim_.time_s() / client.period_s - 1e-9) * client.period_s;
-  reply->result = {{"period_s", client.period_s}, {"first_tick_time", client.next_due_s},
-                   {"timeout_s", client.timeout_s}};
+  const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, sim_.time_s());
+  reply->result = {{"period_s", joined.period_s},
+                   {"first_tick_time", joined.first_tick_time_s},
+                   {"timeout_s", joined.timeout_s}};
 }
 
 void ApiServer::op_lockstep_leave(uint64_t conn, const Json&, OpReply*) {
-  Client& client = clients_[conn];
-  lockstep_left(conn, client);
-  client.lockstep = false;
-  client.awaiting = false;
+  lockstep_left(lockstep_.leave(conn, sim_.time_s()));
 }
 
 void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
-  Client& client = clients_[conn];
-  const auto tick = number_field(request, "tick");
+  const auto tick = number_field(request, "tick");  // a number when present (core_op_fields)
   const auto busy = number_field(request, "busy_until");
   auto seqs = request.find("mavlink_seq");
-  if (!client.lockstep) return reply->fail("not_joined", "\"done\" without lockstep_join");
-  if (!client.awaiting || client.done_received) return reply->fail("bad_state", "no tick is waiting for \"done\"");
-  if (has_field(request, "tick") && (!tick || *tick != static_cast<double>(client.tick))) {
-    return reply->fail("bad_field", "the tick waiting is " + std::to_string(client.tick));
+  std::string message;
+  if (std::string code = lockstep_.check_done(conn, tick, &message); !code.empty()) {
+    return reply->fail(std::move(code), std::move(message));
   }
   if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
     return reply->fail("bad_field", "\"busy_until\" must be a sim time in seconds");
@@ -569,10 +507,8 @@ void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
       wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
     }
   }
-  client.done_received = true;
-  client.wait_seq = wait;
-  if (busy) client.busy_until_s = *busy;
-  reply->result = {{"tick", client.tick}, {"mavlink_seq_checked", seq_waiter_ != nullptr}};
+  const int64_t done_tick = lockstep_.take_done(conn, busy, std::move(wait));
+  reply->result = {{"tick", done_tick}, {"mavlink_seq_checked", seq_waiter_ != nullptr}};
 }
 
 }  // namespace uavsim::server::api

@@ -32,6 +32,7 @@
 
 #include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
+#include "api/lockstep_coordinator.hpp"
 #include "api/op_table.hpp"
 #include "api/vehicle_ops.hpp"
 #include "objects/world_objects.hpp"
@@ -88,7 +89,7 @@ class ApiServer {
 
   // Optional endpoint hooks. Before start().
   void set_link_control(LinkControl* link) { vehicle_ops_.set_link_control(link); }
-  void set_seq_waiter(SeqWaiter* waiter) { seq_waiter_ = waiter; }
+  void set_seq_waiter(SeqWaiter* waiter);
   // Camera frames (the FrameStream group's camera_* ops); without one they answer not_available. The
   // service's capture() runs in the runner's gate before this server's gate. Before start().
   void set_frame_service(render::FrameService* service);
@@ -120,26 +121,11 @@ class ApiServer {
 
   struct Request {
     // kReply: an answer made on the I/O thread (a malformed line), sent from the loop in its turn
-    enum class Kind { kLine, kConnect, kDisconnect, kReply } kind = Kind::kLine;
+    enum class Kind { kLine, kDisconnect, kReply } kind = Kind::kLine;
     uint64_t conn = 0;
     Json body;  // the request, or the reply for kReply
   };
-  // per connection state, loop thread only
-  struct Client {
-    bool events = false;
-    bool lockstep = false;
-    double period_s = 0.0;
-    int64_t period_steps = 0;       // in control steps
-    double next_due_s = 0.0;        // sim time of the next tick for this client
-    bool awaiting = false;          // a tick was announced and is not done yet
-    int64_t tick = 0;
-    double tick_time_s = 0.0;
-    Clock::time_point deadline;
-    double timeout_s = 0.0;
-    bool done_received = false;
-    std::map<size_t, uint8_t> wait_seq;  // vehicle -> MAVLink seq the done named
-    std::optional<double> busy_until_s;
-  };
+
 
   // I/O thread side
   void enqueue(Request request);
@@ -168,13 +154,11 @@ class ApiServer {
   void op_lockstep_leave(uint64_t conn, const Json& request, OpReply* reply);
   void op_done(uint64_t conn, const Json& request, OpReply* reply);
   void forward_events();
+  // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
-  void complete_ticks();
-  void drop_lockstep(uint64_t conn, Client& c, const std::string& reason);
-  // a lockstep client stops being one (leave, drop, disconnect): arms the pause_at lockstep_empty pause
-  void lockstep_left(uint64_t conn, const Client& c);
-  bool lockstep_blocked() const;
-  double control_dt_s() const { return sim_.control_dt_s(); }
+  // a lockstep client stopped gating the clock (leave, drop, disconnect); last_at_s: where the
+  // coordinator says the clock stands without it, if it was the last (arms the lockstep_empty pause)
+  void lockstep_left(std::optional<double> last_at_s);
 
   Json event_json(const sim::Event& e) const;
 
@@ -182,6 +166,7 @@ class ApiServer {
   sim::Runner* runner_;
   ApiConfig config_;
   SeqWaiter* seq_waiter_ = nullptr;
+  LockstepCoordinator::SeqProcessed seq_processed_;  // seq_waiter_'s, or null without one
   std::function<bool()> stop_check_;
   std::unique_ptr<LineServer> server_;
   // every op, registered before start() and read-only afterwards (the I/O thread looks names up)
@@ -198,7 +183,10 @@ class ApiServer {
   std::set<uint64_t> authenticated_;   // connections that sent the token; I/O thread only
 
   // loop thread only
-  std::map<uint64_t, Client> clients_;
+  sim::SteadyWallClock wall_clock_;          // lockstep deadlines
+  LockstepCoordinator lockstep_;             // which connections gate the clock, their ticks
+  std::set<uint64_t> event_subscribers_;     // subscribe_events
+  // the one clock-control path (pause, resume, step, pause_at): the gate holds the clock while paused_
   bool paused_ = false;
   std::set<double> pause_at_s_;             // pause_at: hold the clock once sim time reaches each
   bool pause_when_lockstep_empty_ = false;  // pause_at: hold it when the last lockstep client leaves

@@ -20,10 +20,7 @@ void SteadyWallClock::sleep_until_s(double t_s) {
 Runner::Runner(Simulation& sim, double rate_factor, WallClock* clock)
     : sim_(sim), clock_(clock != nullptr ? clock : &steady_clock_), rate_(rate_factor) {}
 
-void Runner::stop() {
-  stop_ = true;
-  wake_.notify_all();
-}
+void Runner::stop() { stop_ = true; }
 
 void Runner::set_rate(double rate_factor) {
   rate_ = rate_factor;
@@ -31,39 +28,10 @@ void Runner::set_rate(double rate_factor) {
   rebase_ = true;
 }
 
-void Runner::pause() { paused_ = true; }
-
-void Runner::resume() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    paused_ = false;
-    rebase_ = true;
-  }
-  wake_.notify_all();
-}
-
-void Runner::step_while_paused(uint64_t steps) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    steps_allowed_ += steps;
-  }
-  wake_.notify_all();
-}
-
-void Runner::wait_while_paused() {
-  std::unique_lock<std::mutex> lock(mutex_);
-  wake_.wait(lock, [this] { return !paused_ || steps_allowed_ > 0 || stop_; });
-  if (paused_ && steps_allowed_ > 0) --steps_allowed_;
-  if (paused_) rebase_ = true;
-}
-
 void Runner::run_until(double end_time_s) {
   double wall_anchor_s = clock_->now_s();
   double sim_anchor = sim_.time_s();
   while (!stop_ && sim_.time_s() + 0.5 * sim_.physics_dt_s() < end_time_s) {
-    if (paused_) wait_while_paused();
-    if (stop_) break;
-
     const bool control_next = sim_.step_count() % sim_.control_decimation() == 0;
     if (control_next && gate_) {
       // the time the gate held the clock (pause, lockstep, requests) is not owed to the simulation

@@ -1,10 +1,10 @@
 // Drives a Simulation's clock on the calling thread (the loop thread): real time x factor, or as fast as
-// possible; pause, resume and single-stepping; and a gate before each control step where the lockstep
-// contract (sim socket API) can hold the clock. Wall-clock time is read here and nowhere in physics or fc.
+// possible, with a gate before each control step. The gate is the one place the clock is held: the sim
+// API's pause, resume, single-stepping and lockstep contract all act there (api::ApiServer::gate()).
+// Wall-clock time is read here and nowhere in physics or fc.
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <mutex>
@@ -40,10 +40,6 @@ class Runner {
   void stop();                             // Thread-safe: run_until returns at the next step.
   void set_rate(double rate_factor);       // Thread-safe.
   double rate() const { return rate_.load(); }
-  void pause();                            // Thread-safe.
-  void resume();                           // Thread-safe.
-  void step_while_paused(uint64_t steps);  // Thread-safe: advance N physics steps, then pause again.
-  bool paused() const { return paused_.load(); }
 
   // Called on the loop thread before every control step with the sim time it will run at; the lockstep
   // contract blocks in it until every joined client is done, and the API's pause holds the clock in it.
@@ -54,19 +50,14 @@ class Runner {
   void set_control_gate(Gate gate) { gate_ = std::move(gate); }
 
  private:
-  void wait_while_paused();
-
   Simulation& sim_;
   SteadyWallClock steady_clock_;
   WallClock* clock_;
   std::atomic<double> rate_;
   std::atomic<bool> stop_{false};
-  std::atomic<bool> paused_{false};
-  std::atomic<uint64_t> steps_allowed_{0};  // single steps granted while paused
-  std::mutex mutex_;
-  std::condition_variable wake_;
+  std::mutex mutex_;  // guards rebase_
   Gate gate_;
-  bool rebase_ = true;  // re-anchor wall time after a pause or a rate change
+  bool rebase_ = true;  // re-anchor wall time after a rate change
 };
 
 }  // namespace uavsim::server::sim

@@ -4,23 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include "fake_wall_clock.hpp"
 #include "sim_fixture.hpp"
 
 namespace uavsim::server::sim {
 namespace {
 
-// A wall clock that only moves when the runner sleeps or the test says so.
-class FakeWallClock : public WallClock {
- public:
-  double now_s() override { return now_s_; }
-  void sleep_until_s(double t_s) override {
-    if (t_s > now_s_) now_s_ = t_s;
-  }
-  void advance(double dt_s) { now_s_ += dt_s; }
-
- private:
-  double now_s_ = 100.0;
-};
+using testing::FakeWallClock;
 
 constexpr double kTolS = 0.05;  // a control step or two of slack
 
