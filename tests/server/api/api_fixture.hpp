@@ -1,6 +1,7 @@
 // A running server for API tests: a world, its objects, a Runner on its own thread (as fast as possible)
-// with the API's gate, and line-based JSON clients over loopback (port 0). Reads time out after 10 s of
-// wall time so that a broken server fails a test instead of hanging it.
+// with the API's gate; and its clients over loopback (port 0): TestClient on the client library's
+// SimConnection, RawClient on a plain socket for the bytes a well-behaved client never sends. Reads time
+// out after 10 s of wall time so that a broken server fails a test instead of hanging it.
 #pragma once
 
 #include <arpa/inet.h>
@@ -20,13 +21,12 @@
 #include <nlohmann/json.hpp>
 
 #include "api/api_server.hpp"
+#include "sim_api_client.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "sim/runner.hpp"
 
 namespace uavsim::server::api::testing {
-
-using Json = nlohmann::json;
 
 // A config whose clock starts held (tests step it explicitly).
 inline ApiConfig paused() {
@@ -74,9 +74,27 @@ class TestServer {
   std::thread loop_;
 };
 
+// The sim API as launchers use it (SimConnection): each request's reply in its wire form ({"ok", "result"}
+// or {"ok": false, "error": {"code", "message"}}; null if none came) and the streamed messages in order.
 class TestClient {
  public:
-  explicit TestClient(uint16_t port) {
+  explicit TestClient(uint16_t port) : client_(port) {}
+  const Json& hello() const { return client_.hello(); }
+  Json request(Json j) { return client_.request(std::move(j)); }
+  // the next streamed message (null after a 10 s timeout)
+  Json read_message() { return client_.read().json; }
+  // the next streamed message of a given "event" kind, skipping others
+  Json next_event(const std::string& kind) { return client_.next_event(kind).json; }
+
+ private:
+  SimApiClient client_;
+};
+
+// The raw wire: request lines as bytes, for malformed or pipelined input, half-closed sockets and the
+// wire format itself (ids echoed, replies in order).
+class RawClient {
+ public:
+  explicit RawClient(uint16_t port) {
     fd_ = socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -85,7 +103,7 @@ class TestClient {
     EXPECT_EQ(connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
     hello_ = read_message();
   }
-  ~TestClient() { close(fd_); }
+  ~RawClient() { close(fd_); }
   const Json& hello() const { return hello_; }
 
   void send_raw(const std::string& text) {

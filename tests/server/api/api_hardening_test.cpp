@@ -22,14 +22,14 @@ namespace {
 using testing::error_code;
 using testing::Json;
 using testing::paused;
-using testing::TestClient;
+using testing::RawClient;
 using testing::TestServer;
 
 std::string nested(size_t depth) { return std::string(depth, '[') + std::string(depth, ']'); }
 
 TEST(ApiHardening, DeeplyNestedRequestsAreRefusedAndTheServerStaysUp) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   // a 140 KB id nested 70k deep once overflowed the stack when it was echoed
   c.send_raw("{\"op\":\"status\",\"id\":" + nested(70000) + "}\n");
   Json r = c.reply();
@@ -49,7 +49,7 @@ TEST(ApiHardening, DeeplyNestedRequestsAreRefusedAndTheServerStaysUp) {
 
 TEST(ApiHardening, OnlyScalarIdsAreEchoed) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   Json r = c.request({{"op", "status"}, {"id", {{"a", 1}}}});
   EXPECT_EQ(error_code(r), "bad_field");
   EXPECT_TRUE(r["id"].is_null());
@@ -63,7 +63,7 @@ TEST(ApiHardening, OnlyScalarIdsAreEchoed) {
 
 TEST(ApiHardening, RepliesComeBackInRequestOrder) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   // good, unknown op, bad JSON, good, no op, good: errors made on the I/O thread once overtook the
   // requests queued for the loop
   for (int trial = 0; trial < 20; ++trial) {
@@ -77,7 +77,7 @@ TEST(ApiHardening, RepliesComeBackInRequestOrder) {
 
 TEST(ApiHardening, FieldsOfTheWrongTypeAreBadField) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   EXPECT_EQ(error_code(c.request({{"op", "step"}, {"steps", "x"}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "set_rate"}, {"rate", "fast"}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "reset"}, {"seed", "1"}})), "bad_field");
@@ -95,7 +95,7 @@ TEST(ApiHardening, FieldsOfTheWrongTypeAreBadField) {
 
 TEST(ApiHardening, NumbersOutOfRangeAreBadField) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   // seeds: a double out of uint64 range once became 0; an exact uint64 is kept
   EXPECT_EQ(error_code(c.request({{"op", "reset"}, {"seed", 1e30}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "reset"}, {"seed", 18446744073709551616.0}})), "bad_field");
@@ -116,7 +116,7 @@ TEST(ApiHardening, NumbersOutOfRangeAreBadField) {
 
 TEST(ApiHardening, ARequestFollowedByShutdownOfTheSendingSideGetsItsReply) {
   TestServer server("empty.xml", paused());
-  TestClient c(server.port());
+  RawClient c(server.port());
   // the last line even without its newline
   c.send_raw("{\"op\":\"status\",\"id\":1}\n{\"op\":\"status\",\"id\":2}");
   ASSERT_EQ(c.shutdown_sending(), 0);
@@ -129,10 +129,10 @@ TEST(ApiHardening, ConnectionsOverTheLimitAreToldWhyAndClosed) {
   ApiConfig config = paused();
   config.max_connections = 2;
   TestServer server("empty.xml", config);
-  TestClient a(server.port()), b(server.port());
+  RawClient a(server.port()), b(server.port());
   ASSERT_TRUE(a.request({{"op", "status"}})["ok"]);
   ASSERT_TRUE(b.request({{"op", "status"}})["ok"]);
-  TestClient third(server.port());  // its first message is the error instead of the hello
+  RawClient third(server.port());  // its first message is the error instead of the hello
   EXPECT_EQ(error_code(third.hello()), "overloaded") << third.hello();
   EXPECT_TRUE(third.at_eof());
   EXPECT_TRUE(a.request({{"op", "status"}})["ok"]);
@@ -142,10 +142,10 @@ TEST(ApiHardening, AReplyPastTheQueueCapEndsTheConnectionWithOverloaded) {
   ApiConfig config = paused();
   config.max_pending_bytes = 4096;  // more than the hello, less than a "vehicles" reply for 100 vehicles
   TestServer server("grid100.xml", config);
-  TestClient c(server.port());
+  RawClient c(server.port());
   EXPECT_EQ(error_code(c.request({{"op", "vehicles"}})), "overloaded");
   EXPECT_TRUE(c.at_eof());
-  TestClient next(server.port());
+  RawClient next(server.port());
   EXPECT_TRUE(next.request({{"op", "status"}})["ok"]);
 }
 

@@ -49,7 +49,7 @@ TEST(PauseAt, HoldsAtTheNextTickOfTheLastLockstepClientToLeave) {
   for (;;) {
     const Json tick = member->next_event("tick");
     ASSERT_FALSE(tick.is_null());
-    member->send({{"op", "done"}, {"tick", tick["tick"]}});
+    ASSERT_TRUE(member->request({{"op", "done"}, {"tick", tick["tick"]}})["ok"]);
     if (tick["time"].get<double>() > 0.45) break;
   }
   member.reset();

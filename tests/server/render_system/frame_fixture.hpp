@@ -1,18 +1,11 @@
 // A running server with cameras, for the frame-service system tests: a world with its objects, the frame
 // service, the sim API and (optionally) the MAVLink endpoint with the gimbal bridge and the endpoint hooks,
-// wired as server_app.cpp wires them; a Runner on its own thread. FrameClient reads the API's messages
-// including frames (a header line, then exactly "bytes" raw bytes).
+// wired as server_app.cpp wires them; a Runner on its own thread. FrameClient is the client library's
+// SimConnection, which reads frames (a header line, then exactly "bytes" raw bytes) with the other messages.
 #pragma once
-
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <gtest/gtest.h>
 
-#include <deque>
 #include <limits>
 #include <memory>
 #include <string>
@@ -29,6 +22,7 @@
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
 #include "sim/runner.hpp"
+#include "sim_api_client.hpp"
 
 namespace uavsim::server::render::testing {
 
@@ -121,91 +115,13 @@ class FrameServer {
   std::thread loop_;
 };
 
-// a message: the JSON, and for a frame its image bytes
-struct Message {
-  Json json;
-  std::string bytes;
-};
+using api::testing::Message;  // a streamed message: the JSON, and for a frame its image bytes
 
-class FrameClient {
+// The sim API on the client library's SimConnection (frames with their image bytes); waits end after
+// 20 s. rcvbuf > 0 sets the socket's receive buffer (a client that reads slowly fills it sooner).
+class FrameClient : public api::testing::SimApiClient {
  public:
-  explicit FrameClient(uint16_t port, int rcvbuf = 0) {
-    fd_ = socket(AF_INET, SOCK_STREAM, 0);
-    if (rcvbuf > 0) setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
-    hello_ = read().json;
-  }
-  ~FrameClient() { close(fd_); }
-  const Json& hello() const { return hello_; }
-  void send(const Json& j) {
-    const std::string text = j.dump() + "\n";
-    size_t off = 0;
-    while (off < text.size()) {
-      const ssize_t n = ::send(fd_, text.data() + off, text.size() - off, MSG_NOSIGNAL);
-      ASSERT_GT(n, 0);
-      off += static_cast<size_t>(n);
-    }
-  }
-  // the next message from the wire (null json after 20 s)
-  Message read() {
-    Message m;
-    size_t nl;
-    while ((nl = buf_.find('\n')) == std::string::npos) {
-      if (!fill()) return m;
-    }
-    m.json = Json::parse(buf_.substr(0, nl), nullptr, false);
-    buf_.erase(0, nl + 1);
-    if (m.json.is_object() && m.json.value("event", "") == "frame") {
-      const size_t n = m.json["bytes"].get<size_t>();
-      while (buf_.size() < n) {
-        if (!fill()) return Message{};
-      }
-      m.bytes = buf_.substr(0, n);
-      buf_.erase(0, n);
-    }
-    return m;
-  }
-  // the next reply; frames and events met on the way are kept (frames()) or dropped
-  Json request(const Json& j) {
-    send(j);
-    for (;;) {
-      Message m = read();
-      if (m.json.is_null() || m.json.contains("ok")) return m.json;
-      kept_.push_back(std::move(m));
-    }
-  }
-  // the next message of an event kind (kept ones first)
-  Message next_event(const std::string& kind) {
-    while (!kept_.empty()) {
-      Message m = std::move(kept_.front());
-      kept_.pop_front();
-      if (m.json.value("event", "") == kind) return m;
-    }
-    for (;;) {
-      Message m = read();
-      if (m.json.is_null() || m.json.value("event", "") == kind) return m;
-    }
-  }
-  std::deque<Message>& kept() { return kept_; }
-
- private:
-  bool fill() {
-    pollfd p{fd_, POLLIN, 0};
-    if (poll(&p, 1, 20000) <= 0) return false;
-    char tmp[1 << 16];
-    const ssize_t n = recv(fd_, tmp, sizeof(tmp), 0);
-    if (n <= 0) return false;
-    buf_.append(tmp, static_cast<size_t>(n));
-    return true;
-  }
-  int fd_ = -1;
-  std::string buf_;
-  std::deque<Message> kept_;
-  Json hello_;
+  explicit FrameClient(uint16_t port, int rcvbuf = 0) : SimApiClient(port, rcvbuf, 20.0) {}
 };
 
 }  // namespace uavsim::server::render::testing
