@@ -88,8 +88,8 @@ cameras and logs:
                       llvmpipe through the surfaceless platform) or auto (egl if it creates a
                       context, else osmesa); the start-up log says which one renders
   --render-threads N  threads rendering camera frames, each with its own GL context: cameras of
-                      different vehicles render in parallel (1 to 64); default: the hardware threads, at
-                      most 8, at most one per camera. Frames and their order do not depend on it
+                      different vehicles render in parallel (1 to 64); default: one per two hardware
+                      threads (1 to 8), at most one per camera. Frames and their order do not depend on it
   --record FILE.mp4   write a video of the run from the world camera "overview" (else the first world
                       camera, else the first camera), 15 frames per second of sim time; in real time
                       it drops frames rather than slow physics, at --rate 0 it keeps every frame

@@ -104,8 +104,12 @@ void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, 
 }
 
 int default_render_threads(size_t camera_count) {
+  // one per two hardware threads: llvmpipe already rasterises each context on every core, and on the
+  // 2-core development machine a second render thread gained 0-28 % and added a wake-up per snapshot
+  // (docs/results/performance.md, "Cameras")
   const size_t hardware = std::max(1u, std::thread::hardware_concurrency());
-  const size_t threads = std::min({hardware, static_cast<size_t>(kMaxDefaultRenderThreads), camera_count});
+  const size_t threads =
+      std::min({hardware / 2, static_cast<size_t>(kMaxDefaultRenderThreads), camera_count});
   return static_cast<int>(std::max<size_t>(1, threads));
 }
 
@@ -232,6 +236,22 @@ void FrameService::build_worker(int k, const std::vector<CameraSetup>& cameras) 
   RendererOptions ro;
   ro.backend = options_.backend;
   w.renderer = std::make_unique<CameraRenderer>(w.m, std::move(configs), ro);
+
+  // a context's first frame with a set of effects compiles llvmpipe's shaders for it (hundreds of ms on a
+  // loaded machine, per context): render one camera of each set now, before the clock starts, so that
+  // real-time subscribers' first frames are not late (and dropped) while several contexts compile at once
+  mj_forward(w.m, w.d);
+  std::vector<RenderFlags> warmed;
+  for (int i = 0; i < w.renderer->camera_count(); ++i) {
+    const RenderFlags& f = w.renderer->config(i).flags;
+    const bool seen = std::any_of(warmed.begin(), warmed.end(), [&f](const RenderFlags& g) {
+      return g.shadows == f.shadows && g.reflections == f.reflections && g.skybox == f.skybox &&
+             g.msaa_samples == f.msaa_samples;
+    });
+    if (seen) continue;
+    w.renderer->render(w.d, i, &w.frame);
+    warmed.push_back(f);
+  }
 }
 
 void FrameService::start_workers(const std::vector<CameraSetup>& cameras) {

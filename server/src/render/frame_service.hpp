@@ -110,10 +110,11 @@ struct FrameServiceOptions {
   int render_threads = 0;            // 0: default_render_threads(); more than the cameras: one per camera
 };
 
-// Render threads when none are asked for: the hardware threads, at most kMaxDefaultRenderThreads, at most
-// one per camera, at least one. Each is a GL context with its own copy of the meshes and textures, and on
-// llvmpipe each context starts its own rasteriser threads (LP_NUM_THREADS, default: one per CPU), so more
-// threads than cores only add memory and switching. Thread-safe.
+// Render threads when none are asked for: one per two hardware threads, at most kMaxDefaultRenderThreads,
+// at most one per camera, at least one. Each is a GL context with its own copy of the meshes and textures,
+// and on llvmpipe each context starts its own rasteriser threads (LP_NUM_THREADS, default: one per CPU), so
+// render threads overlap only the single-threaded parts of a frame (scene, vertices, read-back, encoding);
+// more of them than cores only add memory and switching. Thread-safe.
 inline constexpr int kMaxDefaultRenderThreads = 8;
 int default_render_threads(size_t camera_count);
 
