@@ -3,6 +3,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <dlfcn.h>
+#include <link.h>
 
 #include <cstdio>
 #include <cstring>
@@ -242,6 +243,33 @@ std::shared_ptr<Display> open_surfaceless_display(const char* client_extensions,
       "surfaceless platform", why);
 }
 
+#if defined(__SANITIZE_ADDRESS__)
+#define UAVSIM_EGL_PIN_DRIVER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define UAVSIM_EGL_PIN_DRIVER 1
+#endif
+#endif
+
+// Sanitizer builds only: Mesa's EGL unloads its DRI driver (llvmpipe's swrast_dri.so, or a GPU's)
+// when the display is terminated, before LeakSanitizer's check at exit. The driver's process-lifetime
+// allocations then show in frames of an "<unknown module>" that no suppression can name; keeping the
+// driver mapped lets scripts/lsan.supp's `_dri.so` line suppress them, as for OSMesa.
+void pin_dri_drivers() {
+#ifdef UAVSIM_EGL_PIN_DRIVER
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void*) {
+        const char* name = info->dlpi_name;
+        if (name != nullptr && std::strstr(name, "_dri.so") != nullptr) {
+          // RTLD_NOLOAD: only the mapped driver gains a reference, and NODELETE keeps it
+          (void)dlopen(name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        }
+        return 0;
+      },
+      nullptr);
+#endif
+}
+
 std::shared_ptr<Display> shared_display() {
   static std::mutex mutex;
   static std::weak_ptr<Display> shared;
@@ -257,6 +285,7 @@ std::shared_ptr<Display> shared_display() {
   std::shared_ptr<Display> display = open_device_display(client_extensions, &why);
   if (!display) display = open_surfaceless_display(client_extensions, &why);
   if (!display) throw std::runtime_error("egl: no display renders desktop OpenGL: " + why);
+  pin_dri_drivers();
   shared = display;
   return display;
 }
