@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "uavsim/common/tcp_socket.hpp"
+
 namespace uavsim::server::api {
 
 namespace {
@@ -158,8 +160,7 @@ void LineServer::accept_all() {
     }
     char ip[INET_ADDRSTRLEN] = {};
     inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof(ip));
-    const int one = 1;
-    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+    (void)common::configure_accepted_tcp(fd);  // no Nagle delay; keepalive drops vanished peers
     {
       std::lock_guard<std::mutex> lock(out_mutex_);
       if (conns_.size() >= limits_.max_connections) {

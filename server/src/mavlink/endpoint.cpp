@@ -24,6 +24,7 @@
 #include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/tlog.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "uavsim/common/tcp_socket.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -385,8 +386,7 @@ struct MavlinkServer::Core {
         if (spare_fd < 0) spare_fd = open_spare_fd();
         return;
       }
-      const int one = 1;
-      setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+      (void)common::configure_accepted_tcp(fd);  // no Nagle delay; keepalive drops vanished peers
       auto c = std::make_unique<Client>();
       c->fd = fd;
       c->vehicle = vehicle;
