@@ -275,11 +275,16 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
       ++sub.dropped;
       continue;
     }
+    // what this subscription lost before this frame: frames reach a subscription in seq order, so every
+    // earlier seq not delivered was dropped. (The running total `sub.dropped` may already count frames
+    // after this one, which the renderer refused while this one was still being rendered.)
+    const uint64_t delivered = sub.delivered.load();
+    const uint64_t dropped_before = p.seq > delivered ? p.seq - delivered : 0;
     const Json header = {{"event", "frame"},
                          {"camera", c.name},
                          {"vehicle", c.vehicle >= 0 ? Json(c.vehicle_name) : Json(nullptr)},
                          {"seq", p.seq},
-                         {"dropped", sub.dropped.load()},
+                         {"dropped", dropped_before},
                          {"stamp", frame.stamp_s},
                          {"stamp_us", frame.stamp_us},
                          {"width", c.width_px},
