@@ -70,18 +70,31 @@ struct A2aRadio::Impl {
 
   Impl(EventLoop& l, int v) : loop(l), vehicle(v) {}
 
-  void on_event(const Json& e) {
-    const Json to = e.value("to", Json());
-    if (!to.is_number_integer() || to.get<int>() != vehicle) return;
-    const Json data = e.value("data_b64", Json());
+  // A radio_batch event: every frame the connection's vehicles received by this gate, each
+  // [to, from, seq, broadcast, time, sent_time, data_b64] (docs/protocol.md, "Radio"), in order of
+  // arrival. The connection may carry other vehicles' radios (several agents a process): only this
+  // vehicle's frames are taken.
+  void on_batch(const Json& e) {
+    const auto it = e.find("frames");
+    if (it == e.end() || !it->is_array()) return;
+    for (const Json& f : *it) {
+      if (!f.is_array() || f.size() != 7 || !f[0].is_number_integer() ||
+          f[0].get<std::int64_t>() != vehicle) {
+        continue;
+      }
+      take(f[1], f[3], f[4], f[6]);
+    }
+  }
+
+  // A frame's fields, checked: a malformed one is dropped, whatever the server sent.
+  void take(const Json& from, const Json& broadcast, const Json& time, const Json& data) {
     if (!data.is_string()) return;
-    auto bytes = base64_decode(data.get<std::string>());
+    auto bytes = base64_decode(data.get_ref<const std::string&>());
     if (!bytes || bytes->empty() || bytes->size() > kRadioMaxFrameBytes) return;
     RadioFrame f;
-    f.time_s = e.value("time", 0.0);
-    const Json from = e.value("from", Json());
+    f.time_s = time.is_number() ? time.get<double>() : 0.0;
     f.from = from.is_number_integer() ? from.get<int>() : -1;
-    f.broadcast = e.value("broadcast", true);
+    f.broadcast = broadcast.is_boolean() ? broadcast.get<bool>() : true;
     f.data = std::move(*bytes);
     inbox.push_back(std::move(f));
     ++counters.received;
@@ -138,9 +151,11 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   if (vehicle < 0) return R::fail(Error::kInvalidArgument, "radio: vehicle index must be >= 0");
   auto impl = std::make_unique<Impl>(loop, vehicle);
   Impl* s = impl.get();
+  // batched: one line a gate for the connection, not one a frame (a flock's broadcasts fan out to
+  // every neighbour, and a line each was most of an agent's parsing)
   auto id = subscribe_lockstep_events(
-      loop, "radio", [s](const Json& e) { s->on_event(e); },
-      {{"op", "radio_subscribe"}, {"vehicle", vehicle}}, timeout_s, "radio",
+      loop, "radio_batch", [s](const Json& e) { s->on_batch(e); },
+      {{"op", "radio_subscribe"}, {"vehicle", vehicle}, {"batch", true}}, timeout_s, "radio",
       "radio of vehicle " + std::to_string(vehicle));
   if (!id) return R(id.error());
   s->sink_id = *id;

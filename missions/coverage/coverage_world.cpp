@@ -99,8 +99,11 @@ std::string coverage_world_xml(const WorldSpec& spec) {
   for (int i = 0; i < spec.agents; ++i) {
     double px = 0.0, py = 0.0;
     takeoff_point(spec, i, &px, &py);
+    // lean collision set: hull and skids. A flock needs vehicle-vehicle and vehicle-ground
+    // contact (two quads that touch both fail), not the propeller discs and cutter blades, which
+    // were 9 of the quad's 12 collidable geoms and a large part of every physics step.
     x += "    <uavsim_vehicle type=\"quad\" name=\"uav" + std::to_string(i) + "\" pos=\"" +
-         num(px) + " " + num(py) + " 0\"/>\n";
+         num(px) + " " + num(py) + " 0\" collision=\"lean\"/>\n";
   }
   x += "  </worldbody>\n";
   x += "</mujoco>\n";

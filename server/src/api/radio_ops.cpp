@@ -218,15 +218,25 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
     } else {
       for (size_t i = 0; i < sim_.vehicle_count(); ++i) which.insert(i);
     }
-    std::set<size_t>& subs = subscriptions_[conn];
+    std::optional<bool> batch;
+    if (auto it = request.find("batch"); it != request.end()) {
+      if (op != "radio_subscribe" || !it->is_boolean()) {
+        return set_error(code, message, "bad_field",
+                         "\"batch\" is a boolean of radio_subscribe (one radio_batch event a gate)");
+      }
+      batch = it->get<bool>();
+    }
+    Subscription& sub = subscriptions_[conn];
+    if (batch) sub.batch = *batch;  // the connection's delivery form, for all its vehicles
     for (size_t v : which) {
       if (op == "radio_subscribe") {
-        subs.insert(v);
+        sub.vehicles.insert(v);
       } else {
-        subs.erase(v);
+        sub.vehicles.erase(v);
       }
     }
-    *result = {{"vehicles", Json(std::vector<size_t>(subs.begin(), subs.end()))},
+    *result = {{"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
+               {"batch", sub.batch},
                {"time_s", sim_.time_s()}};
     return true;
   }
@@ -360,10 +370,23 @@ void RadioOps::on_gate(const Send& send) {
   radio_.advance(false);
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
   if (arrived.empty() || subscriptions_.empty()) return;
+  std::map<uint64_t, Json> batches;  // conn -> its frames of this gate, for batch subscribers
   for (const radio::Delivery& d : arrived) {
-    Json event;
-    for (const auto& [conn, vehicles] : subscriptions_) {
-      if (vehicles.count(d.to) == 0) continue;
+    Json event;  // built once, for the first subscriber that hears it
+    Json compact;
+    for (const auto& [conn, sub] : subscriptions_) {
+      if (sub.vehicles.count(d.to) == 0) continue;
+      if (sub.batch) {
+        // [to, from, seq, broadcast, time, sent_time, data_b64]: the event's fields, keys once
+        if (compact.is_null()) {
+          compact = Json::array(
+              {d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, base64_encode(d.data)});
+        }
+        Json& batch = batches[conn];
+        if (batch.is_null()) batch = Json::array();
+        batch.push_back(compact);
+        continue;
+      }
       if (event.is_null()) {
         event = {{"event", "radio"},
                  {"to", d.to},
@@ -376,6 +399,9 @@ void RadioOps::on_gate(const Send& send) {
       }
       send(conn, event);
     }
+  }
+  for (auto& [conn, frames] : batches) {
+    send(conn, Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
   }
 }
 

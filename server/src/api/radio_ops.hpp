@@ -1,8 +1,11 @@
 // The radio's ops on the sim socket API (docs/protocol.md, "Radio"): radio_send, radio_subscribe,
 // radio_unsubscribe, radio_stats, radio_config for the A2A radio (seed 6.2), and gcs_link_open,
 // gcs_link_impair, gcs_link_stats for the ground-station link relay (seed 6.3). Received frames
-// stream to subscribers as {"event": "radio", ...} at the gate, before the tick at whose sim time
-// they arrive.
+// stream to subscribers at the gate, before the tick at whose sim time they arrive: one
+// {"event": "radio", ...} line each, or, for a connection that subscribed with "batch": true, one
+// {"event": "radio_batch", "frames": [...]} line a gate with all of them (a flock's broadcasts fan
+// out to every neighbour: thousands of frames a sim second, where a line each costs the server a
+// serialisation and a socket write and the client a parse, per frame).
 #pragma once
 
 #include <cstdint>
@@ -46,7 +49,11 @@ class RadioOps : public OpGroup {
   sim::Simulation& sim_;
   radio::SimRadio& radio_;
   radio::GcsRelaySet* relays_;
-  std::map<uint64_t, std::set<size_t>> subscriptions_;  // conn -> vehicles whose frames it receives
+  struct Subscription {
+    std::set<size_t> vehicles;  // whose received frames this connection gets
+    bool batch = false;         // one radio_batch line a gate instead of a radio line a frame
+  };
+  std::map<uint64_t, Subscription> subscriptions_;  // by connection
 };
 
 }  // namespace uavsim::server::api

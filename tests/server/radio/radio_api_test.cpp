@@ -216,6 +216,55 @@ TEST(RadioApi, ALockstepClientGetsAFrameBeforeTheTickAtWhichItArrives) {
   EXPECT_GE(radio_events, 18);
 }
 
+TEST(RadioApi, ABatchSubscriberGetsOneLineAGateWithTheSameFramesInTheSameOrder) {
+  RadioServer server;
+  TestClient single(server.port());
+  TestClient batch(server.port());
+  ASSERT_TRUE(single.request({{"op", "radio_subscribe"}})["ok"]);
+  const Json sub = batch.request({{"op", "radio_subscribe"}, {"batch", true}});
+  ASSERT_TRUE(sub["ok"]) << sub;
+  EXPECT_EQ(sub["result"]["batch"], true);
+  // a broadcast from 0 (heard by 1) and a unicast 1 -> 0, sent at the same time: one gate
+  ASSERT_TRUE(single.request(send_op(0, "broadcast", "AQID"))["ok"]);
+  ASSERT_TRUE(single.request(send_op(1, 0, "BAUG"))["ok"]);
+  ASSERT_TRUE(single.request({{"op", "step"}, {"steps", 10}})["ok"]);
+
+  // as many deliveries as the links counted: 0 -> 1 and 1 -> 0
+  const Json stats = single.request({{"op", "radio_stats"}});
+  ASSERT_TRUE(stats["ok"]) << stats;
+  size_t delivered = 0;
+  for (const Json& l : stats["result"]["links"]) delivered += l["delivered"].get<size_t>();
+  ASSERT_EQ(delivered, 2u);
+  std::vector<Json> singles;
+  for (size_t k = 0; k < delivered; ++k) {
+    singles.push_back(single.next_event("radio"));
+    ASSERT_FALSE(singles.back().is_null()) << k;
+  }
+  const Json b = batch.next_event("radio_batch");
+  ASSERT_FALSE(b.is_null());
+  ASSERT_TRUE(b["frames"].is_array()) << b;
+  ASSERT_EQ(b["frames"].size(), singles.size()) << b;
+  for (size_t k = 0; k < singles.size(); ++k) {
+    const Json& f = b["frames"][k];
+    const Json& e = singles[k];
+    // [to, from, seq, broadcast, time, sent_time, data_b64]
+    ASSERT_EQ(f.size(), 7u) << f;
+    EXPECT_EQ(f[0], e["to"]);
+    EXPECT_EQ(f[1], e["from"]);
+    EXPECT_EQ(f[2], e["seq"]);
+    EXPECT_EQ(f[3], e["broadcast"]);
+    EXPECT_EQ(f[4], e["time"]);
+    EXPECT_EQ(f[5], e["sent_time"]);
+    EXPECT_EQ(f[6], e["data_b64"]);
+  }
+  EXPECT_GE(b["time"].get<double>(), singles.back()["time"].get<double>() - kTimeTol_s);
+
+  // "batch" is a boolean of radio_subscribe only
+  EXPECT_EQ(error_code(batch.request({{"op", "radio_subscribe"}, {"batch", 1}})), "bad_field");
+  EXPECT_EQ(error_code(batch.request({{"op", "radio_unsubscribe"}, {"batch", false}})), "bad_field");
+  EXPECT_TRUE(batch.request({{"op", "status"}})["ok"]);
+}
+
 TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
   RadioServer server;
   TestClient c(server.port());
