@@ -32,6 +32,13 @@ world (empty, hexa, grid100, mbzirc2017, mbzirc2020).
 simulation:
   --seed N            seed of every random generator (sensor noise, ...); default 1
   --physics-hz HZ     physics rate; default 1000
+  --physics-shards N  split the vehicles into N physics shards (1 to 64) stepped in lockstep on a thread
+                      pool, or auto (one per hardware thread for 200 vehicles or more); default 1.
+                      Vehicles in different shards never touch each other; all touch the ground and the
+                      static scene. Only worlds where nothing but vehicles moves, without cameras
+                      (--no-cameras), can be sharded (models/README.md "Physics shards")
+  --physics-threads N threads stepping the shards (1 to 64); default one per shard, at most the
+                      hardware threads. Results do not depend on it
   --control-hz HZ     flight-control rate, rounded to a divisor of the physics rate; default 500
   --rate X            clock: X times real time (default 1); --rate 0 or --fast: as fast as possible
   --fast              same as --rate 0
@@ -349,6 +356,18 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       o.seed = static_cast<uint64_t>(x);
     } else if (a == "--physics-hz") {
       ok = number({1, 100000, false, "a rate in Hz"}, &o.physics_hz);
+    } else if (a == "--physics-shards") {
+      // 0 stands for auto (physics/world_composer.hpp)
+      if ((ok = value(&v)) && v == "auto") {
+        o.physics_shards = 0;
+      } else if (ok) {
+        --i;
+        ok = number({1, 64, true, "a shard count or auto"}, &x);
+        o.physics_shards = static_cast<int>(x);
+      }
+    } else if (a == "--physics-threads") {
+      ok = number({1, 64, true, "a thread count"}, &x);
+      o.physics_threads = static_cast<int>(x);
     } else if (a == "--control-hz") {
       ok = number({1, 100000, false, "a rate in Hz"}, &o.control_hz);
     } else if (a == "--rate") {

@@ -57,6 +57,8 @@ struct Options {
   std::optional<std::string> write_world_path;
   uint64_t seed = 1;
   double physics_hz = 1000.0;
+  int physics_shards = 1;             // --physics-shards N (1 to 64); 0 = auto
+  int physics_threads = 0;            // --physics-threads N; 0 = one per shard, up to the hardware threads
   double control_hz = 500.0;
   double rate = 1.0;                  // real time x rate; 0 = as fast as possible
   double duration_s = 0.0;            // 0 = run until interrupted

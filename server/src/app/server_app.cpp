@@ -184,7 +184,8 @@ int run_server(const Options& given_options) {
     config.physics_hz = options.physics_hz;
     config.control_hz = options.control_hz;
     config.seed = options.seed;
-    std::unique_ptr<physics::World> world = physics::World::load(options.world_path, compose);
+    std::unique_ptr<physics::World> world = physics::World::load(
+        options.world_path, compose, physics::ShardOptions{options.physics_shards, options.physics_threads});
     // parameters: the world's uavsim:params texts, then --defaults files
     std::vector<std::string> names;
     for (const physics::VehicleBinding& v : world->vehicles()) names.push_back(v.name);
@@ -235,7 +236,11 @@ int run_server(const Options& given_options) {
   }
   if (!options.quiet) {
     std::cout << "uavsim-server: " << options.world_path << ": " << s.vehicle_count() << " vehicle(s), physics "
-              << options.physics_hz << " Hz, control " << 1.0 / s.control_dt_s() << " Hz, seed " << options.seed
+              << options.physics_hz << " Hz"
+              << (s.world().shard_count() > 1 ? " in " + std::to_string(s.world().shard_count()) + " shards on " +
+                                                     std::to_string(s.world().thread_count()) + " thread(s)"
+                                               : std::string())
+              << ", control " << 1.0 / s.control_dt_s() << " Hz, seed " << options.seed
               << ", clock " << (options.rate > 0 ? std::to_string(options.rate) + "x real time" : "as fast as possible")
               << "\n";
     const sim::FieldConditions& field = s.config().field;
@@ -317,6 +322,11 @@ int run_server(const Options& given_options) {
       }
       std::vector<std::string> overrides = options.camera_overrides;
       cameras = render::discover_cameras(s.world().model(), owners, overrides, 1.0 / s.control_dt_s());
+      if (!cameras.empty() && s.world().shard_count() > 1) {
+        throw std::invalid_argument("the world is split into " + std::to_string(s.world().shard_count()) +
+                                    " physics shards, and a camera would see only the first shard's vehicles: "
+                                    "use --no-cameras, or --physics-shards 1");
+      }
       const auto probe = record_camera(cameras, options.record_camera);
       if (options.record_path) {
         if (!probe) throw std::invalid_argument("--record-camera " + options.record_camera + ": no such camera");

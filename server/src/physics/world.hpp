@@ -1,9 +1,20 @@
 // The MuJoCo side of the simulation: a loaded world, the vehicles found in it, rotor wrenches written into
 // qfrc_applied, ground truth and contacts. The only module (with render/) that includes MuJoCo; this header
 // forward-declares MuJoCo's structs so users of World do not see mujoco.h.
+//
+// Physics shards: a world of many vehicles can be split into several shards (world_composer.hpp
+// compose_world_shards), each its own mjModel + mjData with a block of the vehicles and the whole static
+// scene, stepped in lockstep on a small thread pool (one step of every shard, then the next). The contact
+// rule: vehicles in the same shard collide with each other; vehicles in different shards never touch each
+// other (they pass through each other); every vehicle collides with the static scene, which every shard
+// holds. Only worlds whose sole moving things are vehicles can be sharded (the composer refuses others), so
+// nothing else moving is ever split from what it must touch. Each shard is stepped by exactly one thread
+// and shards share no state, so results depend on the number of shards but never on the number of
+// threads. One shard (the default) is exactly the unsharded world.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,12 +28,23 @@ struct mjData_;
 
 namespace uavsim::server::physics {
 
+class Shard;
+class StepPool;
+
+// How a world is split and stepped. Out-of-range values are errors (WorldError), never clamped silently.
+struct ShardOptions {
+  int shards = 1;   // 1 to kMaxPhysicsShards, or 0: auto (world_composer.hpp)
+  int threads = 0;  // threads stepping the shards, 1 to kMaxPhysicsShards; 0: one per shard, at most the
+                    // hardware threads. More threads than shards are not started.
+};
+
 // A vehicle found in the world (models/README.md: <text name="uavsim:vehicle:BODY" data="FRAME"/>).
 struct VehicleBinding {
   std::string name;  // the body name, e.g. "uav0"
   int body_id = -1;
   int qpos_adr = -1;  // the free joint's 7 qpos
   int dof_adr = -1;   // the free joint's 6 dofs
+  int shard = 0;      // the physics shard that holds it; body_id and the addresses are in that shard's model
   airframe::AirframeParams airframe;
 };
 
@@ -35,23 +57,38 @@ struct VehicleContact {
   int other_geom = -1;
   int other_body = -1;     // the other geom's body
   bool other_static = false;  // the other body cannot move (welded to the world, not kinematic)
+  int shard = 0;              // the shard whose model the geom and body ids belong to
 };
 
 class World {
  public:
   // Composes and loads a world file. Throws WorldError naming the file (and line) on any error.
-  static std::unique_ptr<World> load(const std::string& world_path, const ComposeOptions& options);
+  // With shards.shards != 1, split into physics shards (see above).
+  static std::unique_ptr<World> load(const std::string& world_path, const ComposeOptions& options,
+                                     const ShardOptions& shards = {});
   // Loads standalone MJCF text (label names it in errors). Throws WorldError.
   static std::unique_ptr<World> from_mjcf(const std::string& mjcf, const std::string& label);
+  // One shard per MJCF text (compose_world_shards' output), stepped by `threads` threads (ShardOptions).
+  static std::unique_ptr<World> from_shards(const std::vector<std::string>& mjcf, const std::string& label,
+                                            int threads);
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  const mjModel_* model() const { return m_; }
+  // Shard 0's model and data: the whole world when it is not sharded. A sharded world holds only
+  // vehicles and static geometry, and shard 0 has only its own block of the vehicles: cameras and
+  // renderers need an unsharded world.
+  const mjModel_* model() const;
   // For run-time model switches (a popped balloon's geoms, physics/object_bodies). Loop thread only.
-  mjModel_* mutable_model() { return m_; }
-  mjData_* data() { return d_; }
-  const mjData_* data() const { return d_; }
+  mjModel_* mutable_model();
+  mjData_* data();
+  const mjData_* data() const;
+  int shard_count() const { return static_cast<int>(shards_.size()); }
+  int thread_count() const;
+  // Runs fn(first, end) for each shard's block of vehicles [first, end) in the world's indices, each block
+  // on the thread that steps that shard, and returns when all have run (one call with every vehicle when
+  // there is one thread). fn must touch only those vehicles' state. Loop thread only.
+  void for_each_shard_block(const std::function<void(size_t first, size_t end)>& fn);
 
   const std::vector<VehicleBinding>& vehicles() const { return vehicles_; }
   // A vehicle's airframe, for conditions set before the simulation starts (battery sag). Loop thread only.
@@ -78,8 +115,8 @@ class World {
   // contacts are most of its step), while moving bodies (awake vehicles, kinematic objects) still
   // collide with it and wake it. truth() of a parked vehicle is that pose at rest (zero velocity and
   // acceleration). Loop thread only.
-  bool parked(size_t vehicle) const { return parked_[vehicle].on; }
-  size_t parked_count() const { return parked_count_; }
+  bool parked(size_t vehicle) const;
+  size_t parked_count() const;
   // Holds the vehicle at its present pose, at rest. Parking a parked vehicle does nothing.
   void park(size_t vehicle);
   // Gives the vehicle its contacts back, at rest where it was held.
@@ -96,35 +133,21 @@ class World {
   // Back to the initial state (qpos0, zero velocities, time 0).
   void reset();
 
-  // Names for events and queries.
-  std::string body_name(int body_id) const;
-  std::string geom_name(int geom_id) const;
-  int body_id(const std::string& name) const;  // -1 if none
+  // Names for events and queries, in a shard's model (ids as in VehicleContact and VehicleBinding).
+  std::string body_name(int body_id, int shard = 0) const;
+  std::string geom_name(int geom_id, int shard = 0) const;
+  int body_id(const std::string& name) const;  // in shard 0; -1 if none
 
  private:
-  World(mjModel_* m, mjData_* d, const std::string& label);
-  void find_vehicles(const std::string& label);
+  explicit World(std::vector<std::unique_ptr<Shard>> shards, int threads);
+  // the shard of a vehicle, and the vehicle's index in it
+  Shard& shard_of(size_t vehicle) const;
+  size_t local(size_t vehicle) const { return vehicle - first_[vehicles_[vehicle].shard]; }
 
-  void init_parking();
-  void hold_parked();
-  void set_parked_bits(size_t vehicle, bool parked);
-
-  struct Parking {
-    bool on = false;
-    double qpos[7] = {};
-    std::vector<int> geoms;  // the vehicle's collidable geoms
-  };
-
-  mjModel_* m_ = nullptr;
-  mjData_* d_ = nullptr;
+  std::vector<std::unique_ptr<Shard>> shards_;
+  std::vector<size_t> first_;  // per shard, its first vehicle's index in the world
+  std::unique_ptr<StepPool> pool_;
   std::vector<VehicleBinding> vehicles_;
-  std::vector<int> body_vehicle_;   // body id -> vehicle index or -1 (via the root body)
-  std::vector<char> geom_is_gear_;  // geom id -> landing gear
-  std::vector<char> body_static_;   // body id -> cannot move (welded to the world, not kinematic)
-  std::vector<int> geom_contype0_, geom_conaffinity0_;  // awake collision bits
-  std::vector<Parking> parked_;
-  size_t parked_count_ = 0;
-  bool forwarded_ = false;  // kinematics are current for the clock-only step
   std::vector<int> woken_;
 };
 

@@ -17,6 +17,7 @@
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "assets/mesh_convert.hpp"
@@ -45,6 +46,10 @@ constexpr long kMaxVehicles = 3000;
 constexpr int kMaxIncludedFiles = 256;
 constexpr std::uintmax_t kMaxIncludedBytes = 64u << 20;
 constexpr size_t kMaxCollisionWords = 32;  // collision="...": geom-name prefixes
+// physics shards "auto": worlds of this many vehicles or more get one shard per hardware thread, up to
+// kMaxAutoShards (a shard's fixed cost, its lockstep hand-off, only pays off for a few hundred vehicles)
+constexpr long kAutoShardMinVehicles = 200;
+constexpr int kMaxAutoShards = 8;
 
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what) {
   std::ostringstream s;
@@ -329,7 +334,10 @@ class Composer {
   Composer(std::string world_path, ComposeOptions options)
       : world_path_(std::move(world_path)), options_(std::move(options)) {}
 
-  std::string compose() {
+  std::string compose() { return compose_shards(1).front(); }
+
+  // The world split into physics shards (world_composer.hpp); shards 0: auto.
+  std::vector<std::string> compose_shards(int shards) {
     world_ = load_xml(world_path_);
     XMLElement* root = world_->RootElement();
     const fs::path base = fs::absolute(world_path_).parent_path();
@@ -337,22 +345,50 @@ class Composer {
     IncludeBudget budget;
     inline_includes(*world_, root, base, world_path_, 0, &budget);
     world_angle_ = compiler_attr(root, "angle", "degree");
-
     // includes may leave several <worldbody> sections, as MuJoCo allows
-    if (root->FirstChildElement("worldbody") == nullptr) {
-      fail(world_path_, root->GetLineNum(), "no <worldbody>");
-    }
-    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb;
-         wb = wb->NextSiblingElement("worldbody")) {
+    if (root->FirstChildElement("worldbody") == nullptr) fail(world_path_, root->GetLineNum(), "no <worldbody>");
+    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb; wb = wb->NextSiblingElement("worldbody")) {
       expand(wb);
     }
     check_nested(root);
-    finish(root);
+    const std::string why_not = unshardable(root);
+    if (shards == 0) {
+      shards = (why_not.empty() && vehicles_ >= kAutoShardMinVehicles) ? auto_shard_count() : 1;
+    }
+    if (shards < 1 || shards > kMaxPhysicsShards) {
+      throw WorldError(world_path_ + ": " + std::to_string(shards) + " physics shards: must be 1 to " +
+                       std::to_string(kMaxPhysicsShards) + " (or auto)");
+    }
+    if (shards == 1) {
+      finish(*world_, static_cast<long>(names_.size()));
+      convert_meshes(root, world_path_, options_);
+      return {print(*world_)};
+    }
+    if (!why_not.empty()) {
+      throw WorldError(world_path_ + ": cannot be split into " + std::to_string(shards) + " physics shards: " +
+                       why_not + " (shards hold vehicles and a static scene only; use 1 shard)");
+    }
+    if (vehicles_ < shards) {
+      throw WorldError(world_path_ + ": " + std::to_string(shards) + " physics shards for " +
+                       std::to_string(vehicles_) + " vehicle(s): each shard needs at least one vehicle");
+    }
     convert_meshes(root, world_path_, options_);
-
-    tinyxml2::XMLPrinter printer;
-    world_->Print(&printer);
-    return printer.CStr();
+    // contiguous blocks in world order, so that the concatenation of the shards' vehicles is the world's
+    std::vector<std::string> out;
+    const long objects = static_cast<long>(names_.size()) - vehicles_;
+    for (int k = 0; k < shards; ++k) {
+      const long first = vehicles_ * k / shards, end = vehicles_ * (k + 1) / shards;
+      std::set<std::string> others;
+      for (long i = 0; i < vehicles_; ++i) {
+        if (i < first || i >= end) others.insert(vehicle_names_[static_cast<size_t>(i)]);
+      }
+      XMLDocument shard;
+      world_->DeepCopy(&shard);
+      remove_vehicles(shard.RootElement(), others);
+      finish(shard, end - first + objects, shards);
+      out.push_back(print(shard));
+    }
+    return out;
   }
 
  private:
@@ -551,7 +587,10 @@ class Composer {
     }
     Template& t = load_template(at, kind);
     merge_globals(t);
-    if (kind == "vehicles") ++vehicles_;
+    if (kind == "vehicles") {
+      ++vehicles_;
+      vehicle_names_.push_back(name);
+    }
 
     // clone the body, prefix every name inside it, and place it
     XMLElement* body = t.body->DeepClone(world_.get())->ToElement();
@@ -668,19 +707,93 @@ class Composer {
     }
   }
 
+  // Why a world cannot be split into shards ("" if it can): anything that moves other than the vehicles, or
+  // that ties model elements together across vehicles (model-wide sections indexed by the whole model).
+  std::string unshardable(XMLElement* root) const {
+    for (const char* section : {"sensor", "actuator", "tendon", "equality", "contact", "keyframe"}) {
+      for (XMLElement* e = root->FirstChildElement(section); e; e = e->NextSiblingElement(section)) {
+        if (e->FirstChildElement() != nullptr) return std::string("it has <") + section + "> elements";
+      }
+    }
+    const std::set<std::string> vehicles(vehicle_names_.begin(), vehicle_names_.end());
+    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb; wb = wb->NextSiblingElement("worldbody")) {
+      for (XMLElement* b = wb->FirstChildElement("body"); b; b = b->NextSiblingElement("body")) {
+        const char* name = b->Attribute("name");
+        if (name != nullptr && vehicles.count(name) != 0) continue;
+        if (const std::string moving = moving_body(b); !moving.empty()) {
+          return "body '" + moving + "' moves and is not a vehicle";
+        }
+      }
+    }
+    return "";
+  }
+
+  // the name of the first body in this subtree with a joint or a mocap pose, or ""
+  static std::string moving_body(const XMLElement* body) {
+    const bool moves = body->FirstChildElement("joint") != nullptr || body->FirstChildElement("freejoint") != nullptr ||
+                       body->BoolAttribute("mocap", false);
+    if (moves) return body->Attribute("name") ? body->Attribute("name") : "(unnamed)";
+    for (const XMLElement* c = body->FirstChildElement("body"); c; c = c->NextSiblingElement("body")) {
+      if (std::string m = moving_body(c); !m.empty()) return m;
+    }
+    return "";
+  }
+
+  static int auto_shard_count() {
+    const unsigned hw = std::thread::hardware_concurrency();
+    return static_cast<int>(std::clamp(hw, 1u, static_cast<unsigned>(kMaxAutoShards)));
+  }
+
+  // takes the named vehicles' bodies and their custom elements (uavsim:vehicle:NAME, uavsim:NAME:*) out
+  static void remove_vehicles(XMLElement* root, const std::set<std::string>& names) {
+    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb; wb = wb->NextSiblingElement("worldbody")) {
+      for (XMLElement* b = wb->FirstChildElement("body"); b;) {
+        XMLElement* next = b->NextSiblingElement("body");
+        if (const char* n = b->Attribute("name"); n != nullptr && names.count(n) != 0) wb->DeleteChild(b);
+        b = next;
+      }
+    }
+    for (XMLElement* custom = root->FirstChildElement("custom"); custom;
+         custom = custom->NextSiblingElement("custom")) {
+      for (XMLElement* c = custom->FirstChildElement(); c;) {
+        XMLElement* next = c->NextSiblingElement();
+        if (names.count(custom_owner(c->Attribute("name"))) != 0) custom->DeleteChild(c);
+        c = next;
+      }
+    }
+  }
+
+  // "uavsim:vehicle:uav3" and "uavsim:uav3:drag_lin" -> "uav3"; anything else -> ""
+  static std::string custom_owner(const char* name) {
+    if (name == nullptr) return "";
+    const std::string_view n = name;
+    constexpr std::string_view kPrefix = "uavsim:", kVehicle = "uavsim:vehicle:";
+    if (n.substr(0, kVehicle.size()) == kVehicle) return std::string(n.substr(kVehicle.size()));
+    if (n.substr(0, kPrefix.size()) != kPrefix) return "";
+    const std::string_view rest = n.substr(kPrefix.size());
+    const size_t colon = rest.find(':');
+    return colon == std::string_view::npos ? "" : std::string(rest.substr(0, colon));
+  }
+
+  static std::string print(const XMLDocument& doc) {
+    tinyxml2::XMLPrinter printer;
+    doc.Print(&printer);
+    return printer.CStr();
+  }
+
   // sizes the composed model needs: user data slots of the rotor sites, contact and constraint buffers
   // (MuJoCo 2.2's defaults, 100 contacts and 500 constraint rows, drop contacts beyond a few vehicles),
-  // the offscreen buffer
-  void finish(XMLElement* root) {
-    XMLElement* size = child_or_create(*world_, root, "size", true);
+  // the offscreen buffer. n: the vehicles and objects in this model (a shard's own), of `shards` shards.
+  void finish(XMLDocument& doc, long n, int shards = 1) {
+    XMLElement* root = doc.RootElement();
+    XMLElement* size = child_or_create(doc, root, "size", true);
     if (nuser_site_ > 0) {
       size->SetAttribute("nuser_site", std::max(nuser_site_, size->IntAttribute("nuser_site", 0)));
     }
-    const long n = static_cast<long>(names_.size());
     if (size->Attribute("nconmax") == nullptr) size->SetAttribute("nconmax", static_cast<int>(100 + 8 * n));
-    if (size->Attribute("njmax") == nullptr) size->SetAttribute("njmax", auto_njmax(n));
-    XMLElement* visual = child_or_create(*world_, root, "visual");
-    XMLElement* global = child_or_create(*world_, visual, "global");
+    if (size->Attribute("njmax") == nullptr) size->SetAttribute("njmax", auto_njmax(n, shards));
+    XMLElement* visual = child_or_create(doc, root, "visual");
+    XMLElement* global = child_or_create(doc, visual, "global");
     global->SetAttribute("offwidth",
                          std::max(options_.offscreen_width_px, global->IntAttribute("offwidth", 0)));
     global->SetAttribute("offheight",
@@ -693,13 +806,15 @@ class Composer {
   // vehicle), rows are not: MuJoCo 2.2 allocates per row a dense Jacobian row of nv doubles twice (efc_J,
   // efc_JT, with column indices) and a dense row of njmax (efc_AR), in one buffer whose size is an int:
   // bytes = njmax (24 nv + 12 njmax) must stay well below 2^31 (njmax >= 11000 fails for 1000 quads).
-  // So: every vehicle on its gear at once up to a buffer of kRowBudgetBytes, then as many as fit.
-  static int auto_njmax(long vehicles) {
-    constexpr double kRowBudgetBytes = 1.0 * (1u << 30);
+  // So: every vehicle on its gear at once up to a buffer of 1 GiB, then as many as fit. The
+  // budget is the world's: each of `shards` shards gets its share (and, as the buffer grows with the square
+  // of the rows, the shards together hold more rows in it than one model would).
+  static int auto_njmax(long vehicles, int shards) {
+    const double row_budget_bytes = 1.0 * (1u << 30) / shards;
     constexpr long kRowsPerGroundedVehicle = 16;
     const double nv = 6.0 * static_cast<double>(vehicles) + 60.0;  // free joints, and some for objects
     // 12 r^2 + 24 nv r = budget
-    const double fit = (-24.0 * nv + std::sqrt(576.0 * nv * nv + 48.0 * kRowBudgetBytes)) / 24.0;
+    const double fit = (-24.0 * nv + std::sqrt(576.0 * nv * nv + 48.0 * row_budget_bytes)) / 24.0;
     const double wanted = 500.0 + static_cast<double>(kRowsPerGroundedVehicle * vehicles);
     return static_cast<int>(std::min(wanted, std::floor(fit)));
   }
@@ -710,6 +825,7 @@ class Composer {
   std::string world_angle_;
   std::map<std::string, Template> templates_;
   std::set<std::string> names_;
+  std::vector<std::string> vehicle_names_;  // in world order
   long vehicles_ = 0;
   int nuser_site_ = 0;
 };
@@ -720,6 +836,13 @@ std::string compose_world(const std::string& world_path, const ComposeOptions& o
   ComposeOptions o = options;
   if (o.models_dir.empty()) o.models_dir = default_models_dir();
   return Composer(world_path, o).compose();
+}
+
+std::vector<std::string> compose_world_shards(const std::string& world_path, const ComposeOptions& options,
+                                              int shards) {
+  ComposeOptions o = options;
+  if (o.models_dir.empty()) o.models_dir = default_models_dir();
+  return Composer(world_path, o).compose_shards(shards);
 }
 
 std::string default_models_dir() {

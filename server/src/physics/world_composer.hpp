@@ -17,6 +17,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace uavsim::server::physics {
 
@@ -41,6 +42,19 @@ struct ComposeOptions {
 // a missing or duplicate name, or a bad attribute; naming the world file and the mesh for a mesh file
 // that is missing or cannot be converted, or a cache directory that cannot be written.
 std::string compose_world(const std::string& world_path, const ComposeOptions& options);
+
+// Physics shards (physics/world.hpp): the world's vehicles split into `shards` contiguous blocks in world order
+// (shard k holds vehicles [k N / shards, (k + 1) N / shards)), each block composed with the whole static
+// scene into its own standalone MJCF. Each shard's contact and constraint buffers are sized for its own
+// vehicles (nconmax, njmax unless the world sets them: then every shard gets the world's values).
+// shards = 0 is auto: one shard per hardware thread (at most 8) for a world of 200 or more vehicles that
+// can be sharded, else 1. One shard gives exactly compose_world's text.
+// A world can be sharded only if nothing but its vehicles moves (no joint or mocap body outside a vehicle)
+// and it has no model-wide <sensor>, <actuator>, <tendon>, <equality>, <contact> or <keyframe> entries;
+// otherwise, and for shards outside 1..kMaxPhysicsShards or more shards than vehicles, WorldError says why.
+constexpr int kMaxPhysicsShards = 64;
+std::vector<std::string> compose_world_shards(const std::string& world_path, const ComposeOptions& options,
+                                              int shards);
 
 // The directory that holds the shipped models, from UAVSIM_MODELS_DIR in the environment or the build.
 std::string default_models_dir();

@@ -155,26 +155,29 @@ void Simulation::step() {
   for (auto& object : objects_) object->before_step(*this);
 
   // motors -> rotor thrusts (at the battery's voltage) -> wrench about the body origin, with drag on the
-  // velocity relative to the air -> qfrc_applied
+  // velocity relative to the air -> qfrc_applied; each vehicle on the thread that steps its physics shard
+  // (physics/world.hpp), faults handled after, in vehicle order
   const Eigen::Vector3d& wind_enu_m_s = wind_.velocity_enu_m_s();
+  faulted_.assign(vehicles_.size(), 0);
+  world_->for_each_shard_block([&](size_t first, size_t end) {
+    for (size_t i = first; i < end; ++i) {
+      VehicleRuntime& v = vehicles_[i];
+      const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
+      airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
+      airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
+      if (v.thrust_scale != 1.0) {
+        for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
+      }
+      if (world_->parked(i)) continue;  // held in place: no wrench (zeroed when it parked)
+      const fc::TruthState t = world_->truth(i);
+      const airframe::Wrench w =
+          airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
+      faulted_[i] = sane(w) ? 0 : 1;
+      world_->apply_wrench(i, faulted_[i] ? airframe::Wrench{} : w);
+    }
+  });
   for (size_t i = 0; i < vehicles_.size(); ++i) {
-    VehicleRuntime& v = vehicles_[i];
-    const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
-    airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
-    airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
-    if (v.thrust_scale != 1.0) {
-      for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
-    }
-    if (world_->parked(i)) continue;  // held in place: no wrench (zeroed when it parked)
-    const fc::TruthState t = world_->truth(i);
-    const airframe::Wrench w =
-        airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
-    if (sane(w)) {
-      world_->apply_wrench(i, w);
-    } else {
-      fault_vehicle(i, "non-finite or runaway rotor force");
-      world_->apply_wrench(i, airframe::Wrench{});
-    }
+    if (faulted_[i]) fault_vehicle(i, "non-finite or runaway rotor force");
   }
   world_->step();
   ++steps_;
@@ -229,15 +232,21 @@ void Simulation::control_step() {
 
   const double now = world_->time_s();
   const double dt = control_dt_s();
+  // each vehicle's flight controller on the thread that steps its physics shard; events after, in
+  // vehicle order
+  world_->for_each_shard_block([&](size_t first, size_t end) {
+    for (size_t i = first; i < end; ++i) {
+      VehicleRuntime& v = vehicles_[i];
+      const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
+      v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
+      if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
+      if (v.fc.armed() && world_->parked(i)) world_->wake(i);  // before the motors spin up
+      airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
+      v.thrust_scale = airframe::battery_thrust_scale(a, v.battery);
+    }
+  });
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     VehicleRuntime& v = vehicles_[i];
-    const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
-    v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
-    if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
-    if (v.fc.armed() && world_->parked(i)) world_->wake(i);  // before the motors spin up
-    airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
-    v.thrust_scale = airframe::battery_thrust_scale(a, v.battery);
-
     if (v.fc.armed() != v.was_armed) {
       record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");
     }
@@ -275,8 +284,8 @@ void Simulation::check_contacts() {
     if (c.other_vehicle >= 0) {
       kill_vehicle(c.vehicle, "collision with " + vehicle_name(c.other_vehicle));
     } else if (!c.landing_gear) {
-      kill_vehicle(c.vehicle, "hard impact: " + world_->geom_name(c.geom) + " hit " +
-                                  world_->geom_name(c.other_geom));
+      kill_vehicle(c.vehicle, "hard impact: " + world_->geom_name(c.geom, c.shard) + " hit " +
+                                  world_->geom_name(c.other_geom, c.shard));
     } else {
       const double speed = world_->truth(c.vehicle).velocity_enu_m_s.norm();
       if (speed > config_.crash_speed_m_s) {

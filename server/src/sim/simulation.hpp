@@ -155,6 +155,7 @@ class Simulation {
   uint64_t steps_ = 0;
   std::vector<VehicleRuntime> vehicles_;
   std::vector<physics::VehicleContact> contacts_;
+  std::vector<char> faulted_;  // per vehicle: this step's rotor wrench was not sane
   std::vector<ControlObserver> observers_;
   std::vector<std::unique_ptr<WorldObject>> objects_;
   EventLog events_;

@@ -35,6 +35,16 @@ std::string write_file(const std::string& name, const std::string& text) {
   return path;
 }
 
+TEST(Options, PhysicsShardsTakeACountOrAuto) {
+  EXPECT_EQ(parse({"w.xml"}).options->physics_shards, 1);
+  EXPECT_EQ(parse({"w.xml"}).options->physics_threads, 0);
+  EXPECT_EQ(parse({"w.xml", "--physics-shards", "auto"}).options->physics_shards, 0);
+  const ParseResult r = parse({"w.xml", "--physics-shards", "4", "--physics-threads", "2"});
+  ASSERT_TRUE(r.options) << r.error;
+  EXPECT_EQ(r.options->physics_shards, 4);
+  EXPECT_EQ(r.options->physics_threads, 2);
+}
+
 TEST(Options, DefaultsAreSitlLike) {
   const ParseResult r = parse({"w.xml"});
   ASSERT_TRUE(r.options);
@@ -62,6 +72,10 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"w.xml", "--gl", "vulkan"}, {"--gl", "egl, osmesa or auto", "'vulkan'"});
   expect_refused({"w.xml", "--render-threads", "0"}, {"--render-threads", "from 1 to 64"});
   expect_refused({"w.xml", "--render-threads", "65"}, {"--render-threads", "'65'"});
+  expect_refused({"w.xml", "--physics-shards", "0"}, {"--physics-shards", "from 1 to 64"});
+  expect_refused({"w.xml", "--physics-shards", "many"}, {"--physics-shards", "'many'"});
+  expect_refused({"w.xml", "--physics-shards"}, {"--physics-shards", "needs a value"});
+  expect_refused({"w.xml", "--physics-threads", "65"}, {"--physics-threads", "'65'"});
   expect_refused({"w.xml", "--rate"}, {"--rate needs a value"});
   expect_refused({"w.xml", "--bogus"}, {"unknown option --bogus"});
   expect_refused({}, {"no world given"});
