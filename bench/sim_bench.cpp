@@ -11,11 +11,21 @@
 //   BM_BareMjStep/full|lean/N  free-flying quads held by a constant m g in qfrc_applied, 10 m up:
 //   the
 //                       cost of the collision set alone
+//   BM_Formation/N/shards:S/threads:T  N quads start parked on the ground, all take off (in waves that the
+//                       constraint rows of each physics shard hold) and hover 5 m up in formation, in S
+//                       physics shards stepped by T threads (physics/world.hpp); wall-clock timed.
+//                       Counters: us_per_vehicle_step and realtime_x on the wall clock, cpu_realtime_x
+//                       (sim seconds per CPU second of the whole process), physics_us_per_vehicle_step
+//                       (World::step alone: every shard's mj_step, on the pool), fc_us_per_vehicle_step
+//                       (the rest of Simulation::step: flight controllers, motors, wrenches, contact
+//                       checks), startup_s, rss_mb, flying.
 // Counters: us_per_vehicle_step (wall), realtime_x, startup_s (compose + load + Simulation), rss_mb
 // (the process after start-up), flying. items/s = vehicle-steps per second: compare rows of one run
 // only.
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
+
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -52,10 +62,17 @@ std::string grid_world(int n, double z_m, const char* collision) {
   return path;
 }
 
-std::unique_ptr<physics::World> load(int n, double z_m, const char* collision) {
+std::unique_ptr<physics::World> load(int n, double z_m, const char* collision,
+                                     physics::ShardOptions shards = {}) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
-  return physics::World::load(grid_world(n, z_m, collision), o);
+  return physics::World::load(grid_world(n, z_m, collision), o, shards);
+}
+
+double cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 double rss_mb() {
@@ -75,29 +92,44 @@ struct Rig {
   size_t flying = 0;
 };
 
-// launch: GUIDED, arm and take off to 5 m, as many at a time as the constraint rows hold (a quad
-// armed on its gear needs up to 16; world_composer.cpp auto_njmax), then hover 10 s
-void launch_all(sim::Simulation& s) {
-  const int rows = s.world().model()->njmax;
-  const size_t n = s.vehicle_count();
-  size_t next = 0;
-  const double give_up_s = s.time_s() + 20.0 + 0.05 * static_cast<double>(n);
-  while (next < n && s.time_s() < give_up_s) {
-    size_t grounded_awake = 0;
-    for (size_t i = 0; i < next; ++i)
-      grounded_awake += s.truth(i).on_ground && !s.world().parked(i);
-    while (next < n && static_cast<int>(16 * (grounded_awake + 1)) <= rows - 500) {
-      s.post(next++, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(false);
-        f.takeoff(5.0);
-      });
-      ++grounded_awake;
+// launch every vehicle (GUIDED, arm, take off to 5 m), in each shard as many at a time as its constraint
+// rows hold (16 per quad awake on its gear, world_composer.cpp auto_njmax), then hover for hover_s
+void launch_all_sharded(sim::Simulation& s, int rows_per_shard, double hover_s) {
+  const auto& vehicles = s.world().vehicles();
+  const size_t shards = static_cast<size_t>(s.world().shard_count());
+  std::vector<std::vector<size_t>> block(shards);
+  for (size_t i = 0; i < vehicles.size(); ++i) block[static_cast<size_t>(vehicles[i].shard)].push_back(i);
+  std::vector<size_t> next(shards, 0);
+  const double give_up_s = s.time_s() + 20.0 + 0.05 * static_cast<double>(vehicles.size());
+  auto done = [&] {
+    for (size_t k = 0; k < shards; ++k) {
+      if (next[k] < block[k].size()) return false;
+    }
+    return true;
+  };
+  while (!done() && s.time_s() < give_up_s) {
+    for (size_t k = 0; k < shards; ++k) {
+      size_t grounded_awake = 0;
+      for (size_t j = 0; j < next[k]; ++j) {
+        const size_t i = block[k][j];
+        grounded_awake += s.truth(i).on_ground && !s.world().parked(i);
+      }
+      while (next[k] < block[k].size() && static_cast<int>(16 * (grounded_awake + 1)) <= rows_per_shard - 500) {
+        s.post(block[k][next[k]++], [](fc::FlightController& f) {
+          f.set_mode(fc::Mode::kGuided);
+          f.arm(false);
+          f.takeoff(5.0);
+        });
+        ++grounded_awake;
+      }
     }
     s.run_until(s.time_s() + 0.1);
   }
-  s.run_until(s.time_s() + 10.0);
+  s.run_until(s.time_s() + hover_s);
 }
+
+// an unsharded world: as many at a time as its constraint rows hold, then hover 10 s
+void launch_all(sim::Simulation& s) { launch_all_sharded(s, s.world().model()->njmax, 10.0); }
 
 Rig& rig(int kind, int n) {
   static Rig r;
@@ -188,6 +220,43 @@ void BM_BareMjStep(benchmark::State& state, const char* collision) {
       static_cast<double>(state.iterations()) * world->timestep_s(), benchmark::Counter::kIsRate);
 }
 
+void BM_Formation(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int shards = static_cast<int>(state.range(1));
+  const int threads = static_cast<int>(state.range(2));
+  Rig r;
+  const auto t0 = std::chrono::steady_clock::now();
+  r.sim = std::make_unique<sim::Simulation>(load(n, 0.0, "lean", physics::ShardOptions{shards, threads}),
+                                            sim::SimConfig{});
+  r.startup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.rss_mb = rss_mb();
+  r.n = n;
+  sim::Simulation& s = *r.sim;
+  while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
+  launch_all_sharded(s, s.world().model()->njmax, 5.0);
+  for (size_t i = 0; i < s.vehicle_count(); ++i) r.flying += s.fc(i).armed() && !s.runtime(i).crashed;
+
+  // physics alone (every shard's step on the pool, the last rotor wrenches held), then the whole step
+  constexpr int kPhysicsSteps = 200;
+  const auto p0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < kPhysicsSteps; ++i) s.world().step();
+  const double physics_us =
+      1e6 * std::chrono::duration<double>(std::chrono::steady_clock::now() - p0).count() / (kPhysicsSteps * n);
+  const double c0 = cpu_s();
+  const auto w0 = std::chrono::steady_clock::now();
+  for (auto _ : state) s.step();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  const double cpu = cpu_s() - c0;
+  report(state, r, s.physics_dt_s());
+  const double sim_s = static_cast<double>(state.iterations()) * s.physics_dt_s();
+  const double step_us = 1e6 * wall / (static_cast<double>(state.iterations()) * n);
+  state.counters["cpu_realtime_x"] = sim_s / cpu;
+  state.counters["physics_us_per_vehicle_step"] = physics_us;
+  state.counters["fc_us_per_vehicle_step"] = step_us - physics_us;
+  state.counters["shards"] = shards;
+  state.counters["threads"] = s.world().thread_count();
+}
+
 // each world's two benchmarks next to each other, so that one warmed-up rig serves both
 const int registered = [] {
   for (int n : {1, 10, 100, 300, 1000, 3000}) {
@@ -213,6 +282,15 @@ const int registered = [] {
     benchmark::RegisterBenchmark("BM_BareMjStep/lean", BM_BareMjStep, "lean")
         ->Arg(n)
         ->Unit(benchmark::kMicrosecond);
+  }
+  for (int n : {100, 1000}) {
+    for (const auto& [shards, threads] : {std::pair{1, 1}, std::pair{2, 1}, std::pair{2, 2}}) {
+      benchmark::RegisterBenchmark("BM_Formation", BM_Formation)
+          ->Args({n, shards, threads})
+          ->ArgNames({"", "shards", "threads"})
+          ->UseRealTime()
+          ->Unit(benchmark::kMicrosecond);
+    }
   }
   return 0;
 }();
