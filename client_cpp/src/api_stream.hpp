@@ -17,8 +17,24 @@ class ApiStream {
   template <class F>
   void feed(const char* data, std::size_t size, F&& on_message) {
     buf_.append(data, size);
+    pump(on_message);
+  }
+
+  // hold(), from inside on_message: the messages after this one stay buffered until resume()
+  // (a pipelined lockstep loop works on a tick before it looks at what came after it).
+  void hold() { held_ = true; }
+  bool held() const { return held_; }
+  template <class F>
+  void resume(F&& on_message) {
+    held_ = false;
+    pump(on_message);
+  }
+
+ private:
+  template <class F>
+  void pump(F& on_message) {
     std::size_t pos = 0;
-    for (;;) {
+    while (!held_) {
       if (pending_bytes_ > 0) {
         if (buf_.size() - pos < pending_bytes_) break;
         const std::string_view payload(buf_.data() + pos, pending_bytes_);
@@ -45,8 +61,8 @@ class ApiStream {
     buf_.erase(0, pos);
   }
 
- private:
   std::string buf_;
+  bool held_ = false;
   nlohmann::json pending_header_;
   std::size_t pending_bytes_ = 0;
 };

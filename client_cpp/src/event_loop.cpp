@@ -98,20 +98,27 @@ bool EventLoop::Impl::dispatch(int timeout_ms) {
     n = epoll_wait(epfd, evs, 64, timeout_ms);
   } while (n < 0 && errno == EINTR);
   if (n <= 0) return false;
+  bool handled = false;
   for (int i = 0; i < n; ++i) {
     const int fd = evs[i].data.fd;
     if (fd == wakefd || fd == timerfd) {
       std::uint64_t v;
       [[maybe_unused]] ssize_t r = ::read(fd, &v, sizeof(v));
+      handled = true;
       continue;
     }
     if (fd == api_fd) {
+      // held (pipelined, working on a tick): a hang-up is reported even with no interest; it is
+      // read once the tick's work is done, and is no progress now (or the loop would spin)
+      if (api_held) continue;
       on_api_readable();
+      handled = true;
       continue;
     }
     notify_watch(fd, evs[i].events);
+    handled = true;
   }
-  return true;
+  return handled;
 }
 
 void EventLoop::Impl::notify_watch(int fd, std::uint32_t epoll_events) {
@@ -205,6 +212,11 @@ bool EventLoop::Impl::iterate(bool may_block, double wake_at) {
   const bool lockstep = config.clock == LoopConfig::Clock::kLockstep;
   // nothing left to do at this time: the process is waiting, so the tick is complete (seed 6.5)
   if (lockstep && tick_outstanding) send_done();
+  // pipelined: the tick's work is done, so what came after the tick may be handled now
+  if (lockstep && api_held && alive) {
+    resume_api();
+    return true;
+  }
   if (!may_block) return false;
   bool got = false;
   if (!lockstep) {
@@ -227,10 +239,63 @@ bool EventLoop::Impl::iterate(bool may_block, double wake_at) {
 
 bool EventLoop::Impl::send_api(const std::string& line) {
   if (api_fd < 0) return false;
+  if (outputs_held) {
+    held_api += line;
+    held_api += '\n';
+    return true;
+  }
   return net::send_all(api_fd, line + "\n", config.lockstep_wall_timeout_s);
 }
 
+void EventLoop::Impl::release_held_outputs() {
+  outputs_held = false;
+  // a flusher may close its link (and unregister): iterate over a copy
+  const auto flushers = output_flushers;
+  for (const auto& [id, flush] : flushers) flush();
+  if (!held_api.empty()) {
+    std::string lines;
+    lines.swap(held_api);
+    if (!net::send_all(api_fd, lines, config.lockstep_wall_timeout_s)) {
+      lose_clock("cannot send to the simulator");
+    }
+  }
+}
+
+void EventLoop::Impl::answer_early() {
+  send_done();
+  if (!alive) return;
+  tick_outstanding = true;  // the caller is still at this tick: its work for it comes now
+  done_sent = true;
+  outputs_held = true;
+  hold_api();
+}
+
+void EventLoop::Impl::hold_api() {
+  api_held = true;
+  api_stream.hold();
+  if (api_fd < 0) return;
+  epoll_event ev{};
+  ev.events = api_interest();
+  ev.data.fd = api_fd;
+  epoll_ctl(epfd, EPOLL_CTL_MOD, api_fd, &ev);  // fails harmlessly before create() has added it
+}
+
+void EventLoop::Impl::resume_api() {
+  api_held = false;
+  if (api_fd >= 0) {
+    epoll_event ev{};
+    ev.events = api_interest();
+    ev.data.fd = api_fd;
+    epoll_ctl(epfd, EPOLL_CTL_MOD, api_fd, &ev);
+  }
+  api_stream.resume([this](const Json& j, std::string_view payload) { handle_api_message(j, payload); });
+}
+
 void EventLoop::Impl::send_done() {
+  if (done_sent) {  // pipelined: answered when the tick came
+    tick_outstanding = false;
+    return;
+  }
   Json done = {{"op", "done"}, {"tick", tick}};
   Json seqs = Json::object();
   for (const auto& [id, src] : seq_sources) {
@@ -240,13 +305,18 @@ void EventLoop::Impl::send_done() {
   if (pending_busy_until) done["busy_until"] = *pending_busy_until;
   pending_busy_until.reset();
   tick_outstanding = false;
-  if (!send_api(done.dump())) lose_clock("cannot send done to the simulator");
+  // straight to the socket: never held with the outputs
+  if (api_fd < 0 || !net::send_all(api_fd, done.dump() + "\n", config.lockstep_wall_timeout_s)) {
+    lose_clock("cannot send done to the simulator");
+  }
 }
 
 void EventLoop::Impl::lose_clock(const std::string& why) {
   if (!alive) return;
   alive = false;
   tick_outstanding = false;
+  outputs_held = false;
+  held_api.clear();
   dead_reason = why;
   std::fprintf(stderr, "uavsim client: lockstep clock lost: %s\n", why.c_str());
   if (api_fd >= 0) {
@@ -257,13 +327,14 @@ void EventLoop::Impl::lose_clock(const std::string& why) {
 }
 
 void EventLoop::Impl::on_api_readable() {
+  if (api_held) return;
   char buf[65536];
   for (;;) {
     const ssize_t n = ::recv(api_fd, buf, sizeof(buf), MSG_DONTWAIT);
     if (n > 0) {
       api_stream.feed(buf, static_cast<std::size_t>(n),
                       [this](const Json& j, std::string_view payload) { handle_api_message(j, payload); });
-      if (!alive) return;
+      if (!alive || api_held) return;
       continue;
     }
     if (n == 0) {
@@ -309,6 +380,9 @@ void EventLoop::Impl::handle_api_message(const Json& j, std::string_view payload
       tick = j.value("tick", std::int64_t{0});
       sim_now = j.value("time", sim_now);
       tick_outstanding = true;
+      done_sent = false;
+      if (outputs_held) release_held_outputs();  // what the last tick's work sent: it applies now
+      if (pipelined && alive) answer_early();
     } else if (ev == "lockstep_dropped") {
       lose_clock("the simulator dropped this client: " + j.value("reason", std::string("?")));
     } else if (ev == "reset") {
@@ -408,7 +482,7 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
                            [raw](const Json& j, std::string_view payload) { raw->handle_api_message(j, payload); });
     }
     epoll_event ev{};
-    ev.events = EPOLLIN | EPOLLRDHUP;
+    ev.events = impl->api_interest();  // pipelined: held at the first tick
     ev.data.fd = impl->api_fd;
     epoll_ctl(impl->epfd, EPOLL_CTL_ADD, impl->api_fd, &ev);
   }
@@ -553,6 +627,11 @@ void EventLoop::run_busy(double duration_s, const std::function<void()>& fn) {
     fn();
     return;
   }
+  if (impl_->pipelined) {  // answered at every tick: no detaching
+    fn();
+    (void)run_for(duration_s);
+    return;
+  }
   // the busy section starts at a tick: the current one, or the next
   if (!impl_->tick_outstanding) {
     (void)run_until([this] { return impl_->tick_outstanding || !impl_->alive; }, kInf, "the next tick");
@@ -567,6 +646,13 @@ void EventLoop::run_busy(double duration_s, const std::function<void()>& fn) {
   fn();
   (void)run_until([&] { return now() >= until - kEps; }, kInf, "the end of a busy section");
 }
+
+void EventLoop::set_lockstep_pipelined(bool on) {
+  assert_in_loop_thread();
+  impl_->pipelined = on && is_lockstep();
+}
+
+bool EventLoop::lockstep_pipelined() const { return impl_->pipelined; }
 
 bool EventLoop::in_loop_thread() const { return std::this_thread::get_id() == impl_->thread; }
 

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <sys/epoll.h>
 
 #include "api_stream.hpp"
 #include "uavsim/client/event_loop.hpp"
@@ -78,6 +79,18 @@ struct EventLoop::Impl {
   std::optional<bool> mavlink_seq_checked;
   std::map<std::uint64_t, SeqSource> seq_sources;
   std::uint64_t next_seq_source = 1;
+  // pipelined lockstep (EventLoop::set_lockstep_pipelined): `done` of the current tick already sent;
+  // outputs held until the next tick (requests on the lockstep connection here, each Vehicle link's
+  // MAVLink in its own buffer, sent by its flusher)
+  bool pipelined = false;
+  bool done_sent = false;
+  bool outputs_held = false;
+  // ... and the lockstep connection is not read past the tick until the tick's work is done (the
+  // next tick may already be on its way: the simulation did not wait)
+  bool api_held = false;
+  std::string held_api;
+  std::map<std::uint64_t, std::function<void()>> output_flushers;
+  std::uint64_t next_output_flusher = 1;
 
   ~Impl();
   double now() const;
@@ -102,6 +115,14 @@ struct EventLoop::Impl {
   // Sends a request on the lockstep connection; on_reply gets the whole reply. False if there is none.
   bool api_request(nlohmann::json request, std::function<void(const nlohmann::json&)> on_reply);
   void send_done();
+  // pipelined lockstep, at a tick: sends the outputs held since the last tick ...
+  void release_held_outputs();
+  // ... then answers `done` before the tick's work, and holds what the work sends
+  void answer_early();
+  // pipelined lockstep: stops / resumes reading the lockstep connection (see api_held)
+  void hold_api();
+  void resume_api();
+  std::uint32_t api_interest() const { return api_held ? 0u : (EPOLLIN | EPOLLRDHUP); }
   void lose_clock(const std::string& why);
   bool send_api(const std::string& line);
 
@@ -110,6 +131,12 @@ struct EventLoop::Impl {
     return next_seq_source++;
   }
   void remove_seq_source(std::uint64_t id) { seq_sources.erase(id); }
+  // A link that holds its own output while outputs_held registers how to send it.
+  std::uint64_t add_output_flusher(std::function<void()> f) {
+    output_flushers[next_output_flusher] = std::move(f);
+    return next_output_flusher++;
+  }
+  void remove_output_flusher(std::uint64_t id) { output_flushers.erase(id); }
 };
 
 }  // namespace uavsim::client

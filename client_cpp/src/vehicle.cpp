@@ -224,6 +224,8 @@ struct Vehicle::Impl {
   TimerId resend_timer = 0;
   std::optional<msg::SetPositionTargetLocalNed> resend_setpoint;
   std::uint64_t seq_source = 0;
+  std::uint64_t output_flusher = 0;
+  std::string held_out;  // pipelined lockstep: frames sent during this tick's work (send, release_held)
 
   std::map<std::uint16_t, msg::CommandAck> acks;
   struct ParamSeen {
@@ -251,6 +253,7 @@ struct Vehicle::Impl {
     if (link_up && why != nullptr) std::fprintf(stderr, "uavsim client: %s: link closed: %s\n", address.c_str(), why);
     link_up = false;
     out.clear();
+    held_out.clear();
     for (TimerId* t : {&heartbeat_timer, &home_timer, &resend_timer}) {
       if (*t != 0) loop.cancel(*t);
       *t = 0;
@@ -295,13 +298,23 @@ struct Vehicle::Impl {
     if (f.empty()) return false;
     last_seq = seq++;
     sent_any = true;
-    out.append(reinterpret_cast<const char*>(f.bytes.data()), f.size);
-    if (out.size() > (4u << 20)) {
+    // pipelined lockstep: what is sent during a tick's work goes out at the next tick (release_held)
+    std::string& to = loop.impl().outputs_held ? held_out : out;
+    to.append(reinterpret_cast<const char*>(f.bytes.data()), f.size);
+    if (out.size() + held_out.size() > (4u << 20)) {
       close_link("the vehicle does not read (4 MiB unsent)");
       return false;
     }
-    flush();
+    if (&to == &out) flush();
     return fd >= 0;
+  }
+
+  // pipelined lockstep, at a tick before `done`: the frames held since the last tick go out
+  void release_held() {
+    if (held_out.empty()) return;
+    out += held_out;
+    held_out.clear();
+    flush();
   }
 
   void on_io(std::uint32_t what) {
@@ -655,11 +668,13 @@ Vehicle::Vehicle(EventLoop& loop, VehicleConfig config) : impl_(std::make_unique
     if (key.empty()) key = std::to_string(std::max(0, static_cast<int>(self->target_sysid) - 1));
     return std::make_pair(key, static_cast<int>(self->last_seq));
   });
+  impl_->output_flusher = loop.impl().add_output_flusher([self] { self->release_held(); });
 }
 
 Vehicle::~Vehicle() {
   impl_->close_link(nullptr);
   impl_->loop.impl().remove_seq_source(impl_->seq_source);
+  impl_->loop.impl().remove_output_flusher(impl_->output_flusher);
 }
 
 EventLoop& Vehicle::loop() { return impl_->loop; }

@@ -65,6 +65,10 @@ int usage() {
                           ground station (coverage-gcs) on udp:--gcs-host:P, one port per vehicle
   --gcs-host H            where those ports are (default 127.0.0.1)
   --gcs-period S          an agent sends its APD to the station at most every S seconds (default 1)
+  --pipelined             on the lockstep clock, a one-tick compute latency: the outputs of a step
+                          go out at the next tick, and the simulator steps while the agents think
+                          (deterministic; the GCS link's own UDP socket is not held back, so do
+                          not combine with --gcs-ports where runs must repeat exactly)
 )");
   return 2;
 }
@@ -126,9 +130,14 @@ int main(int argc, char** argv) {
   double gcs_period_s = 1.0;
   double step_s = 0.05, report_period_s = 2.0, status_period_s = 0.0;
   bool have_area = false;
+  bool pipelined = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") return usage();
+    if (a == "--pipelined") {
+      pipelined = true;
+      continue;
+    }
     if (i + 1 >= argc) return usage();
     const char* v = argv[++i];
     double x = 0, y = 0;
@@ -263,7 +272,8 @@ int main(int argc, char** argv) {
     log(f.id, buf);
   }
 
-  // 2. the agents at a fixed rate
+  // 2. the agents at a fixed rate (pipelined from here on, if asked: every link is up)
+  loop.set_lockstep_pipelined(pipelined);
   auto report = [&](Flyer& f) {
     std::printf("%s\n", encode_apd_report(f.id, loop.now(), f.agent->own()).c_str());
     std::fflush(stdout);

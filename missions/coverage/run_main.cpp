@@ -69,6 +69,9 @@ struct Options {
   double failure_prob = 0.0;
   uint64_t seed = 1;
   bool gcs = false;
+  // the agents' one-tick compute latency (coverage-agent --pipelined); never with --gcs, whose UDP
+  // links it would make timing-dependent
+  bool pipelined = false;
   double gcs_cut_s = -1.0;  // the GCS links cut (every datagram dropped) from this sim time on
   double gcs_loss = 0.0;    // each GCS-link datagram lost with this probability
   std::string json_path;
@@ -127,6 +130,9 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
                       receives the agents' data over their GCS links and sends its map back
   --gcs-cut T         cut every GCS link at sim time T (the server's relay drops all datagrams)
   --gcs-loss P        each GCS-link datagram is lost with probability P (0-1, seeded)
+  --pipelined         the agents' outputs of a step go out at the next tick (a one-tick compute
+                      latency) and the simulator steps while they think; default: zero latency, the
+                      simulator waits for them at every tick. Not with --gcs
   --server/--agent/--gcs-program PATH, --models-dir DIR  programs and models (default: the build
                       tree)
 )");
@@ -162,6 +168,10 @@ int main(int argc, char** argv) {
     }
     if (a == "--gcs") {
       o.gcs = true;
+      continue;
+    }
+    if (a == "--pipelined") {
+      o.pipelined = true;
       continue;
     }
     if (a == "--no-record" || a == "--no-run-dir") {
@@ -468,6 +478,7 @@ int main(int argc, char** argv) {
                                     "--status-period",
                                     fmt("%.3f", o.agent_status_s)};
       if (o.gcs) args.insert(args.end(), {"--gcs-ports", gcs_ports});
+      if (o.pipelined && !o.gcs) args.push_back("--pipelined");
       if (auto s = launch.spawn(name, args, {lockstep}); !s) {
         fail(s.message());
       }

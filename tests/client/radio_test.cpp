@@ -118,6 +118,32 @@ TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
   EXPECT_EQ(radio[1]->counters().received, 1u);
 }
 
+// Pipelined lockstep (one-tick compute latency): what the program sends during tick t0's work goes
+// on air at the next tick, so it is heard one tick later than above, and the loop answered tick t0
+// before the work (the simulation stepped on meanwhile).
+TEST(A2aRadio, PipelinedAFrameSentDuringATickGoesOnAirAtTheNext) {
+  ServerProcess server;
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
+  ASSERT_TRUE(r0 && r1) << (r0 ? r1.message() : r0.message());
+  loop.set_lockstep_pipelined(true);
+  ASSERT_TRUE(loop.run_for(0.1));
+  const double t0 = loop.now();
+  const auto data = frame(40, 9);
+  ASSERT_TRUE((*r0)->send(data));
+  ASSERT_TRUE(loop.run_for(kPeriod_s));  // tick t0 + p: the frame goes on air now (1.5 ms)
+  EXPECT_TRUE((*r1)->take_received().empty());
+  ASSERT_TRUE(loop.run_for(kPeriod_s));  // tick t0 + 2p: heard
+  const auto got = (*r1)->take_received();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].data, data);
+  EXPECT_GT(got[0].time_s, t0 + kPeriod_s + 0.0014);
+  EXPECT_LE(got[0].time_s, t0 + 2 * kPeriod_s + kTimeTol_s);
+}
+
 TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
   ServerProcess server;
   ASSERT_GT(server.api_port(), 0) << server.output();

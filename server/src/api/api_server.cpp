@@ -131,6 +131,13 @@ void ApiServer::set_seq_waiter(SeqWaiter* waiter) {
   seq_processed_ = nullptr;
   if (waiter != nullptr) {
     seq_processed_ = [waiter](size_t vehicle, uint8_t seq) { return waiter->seq_processed(vehicle, seq); };
+    waiter->set_progress_listener([this] {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++seq_progress_;
+      }
+      wake_.notify_one();
+    });
   }
 }
 
@@ -197,6 +204,11 @@ void ApiServer::on_gate() {
     if (stop_check_ && stop_check_()) return;
     for (OpGroup* g : groups_) g->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
     announce_ticks();
+    uint64_t seq_progress_seen = 0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      seq_progress_seen = seq_progress_;
+    }
     lockstep_.complete(seq_processed_);
 
     bool waiting_seq = false;
@@ -225,9 +237,15 @@ void ApiServer::on_gate() {
       step_reply_.reset();
     }
     // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)
+    // (the endpoint's progress call wakes a seq wait at once; the poll is the fallback for a waiter
+    // that makes none)
     std::unique_lock<std::mutex> lock(mutex_);
-    if (queue_.empty() && !shutdown_) {
-      wake_.wait_until(lock, waiting_seq ? std::min(next_deadline, Clock::now() + kSeqPoll) : next_deadline);
+    if (queue_.empty() && !shutdown_ && !(waiting_seq && seq_progress_ != seq_progress_seen)) {
+      wake_.wait_until(lock, waiting_seq ? std::min(next_deadline, Clock::now() + kSeqPoll) : next_deadline,
+                       [&] {
+                         return !queue_.empty() || shutdown_ ||
+                                (waiting_seq && seq_progress_ != seq_progress_seen);
+                       });
     }
   }
 }

@@ -52,6 +52,10 @@ class SeqWaiter {
   // True once the endpoint has processed the MAVLink message with sequence seq (0-255, as in the
   // MAVLink header) on vehicle's link, or any later one. Thread-safe.
   virtual bool seq_processed(size_t vehicle, uint8_t seq) const = 0;
+  // Registers the server's "a seq may have been processed" call, which the endpoint makes (any
+  // thread) after handling messages, so a gate waiting for a done's mavlink_seq wakes at once. The
+  // default registers nothing: the gate then polls every millisecond.
+  virtual void set_progress_listener(std::function<void()> listener) { (void)listener; }
   // Returns once every MAVLink byte the endpoint has queued for its clients so far (the telemetry and
   // replies of the control steps before now) has been written to their sockets. Called before a tick is
   // announced, so a lockstep client has its vehicles' telemetry stamped before the tick when the tick
@@ -177,6 +181,8 @@ class ApiServer {
 
   std::mutex mutex_;                 // guards queue_ and shutdown_
   std::condition_variable wake_;
+  // counts the SeqWaiter's progress calls (guarded by mutex_): the gate waits for it to change
+  uint64_t seq_progress_ = 0;
   std::deque<Request> queue_;
   bool shutdown_ = false;
   std::atomic<size_t> connections_{0};

@@ -22,6 +22,9 @@ class EndpointHooks : public api::LinkControl, public api::SeqWaiter {
     return server_.seq_processed(vehicle, seq);
   }
   void flush_sent() override { server_.flush_queued(); }
+  void set_progress_listener(std::function<void()> listener) override {
+    server_.set_seq_listener(std::move(listener));
+  }
 
  private:
   mavlink::MavlinkServer& server_;

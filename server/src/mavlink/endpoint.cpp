@@ -108,6 +108,8 @@ struct MavlinkServer::Core {
   std::atomic<bool> stop{false};
   std::atomic<bool> wake_pending{false};
   std::atomic<std::uint64_t> wakeups{0};
+  std::mutex seq_listener_mutex;  // the I/O thread runs from construction: set_seq_listener races it
+  std::function<void()> seq_listener;
   std::thread io_thread;
   std::unordered_map<int, std::unique_ptr<Client>> clients;  // by fd; I/O thread only
   std::uint64_t next_client_id = 1;                          // I/O thread only
@@ -408,6 +410,17 @@ struct MavlinkServer::Core {
 
   // false when the client is gone
   bool read_client(Client& c) {
+    bool handled_any = false;
+    const bool alive = read_client_bytes(c, handled_any);
+    // a lockstep `done` may be waiting for one of these messages' seq (api::SeqWaiter)
+    if (handled_any) {
+      std::lock_guard lock(seq_listener_mutex);
+      if (seq_listener) seq_listener();
+    }
+    return alive;
+  }
+
+  bool read_client_bytes(Client& c, bool& handled_any) {
     Vehicle& v = *vehicles[c.vehicle];
     std::uint8_t buf[kReadChunk];
     std::size_t total = 0;
@@ -456,6 +469,7 @@ struct MavlinkServer::Core {
         push_event(c.vehicle, std::move(ev));
         std::lock_guard lock(v.seq_mutex);
         v.last_seq[c.id] = seq;
+        handled_any = true;
       });
       account_parser(c);
     }
@@ -649,6 +663,11 @@ bool MavlinkServer::link_down(std::size_t vehicle) const {
 bool MavlinkServer::flush_queued(double timeout_s) { return core_->flush_queued(timeout_s); }
 
 std::uint64_t MavlinkServer::io_wakeups() const { return core_->wakeups.load(std::memory_order_relaxed); }
+
+void MavlinkServer::set_seq_listener(std::function<void()> listener) {
+  std::lock_guard lock(core_->seq_listener_mutex);
+  core_->seq_listener = std::move(listener);
+}
 
 bool MavlinkServer::seq_processed(std::size_t vehicle, std::uint8_t seq) const {
   if (vehicle >= core_->vehicles.size()) return false;

@@ -126,6 +126,10 @@ class MavlinkServer {
   // MAVLink sequence number seq, or one up to 127 later (mod 256), on some client connection of the vehicle?
   // Per connection the last handled seq is kept (the lockstep contract's mavlink_seq). Thread-safe.
   bool seq_processed(std::size_t vehicle, std::uint8_t seq) const;
+  // Called on the I/O thread after a read that handled messages (so seq_processed may have become
+  // true): the lockstep gate waiting for a `done`'s mavlink_seq wakes at once instead of polling.
+  // Any thread; null: none.
+  void set_seq_listener(std::function<void()> listener);
   // Blocks until the I/O thread has written to the sockets every byte queued for any client before the call
   // (telemetry and replies of the control steps so far), so that the sim API can announce a lockstep tick only
   // after them. A client whose socket buffer is full (it does not read) is not waited for; the wait is also

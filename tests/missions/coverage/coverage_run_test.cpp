@@ -183,4 +183,25 @@ TEST(CoverageRun, SameSeedSameRunWithFailuresAndLoss) {
   }
 }
 
+// The agents with a one-tick compute latency (coverage-agent --pipelined: their outputs go out at
+// the next tick while the simulator steps on): the flock still covers everything and lands, and a
+// run repeats to the last bit, with loss, though the simulator no longer waits for the agents'
+// work at each tick.
+TEST(CoverageRun, PipelinedAgentsCoverTheRectangleAndTheRunRepeats) {
+  std::string out1, out2;
+  const std::string args = "--area 100x60 --radio-loss 0.2 --seed 4 --pipelined";
+  const Json a = run_flock(args, &out1);
+  const Json b = run_flock(args, &out2);
+  ASSERT_TRUE(a.is_object()) << out1;
+  ASSERT_TRUE(b.is_object()) << out2;
+  EXPECT_GE(a["coverage"].get<double>(), kFullCoverage) << out1;
+  EXPECT_EQ(a["landed"].get<int>(), 5) << out1;
+  EXPECT_EQ(a["mission_time_s"], b["mission_time_s"]) << out1 << out2;
+  EXPECT_EQ(a["coverage"], b["coverage"]) << out1 << out2;
+  for (size_t i = 0; i < a["per_agent"].size(); ++i) {
+    EXPECT_EQ(a["per_agent"][i]["energy_mah"], b["per_agent"][i]["energy_mah"]) << i;
+    EXPECT_EQ(a["per_agent"][i]["distance_m"], b["per_agent"][i]["distance_m"]) << i;
+  }
+}
+
 }  // namespace

@@ -9,6 +9,14 @@
 //     At each tick it handles what has arrived, runs the timers due at the tick's time, and then answers
 //     `done` with the last MAVLink sequence number each vehicle link sent, so commands sent during the tick
 //     take effect at that tick. The simulation does not advance while the loop is working on a tick.
+//   * pipelined lockstep (set_lockstep_pipelined): the same clock, with a fixed one-tick compute
+//     latency, like an onboard computer whose outputs go out one period after the data they were
+//     computed from. At tick n the loop sends what the program produced during tick n-1 (MAVLink of
+//     every Vehicle link, requests on the lockstep connection), answers `done` at once, and then runs
+//     the program's work for tick n while the simulation steps on to tick n+1. Runs stay
+//     deterministic (what the program sees at tick n and when its outputs take effect do not depend
+//     on timing) and the simulator and the program use the CPU at the same time. Descriptors the
+//     program writes itself (its own UDP sockets) are not held back: their timing is the host's.
 //
 // Waiting: run_for() / run_until() keep dispatching events (and answering ticks) while they wait, so mission
 // code can be written as straight-line code. Blocking calls of Vehicle are built on them.
@@ -96,6 +104,13 @@ class EventLoop {
   // carries on, and the call returns at the first tick at or after that time (waiting for fn if it is slower:
   // the simulation then waits for it). Host clock: runs fn and returns.
   void run_busy(double duration_s, const std::function<void()>& fn);
+
+  // Pipelined lockstep (see the header comment), from the next tick on; off by default, nothing on
+  // the host clock. Turn it on once the program's links are connected: a connection opened while
+  // the simulation runs ahead is accepted at a timing-dependent sim time. While on, run_busy()
+  // does not detach (every tick is answered).
+  void set_lockstep_pipelined(bool on);
+  bool lockstep_pipelined() const;
 
   bool in_loop_thread() const;
   void assert_in_loop_thread() const;  // aborts naming the caller's thread when not on the loop thread
