@@ -373,6 +373,7 @@ class Composer {
                        std::to_string(vehicles_) + " vehicle(s): each shard needs at least one vehicle");
     }
     convert_meshes(root, world_path_, options_);
+    strip_visual_geoms(root);
     // contiguous blocks in world order, so that the concatenation of the shards' vehicles is the world's
     std::vector<std::string> out;
     const long objects = static_cast<long>(names_.size()) - vehicles_;
@@ -737,6 +738,59 @@ class Composer {
       if (std::string m = moving_body(c); !m.empty()) return m;
     }
     return "";
+  }
+
+  // A sharded world renders nothing (the server refuses cameras on it), so its shard models need only the
+  // geoms that collide: the vehicles' visual-only geoms (contype = conaffinity = 0; 17 of a lean quad's
+  // 20) go, which MuJoCo would otherwise place every step. Only in bodies whose mass is given by an
+  // <inertial> (and unless the compiler takes inertia from geoms), so that no body's dynamics change.
+  void strip_visual_geoms(XMLElement* root) const {
+    if (compiler_attr(root, "inertiafromgeom", "auto") == "true") return;
+    std::map<std::string, std::pair<int, int>> bits;  // default class -> (contype, conaffinity)
+    for (XMLElement* d = root->FirstChildElement("default"); d; d = d->NextSiblingElement("default")) {
+      collect_default_bits(d, {1, 1}, &bits);
+    }
+    const std::set<std::string> vehicles(vehicle_names_.begin(), vehicle_names_.end());
+    for (XMLElement* wb = root->FirstChildElement("worldbody"); wb; wb = wb->NextSiblingElement("worldbody")) {
+      for (XMLElement* b = wb->FirstChildElement("body"); b; b = b->NextSiblingElement("body")) {
+        if (const char* n = b->Attribute("name"); n != nullptr && vehicles.count(n) != 0) {
+          strip_visual_geoms(b, "main", bits);
+        }
+      }
+    }
+  }
+
+  // MuJoCo's default classes: a nested class starts from its parent's values; the top one is "main"
+  static void collect_default_bits(const XMLElement* def, std::pair<int, int> inherited,
+                                   std::map<std::string, std::pair<int, int>>* out) {
+    std::pair<int, int> b = inherited;
+    if (const XMLElement* g = def->FirstChildElement("geom")) {
+      b = {g->IntAttribute("contype", b.first), g->IntAttribute("conaffinity", b.second)};
+    }
+    const char* cls = def->Attribute("class");
+    (*out)[cls != nullptr ? cls : "main"] = b;
+    for (const XMLElement* c = def->FirstChildElement("default"); c; c = c->NextSiblingElement("default")) {
+      collect_default_bits(c, b, out);
+    }
+  }
+
+  static void strip_visual_geoms(XMLElement* body, const std::string& childclass,
+                                 const std::map<std::string, std::pair<int, int>>& bits) {
+    const std::string cls = body->Attribute("childclass") ? body->Attribute("childclass") : childclass;
+    const bool inertial = body->FirstChildElement("inertial") != nullptr;
+    for (XMLElement* c = body->FirstChildElement(); c;) {
+      XMLElement* next = c->NextSiblingElement();
+      const std::string tag = c->Name();
+      if (tag == "body") strip_visual_geoms(c, cls, bits);
+      if (tag == "geom" && inertial) {
+        const auto it = bits.find(c->Attribute("class") ? c->Attribute("class") : cls);
+        const std::pair<int, int> b = it != bits.end() ? it->second : std::pair<int, int>{1, 1};
+        if (c->IntAttribute("contype", b.first) == 0 && c->IntAttribute("conaffinity", b.second) == 0) {
+          body->DeleteChild(c);
+        }
+      }
+      c = next;
+    }
   }
 
   static int auto_shard_count() {

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <mujoco/mujoco.h>
+
 #include "physics/world.hpp"
 #include "physics/world_composer.hpp"
 
@@ -62,6 +64,12 @@ TEST(PhysicsShards, SplitTheVehiclesInContiguousBlocksInWorldOrder) {
   // shard 0 holds its 3 free bodies only, and the ground
   EXPECT_EQ(sharded->body_id("uav3"), -1);
   EXPECT_GE(sharded->body_id("uav2"), 0);
+  EXPECT_EQ(sharded->model()->nv, 3 * 6);
+  // and only the geoms that collide (it renders nothing): the ground and each lean quad's hull and two
+  // skids, where the whole world keeps all 20 geoms of each quad for its cameras
+  EXPECT_EQ(sharded->model()->ngeom, 1 + 3 * 3);
+  EXPECT_EQ(whole->model()->ngeom, 1 + 10 * 20);
+  EXPECT_EQ(sharded->vehicles()[0].airframe.inertia_body_kgm2, whole->vehicles()[0].airframe.inertia_body_kgm2);
 }
 
 TEST(PhysicsShards, OneShardIsExactlyTheComposedWorld) {
