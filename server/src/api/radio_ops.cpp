@@ -371,6 +371,13 @@ void RadioOps::on_gate(const Send& send) {
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
   if (arrived.empty() || subscriptions_.empty()) return;
   std::map<uint64_t, Json> batches;  // conn -> its frames of this gate, for batch subscribers
+  // a broadcast is one delivery per receiver with the same bytes: encoded once per frame
+  std::map<std::pair<size_t, uint64_t>, std::string> encoded;  // (from, seq) -> base64
+  auto data_b64 = [&](const radio::Delivery& d) -> const std::string& {
+    auto [it, fresh] = encoded.try_emplace({d.from, d.seq});
+    if (fresh) it->second = base64_encode(d.data);
+    return it->second;
+  };
   for (const radio::Delivery& d : arrived) {
     Json event;  // built once, for the first subscriber that hears it
     Json compact;
@@ -380,7 +387,7 @@ void RadioOps::on_gate(const Send& send) {
         // [to, from, seq, broadcast, time, sent_time, data_b64]: the event's fields, keys once
         if (compact.is_null()) {
           compact = Json::array(
-              {d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, base64_encode(d.data)});
+              {d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, data_b64(d)});
         }
         Json& batch = batches[conn];
         if (batch.is_null()) batch = Json::array();
@@ -395,7 +402,7 @@ void RadioOps::on_gate(const Send& send) {
                  {"seq", d.seq},
                  {"broadcast", d.broadcast},
                  {"sent_time", d.queued_s},
-                 {"data_b64", base64_encode(d.data)}};
+                 {"data_b64", data_b64(d)}};
       }
       send(conn, event);
     }
