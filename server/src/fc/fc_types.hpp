@@ -64,7 +64,7 @@ struct MissionItem {
   Kind kind = Kind::kWaypoint;
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // altitude relative to home for kTakeoff
   double param_s_or_m_s = 0.0;  // hold time (kWaypoint, kLoiterTime), speed (kChangeSpeed)
-  double yaw_deg = 0.0;         // kConditionYaw
+  double yaw_enu_rad = 0.0;     // kConditionYaw: the heading to hold (ENU: 0 = east, counter-clockwise)
   bool position_valid = true;   // false: "use current position" (lat/lon 0 in MAVLink)
 };
 
@@ -77,6 +77,17 @@ struct GuidedTarget {
   std::optional<double> yaw_enu_rad;     // ENU yaw: 0 = east, counter-clockwise positive
   std::optional<double> yaw_rate_rad_s;  // ENU: counter-clockwise positive
 };
+
+// A commanded heading: turn to yaw_enu_rad, or by it when relative (counter-clockwise positive), at
+// rate_rad_s (0: the ATC_SLEW_YAW default).
+struct YawCommand {
+  double yaw_enu_rad = 0.0;
+  bool relative = false;
+  double rate_rad_s = 0.0;
+};
+
+// The speed limit a speed change overrides.
+enum class SpeedLimit { kHorizontal, kClimb, kDescent };
 
 // SET_ATTITUDE_TARGET in guided mode.
 struct AttitudeTarget {

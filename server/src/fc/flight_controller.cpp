@@ -434,40 +434,29 @@ std::optional<PilotInput> FlightController::Impl::pilot() const {
   return pilot_;
 }
 
-CommandResult FlightController::condition_yaw(double angle_deg, double rate_deg_s, int direction,
-                                              bool relative) {
+CommandResult FlightController::set_yaw(const YawCommand& command) {
   Impl& s = *impl_;
-  if (!std::isfinite(angle_deg) || !std::isfinite(rate_deg_s) || rate_deg_s < 0.0 ||
-      direction < -1 || direction > 1) {
+  if (!std::isfinite(command.yaw_enu_rad) || !std::isfinite(command.rate_rad_s) || command.rate_rad_s < 0.0) {
     return CommandResult::kInvalid;
   }
   if (!s.armed_) return CommandResult::kFailed;
-  // compass heading (0 north, clockwise) <-> ENU yaw (0 east, counter-clockwise): yaw = 90 deg - hdg
-  const double deg = kPi / 180.0;
-  double target;
-  if (relative) {
-    const int dir = direction == 0 ? 1 : direction;
-    target = s.yaw_target_rad_ - dir * angle_deg * deg;
-  } else {
-    target = kPi / 2.0 - angle_deg * deg;
-  }
+  const double target = command.relative ? s.yaw_target_rad_ + command.yaw_enu_rad : command.yaw_enu_rad;
   s.yaw_target_rad_ = wrap_pi(target);
   s.yaw_fixed_ = true;
   s.yaw_rate_mode_ = false;
-  s.yaw_slew_override_rad_s_ = rate_deg_s * deg;
+  s.yaw_slew_override_rad_s_ = command.rate_rad_s;
   return CommandResult::kAccepted;
 }
 
-CommandResult FlightController::change_speed(int speed_type, double speed_m_s) {
+CommandResult FlightController::change_speed(SpeedLimit limit, double speed_m_s) {
   Impl& s = *impl_;
   if (!std::isfinite(speed_m_s) || speed_m_s <= 0.0 || speed_m_s > 50.0) {
     return CommandResult::kInvalid;
   }
-  switch (speed_type) {
-    case 0:  // airspeed: no wind here, the same as ground speed
-    case 1: s.speed_xy_override_m_s_ = speed_m_s; break;
-    case 2: s.speed_up_override_m_s_ = speed_m_s; break;
-    case 3: s.speed_dn_override_m_s_ = speed_m_s; break;
+  switch (limit) {
+    case SpeedLimit::kHorizontal: s.speed_xy_override_m_s_ = speed_m_s; break;
+    case SpeedLimit::kClimb: s.speed_up_override_m_s_ = speed_m_s; break;
+    case SpeedLimit::kDescent: s.speed_dn_override_m_s_ = speed_m_s; break;
     default: return CommandResult::kInvalid;
   }
   return CommandResult::kAccepted;

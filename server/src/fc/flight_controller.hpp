@@ -42,10 +42,11 @@ class FlightController {
   CommandResult takeoff(double altitude_above_home_m);  // GUIDED and armed, on the ground
   CommandResult set_guided_target(const GuidedTarget& target);  // GUIDED only; velocity targets time out
   CommandResult set_attitude_target(const AttitudeTarget& target);  // GUIDED only
-  // MAV_CMD_CONDITION_YAW: angle (deg, 0 = north, clockwise), rate (deg/s, 0 = default), direction
-  // (-1 ccw, 0 shortest, +1 cw), relative to the current heading or absolute.
-  CommandResult condition_yaw(double angle_deg, double rate_deg_s, int direction, bool relative);
-  CommandResult change_speed(int speed_type, double speed_m_s);  // MAV_CMD_DO_CHANGE_SPEED
+  // Holds a commanded heading (armed only): yaw_enu_rad absolute, or added to the current yaw target when
+  // relative, slewed at rate_rad_s (0: ATC_SLEW_YAW). kInvalid for a non-finite yaw or a negative rate.
+  CommandResult set_yaw(const YawCommand& command);
+  // Overrides one speed limit until the next mode change; kInvalid outside (0, 50] m/s.
+  CommandResult change_speed(SpeedLimit limit, double speed_m_s);
   // Pilot sticks, as ArduCopter reads its RC channels: STABILIZE leans by them (up to ANGLE_MAX) with
   // throttle as collective (mid stick = hover); ALT_HOLD leans too, with throttle as climb rate;
   // LOITER takes them as horizontal velocity (up to WPNAV_SPEED) and climb rate, and holds position when

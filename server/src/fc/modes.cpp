@@ -577,7 +577,7 @@ void FlightController::Impl::start_mission_item(int seq) {
       complete_mission_item();
       break;
     case MissionItem::Kind::kConditionYaw:
-      yaw_target_rad_ = wrap_pi(kPi / 2.0 - item.yaw_deg * kPi / 180.0);
+      yaw_target_rad_ = wrap_pi(item.yaw_enu_rad);
       yaw_fixed_ = true;
       auto_phase_ = AutoPhase::kYaw;
       break;

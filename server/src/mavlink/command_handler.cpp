@@ -1,6 +1,9 @@
 // Commands (COMMAND_LONG, COMMAND_INT, SET_MODE) and guided setpoints, with ArduCopter's semantics
-// (behaviour.md §4-5). Commands are acked on the link they came from; setpoints are never acked.
+// (behaviour.md §4-5). Commands are read by the pure command mapper (command_mapper.hpp) and carried out
+// here; they are acked on the link they came from. Setpoints are never acked.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
@@ -13,28 +16,7 @@ namespace frames = ::uavsim::common::frames;
 namespace {
 
 constexpr std::uint8_t kAccepted = to_underlying(MavResult::Accepted);
-constexpr std::uint8_t kDenied = to_underlying(MavResult::Denied);
-constexpr std::uint8_t kUnsupported = to_underlying(MavResult::Unsupported);
 constexpr std::uint8_t kFailed = to_underlying(MavResult::Failed);
-
-constexpr double kDegToRad = common::kPi / 180.0;
-
-// ArduPilot answers a refused arm, disarm or take-off with FAILED (behaviour.md §4)
-std::uint8_t failed_unless_accepted(fc::CommandResult r) {
-  if (r == fc::CommandResult::kAccepted) return kAccepted;
-  return r == fc::CommandResult::kUnsupported ? kUnsupported : kFailed;
-}
-
-std::uint8_t mav_result(fc::CommandResult r) {
-  switch (r) {
-    case fc::CommandResult::kAccepted: return kAccepted;
-    case fc::CommandResult::kDenied: return kDenied;
-    case fc::CommandResult::kFailed: return kFailed;
-    case fc::CommandResult::kUnsupported: return kUnsupported;
-    case fc::CommandResult::kInvalid: return kDenied;
-  }
-  return kFailed;
-}
 
 // type_mask groups: any bit of a group set ignores the whole group (ArduCopter)
 using Mask = PositionTargetTypemask;
@@ -46,14 +28,7 @@ constexpr std::uint16_t kForceSet = bits(Mask::ForceSet);
 constexpr std::uint16_t kYawIgnore = bits(Mask::YawIgnore);
 constexpr std::uint16_t kYawRateIgnore = bits(Mask::YawRateIgnore);
 
-
 using limits::within;
-using sim::checked_integer;
-
-// MAVLink message ids are 24 bits
-constexpr std::uint32_t kMaxMsgId = 0xFFFFFF;
-// mission sequence numbers are uint16 on the wire
-constexpr int kMaxSeq = 65535;
 
 }  // namespace
 
@@ -69,182 +44,54 @@ void VehicleLink::ack_command(Link& link, const Frame& frame, std::uint16_t comm
 }
 
 std::uint8_t VehicleLink::handle_command(Link& link, const CommandArgs& c, fc::FlightController& fc) {
-  const auto& p = c.p;
-  switch (static_cast<MavCmd>(c.command)) {
-    case MavCmd::ComponentArmDisarm: {
-      if (p[0] == 1.0) {
-        if (fc.armed()) return kAccepted;
-        const bool force = p[1] == 2989.0 || p[1] == 21196.0;  // both magic values force arming
-        return failed_unless_accepted(fc.arm(force));
-      }
-      if (p[0] == 0.0) {
-        if (!fc.armed()) return kAccepted;
-        return failed_unless_accepted(fc.disarm(p[1] == 21196.0));
-      }
-      return kUnsupported;
-    }
-    case MavCmd::DoSetMode: {  // also the SET_MODE message; needs CUSTOM_MODE_ENABLED
-      // both are integers on the wire (SET_MODE); anything a uint8/uint32 cannot hold is refused
-      const auto base_mode = checked_integer<std::uint8_t>(p[0]);
-      const auto custom_mode = checked_integer<std::uint32_t>(p[1]);
-      if (!base_mode || !custom_mode) return kDenied;
-      if ((*base_mode & to_underlying(MavModeFlag::CustomModeEnabled)) == 0) return kFailed;
-      const auto mode = fc::mode_from_number(*custom_mode);
-      if (!mode) return kFailed;
-      return mav_result(fc.set_mode(*mode));
-    }
-    case MavCmd::NavTakeoff: {  // COMMAND_LONG is GLOBAL_RELATIVE_ALT; COMMAND_INT must be too
-      if (c.is_int && !is_one_of<MavFrame>(c.frame, {MavFrame::GlobalRelativeAlt, MavFrame::GlobalRelativeAltInt})) {
-        return kDenied;
-      }
-      if (!within(p[6], limits::kPosition_m)) return kDenied;
-      return failed_unless_accepted(fc.takeoff(p[6]));
-    }
-    case MavCmd::NavLand:
-      return mav_result(fc.land());
-    case MavCmd::NavReturnToLaunch:
-      return mav_result(fc.rtl());
-    case MavCmd::NavLoiterUnlim:
-      return mav_result(fc.set_mode(fc::Mode::kLoiter));
-    case MavCmd::ConditionYaw: {  // angle, rate, direction, relative
-      if (!within(p[0], limits::kAngle_deg) || !sim::finite_in(p[1], 0.0, limits::kYawRate_deg_s) ||
-          !std::isfinite(p[2]) || !std::isfinite(p[3])) {
-        return kDenied;
-      }
-      const int dir = p[2] > 0 ? 1 : (p[2] < 0 ? -1 : 0);
-      return mav_result(fc.condition_yaw(p[0], p[1], dir, p[3] != 0.0));
-    }
-    case MavCmd::DoChangeSpeed: {  // speed type (0..3), speed
-      const auto type = checked_integer<int>(p[0], 0, 3);
-      if (!type || !within(p[1], limits::kSpeed_m_s)) return kDenied;
-      return mav_result(fc.change_speed(*type, p[1]));
-    }
-    case MavCmd::MissionStart: {  // first, last item (0, 0 = all)
-      const auto first = checked_integer<int>(p[0], 0, kMaxSeq);
-      const auto last = checked_integer<int>(p[1], 0, kMaxSeq);
-      if (!first || !last) return kDenied;
-      return mav_result(fc.mission_start(*first, *last));
-    }
-    case MavCmd::DoSetMissionCurrent: {
-      const auto seq = checked_integer<int>(p[0], 0, kMaxSeq);
-      if (!seq) return kDenied;
-      return mav_result(fc.set_mission_current(*seq));
-    }
-    case MavCmd::DoReposition: {  // COMMAND_INT only: go to lat/lon/alt in GUIDED
-      if (!c.is_int) return kUnsupported;
-      // NaN altitude means "keep the current one" (MAVLink's convention); any other non-number is refused
-      if (!limits::valid_lat_lon(c.x / 1e7, c.y / 1e7) ||
-          (!std::isnan(p[6]) && !within(p[6], limits::kPosition_m))) {
-        return kDenied;
-      }
-      if (fc.mode() != fc::Mode::kGuided) {
-        const fc::CommandResult r = fc.set_mode(fc::Mode::kGuided);
-        if (r != fc::CommandResult::kAccepted) return mav_result(r);
-      }
-      fc::GuidedTarget t;
-      Eigen::Vector3d pos = fc.estimate().position_enu_m;
-      if (c.x != 0 || c.y != 0) {
-        const Eigen::Vector3d xy = enu_of_geodetic({c.x / 1e7, c.y / 1e7, config_.origin.alt_m});
-        pos.x() = xy.x();
-        pos.y() = xy.y();
-      }
-      if (std::isfinite(p[6])) {
-        const bool amsl = is_one_of<MavFrame>(c.frame, {MavFrame::Global, MavFrame::GlobalInt});
-        pos.z() = amsl ? p[6] - config_.origin.alt_m : fc.home_enu_m().z() + p[6];
-      }
-      t.position_enu_m = pos;
-      return mav_result(fc.set_guided_target(t));
-    }
-    case MavCmd::DoMountControl: {  // pitch, roll, yaw (deg), mode in param7
-      // NaN leaves an axis as it is; MAV_MOUNT_MODE is 0..6 (0 here also leaves the mode)
-      for (int i : {0, 1, 2}) {
-        if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
-      }
-      const auto mount_mode = std::isnan(p[6]) ? std::optional<std::uint8_t>(0)
-                                               : checked_integer<std::uint8_t>(p[6], 0, 6);
-      if (!mount_mode) return kDenied;
-      if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
-      if (std::isfinite(p[1])) gimbal_.roll_deg = p[1];
-      if (std::isfinite(p[2])) gimbal_.yaw_deg = p[2];
-      if (*mount_mode > 0) gimbal_.mount_mode = *mount_mode;
-      gimbal_.yaw_earth_frame = false;
-      gimbal_.stamp_s = now_s();
-      return kAccepted;
-    }
-    case MavCmd::DoGimbalManagerPitchyaw: {  // pitch, yaw (deg), rates (deg/s), flags
-      // NaN leaves an angle as it is and means rate 0 / no flags
-      for (int i : {0, 1}) {
-        if (!std::isnan(p[i]) && !within(p[i], limits::kAngle_deg)) return kDenied;
-      }
-      for (int i : {2, 3}) {
-        if (!std::isnan(p[i]) && !within(p[i], limits::kYawRate_deg_s)) return kDenied;
-      }
-      const auto flags = std::isnan(p[4]) ? std::optional<std::uint32_t>(0) : checked_integer<std::uint32_t>(p[4]);
-      if (!flags) return kDenied;
-      if (std::isfinite(p[0])) gimbal_.pitch_deg = p[0];
-      if (std::isfinite(p[1])) gimbal_.yaw_deg = p[1];
-      gimbal_.pitch_rate_deg_s = std::isfinite(p[2]) ? p[2] : 0.0;
-      gimbal_.yaw_rate_deg_s = std::isfinite(p[3]) ? p[3] : 0.0;
-      gimbal_.yaw_earth_frame = (*flags & to_underlying(GimbalManagerFlags::YawLock)) != 0;
-      gimbal_.mount_mode = to_underlying(MavMountMode::MavlinkTargeting);
-      gimbal_.stamp_s = now_s();
-      return kAccepted;
-    }
-    case MavCmd::GetHomePosition:
-      if (!fc.home_set()) return kFailed;
-      send_home(link);
-      send_message_by_id(link, msg::GpsGlobalOrigin::kId);
-      return kAccepted;
-    case MavCmd::RequestAutopilotCapabilities:
-      if (p[0] == 1.0) send_autopilot_version(link);
-      return kAccepted;
-    case MavCmd::RequestMessage: {  // sent at the next control step, after this ack
-      const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
-      if (!id) return kDenied;
-      if (!can_send(*id)) return kFailed;
-      link.one_shot.push_back(*id);
-      return kAccepted;
-    }
-    case MavCmd::SetMessageInterval: {  // msgid, interval us (0 default, -1 stop)
-      const auto id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
-      if (!id || !std::isfinite(p[1])) return kDenied;
-      Stream* stream = nullptr;
-      for (Stream& s : link.streams) {
-        if (s.msgid == *id) stream = &s;
-      }
-      if (stream == nullptr) return kFailed;
-      double interval_s = 0.0;
-      if (p[1] == 0.0) {
-        if (stream->default_interval_s <= 0.0) return kFailed;
-        interval_s = stream->default_interval_s;
-      } else if (p[1] < 0.0) {
-        interval_s = 0.0;
-      } else {
-        interval_s = std::clamp(p[1] * 1e-6, 1e-3, 60.0);
-      }
-      stream->interval_s = interval_s;
-      stream->next_due_s = now_s();  // first one at the next control step
-      return kAccepted;
-    }
-    case MavCmd::GetMessageInterval: {  // -> MESSAGE_INTERVAL
-      const auto checked_id = checked_integer<std::uint32_t>(p[0], 0, kMaxMsgId);
-      if (!checked_id) return kDenied;
-      const std::uint32_t id = *checked_id;
-      msg::MessageInterval mi;
-      mi.message_id = static_cast<std::uint16_t>(id);
-      mi.interval_us = 0;  // not available
-      for (const Stream& s : link.streams) {
-        if (s.msgid == id) mi.interval_us = s.interval_s > 0 ? static_cast<std::int32_t>(s.interval_s * 1e6) : -1;
-      }
-      send(link, mi);
-      return kAccepted;
-    }
-    case MavCmd::DoSendBanner:
-      send_status_text(to_underlying(MavSeverity::Info), "ArduCopter V4.5.0 (uavsim)");
-      return kAccepted;
-    default:
-      return kUnsupported;
-  }
+  const MappedCommand mapped = map_command(c);
+  if (!mapped.request) return mapped.result;
+  return std::visit(
+      Overloaded{
+          [&](const FcRequest& r) { return execute(r, fc, config_.origin); },
+          [&](const GimbalRequest& r) {
+            apply(r, gimbal_, now_s());
+            return kAccepted;
+          },
+          [&](const LinkRequest& r) { return handle_link_request(link, r, fc); },
+      },
+      *mapped.request);
+}
+
+std::uint8_t VehicleLink::handle_link_request(Link& link, const LinkRequest& request, fc::FlightController& fc) {
+  return std::visit(
+      Overloaded{
+          [&](const cmd::SendHome&) {
+            if (!fc.home_set()) return kFailed;
+            send_home(link);
+            send_message_by_id(link, msg::GpsGlobalOrigin::kId);
+            return kAccepted;
+          },
+          [&](const cmd::SendAutopilotVersion&) {
+            send_autopilot_version(link);
+            return kAccepted;
+          },
+          [&](const cmd::RequestMessage& r) {  // sent at the next control step, after this ack
+            if (!can_send(r.msgid)) return kFailed;
+            link.one_shot.push_back(r.msgid);
+            return kAccepted;
+          },
+          [&](const cmd::SetMessageInterval& r) {
+            return link.streams.set_interval(r.msgid, r.interval_us, now_s()) ? kAccepted : kFailed;
+          },
+          [&](const cmd::GetMessageInterval& r) {
+            msg::MessageInterval mi;
+            mi.message_id = static_cast<std::uint16_t>(r.msgid);
+            mi.interval_us = link.streams.interval_us(r.msgid);
+            send(link, mi);
+            return kAccepted;
+          },
+          [&](const cmd::SendBanner&) {
+            send_status_text(to_underlying(MavSeverity::Info), "ArduCopter V4.5.0 (uavsim)");
+            return kAccepted;
+          },
+      },
+      request);
 }
 
 void VehicleLink::hold_position(fc::FlightController& fc) {
@@ -370,5 +217,67 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
   if ((m.type_mask & 64) == 0 && std::isfinite(m.thrust)) t.thrust = std::clamp<double>(m.thrust, 0.0, 1.0);
   if (fc.set_attitude_target(t) != fc::CommandResult::kAccepted) StatCounters::add(stats_.rejected_inputs);
 }
+
+void VehicleLink::handle_gimbal_pitchyaw(const msg::GimbalManagerSetPitchyaw& m) {
+  constexpr double kRadToDeg = 180.0 / common::kPi;
+  // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
+  const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
+  if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||
+      bad(m.yaw_rate, limits::kRate_rad_s)) {
+    StatCounters::add(stats_.rejected_inputs);
+    return;
+  }
+  if (std::isfinite(m.pitch)) gimbal_.pitch_deg = m.pitch * kRadToDeg;
+  if (std::isfinite(m.yaw)) gimbal_.yaw_deg = m.yaw * kRadToDeg;
+  gimbal_.pitch_rate_deg_s = std::isfinite(m.pitch_rate) ? m.pitch_rate * kRadToDeg : 0.0;
+  gimbal_.yaw_rate_deg_s = std::isfinite(m.yaw_rate) ? m.yaw_rate * kRadToDeg : 0.0;
+  gimbal_.yaw_earth_frame = (m.flags & to_underlying(GimbalManagerFlags::YawLock)) != 0;
+  gimbal_.stamp_s = now_s();
+}
+
+namespace {
+constexpr std::uint8_t kSysidMyGcs = 255;  // ArduPilot's SYSID_MYGCS default
+}  // namespace
+
+void VehicleLink::handle_rc_override(const Frame& f, const msg::RcChannelsOverride& m, fc::FlightController& fc) {
+  if (f.sysid != kSysidMyGcs) {
+    StatCounters::add(stats_.unhandled_messages);
+    return;
+  }
+  // channels 1-4 are roll, pitch, throttle, yaw (ArduCopter's RCMAP defaults) in microseconds; 0
+  // releases a channel (centred, mid throttle: no radio behind it here), UINT16_MAX leaves it as it was
+  const std::uint16_t pwm[4] = {m.chan1_raw, m.chan2_raw, m.chan3_raw, m.chan4_raw};
+  fc::PilotInput in = pilot_;
+  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
+  for (int k = 0; k < 4; ++k) {
+    if (pwm[k] == UINT16_MAX) continue;
+    if (pwm[k] != 0 && (pwm[k] < 800 || pwm[k] > 2200)) {
+      StatCounters::add(stats_.rejected_inputs);
+      return;
+    }
+    const double us = pwm[k] == 0 ? 1500.0 : std::clamp<double>(pwm[k], 1000.0, 2000.0);
+    // channel 2 high is nose up (stick back); throttle runs 1000 (0) to 2000 (1)
+    *axis[k] = k == 2 ? (us - 1000.0) / 1000.0 : (us - 1500.0) / 500.0 * (k == 1 ? -1.0 : 1.0);
+  }
+  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
+}
+
+void VehicleLink::handle_manual_control(const Frame& f, const msg::ManualControl& m, fc::FlightController& fc) {
+  if (f.sysid != kSysidMyGcs) {
+    StatCounters::add(stats_.unhandled_messages);
+    return;
+  }
+  // x forward, y right, r clockwise in [-1000, 1000], z throttle in [0, 1000] (ArduPilot's reading);
+  // INT16_MAX marks an axis as unused: it keeps its value
+  fc::PilotInput in = pilot_;
+  const std::int16_t raw[4] = {m.y, m.x, m.z, m.r};
+  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
+  for (int k = 0; k < 4; ++k) {
+    if (raw[k] == INT16_MAX) continue;
+    *axis[k] = k == 2 ? std::clamp(raw[k] / 1000.0, 0.0, 1.0) : std::clamp(raw[k] / 1000.0, -1.0, 1.0);
+  }
+  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
+}
+
 
 }  // namespace uavsim::server::mavlink

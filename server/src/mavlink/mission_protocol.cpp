@@ -5,6 +5,7 @@
 // sim time: an unanswered request is repeated after 1 s, the upload is cancelled after 8 s of silence.
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
@@ -21,9 +22,7 @@ constexpr std::uint8_t kMissionAccepted = result(MavMissionResult::Accepted);
 constexpr std::uint8_t kMissionError = result(MavMissionResult::Error);
 constexpr std::uint8_t kMissionUnsupportedFrame = result(MavMissionResult::UnsupportedFrame);
 constexpr std::uint8_t kMissionUnsupported = result(MavMissionResult::Unsupported);
-constexpr std::uint8_t kMissionNoSpace = result(MavMissionResult::NoSpace);
 constexpr std::uint8_t kMissionInvalidSequence = result(MavMissionResult::InvalidSequence);
-constexpr std::uint8_t kMissionCancelled = result(MavMissionResult::OperationCancelled);
 
 // the mission proper (no fence or rally points)
 constexpr std::uint8_t kMissionTypeMission = to_underlying(MavMissionType::Mission);
@@ -32,9 +31,10 @@ constexpr std::uint8_t kMissionTypeMission = to_underlying(MavMissionType::Missi
 constexpr std::uint16_t mav_command(MavCmd c) { return static_cast<std::uint16_t>(to_underlying(c)); }
 constexpr std::uint8_t mav_frame(MavFrame f) { return static_cast<std::uint8_t>(to_underlying(f)); }
 
-constexpr int kMaxMissionItems = 700;       // ArduPilot's SITL storage holds ~700 items
-constexpr double kRequestRetryS = 1.0;
-constexpr double kUploadTimeoutS = 8.0;
+// CONDITION_YAW's angle is a compass heading (0 = north, clockwise, degrees); the flight controller
+// holds an ENU yaw (0 = east, counter-clockwise, radians): yaw = 90 deg - heading
+double yaw_enu_rad_from_heading_deg(double heading_deg) { return common::kPi / 2.0 - heading_deg * common::kPi / 180.0; }
+double heading_deg_from_yaw_enu_rad(double yaw_enu_rad) { return (common::kPi / 2.0 - yaw_enu_rad) * 180.0 / common::kPi; }
 
 // the parameters each supported command uses, in a sane range (hold times, speeds, angles)
 bool params_in_range(const msg::MissionItemInt& m) {
@@ -76,43 +76,28 @@ msg::MissionCurrent VehicleLink::mission_current() const {
 }
 
 void VehicleLink::handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m) {
-  if (m.mission_type != kMissionTypeMission) {  // no fence or rally support
-    send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, m.mission_type);
-    return;
-  }
-  if (m.count > kMaxMissionItems) {
-    send_mission_ack(link, f.sysid, f.compid, kMissionNoSpace);
-    return;
-  }
-  MissionUpload& u = link.upload;
-  u = MissionUpload{};
-  if (m.count == 0) {  // an empty upload clears the mission
-    sim_.fc(vehicle_).set_mission({});
-    send_mission_ack(link, f.sysid, f.compid, kMissionAccepted);
-    return;
-  }
-  u.active = true;
-  u.count = m.count;
-  u.next_seq = 0;
-  u.last_activity_s = now_s();
-  u.items.reserve(m.count);
-  send_mission_request(link);
+  apply_upload_step(link, link.upload.on_count(m.count, m.mission_type, now_s()), f.sysid, f.compid);
 }
 
-void VehicleLink::send_mission_request(Link& link) {
-  MissionUpload& u = link.upload;
-  u.last_request_s = now_s();
+void VehicleLink::apply_upload_step(Link& link, UploadStep step, std::uint8_t sysid, std::uint8_t compid) {
+  if (step.rejected) StatCounters::add(stats_.rejected_inputs);
+  if (step.mission) sim_.fc(vehicle_).set_mission(std::move(*step.mission));
+  if (step.request_seq) send_mission_request(link, *step.request_seq);
+  if (step.ack) send_mission_ack(link, sysid, compid, *step.ack, step.ack_mission_type);
+}
+
+void VehicleLink::send_mission_request(Link& link, int seq) {
   // MISSION_REQUEST_INT once the client has shown it speaks INT; otherwise the legacy request, which
   // every client answers (DroneKit only understands MISSION_REQUEST)
   if (link.mission_int) {
     msg::MissionRequestInt r;
-    r.seq = static_cast<std::uint16_t>(u.next_seq);
+    r.seq = static_cast<std::uint16_t>(seq);
     r.target_system = link.peer_sysid;
     r.target_component = link.peer_compid;
     send(link, r);
   } else {
     msg::MissionRequest r;
-    r.seq = static_cast<std::uint16_t>(u.next_seq);
+    r.seq = static_cast<std::uint16_t>(seq);
     r.target_system = link.peer_sysid;
     r.target_component = link.peer_compid;
     send(link, r);
@@ -120,14 +105,7 @@ void VehicleLink::send_mission_request(Link& link) {
 }
 
 void VehicleLink::service_mission_upload(Link& link, double t) {
-  MissionUpload& u = link.upload;
-  if (!u.active) return;
-  if (t - u.last_activity_s > kUploadTimeoutS) {
-    u = MissionUpload{};
-    send_mission_ack(link, link.peer_sysid, link.peer_compid, kMissionCancelled);
-    return;
-  }
-  if (t - u.last_request_s >= kRequestRetryS) send_mission_request(link);
+  apply_upload_step(link, link.upload.on_tick(t), link.peer_sysid, link.peer_compid);
 }
 
 std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg::MissionItemInt& m, bool is_int,
@@ -188,14 +166,14 @@ std::optional<fc::MissionItem> VehicleLink::mission_item_from_mavlink(const msg:
       break;
     case MavCmd::ConditionYaw:  // param1 = angle
       item.kind = fc::MissionItem::Kind::kConditionYaw;
-      item.yaw_deg = m.param1;
+      item.yaw_enu_rad = yaw_enu_rad_from_heading_deg(m.param1);
       item.position_valid = false;
       break;
     default:
       *error = kMissionUnsupported;
       return std::nullopt;
   }
-  if (!item.position_enu_m.allFinite() || !std::isfinite(item.param_s_or_m_s) || !std::isfinite(item.yaw_deg)) {
+  if (!item.position_enu_m.allFinite() || !std::isfinite(item.param_s_or_m_s) || !std::isfinite(item.yaw_enu_rad)) {
     *error = kMissionError;
     return std::nullopt;
   }
@@ -239,7 +217,7 @@ msg::MissionItemInt VehicleLink::mission_item_to_mavlink(const fc::MissionItem& 
       break;
     case fc::MissionItem::Kind::kConditionYaw:
       m.command = mav_command(MavCmd::ConditionYaw);
-      m.param1 = static_cast<float>(item.yaw_deg);
+      m.param1 = static_cast<float>(heading_deg_from_yaw_enu_rad(item.yaw_enu_rad));
       break;
   }
   if (seq == 0) {  // home: absolute altitude, frame GLOBAL, as ArduPilot sends it
@@ -275,9 +253,7 @@ void VehicleLink::guided_goto(Link& link, const Frame& f, const msg::MissionItem
 }
 
 void VehicleLink::reject_mission_item(Link& link, const Frame& f) {
-  // an item that cannot even be read ends an upload in progress, as a bad item does below
-  if (link.upload.active) link.upload = MissionUpload{};
-  send_mission_ack(link, f.sysid, f.compid, kMissionError);
+  apply_upload_step(link, link.upload.on_unreadable_item(), f.sysid, f.compid);
 }
 
 void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
@@ -286,44 +262,48 @@ void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::Mis
     guided_goto(link, f, m, is_int, fc);
     return;
   }
-  MissionUpload& u = link.upload;
-  if (!u.active || m.mission_type != kMissionTypeMission) {
-    StatCounters::add(stats_.rejected_inputs);
-    return;
-  }
-  if (m.seq < u.next_seq) return;  // a repeat of an item we already have: the next request follows
-  if (m.seq > u.next_seq) {
-    StatCounters::add(stats_.rejected_inputs);
-    send_mission_ack(link, f.sysid, f.compid, kMissionInvalidSequence);
-    u = MissionUpload{};
-    return;
-  }
-  u.last_activity_s = now_s();
-  fc::MissionItem item;
-  if (m.seq == 0) {
-    // item 0 is home: the vehicle keeps its own home, the slot is a placeholder
-    item.kind = fc::MissionItem::Kind::kWaypoint;
-    item.position_enu_m = fc.home_enu_m();
-  } else {
-    std::uint8_t error = kMissionError;
-    const auto converted = mission_item_from_mavlink(m, is_int, &error);
-    if (!converted) {
-      send_mission_ack(link, f.sysid, f.compid, error);
-      u = MissionUpload{};
-      return;
+  const auto read = [&](int seq) -> MissionUpload::ReadItem {
+    if (seq == 0) {
+      // item 0 is home: the vehicle keeps its own home, the slot is a placeholder
+      fc::MissionItem home;
+      home.kind = fc::MissionItem::Kind::kWaypoint;
+      home.position_enu_m = fc.home_enu_m();
+      return home;
     }
-    item = *converted;
-  }
-  u.items.push_back(item);
-  ++u.next_seq;
-  if (u.next_seq < u.count) {
-    send_mission_request(link);
+    std::uint8_t error = kMissionError;
+    auto converted = mission_item_from_mavlink(m, is_int, &error);
+    if (!converted) return error;
+    return *converted;
+  };
+  apply_upload_step(link, link.upload.on_item(m.seq, m.mission_type, now_s(), read), f.sysid, f.compid);
+}
+
+void VehicleLink::handle_mission_item_float(Link& link, const Frame& f, const msg::MissionItem& m,
+                                            fc::FlightController& fc) {
+  // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution; a
+  // latitude/longitude out of range would overflow that conversion, so it is refused first
+  if (!limits::valid_lat_lon(m.x, m.y)) {
+    StatCounters::add(stats_.rejected_inputs);
+    reject_mission_item(link, f);
     return;
   }
-  // complete: hand the mission to the flight controller
-  fc.set_mission(std::move(u.items));
-  u = MissionUpload{};
-  send_mission_ack(link, f.sysid, f.compid, kMissionAccepted);
+  msg::MissionItemInt i;
+  i.param1 = m.param1;
+  i.param2 = m.param2;
+  i.param3 = m.param3;
+  i.param4 = m.param4;
+  i.x = static_cast<std::int32_t>(std::llround(static_cast<double>(m.x) * 1e7));
+  i.y = static_cast<std::int32_t>(std::llround(static_cast<double>(m.y) * 1e7));
+  i.z = m.z;
+  i.seq = m.seq;
+  i.command = m.command;
+  i.target_system = m.target_system;
+  i.target_component = m.target_component;
+  i.frame = m.frame;
+  i.current = m.current;
+  i.autocontinue = m.autocontinue;
+  i.mission_type = m.mission_type;
+  handle_mission_item(link, f, i, false, fc);
 }
 
 void VehicleLink::handle_mission_request_list(Link& link, const Frame& f, int mission_type,

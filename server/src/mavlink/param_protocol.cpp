@@ -8,7 +8,6 @@ namespace uavsim::server::mavlink {
 
 namespace {
 constexpr std::uint8_t kParamTypeReal32 = 9;
-constexpr int kParamsPerStep = 16;  // PARAM_REQUEST_LIST pacing: 16 per control step = 8000/s at 500 Hz
 }  // namespace
 
 void VehicleLink::send_param(Link& link, std::size_t index) {
@@ -29,16 +28,11 @@ void VehicleLink::handle_param_request_list(Link& link) {
   send_status_text(to_underlying(MavSeverity::Info), "ArduCopter V4.5.0 (uavsim)");
   send_status_text(to_underlying(MavSeverity::Info),
                    mav_type_ == to_underlying(MavType::Hexarotor) ? "Frame: HEXA" : "Frame: QUAD");
-  link.param_next = 0;
+  link.params.start();
 }
 
 void VehicleLink::service_param_download(Link& link) {
-  if (link.param_next < 0) return;
-  const std::size_t count = sim_.fc(vehicle_).param_names().size();
-  for (int i = 0; i < kParamsPerStep && static_cast<std::size_t>(link.param_next) < count; ++i) {
-    send_param(link, static_cast<std::size_t>(link.param_next++));
-  }
-  if (static_cast<std::size_t>(link.param_next) >= count) link.param_next = -1;
+  link.params.take(sim_.fc(vehicle_).param_names().size(), [&](std::size_t i) { send_param(link, i); });
 }
 
 void VehicleLink::handle_param_request_read(Link& link, const msg::ParamRequestRead& m) {
@@ -51,12 +45,9 @@ void VehicleLink::handle_param_request_read(Link& link, const msg::ParamRequestR
     }
     return;
   }
-  const std::string name(get_string(m.param_id));
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == name) {
-      send_param(link, i);
-      return;
-    }
+  if (const auto index = param_index(names, get_string(m.param_id))) {
+    send_param(link, *index);
+    return;
   }
   StatCounters::add(stats_.rejected_inputs);  // unknown name: no reply, as ArduPilot
 }
@@ -64,11 +55,7 @@ void VehicleLink::handle_param_request_read(Link& link, const msg::ParamRequestR
 void VehicleLink::handle_param_set(const msg::ParamSet& m, fc::FlightController& fc) {
   const std::string name(get_string(m.param_id));
   const auto& names = fc.param_names();
-  std::size_t index = names.size();
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == name) index = i;
-  }
-  if (index == names.size() || !std::isfinite(m.param_value)) {
+  if (!param_index(names, name) || !std::isfinite(m.param_value)) {
     StatCounters::add(stats_.rejected_inputs);  // ignored silently, as ArduPilot
     return;
   }

@@ -1,4 +1,4 @@
-// Telemetry: what the vehicle streams, at which sim-time intervals, and the messages it sends on request.
+// Telemetry: the messages the vehicle streams (when, per client: telemetry_schedule.hpp) and sends on request.
 // Every time_boot_ms / time_usec is simulation time since start, as in SITL (behaviour.md §8), and every
 // value comes from the flight controller's estimate, never from ground truth.
 //
@@ -36,47 +36,6 @@ constexpr T field(E value) {
 // SYSTEM_TIME.time_unix_usec: a fixed epoch (2024-01-01 00:00:00 UTC) plus sim time, so runs are reproducible
 constexpr std::uint64_t kSimEpochUnixUs = 1704067200ULL * 1000000ULL;
 
-struct StreamDef {
-  std::uint32_t msgid;
-  StreamGroup group;
-};
-
-constexpr StreamDef kStreamable[] = {
-    {msg::Heartbeat::kId, StreamGroup::kNone},
-    {msg::SysStatus::kId, StreamGroup::kExtendedStatus},
-    {msg::GpsRawInt::kId, StreamGroup::kExtendedStatus},
-    {msg::MissionCurrent::kId, StreamGroup::kExtendedStatus},
-    {msg::PositionTargetLocalNed::kId, StreamGroup::kExtendedStatus},
-    {msg::GlobalPositionInt::kId, StreamGroup::kPosition},
-    {msg::LocalPositionNed::kId, StreamGroup::kPosition},
-    {msg::Attitude::kId, StreamGroup::kExtra1},
-    {msg::VfrHud::kId, StreamGroup::kExtra2},
-    {msg::SystemTime::kId, StreamGroup::kExtra3},
-    {msg::BatteryStatus::kId, StreamGroup::kExtra3},
-    {msg::EkfStatusReport::kId, StreamGroup::kExtra3},
-    // ArduCopter streams GIMBAL_DEVICE_ATTITUDE_STATUS in EXTRA3; MOUNT_ORIENTATION (deprecated) rides along
-    // for clients that still read it (e.g. DroneKit's gimbal attribute)
-    {msg::MountOrientation::kId, StreamGroup::kExtra3},
-    {msg::GimbalDeviceAttitudeStatus::kId, StreamGroup::kExtra3},
-    {msg::AttitudeQuaternion::kId, StreamGroup::kNone},
-    {msg::HomePosition::kId, StreamGroup::kNone},
-    {msg::ExtendedSysState::kId, StreamGroup::kNone},
-    {msg::MountStatus::kId, StreamGroup::kNone},
-    {msg::GpsGlobalOrigin::kId, StreamGroup::kNone},
-};
-
-double default_group_rate_hz(StreamGroup g) {
-  switch (g) {
-    case StreamGroup::kExtendedStatus: return 2.0;
-    case StreamGroup::kPosition: return 4.0;
-    case StreamGroup::kExtra1: return 4.0;
-    case StreamGroup::kExtra2: return 4.0;
-    case StreamGroup::kExtra3: return 2.0;
-    case StreamGroup::kNone: return 0.0;
-  }
-  return 0.0;
-}
-
 std::int32_t deg_e7(double deg) { return static_cast<std::int32_t>(std::llround(deg * 1e7)); }
 
 template <class T>
@@ -107,60 +66,13 @@ std::uint64_t VehicleLink::signing_now_10us() const {
   return std::max(advanced, gps);
 }
 
-std::vector<VehicleLink::Stream> VehicleLink::default_streams() const {
-  std::vector<Stream> streams;
-  streams.reserve(std::size(kStreamable));
-  for (const StreamDef& d : kStreamable) {
-    Stream s;
-    s.msgid = d.msgid;
-    s.group = d.group;
-    s.default_interval_s = *default_interval(d.msgid);
-    s.interval_s = s.default_interval_s;
-    streams.push_back(s);
-  }
-  return streams;
-}
-
-std::optional<double> VehicleLink::default_interval(std::uint32_t msgid) const {
-  if (msgid == msg::Heartbeat::kId) return 1.0;
-  for (const StreamDef& d : kStreamable) {
-    if (d.msgid != msgid) continue;
-    const double hz = default_group_rate_hz(d.group);
-    return hz > 0 ? 1.0 / hz : 0.0;
-  }
-  return std::nullopt;
-}
-
 bool VehicleLink::can_send(std::uint32_t msgid) const {
-  if (msgid == msg::AutopilotVersion::kId) return true;
-  return std::any_of(std::begin(kStreamable), std::end(kStreamable),
-                     [msgid](const StreamDef& d) { return d.msgid == msgid; });
-}
-
-void VehicleLink::send_due_streams(Link& link, double t) {
-  constexpr double kEps = 1e-9;
-  for (Stream& s : link.streams) {
-    if (s.interval_s <= 0.0 || t + kEps < s.next_due_s) continue;
-    send_message_by_id(link, s.msgid);
-    // keep the phase; after a long gap (or a rate change) restart from now instead of bursting
-    s.next_due_s += s.interval_s;
-    if (s.next_due_s + kEps < t) s.next_due_s = t + s.interval_s;
-  }
-}
-
-void VehicleLink::set_group_rate(Link& link, int group, double rate_hz, bool start) {
-  const double t = now_s();
-  for (Stream& s : link.streams) {
-    if (s.group == StreamGroup::kNone) continue;
-    if (group != 0 && static_cast<int>(s.group) != group) continue;
-    s.interval_s = (start && rate_hz > 0) ? 1.0 / rate_hz : 0.0;
-    s.next_due_s = t + s.interval_s;
-  }
+  return msgid == msg::AutopilotVersion::kId || TelemetrySchedule::streamable(msgid);
 }
 
 void VehicleLink::handle_request_data_stream(Link& link, const msg::RequestDataStream& m) {
   // stream 0 (ALL) sets every group; start_stop 0 or rate 0 stops
-  set_group_rate(link, m.req_stream_id, m.req_message_rate, m.start_stop != 0);
+  link.streams.set_group_rate(m.req_stream_id, m.req_message_rate, m.start_stop != 0, now_s());
 }
 
 void VehicleLink::handle_timesync(Link& link, const msg::Timesync& m) {

@@ -4,8 +4,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "mavlink/input_limits.hpp"
-#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -101,7 +99,7 @@ void VehicleLink::on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbo
   Link link;
   link.id = client;
   link.outbox = std::move(outbox);
-  link.streams = default_streams();
+  link.streams = TelemetrySchedule(now_s());
   // like ArduPilot's per-channel link ids: the lowest id no connected client uses
   for (int id = 0; id < 256; ++id) {
     if (std::none_of(links_.begin(), links_.end(), [id](const Link& l) { return l.link_id == id; })) {
@@ -109,8 +107,6 @@ void VehicleLink::on_connect(std::uint64_t client, std::shared_ptr<Outbox> outbo
       break;
     }
   }
-  const double t = now_s();
-  for (Stream& s : link.streams) s.next_due_s = t + s.interval_s;
   links_.push_back(std::move(link));
   // start the stream with a MAVLink 2 heartbeat, so version-sniffing clients (pymavlink) pick v2
   send_heartbeat(links_.back());
@@ -130,12 +126,7 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
   link.peer_sysid = f.sysid;
   link.peer_compid = f.compid;
 
-  auto wrong_target = [&](int ts, int tc) {
-    if (addressed_to_us(ts, tc)) return false;
-    StatCounters::add(stats_.wrong_target);
-    return true;
-  };
-
+  // route: decode, drop what is addressed to another vehicle, hand the message to its part
   switch (f.msgid) {
     case msg::Heartbeat::kId: {
       // any heartbeat from a ground station keeps the GCS-loss failsafe fed
@@ -143,215 +134,82 @@ void VehicleLink::on_frame(std::uint64_t client, const Frame& f, fc::FlightContr
       if (m.type == to_underlying(MavType::Gcs) || m.autopilot == to_underlying(MavAutopilot::Invalid)) {
         fc.on_gcs_heartbeat(now_s());
       }
-      break;
+      return;
     }
-    case msg::CommandLong::kId: {
-      const auto m = msg::CommandLong::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      CommandArgs c;
-      c.command = m.command;
-      c.p = {m.param1, m.param2, m.param3, m.param4, m.param5, m.param6, m.param7};
-      StatCounters::add(stats_.commands);
-      ack_command(link, f, m.command, handle_command(link, c, fc));
-      break;
-    }
-    case msg::CommandInt::kId: {
-      const auto m = msg::CommandInt::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      CommandArgs c;
-      c.command = m.command;
-      c.is_int = true;
-      c.frame = m.frame;
-      c.x = m.x;
-      c.y = m.y;
-      c.p = {m.param1, m.param2, m.param3, m.param4, m.x / 1e7, m.y / 1e7, m.z};
-      StatCounters::add(stats_.commands);
-      ack_command(link, f, m.command, handle_command(link, c, fc));
-      break;
-    }
-    case msg::SetMode::kId: {
-      const auto m = msg::SetMode::decode(f.payload.data());
-      if (wrong_target(m.target_system, 0)) break;
-      StatCounters::add(stats_.commands);
-      CommandArgs c;
-      c.command = to_underlying(MavCmd::DoSetMode);  // the same path as the command
-      c.p[0] = m.base_mode;
-      c.p[1] = m.custom_mode;
-      ack_command(link, f, msg::SetMode::kId, handle_command(link, c, fc));
-      break;
-    }
-    case msg::SetPositionTargetLocalNed::kId: {
-      const auto m = msg::SetPositionTargetLocalNed::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_set_position_target_local(m, fc);
-      break;
-    }
-    case msg::SetPositionTargetGlobalInt::kId: {
-      const auto m = msg::SetPositionTargetGlobalInt::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_set_position_target_global(m, fc);
-      break;
-    }
-    case msg::SetAttitudeTarget::kId: {
-      const auto m = msg::SetAttitudeTarget::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_set_attitude_target(m, fc);
-      break;
-    }
-    case msg::GimbalManagerSetPitchyaw::kId: {
-      const auto m = msg::GimbalManagerSetPitchyaw::decode(f.payload.data());
-      if (m.target_system != 0 && m.target_system != sysid_) {
-        StatCounters::add(stats_.wrong_target);
-        break;
-      }
-      constexpr double kRadToDeg = 180.0 / common::kPi;
-      // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
-      const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
-      if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||
-          bad(m.yaw_rate, limits::kRate_rad_s)) {
-        StatCounters::add(stats_.rejected_inputs);
-        break;
-      }
-      if (std::isfinite(m.pitch)) gimbal_.pitch_deg = m.pitch * kRadToDeg;
-      if (std::isfinite(m.yaw)) gimbal_.yaw_deg = m.yaw * kRadToDeg;
-      gimbal_.pitch_rate_deg_s = std::isfinite(m.pitch_rate) ? m.pitch_rate * kRadToDeg : 0.0;
-      gimbal_.yaw_rate_deg_s = std::isfinite(m.yaw_rate) ? m.yaw_rate * kRadToDeg : 0.0;
-      gimbal_.yaw_earth_frame = (m.flags & to_underlying(GimbalManagerFlags::YawLock)) != 0;
-      gimbal_.stamp_s = now_s();
-      break;
-    }
-    case msg::ParamRequestList::kId: {
-      const auto m = msg::ParamRequestList::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_param_request_list(link);
-      break;
-    }
-    case msg::ParamRequestRead::kId: {
-      const auto m = msg::ParamRequestRead::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_param_request_read(link, m);
-      break;
-    }
-    case msg::ParamSet::kId: {
-      const auto m = msg::ParamSet::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_param_set(m, fc);
-      break;
-    }
-    case msg::MissionCount::kId: {
-      const auto m = msg::MissionCount::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_mission_count(link, f, m);
-      break;
-    }
-    case msg::MissionItemInt::kId: {
-      const auto m = msg::MissionItemInt::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      link.mission_int = true;
-      handle_mission_item(link, f, m, true, fc);
-      break;
-    }
-    case msg::MissionItem::kId: {
-      const auto m = msg::MissionItem::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution; a
-      // latitude/longitude out of range would overflow that conversion, so it is refused first
-      if (!limits::valid_lat_lon(m.x, m.y)) {
-        StatCounters::add(stats_.rejected_inputs);
-        reject_mission_item(link, f);
-        break;
-      }
-      msg::MissionItemInt i;
-      i.param1 = m.param1;
-      i.param2 = m.param2;
-      i.param3 = m.param3;
-      i.param4 = m.param4;
-      i.x = static_cast<std::int32_t>(std::llround(static_cast<double>(m.x) * 1e7));
-      i.y = static_cast<std::int32_t>(std::llround(static_cast<double>(m.y) * 1e7));
-      i.z = m.z;
-      i.seq = m.seq;
-      i.command = m.command;
-      i.target_system = m.target_system;
-      i.target_component = m.target_component;
-      i.frame = m.frame;
-      i.current = m.current;
-      i.autocontinue = m.autocontinue;
-      i.mission_type = m.mission_type;
-      handle_mission_item(link, f, i, false, fc);
-      break;
-    }
-    case msg::MissionRequestInt::kId: {
-      const auto m = msg::MissionRequestInt::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      link.mission_int = true;
-      handle_mission_request(link, f, m.seq, true, fc);
-      break;
-    }
-    case msg::MissionRequest::kId: {
-      const auto m = msg::MissionRequest::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_mission_request(link, f, m.seq, false, fc);
-      break;
-    }
-    case msg::MissionRequestList::kId: {
-      const auto m = msg::MissionRequestList::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_mission_request_list(link, f, m.mission_type, fc);
-      break;
-    }
-    case msg::MissionClearAll::kId: {
-      const auto m = msg::MissionClearAll::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_mission_clear_all(link, f, m.mission_type, fc);
-      break;
-    }
-    case msg::MissionSetCurrent::kId: {
-      const auto m = msg::MissionSetCurrent::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_mission_set_current(m.seq, fc);
-      break;
-    }
+    // commands, acked with the command's id (SET_MODE: the message's)
+    case msg::CommandLong::kId:
+      return route<msg::CommandLong>(f, [&](const auto& m) { run_command(link, f, m.command, command_args(m), fc); });
+    case msg::CommandInt::kId:
+      return route<msg::CommandInt>(f, [&](const auto& m) { run_command(link, f, m.command, command_args(m), fc); });
+    case msg::SetMode::kId:
+      return route<msg::SetMode>(f, [&](const auto& m) { run_command(link, f, msg::SetMode::kId, command_args(m), fc); });
+    // guided setpoints and the camera gimbal
+    case msg::SetPositionTargetLocalNed::kId:
+      return route<msg::SetPositionTargetLocalNed>(f, [&](const auto& m) { handle_set_position_target_local(m, fc); });
+    case msg::SetPositionTargetGlobalInt::kId:
+      return route<msg::SetPositionTargetGlobalInt>(f, [&](const auto& m) { handle_set_position_target_global(m, fc); });
+    case msg::SetAttitudeTarget::kId:
+      return route<msg::SetAttitudeTarget>(f, [&](const auto& m) { handle_set_attitude_target(m, fc); });
+    case msg::GimbalManagerSetPitchyaw::kId:  // any component: the gimbal's own, or the autopilot's
+      return route<msg::GimbalManagerSetPitchyaw, kAnyComponent>(f, [&](const auto& m) { handle_gimbal_pitchyaw(m); });
+    case msg::RcChannelsOverride::kId:
+      return route<msg::RcChannelsOverride>(f, [&](const auto& m) { handle_rc_override(f, m, fc); });
+    case msg::ManualControl::kId:
+      return route<msg::ManualControl>(f, [&](const auto& m) { handle_manual_control(f, m, fc); });
+    // parameters
+    case msg::ParamRequestList::kId:
+      return route<msg::ParamRequestList>(f, [&](const auto&) { handle_param_request_list(link); });
+    case msg::ParamRequestRead::kId:
+      return route<msg::ParamRequestRead>(f, [&](const auto& m) { handle_param_request_read(link, m); });
+    case msg::ParamSet::kId:
+      return route<msg::ParamSet>(f, [&](const auto& m) { handle_param_set(m, fc); });
+    // missions
+    case msg::MissionCount::kId:
+      return route<msg::MissionCount>(f, [&](const auto& m) { handle_mission_count(link, f, m); });
+    case msg::MissionItemInt::kId:
+      return route<msg::MissionItemInt>(f, [&](const auto& m) {
+        link.mission_int = true;
+        handle_mission_item(link, f, m, true, fc);
+      });
+    case msg::MissionItem::kId:
+      return route<msg::MissionItem>(f, [&](const auto& m) { handle_mission_item_float(link, f, m, fc); });
+    case msg::MissionRequestInt::kId:
+      return route<msg::MissionRequestInt>(f, [&](const auto& m) {
+        link.mission_int = true;
+        handle_mission_request(link, f, m.seq, true, fc);
+      });
+    case msg::MissionRequest::kId:
+      return route<msg::MissionRequest>(f, [&](const auto& m) { handle_mission_request(link, f, m.seq, false, fc); });
+    case msg::MissionRequestList::kId:
+      return route<msg::MissionRequestList>(
+          f, [&](const auto& m) { handle_mission_request_list(link, f, m.mission_type, fc); });
+    case msg::MissionClearAll::kId:
+      return route<msg::MissionClearAll>(f, [&](const auto& m) { handle_mission_clear_all(link, f, m.mission_type, fc); });
+    case msg::MissionSetCurrent::kId:
+      return route<msg::MissionSetCurrent>(f, [&](const auto& m) { handle_mission_set_current(m.seq, fc); });
     case msg::MissionAck::kId:
-      break;  // end of a download: nothing is held per download
-    case msg::RequestDataStream::kId: {
-      const auto m = msg::RequestDataStream::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_request_data_stream(link, m);
-      break;
-    }
+      return;  // end of a download: nothing is held per download
+    // telemetry and the link itself
+    case msg::RequestDataStream::kId:
+      return route<msg::RequestDataStream>(f, [&](const auto& m) { handle_request_data_stream(link, m); });
     case msg::Timesync::kId:
-      handle_timesync(link, msg::Timesync::decode(f.payload.data()));
-      break;
-    case msg::SetupSigning::kId: {
+      return handle_timesync(link, msg::Timesync::decode(f.payload.data()));
+    case msg::SetupSigning::kId:
       // ArduPilot takes it from any client and applies it to every link at once (GCS_Signing.cpp); once
       // signing is on, only a signed SETUP_SIGNING gets here (the I/O thread drops unsigned frames)
-      const auto m = msg::SetupSigning::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      set_signing(m.secret_key, m.initial_timestamp);
-      break;
-    }
-    case msg::RcChannelsOverride::kId: {
-      const auto m = msg::RcChannelsOverride::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      handle_rc_override(f, m, fc);
-      break;
-    }
-    case msg::ManualControl::kId: {
-      const auto m = msg::ManualControl::decode(f.payload.data());
-      if (wrong_target(m.target, 0)) break;
-      handle_manual_control(f, m, fc);
-      break;
-    }
-    case msg::AutopilotVersionRequest::kId: {
-      const auto m = msg::AutopilotVersionRequest::decode(f.payload.data());
-      if (wrong_target(m.target_system, m.target_component)) break;
-      send_autopilot_version(link);
-      break;
-    }
+      return route<msg::SetupSigning>(f, [&](const auto& m) { set_signing(m.secret_key, m.initial_timestamp); });
+    case msg::AutopilotVersionRequest::kId:
+      return route<msg::AutopilotVersionRequest>(f, [&](const auto&) { send_autopilot_version(link); });
     default:
       StatCounters::add(stats_.unhandled_messages);
-      break;
+      return;
   }
+}
+
+void VehicleLink::run_command(Link& link, const Frame& f, std::uint16_t ack_id, const CommandArgs& c,
+                              fc::FlightController& fc) {
+  StatCounters::add(stats_.commands);
+  ack_command(link, f, ack_id, handle_command(link, c, fc));
 }
 
 void VehicleLink::on_control_step() {
@@ -371,7 +229,7 @@ void VehicleLink::on_control_step() {
   for (Link& link : links_) {
     for (std::uint32_t id : link.one_shot) send_message_by_id(link, id);
     link.one_shot.clear();
-    send_due_streams(link, t);
+    link.streams.take_due(t, [&](std::uint32_t msgid) { send_message_by_id(link, msgid); });
     service_mission_upload(link, t);
     service_param_download(link);
   }
@@ -385,49 +243,5 @@ void VehicleLink::on_control_step() {
   }
 }
 
-
-namespace {
-constexpr std::uint8_t kSysidMyGcs = 255;  // ArduPilot's SYSID_MYGCS default
-}  // namespace
-
-void VehicleLink::handle_rc_override(const Frame& f, const msg::RcChannelsOverride& m, fc::FlightController& fc) {
-  if (f.sysid != kSysidMyGcs) {
-    StatCounters::add(stats_.unhandled_messages);
-    return;
-  }
-  // channels 1-4 are roll, pitch, throttle, yaw (ArduCopter's RCMAP defaults) in microseconds; 0
-  // releases a channel (centred, mid throttle: no radio behind it here), UINT16_MAX leaves it as it was
-  const std::uint16_t pwm[4] = {m.chan1_raw, m.chan2_raw, m.chan3_raw, m.chan4_raw};
-  fc::PilotInput in = pilot_;
-  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
-  for (int k = 0; k < 4; ++k) {
-    if (pwm[k] == UINT16_MAX) continue;
-    if (pwm[k] != 0 && (pwm[k] < 800 || pwm[k] > 2200)) {
-      StatCounters::add(stats_.rejected_inputs);
-      return;
-    }
-    const double us = pwm[k] == 0 ? 1500.0 : std::clamp<double>(pwm[k], 1000.0, 2000.0);
-    // channel 2 high is nose up (stick back); throttle runs 1000 (0) to 2000 (1)
-    *axis[k] = k == 2 ? (us - 1000.0) / 1000.0 : (us - 1500.0) / 500.0 * (k == 1 ? -1.0 : 1.0);
-  }
-  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
-}
-
-void VehicleLink::handle_manual_control(const Frame& f, const msg::ManualControl& m, fc::FlightController& fc) {
-  if (f.sysid != kSysidMyGcs) {
-    StatCounters::add(stats_.unhandled_messages);
-    return;
-  }
-  // x forward, y right, r clockwise in [-1000, 1000], z throttle in [0, 1000] (ArduPilot's reading);
-  // INT16_MAX marks an axis as unused: it keeps its value
-  fc::PilotInput in = pilot_;
-  const std::int16_t raw[4] = {m.y, m.x, m.z, m.r};
-  double* axis[4] = {&in.roll, &in.pitch, &in.throttle, &in.yaw};
-  for (int k = 0; k < 4; ++k) {
-    if (raw[k] == INT16_MAX) continue;
-    *axis[k] = k == 2 ? std::clamp(raw[k] / 1000.0, 0.0, 1.0) : std::clamp(raw[k] / 1000.0, -1.0, 1.0);
-  }
-  if (fc.set_pilot_input(in, now_s()) != fc::CommandResult::kInvalid) pilot_ = in;
-}
 
 }  // namespace uavsim::server::mavlink

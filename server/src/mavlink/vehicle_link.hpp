@@ -1,11 +1,20 @@
 // Internal to the endpoint: the loop-thread half of one vehicle's MAVLink endpoint. It owns the state of
-// every connected client (its MAVLink version, sequence numbers, stream intervals, mission transfer,
-// parameter download) and speaks ArduCopter's protocol over the vehicle's flight controller:
-//   vehicle_link.cpp      dispatch of incoming frames, sending, client bookkeeping
-//   telemetry.cpp         streamed and requested messages, stream rates
-//   command_handler.cpp   COMMAND_LONG/INT, SET_MODE, SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, gimbal
-//   mission_protocol.cpp  mission upload/download, MISSION_ITEM guided goto, MISSION_CURRENT/REACHED
-//   param_protocol.cpp    PARAM_REQUEST_LIST/READ, PARAM_SET
+// every connected client (its MAVLink version, sequence numbers, telemetry schedule, mission upload,
+// parameter download) and speaks ArduCopter's protocol over the vehicle's flight controller. The protocol
+// logic lives in small pure parts, each unit-tested without sockets; this class routes frames to them and
+// sends what they answer:
+//   command_mapper.hpp      COMMAND_LONG/INT, SET_MODE -> a typed request (fc, gimbal, link) + its ack result
+//   mission_upload.hpp      the mission upload state machine (count, items in sequence, retries, timeout)
+//   param_download.hpp      the paced PARAM_REQUEST_LIST download
+//   telemetry_schedule.hpp  which messages each client has streamed, and when each is due
+// and the link's own files:
+//   vehicle_link.cpp      the router (frame -> decode -> target check -> part), sending, client bookkeeping
+//   telemetry.cpp         the messages themselves, from the flight controller's estimate
+//   command_handler.cpp   commands carried out, SET_POSITION_TARGET_*, SET_ATTITUDE_TARGET, sticks
+//   mission_protocol.cpp  MAVLink <-> fc::MissionItem, download, guided goto, MISSION_CURRENT/REACHED
+//   param_protocol.cpp    PARAM_REQUEST_READ, PARAM_SET, PARAM_VALUE
+// MAVLink's conventions (NED, headings "0 = north, clockwise", degrees, degE7) are converted in these
+// files; the flight controller sees ENU, FLU and radians only.
 // Every method is loop-thread only.
 #pragma once
 
@@ -21,7 +30,11 @@
 #include "fc/flight_controller.hpp"
 #include "uavsim/common/mavlink/codec.hpp"
 #include "uavsim/common/mavlink/signing.hpp"
+#include "mavlink/command_mapper.hpp"
 #include "mavlink/endpoint.hpp"
+#include "mavlink/mission_upload.hpp"
+#include "mavlink/param_download.hpp"
+#include "mavlink/telemetry_schedule.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/generated/messages.hpp"
 #include "mavlink/outbox.hpp"
@@ -76,16 +89,6 @@ inline bool accepted_unsigned(std::uint32_t msgid) {
   return msgid == msg::RadioStatus::kId || msgid == 166 /* RADIO (ardupilotmega; no struct generated) */;
 }
 
-// A message a client may have streamed, with the data-stream group REQUEST_DATA_STREAM addresses it by.
-enum class StreamGroup : std::uint8_t {
-  kNone = 0,  // only by SET_MESSAGE_INTERVAL
-  kExtendedStatus = to_underlying(MavDataStream::ExtendedStatus),
-  kPosition = to_underlying(MavDataStream::Position),
-  kExtra1 = to_underlying(MavDataStream::Extra1),
-  kExtra2 = to_underlying(MavDataStream::Extra2),
-  kExtra3 = to_underlying(MavDataStream::Extra3),
-};
-
 inline constexpr std::uint8_t kCompIdAutopilot = to_underlying(MavComponent::CompIdAutopilot1);
 
 class VehicleLink {
@@ -113,21 +116,6 @@ class VehicleLink {
   bool signing() const { return signing_key_.has_value(); }
 
  private:
-  struct Stream {
-    std::uint32_t msgid = 0;
-    StreamGroup group = StreamGroup::kNone;
-    double default_interval_s = 0.0;  // 0 = not streamed unless asked
-    double interval_s = 0.0;          // current; 0 = off
-    double next_due_s = 0.0;
-  };
-  struct MissionUpload {
-    bool active = false;
-    int count = 0;
-    int next_seq = 0;
-    double last_activity_s = 0.0;
-    double last_request_s = 0.0;
-    std::vector<fc::MissionItem> items;
-  };
   struct Link {
     std::uint64_t id = 0;
     std::shared_ptr<Outbox> outbox;
@@ -135,11 +123,11 @@ class VehicleLink {
     std::uint8_t seq = 0;
     std::uint8_t peer_sysid = 255;
     std::uint8_t peer_compid = 190;
-    std::vector<Stream> streams;
+    TelemetrySchedule streams{0.0};
     std::vector<std::uint32_t> one_shot;  // REQUEST_MESSAGE answers queued for the next step
     MissionUpload upload;
     bool mission_int = false;    // the client has used *_INT mission messages: request items as INT
-    int param_next = -1;         // next index of a PARAM_REQUEST_LIST download; -1 = none
+    ParamDownload params;
     std::uint8_t link_id = 0;    // signing link id: the lowest one free when the client connected
     TimestampSource signing_timestamps;
   };
@@ -170,6 +158,26 @@ class VehicleLink {
     for (Link& l : links_) send(l, msg);
   }
   bool addressed_to_us(int target_system, int target_component) const;
+  // the router's one step: decodes Msg from f and hands it to handle when it is addressed to this vehicle
+  // (target_system 0 or ours; target_component 0 or the autopilot, or any with kAnyComponent), counts
+  // wrong_target otherwise
+  static constexpr bool kAnyComponent = true;
+  template <class Msg, bool any_component = false, class Handle>
+  void route(const Frame& f, Handle&& handle) {
+    const Msg m = Msg::decode(f.payload.data());
+    int target_system = 0, target_component = 0;
+    if constexpr (requires { m.target_system; }) {
+      target_system = m.target_system;
+    } else {
+      target_system = m.target;  // MANUAL_CONTROL
+    }
+    if constexpr (!any_component && requires { m.target_component; }) target_component = m.target_component;
+    if (!addressed_to_us(target_system, target_component)) {
+      StatCounters::add(stats_.wrong_target);
+      return;
+    }
+    handle(m);
+  }
   // SETUP_SIGNING: the key and initial timestamp (an all-zero key turns signing off)
   void set_signing(const std::optional<SecretKey>& key, std::uint64_t initial_timestamp_10us);
   // the signing clock (10 us since 2015): the initial timestamp advanced by sim time, or the simulated
@@ -179,12 +187,8 @@ class VehicleLink {
   std::uint32_t time_boot_ms() const;
 
   // --- telemetry.cpp ---
-  std::vector<Stream> default_streams() const;
-  void send_due_streams(Link& link, double t);
   bool send_message_by_id(Link& link, std::uint32_t msgid);  // false: not a message we can produce
   bool can_send(std::uint32_t msgid) const;
-  void set_group_rate(Link& link, int group, double rate_hz, bool start);
-  std::optional<double> default_interval(std::uint32_t msgid) const;
   msg::Heartbeat heartbeat() const;
   void send_heartbeat(Link& link);
   void send_home(Link& link);
@@ -196,14 +200,10 @@ class VehicleLink {
   Eigen::Vector3d enu_of_geodetic(const Geodetic& g) const;
 
   // --- command_handler.cpp ---
-  struct CommandArgs {
-    std::uint16_t command = 0;
-    std::array<double, 7> p{};
-    bool is_int = false;
-    int frame = 3;                   // COMMAND_INT frame; COMMAND_LONG: GLOBAL_RELATIVE_ALT
-    std::int32_t x = 0, y = 0;       // COMMAND_INT lat/lon degE7
-  };
+  // a command counted, carried out and acked with ack_id
+  void run_command(Link& link, const Frame& f, std::uint16_t ack_id, const CommandArgs& c, fc::FlightController& fc);
   std::uint8_t handle_command(Link& link, const CommandArgs& c, fc::FlightController& fc);
+  std::uint8_t handle_link_request(Link& link, const LinkRequest& request, fc::FlightController& fc);
   void ack_command(Link& link, const Frame& frame, std::uint16_t command, std::uint8_t result);
   void handle_set_position_target_local(const msg::SetPositionTargetLocalNed& m, fc::FlightController& fc);
   void handle_set_position_target_global(const msg::SetPositionTargetGlobalInt& m, fc::FlightController& fc);
@@ -211,6 +211,7 @@ class VehicleLink {
                       const Eigen::Vector3d& vel_ned, const Eigen::Vector3d& acc_ned, double yaw_ned,
                       double yaw_rate_ned, fc::FlightController& fc);
   void handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc::FlightController& fc);
+  void handle_gimbal_pitchyaw(const msg::GimbalManagerSetPitchyaw& m);
   // RC_CHANNELS_OVERRIDE and MANUAL_CONTROL: the pilot's sticks (ArduCopter takes them from its own
   // ground station only, SYSID_MYGCS 255)
   void handle_rc_override(const Frame& f, const msg::RcChannelsOverride& m, fc::FlightController& fc);
@@ -223,11 +224,15 @@ class VehicleLink {
   void reject_mission_item(Link& link, const Frame& f);
   void handle_mission_item(Link& link, const Frame& f, const msg::MissionItemInt& m, bool is_int,
                            fc::FlightController& fc);
+  // MISSION_ITEM (float lat/lon): as MISSION_ITEM_INT, refused when it cannot be carried in one
+  void handle_mission_item_float(Link& link, const Frame& f, const msg::MissionItem& m, fc::FlightController& fc);
   void handle_mission_request(Link& link, const Frame& f, int seq, bool want_int, fc::FlightController& fc);
   void handle_mission_request_list(Link& link, const Frame& f, int mission_type, fc::FlightController& fc);
   void handle_mission_clear_all(Link& link, const Frame& f, int mission_type, fc::FlightController& fc);
   void handle_mission_set_current(int seq, fc::FlightController& fc);
-  void send_mission_request(Link& link);
+  void send_mission_request(Link& link, int seq);
+  // does what an upload step asks: set the mission, request an item, ack to sysid/compid
+  void apply_upload_step(Link& link, UploadStep step, std::uint8_t sysid, std::uint8_t compid);
   void send_mission_ack(Link& link, std::uint8_t sysid, std::uint8_t compid, std::uint8_t result,
                         std::uint8_t mission_type = 0);
   void service_mission_upload(Link& link, double t);

@@ -149,8 +149,8 @@ TEST(ModeRules, CommandsWithNonFiniteValuesAreInvalid) {
   AttitudeTarget a;
   a.q_enu_body = Eigen::Quaterniond(kNaN, 0, 0, 0);
   EXPECT_EQ(g.fc.set_attitude_target(a), CommandResult::kInvalid);
-  EXPECT_EQ(g.fc.condition_yaw(kNaN, 0, 0, false), CommandResult::kInvalid);
-  EXPECT_EQ(g.fc.change_speed(1, kNaN), CommandResult::kInvalid);
+  EXPECT_EQ(g.fc.set_yaw({kNaN, false, 0.0}), CommandResult::kInvalid);
+  EXPECT_EQ(g.fc.change_speed(fc::SpeedLimit::kHorizontal, kNaN), CommandResult::kInvalid);
 }
 
 TEST(ModeRules, GuidedTargetRefusedOutsideGuided) {

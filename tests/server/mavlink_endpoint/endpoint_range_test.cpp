@@ -48,7 +48,7 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   take_off(*g);
   fc::FlightController& fc = sim_->fc(0);
   // the three inputs that once spun the angle wrap forever, given straight to the controller
-  EXPECT_EQ(fc.condition_yaw(1e30, 0.0, 0, false), fc::CommandResult::kAccepted);
+  EXPECT_EQ(fc.set_yaw({M_PI / 2.0 - 1e30 * M_PI / 180.0, false, 0.0}), fc::CommandResult::kAccepted);
   step_for(0.5);
   fc::GuidedTarget t;
   t.velocity_enu_m_s = Eigen::Vector3d::Zero();
@@ -57,7 +57,7 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   step_for(0.2);
   fc::MissionItem yaw_item;
   yaw_item.kind = fc::MissionItem::Kind::kConditionYaw;
-  yaw_item.yaw_deg = 1e30;
+  yaw_item.yaw_enu_rad = M_PI / 2.0 - 1e30 * M_PI / 180.0;
   yaw_item.position_valid = false;
   fc.set_mission({fc::MissionItem{}, yaw_item});
   ASSERT_EQ(command(*g, 300, {0, 0}), kAccepted);  // AUTO runs the yaw item

@@ -70,13 +70,13 @@ TEST_P(EveryFrame, StepOf20mSettlesWithLimitedOvershoot) {
   EXPECT_LE(max_x - goal.x(), kMaxOvershootM);
 }
 
-// a 90 deg yaw (CONDITION_YAW semantics: heading clockwise from north) settles
+// a relative 90 deg yaw clockwise (as CONDITION_YAW asks it, in ENU: -90 deg) settles
 TEST_P(EveryFrame, YawOf90DegSettles) {
   auto sim = make_sim(GetParam());
   take_off(*sim, 10.0);
   const double yaw0 = yaw_of(sim->truth(0).q_enu_body);
   sim->post(0, [](fc::FlightController& f) {
-    EXPECT_EQ(f.condition_yaw(90.0, 0.0, 1, true), fc::CommandResult::kAccepted);
+    EXPECT_EQ(f.set_yaw({-90.0 * M_PI / 180.0, true, 0.0}), fc::CommandResult::kAccepted);
   });
   sim->run_until(sim->time_s() + 15.0);
   // clockwise seen from above is negative ENU yaw
