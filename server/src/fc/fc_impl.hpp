@@ -1,6 +1,7 @@
 // Private state of FlightController, shared by its implementation files (flight_controller.cpp:
-// commands and the control step; modes.cpp: mode and mission logic; safety.cpp: arming checks, land
-// detector, failsafes). Not part of the public API.
+// commands and the control step; modes.cpp: the rules the modes share and the services they fly with;
+// flight_modes.cpp: one object per mode; safety.cpp: arming checks, land detector, failsafes). It is the
+// vehicle context the mode objects run over. Not part of the public API.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,6 +17,7 @@
 #include "fc/estimator.hpp"
 #include "fc/fc_types.hpp"
 #include "fc/flight_controller.hpp"
+#include "fc/flight_modes.hpp"
 #include "fc/mixer.hpp"
 #include "fc/motor_monitor.hpp"
 #include "fc/params.hpp"
@@ -66,8 +68,6 @@ enum class ControlKind {
 };
 
 enum class GuidedSub { kHold, kTakeoff, kWp, kPosVelAccel, kVelAccel, kAccel, kAttitude };
-enum class RtlState { kClimb, kReturn, kLoiter, kLand };
-enum class AutoPhase { kNav, kHold, kLandApproach, kLandDescend, kRtl, kYaw, kDone };
 
 struct FlightController::Impl {
   explicit Impl(const airframe::AirframeParams& airframe, uint64_t seed);
@@ -96,17 +96,11 @@ struct FlightController::Impl {
   void start_takeoff(double target_z_enu_m);
   void run_nav(double dt_s, const NavLimits& limits);
   void run_land_descent(bool hold_xy);
-  void run_rtl(double dt_s);
-  void start_rtl();
-  void run_guided(double dt_s);
-  void run_auto(double dt_s);
   bool pilot_takeoff();                       // armed on the ground, throttle up in a pilot mode
   void run_pilot_lean(const PilotInput& in);  // STABILIZE, ALT_HOLD: attitude from the sticks
   void run_pilot_climb(const PilotInput& in, double dt_s);    // ALT_HOLD, LOITER: the z setpoint
   bool run_pilot_loiter(const PilotInput& in, double dt_s);  // LOITER: false when the sticks are centred
   double pilot_thrust_n(double throttle) const;
-  void start_mission_item(int seq);
-  void complete_mission_item();
   void face_destination();
   Eigen::Vector3d stopping_point() const;
   bool gps_mode(Mode mode) const;
@@ -159,6 +153,9 @@ struct FlightController::Impl {
 
   // vehicle state
   Mode mode_ = Mode::kStabilize;
+  FlightModes modes_;  // one object per mode; mode_ names the active one
+  FlightMode& active_mode() { return modes_.of(mode_); }
+  const FlightMode& active_mode() const { return modes_.of(mode_); }
   bool armed_ = false;
   bool landed_ = true;          // ArduCopter's land_complete
   bool takeoff_active_ = false;
@@ -196,19 +193,13 @@ struct FlightController::Impl {
   bool pilot_flying_xy_ = false;        // LOITER: the sticks moved the vehicle (hold where it stops)
   Eigen::Vector3d hold_position_enu_m_ = Eigen::Vector3d::Zero();
 
-  // BRAKE, LAND, RTL
-  bool brake_holding_ = false;
+  // LAND (and RTL's and AUTO's landings): where the descent holds
   Eigen::Vector3d land_xy_enu_m_ = Eigen::Vector3d::Zero();
-  RtlState rtl_state_ = RtlState::kClimb;
-  double rtl_loiter_start_s_ = 0.0;
-  double rtl_alt_enu_m_ = 0.0;
 
   // AUTO
   std::vector<MissionItem> mission_;
   int mission_current_ = 1;
   int mission_last_ = -1;  // MISSION_START last item; -1: to the end
-  AutoPhase auto_phase_ = AutoPhase::kDone;
-  double auto_hold_start_s_ = 0.0;
   EventRing<int, 64> reached_;
 
   // link and failsafes

@@ -281,8 +281,7 @@ CommandResult FlightController::arm(bool force) {
   Impl& s = *impl_;
   if (s.armed_) return CommandResult::kAccepted;
   // modes that cannot arm refuse even a forced arm (ArduCopter's allows_arming)
-  if (s.mode_ == Mode::kAuto || s.mode_ == Mode::kRtl || s.mode_ == Mode::kLand ||
-      s.mode_ == Mode::kBrake) {
+  if (!s.active_mode().allows_arming()) {
     s.status(2, std::string("Arm: Mode not armable (") + mode_name(s.mode_) + ")");
     return CommandResult::kDenied;
   }
@@ -427,7 +426,7 @@ CommandResult FlightController::set_pilot_input(const PilotInput& in, double tim
 }
 
 std::optional<PilotInput> FlightController::Impl::pilot() const {
-  if (mode_ != Mode::kStabilize && mode_ != Mode::kAltHold && mode_ != Mode::kLoiter) return std::nullopt;
+  if (!active_mode().reads_pilot()) return std::nullopt;
   const double timeout = params_.values().rc_override_time;
   if (!pilot_time_s_ || timeout == 0.0) return std::nullopt;
   if (timeout > 0.0 && now() - *pilot_time_s_ > timeout) return std::nullopt;
@@ -473,7 +472,7 @@ void FlightController::set_mission(std::vector<MissionItem> items) {
   s.mission_current_ = 1;
   s.mission_last_ = -1;
   // a new mission under a flying AUTO: ArduCopter restarts it from item 1
-  if (s.mode_ == Mode::kAuto && s.armed_ && !s.landed_) s.start_mission_item(1);
+  if (s.mode_ == Mode::kAuto && s.armed_ && !s.landed_) s.modes_.automatic.start_item(s, 1);
 }
 
 const std::vector<MissionItem>& FlightController::mission() const { return impl_->mission_; }
@@ -488,7 +487,7 @@ CommandResult FlightController::mission_start(int first_item, int last_item) {
   s.mission_current_ = first_item > 0 ? first_item : 1;
   s.mission_last_ = last_item > 0 ? last_item : -1;
   if (s.mode_ == Mode::kAuto) {
-    s.start_mission_item(s.mission_current_);
+    s.modes_.automatic.start_item(s, s.mission_current_);
     return CommandResult::kAccepted;
   }
   return set_mode(Mode::kAuto);
@@ -498,7 +497,7 @@ CommandResult FlightController::set_mission_current(int seq) {
   Impl& s = *impl_;
   if (seq < 0 || seq >= static_cast<int>(s.mission_.size())) return CommandResult::kInvalid;
   s.mission_current_ = std::max(seq, 1);
-  if (s.mode_ == Mode::kAuto && s.armed_) s.start_mission_item(s.mission_current_);
+  if (s.mode_ == Mode::kAuto && s.armed_) s.modes_.automatic.start_item(s, s.mission_current_);
   return CommandResult::kAccepted;
 }
 
@@ -546,11 +545,7 @@ LandedState FlightController::landed_state() const {
   const Impl& s = *impl_;
   if (!s.armed_ || s.landed_) return LandedState::kOnGround;
   if (s.takeoff_active_) return LandedState::kTakeoff;
-  const bool descending_to_land =
-      s.mode_ == Mode::kLand || (s.mode_ == Mode::kRtl && s.rtl_state_ == RtlState::kLand) ||
-      (s.mode_ == Mode::kAuto && (s.auto_phase_ == AutoPhase::kLandDescend ||
-                                  (s.auto_phase_ == AutoPhase::kRtl && s.rtl_state_ == RtlState::kLand)));
-  return descending_to_land ? LandedState::kLanding : LandedState::kInAir;
+  return s.active_mode().landing() ? LandedState::kLanding : LandedState::kInAir;
 }
 
 const EstimatedState& FlightController::estimate() const { return impl_->estimator_.state(); }

@@ -90,8 +90,9 @@ class FlightController {
   // motor commands were repeated); telemetry exposes it as a warning counter.
   uint64_t nonfinite_input_count() const;
 
+  struct Impl;  // library internal (fc_impl.hpp): the vehicle context the flight modes run over
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -57,13 +57,10 @@ void FlightController::Impl::on_touchdown() {
   nav_active_ = false;
   status(6, "Landed");
   // LAND, RTL and a mission's land or RTL disarm at touchdown; other modes wait DISARM_DELAY
-  const bool landing_mode =
-      mode_ == Mode::kLand || mode_ == Mode::kRtl ||
-      (mode_ == Mode::kAuto &&
-       (auto_phase_ == AutoPhase::kLandDescend || auto_phase_ == AutoPhase::kRtl));
+  const bool landing_mode = active_mode().ends_flight_at_touchdown();
   if (mode_ == Mode::kAuto && landing_mode) {
     reached_.push(mission_current_);
-    auto_phase_ = AutoPhase::kDone;
+    modes_.automatic.finish();
   }
   if (landing_mode) do_disarm("Disarming motors: landed");
 }
