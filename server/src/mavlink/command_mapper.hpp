@@ -24,6 +24,9 @@ template <class... F>
 struct Overloaded : F... {
   using F::operator()...;
 };
+// (C++20 deduces this for aggregates, but clang before 17 does not: the sanitizer build uses clang)
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
 
 // One command as COMMAND_LONG, COMMAND_INT or SET_MODE carries it.
 struct CommandArgs {
