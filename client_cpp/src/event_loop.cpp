@@ -270,9 +270,7 @@ void EventLoop::Impl::answer_early() {
   hold_api();
 }
 
-void EventLoop::Impl::hold_api() {
-  api_held = true;
-  api_stream.hold();
+void EventLoop::Impl::update_api_interest() {
   if (api_fd < 0) return;
   epoll_event ev{};
   ev.events = api_interest();
@@ -280,14 +278,15 @@ void EventLoop::Impl::hold_api() {
   epoll_ctl(epfd, EPOLL_CTL_MOD, api_fd, &ev);  // fails harmlessly before create() has added it
 }
 
+void EventLoop::Impl::hold_api() {
+  api_held = true;
+  api_stream.hold();
+  update_api_interest();
+}
+
 void EventLoop::Impl::resume_api() {
   api_held = false;
-  if (api_fd >= 0) {
-    epoll_event ev{};
-    ev.events = api_interest();
-    ev.data.fd = api_fd;
-    epoll_ctl(epfd, EPOLL_CTL_MOD, api_fd, &ev);
-  }
+  update_api_interest();
   api_stream.resume([this](const Json& j, std::string_view payload) { handle_api_message(j, payload); });
 }
 

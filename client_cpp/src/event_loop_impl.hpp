@@ -123,6 +123,7 @@ struct EventLoop::Impl {
   void hold_api();
   void resume_api();
   std::uint32_t api_interest() const { return api_held ? 0u : (EPOLLIN | EPOLLRDHUP); }
+  void update_api_interest();  // epfd's interest in api_fd := api_interest()
   void lose_clock(const std::string& why);
   bool send_api(const std::string& line);
 
