@@ -33,6 +33,9 @@ constexpr double kHomeApproachGain_1_s = 1.0;
 // Going Home: agents of the same altitude layer closer than this push each other apart
 constexpr double kHomeSeparation_m = 5.0;
 constexpr double kHomeSeparationSpeed_m_s = 1.5;
+// Going Home after a loss: once agents have landed, the leader checks the flock's map only this
+// close to its home, where the landed agents (on the take-off line, radios on) answer its query
+constexpr double kVerifyNearHome_m = 50.0;
 
 std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   char buf[160];
@@ -108,9 +111,21 @@ AgentOutputs Agent::step(const AgentInputs& in) {
   age_remainder_ms_ += dt * 1000.0;
   const int elapsed_ms = static_cast<int>(age_remainder_ms_);
   age_remainder_ms_ -= elapsed_ms;
-  if (elapsed_ms > 0) adb_.age(elapsed_ms);
+  if (elapsed_ms > 0) {
+    // an agent that aged out on the way home, not known to have landed, died with its pictures
+    for (int id : adb_.age(elapsed_ms)) {
+      if (state_ == AgentState::kGoingHome && !landed_ids_.count(id)) loss_pending_ = true;
+    }
+  }
 
-  if (state_ == AgentState::kLanded || state_ == AgentState::kFailed) return out;
+  if (state_ == AgentState::kFailed) return out;
+  if (state_ == AgentState::kLanded) {
+    // on the ground the radio stays on: the agent still relays, beacons (landed) and answers the
+    // leader's queries, since its pictures are part of the flock's map
+    receive(in);
+    broadcast(in, out);
+    return out;
+  }
   // our own vehicle stopped flying in the air: a dead drone is silent
   // (Going Home ends disarmed on the ground once it has sent the landing; before that, a disarm
   // is a failure too)
@@ -135,11 +150,20 @@ void Agent::receive(const AgentInputs& in) {
       auto b = decode_beacon(f, origin_);
       if (!b) continue;
       adb_.on_message(b->self, b->records);
-      if (b->going_home) going_home_heard_ = true;
+      // a later survey round: a recall after a loss on the way home, or its going home
+      const int ahead = (b->round - round_ + kRounds) % kRounds;
+      if (ahead != 0 && ahead < kRounds / 2) {
+        round_ = b->round;
+        going_home_heard_ = false;
+        recalled_ = !b->going_home;
+      }
+      if (b->round == round_ && b->going_home) going_home_heard_ = true;
     } else if (type == MessageType::kAggregate) {
       if (auto m = reassembler_.add(f)) aggregation_.on_message(*m, adb_.leader(), own_);
     }
   }
+  for (const auto& [id, r] : adb_.records())
+    if (r.landed) landed_ids_.insert(id);
 }
 
 void Agent::take_picture(const AgentInputs& in, AgentOutputs& out) {
@@ -164,7 +188,9 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     b.self.heading_rad = target_heading_rad_;
     b.self.vx_m_s = commanded_velocity_enu_m_s_.x();
     b.self.vy_m_s = commanded_velocity_enu_m_s_.y();
+    b.self.landed = state_ == AgentState::kLanded;
     b.going_home = state_ == AgentState::kGoingHome;
+    b.round = static_cast<uint8_t>(round_);
     // the next window of the ADB (rotating, so every record goes out in turn)
     const auto& records = adb_.records();
     if (!records.empty()) {
@@ -179,10 +205,8 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     }
     out.broadcast.push_back(encode_beacon(b, origin_));
   }
-  if (state_ != AgentState::kGoingHome) {
-    if (auto m = aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s)) {
-      for (Frame& f : encode_aggregate(*m)) out.broadcast.push_back(std::move(f));
-    }
+  if (auto m = aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s)) {
+    for (Frame& f : encode_aggregate(*m)) out.broadcast.push_back(std::move(f));
   }
 }
 
@@ -212,6 +236,7 @@ bool Agent::flock_in_line(const AgentInputs& in) const {
   // every agent of the ADB within the tolerance of the leader's flock line (along the heading)
   const Eigen::Vector2d dir(std::cos(target_heading_rad_), std::sin(target_heading_rad_));
   for (const auto& [id, r] : adb_.records()) {
+    if (r.landed) continue;  // on the ground at home, not part of the formation
     const Eigen::Vector2d d(r.x_m - in.position_enu_m.x(), r.y_m - in.position_enu_m.y());
     if (std::abs(d.dot(dir)) > config_.formation_tolerance_m) return false;
   }
@@ -226,11 +251,16 @@ void Agent::start_query(AgentOutputs& out) {
   out.note += "query " + std::to_string(query_counter_) + " started";
 }
 
-void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
-  // the flock's map, with our own latest pictures and the ground station's map (3.6)
+AreaParts Agent::flock_map() const {
+  // the query's result, with our own latest pictures and the ground station's map (3.6)
   AreaParts map = aggregation_.result();
   map.merge(own_);
   if (gcs_map_) map.merge(*gcs_map_);
+  return map;
+}
+
+void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
+  const AreaParts map = flock_map();
   last_map_ = map;
   const double fraction = map.covered_fraction(config_.width_y_m);
   if (map.covers_all(config_.width_y_m)) {
@@ -239,7 +269,8 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
     return;
   }
   std::vector<double> others_y;
-  for (const auto& [id, r] : adb_.records()) others_y.push_back(r.y_m);
+  for (const auto& [id, r] : adb_.records())
+    if (!r.landed) others_y.push_back(r.y_m);
   const FlockExtent extent = flock_extent(in.position_enu_m.y(), others_y, config_.gains.d_r1_m);
   // a path that covered (almost) nothing: plan the other side. The nearer side is the thesis's
   // rule, but a sliver left along the flock's far edge, where the outermost agent sits a metre or
@@ -265,11 +296,62 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
             (path_->low_side ? " on the low-y frontier" : " on the high-y frontier"));
 }
 
+bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {
+  // Beyond the thesis (whose mission ends at the going-home broadcast): an agent that dies on the
+  // way home takes the pictures only it held. The leader (the lowest id still flying) asks the
+  // flock for its map again, and if the rectangle is no longer covered, starts the next survey
+  // round: the agents still flying come back and the frontier is planned over what was lost.
+  if (!loss_pending_ || adb_.leader() != id_) return false;
+  const double now = in.now_s;
+  if (!verifying_) {
+    // with agents landed, ask near home, where they hear us; before any landed, at once
+    if (!landed_ids_.empty() &&
+        (home_enu_m_ - in.position_enu_m.head<2>()).norm() > kVerifyNearHome_m)
+      return false;
+    verifying_ = true;
+    verify_since_s_ = now;
+    start_query(out);
+    out.note += " (a loss on the way home)";
+    return false;
+  }
+  if (!aggregation_.complete(adb_.live_mask())) {
+    if (now - verify_since_s_ > kQueryTimeout_s) {
+      verify_since_s_ = now;
+      start_query(out);
+    }
+    return false;
+  }
+  verifying_ = false;
+  loss_pending_ = false;
+  if (flock_map().covers_all(config_.width_y_m)) {
+    if (!out.note.empty()) out.note += "; ";
+    out.note += "the flock still holds the whole rectangle";
+    return false;
+  }
+  round_ = (round_ + 1) % kRounds;
+  going_home_heard_ = false;
+  complete_ = false;
+  path_.reset();
+  flock_.reset();
+  finish_query(in, out);  // plans over the gaps (Deploying)
+  out.note += " (recall: round " + std::to_string(round_) + ")";
+  return true;
+}
+
 void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
   const double now = in.now_s;
   const Eigen::Vector2d here = in.position_enu_m.head<2>();
   const bool lead = adb_.leader() == id_;
 
+  // a recall (a later round that surveys again): back to the flock, unless already landing
+  if (recalled_) {
+    recalled_ = false;
+    complete_ = false;
+    if (state_ == AgentState::kGoingHome && !land_sent_) {
+      flock_.reset();
+      enter(AgentState::kNonLeader, out, "recalled: pictures lost on the way home");
+    }
+  }
   // the "going home" broadcast ends the mission for everyone (fig. 4.6)
   if (going_home_heard_ && state_ != AgentState::kGoingHome && state_ != AgentState::kTakingOff) {
     enter(AgentState::kGoingHome, out, "going-home broadcast heard");
@@ -367,7 +449,8 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       f.leader_enu_m = {leader.x_m, leader.y_m};
       f.leader_heading_rad = leader.heading_rad;
       f.leader_velocity_enu_m_s = {leader.vx_m_s, leader.vy_m_s};
-      for (const auto& [id, r] : adb_.records()) f.others_enu_m.emplace_back(r.x_m, r.y_m);
+      for (const auto& [id, r] : adb_.records())
+        if (!r.landed) f.others_enu_m.emplace_back(r.x_m, r.y_m);
       f.dt_s = std::max(1e-3, dt_s_);
       const FlockOutputs fo = flock_.step(f);
       target_heading_rad_ = leader.heading_rad;
@@ -385,7 +468,17 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
           config_.altitude_m + (id_ % config_.home_layers) * config_.home_layer_m;
       const Eigen::Vector2d d = home_enu_m_ - here;
       if (land_sent_) {
-        if (!in.armed && in.on_ground) enter(AgentState::kLanded, out, "on the ground");
+        if (!in.armed && in.on_ground) {
+          enter(AgentState::kLanded, out, "on the ground");
+          adb_.set_local_landed(true);
+        }
+        break;
+      }
+      if (verify_after_loss(in, out)) break;    // recalled: surveying again
+      const bool hold = loss_pending_ && lead;  // the leader lands once the loss is checked
+      if (d.norm() < kHomeReached_m && hold) {
+        fly_to(in, here, 0.0, in.yaw_enu_rad, out);
+        out.velocity_enu_m_s.z() = altitude_rate(in, layer_alt);
         break;
       }
       if (d.norm() < kHomeReached_m) {
@@ -403,7 +496,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
           d / d.norm() * std::min(config_.home_speed_m_s, kHomeApproachGain_1_s * d.norm());
       // steer away from agents in our layer (their ids tell their layers)
       for (const auto& [id, r] : adb_.records()) {
-        if (id % config_.home_layers != id_ % config_.home_layers) continue;
+        if (r.landed || id % config_.home_layers != id_ % config_.home_layers) continue;
         const Eigen::Vector2d away = here - Eigen::Vector2d(r.x_m, r.y_m);
         const double dist = away.norm();
         if (dist > 1e-3 && dist < kHomeSeparation_m)

@@ -10,11 +10,19 @@
 // becomes Non-Leader; a Non-Leader whose leader aged out of its ADB and that has the lowest id left
 // becomes the leader and queries. Failed (beyond the figure): the agent's own vehicle stopped
 // flying (disarmed or crashed in the air): it goes silent.
+// Beyond the figure, losses on the way home: agents that land keep their radios on (they beacon
+// "landed", relay and answer queries, and no longer lead). When an agent that had not landed ages
+// out during Going Home, the leader (the lowest id still flying) queries the flock's map again,
+// near home once agents have landed, and holds its own landing until the answer. If the rectangle
+// is no longer covered, it starts the next survey round (a counter in the beacons): the agents
+// still flying leave Going Home for Non-Leader and the leader plans over what was lost. Otherwise
+// everyone lands as before.
 #pragma once
 
 #include <Eigen/Core>
 #include <array>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -65,10 +73,10 @@ struct AgentOutputs {
   // yaw controller (ArduCopter's GUIDED) is better given this than the rate: R2's gain on top of
   // the autopilot's yaw lag and the telemetry delay makes the heading oscillate.
   std::optional<double> yaw_enu_rad;
-  double takeoff_altitude_m = 0.0;                             // kTakeOff
-  std::vector<Frame> broadcast;                                // radio frames to send now
-  std::optional<Picture> picture;                              // a picture taken at this step
-  std::string note;                                            // a log line when something happened
+  double takeoff_altitude_m = 0.0;  // kTakeOff
+  std::vector<Frame> broadcast;     // radio frames to send now
+  std::optional<Picture> picture;   // a picture taken at this step
+  std::string note;                 // a log line when something happened
 };
 
 class Agent {
@@ -89,6 +97,10 @@ class Agent {
   const std::optional<AreaParts>& last_map() const { return last_map_; }
   const std::optional<PlannedPath>& path() const { return path_; }
   bool mission_complete() const { return complete_; }
+  // Landed, and every agent this one still hears has landed too: its radio can be switched off.
+  bool flock_landed() const { return state_ == AgentState::kLanded && adb_.all_landed(); }
+  // The survey round (a recall after a loss on the way home starts the next).
+  int round() const { return round_; }
   // Sim seconds spent in each state (fig. 4.9), indexed by AgentState.
   const std::array<double, kAgentStateCount>& time_in_state() const { return time_in_state_; }
   int queries_started() const { return queries_started_; }
@@ -102,6 +114,9 @@ class Agent {
   void run_state(const AgentInputs& in, AgentOutputs& out);
   void start_query(AgentOutputs& out);
   void finish_query(const AgentInputs& in, AgentOutputs& out);
+  AreaParts flock_map() const;
+  // Going Home, leader: checks the flock's map after a loss; true when it recalled the flock.
+  bool verify_after_loss(const AgentInputs& in, AgentOutputs& out);
   bool flock_in_line(const AgentInputs& in) const;
   // a velocity setpoint towards `target` (2D) at `speed`, holding the survey altitude
   void fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double speed,
@@ -130,6 +145,13 @@ class Agent {
   bool airborne_seen_ = false;
   bool going_home_heard_ = false;
   bool complete_ = false;
+  // survey rounds and losses on the way home (verify_after_loss)
+  int round_ = 0;
+  bool recalled_ = false;
+  bool loss_pending_ = false;
+  bool verifying_ = false;
+  double verify_since_s_ = 0.0;
+  std::set<int> landed_ids_;  // agents heard to have landed: when they age out, nothing is lost
 
   // overlay network
   uint16_t seq_ = 0;

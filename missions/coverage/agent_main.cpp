@@ -358,9 +358,10 @@ int main(int argc, char** argv) {
       }
 
       // what the launcher reads: state changes, the end of the mission, the APD
-      if (f.agent->mission_complete() && !f.complete_logged) {
-        f.complete_logged = true;
-        log(f.id, "mission complete: the query found the rectangle covered");
+      // again after a recall (agent.hpp): the launcher takes the last one
+      if (f.agent->mission_complete() != f.complete_logged) {
+        f.complete_logged = f.agent->mission_complete();
+        if (f.complete_logged) log(f.id, "mission complete: the query found the rectangle covered");
       }
       const AgentState s = f.agent->state();
       if (s != f.last_state || f.agent->leader() != f.last_leader) {
@@ -395,7 +396,8 @@ int main(int argc, char** argv) {
                       f.agent->adb().records().size());
         log(f.id, buf);
       }
-      const bool over = s == AgentState::kLanded || s == AgentState::kFailed;
+      // a landed agent keeps its radio on until every agent it hears has landed (agent.hpp)
+      const bool over = s == AgentState::kFailed || f.agent->flock_landed();
       if (over ||
           (!(f.agent->own() == f.reported) && loop.now() - f.last_report_s >= report_period_s)) {
         report(f);

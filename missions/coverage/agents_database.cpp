@@ -49,9 +49,22 @@ std::vector<int> AgentsDatabase::age(int elapsed_ms) {
 }
 
 int AgentsDatabase::leader() const {
-  // records_ is ordered by id: the first one is the lowest other id
+  // records_ is ordered by id: the first one that flies is the lowest other id that flies
+  int lowest_flying = local_landed_ ? -1 : local_id_;
+  for (const auto& [id, r] : records_) {
+    if (r.landed) continue;
+    if (lowest_flying < 0 || id < lowest_flying) lowest_flying = id;
+    break;
+  }
+  if (lowest_flying >= 0) return lowest_flying;
   if (records_.empty() || records_.begin()->first > local_id_) return local_id_;
   return records_.begin()->first;
+}
+
+bool AgentsDatabase::all_landed() const {
+  for (const auto& [id, r] : records_)
+    if (!r.landed) return false;
+  return true;
 }
 
 std::vector<int> AgentsDatabase::neighbours() const {

@@ -22,6 +22,7 @@ struct AgentRecord {
   double vy_m_s = 0.0;
   int distance_hops = 0;  // 1 = heard directly
   int age_ms = 0;         // age of the information
+  bool landed = false;    // the agent had landed (its radio stays on; it cannot lead)
 };
 
 // True when sequence number a is newer than b (16-bit serial arithmetic, RFC 1982).
@@ -49,8 +50,13 @@ class AgentsDatabase {
   // Removes an agent at once (e.g. it announced its landing).
   void drop(int id) { records_.erase(id); }
 
-  // The lowest id among the live records and this agent.
+  // This agent has landed: it no longer leads while an agent that flies is alive.
+  void set_local_landed(bool landed) { local_landed_ = landed; }
+  // The lowest id among the live agents that fly, this agent included; when every live agent has
+  // landed, the lowest live id. Without landings this is the thesis's rule (lowest id alive).
   int leader() const;
+  // Every live record has landed (true for an empty database).
+  bool all_landed() const;
   const std::map<int, AgentRecord>& records() const { return records_; }
   // Ids of the agents heard directly (distance 1).
   std::vector<int> neighbours() const;
@@ -61,6 +67,7 @@ class AgentsDatabase {
   int local_id_;
   std::function<int(int)> max_allowed_age_ms_;
   std::map<int, AgentRecord> records_;
+  bool local_landed_ = false;
 };
 
 }  // namespace uavsim::missions::coverage

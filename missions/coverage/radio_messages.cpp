@@ -11,7 +11,13 @@ constexpr size_t kBeaconHeaderBytes = 14;
 constexpr size_t kRecordBytes = 14;
 constexpr size_t kAggregateHeaderBytes = 29;
 constexpr int kMaxFragments = 255;
-constexpr uint8_t kFlagGoingHome = 1;
+constexpr unsigned kFlagGoingHome = 1;
+constexpr unsigned kFlagLanded = 2;
+constexpr unsigned kRoundShift = 2;  // bits 2-4: the survey round (mod kRounds)
+// a record's hop count byte: bits 0-6 the hops (a flock of at most kMaxAgents is fewer hops deep),
+// bit 7 the agent's landed flag as last heard
+constexpr unsigned kHopsMask = 0x7F;
+constexpr unsigned kRecordLanded = 0x80;
 
 // little-endian writer and bounds-checked reader
 struct Writer {
@@ -159,7 +165,8 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin) {
   Writer w{f};
   w.u8(static_cast<unsigned>(MessageType::kBeacon));
   w.u8(static_cast<unsigned>(b.self.id));
-  w.u8(b.going_home ? kFlagGoingHome : 0);
+  w.u8((b.going_home ? kFlagGoingHome : 0u) | (b.self.landed ? kFlagLanded : 0u) |
+       ((b.round % kRounds) << kRoundShift));
   write_state(w, b.self, origin);
   const size_t n = std::min(b.records.size(), static_cast<size_t>(kRecordsPerBeacon));
   w.u8(static_cast<unsigned>(n));
@@ -167,7 +174,8 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin) {
     const AgentRecord& r = b.records[i];
     w.u8(static_cast<unsigned>(r.id));
     write_state(w, r, origin);
-    w.u8(static_cast<unsigned>(std::clamp(r.distance_hops, 0, 255)));
+    w.u8(static_cast<unsigned>(std::clamp(r.distance_hops, 0, static_cast<int>(kHopsMask))) |
+         (r.landed ? kRecordLanded : 0u));
     w.u16(static_cast<unsigned>(std::clamp(r.age_ms, 0, 65535)));
   }
   return f;
@@ -179,7 +187,10 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
   if (r.u8() != static_cast<unsigned>(MessageType::kBeacon)) return std::nullopt;
   Beacon b;
   b.self.id = static_cast<int>(r.u8());
-  b.going_home = (r.u8() & kFlagGoingHome) != 0;
+  const unsigned flags = r.u8();
+  b.going_home = (flags & kFlagGoingHome) != 0;
+  b.self.landed = (flags & kFlagLanded) != 0;
+  b.round = static_cast<uint8_t>((flags >> kRoundShift) % kRounds);
   read_state(r, b.self, origin);
   const unsigned n = r.u8();
   if (n > kRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes)
@@ -189,7 +200,9 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
     AgentRecord a;
     a.id = static_cast<int>(r.u8());
     read_state(r, a, origin);
-    a.distance_hops = static_cast<int>(r.u8());
+    const unsigned hops = r.u8();
+    a.distance_hops = static_cast<int>(hops & kHopsMask);
+    a.landed = (hops & kRecordLanded) != 0;
     a.age_ms = static_cast<int>(r.u16());
     if (a.id >= kMaxAgents) return std::nullopt;
     b.records.push_back(a);

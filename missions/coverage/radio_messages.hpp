@@ -2,9 +2,12 @@
 // descends from, sections 3.3, 3.4 and 6.2). Little-endian, fixed point:
 //
 //   beacon (8 per second, section 3.3), 14 + 14 * n bytes, n <= 8:
-//     u8 type = 1 | u8 sender | u8 flags (bit 0: going home) | u16 seq | i16 x_dm | i16 y_dm |
+//     u8 type = 1 | u8 sender | u8 flags | u16 seq | i16 x_dm | i16 y_dm |
 //     u16 heading (2 pi / 65536) | i8 vx (0.1 m/s) | i8 vy | u8 n | n records:
 //       u8 id | u16 seq | i16 x_dm | i16 y_dm | u16 heading | i8 vx | i8 vy | u8 hops | u16 age_ms
+//   flags: bit 0 going home, bit 1 the sender has landed, bits 2-4 the survey round (mod 8; a
+//   recall after a loss on the way home starts the next one, see agent.hpp). A record's hops byte
+//   carries that agent's landed flag in bit 7.
 //   A full ADB of 25 agents does not fit one frame; each beacon carries the next n records of the
 //   ADB in turn (a rotating window), so a full copy crosses every hop in ceil(size / 8) beacons.
 //   Algorithm 1 merges record by record, so a partial copy is merged exactly like a full one; the
@@ -42,9 +45,13 @@ using Frame = std::vector<uint8_t>;
 
 enum class MessageType : uint8_t { kBeacon = 1, kAggregate = 2 };
 
+// Survey rounds are counted modulo this (3 bits of the beacon's flags); see agent.hpp.
+inline constexpr int kRounds = 8;
+
 struct Beacon {
-  AgentRecord self;  // id, seq, x, y, heading, velocity (hops and age unused)
+  AgentRecord self;  // id, seq, x, y, heading, velocity, landed (hops and age unused)
   bool going_home = false;
+  uint8_t round = 0;                 // [0, kRounds)
   std::vector<AgentRecord> records;  // at most kRecordsPerBeacon
 };
 

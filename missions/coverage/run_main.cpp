@@ -321,6 +321,7 @@ int main(int argc, char** argv) {
   std::map<int, ApdReport> apd;      // agent -> its last APD report
   std::set<int> leaders;             // agents that were ever in a leader state
   int completed_by = -1;             // the agent whose query found the rectangle covered
+  int recalls = 0;                   // survey rounds restarted after a loss on the way home
   double completed_at_s = -1.0;      // and the sim time it found it (the going-home broadcast)
   std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
   std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
@@ -342,6 +343,7 @@ int main(int argc, char** argv) {
     }
     static const std::regex state_re(R"(^agent (\d+) t=\S+ state (.+) leader (-?\d+)$)");
     static const std::regex complete_re(R"(^agent (\d+) t=(\S+) mission complete)");
+    static const std::regex recall_re(R"(^agent \d+ t=\S+ .*\(recall: round \d+\))");
     static const std::regex times_re(R"(^agent (\d+) t=\S+ time in states:(.*)$)");
     std::smatch m;
     if (std::regex_search(line, m, state_re)) {
@@ -354,6 +356,8 @@ int main(int argc, char** argv) {
       completed_by = std::stoi(m[1]);
       const double t = std::strtod(m[2].str().c_str(), nullptr);
       if (std::isfinite(t) && t >= 0.0) completed_at_s = t;
+    } else if (std::regex_search(line, m, recall_re)) {
+      ++recalls;
     } else if (std::regex_search(line, m, times_re)) {
       std::istringstream in(m[2].str());
       double v = 0.0;
@@ -711,7 +715,9 @@ int main(int argc, char** argv) {
   if (!gaps.empty()) std::printf("gaps (stripe, y from, y to): %s\n", gaps.dump().c_str());
   std::printf("leaders: ");
   for (int i : leaders) std::printf("%d ", i);
-  std::printf("(completed by %d)\n", completed_by);
+  std::printf("(completed by %d)", completed_by);
+  if (recalls > 0) std::printf(", %d recall(s) after losses on the way home", recalls);
+  std::printf("\n");
   {
     // fig. 4.9: share of the agents' time in each state, Going Home, Landed and Failed left out
     double total = 0.0;
@@ -786,6 +792,7 @@ int main(int argc, char** argv) {
     summary["time_in_state_s"] = states;
     summary["leaders"] = std::vector<int>(leaders.begin(), leaders.end());
     summary["completed_by"] = completed_by;
+    summary["recalls"] = recalls;
     summary["landed"] = landed;
     summary["energy_mah_mean"] = vehicles_end.empty() ? 0.0 : energy_total / vehicles_end.size();
     summary["distance_m_total"] = distance_total;

@@ -88,5 +88,23 @@ TEST(AgentsDatabase, LeaderIsTheLowestLiveIdAndIsReplacedWhenItAgesOut) {
   EXPECT_EQ(adb.leader(), 4);
 }
 
+TEST(AgentsDatabase, LandedAgentsDoNotLeadWhileOneFlies) {
+  AgentsDatabase adb = make(4);
+  AgentRecord one = rec(1, 1, 0.0);
+  one.landed = true;
+  adb.on_message(one, {rec(6, 1, 0.0, 1, 0)});
+  EXPECT_EQ(adb.leader(), 4);  // 1 has landed: the lowest id that flies
+  EXPECT_FALSE(adb.all_landed());
+  adb.set_local_landed(true);
+  EXPECT_EQ(adb.leader(), 6);
+  // every one landed: the thesis's rule again (the lowest live id)
+  AgentRecord six = rec(6, 2, 0.0);
+  six.landed = true;
+  adb.on_message(six, {});
+  EXPECT_TRUE(adb.all_landed());
+  EXPECT_EQ(adb.leader(), 1);
+  EXPECT_EQ(adb.live_mask(), (1u << 1) | (1u << 4) | (1u << 6));  // landed agents still answer
+}
+
 }  // namespace
 }  // namespace uavsim::missions::coverage

@@ -82,6 +82,22 @@ TEST(CoverageRun, NonLeaderKilledItsStripesAreCoveredAgain) {
   EXPECT_TRUE(r["success"].get<bool>()) << out;
 }
 
+// A non-leader dies on the way home (the going-home broadcast of this seed goes out at 132.9 s):
+// the pictures only it held die with it. The leader, having aged it out, queries the flock again,
+// finds the rectangle no longer covered and recalls the agents still flying, which cover the lost
+// part; then everyone lands. Without the recall the run ends below 100 % (scored a failure).
+TEST(CoverageRun, NonLeaderKilledOnTheWayHomeTheFlockGoesBackForItsPictures) {
+  std::string out;
+  const Json r = run_flock("--kill 3@138", &out);
+  ASSERT_TRUE(r.is_object()) << out;
+  EXPECT_EQ(r["killed"], Json::array({3})) << out;
+  EXPECT_EQ(r["recalls"].get<int>(), 1) << out;
+  EXPECT_GT(r["coverage_complete_s"].get<double>(), 138.0) << out;  // completed again, after it
+  EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
+  expect_every_survivor_landed(r, out);
+  EXPECT_TRUE(r["success"].get<bool>()) << out;
+}
+
 // 30 % of the frames heard are lost (seeded): beacons and the aggregation query's retransmissions
 // still get the flock's map to the leader.
 TEST(CoverageRun, ThirtyPercentRadioLossStillCoversEverything) {

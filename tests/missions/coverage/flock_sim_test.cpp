@@ -23,6 +23,7 @@ struct SimVehicle {
   Eigen::Vector3d command_enu_m_s = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0, yaw_rate_rad_s = 0.0;
   bool armed = false, alive = true, landing = false;
+  double going_home_since_s = -1.0;
   double takeoff_altitude_m = -1.0;
   std::vector<Frame> inbox;
 };
@@ -34,6 +35,7 @@ struct FlockRun {
   int completed_by = -1;            // the leader whose query found the rectangle covered
   double min_separation_m = 1e9;    // between flying vehicles
   double distance_m = 0.0;          // flown by all
+  int rounds = 0;                   // survey rounds (recalls after losses on the way home + 1)
 };
 
 struct FlockScenario {
@@ -41,6 +43,8 @@ struct FlockScenario {
   double loss = 0.0;
   double range_m = 200.0;
   std::vector<std::pair<double, int>> kills;  // (time, agent)
+  // (delay, agent): the agent is killed this long after it enters Going Home
+  std::vector<std::pair<double, int>> kills_going_home;
   double timeout_s = 2000.0;
   uint32_t seed = 1;
 };
@@ -68,6 +72,10 @@ FlockRun fly(const FlockScenario& s) {
   for (; t < s.timeout_s; t += kDt_s) {
     while (next_kill < s.kills.size() && s.kills[next_kill].first <= t)
       v[static_cast<size_t>(s.kills[next_kill++].second)].alive = false;
+    for (const auto& [delay, id] : s.kills_going_home) {
+      SimVehicle& sv = v[static_cast<size_t>(id)];
+      if (sv.going_home_since_s >= 0.0 && t >= sv.going_home_since_s + delay) sv.alive = false;
+    }
     // agents step and broadcast
     std::vector<std::pair<size_t, Frame>> air;
     bool done = true;
@@ -84,6 +92,11 @@ FlockRun fly(const FlockScenario& s) {
       in.received = std::move(sv.inbox);
       sv.inbox.clear();
       const AgentOutputs out = sv.agent.step(in);
+      if (sv.agent.state() == AgentState::kGoingHome && sv.going_home_since_s < 0.0)
+        sv.going_home_since_s = t;
+      if (!out.note.empty() && std::getenv("FLOCK_DEBUG"))
+        std::printf("t=%.2f agent %zu: %s\n", t, i, out.note.c_str());
+      run.rounds = std::max(run.rounds, sv.agent.round() + 1);
       switch (out.action) {
         case AgentOutputs::Action::kTakeOff:
           sv.armed = true;
@@ -190,6 +203,29 @@ TEST(FlockSim, ThirtyPercentRadioLossStillCoversEverything) {
   s.loss = 0.3;
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+TEST(FlockSim, AgentLostOnTheWayHomeTheFlockGoesBackForItsStripes) {
+  // without the check, the pictures only agent 3 held die with it after the going-home broadcast
+  FlockScenario s;
+  s.kills_going_home = {{5.0, 3}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.rounds, 2);  // one recall
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  const FlockRun plain = fly({});
+  EXPECT_GT(r.mission_time_s, plain.mission_time_s);  // the extra pass costs time
+  std::printf("recall: mission %.1f s (without the loss %.1f s), distance %.0f m (%.0f m)\n",
+              r.mission_time_s, plain.mission_time_s, r.distance_m, plain.distance_m);
+}
+
+TEST(FlockSim, LeaderLostOnTheWayHomeTheNextOneChecksAndRecalls) {
+  FlockScenario s;
+  s.kills_going_home = {{5.0, 0}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.rounds, 2);
   EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
 }
 

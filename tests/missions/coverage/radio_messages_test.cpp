@@ -34,6 +34,33 @@ TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
   EXPECT_NEAR(d->records[6].heading_rad, 3.1, 1e-4);
 }
 
+TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
+  const RadioFrameOrigin o{0.0, 0.0};
+  Beacon b;
+  b.self = {5, 9, 1.0, 2.0, 0.0, 0, 0, 0, 0, true};
+  b.round = 6;
+  AgentRecord far{7, 3, 0.0, 0.0, 0.0, 0, 0, 127, 200, true};
+  AgentRecord flying{8, 4, 0.0, 0.0, 0.0, 0, 0, 3, 100, false};
+  b.records = {far, flying};
+  const auto d = decode_beacon(encode_beacon(b, o), o);
+  ASSERT_TRUE(d);
+  EXPECT_FALSE(d->going_home);
+  EXPECT_TRUE(d->self.landed);
+  EXPECT_EQ(d->round, 6);
+  ASSERT_EQ(d->records.size(), 2u);
+  EXPECT_TRUE(d->records[0].landed);
+  EXPECT_EQ(d->records[0].distance_hops, 127);  // the flag does not eat into the hop count
+  EXPECT_FALSE(d->records[1].landed);
+  EXPECT_EQ(d->records[1].distance_hops, 3);
+  // rounds wrap in 3 bits; the going-home bit stays its own
+  b.round = kRounds + 1;
+  b.going_home = true;
+  const auto w = decode_beacon(encode_beacon(b, o), o);
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->round, 1);
+  EXPECT_TRUE(w->going_home);
+}
+
 TEST(RadioMessages, MalformedBeaconsAreRejected) {
   Beacon b;
   b.self.id = 1;
@@ -110,8 +137,7 @@ TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
   m.sender = 3;
   m.apd = AreaParts(108);
   for (int s = 0; s < 108; ++s)
-    for (int band = 0; band < 16; ++band)
-      m.apd.add(s, {37.0 * band + 0.1 * s, 37.0 * band + 20.0});
+    for (int band = 0; band < 16; ++band) m.apd.add(s, {37.0 * band + 0.1 * s, 37.0 * band + 20.0});
   const auto frames = encode_aggregate(m);
   ASSERT_EQ(frames.size(), 108u);
   AggregateReassembler r(108);
