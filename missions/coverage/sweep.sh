@@ -6,7 +6,7 @@
 #   missions/coverage/sweep.sh jobs OUT_DIR [AREA] [SEEDS] > jobs.txt   # one coverage-run per line
 #   parallel -j2 < jobs.txt                      # GNU parallel (or: xargs -P2 -d '\n' -n1 bash -c < jobs.txt)
 #   missions/coverage/sweep.sh table OUT_DIR                           # the tables, beside the thesis's
-#   missions/coverage/sweep.sh plot OUT_DIR [PNG_DIR]                  # fig. 4.7 and 4.9 (matplotlib)
+#   missions/coverage/sweep.sh plot OUT_DIR [PNG_DIR]                  # fig. 4.7, 4.8 and 4.9 (matplotlib)
 # AREA defaults to 600x600 (the thesis's), SEEDS to 3. Environment (space-separated lists):
 #   SWEEP_AGENTS       flock sizes flown without failures (default "5 10 15 20 25")
 #   SWEEP_FAIL_AGENTS  flock size of the failure runs (default 25; empty: no failure runs)
@@ -44,9 +44,11 @@ case "$cmd" in
     done
     ;;
   table)
-    python3 - "$out" <<'PY'
+    python3 - "$out" "$root" <<'PY'
 import glob, json, os, statistics, sys
 out = sys.argv[1]
+sys.path.insert(0, os.path.join(sys.argv[2], "missions", "coverage"))
+from plot_sweep import overcoverage
 runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "*.json")))]
 # the thesis's table 4.3: failure probability -> (failed agents, extra distance), both in %
 THESIS_43 = {0.0005: (2.50, 0.0000), 0.0007: (3.75, 0.1493), 0.0009: (5.00, 0.2095),
@@ -95,6 +97,22 @@ for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs i
     print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s (%s) |" % (
         a, n, p, len(good), len(rs), 100 * failed, ("%.2f %%" % th[0]) if th else "-", 100 * cov, *t, *e,
         pct(extra), pct(extra_s), ("%.4f %%" % th[1]) if th else "-"))
+print()
+print("fig. 4.8: overcoverage, the share of the rectangle the pictures of k agents cover (every agent's")
+print("last APD, the dead ones' included; the thesis plots its distribution and calls it negligible)")
+print("(neighbours' footprints overlap by design: D_R1 is 25 % under Y_sensor, and passes by the 20 % margin,")
+print("so the failure-free flock already covers much twice; the last column is what failures add to it)")
+print("| area | agents | failure p | runs | not covered | 1 agent | 2 agents | 3 agents | 4+ agents | covered again: sum of (k-1) x share | beyond the failure-free runs |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
+again = lambda m: sum((k - 1) * m[k] for k in range(2, 5))
+dist = {}
+for key in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs if "apd_reports" in j}):
+    ds = [overcoverage(j) for j in runs if (area(j), j["agents"], j["failure_prob"]) == key]
+    dist[key] = (len(ds), [statistics.mean(d[k] for d in ds) for k in range(5)])
+for (a, n, p), (count, m) in dist.items():
+    b = dist.get((a, n, 0.0))
+    extra = ("%+.2f %%" % (100 * (again(m) - again(b[1])))) if b and p > 0 else "-"
+    print("| %s | %d | %g | %d | %s | %.2f %% | %s |" % (a, n, p, count, " | ".join("%.2f %%" % (100 * v) for v in m), 100 * again(m), extra))
 PY
     ;;
   plot)
