@@ -17,6 +17,9 @@ constexpr double kQueryTimeout_s = 20.0;
 constexpr double kWaitTimeout_s = 30.0;
 // a pass that added less than this fraction of the rectangle made no progress
 constexpr double kNoProgressFraction = 1e-3;
+// with less than this fraction of the rectangle left, the leader plans repair passes over the
+// holes (path_planner.hpp, plan_repair) instead of frontier passes
+constexpr double kRepairFraction = 0.01;
 // the leader is at the start of its path when this close
 constexpr double kAtStart_m = 1.5;
 // Running: the leader aims at its path this far ahead, and corrects sideways with this gain
@@ -36,6 +39,8 @@ constexpr double kHomeSeparationSpeed_m_s = 1.5;
 // Going Home after a loss: once agents have landed, the leader checks the flock's map only this
 // close to its home, where the landed agents (on the take-off line, radios on) answer its query
 constexpr double kVerifyNearHome_m = 50.0;
+// the leader's hover over its home while the others land (it lands last)
+constexpr double kLeaderWaitAltitude_m = 3.0;
 
 std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   char buf[160];
@@ -94,6 +99,7 @@ void Agent::enter(AgentState s, AgentOutputs& out, const std::string& why) {
   if (!why.empty()) out.note += " (" + why + ")";
   state_ = s;
   state_since_s_ = last_now_s_;
+  if (s == AgentState::kGoingHome) home_round_ = round_;
 }
 
 AgentOutputs Agent::step(const AgentInputs& in) {
@@ -189,7 +195,8 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     b.self.vx_m_s = commanded_velocity_enu_m_s_.x();
     b.self.vy_m_s = commanded_velocity_enu_m_s_.y();
     b.self.landed = state_ == AgentState::kLanded;
-    b.going_home = state_ == AgentState::kGoingHome;
+    // an agent still landing from an earlier round does not send a later round's flock home
+    b.going_home = state_ == AgentState::kGoingHome && home_round_ == round_;
     b.round = static_cast<uint8_t>(round_);
     // the next window of the ADB (rotating, so every record goes out in turn)
     const auto& records = adb_.records();
@@ -277,12 +284,22 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
   // two off the extent the leader measured, is missed pass after pass (5 quads over 600 x 600 m
   // flew the same 500 m path at 99.9 % until the 5000 s budget); planned from the other side, the
   // sliver lies under the leader's own footprint, on its own track.
+  // Little left: holes inside covered ground, each flown over by a short pass of its own
+  // (plan_repair); a repair pass that added nothing is flown again from the other side.
+  const Eigen::Vector2d here = in.position_enu_m.head<2>();
+  const bool repair = fraction >= 1.0 - kRepairFraction;
   std::optional<PlannedPath> next;
-  if (path_ && fraction < planned_fraction_ + kNoProgressFraction) {
-    next = plan_side(config_, map, in.position_enu_m.head<2>(), extent, !path_->low_side);
+  if (repair) {
+    if (path_ && repairing_ && fraction <= planned_fraction_)
+      next = plan_repair(config_, map, here, extent, !path_->low_side);
+    if (!next) next = plan_repair_path(config_, map, here, extent);
+  } else {
+    if (path_ && fraction < planned_fraction_ + kNoProgressFraction)
+      next = plan_side(config_, map, here, extent, !path_->low_side);
+    if (!next) next = plan_path(config_, map, here, extent);
   }
-  if (!next) next = plan_path(config_, map, in.position_enu_m.head<2>(), extent);
   path_ = next;
+  repairing_ = repair;
   planned_fraction_ = fraction;
   if (!path_) {
     complete_ = true;
@@ -293,7 +310,8 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
   enter(AgentState::kDeploying, out,
         fmt("covered %.1f%%, path from (%.1f, %.1f)", 100.0 * fraction,
             path_->points_enu_m.front().x(), path_->points_enu_m.front().y()) +
-            (path_->low_side ? " on the low-y frontier" : " on the high-y frontier"));
+            (path_->low_side ? " on the low-y frontier" : " on the high-y frontier") +
+            (repairing_ ? ", a repair pass over holes" : ""));
 }
 
 bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {
@@ -474,11 +492,16 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
         }
         break;
       }
-      if (verify_after_loss(in, out)) break;    // recalled: surveying again
-      const bool hold = loss_pending_ && lead;  // the leader lands once the loss is checked
+      if (verify_after_loss(in, out)) break;  // recalled: surveying again
+      // The leader lands last, once every agent it hears has landed and any loss is checked: an
+      // agent lost while the others descend is still noticed by one that can fly
+      // (verify_after_loss). It waits low over its home, so its own landing after the last one is
+      // short.
+      const bool hold = lead && (loss_pending_ || !adb_.all_landed());
       if (d.norm() < kHomeReached_m && hold) {
-        fly_to(in, here, 0.0, in.yaw_enu_rad, out);
-        out.velocity_enu_m_s.z() = altitude_rate(in, layer_alt);
+        fly_to(in, home_enu_m_, 0.0, in.yaw_enu_rad, out);
+        out.velocity_enu_m_s.z() =
+            altitude_rate(in, loss_pending_ ? layer_alt : kLeaderWaitAltitude_m);
         break;
       }
       if (d.norm() < kHomeReached_m) {

@@ -13,10 +13,11 @@
 // Beyond the figure, losses on the way home: agents that land keep their radios on (they beacon
 // "landed", relay and answer queries, and no longer lead). When an agent that had not landed ages
 // out during Going Home, the leader (the lowest id still flying) queries the flock's map again,
-// near home once agents have landed, and holds its own landing until the answer. If the rectangle
-// is no longer covered, it starts the next survey round (a counter in the beacons): the agents
-// still flying leave Going Home for Non-Leader and the leader plans over what was lost. Otherwise
-// everyone lands as before.
+// near home once agents have landed. The leader lands last (it hovers low over its home until
+// every agent it hears has landed), so a loss during the others' descent is noticed too. If the
+// rectangle is no longer covered, it starts the next survey round (a counter in the beacons): the
+// agents still flying leave Going Home for Non-Leader and the leader plans over what was lost.
+// Otherwise everyone lands as before.
 #pragma once
 
 #include <Eigen/Core>
@@ -148,6 +149,7 @@ class Agent {
   // survey rounds and losses on the way home (verify_after_loss)
   int round_ = 0;
   bool recalled_ = false;
+  int home_round_ = 0;  // the round in which this agent went home
   bool loss_pending_ = false;
   bool verifying_ = false;
   double verify_since_s_ = 0.0;
@@ -167,6 +169,7 @@ class Agent {
   std::optional<AreaParts> last_map_;
   std::optional<PlannedPath> path_;
   double planned_fraction_ = 0.0;  // the map's covered fraction when path_ was planned
+  bool repairing_ = false;         // path_ is a repair pass over holes
 
   std::array<double, kAgentStateCount> time_in_state_{};
 };
