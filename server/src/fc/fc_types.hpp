@@ -1,6 +1,7 @@
 // Plain types shared by the flight-controller emulation and its adapters (sim loop, MAVLink endpoint).
 // Frames: the FC works in the local ENU frame of the MuJoCo world (origin = EKF origin, z up) and the
-// FLU body frame. ENU<->NED conversion happens only in server/src/mavlink/frames.hpp.
+// FLU body frame. MAVLink's conventions (NED, yaw 0 = north clockwise) are converted at the MAVLink
+// edge, in server/src/mavlink (with the ENU/NED helpers of common/include/uavsim/common/frames.hpp).
 #pragma once
 
 #include <Eigen/Core>

@@ -280,30 +280,15 @@ void VehicleLink::handle_mission_item(Link& link, const Frame& f, const msg::Mis
 
 void VehicleLink::handle_mission_item_float(Link& link, const Frame& f, const msg::MissionItem& m,
                                             fc::FlightController& fc) {
-  // carry the float item in the INT struct: x/y as degrees * 1e7 keeps 1 cm resolution; a
-  // latitude/longitude out of range would overflow that conversion, so it is refused first
-  if (!limits::valid_lat_lon(m.x, m.y)) {
+  // carried in the INT struct (1 cm resolution); a latitude/longitude out of range would overflow
+  // that conversion, so it is refused
+  const auto i = mission_item_int_from_legacy(m);
+  if (!i) {
     StatCounters::add(stats_.rejected_inputs);
     reject_mission_item(link, f);
     return;
   }
-  msg::MissionItemInt i;
-  i.param1 = m.param1;
-  i.param2 = m.param2;
-  i.param3 = m.param3;
-  i.param4 = m.param4;
-  i.x = static_cast<std::int32_t>(std::llround(static_cast<double>(m.x) * 1e7));
-  i.y = static_cast<std::int32_t>(std::llround(static_cast<double>(m.y) * 1e7));
-  i.z = m.z;
-  i.seq = m.seq;
-  i.command = m.command;
-  i.target_system = m.target_system;
-  i.target_component = m.target_component;
-  i.frame = m.frame;
-  i.current = m.current;
-  i.autocontinue = m.autocontinue;
-  i.mission_type = m.mission_type;
-  handle_mission_item(link, f, i, false, fc);
+  handle_mission_item(link, f, *i, false, fc);
 }
 
 void VehicleLink::handle_mission_request_list(Link& link, const Frame& f, int mission_type,
