@@ -60,7 +60,7 @@ void BM_Run(benchmark::State& state) {
       sim::SimConfig{});
   objects::ObjectSet world_objects = objects::add_world_objects(s);
   app::RunReporter reporter(s, nullptr, nullptr);
-  s.add_control_observer([&reporter](sim::Simulation&) { reporter.on_control_step(); });
+  s.schedule().add(sim::Phase::kPostControl, "reporter", [&reporter] { reporter.on_control_step(); });
   api::OverlayOps notes(s);
 
   // the cameras and the recorder as server_app wires them
@@ -105,11 +105,11 @@ void BM_Run(benchmark::State& state) {
 
   // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
   std::vector<bool> launched(s.vehicle_count(), false);
-  s.add_control_observer([&launched](sim::Simulation& sim) {
-    for (size_t i = 0; i < sim.vehicle_count(); ++i) {
-      if (launched[i] || !sim.fc(i).prearm_ok()) continue;
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      if (launched[i] || !s.fc(i).prearm_ok()) continue;
       launched[i] = true;
-      sim.post(i, [](fc::FlightController& f) {
+      s.post(i, [](fc::FlightController& f) {
         f.set_mode(fc::Mode::kGuided);
         f.arm(false);
         f.takeoff(5.0);
@@ -118,7 +118,9 @@ void BM_Run(benchmark::State& state) {
   });
   sim::Runner runner(s, 0.0);
   render::FrameService* fs = frames.get();
-  if (fs != nullptr) runner.set_control_gate([fs, &s](double) { fs->capture(s.world().data()); });
+  if (fs != nullptr) {
+    runner.add_gate(sim::Phase::kCapture, "frames", [fs, &s](double) { fs->capture(s.world().data()); });
+  }
   runner.run_until(kWarmupS);
   if (fs != nullptr) fs->wait_delivered();
 

@@ -49,6 +49,7 @@ class SimServer {
     ec.base_port = 0;
     if (!vehicle0_udp.empty()) ec.udp = {std::move(vehicle0_udp)};
     mavlink_ = std::make_unique<s::mavlink::MavlinkServer>(*sim_, ec);
+    mavlink_->schedule(sim_->schedule());
     runner_ = std::make_unique<s::sim::Runner>(*sim_, 0.0);
     s::api::ApiConfig ac;
     ac.port = 0;
@@ -58,7 +59,7 @@ class SimServer {
     hooks_ = std::make_unique<EndpointHooks>(*mavlink_);
     api_->set_link_control(hooks_.get());
     api_->set_seq_waiter(hooks_.get());
-    runner_->set_control_gate(api_->gate());
+    runner_->add_gate(s::sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
   }

@@ -9,8 +9,8 @@
 // check and the dispatch all read that table.
 //
 // Threads: socket I/O runs on the LineServer's thread; every request that touches the simulation is
-// queued and executed on the loop thread inside the control gate (gate(), installed with
-// Runner::set_control_gate), before the control step, in arrival order. The gate is also where pause,
+// queued and executed on the loop thread inside the control gate (gate(), registered with
+// Runner::add_gate in the step schedule's queued-tasks phase), before the control step, in arrival order. The gate is also where pause,
 // single-stepping and lockstep hold the clock, so the loop thread keeps serving requests while held.
 #pragma once
 
@@ -113,7 +113,7 @@ class ApiServer {
   // Connections open now. Thread-safe.
   size_t connection_count() const { return connections_.load(); }
 
-  // The control gate for Runner::set_control_gate: runs queued requests and holds the clock while
+  // The control gate for Runner::add_gate (queued-tasks phase): runs queued requests and holds the clock while
   // paused or while a lockstep client has not finished its tick. Loop thread only.
   sim::Runner::Gate gate() {
     return [this](double) { on_gate(); };

@@ -17,9 +17,7 @@ const std::array<Eigen::Vector3d, 3> kWaypointsEnu = {
 
 }  // namespace
 
-DemoFlight::DemoFlight(sim::Simulation& sim, std::ostream& out, bool quiet) : out_(out), quiet_(quiet) {
-  sim.add_control_observer([this](sim::Simulation& s) { on_control_step(s); });
-}
+DemoFlight::DemoFlight(std::ostream& out, bool quiet) : out_(out), quiet_(quiet) {}
 
 void DemoFlight::on_control_step(sim::Simulation& sim) {
   if (finished_ || sim.vehicle_count() == 0) return;

@@ -22,15 +22,17 @@ struct DemoResult {
 
 class DemoFlight {
  public:
-  // Installs itself as a control observer of sim; prints progress to out unless quiet.
-  DemoFlight(sim::Simulation& sim, std::ostream& out, bool quiet);
+  // Prints progress to out unless quiet.
+  DemoFlight(std::ostream& out, bool quiet);
+  // Flies the script one control step on (the post-control phase of the step schedule). Loop thread
+  // only.
+  void on_control_step(sim::Simulation& sim);
   bool finished() const { return finished_; }
   const DemoResult& result() const { return result_; }
   void print_summary(std::ostream& out) const;
 
  private:
   enum class Phase { kWaitGps, kArm, kClimb, kWaypoints, kLanding, kDone };
-  void on_control_step(sim::Simulation& sim);
   void finish(bool success, const std::string& failure);
 
   std::ostream& out_;

@@ -115,6 +115,8 @@ cameras and logs:
                       events, one JSON object a line)
   --quiet             print only errors and the result (no event lines, no summary)
   --list-params       the flight controller's parameters as a Markdown table (docs/parameters.md)
+  --print-schedule    print the step schedule (its phases, and who runs in each, in order) before the
+                      clock starts
   --version           the version
   --help              this text
 )";
@@ -346,6 +348,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       r.output = params_markdown();
       r.exit_code = 0;
       return r;
+    } else if (a == "--print-schedule") {
+      o.print_schedule = true;
     } else if (a == "--version") {
       r.output = std::string(version_string()) + "\n";
       r.exit_code = 0;

@@ -64,6 +64,7 @@ struct Options {
   double duration_s = 0.0;            // 0 = run until interrupted
   bool demo = false;                  // fly the scripted demo on vehicle 0 and exit
   bool quiet = false;
+  bool print_schedule = false;        // print the step schedule before the clock starts
   bool version = false;               // --version: print it and exit
   int api_port = 5700;                // sim socket API (docs/protocol.md); 0 = ephemeral; -1 = none
   std::string api_bind_address = "127.0.0.1";

@@ -225,11 +225,10 @@ int run_server(const Options& given_options) {
   if (options.log_dir && !options.quiet) {
     std::cout << "uavsim-server: logging to " << *options.log_dir << " (VEHICLE.tlog, events.jsonl)\n";
   }
-  s.add_control_observer([&reporter](sim::Simulation&) { reporter.on_control_step(); });
   // world objects (truck, balloons, gimbals) found in the world
   objects::ObjectSet world_objects;
   try {
-    world_objects = objects::add_world_objects(s);
+    world_objects = objects::create_world_objects(s);
   } catch (const std::exception& e) {
     std::cerr << "uavsim-server: " << options.world_path << ": " << e.what() << "\n";
     return 1;
@@ -302,7 +301,6 @@ int run_server(const Options& given_options) {
     mavlink::MavlinkServer* ms = mavlink_server.get();
     gimbal_bridge = std::make_unique<MavlinkGimbalBridge>(
         *world_objects.gimbals, [ms](size_t vehicle) -> const mavlink::GimbalState& { return ms->gimbal(vehicle); });
-    s.add_control_observer([&gimbal_bridge](sim::Simulation& sim) { gimbal_bridge->update(sim); });
   }
 
   // the launchers' counters and notes for the video's overlay (overlay_* ops)
@@ -410,12 +408,10 @@ int run_server(const Options& given_options) {
   }
 
   sim::Runner runner(s, options.rate);
-  // the stop flag is polled at control steps (signal handlers may only set it)
-  s.add_control_observer([&runner](sim::Simulation&) {
-    if (g_stop_requested) runner.stop();
-  });
 
   // the sim socket API: requests run in the control gate, on this (the loop) thread
+  radio::SimRadio* radio = nullptr;  // owned by s
+  radio::GcsRelaySet* gcs_relays = nullptr;  // likewise
   std::unique_ptr<api::RadioOps> radio_ops;  // outlives api_server, which serves its ops
   std::unique_ptr<api::SensorOps> sensor_ops;  // likewise
   std::unique_ptr<api::ApiServer> api_server;
@@ -441,8 +437,9 @@ int run_server(const Options& given_options) {
     }
     if (frames) api_server->set_frame_service(frames.get());
     // the A2A radio and the GCS link relay (seed 6.2, 6.3), served as radio_* / gcs_link_* ops
-    radio_ops = std::make_unique<api::RadioOps>(s, radio::SimRadio::attach(s, radio::RadioConfig{}),
-                                                &radio::GcsRelaySet::attach(s, options.api_bind_address));
+    radio = &radio::SimRadio::create(s, radio::RadioConfig{});
+    gcs_relays = &radio::GcsRelaySet::create(s, options.api_bind_address);
+    radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays);
     api_server->add_group(radio_ops.get());
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);
@@ -456,27 +453,49 @@ int run_server(const Options& given_options) {
     }
   }
 
-  // the gate before each control step: frames due now first, then the API (requests, pause, lockstep)
-  if (frames || api_server) {
-    sim::Runner::Gate api_gate = api_server ? api_server->gate() : sim::Runner::Gate{};
-    render::FrameService* fs = frames.get();
-    runner.set_control_gate([fs, api_gate, &s](double t) {
-      if (fs != nullptr) fs->capture(s.world().data());
-      if (api_gate) api_gate(t);
-    });
-  }
-
   std::unique_ptr<DemoFlight> demo;
   if (options.demo) {
     if (s.vehicle_count() == 0) {
       std::cerr << "uavsim-server: --demo needs a world with a vehicle\n";
       return 1;
     }
-    demo = std::make_unique<DemoFlight>(s, std::cout, options.quiet);
-    s.add_control_observer([&runner, &demo](sim::Simulation&) {
+    demo = std::make_unique<DemoFlight>(std::cout, options.quiet);
+  }
+
+  // the step schedule (sim/step_schedule.hpp, docs/architecture.md): each component's place in a step,
+  // registered here once; inside a phase they run in the order written here, the simulation's own work
+  // (sim.*) before or after them as the schedule declares
+  sim::StepSchedule& steps = s.schedule();
+  // capture, queued tasks: gates, whose wall time holds the clock (Runner::add_gate); camera snapshots
+  // due now first, of the state the last step left, then the sim API (requests, pause, lockstep), then
+  // the vehicles' queued tasks (sim.vehicle_tasks)
+  if (frames) {
+    render::FrameService* fs = frames.get();
+    runner.add_gate(sim::Phase::kCapture, "frames", [fs, &s](double) { fs->capture(s.world().data()); });
+  }
+  if (api_server) runner.add_gate(sim::Phase::kQueuedTasks, "api", api_server->gate());
+  // post-control: what reads the control step's result (events out, telemetry, gimbal commands), the
+  // stop flag (signal handlers may only set it), the demo, the GCS link relays' datagrams
+  steps.add(sim::Phase::kPostControl, "reporter", [&reporter] { reporter.on_control_step(); });
+  if (mavlink_server) mavlink_server->schedule(steps);
+  if (gimbal_bridge) {
+    steps.add(sim::Phase::kPostControl, "gimbal_bridge", [&gimbal_bridge, &s] { gimbal_bridge->update(s); });
+  }
+  steps.add(sim::Phase::kPostControl, "stop_signal", [&runner] {
+    if (g_stop_requested) runner.stop();
+  });
+  if (demo) {
+    steps.add(sim::Phase::kPostControl, "demo", [&runner, &demo, &s] {
+      demo->on_control_step(s);
       if (demo->finished()) runner.stop();
     });
   }
+  // pre-physics (after the wind, before the rotor forces), contact handlers, reset hooks: the world
+  // objects (trucks, balloons, gimbals), then the radio; the relays (post-control) reset last
+  objects::schedule_world_objects(s, world_objects);
+  if (radio != nullptr) radio->schedule(steps);
+  if (gcs_relays != nullptr) gcs_relays->schedule(steps);
+  if (options.print_schedule) std::cout << "uavsim-server: step schedule\n" << steps.describe() << std::flush;
 
   // --wait-for-clients: the clock starts when enough MAVLink and sim API clients are connected (the API's
   // requests are answered from then on), so --rate 0 does not race through an empty world

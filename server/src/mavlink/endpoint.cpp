@@ -623,15 +623,18 @@ MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config)
       sim.post(i, [i](fc::FlightController& fc) { fc.set_param("SYSID_THISMAV", static_cast<double>(i + 1)); });
     }
   }
-  std::weak_ptr<Core> weak = core_;
-  sim.add_control_observer([weak](sim::Simulation&) {
-    if (auto core = weak.lock()) core->on_control_step();
-  });
   Core* core = core_.get();
   core_->io_thread = std::thread([core] { core->run(); });
 }
 
 MavlinkServer::~MavlinkServer() { core_->shutdown(); }
+
+void MavlinkServer::schedule(sim::StepSchedule& steps) {
+  std::weak_ptr<Core> weak = core_;
+  steps.add(sim::Phase::kPostControl, "mavlink", [weak] {
+    if (auto core = weak.lock()) core->on_control_step();
+  });
+}
 
 std::size_t MavlinkServer::vehicle_count() const { return core_->vehicles.size(); }
 std::uint16_t MavlinkServer::port(std::size_t vehicle) const { return core_->vehicles.at(vehicle)->port; }

@@ -95,7 +95,8 @@ struct EndpointStats {
 
 class MavlinkServer {
  public:
-  // Opens one listening socket per vehicle of sim (and its UDP links), registers the telemetry observer, starts the I/O thread.
+  // Opens one listening socket per vehicle of sim (and its UDP links), starts the I/O thread; schedule()
+  // registers its control-step work (queued messages handled, telemetry produced).
   // Throws std::runtime_error naming the address and port when a socket cannot be bound (startup error).
   // Call on the loop thread (or before the loop runs); sim must outlive the server's use of the loop.
   MavlinkServer(sim::Simulation& sim, const EndpointConfig& config);
@@ -104,6 +105,10 @@ class MavlinkServer {
   ~MavlinkServer();
   MavlinkServer(const MavlinkServer&) = delete;
   MavlinkServer& operator=(const MavlinkServer&) = delete;
+
+  // Registers the endpoints' control step as "mavlink" in steps' post-control phase; after the server
+  // is destroyed it does nothing. Before the loop starts.
+  void schedule(sim::StepSchedule& steps);
 
   std::size_t vehicle_count() const;                // Thread-safe.
   std::uint16_t port(std::size_t vehicle) const;    // The bound TCP port (useful with base_port 0; 0 with

@@ -78,7 +78,7 @@ std::optional<BalloonArena> balloon_arena(const physics::World& world) {
 
 }  // namespace
 
-ObjectSet add_world_objects(sim::Simulation& sim) {
+ObjectSet create_world_objects(sim::Simulation& sim) {
   physics::World& world = sim.world();
   ObjectSet set;
   std::vector<std::string> balloons;
@@ -86,8 +86,7 @@ ObjectSet add_world_objects(sim::Simulation& sim) {
     const std::string name = text_name.substr(std::string(kObjectPrefix).size());
     if (type == "truck") {
       auto truck = std::make_unique<Truck>(sim, truck_params(world, name));
-      set.trucks.push_back(truck.get());
-      sim.add_object(std::move(truck));
+      set.trucks.push_back(&sim.own(std::move(truck)));
     } else if (type == "balloon") {
       balloons.push_back(name);
     } else {
@@ -97,8 +96,7 @@ ObjectSet add_world_objects(sim::Simulation& sim) {
   }
   if (!balloons.empty()) {
     auto field = std::make_unique<BalloonField>(sim, balloons, balloon_arena(world), sim.config().field.balloons);
-    set.balloons = field.get();
-    sim.add_object(std::move(field));
+    set.balloons = &sim.own(std::move(field));
   }
 
   std::vector<Gimbal> gimbals;
@@ -140,10 +138,21 @@ ObjectSet add_world_objects(sim::Simulation& sim) {
   }
   if (!gimbals.empty()) {
     auto set_ptr = std::make_unique<GimbalSet>(std::move(gimbals), sim.config().field.gimbal);
-    set.gimbals = set_ptr.get();
     set_ptr->before_step(sim);
-    sim.add_object(std::move(set_ptr));
+    set.gimbals = &sim.own(std::move(set_ptr));
   }
+  return set;
+}
+
+void schedule_world_objects(sim::Simulation& sim, const ObjectSet& set) {
+  for (Truck* truck : set.trucks) sim.schedule_object("truck." + truck->params().name, *truck);
+  if (set.balloons != nullptr) sim.schedule_object("balloons", *set.balloons);
+  if (set.gimbals != nullptr) sim.schedule_object("gimbals", *set.gimbals);
+}
+
+ObjectSet add_world_objects(sim::Simulation& sim) {
+  ObjectSet set = create_world_objects(sim);
+  schedule_world_objects(sim, set);
   return set;
 }
 

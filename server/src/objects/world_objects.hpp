@@ -21,8 +21,14 @@ struct ObjectSet {
   GimbalSet* gimbals = nullptr;
 };
 
-// Creates the objects the world declares and adds them to sim. Throws physics::WorldError naming the
-// object and the custom field for bad parameters (a startup error). Before the loop starts.
+// Creates the objects the world declares, owned by sim, not yet in its step schedule. Throws
+// physics::WorldError naming the object and the custom field for bad parameters (a startup error).
+// Before the loop starts.
+ObjectSet create_world_objects(sim::Simulation& sim);
+// Registers set's objects in sim's step schedule (Simulation::schedule_object), trucks in the world's
+// order, then the balloons, then the gimbals. Before the loop starts.
+void schedule_world_objects(sim::Simulation& sim, const ObjectSet& set);
+// Both: the objects created and registered. Before the loop starts.
 ObjectSet add_world_objects(sim::Simulation& sim);
 
 }  // namespace uavsim::server::objects

@@ -147,11 +147,20 @@ void GcsRelay::pump(double now_s) {
   in_flight_.erase(in_flight_.begin(), in_flight_.begin() + static_cast<std::ptrdiff_t>(sent));
 }
 
+GcsRelaySet& GcsRelaySet::create(sim::Simulation& sim, std::string bind_address) {
+  return sim.own(std::make_unique<GcsRelaySet>(sim, std::move(bind_address)));
+}
+
 GcsRelaySet& GcsRelaySet::attach(sim::Simulation& sim, std::string bind_address) {
-  auto set = std::make_unique<GcsRelaySet>(sim, std::move(bind_address));
-  GcsRelaySet& ref = *set;
-  sim.add_object(std::move(set));
-  return ref;
+  GcsRelaySet& set = create(sim, std::move(bind_address));
+  set.schedule(sim.schedule());
+  return set;
+}
+
+void GcsRelaySet::schedule(sim::StepSchedule& steps) {
+  // at control steps: the loop's own granularity for I/O with the outside world
+  steps.add(sim::Phase::kPostControl, "gcs_relays", [this] { pump(); });
+  steps.add_reset("gcs_relays", [this](uint64_t seed) { reset(seed); });
 }
 
 GcsRelaySet::GcsRelaySet(sim::Simulation& sim, std::string bind_address)
@@ -174,10 +183,8 @@ GcsRelay* GcsRelaySet::relay(size_t vehicle) {
   return vehicle < relays_.size() ? relays_[vehicle].get() : nullptr;
 }
 
-void GcsRelaySet::before_step(sim::Simulation& sim) {
-  // at control steps: the loop's own granularity for I/O with the outside world
-  if (sim.step_count() % static_cast<uint64_t>(sim.control_decimation()) != 0) return;
-  const double now = sim.time_s();
+void GcsRelaySet::pump() {
+  const double now = sim_.time_s();
   for (auto& r : relays_) {
     if (r) r->pump(now);
   }

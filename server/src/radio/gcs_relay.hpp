@@ -89,12 +89,16 @@ class GcsRelay {
   std::mt19937_64 rng_;
 };
 
-// Every vehicle's relay, pumped by the simulation at control steps (a WorldObject the simulation
-// owns).
-class GcsRelaySet : public sim::WorldObject {
+// Every vehicle's relay, owned by the simulation and pumped at control steps (schedule()).
+class GcsRelaySet {
  public:
-  // Creates an empty set and adds it to sim. Before the loop starts.
+  // Creates an empty set, owned by sim, not yet in its step schedule. Before the loop starts.
+  static GcsRelaySet& create(sim::Simulation& sim, std::string bind_address);
+  // create(), then schedule(sim.schedule()). Before the loop starts.
   static GcsRelaySet& attach(sim::Simulation& sim, std::string bind_address);
+  // Registers the set as "gcs_relays": pump() in the post-control phase, reset() as a reset hook.
+  // Before the loop starts.
+  void schedule(sim::StepSchedule& steps);
 
   // Opens vehicle's relay (replacing one already open). Null and *error if the sockets fail. Loop
   // thread only.
@@ -103,9 +107,10 @@ class GcsRelaySet : public sim::WorldObject {
                  std::optional<uint16_t> gcs_target_port, std::string* error);
   GcsRelay* relay(size_t vehicle);  // null if none open. Loop thread only.
 
-  void before_step(sim::Simulation& sim) override;
-  bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
-  void reset(uint64_t seed) override;
+  // Every open relay's datagrams due by now, sent and received. Loop thread only.
+  void pump();
+  // Every open relay back to its initial state for a reset with seed. Loop thread only.
+  void reset(uint64_t seed);
 
   GcsRelaySet(sim::Simulation& sim, std::string bind_address);  // use attach()
 

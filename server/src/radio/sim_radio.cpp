@@ -4,11 +4,19 @@
 
 namespace uavsim::server::radio {
 
+SimRadio& SimRadio::create(sim::Simulation& sim, const RadioConfig& config) {
+  return sim.own(std::make_unique<SimRadio>(sim, config));
+}
+
 SimRadio& SimRadio::attach(sim::Simulation& sim, const RadioConfig& config) {
-  auto radio = std::make_unique<SimRadio>(sim, config);
-  SimRadio& ref = *radio;
-  sim.add_object(std::move(radio));
-  return ref;
+  SimRadio& radio = create(sim, config);
+  radio.schedule(sim.schedule());
+  return radio;
+}
+
+void SimRadio::schedule(sim::StepSchedule& steps) {
+  steps.add(sim::Phase::kPrePhysics, "radio", [this] { advance(); });
+  steps.add_reset("radio", [this](uint64_t seed) { reset(seed); });
 }
 
 SimRadio::SimRadio(sim::Simulation& sim, const RadioConfig& config)
@@ -43,8 +51,6 @@ std::vector<Delivery> SimRadio::take_deliveries() {
   out.swap(inbox_);
   return out;
 }
-
-void SimRadio::before_step(sim::Simulation&) { advance(); }
 
 void SimRadio::reset(uint64_t seed) {
   model_.reset(radio_seed(seed));

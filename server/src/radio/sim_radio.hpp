@@ -1,6 +1,6 @@
 // The radio in the simulation: a RadioModel stepped in sim time with every vehicle's ground-truth
-// position (the radio is physics, so truth is what it should see). It is a WorldObject, so the
-// simulation owns it, steps it before every physics step and resets it with the world (seeded from
+// position (the radio is physics, so truth is what it should see). The simulation owns it; schedule()
+// registers it to be advanced in every step's pre-physics phase and reset with the world (seeded from
 // the sim seed).
 #pragma once
 
@@ -12,19 +12,24 @@
 
 namespace uavsim::server::radio {
 
-class SimRadio : public sim::WorldObject {
+class SimRadio {
  public:
-  // Creates the radio for every vehicle of sim and adds it to sim (which owns it). Throws
+  // Creates the radio for every vehicle of sim, owned by sim, not yet in its step schedule. Throws
   // std::invalid_argument for an unusable config. Before the loop starts.
+  static SimRadio& create(sim::Simulation& sim, const RadioConfig& config);
+  // create(), then schedule(sim.schedule()). Before the loop starts.
   static SimRadio& attach(sim::Simulation& sim, const RadioConfig& config);
+  // Registers the radio as "radio": advance() in the pre-physics phase, reset() as a reset hook.
+  // Before the loop starts.
+  void schedule(sim::StepSchedule& steps);
 
   // Queues a frame from vehicle from to to (a vehicle or kBroadcast) at the current sim time. Loop
   // thread only.
   SendResult send(size_t from, int to, const std::vector<uint8_t>& data);
   // Steps the model to the current sim time; frames arriving by now move to the inbox. Idempotent
-  // at a given sim time (the API's gate calls it before announcing a tick, before_step calls it
-  // again). The gate passes starting_now = false: frames queued at this time (by any lockstep
-  // client, in whatever order their requests come) go on air together at before_step, so the
+  // at a given sim time (the API's gate calls it before announcing a tick, the pre-physics phase calls
+  // it again). The gate passes starting_now = false: frames queued at this time (by any lockstep
+  // client, in whatever order their requests come) go on air together in pre-physics, so the
   // loss and shadowing draws do not depend on the clients' timing. Loop thread only.
   void advance(bool starting_now = true);
   // The frames that arrived since the last call, in arrival order. Loop thread only.
@@ -35,9 +40,8 @@ class SimRadio : public sim::WorldObject {
   RadioModel& model() { return model_; }  // Loop thread only.
   const RadioModel& model() const { return model_; }
 
-  void before_step(sim::Simulation& sim) override;
-  bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
-  void reset(uint64_t seed) override;
+  // Back to the initial state for a reset with seed. Loop thread only.
+  void reset(uint64_t seed);
 
   // The radio's generator seed for a sim seed (its own stream, not the sensors').
   static uint64_t radio_seed(uint64_t sim_seed) {

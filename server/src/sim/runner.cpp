@@ -22,6 +22,15 @@ Runner::Runner(Simulation& sim, double rate_factor, WallClock* clock)
 
 void Runner::stop() { stop_ = true; }
 
+void Runner::add_gate(Phase phase, std::string name, Gate gate) {
+  sim_.schedule().add(phase, std::move(name), [this, gate = std::move(gate)] {
+    // the time the gate held the clock (pause, lockstep, requests) is not owed to the simulation
+    const double start_s = clock_->now_s();
+    gate(sim_.time_s());
+    held_s_ += clock_->now_s() - start_s;
+  });
+}
+
 void Runner::set_rate(double rate_factor) {
   rate_ = rate_factor;
   std::lock_guard<std::mutex> lock(mutex_);
@@ -33,13 +42,9 @@ void Runner::run_until(double end_time_s) {
   double sim_anchor = sim_.time_s();
   while (!stop_ && sim_.time_s() + 0.5 * sim_.physics_dt_s() < end_time_s) {
     const bool control_next = sim_.step_count() % sim_.control_decimation() == 0;
-    if (control_next && gate_) {
-      // the time the gate held the clock (pause, lockstep, requests) is not owed to the simulation
-      const double gate_start_s = clock_->now_s();
-      gate_(sim_.time_s());
-      wall_anchor_s += clock_->now_s() - gate_start_s;
-    }
+    held_s_ = 0.0;
     sim_.step();
+    wall_anchor_s += held_s_;
 
     // pacing: at every control step, sleep until wall time catches up with sim time / rate
     const double rate = rate_;

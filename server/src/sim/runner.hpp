@@ -1,6 +1,7 @@
 // Drives a Simulation's clock on the calling thread (the loop thread): real time x factor, or as fast as
-// possible, with a gate before each control step. The gate is the one place the clock is held: the sim
-// API's pause, resume, single-stepping and lockstep contract all act there (api::ApiServer::gate()).
+// possible. Gates (add_gate) are the one place the clock is held: the sim API's pause, resume,
+// single-stepping and lockstep contract all act in its gate (api::ApiServer::gate()), registered in the
+// schedule's queued-tasks phase.
 // Wall-clock time is read here and nowhere in physics or fc.
 #pragma once
 
@@ -8,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <mutex>
+#include <string>
 
 #include "sim/simulation.hpp"
 
@@ -41,13 +43,14 @@ class Runner {
   void set_rate(double rate_factor);       // Thread-safe.
   double rate() const { return rate_.load(); }
 
-  // Called on the loop thread before every control step with the sim time it will run at; the lockstep
-  // contract blocks in it until every joined client is done, and the API's pause holds the clock in it.
-  // Wall time spent in the gate is time the clock was held: pacing re-anchors after it, so the
-  // simulation never fast-forwards to "catch up" after a pause or a slow lockstep client. Set before
-  // run_until.
+  // Registers gate in the simulation's schedule (sim/step_schedule.hpp) under name, in phase (a control
+  // phase: kCapture for camera snapshots, kQueuedTasks for the sim API); it is called on the loop thread
+  // with the sim time of the step. The lockstep contract blocks in it until every joined client is
+  // done, and the API's pause holds the clock in it. Wall time spent in a gate is time the clock was
+  // held: pacing re-anchors after it, so the simulation never fast-forwards to "catch up" after a pause
+  // or a slow lockstep client. The runner must outlive the stepping. Before run_until.
   using Gate = std::function<void(double time_s)>;
-  void set_control_gate(Gate gate) { gate_ = std::move(gate); }
+  void add_gate(Phase phase, std::string name, Gate gate);
 
  private:
   Simulation& sim_;
@@ -56,7 +59,7 @@ class Runner {
   std::atomic<double> rate_;
   std::atomic<bool> stop_{false};
   std::mutex mutex_;  // guards rebase_
-  Gate gate_;
+  double held_s_ = 0.0;  // wall time spent in gates during the present step (loop thread)
   bool rebase_ = true;  // re-anchor wall time after a rate change
 };
 

@@ -75,6 +75,33 @@ Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& c
   init_wind();
   pending_tasks_.resize(vehicles_.size());
   running_tasks_.resize(vehicles_.size());
+  schedule_own_work();
+}
+
+void Simulation::schedule_own_work() {
+  // the simulation's own work, placed before (kFirst) or after (kLast) every component of its phase:
+  // the API's gate before the vehicles' tasks, world objects and the radio after the wind and before
+  // the rotor forces, the non-finite-state rule before anything judges contacts
+  schedule_.add(Phase::kQueuedTasks, "sim.vehicle_tasks", [this] { run_vehicle_tasks(); }, Slot::kLast);
+  schedule_.add(Phase::kFlightControl, "sim.flight_control", [this] { flight_control(); }, Slot::kFirst);
+  schedule_.add(Phase::kPrePhysics, "sim.wind", [this] {
+    if (wind_.active()) wind_.step(physics_dt_s_);
+  }, Slot::kFirst);
+  schedule_.add(Phase::kPrePhysics, "sim.rotor_forces", [this] { rotor_forces(); }, Slot::kLast);
+  schedule_.add(Phase::kPrePhysics, "sim.nonfinite_rule.controls", [this] { fault_bad_controls(); }, Slot::kLast);
+  schedule_.add(Phase::kPhysics, "sim.mj_step", [this] {
+    world_->step();
+    ++steps_;
+  }, Slot::kFirst);
+  schedule_.add(Phase::kContacts, "sim.nonfinite_rule.state", [this] { fault_bad_states(); }, Slot::kFirst);
+  schedule_.add(Phase::kContacts, "sim.contacts", [this] { check_contacts(); }, Slot::kFirst);
+}
+
+void Simulation::schedule_object(const std::string& name, WorldObject& object) {
+  WorldObject* o = &object;
+  schedule_.add(Phase::kPrePhysics, name, [this, o] { o->before_step(*this); });
+  schedule_.add_contact_handler(name, [this, o](const physics::VehicleContact& c) { return o->on_contact(*this, c); });
+  schedule_.add_reset(name, [o](uint64_t seed) { o->reset(seed); });
 }
 
 Simulation::~Simulation() = default;
@@ -133,7 +160,7 @@ void Simulation::reset(uint64_t seed) {
     tasks_pending_ = false;
   }
   events_.clear();
-  for (auto& object : objects_) object->reset(seed);
+  schedule_.reset(seed);
 }
 
 double Simulation::time_s() const { return world_->time_s(); }
@@ -149,14 +176,13 @@ fc::TruthState Simulation::truth(size_t i) const {
 }
 
 void Simulation::step() {
-  if (steps_ % static_cast<uint64_t>(control_decimation_) == 0) control_step();
+  schedule_.run_step(steps_ % static_cast<uint64_t>(control_decimation_) == 0);
+}
 
-  if (wind_.active()) wind_.step(physics_dt_s_);
-  for (auto& object : objects_) object->before_step(*this);
-
+void Simulation::rotor_forces() {
   // motors -> rotor thrusts (at the battery's voltage) -> wrench about the body origin, with drag on the
   // velocity relative to the air -> qfrc_applied; each vehicle on the thread that steps its physics shard
-  // (physics/world.hpp), faults handled after, in vehicle order
+  // (physics/world.hpp), faults handled after, in vehicle order (fault_bad_controls)
   const Eigen::Vector3d& wind_enu_m_s = wind_.velocity_enu_m_s();
   faulted_.assign(vehicles_.size(), 0);
   world_->for_each_shard_block([&](size_t first, size_t end) {
@@ -176,15 +202,18 @@ void Simulation::step() {
       world_->apply_wrench(i, faulted_[i] ? airframe::Wrench{} : w);
     }
   });
+}
+
+void Simulation::fault_bad_controls() {
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     if (faulted_[i]) fault_vehicle(i, "non-finite or runaway rotor force");
   }
-  world_->step();
-  ++steps_;
+}
+
+void Simulation::fault_bad_states() {
   for (size_t i = 0; i < vehicles_.size(); ++i) {
     if (!sane(world_->truth(i))) fault_vehicle(i, "non-finite or runaway state");
   }
-  check_contacts();
 }
 
 void Simulation::fault_vehicle(size_t vehicle, const std::string& what) {
@@ -211,7 +240,7 @@ void Simulation::run_until(double time_s) {
   while (world_->time_s() + 0.5 * physics_dt_s_ < time_s) step();
 }
 
-void Simulation::control_step() {
+void Simulation::run_vehicle_tasks() {
   // armed state and mode before this step's commands, so command-driven changes become events too
   for (VehicleRuntime& v : vehicles_) {
     v.was_armed = v.fc.armed();
@@ -229,7 +258,9 @@ void Simulation::control_step() {
     for (VehicleTask& task : running_tasks_[i]) task(vehicles_[i].fc);
     running_tasks_[i].clear();
   }
+}
 
+void Simulation::flight_control() {
   const double now = world_->time_s();
   const double dt = control_dt_s();
   // each vehicle's flight controller on the thread that steps its physics shard; events after, in
@@ -252,7 +283,6 @@ void Simulation::control_step() {
     }
     if (v.fc.mode() != v.old_mode) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
   }
-  for (ControlObserver& observer : observers_) observer(*this);
 }
 
 bool Simulation::resting(size_t i) const {
@@ -272,9 +302,7 @@ void Simulation::check_contacts() {
   for (const physics::VehicleContact& c : contacts_) {
     VehicleRuntime& v = vehicles_[c.vehicle];
     if (!c.other_static) touching_moving[c.vehicle] = 1;
-    bool handled = false;
-    for (auto& object : objects_) handled = handled || object->on_contact(*this, c);
-    if (handled) {
+    if (schedule_.handle_contact(c)) {
       // gear on a deck is still ground contact (the land detector needs it); blades in a balloon are not
       if (c.landing_gear) touching[c.vehicle] = 1;
       continue;
@@ -343,15 +371,9 @@ bool Simulation::post(size_t vehicle, VehicleTask task) {
   return true;
 }
 
-void Simulation::add_control_observer(ControlObserver observer) {
-  observers_.push_back(std::move(observer));
-}
-
 void Simulation::record(EventType type, int vehicle, std::string detail) {
   events_.add(world_->time_s(), type, vehicle, std::move(detail));
 }
-
-void Simulation::add_object(std::unique_ptr<WorldObject> object) { objects_.push_back(std::move(object)); }
 
 uint64_t Simulation::state_hash() const {
   uint64_t h = 0xCBF29CE484222325ull;

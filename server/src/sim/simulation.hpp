@@ -1,7 +1,9 @@
 // The simulation loop: one world, one clock, every vehicle's flight controller, motors and battery.
-// step() advances physics by one timestep; every control period (an integer number of physics steps) it
-// first runs the queued vehicle tasks (commands) in vehicle order, then each vehicle's flight controller,
-// so inputs take effect at control-step boundaries in a fixed order, never in arrival order (DESIGN.md:
+// step() runs one step of the declared schedule (sim/step_schedule.hpp): every control period (an
+// integer number of physics steps) the control phases first (camera capture, the API's gate, the queued
+// vehicle tasks in vehicle order, each vehicle's flight controller, what reads the result), then the
+// physics phases (wind, world objects, rotor forces, mj_step, the non-finite-state rule, contacts), so
+// inputs take effect at control-step boundaries in a fixed order, never in arrival order (DESIGN.md:
 // determinism). The same world, seed and inputs give bit-identical trajectories.
 // Parking (physics/world.hpp): a disarmed vehicle with its motors stopped that has stood still on static
 // geometry for kParkAfter_s is parked (held exactly, no contact constraints; its flight controller and
@@ -23,6 +25,7 @@
 #include "physics/world.hpp"
 #include "sim/events.hpp"
 #include "sim/field_conditions.hpp"
+#include "sim/step_schedule.hpp"
 
 namespace uavsim::server::sim {
 
@@ -66,8 +69,9 @@ using VehicleTask = std::function<void(fc::FlightController&)>;
 
 class Simulation;
 
-// Something in the world with behaviour of its own (the truck on its track, balloons that pop). Objects
-// are stepped on the loop thread before every physics step and see every vehicle contact first.
+// Something in the world with behaviour of its own (the truck on its track, balloons that pop):
+// Simulation::schedule_object registers its three parts in the step schedule (before_step in the
+// pre-physics phase, on_contact as a contact handler, reset as a reset hook).
 class WorldObject {
  public:
   virtual ~WorldObject() = default;
@@ -119,14 +123,23 @@ class Simulation {
   void set_motor_failed(size_t vehicle, size_t rotor, bool failed);
   void kill_vehicle(size_t vehicle, const std::string& reason);
 
-  // Adds a world object; it is stepped before physics and consulted on contacts. Loop thread only.
-  void add_object(std::unique_ptr<WorldObject> object);
+  // The step's phases and who is registered in each (sim/step_schedule.hpp). Loop thread only.
+  StepSchedule& schedule() { return schedule_; }
+  const StepSchedule& schedule() const { return schedule_; }
+  // Keeps component alive as long as the simulation (world objects, the radio): a component the
+  // schedule calls. Returns it. Before the loop starts.
+  template <class T>
+  T& own(std::unique_ptr<T> component) {
+    T& ref = *component;
+    owned_.emplace_back(std::move(component));
+    return ref;
+  }
+  // Registers object's parts in the schedule under name: before_step in the pre-physics phase,
+  // on_contact as a contact handler, reset as a reset hook. The object must outlive the stepping (own
+  // it). Before the loop starts.
+  void schedule_object(const std::string& name, WorldObject& object);
   // Records an event at the current sim time. Loop thread only.
   void record(EventType type, int vehicle, std::string detail);
-
-  // Called on the loop thread after every control step (telemetry publishers, lockstep).
-  using ControlObserver = std::function<void(Simulation&)>;
-  void add_control_observer(ControlObserver observer);
 
   // The wind every vehicle flies in (and balloons sway in); set_params/gust change it. Loop thread only.
   airframe::WindField& wind() { return wind_; }
@@ -141,8 +154,19 @@ class Simulation {
  private:
   void init_vehicles();
   void init_wind();
-  void control_step();
+  // the simulation's own registrations in the schedule
+  void schedule_own_work();
+  // (queued tasks) => commands applied, in vehicle order
+  void run_vehicle_tasks();
+  // (truth, battery) => motor commands, battery state; arm and mode events
+  void flight_control();
+  // (motor commands, truth, wind) => qfrc_applied; a wrench that is not sane is not applied
+  void rotor_forces();
   void check_contacts();
+  // the non-finite-state rule: a vehicle whose rotor wrench (before mj_step, which would reset the
+  // whole world on a non-finite value) or state (after it) is non-finite or runaway is faulted
+  void fault_bad_controls();
+  void fault_bad_states();
   // disarmed, rotors stopped, (almost) still: a candidate for parking
   bool resting(size_t vehicle) const;
   // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed (one event)
@@ -156,8 +180,8 @@ class Simulation {
   std::vector<VehicleRuntime> vehicles_;
   std::vector<physics::VehicleContact> contacts_;
   std::vector<char> faulted_;  // per vehicle: this step's rotor wrench was not sane
-  std::vector<ControlObserver> observers_;
-  std::vector<std::unique_ptr<WorldObject>> objects_;
+  StepSchedule schedule_;
+  std::vector<std::shared_ptr<void>> owned_;  // components the schedule calls (own())
   EventLog events_;
   airframe::WindField wind_{airframe::WindParams{}, 0};
 

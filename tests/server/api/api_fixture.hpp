@@ -54,7 +54,7 @@ class TestServer {
     api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
     api_->set_link_control(link);
     api_->set_seq_waiter(waiter);
-    runner_->set_control_gate(api_->gate());
+    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
   }

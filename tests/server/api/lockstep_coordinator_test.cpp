@@ -203,7 +203,7 @@ class LockstepRunner : public Lockstep {
 
   // answer_after_s: wall seconds the client takes for each tick (nullopt: it never answers)
   void hold_with(uint64_t conn, std::optional<double> answer_after_s) {
-    runner_.set_control_gate([this, conn, answer_after_s](double t) {
+    runner_.add_gate(sim::Phase::kQueuedTasks, "api", [this, conn, answer_after_s](double t) {
       for (uint64_t c : coordinator_.due(t)) coordinator_.begin_tick(c, t);
       while (coordinator_.blocked()) {
         if (!coordinator_.expire(t).empty()) dropped_at_.push_back({t, clock_.now_s()});

@@ -43,6 +43,7 @@ class MavlinkApiServer {
     mavlink::EndpointConfig ec;
     ec.base_port = 0;
     mavlink_ = std::make_unique<mavlink::MavlinkServer>(*sim_, ec);
+    mavlink_->schedule(sim_->schedule());
     hooks_ = std::make_unique<Hooks>(*mavlink_);
     runner_ = std::make_unique<sim::Runner>(*sim_, 0.0);
     ApiConfig config;
@@ -50,7 +51,7 @@ class MavlinkApiServer {
     config.start_paused = true;
     api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
     api_->set_seq_waiter(hooks_.get());
-    runner_->set_control_gate(api_->gate());
+    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
   }

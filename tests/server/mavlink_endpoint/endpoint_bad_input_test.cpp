@@ -96,6 +96,7 @@ TEST_F(BadInputTest, ClientThatNeverReadsIsCappedAndCostsNobodyElse) {
   c.base_port = 0;
   c.client_buffer_bytes = 64 * 1024;
   server_ = std::make_unique<MavlinkServer>(*sim_, c);
+  server_->schedule(sim_->schedule());
   clients_.clear();
   auto lazy = connect(0, Version::kV2, 4096);  // never reads, tiny socket buffer
   auto good = connect();

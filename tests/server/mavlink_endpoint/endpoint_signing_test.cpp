@@ -153,6 +153,7 @@ class ConfiguredKeyTest : public EndpointTest {
     c.base_port = 0;
     c.signing_key = key_of(21);
     server_ = std::make_unique<MavlinkServer>(*sim_, c);
+    server_->schedule(sim_->schedule());
   }
 };
 

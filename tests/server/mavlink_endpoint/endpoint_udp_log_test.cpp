@@ -74,6 +74,7 @@ class EndpointUdpTest : public EndpointTest {
     sim_ = sim::testing::make_sim("empty.xml");
     c.base_port = 0;
     server_ = std::make_unique<MavlinkServer>(*sim_, c);
+    server_->schedule(sim_->schedule());
   }
   // steps control periods until pred() holds for what gcs received (at most max_sim_s of sim time)
   bool step_until_udp(UdpGcs& gcs, const std::function<bool()>& pred, double max_sim_s) {

@@ -174,6 +174,7 @@ class EndpointTest : public ::testing::Test {
     EndpointConfig c;
     c.base_port = 0;
     server_ = std::make_unique<MavlinkServer>(*sim_, c);
+    server_->schedule(sim_->schedule());
   }
   void SetUp() override { start(); }
   void TearDown() override {

@@ -38,7 +38,7 @@ class RadioServer {
     config.start_paused = true;
     api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
     api_->add_group(ops_.get());
-    runner_->set_control_gate(api_->gate());
+    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
   }

@@ -98,11 +98,11 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
 
   // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
   std::vector<bool> launched(s.vehicle_count(), false);
-  s.add_control_observer([&launched](sim::Simulation& sim) {
-    for (size_t i = 0; i < sim.vehicle_count(); ++i) {
-      if (launched[i] || !sim.fc(i).prearm_ok()) continue;
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
+    for (size_t i = 0; i < s.vehicle_count(); ++i) {
+      if (launched[i] || !s.fc(i).prearm_ok()) continue;
       launched[i] = true;
-      sim.post(i, [](fc::FlightController& f) {
+      s.post(i, [](fc::FlightController& f) {
         f.set_mode(fc::Mode::kGuided);
         f.arm(false);
         f.takeoff(5.0);
@@ -110,7 +110,7 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
     }
   });
   sim::Runner runner(s, 0.0);
-  runner.set_control_gate([&](double) { frames.capture(s.world().data()); });
+  runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
   runner.run_until(kRunS);
   frames.wait_delivered();
   return collector.shots();

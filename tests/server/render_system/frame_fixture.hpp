@@ -50,12 +50,13 @@ class FrameServer {
       mavlink::EndpointConfig ec;
       ec.base_port = 0;
       mavlink_ = std::make_unique<mavlink::MavlinkServer>(*sim_, ec);
+      mavlink_->schedule(sim_->schedule());
       hooks_ = std::make_unique<Hooks>(*mavlink_);
       if (objects_.gimbals) {
         mavlink::MavlinkServer* ms = mavlink_.get();
         bridge_ = std::make_unique<app::MavlinkGimbalBridge>(
             *objects_.gimbals, [ms](size_t v) -> const mavlink::GimbalState& { return ms->gimbal(v); });
-        sim_->add_control_observer([this](sim::Simulation& s) { bridge_->update(s); });
+        sim_->schedule().add(sim::Phase::kPostControl, "gimbal_bridge", [this] { bridge_->update(*sim_); });
       }
     }
     CameraOwners owners;
@@ -79,12 +80,9 @@ class FrameServer {
       api_->set_seq_waiter(hooks_.get());
     }
     api_->set_frame_service(frames_.get());
-    auto gate = api_->gate();
     FrameService* fs = frames_.get();
-    runner_->set_control_gate([fs, gate, this](double t) {
-      fs->capture(sim_->world().data());
-      gate(t);
-    });
+    runner_->add_gate(sim::Phase::kCapture, "frames", [fs, this](double) { fs->capture(sim_->world().data()); });
+    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
   }

@@ -124,7 +124,7 @@ TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
     frames.add_consumer(&raw);
     frames.add_consumer(recorder.get());
     sim::Runner runner(s, 0.0);
-    runner.set_control_gate([&](double) { frames.capture(s.world().data()); });
+    runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
     runner.run_until(kRunS);
     frames.wait_delivered();
   }

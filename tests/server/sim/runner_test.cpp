@@ -31,7 +31,7 @@ TEST(Runner, TimeHeldInTheGateIsNotFastForwarded) {
   // the gate holds the clock for 5 s once, at sim time 1 s (as an API pause or a lockstep wait would)
   bool held = false;
   double sim_after_hold = -1.0, wall_after_hold = 0.0;
-  runner.set_control_gate([&](double t) {
+  runner.add_gate(Phase::kQueuedTasks, "test", [&](double t) {
     if (!held && t >= 1.0) {
       held = true;
       clock.advance(5.0);
@@ -51,7 +51,7 @@ TEST(Runner, RateChangeReanchorsWithoutAJump) {
   Runner runner(*sim, 1.0, &clock);
   bool changed = false;
   double wall_at_change = 0.0, sim_at_change = 0.0;
-  runner.set_control_gate([&](double t) {
+  runner.add_gate(Phase::kQueuedTasks, "test", [&](double t) {
     if (!changed && t >= 1.0) {
       changed = true;
       runner.set_rate(4.0);
@@ -82,7 +82,7 @@ TEST(Runner, StopFromTheGateEndsTheRunAfterThatStep) {
   FakeWallClock clock;
   Runner runner(*sim, 0.0, &clock);
   double stopped_at = -1.0;
-  runner.set_control_gate([&](double t) {
+  runner.add_gate(Phase::kQueuedTasks, "test", [&](double t) {
     if (stopped_at < 0.0 && t >= 1.0) {
       stopped_at = t;
       runner.stop();
