@@ -1,17 +1,14 @@
 #include "uavsim/client/camera.hpp"
 
-#include <sys/socket.h>
-#include <unistd.h>
+#include <cstdlib>
+#include <utility>
 
-#include <cerrno>
-#include <cstring>
-
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "api_stream.hpp"
-#include "event_loop_impl.hpp"
-#include "net.hpp"
+#include "loop_services.hpp"
+#include "sim_channel.hpp"
 
 namespace uavsim::client {
 
@@ -41,10 +38,10 @@ struct CameraSubscriber::Impl {
   EventLoop& loop;
   CameraConfig config;
   std::function<void(const CameraFrame&)> on_frame;
-  bool lockstep = false;
-  int fd = -1;  // own connection (host clock)
-  ApiStream stream;
-  std::optional<Json> reply;
+  // Where the frames come from: the lockstep loop's simulator connection, or (host clock) one of
+  // this subscriber's own. Either way they arrive as `frame` messages routed to deliver().
+  SimChannel* channel = nullptr;
+  std::unique_ptr<SimChannel> own_channel;
   int width = 0, height = 0;
   double fps = 0.0;
   CameraIntrinsics intrinsics;
@@ -52,15 +49,6 @@ struct CameraSubscriber::Impl {
   std::int64_t dropped = 0;
 
   Impl(EventLoop& l, CameraConfig c) : loop(l), config(std::move(c)) {}
-
-  void on_message(const Json& j, std::string_view bytes) {
-    if (!j.is_object()) return;
-    if (j.value("event", std::string()) == "frame") {
-      if (j.value("camera", std::string()) == config.camera) deliver(j, bytes);
-      return;
-    }
-    if (j.contains("ok") && j.value("id", Json()) == "cam") reply = j;
-  }
 
   void deliver(const Json& h, std::string_view bytes) {
     CameraFrame f;
@@ -94,35 +82,29 @@ struct CameraSubscriber::Impl {
     if (on_frame) on_frame(f);
   }
 
-  void on_io(std::uint32_t what) {
-    if (!(what & EventLoop::kReadable)) return;
-    char buf[65536];
-    for (;;) {
-      const ssize_t n = ::recv(fd, buf, sizeof(buf), MSG_DONTWAIT);
-      if (n > 0) {
-        stream.feed(buf, static_cast<std::size_t>(n), [this](const Json& j, std::string_view b) { on_message(j, b); });
-        if (fd < 0) return;
-        continue;
-      }
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
-      close_fd();
-      return;
-    }
-  }
-
-  void close_fd() {
-    if (fd < 0) return;
-    loop.unwatch_fd(fd);
-    ::close(fd);
-    fd = -1;
-  }
-
   Json request() const {
     Json r = {{"op", "camera_subscribe"}, {"camera", config.camera}, {"format", wire_format(config.format)}};
     if (config.fps > 0) r["fps"] = config.fps;
     if (config.format == CameraFormat::kJpeg) r["quality"] = config.jpeg_quality;
     return r;
+  }
+
+  // The simulator connection the frames come on: the lockstep loop's (every frame due at or before a
+  // tick is read before that tick's timers run, none dropped), else one of our own, read as its
+  // bytes arrive (the simulator drops frames a slow reader has not taken, and counts them).
+  Result<void> open_channel(double timeout_s) {
+    channel = LoopServices(loop).sim_channel();
+    if (channel != nullptr) return {};
+    std::string address = config.api_address;
+    if (address.empty()) {
+      const char* env = std::getenv("UAVSIM_API");
+      address = env != nullptr && *env != '\0' ? env : "127.0.0.1:5700";
+    }
+    auto own = SimChannel::connect(loop, address, timeout_s);
+    if (!own) return Result<void>::fail(own.code(), "camera " + config.camera + ": " + own.message());
+    own_channel = std::move(*own);
+    channel = own_channel.get();
+    return {};
   }
 };
 
@@ -130,13 +112,8 @@ CameraSubscriber::CameraSubscriber(std::unique_ptr<Impl> impl) : impl_(std::move
 
 CameraSubscriber::~CameraSubscriber() {
   Impl& s = *impl_;
-  if (s.lockstep) {
-    auto& li = s.loop.impl();
-    li.frame_sinks.erase(s.config.camera);
-    (void)li.api_request({{"op", "camera_unsubscribe"}, {"camera", s.config.camera}}, [](const Json&) {});
-  } else {
-    s.close_fd();
-  }
+  s.channel->remove_frame_sink(s.config.camera);
+  (void)s.channel->request({{"op", "camera_unsubscribe"}, {"camera", s.config.camera}}, [](const Json&) {});
 }
 
 Result<std::unique_ptr<CameraSubscriber>> CameraSubscriber::subscribe(EventLoop& loop, const CameraConfig& config,
@@ -148,73 +125,18 @@ Result<std::unique_ptr<CameraSubscriber>> CameraSubscriber::subscribe(EventLoop&
   auto impl = std::make_unique<Impl>(loop, config);
   impl->on_frame = std::move(on_frame);
   Impl* s = impl.get();
-  const Json req = s->request();
-
-  if (loop.is_lockstep()) {
-    auto& li = loop.impl();
-    if (li.frame_sinks.count(config.camera)) {
-      return R::fail(Error::kInvalidArgument, "camera " + config.camera + ": already subscribed on this loop");
-    }
-    s->lockstep = true;
-    if (!li.api_request(req, [s](const Json& j) { s->reply = j; })) {
-      return R::fail(Error::kConnectionLost, "camera " + config.camera + ": no simulator connection");
-    }
-    // the sink before the reply: the first frame may follow the reply at once
-    li.frame_sinks[config.camera] = [s](const Json& h, std::string_view bytes) { s->deliver(h, bytes); };
-    auto w = loop.run_until([s] { return s->reply.has_value(); }, timeout_s, "camera_subscribe's reply");
-    if (!w) {
-      li.frame_sinks.erase(config.camera);
-      return R(w.error());
-    }
-  } else {
-    std::string address = config.api_address;
-    if (address.empty()) {
-      const char* env = std::getenv("UAVSIM_API");
-      address = env != nullptr && *env != '\0' ? env : "127.0.0.1:5700";
-    }
-    std::string host;
-    int port = 0;
-    if (!net::parse_address(address, &host, &port)) {
-      return R::fail(Error::kInvalidArgument, "camera: bad simulator API address '" + address + "'");
-    }
-    auto fd = net::tcp_connect(host, port, timeout_s);
-    if (!fd) return R(Failure{fd.code(), "camera " + config.camera + ": simulator API: " + fd.message()});
-    s->fd = *fd;
-    std::string buf;
-    auto hello = net::read_line(s->fd, buf, timeout_s);
-    if (!hello) {
-      s->close_fd();
-      return R(Failure{hello.code(), "camera: no hello from the simulator API: " + hello.message()});
-    }
-    Json r = req;
-    r["id"] = "cam";
-    if (!net::send_all(s->fd, r.dump() + "\n", timeout_s)) {
-      ::close(s->fd);
-      return R::fail(Error::kIo, "camera: cannot send the subscription");
-    }
-    if (!buf.empty()) s->stream.feed(buf.data(), buf.size(), [s](const Json& j, std::string_view b) { s->on_message(j, b); });
-    if (auto w = loop.watch_fd(s->fd, EventLoop::kReadable, [s](std::uint32_t what) { s->on_io(what); }); !w) {
-      ::close(s->fd);
-      s->fd = -1;
-      return R(w.error());
-    }
-    auto w = loop.run_until([s] { return s->reply.has_value() || s->fd < 0; }, timeout_s, "camera_subscribe's reply");
-    if (!s->reply) {
-      s->close_fd();
-      if (!w) return R(w.error());
-      return R::fail(Error::kConnectionLost, "camera: the simulator closed the connection");
-    }
+  if (auto c = s->open_channel(timeout_s); !c) return R(c.error());
+  // the sink before the request: the first frame may follow the reply at once
+  if (!s->channel->add_frame_sink(config.camera, [s](const Json& h, std::string_view bytes) { s->deliver(h, bytes); })) {
+    return R::fail(Error::kInvalidArgument, "camera " + config.camera + ": already subscribed on this loop");
   }
-
-  const Json& rep = *s->reply;
-  if (rep.value("ok", false) != true) {
-    const Json e = rep.value("error", Json::object());
-    if (s->lockstep) loop.impl().frame_sinks.erase(config.camera);
-    s->close_fd();
-    return R::fail(Error::kDenied, "camera " + config.camera + ": " + e.value("code", std::string("?")) + ": " +
-                                       e.value("message", std::string("?")));
+  auto reply = call_and_wait(loop, *s->channel, s->request(), timeout_s, "camera " + config.camera);
+  if (!reply || reply->value("ok", false) != true) {
+    s->channel->remove_frame_sink(config.camera);
+    if (!reply) return R(reply.error());
+    return R::fail(Error::kDenied, "camera " + config.camera + ": " + reply_error_text(*reply));
   }
-  const Json res = rep.value("result", Json::object());
+  const Json res = reply->value("result", Json::object());
   s->width = res.value("width", 0);
   s->height = res.value("height", 0);
   s->fps = res.value("fps", 0.0);
@@ -228,6 +150,6 @@ double CameraSubscriber::fps() const { return impl_->fps; }
 CameraIntrinsics CameraSubscriber::intrinsics() const { return impl_->intrinsics; }
 std::uint64_t CameraSubscriber::frames_received() const { return impl_->received; }
 std::int64_t CameraSubscriber::frames_dropped() const { return impl_->dropped; }
-bool CameraSubscriber::connected() const { return impl_->lockstep ? impl_->loop.clock_alive() : impl_->fd >= 0; }
+bool CameraSubscriber::connected() const { return impl_->channel->is_open(); }
 
 }  // namespace uavsim::client

@@ -13,17 +13,26 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <mutex>
+#include <optional>
 #include <sstream>
+#include <thread>
+#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "event_loop_impl.hpp"
+#include "loop_services.hpp"
 #include "net.hpp"
+#include "sim_channel.hpp"
 #include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::client {
@@ -80,8 +89,98 @@ LoopConfig LoopConfig::from_env() {
 
 // ---------------------------------------------------------------- Impl
 
+struct EventLoop::Impl {
+  struct Timer {
+    double deadline = 0.0;
+    double period = 0.0;  // 0: one-shot
+    std::shared_ptr<Task> fn;
+  };
+  struct Watch {
+    std::uint32_t events = 0;
+    std::shared_ptr<std::function<void(std::uint32_t)>> fn;
+  };
+  using SeqSource = LoopServices::SeqSource;
+
+  LoopConfig config;
+  std::thread::id thread;
+  int epfd = -1;
+  // lockstep: the readable side of the watched descriptors, read just before a tick applies
+  // (read_links) rather than whenever bytes arrive, so every run sees the same bytes at the same
+  // tick
+  int links_epfd = -1;
+  int timerfd = -1;
+  int wakefd = -1;
+  std::int64_t start_mono_ns = 0;
+
+  std::map<TimerId, Timer> timers;
+  TimerId next_timer_id = 1;
+  std::unordered_map<int, Watch> watches;
+  std::mutex posted_mutex;
+  std::vector<Task> posted;
+  std::atomic<bool> stop_requested{false};
+
+  // lockstep: the simulator connection (the modules' requests and sinks ride on it; the loop
+  // handles what they do not take: ticks, lockstep_dropped, reset, the replies to `done`)
+  SimChannel api;
+  bool alive = true;
+  std::string dead_reason;
+  double sim_now = 0.0;
+  double period_s = 0.0;
+  std::int64_t tick = -1;
+  bool tick_outstanding = false;
+  std::optional<double> pending_busy_until;
+  // from the server's replies to `done`: does it wait for the MAVLink seqs named there (api::SeqWaiter)?
+  std::optional<bool> mavlink_seq_checked;
+  std::map<std::uint64_t, SeqSource> seq_sources;
+  std::uint64_t next_seq_source = 1;
+  // pipelined lockstep (EventLoop::set_lockstep_pipelined): `done` of the current tick already sent;
+  // outputs held until the next tick (requests on the lockstep connection in the SimChannel, each
+  // Vehicle link's MAVLink in its own buffer, sent by its flusher)
+  bool pipelined = false;
+  bool done_sent = false;
+  bool outputs_held = false;
+  // ... and the lockstep connection is not read past the tick until the tick's work is done (the
+  // next tick may already be on its way: the simulation did not wait)
+  bool api_held = false;
+  std::map<std::uint64_t, std::function<void()>> output_flushers;
+  std::uint64_t next_output_flusher = 1;
+
+  ~Impl();
+  double now() const;
+  // Handles what is ready, runs posted tasks and due timers; under lockstep answers the tick when nothing
+  // is left to do at this time. With may_block, then waits for something to happen (at most until
+  // wake_at on the loop clock, if finite). Returns false when nothing happened.
+  bool iterate(bool may_block, double wake_at);
+  bool dispatch(int timeout_ms);
+  bool run_posted();
+  bool run_due_timers();
+  void arm_timerfd(double wake_at);
+  void on_api_readable();
+  // lockstep: handles what has arrived on the watched descriptors, at the clock of the tick now
+  // ending
+  void read_links();
+  // the epoll interest of a watched descriptor: in epfd (all of it on the host clock; under
+  // lockstep only writability, errors aside) and in links_epfd (readability, under lockstep)
+  std::uint32_t main_interest(std::uint32_t events) const;
+  std::uint32_t links_interest(std::uint32_t events) const;
+  void notify_watch(int fd, std::uint32_t epoll_events);
+  // what the modules' sinks and reply handlers on the lockstep connection do not take
+  void on_unrouted(const nlohmann::json& j);
+  void send_done();
+  // pipelined lockstep, at a tick: sends the outputs held since the last tick ...
+  void release_held_outputs();
+  // ... then answers `done` before the tick's work, and holds what the work sends
+  void answer_early();
+  // pipelined lockstep: stops / resumes reading the lockstep connection (see api_held)
+  void hold_api();
+  void resume_api();
+  std::uint32_t api_interest() const { return api_held ? 0u : (EPOLLIN | EPOLLRDHUP); }
+  void update_api_interest();  // epfd's interest in the lockstep connection := api_interest()
+  void lose_clock(const std::string& why);
+};
+
 EventLoop::Impl::~Impl() {
-  for (int fd : {epfd, links_epfd, timerfd, wakefd, api_fd}) {
+  for (int fd : {epfd, links_epfd, timerfd, wakefd}) {
     if (fd >= 0) ::close(fd);
   }
 }
@@ -107,7 +206,7 @@ bool EventLoop::Impl::dispatch(int timeout_ms) {
       handled = true;
       continue;
     }
-    if (fd == api_fd) {
+    if (fd == api.fd()) {
       // held (pipelined, working on a tick): a hang-up is reported even with no interest; it is
       // read once the tick's work is done, and is no progress now (or the loop would spin)
       if (api_held) continue;
@@ -237,28 +336,12 @@ bool EventLoop::Impl::iterate(bool may_block, double wake_at) {
   return got;
 }
 
-bool EventLoop::Impl::send_api(const std::string& line) {
-  if (api_fd < 0) return false;
-  if (outputs_held) {
-    held_api += line;
-    held_api += '\n';
-    return true;
-  }
-  return net::send_all(api_fd, line + "\n", config.lockstep_wall_timeout_s);
-}
-
 void EventLoop::Impl::release_held_outputs() {
   outputs_held = false;
   // a flusher may close its link (and unregister): iterate over a copy
   const auto flushers = output_flushers;
   for (const auto& [id, flush] : flushers) flush();
-  if (!held_api.empty()) {
-    std::string lines;
-    lines.swap(held_api);
-    if (!net::send_all(api_fd, lines, config.lockstep_wall_timeout_s)) {
-      lose_clock("cannot send to the simulator");
-    }
-  }
+  if (!api.release_outputs()) lose_clock("cannot send to the simulator");
 }
 
 void EventLoop::Impl::answer_early() {
@@ -267,27 +350,28 @@ void EventLoop::Impl::answer_early() {
   tick_outstanding = true;  // the caller is still at this tick: its work for it comes now
   done_sent = true;
   outputs_held = true;
+  api.hold_outputs();
   hold_api();
 }
 
 void EventLoop::Impl::update_api_interest() {
-  if (api_fd < 0) return;
+  if (!api.is_open()) return;
   epoll_event ev{};
   ev.events = api_interest();
-  ev.data.fd = api_fd;
-  epoll_ctl(epfd, EPOLL_CTL_MOD, api_fd, &ev);  // fails harmlessly before create() has added it
+  ev.data.fd = api.fd();
+  epoll_ctl(epfd, EPOLL_CTL_MOD, api.fd(), &ev);  // fails harmlessly before create() has added it
 }
 
 void EventLoop::Impl::hold_api() {
   api_held = true;
-  api_stream.hold();
+  api.hold_input();
   update_api_interest();
 }
 
 void EventLoop::Impl::resume_api() {
   api_held = false;
   update_api_interest();
-  api_stream.resume([this](const Json& j, std::string_view payload) { handle_api_message(j, payload); });
+  api.resume_input();
 }
 
 void EventLoop::Impl::send_done() {
@@ -305,7 +389,7 @@ void EventLoop::Impl::send_done() {
   pending_busy_until.reset();
   tick_outstanding = false;
   // straight to the socket: never held with the outputs
-  if (api_fd < 0 || !net::send_all(api_fd, done.dump() + "\n", config.lockstep_wall_timeout_s)) {
+  if (!api.send_now(done.dump())) {
     lose_clock("cannot send done to the simulator");
   }
 }
@@ -315,62 +399,28 @@ void EventLoop::Impl::lose_clock(const std::string& why) {
   alive = false;
   tick_outstanding = false;
   outputs_held = false;
-  held_api.clear();
   dead_reason = why;
   std::fprintf(stderr, "uavsim client: lockstep clock lost: %s\n", why.c_str());
-  if (api_fd >= 0) {
-    epoll_ctl(epfd, EPOLL_CTL_DEL, api_fd, nullptr);
-    ::close(api_fd);
-    api_fd = -1;
+  if (api.is_open()) {
+    epoll_ctl(epfd, EPOLL_CTL_DEL, api.fd(), nullptr);
+    api.close();  // and what it held
   }
 }
 
 void EventLoop::Impl::on_api_readable() {
   if (api_held) return;
-  char buf[65536];
-  for (;;) {
-    const ssize_t n = ::recv(api_fd, buf, sizeof(buf), MSG_DONTWAIT);
-    if (n > 0) {
-      api_stream.feed(buf, static_cast<std::size_t>(n),
-                      [this](const Json& j, std::string_view payload) { handle_api_message(j, payload); });
-      if (!alive || api_held) return;
-      continue;
-    }
-    if (n == 0) {
-      lose_clock("the simulator closed the connection");
-      return;
-    }
-    if (errno == EINTR) continue;
-    if (errno == EAGAIN || errno == EWOULDBLOCK) break;
-    lose_clock(std::string("recv: ") + std::strerror(errno));
-    return;
+  std::string why;
+  switch (api.read_available(&why)) {
+    case SimChannel::ReadResult::kOk: return;
+    case SimChannel::ReadResult::kClosed: lose_clock("the simulator closed the connection"); return;
+    case SimChannel::ReadResult::kError: lose_clock(why); return;
   }
 }
 
-bool EventLoop::Impl::api_request(Json request, std::function<void(const Json&)> on_reply) {
-  if (api_fd < 0 || !alive) return false;
-  std::string id = std::to_string(next_request_id++);
-  id.insert(id.begin(), 'r');  // (not "r" + ...: a GCC 12 -Wrestrict false positive)
-  request["id"] = id;
-  reply_handlers[id] = std::move(on_reply);
-  if (!send_api(request.dump())) {
-    reply_handlers.erase(id);
-    return false;
-  }
-  return true;
-}
-
-void EventLoop::Impl::handle_api_message(const Json& j, std::string_view payload) {
-  if (!j.is_object()) return;
+void EventLoop::Impl::on_unrouted(const Json& j) {
   if (j.contains("event")) {
     const std::string ev = j["event"].is_string() ? j["event"].get<std::string>() : "";
-    if (ev == "frame") {
-      auto it = frame_sinks.find(j.value("camera", std::string()));
-      if (it != frame_sinks.end()) {
-        auto sink = it->second;
-        sink(j, payload);
-      }
-    } else if (ev == "tick") {
+    if (ev == "tick") {
       // the server flushed the MAVLink bytes of the steps before this tick before it sent the tick:
       // they are handled now, at the clock of the tick before, wherever epoll would have put them
       // in this batch
@@ -386,22 +436,8 @@ void EventLoop::Impl::handle_api_message(const Json& j, std::string_view payload
       lose_clock("the simulator dropped this client: " + j.value("reason", std::string("?")));
     } else if (ev == "reset") {
       std::fprintf(stderr, "uavsim client: the simulation was reset (seed %s)\n", j.value("seed", Json()).dump().c_str());
-    } else {
-      const auto [first, last] = event_sinks.equal_range(ev);
-      std::vector<EventSink> sinks;
-      for (auto it = first; it != last; ++it) sinks.push_back(it->second.second);
-      for (const EventSink& sink : sinks) sink(j);
     }
     return;
-  }
-  if (j.contains("id") && j["id"].is_string()) {
-    auto it = reply_handlers.find(j["id"].get<std::string>());
-    if (it != reply_handlers.end()) {
-      auto fn = std::move(it->second);
-      reply_handlers.erase(it);
-      fn(j);
-      return;
-    }
   }
   if (j.contains("ok") && j["ok"] == true && j.contains("result") && j["result"].is_object() &&
       j["result"].contains("mavlink_seq_checked")) {
@@ -448,20 +484,21 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
     const double wall = config.lockstep_wall_timeout_s;
     auto fd = net::tcp_connect(config.lockstep_host, config.lockstep_port, wall);
     if (!fd) return R(Failure{fd.code(), "lockstep: simulator API: " + fd.message()});
-    impl->api_fd = *fd;
+    Impl* raw = impl.get();
+    impl->api.open(*fd, wall, [raw](const Json& j) { raw->on_unrouted(j); });
     std::string buf;
-    auto hello = net::read_line(impl->api_fd, buf, wall);
+    auto hello = net::read_line(*fd, buf, wall);
     if (!hello) return R(Failure{hello.code(), "lockstep: no hello from the simulator API: " + hello.message()});
     const Json h = Json::parse(*hello, nullptr, false);
     if (!h.is_object() || h.value("hello", std::string()) != "uavsim") {
       return R::fail(Error::kProtocol, "lockstep: not a uavsim simulator API: " + *hello);
     }
     const Json join = {{"op", "lockstep_join"}, {"id", "join"}, {"period_s", config.lockstep_period_s}};
-    if (!net::send_all(impl->api_fd, join.dump() + "\n", wall)) return R::fail(Error::kIo, "lockstep: cannot send the join");
+    if (!impl->api.send_now(join.dump())) return R::fail(Error::kIo, "lockstep: cannot send the join");
     // the join's reply, then the first tick
     bool joined = false;
     while (!impl->tick_outstanding) {
-      auto line = net::read_line(impl->api_fd, buf, wall);
+      auto line = net::read_line(*fd, buf, wall);
       if (!line) return R(Failure{line.code(), "lockstep: waiting for the first tick: " + line.message()});
       const Json j = Json::parse(*line, nullptr, false);
       if (!j.is_object()) continue;
@@ -472,18 +509,14 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
         joined = true;
         continue;
       }
-      impl->handle_api_message(j, std::string_view());
+      impl->on_unrouted(j);  // (no module has a sink or a request yet)
       if (!impl->alive) return R::fail(Error::kConnectionLost, "lockstep: " + impl->dead_reason);
     }
-    if (!buf.empty()) {
-      Impl* raw = impl.get();
-      raw->api_stream.feed(buf.data(), buf.size(),
-                           [raw](const Json& j, std::string_view payload) { raw->handle_api_message(j, payload); });
-    }
+    if (!buf.empty()) impl->api.feed(buf.data(), buf.size());
     epoll_event ev{};
     ev.events = impl->api_interest();  // pipelined: held at the first tick
-    ev.data.fd = impl->api_fd;
-    epoll_ctl(impl->epfd, EPOLL_CTL_ADD, impl->api_fd, &ev);
+    ev.data.fd = *fd;
+    epoll_ctl(impl->epfd, EPOLL_CTL_ADD, *fd, &ev);
   }
   return std::unique_ptr<EventLoop>(new EventLoop(std::move(impl)));
 }
@@ -664,5 +697,29 @@ void EventLoop::assert_in_loop_thread() const {
                os.str().c_str());
   std::abort();
 }
+
+// ---------------------------------------------------------------- LoopServices
+
+SimChannel* LoopServices::sim_channel() const {
+  return impl_.config.clock == LoopConfig::Clock::kLockstep ? &impl_.api : nullptr;
+}
+
+std::uint64_t LoopServices::add_seq_source(SeqSource source) {
+  impl_.seq_sources[impl_.next_seq_source] = std::move(source);
+  return impl_.next_seq_source++;
+}
+
+void LoopServices::remove_seq_source(std::uint64_t id) { impl_.seq_sources.erase(id); }
+
+bool LoopServices::outputs_held() const { return impl_.outputs_held; }
+
+std::uint64_t LoopServices::add_output_flusher(std::function<void()> flush) {
+  impl_.output_flushers[impl_.next_output_flusher] = std::move(flush);
+  return impl_.next_output_flusher++;
+}
+
+void LoopServices::remove_output_flusher(std::uint64_t id) { impl_.output_flushers.erase(id); }
+
+std::optional<bool> LoopServices::mavlink_seq_checked() const { return impl_.mavlink_seq_checked; }
 
 }  // namespace uavsim::client

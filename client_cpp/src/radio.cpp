@@ -3,8 +3,9 @@
 #include <optional>
 #include <string>
 
-#include "event_loop_impl.hpp"
 #include "lockstep_subscription.hpp"
+#include "loop_services.hpp"
+#include "sim_channel.hpp"
 
 namespace uavsim::client {
 
@@ -104,9 +105,7 @@ struct A2aRadio::Impl {
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
-  remove_event_sink(impl_->loop, impl_->sink_id);
-  (void)impl_->loop.impl().api_request({{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}},
-                                       [](const Json&) {});
+  unsubscribe_lockstep_events(impl_->loop, impl_->sink_id, {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
 
 int A2aRadio::vehicle() const { return impl_->vehicle; }
@@ -133,7 +132,8 @@ Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
     req["to"] = "broadcast";
   }
   Impl* s = impl_.get();
-  if (!impl_->loop.impl().api_request(std::move(req), [s](const Json& j) {
+  SimChannel* channel = LoopServices(impl_->loop).sim_channel();
+  if (channel == nullptr || !channel->request(std::move(req), [s](const Json& j) {
         if (j.value("ok", false) != true) ++s->counters.refused;
       })) {
     return Result<void>::fail(Error::kConnectionLost, "radio: no simulator connection");

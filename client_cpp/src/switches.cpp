@@ -2,7 +2,6 @@
 
 #include <optional>
 
-#include "event_loop_impl.hpp"
 #include "lockstep_subscription.hpp"
 
 namespace uavsim::client {
@@ -37,9 +36,8 @@ struct PadSwitches::Impl {
 PadSwitches::PadSwitches(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 PadSwitches::~PadSwitches() {
-  remove_event_sink(impl_->loop, impl_->sink_id);
-  (void)impl_->loop.impl().api_request({{"op", "sensor_unsubscribe"}, {"vehicle", impl_->vehicle}},
-                                       [](const Json&) {});
+  unsubscribe_lockstep_events(impl_->loop, impl_->sink_id,
+                              {{"op", "sensor_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
 
 const SwitchState& PadSwitches::state() const { return impl_->state; }

@@ -13,7 +13,7 @@
 #include <map>
 #include <sstream>
 
-#include "event_loop_impl.hpp"
+#include "loop_services.hpp"
 #include "net.hpp"
 #include "uavsim/common/mavlink/codec.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
@@ -299,7 +299,7 @@ struct Vehicle::Impl {
     last_seq = seq++;
     sent_any = true;
     // pipelined lockstep: what is sent during a tick's work goes out at the next tick (release_held)
-    std::string& to = loop.impl().outputs_held ? held_out : out;
+    std::string& to = LoopServices(loop).outputs_held() ? held_out : out;
     to.append(reinterpret_cast<const char*>(f.bytes.data()), f.size);
     if (out.size() + held_out.size() > (4u << 20)) {
       close_link("the vehicle does not read (4 MiB unsent)");
@@ -662,19 +662,19 @@ Vehicle::Vehicle(EventLoop& loop, VehicleConfig config) : impl_(std::make_unique
   loop.assert_in_loop_thread();
   impl_->target_sysid = impl_->config.target_sysid;
   Impl* self = impl_.get();
-  impl_->seq_source = loop.impl().add_seq_source([self]() -> std::optional<std::pair<std::string, int>> {
+  impl_->seq_source = LoopServices(loop).add_seq_source([self]() -> std::optional<std::pair<std::string, int>> {
     if (!self->sent_any || self->fd < 0) return std::nullopt;
     std::string key = self->config.sim_vehicle;
     if (key.empty()) key = std::to_string(std::max(0, static_cast<int>(self->target_sysid) - 1));
     return std::make_pair(key, static_cast<int>(self->last_seq));
   });
-  impl_->output_flusher = loop.impl().add_output_flusher([self] { self->release_held(); });
+  impl_->output_flusher = LoopServices(loop).add_output_flusher([self] { self->release_held(); });
 }
 
 Vehicle::~Vehicle() {
   impl_->close_link(nullptr);
-  impl_->loop.impl().remove_seq_source(impl_->seq_source);
-  impl_->loop.impl().remove_output_flusher(impl_->output_flusher);
+  LoopServices(impl_->loop).remove_seq_source(impl_->seq_source);
+  LoopServices(impl_->loop).remove_output_flusher(impl_->output_flusher);
 }
 
 EventLoop& Vehicle::loop() { return impl_->loop; }

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "event_loop_impl.hpp"
+#include "loop_services.hpp"
 #include "sim_harness.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/geodesy.hpp"
@@ -409,7 +409,7 @@ FlightRecord fly_scripted(bool pipelined = false) {
   EXPECT_TRUE(uav.goto_local_enu({0.0, 0.0, 6.0}));
   EXPECT_TRUE(loop.run_for(3.0));
   sample();
-  rec.seq_checked = loop.impl().mavlink_seq_checked.value_or(false);
+  rec.seq_checked = uavsim::client::LoopServices(loop).mavlink_seq_checked().value_or(false);
   return rec;
 }
 

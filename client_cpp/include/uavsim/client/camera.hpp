@@ -1,10 +1,12 @@
 // CameraSubscriber: camera frames as cv::Mat with their sim timestamp, pinhole intrinsics and camera pose,
 // from the simulator's frame protocol (docs/protocol.md "Camera frames").
 //
-// Under a lockstep loop the subscription rides on the loop's own simulator connection, so every frame due
-// at or before a tick has been handed to on_frame before that tick's timers run (none is ever dropped).
-// On the host clock it opens its own connection to the simulator's API (CameraConfig::api_address, else
-// UAVSIM_API=host:port, else 127.0.0.1:5700); frames may then be dropped when the reader is slow (counted).
+// The frames arrive one way on either clock, as `frame` messages on a simulator connection; the clock
+// decides only their pacing. Under a lockstep loop that is the loop's own connection, read at ticks, so
+// every frame due at or before a tick has been handed to on_frame before that tick's timers run (none is
+// ever dropped). On the host clock it is a connection of the subscriber's own to the simulator's API
+// (CameraConfig::api_address, else UAVSIM_API=host:port, else 127.0.0.1:5700), read as bytes arrive;
+// frames may then be dropped when the reader is slow (counted).
 // On a real drone the frames come from the camera driver instead (seed 6.1): the same CameraFrame type is
 // what image-processing code should take.
 //

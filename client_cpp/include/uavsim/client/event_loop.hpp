@@ -115,10 +115,11 @@ class EventLoop {
   bool in_loop_thread() const;
   void assert_in_loop_thread() const;  // aborts naming the caller's thread when not on the loop thread
 
-  struct Impl;
-  Impl& impl() { return *impl_; }  // library internal
-
  private:
+  struct Impl;
+  // the library's modules (Vehicle, CameraSubscriber, A2aRadio, PadSwitches) reach the loop's
+  // simulator connection and its lockstep `done` through this narrow internal interface only
+  friend class LoopServices;
   explicit EventLoop(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

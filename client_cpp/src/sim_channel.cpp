@@ -1,0 +1,201 @@
+#include "sim_channel.hpp"
+
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "net.hpp"
+
+namespace uavsim::client {
+
+SimChannel::~SimChannel() { close(); }
+
+void SimChannel::open(int fd, double send_timeout_s, Unrouted unrouted) {
+  close();
+  fd_ = fd;
+  send_timeout_s_ = send_timeout_s;
+  unrouted_ = std::move(unrouted);
+}
+
+Result<std::unique_ptr<SimChannel>> SimChannel::connect(EventLoop& loop, const std::string& address,
+                                                        double timeout_s) {
+  using R = Result<std::unique_ptr<SimChannel>>;
+  std::string host;
+  int port = 0;
+  if (!net::parse_address(address, &host, &port)) {
+    return R::fail(Error::kInvalidArgument, "bad simulator API address '" + address + "'");
+  }
+  auto fd = net::tcp_connect(host, port, timeout_s);
+  if (!fd) return R(Failure{fd.code(), "simulator API: " + fd.message()});
+  auto channel = std::make_unique<SimChannel>();
+  channel->open(*fd, timeout_s, [](const Json&) {});
+  std::string buf;
+  auto hello = net::read_line(*fd, buf, timeout_s);
+  if (!hello) return R(Failure{hello.code(), "no hello from the simulator API: " + hello.message()});
+  SimChannel* c = channel.get();
+  if (auto w = loop.watch_fd(*fd, EventLoop::kReadable, [c](std::uint32_t what) { c->on_io(what); }); !w) {
+    return R(w.error());
+  }
+  channel->watched_by_ = &loop;
+  if (!buf.empty()) channel->feed(buf.data(), buf.size());
+  return channel;
+}
+
+void SimChannel::close() {
+  if (fd_ < 0) return;
+  if (watched_by_ != nullptr) watched_by_->unwatch_fd(fd_);
+  watched_by_ = nullptr;
+  ::close(fd_);
+  fd_ = -1;
+  outputs_held_ = false;
+  held_.clear();
+  reply_handlers_.clear();
+}
+
+bool SimChannel::request(Json request, ReplyHandler on_reply) {
+  if (fd_ < 0) return false;
+  std::string id = std::to_string(next_request_id_++);
+  id.insert(id.begin(), 'r');  // (not "r" + ...: a GCC 12 -Wrestrict false positive)
+  request["id"] = id;
+  reply_handlers_[id] = std::move(on_reply);
+  if (!send(request.dump())) {
+    reply_handlers_.erase(id);
+    return false;
+  }
+  return true;
+}
+
+bool SimChannel::send(const std::string& line) {
+  if (fd_ < 0) return false;
+  if (outputs_held_) {
+    held_ += line;
+    held_ += '\n';
+    return true;
+  }
+  return send_now(line);
+}
+
+bool SimChannel::send_now(const std::string& line) {
+  return fd_ >= 0 && net::send_all(fd_, line + "\n", send_timeout_s_);
+}
+
+bool SimChannel::release_outputs() {
+  outputs_held_ = false;
+  if (held_.empty()) return true;
+  std::string lines;
+  lines.swap(held_);
+  return fd_ >= 0 && net::send_all(fd_, lines, send_timeout_s_);
+}
+
+SimChannel::ReadResult SimChannel::read_available(std::string* why) {
+  char buf[65536];
+  while (fd_ >= 0 && !stream_.held()) {
+    const ssize_t n = ::recv(fd_, buf, sizeof(buf), MSG_DONTWAIT);
+    if (n > 0) {
+      feed(buf, static_cast<std::size_t>(n));
+      continue;
+    }
+    if (n == 0) return ReadResult::kClosed;
+    if (errno == EINTR) continue;
+    if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+    if (why != nullptr) *why = std::string("recv: ") + std::strerror(errno);
+    return ReadResult::kError;
+  }
+  return ReadResult::kOk;
+}
+
+void SimChannel::feed(const char* data, std::size_t size) {
+  stream_.feed(data, size, [this](const Json& j, std::string_view payload) { route(j, payload); });
+}
+
+void SimChannel::resume_input() {
+  stream_.resume([this](const Json& j, std::string_view payload) { route(j, payload); });
+}
+
+void SimChannel::on_io(std::uint32_t what) {
+  if (!(what & EventLoop::kReadable)) return;
+  if (read_available(nullptr) != ReadResult::kOk) close();
+}
+
+bool SimChannel::add_frame_sink(const std::string& camera, FrameSink sink) {
+  return frame_sinks_.emplace(camera, std::move(sink)).second;
+}
+
+void SimChannel::remove_frame_sink(const std::string& camera) { frame_sinks_.erase(camera); }
+
+std::uint64_t SimChannel::add_event_sink(const std::string& event, EventSink sink) {
+  const std::uint64_t id = next_event_sink_++;
+  event_sinks_.emplace(event, std::make_pair(id, std::move(sink)));
+  return id;
+}
+
+void SimChannel::remove_event_sink(std::uint64_t id) {
+  for (auto it = event_sinks_.begin(); it != event_sinks_.end(); ++it) {
+    if (it->second.first == id) {
+      event_sinks_.erase(it);
+      return;
+    }
+  }
+}
+
+void SimChannel::route(const Json& j, std::string_view payload) {
+  if (!j.is_object()) return;
+  if (j.contains("event")) {
+    const std::string ev = j["event"].is_string() ? j["event"].get<std::string>() : "";
+    if (ev == "frame") {
+      auto it = frame_sinks_.find(j.value("camera", std::string()));
+      if (it != frame_sinks_.end()) {
+        auto sink = it->second;  // the sink may remove itself
+        sink(j, payload);
+      }
+      return;
+    }
+    const auto [first, last] = event_sinks_.equal_range(ev);
+    if (first == last) {
+      if (unrouted_) unrouted_(j);
+      return;
+    }
+    std::vector<EventSink> sinks;
+    for (auto it = first; it != last; ++it) sinks.push_back(it->second.second);
+    for (const EventSink& sink : sinks) sink(j);
+    return;
+  }
+  if (j.contains("id") && j["id"].is_string()) {
+    auto it = reply_handlers_.find(j["id"].get<std::string>());
+    if (it != reply_handlers_.end()) {
+      auto fn = std::move(it->second);
+      reply_handlers_.erase(it);
+      fn(j);
+      return;
+    }
+  }
+  if (unrouted_) unrouted_(j);
+}
+
+Result<nlohmann::json> call_and_wait(EventLoop& loop, SimChannel& channel, nlohmann::json request,
+                                     double timeout_s, const std::string& who) {
+  using R = Result<nlohmann::json>;
+  const std::string op = request.value("op", std::string());
+  // the reply lives here until the wait below is over (the handler runs inside run_until)
+  auto reply = std::make_shared<std::optional<nlohmann::json>>();
+  if (!channel.request(std::move(request), [reply](const nlohmann::json& j) { *reply = j; })) {
+    return R::fail(Error::kConnectionLost, who + ": no simulator connection");
+  }
+  SimChannel* c = &channel;
+  auto w = loop.run_until([reply, c] { return reply->has_value() || !c->is_open(); }, timeout_s, op + "'s reply");
+  if (reply->has_value()) return std::move(**reply);
+  if (!w) return R(w.error());
+  return R::fail(Error::kConnectionLost, who + ": the simulator closed the connection");
+}
+
+std::string reply_error_text(const nlohmann::json& reply) {
+  const nlohmann::json e = reply.value("error", nlohmann::json::object());
+  return e.value("code", std::string("?")) + ": " + e.value("message", std::string("?"));
+}
+
+}  // namespace uavsim::client
