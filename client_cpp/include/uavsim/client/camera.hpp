@@ -83,9 +83,8 @@ class CameraSubscriber {
   std::int64_t frames_dropped() const;  // as the simulator counts them
   bool connected() const;
 
-  struct Impl;
-
  private:
+  struct Impl;
   explicit CameraSubscriber(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

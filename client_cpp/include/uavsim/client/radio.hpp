@@ -55,9 +55,8 @@ class A2aRadio {
   std::vector<RadioFrame> take_received();
   const RadioCounters& counters() const;
 
-  struct Impl;
-
  private:
+  struct Impl;
   explicit A2aRadio(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

@@ -45,9 +45,8 @@ class PadSwitches {
   // The last state received (empty closed until the first reading).
   const SwitchState& state() const;
 
-  struct Impl;
-
  private:
+  struct Impl;
   explicit PadSwitches(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };

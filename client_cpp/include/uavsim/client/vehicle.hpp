@@ -196,9 +196,8 @@ class Vehicle {
   Result<void> command_long(std::uint16_t command, const std::array<float, 7>& params);
 
   EventLoop& loop();
-  struct Impl;
-
  private:
+  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
