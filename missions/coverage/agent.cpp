@@ -17,9 +17,6 @@ constexpr double kQueryTimeout_s = 20.0;
 constexpr double kWaitTimeout_s = 30.0;
 // a pass that added less than this fraction of the rectangle made no progress
 constexpr double kNoProgressFraction = 1e-3;
-// with less than this fraction of the rectangle left, the leader plans repair passes over the
-// holes (path_planner.hpp, plan_repair) instead of frontier passes
-constexpr double kRepairFraction = 0.01;
 // the leader is at the start of its path when this close
 constexpr double kAtStart_m = 1.5;
 // Running: the leader aims at its path this far ahead, and corrects sideways with this gain
@@ -284,22 +281,12 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
   // two off the extent the leader measured, is missed pass after pass (5 quads over 600 x 600 m
   // flew the same 500 m path at 99.9 % until the 5000 s budget); planned from the other side, the
   // sliver lies under the leader's own footprint, on its own track.
-  // Little left: holes inside covered ground, each flown over by a short pass of its own
-  // (plan_repair); a repair pass that added nothing is flown again from the other side.
-  const Eigen::Vector2d here = in.position_enu_m.head<2>();
-  const bool repair = fraction >= 1.0 - kRepairFraction;
   std::optional<PlannedPath> next;
-  if (repair) {
-    if (path_ && repairing_ && fraction <= planned_fraction_)
-      next = plan_repair(config_, map, here, extent, !path_->low_side);
-    if (!next) next = plan_repair_path(config_, map, here, extent);
-  } else {
-    if (path_ && fraction < planned_fraction_ + kNoProgressFraction)
-      next = plan_side(config_, map, here, extent, !path_->low_side);
-    if (!next) next = plan_path(config_, map, here, extent);
+  if (path_ && fraction < planned_fraction_ + kNoProgressFraction) {
+    next = plan_side(config_, map, in.position_enu_m.head<2>(), extent, !path_->low_side);
   }
+  if (!next) next = plan_path(config_, map, in.position_enu_m.head<2>(), extent);
   path_ = next;
-  repairing_ = repair;
   planned_fraction_ = fraction;
   if (!path_) {
     complete_ = true;
@@ -310,8 +297,7 @@ void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
   enter(AgentState::kDeploying, out,
         fmt("covered %.1f%%, path from (%.1f, %.1f)", 100.0 * fraction,
             path_->points_enu_m.front().x(), path_->points_enu_m.front().y()) +
-            (path_->low_side ? " on the low-y frontier" : " on the high-y frontier") +
-            (repairing_ ? ", a repair pass over holes" : ""));
+            (path_->low_side ? " on the low-y frontier" : " on the high-y frontier"));
 }
 
 bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {

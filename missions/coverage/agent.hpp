@@ -169,7 +169,6 @@ class Agent {
   std::optional<AreaParts> last_map_;
   std::optional<PlannedPath> path_;
   double planned_fraction_ = 0.0;  // the map's covered fraction when path_ was planned
-  bool repairing_ = false;         // path_ is a repair pass over holes
 
   std::array<double, kAgentStateCount> time_in_state_{};
 };

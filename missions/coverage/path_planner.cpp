@@ -93,68 +93,16 @@ std::optional<PlannedPath> plan_side(const CoverageConfig& config, const AreaPar
   return path;
 }
 
-namespace {
-
-// the candidate whose start is nearer the leader (ties: the low side)
-std::optional<PlannedPath> nearer_start(std::optional<PlannedPath> low,
-                                        std::optional<PlannedPath> high,
-                                        const Eigen::Vector2d& leader_enu_m) {
-  if (!low || !high) return low ? low : high;
-  const double d_low = (low->points_enu_m.front() - leader_enu_m).norm();
-  const double d_high = (high->points_enu_m.front() - leader_enu_m).norm();
-  return d_high < d_low ? high : low;
-}
-
-}  // namespace
-
 std::optional<PlannedPath> plan_path(const CoverageConfig& config, const AreaParts& covered,
                                      const Eigen::Vector2d& leader_enu_m,
                                      const FlockExtent& extent) {
-  return nearer_start(plan_side(config, covered, leader_enu_m, extent, true),
-                      plan_side(config, covered, leader_enu_m, extent, false), leader_enu_m);
-}
-
-std::optional<PlannedPath> plan_repair_path(const CoverageConfig& config, const AreaParts& covered,
-                                            const Eigen::Vector2d& leader_enu_m,
-                                            const FlockExtent& extent) {
-  return nearer_start(plan_repair(config, covered, leader_enu_m, extent, true),
-                      plan_repair(config, covered, leader_enu_m, extent, false), leader_enu_m);
-}
-
-std::optional<PlannedPath> plan_repair(const CoverageConfig& config, const AreaParts& covered,
-                                       const Eigen::Vector2d& leader_enu_m,
-                                       const FlockExtent& extent, bool low_side) {
-  const double h = config.stripe_height_m();
-  const double w = config.width_y_m;
-  const int n = covered.stripe_count();
-  // every stripe's frontier on this side, and the gap nearest the leader
-  std::vector<std::optional<double>> frontier(static_cast<size_t>(n));
-  int target = -1;
-  double best = 0.0;
-  for (int i = 0; i < n; ++i) {
-    frontier[static_cast<size_t>(i)] =
-        low_side ? covered.lowest_uncovered(i, w) : covered.highest_uncovered(i, w);
-    if (!frontier[static_cast<size_t>(i)]) continue;
-    const Eigen::Vector2d gap(config.origin_x_m + (i + 0.5) * h,
-                              config.origin_y_m + *frontier[static_cast<size_t>(i)]);
-    const double d = (gap - leader_enu_m).norm();
-    if (target < 0 || d < best) {
-      target = i;
-      best = d;
-    }
-  }
-  if (target < 0) return std::nullopt;
-  // the map the pass is planned on: only the gap stripes the flock's edge can reach together with
-  // the target (within the lateral threshold of its frontier) are left uncovered
-  const double y_target = *frontier[static_cast<size_t>(target)];
-  AreaParts holes = covered;
-  const std::vector<Interval> whole{{0.0, w}};
-  for (int i = 0; i < n; ++i) {
-    const auto& y = frontier[static_cast<size_t>(i)];
-    if (y && std::abs(*y - y_target) <= config.lateral_threshold_m) continue;
-    holes.set_stripe(i, whole);
-  }
-  return plan_side(config, holes, leader_enu_m, extent, low_side);
+  auto low = plan_side(config, covered, leader_enu_m, extent, true);
+  auto high = plan_side(config, covered, leader_enu_m, extent, false);
+  if (!low || !high) return low ? low : high;
+  // keep the nearer start (ties: the low side)
+  const double d_low = (low->points_enu_m.front() - leader_enu_m).norm();
+  const double d_high = (high->points_enu_m.front() - leader_enu_m).norm();
+  return d_high < d_low ? high : low;
 }
 
 double path_y_at(const PlannedPath& path, double x_enu_m) {

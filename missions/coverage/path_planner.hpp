@@ -51,22 +51,6 @@ std::optional<PlannedPath> plan_path(const CoverageConfig& config, const AreaPar
                                      const Eigen::Vector2d& leader_enu_m,
                                      const FlockExtent& extent);
 
-// A repair pass over holes (beyond the thesis): when only a little is left, it is usually holes
-// inside covered ground (a stripe an agent's camera skipped while its heading or altitude was off
-// for a moment), each a few stripes long. The frontier's threshold treats such a hole as an outlier
-// (it lies far from the median frontier) and the flock passes beside it, pass after pass (15 quads
-// over 600 x 600 m flew 7 such passes, 525 s). This plans one side's frontier over just the gap
-// stripes near the one nearest the leader (those whose frontier lies within the lateral threshold
-// of it), so the flock's edge is laid on the holes and the pass spans only their stripes. Nothing
-// when every stripe is covered.
-std::optional<PlannedPath> plan_repair(const CoverageConfig& config, const AreaParts& covered,
-                                       const Eigen::Vector2d& leader_enu_m,
-                                       const FlockExtent& extent, bool low_side);
-// Both sides' repair passes, the one whose start is nearer the leader kept.
-std::optional<PlannedPath> plan_repair_path(const CoverageConfig& config, const AreaParts& covered,
-                                            const Eigen::Vector2d& leader_enu_m,
-                                            const FlockExtent& extent);
-
 // The path's y at x (linear between control points, constant beyond the ends).
 double path_y_at(const PlannedPath& path, double x_enu_m);
 

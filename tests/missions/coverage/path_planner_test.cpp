@@ -109,41 +109,6 @@ TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {
   EXPECT_DOUBLE_EQ(path_y_at(*p, 2.8), 43.0);
 }
 
-TEST(PathPlanner, ARepairPassLaysTheFlockEdgeOnTheNearestHolesAndSpansOnlyTheirStripes) {
-  // everything covered but three holes left by skipped pictures: stripes 3-4 at y [50, 60)
-  // (inside covered ground, where the frontier threshold of a normal pass ignores them), and
-  // stripe 8 at y [10, 20), 40 m lower
-  const CoverageConfig c = config();
-  AreaParts map(c.stripe_count());
-  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 100.0});
-  map.set_stripe(3, {{0.0, 50.0}, {60.0, 100.0}});
-  map.set_stripe(4, {{0.0, 52.0}, {60.0, 100.0}});
-  map.set_stripe(8, {{0.0, 10.0}, {20.0, 100.0}});
-  // the leader just west of x = 0 at y = 50: stripes 3-4 are nearer; stripe 8 is 40 m off, beyond
-  // the 30 m threshold, so it waits for the next pass
-  auto p = plan_repair(c, map, {-10.0, 50.0}, {0.0, 30.0}, true);
-  ASSERT_TRUE(p);
-  ASSERT_EQ(p->frontier_m.size(), 2u);
-  EXPECT_DOUBLE_EQ(p->frontier_m[0].y(), 50.0);
-  EXPECT_DOUBLE_EQ(p->frontier_m[1].y(), 52.0);
-  // run-in a footprint before stripe 3 (x 16.8 - 7), run-out a footprint past stripe 4 (28 + 7);
-  // the flock's low edge (the leader: extent 0 below) 5 m - 2 m margin above the holes
-  EXPECT_NEAR(p->points_enu_m.front().x(), 16.8 - 7.0, 1e-9);
-  EXPECT_NEAR(p->points_enu_m.back().x(), 28.0 + 7.0, 1e-9);
-  EXPECT_DOUBLE_EQ(path_y_at(*p, 19.6), 53.0);
-  // a normal pass over the same map runs on to a footprint past stripe 8 (whose hole it leaves)
-  EXPECT_NEAR(plan_side(c, map, {-10.0, 50.0}, {0.0, 30.0}, true)->points_enu_m.back().x(),
-              8.5 * 5.6 + 2.8 + 7.0, 1e-9);
-  // from near stripe 8, its hole is the target, alone
-  p = plan_repair_path(c, map, {60.0, 15.0}, {0.0, 30.0});
-  ASSERT_TRUE(p);
-  ASSERT_EQ(p->frontier_m.size(), 1u);
-  EXPECT_NEAR(p->frontier_m[0].x(), 8.5 * 5.6, 1e-9);
-  // covered: nothing
-  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 100.0});
-  EXPECT_FALSE(plan_repair_path(c, map, {0.0, 0.0}, {}));
-}
-
 TEST(PathPlanner, NothingToPlanWhenCovered) {
   const CoverageConfig c = config();
   AreaParts map(c.stripe_count());
