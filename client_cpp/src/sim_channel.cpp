@@ -98,6 +98,10 @@ SimChannel::ReadResult SimChannel::read_available(std::string* why) {
     const ssize_t n = ::recv(fd_, buf, sizeof(buf), MSG_DONTWAIT);
     if (n > 0) {
       feed(buf, static_cast<std::size_t>(n));
+      if (stream_.error()) {
+        if (why != nullptr) *why = *stream_.error();
+        return ReadResult::kError;
+      }
       continue;
     }
     if (n == 0) return ReadResult::kClosed;
