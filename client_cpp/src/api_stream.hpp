@@ -1,8 +1,9 @@
 // Reader of the sim API's byte stream (docs/protocol.md): newline-delimited JSON, where a line that
 // parses to {"event": "frame", "bytes": N, ...} is followed by exactly N bytes of image data.
-// Library internal. A line or a frame over the limits (SimConnection's blocking reader's, by
-// default) ends the stream with an error instead of buffering without bound: a peer that never
-// sends a newline, or announces a 4 GB frame, must not make the client allocate for ever.
+// Library internal; the one parser of both readers (SimChannel on the event loop, SimConnection's
+// blocking reader). A line over the limits, or a frame header without a usable byte count, ends the
+// stream with an error instead of buffering without bound: a peer that never sends a newline, or
+// announces a 4 GB frame, must not make the client allocate for ever.
 #pragma once
 
 #include <cstddef>
@@ -25,6 +26,12 @@ class ApiStream {
   // Why the stream stopped (a line or frame over the limits); nothing while it is fine. Once set,
   // feed() drops everything: the connection is to be closed.
   const std::optional<std::string>& error() const { return error_; }
+  // From inside on_message: ends the stream with this error (the reader's own rule, e.g. a line
+  // that is not a JSON object); nothing after the current message is delivered.
+  void stop(std::string why) {
+    error_ = "sim API: " + std::move(why);
+    held_ = false;
+  }
 
   // Consumes bytes; calls on_message(json, payload) for each complete message (payload empty unless
   // a frame). Malformed lines are passed as a discarded (non-object) json.
@@ -49,7 +56,7 @@ class ApiStream {
   template <class F>
   void pump(F& on_message) {
     std::size_t pos = 0;
-    while (!held_) {
+    while (!held_ && !error_) {
       if (pending_bytes_ > 0) {
         if (buf_.size() - pos < pending_bytes_) break;
         const std::string_view payload(buf_.data() + pos, pending_bytes_);
@@ -62,28 +69,33 @@ class ApiStream {
       const std::size_t nl = buf_.find('\n', pos);
       if (nl == std::string::npos) {
         if (buf_.size() - pos > max_line_bytes_)
-          fail("a line longer than " + std::to_string(max_line_bytes_) + " bytes");
+          stop("a line longer than " + std::to_string(max_line_bytes_) + " bytes");
         break;
       }
       if (nl - pos > max_line_bytes_) {
-        fail("a line longer than " + std::to_string(max_line_bytes_) + " bytes");
+        stop("a line longer than " + std::to_string(max_line_bytes_) + " bytes");
         break;
       }
       nlohmann::json j =
           nlohmann::json::parse(std::string_view(buf_.data() + pos, nl - pos), nullptr, false);
       pos = nl + 1;
-      if (j.is_object() && j.value("event", std::string()) == "frame") {
-        const auto n = j.value("bytes", std::int64_t{0});
-        if (n > 0 && static_cast<std::uint64_t>(n) > max_frame_bytes_) {
-          fail("a frame of " + std::to_string(n) + " bytes (at most " +
+      const auto ev = j.is_object() ? j.find("event") : j.end();
+      if (j.is_object() && ev != j.end() && ev->is_string() && *ev == "frame") {
+        // a frame header: exactly `bytes` bytes of image follow (typed lookups: a wrong type is
+        // bad input, not an exception)
+        const auto n = j.find("bytes");
+        if (n == j.end() || !n->is_number_integer() || n->get<std::int64_t>() < 0 ||
+            static_cast<std::uint64_t>(n->get<std::int64_t>()) > max_frame_bytes_) {
+          stop("a frame header without a usable `bytes` (at most " +
                std::to_string(max_frame_bytes_) + ")");
           break;
         }
-        if (n > 0) {
-          pending_header_ = std::move(j);
-          pending_bytes_ = static_cast<std::size_t>(n);
-          continue;
-        }
+        pending_bytes_ = static_cast<std::size_t>(n->get<std::int64_t>());
+        pending_header_ = std::move(j);  // (n points into j: read first)
+        if (pending_bytes_ > 0) continue;
+        on_message(pending_header_, std::string_view());  // an empty frame
+        pending_header_ = nullptr;
+        continue;
       }
       on_message(j, std::string_view());
     }
@@ -92,11 +104,6 @@ class ApiStream {
       return;
     }
     buf_.erase(0, pos);
-  }
-
-  void fail(std::string why) {
-    error_ = "sim API: " + std::move(why);
-    held_ = false;
   }
 
   std::string buf_;

@@ -15,6 +15,7 @@
 #include <thread>
 #include <utility>
 
+#include "api_stream.hpp"
 #include "net.hpp"
 
 namespace uavsim::client {
@@ -93,9 +94,7 @@ struct SimConnection::Impl {
   std::thread::id owner = std::this_thread::get_id();
   Json hello;
   int64_t next_id = 0;
-  std::string buf;                   // bytes read, not yet a whole message
-  std::optional<Json> frame_header;  // a frame header whose payload is still being read
-  std::size_t frame_bytes = 0;
+  ApiStream stream;  // bytes read, cut into whole messages
   std::deque<SimMessage> queue;  // streamed messages for take_messages()
   std::map<std::string, std::function<void(const SimMessage&)>> handlers;
   std::deque<Json> replies;       // replies read, not yet claimed by request()
@@ -130,62 +129,18 @@ struct SimConnection::Impl {
     }
   }
 
-  // (buf) => whole messages delivered; a failure when the stream is malformed
-  std::optional<Failure> parse_buffer() {
-    std::size_t pos = 0;
-    std::optional<Failure> error;
-    for (;;) {
-      if (frame_header) {
-        if (buf.size() - pos < frame_bytes) break;
-        std::string payload = buf.substr(pos, frame_bytes);
-        pos += frame_bytes;
-        Json header = std::move(*frame_header);
-        frame_header.reset();
-        deliver(std::move(header), std::move(payload));
-        continue;
-      }
-      const std::size_t nl = buf.find('\n', pos);
-      if (nl == std::string::npos) {
-        if (buf.size() - pos > kMaxLineBytes) {
-          error = fail(Error::kProtocol,
-                       "sim API: a line longer than " + std::to_string(kMaxLineBytes) + " bytes");
-        }
-        break;
-      }
-      if (nl - pos > kMaxLineBytes) {
-        error = fail(Error::kProtocol,
-                     "sim API: a line longer than " + std::to_string(kMaxLineBytes) + " bytes");
-        break;
-      }
-      Json j = Json::parse(std::string_view(buf.data() + pos, nl - pos), nullptr, false);
-      pos = nl + 1;
+  // bytes => whole messages delivered; a failure when the stream is malformed (api_stream.hpp's
+  // limits, or a line that is not a JSON object)
+  std::optional<Failure> parse(const char* data, std::size_t size) {
+    stream.feed(data, size, [this](const Json& j, std::string_view payload) {
       if (!j.is_object()) {
-        error = fail(Error::kProtocol, "sim API: a line that is not a JSON object");
-        break;
+        stream.stop("a line that is not a JSON object");
+        return;
       }
-      const auto ev = j.find("event");
-      if (ev != j.end() && ev->is_string() && *ev == "frame") {
-        // a frame header: exactly `bytes` bytes of image follow
-        const auto n = j.find("bytes");
-        if (n == j.end() || !n->is_number_integer() || n->get<int64_t>() < 0 ||
-            static_cast<uint64_t>(n->get<int64_t>()) > kMaxFrameBytes) {
-          error =
-              fail(Error::kProtocol, "sim API: a frame header without a usable `bytes` (at most " +
-                                         std::to_string(kMaxFrameBytes) + ")");
-          break;
-        }
-        frame_bytes = static_cast<std::size_t>(n->get<int64_t>());
-        frame_header = std::move(j);
-        continue;
-      }
-      deliver(std::move(j), std::string());
-    }
-    if (error) {
-      buf.clear();
-    } else {
-      buf.erase(0, pos);
-    }
-    return error;
+      deliver(j, std::string(payload));
+    });
+    if (stream.error()) return fail(Error::kProtocol, *stream.error());
+    return std::nullopt;
   }
 
   // waits up to timeout_ms for bytes, then reads all there are and delivers the whole messages
@@ -202,8 +157,7 @@ struct SimConnection::Impl {
     for (;;) {
       const ssize_t n = ::recv(fd, tmp, sizeof(tmp), MSG_DONTWAIT);
       if (n > 0) {
-        buf.append(tmp, static_cast<std::size_t>(n));
-        if (auto e = parse_buffer()) return e;
+        if (auto e = parse(tmp, static_cast<std::size_t>(n))) return e;
         if (static_cast<std::size_t>(n) < sizeof(tmp)) break;
         continue;
       }

@@ -58,8 +58,25 @@ TEST(ApiStream, AFrameOverTheLimitStopsTheStreamBeforeItsBytesArrive) {
   ASSERT_EQ(seen.payloads.size(), 1u);  // exactly the limit is fine
   feed(s, "{\"event\":\"frame\",\"bytes\":4294967296}\n", &seen);
   ASSERT_TRUE(s.error());
-  EXPECT_NE(s.error()->find("4294967296"), std::string::npos) << *s.error();
+  EXPECT_EQ(*s.error(), "sim API: a frame header without a usable `bytes` (at most 100)");
   EXPECT_EQ(seen.messages.size(), 1u);
+}
+
+TEST(ApiStream, AFrameHeaderWithAWrongTypeIsAnErrorNotAnExceptionAndAnEmptyFrameIsOne) {
+  ApiStream s;
+  Seen seen;
+  feed(s, "{\"event\":\"frame\",\"bytes\":0,\"seq\":7}\n{\"id\":1}\n", &seen);
+  ASSERT_EQ(seen.messages.size(), 2u);
+  EXPECT_EQ(seen.messages[0]["seq"], 7);
+  EXPECT_EQ(seen.payloads[0], "");
+  feed(s, "{\"event\":\"frame\",\"bytes\":\"many\"}\n", &seen);
+  ASSERT_TRUE(s.error());
+  EXPECT_EQ(seen.messages.size(), 2u);
+  ApiStream t;
+  Seen other;
+  feed(t, "{\"event\":5}\n", &other);  // an event that is not a string is an ordinary message
+  EXPECT_EQ(other.messages.size(), 1u);
+  EXPECT_FALSE(t.error());
 }
 
 }  // namespace
