@@ -6,59 +6,13 @@
 #include "lockstep_subscription.hpp"
 #include "loop_services.hpp"
 #include "sim_channel.hpp"
+#include "uavsim/common/base64.hpp"
 
 namespace uavsim::client {
 
 namespace {
 
 using Json = nlohmann::json;
-
-constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-
-std::string base64_encode(const std::vector<std::uint8_t>& bytes) {
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) |
-                            (i + 1 < bytes.size() ? std::uint32_t{bytes[i + 1]} << 8 : 0u) |
-                            (i + 2 < bytes.size() ? std::uint32_t{bytes[i + 2]} : 0u);
-    out.push_back(kAlphabet[(n >> 18) & 63]);
-    out.push_back(kAlphabet[(n >> 12) & 63]);
-    out.push_back(i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=');
-    out.push_back(i + 2 < bytes.size() ? kAlphabet[n & 63] : '=');
-  }
-  return out;
-}
-
-int sextet(char c) {
-  if (c >= 'A' && c <= 'Z') return c - 'A';
-  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-  if (c >= '0' && c <= '9') return c - '0' + 52;
-  if (c == '+') return 62;
-  if (c == '/') return 63;
-  return -1;
-}
-
-// what the server sends is canonical base64; anything else is dropped
-std::optional<std::vector<std::uint8_t>> base64_decode(const std::string& text) {
-  std::size_t len = text.size();
-  while (len > 0 && text[len - 1] == '=') --len;
-  std::vector<std::uint8_t> out;
-  out.reserve(len * 3 / 4);
-  std::uint32_t acc = 0;
-  int bits = 0;
-  for (std::size_t i = 0; i < len; ++i) {
-    const int v = sextet(text[i]);
-    if (v < 0) return std::nullopt;
-    acc = (acc << 6) | static_cast<std::uint32_t>(v);
-    bits += 6;
-    if (bits >= 8) {
-      bits -= 8;
-      out.push_back(static_cast<std::uint8_t>((acc >> bits) & 0xFF));
-    }
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -90,7 +44,7 @@ struct A2aRadio::Impl {
   // A frame's fields, checked: a malformed one is dropped, whatever the server sent.
   void take(const Json& from, const Json& broadcast, const Json& time, const Json& data) {
     if (!data.is_string()) return;
-    auto bytes = base64_decode(data.get_ref<const std::string&>());
+    auto bytes = common::base64_decode(data.get_ref<const std::string&>());
     if (!bytes || bytes->empty() || bytes->size() > kRadioMaxFrameBytes) return;
     RadioFrame f;
     f.time_s = time.is_number() ? time.get<double>() : 0.0;
@@ -125,7 +79,7 @@ Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
     return Result<void>::fail(Error::kInvalidArgument, "radio: a frame carries 1-127 bytes, not " +
                                                            std::to_string(data.size()));
   }
-  Json req = {{"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", base64_encode(data)}};
+  Json req = {{"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", common::base64_encode(data)}};
   if (to >= 0) {
     req["to"] = to;
   } else {

@@ -17,6 +17,7 @@
 
 #include "api_stream.hpp"
 #include "net.hpp"
+#include "uavsim/common/base64.hpp"
 
 namespace uavsim::client {
 
@@ -39,31 +40,6 @@ int ms_until(SteadyClock::time_point end) {
   const auto left =
       std::chrono::duration_cast<std::chrono::milliseconds>(end - SteadyClock::now()).count();
   return static_cast<int>(std::clamp<int64_t>(left, 0, 1000 * 86400));
-}
-
-std::string base64_encode(std::string_view in) {
-  static constexpr char kAlphabet[] =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((in.size() + 2) / 3 * 4);
-  std::size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const uint32_t v =
-        (uint32_t(uint8_t(in[i])) << 16) | (uint32_t(uint8_t(in[i + 1])) << 8) | uint8_t(in[i + 2]);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += kAlphabet[(v >> 6) & 63];
-    out += kAlphabet[v & 63];
-  }
-  if (i < in.size()) {
-    uint32_t v = uint32_t(uint8_t(in[i])) << 16;
-    if (i + 1 < in.size()) v |= uint32_t(uint8_t(in[i + 1])) << 8;
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += i + 1 < in.size() ? kAlphabet[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
 }
 
 }  // namespace
@@ -352,7 +328,10 @@ Result<nlohmann::json> SimConnection::done(int64_t tick,
 }
 
 Result<nlohmann::json> SimConnection::radio_send(int vehicle, std::string_view bytes, int to) {
-  Json req = {{"op", "radio_send"}, {"vehicle", vehicle}, {"data_b64", base64_encode(bytes)}};
+  Json req = {{"op", "radio_send"},
+              {"vehicle", vehicle},
+              {"data_b64", common::base64_encode(
+                               reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size())}};
   req["to"] = to < 0 ? Json("broadcast") : Json(to);
   return request(std::move(req));
 }

@@ -4,21 +4,11 @@
 #include <functional>
 
 #include "api/vehicle_arg.hpp"
+#include "uavsim/common/base64.hpp"
 
 namespace uavsim::server::api {
 
 namespace {
-
-constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-
-int sextet(char c) {
-  if (c >= 'A' && c <= 'Z') return c - 'A';
-  if (c >= 'a' && c <= 'z') return c - 'a' + 26;
-  if (c >= '0' && c <= '9') return c - '0' + 52;
-  if (c == '+') return 62;
-  if (c == '/') return 63;
-  return -1;
-}
 
 bool set_error(std::string* code, std::string* message, const std::string& c,
                const std::string& m) {
@@ -28,50 +18,6 @@ bool set_error(std::string* code, std::string* message, const std::string& c,
 }
 
 }  // namespace
-
-std::string base64_encode(const std::vector<uint8_t>& bytes) {
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  for (size_t i = 0; i < bytes.size(); i += 3) {
-    const uint32_t n = (uint32_t{bytes[i]} << 16) |
-                       (i + 1 < bytes.size() ? uint32_t{bytes[i + 1]} << 8 : 0u) |
-                       (i + 2 < bytes.size() ? uint32_t{bytes[i + 2]} : 0u);
-    out.push_back(kAlphabet[(n >> 18) & 63]);
-    out.push_back(kAlphabet[(n >> 12) & 63]);
-    out.push_back(i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=');
-    out.push_back(i + 2 < bytes.size() ? kAlphabet[n & 63] : '=');
-  }
-  return out;
-}
-
-std::optional<std::vector<uint8_t>> base64_decode(const std::string& text) {
-  // strip padding (at most two, only at the end)
-  size_t len = text.size();
-  size_t pad = 0;
-  while (len > 0 && text[len - 1] == '=' && pad < 2) {
-    --len;
-    ++pad;
-  }
-  if (pad > 0 && text.size() % 4 != 0) return std::nullopt;
-  if (len % 4 == 1) return std::nullopt;
-  std::vector<uint8_t> out;
-  out.reserve(len * 3 / 4);
-  uint32_t acc = 0;
-  int bits = 0;
-  for (size_t i = 0; i < len; ++i) {
-    const int v = sextet(text[i]);
-    if (v < 0) return std::nullopt;
-    acc = (acc << 6) | static_cast<uint32_t>(v);
-    bits += 6;
-    if (bits >= 8) {
-      bits -= 8;
-      out.push_back(static_cast<uint8_t>((acc >> bits) & 0xFF));
-    }
-  }
-  // the unused low bits of the last character must be zero (canonical encoding)
-  if (bits > 0 && (acc & ((1u << bits) - 1)) != 0) return std::nullopt;
-  return out;
-}
 
 RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays)
     : sim_(sim), radio_(radio), relays_(relays) {}
@@ -190,7 +136,7 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
           code, message, "frame_too_large",
           "a frame is at most " + std::to_string(radio::kMaxFrameBytes) + " bytes (802.15.4)");
     }
-    const auto data = base64_decode(dit->get<std::string>());
+    const auto data = common::base64_decode(dit->get<std::string>());
     if (!data) return set_error(code, message, "bad_base64", "\"data_b64\" is not valid base64");
     if (data->empty())
       return set_error(code, message, "bad_field", "a frame carries at least one byte");
@@ -375,7 +321,7 @@ void RadioOps::on_gate(const Send& send) {
   std::map<std::pair<size_t, uint64_t>, std::string> encoded;  // (from, seq) -> base64
   auto data_b64 = [&](const radio::Delivery& d) -> const std::string& {
     auto [it, fresh] = encoded.try_emplace({d.from, d.seq});
-    if (fresh) it->second = base64_encode(d.data);
+    if (fresh) it->second = common::base64_encode(d.data);
     return it->second;
   };
   for (const radio::Delivery& d : arrived) {

@@ -23,11 +23,6 @@
 
 namespace uavsim::server::api {
 
-// Standard base64 (RFC 4648 section 4): padding optional on input, always written on output.
-std::string base64_encode(const std::vector<uint8_t>& bytes);
-// Nullopt for characters outside the alphabet, misplaced padding or an impossible length.
-std::optional<std::vector<uint8_t>> base64_decode(const std::string& text);
-
 class RadioOps : public OpGroup {
  public:
   // relays may be null (the gcs_link_* ops then answer not_available). All must outlive the server.

@@ -10,6 +10,7 @@
 #include "api_fixture.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
+#include "uavsim/common/base64.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -66,23 +67,6 @@ Json send_op(int from, Json to, const std::string& data) {
   return {{"op", "radio_send"}, {"vehicle", from}, {"to", to}, {"data_b64", data}};
 }
 
-TEST(Base64, RoundTripsEveryLengthAndRejectsGarbage) {
-  for (size_t n = 0; n < 130; ++n) {
-    std::vector<uint8_t> b(n);
-    for (size_t k = 0; k < n; ++k) b[k] = static_cast<uint8_t>(k * 37 + n);
-    const auto back = base64_decode(base64_encode(b));
-    ASSERT_TRUE(back) << n;
-    EXPECT_EQ(*back, b);
-  }
-  EXPECT_EQ(base64_encode({'h', 'i', '!'}), "aGkh");
-  EXPECT_EQ(*base64_decode("aGk"), (std::vector<uint8_t>{'h', 'i'}));  // padding optional
-  EXPECT_EQ(*base64_decode("aGk="), (std::vector<uint8_t>{'h', 'i'}));
-  EXPECT_FALSE(base64_decode("a"));     // impossible length
-  EXPECT_FALSE(base64_decode("aGk*"));  // outside the alphabet
-  EXPECT_FALSE(base64_decode("a=Gk"));  // padding inside
-  EXPECT_FALSE(base64_decode("aGl="));  // non-canonical trailing bits
-}
-
 TEST(RadioApi, AFrameReachesTheSubscriberOfItsAddressee) {
   RadioServer server;
   TestClient c(server.port());
@@ -90,7 +74,7 @@ TEST(RadioApi, AFrameReachesTheSubscriberOfItsAddressee) {
   for (const Json& op : c.hello()["ops"]) listed = listed || op == "radio_send";
   EXPECT_TRUE(listed) << c.hello();
   ASSERT_TRUE(c.request({{"op", "radio_subscribe"}, {"vehicle", 1}})["ok"]);
-  const Json sent = c.request(send_op(0, 1, base64_encode({'h', 'e', 'l', 'l', 'o'})));
+  const Json sent = c.request(send_op(0, 1, common::base64_encode({'h', 'e', 'l', 'l', 'o'})));
   ASSERT_TRUE(sent["ok"]) << sent;
   ASSERT_TRUE(c.request({{"op", "step"}, {"steps", 10}})["ok"]);
   const Json e = c.next_event("radio");
@@ -98,7 +82,7 @@ TEST(RadioApi, AFrameReachesTheSubscriberOfItsAddressee) {
   EXPECT_EQ(e["from"], 0);
   EXPECT_EQ(e["to"], 1);
   EXPECT_EQ(e["broadcast"], false);
-  EXPECT_EQ(e["data_b64"], base64_encode({'h', 'e', 'l', 'l', 'o'}));
+  EXPECT_EQ(e["data_b64"], common::base64_encode({'h', 'e', 'l', 'l', 'o'}));
   // at least one physics step after it was sent
   EXPECT_GE(e["time"].get<double>(), sent["result"]["time_s"].get<double>() + kStep_s - kTimeTol_s);
 
@@ -126,7 +110,7 @@ TEST(RadioApi, SubscribersOfOtherVehiclesDoNotSeeAUnicast) {
 TEST(RadioApi, BadInputGetsAnErrorAndTheServerCarriesOn) {
   RadioServer server;
   TestClient c(server.port());
-  const std::string big = base64_encode(std::vector<uint8_t>(128, 1));
+  const std::string big = common::base64_encode(std::vector<uint8_t>(128, 1));
   EXPECT_EQ(error_code(c.request(send_op(0, 1, big))), "frame_too_large");
   EXPECT_EQ(error_code(c.request(send_op(0, 1, std::string(2000, 'A')))), "frame_too_large");
   EXPECT_EQ(error_code(c.request(send_op(0, 1, "!!!!"))), "bad_base64");
@@ -210,7 +194,7 @@ TEST(RadioApi, ALockstepClientGetsAFrameBeforeTheTickAtWhichItArrives) {
     ++ticks;
     ASSERT_TRUE(c.request({{"op", "radio_config"}, {"latency_s", ticks % 2 ? 0.0095 : 0.0}})["ok"]);
     ASSERT_TRUE(
-        c.request(send_op(0, "broadcast", base64_encode(std::vector<uint8_t>(10, 3))))["ok"]);
+        c.request(send_op(0, "broadcast", common::base64_encode(std::vector<uint8_t>(10, 3))))["ok"]);
     ASSERT_TRUE(c.request({{"op", "done"}, {"tick", m["tick"]}})["ok"]);
   }
   EXPECT_GE(radio_events, 18);
