@@ -361,11 +361,6 @@ int run_server(const Options& given_options) {
         std::cerr << "uavsim-server: warning: no camera frames: " << e.what() << "\n";
       }
     }
-    if (frames && world_objects.gimbals != nullptr) {
-      // gimbal bodies at the vehicles' pose of the snapshot's instant, not the previous step's
-      objects::GimbalSet* gimbals = world_objects.gimbals;
-      frames->set_before_capture([gimbals, &s] { gimbals->before_step(s); });
-    }
     if (frames && options.record_path) {
       const std::optional<size_t> cam = recorded;
       try {

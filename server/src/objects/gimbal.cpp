@@ -59,6 +59,11 @@ void step_gimbal_motion(const sim::GimbalDynamicsParams& p, const Eigen::Quatern
   }
 }
 
+double GimbalSet::heading(const Eigen::Quaterniond& q_enu_body) {
+  const Eigen::Vector3d x = q_enu_body * Eigen::Vector3d::UnitX();
+  return std::atan2(x.y(), x.x());
+}
+
 Eigen::Quaterniond GimbalSet::actual(const Gimbal& g, const Eigen::Quaterniond& q_enu_body) {
   return (q_enu_body * g.motion.q_body_cam).normalized();
 }
@@ -69,22 +74,32 @@ void GimbalSet::before_step(sim::Simulation& sim) {
     initial_saved_ = true;
   }
   const bool dynamic = dynamics_.time_const_s > 0 || dynamics_.rate_max_rad_s > 0 || dynamics_.accel_max_rad_s2 > 0;
-  const double now_s = sim.time_s();
-  for (Gimbal& g : gimbals_) {
-    const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
-    const Eigen::Vector3d x = t.q_enu_body * Eigen::Vector3d::UnitX();
-    const double heading = std::atan2(x.y(), x.x());
-    Eigen::Quaterniond q_enu_gimbal = pointing(g, heading);
-    if (dynamic) {
-      // the camera rides on the body; the loop slews it towards the target (once per sim time: this
-      // also runs before camera captures)
+  if (dynamic) {
+    // the camera rides on the body; the loop slews it towards the target, once a physics step
+    const double now_s = sim.time_s();
+    for (Gimbal& g : gimbals_) {
+      const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
       const double dt_s = g.motion.started ? now_s - g.motion.time_s : 0.0;
-      step_gimbal_motion(dynamics_, t.q_enu_body.conjugate() * q_enu_gimbal, dt_s, &g.motion);
+      step_gimbal_motion(dynamics_, t.q_enu_body.conjugate() * pointing(g, heading(t.q_enu_body)),
+                         dt_s, &g.motion);
       g.motion.time_s = now_s;
-      q_enu_gimbal = actual(g, t.q_enu_body);
     }
+  }
+  place(sim);
+}
+
+void GimbalSet::place(sim::Simulation& sim) const {
+  for (const Gimbal& g : gimbals_) {
+    const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
+    const Eigen::Quaterniond q_enu_gimbal =
+        g.motion.started ? actual(g, t.q_enu_body) : pointing(g, heading(t.q_enu_body));
     physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m, q_enu_gimbal);
   }
+}
+
+void GimbalSet::schedule_capture_pose(sim::Simulation& sim) {
+  sim.schedule().add(
+      sim::Phase::kCapture, "gimbals.pose", [this, &sim] { place(sim); }, sim::Slot::kFirst);
 }
 
 void GimbalSet::reset(uint64_t /*seed*/) {

@@ -58,7 +58,15 @@ class GimbalSet : public sim::WorldObject {
   explicit GimbalSet(std::vector<Gimbal> gimbals, const sim::GimbalDynamicsParams& dynamics = {})
       : gimbals_(std::move(gimbals)), dynamics_(dynamics) {}
 
+  // Steps the stabilisation loop (with dynamics), then place().
   void before_step(sim::Simulation& sim) override;
+  // Puts every gimbal body at its vehicle's mount as the vehicle is now, oriented as the gimbal is
+  // now; steps nothing. Loop thread only.
+  void place(sim::Simulation& sim) const;
+  // Registers place() first in the capture phase, so camera snapshots see the gimbals at the
+  // vehicles' pose of the snapshot's instant, not the pose before the last physics step. It only
+  // places bodies (no loop step), so whether a snapshot is taken or dropped never changes the motion.
+  void schedule_capture_pose(sim::Simulation& sim);
   bool on_contact(sim::Simulation&, const physics::VehicleContact&) override { return false; }
   void reset(uint64_t seed) override;
 
@@ -68,6 +76,8 @@ class GimbalSet : public sim::WorldObject {
   static Eigen::Quaterniond pointing(const Gimbal& gimbal, double vehicle_yaw_rad);
   // The orientation the gimbal body has now (ENU), after its dynamics. Loop thread only.
   static Eigen::Quaterniond actual(const Gimbal& gimbal, const Eigen::Quaterniond& q_enu_body);
+  // The heading (ENU yaw) of a vehicle attitude: where its body x axis points, seen from above.
+  static double heading(const Eigen::Quaterniond& q_enu_body);
   const sim::GimbalDynamicsParams& dynamics() const { return dynamics_; }
 
  private:

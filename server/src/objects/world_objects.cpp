@@ -147,7 +147,10 @@ ObjectSet create_world_objects(sim::Simulation& sim) {
 void schedule_world_objects(sim::Simulation& sim, const ObjectSet& set) {
   for (Truck* truck : set.trucks) sim.schedule_object("truck." + truck->params().name, *truck);
   if (set.balloons != nullptr) sim.schedule_object("balloons", *set.balloons);
-  if (set.gimbals != nullptr) sim.schedule_object("gimbals", *set.gimbals);
+  if (set.gimbals != nullptr) {
+    sim.schedule_object("gimbals", *set.gimbals);
+    set.gimbals->schedule_capture_pose(sim);
+  }
 }
 
 ObjectSet add_world_objects(sim::Simulation& sim) {

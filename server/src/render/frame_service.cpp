@@ -371,7 +371,6 @@ void FrameService::capture(mjData_* d) {
     }
   }
   if (!snap) snap = std::make_unique<Snapshot>();
-  if (before_capture_) before_capture_();
   const mjModel* m = m_;
   snap->id = next_id_++;
   snap->time = d->time;

@@ -152,8 +152,6 @@ class FrameService {
   // every frame from the tracked bodies' positions instead of by the model (--record-camera follow|top).
   // Its subscribers see the directed view. The director is used on the render thread only.
   void set_director(int camera, std::shared_ptr<CameraDirector> director);
-  // Loop thread: called before a snapshot is taken (e.g. refresh gimbal bodies to the current vehicle pose).
-  void set_before_capture(std::function<void()> fn) { before_capture_ = std::move(fn); }
 
   // Loop thread, at each control step before it runs: takes the frames due now. Idempotent per sim time
   // (the gate may run several times at one held step); a sim time earlier than the last one (reset)
@@ -205,7 +203,6 @@ class FrameService {
   std::vector<FrameCamera> cameras_;
   FrameServiceOptions options_;
   std::vector<FrameConsumer*> consumers_;
-  std::function<void()> before_capture_;
   std::vector<int> tracked_bodies_;
   std::vector<std::shared_ptr<CameraDirector>> directors_;  // per camera, null: posed by the model
 

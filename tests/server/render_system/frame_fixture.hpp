@@ -66,10 +66,6 @@ class FrameServer {
     }
     cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides, 1.0 / sim_->control_dt_s());
     frames_ = std::make_unique<FrameService>(sim_->world().model(), cameras_);
-    if (objects_.gimbals) {
-      objects::GimbalSet* g = objects_.gimbals;
-      frames_->set_before_capture([g, this] { g->before_step(*sim_); });
-    }
     runner_ = std::make_unique<sim::Runner>(*sim_, o.rate);
     api::ApiConfig config;
     config.port = 0;
