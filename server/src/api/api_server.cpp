@@ -185,8 +185,30 @@ void ApiServer::reply_in_order(uint64_t conn, Json reply) {
 // ---------------------------------------------------------------------------------------------------
 // the gate: requests, events, lockstep and pause, all on the loop thread before a control step
 
+namespace {
+
+// Holds the line server's wake-ups for one pass of the gate (LineServer::hold_wakeups): what the
+// pass sends a connection leaves in one write. Released before the gate waits, and on leaving it.
+class WakeupHold {
+ public:
+  explicit WakeupHold(LineServer& server) : server_(&server) { server.hold_wakeups(); }
+  ~WakeupHold() { release(); }
+  WakeupHold(const WakeupHold&) = delete;
+  WakeupHold& operator=(const WakeupHold&) = delete;
+  void release() {
+    if (server_ != nullptr) server_->release_wakeups();
+    server_ = nullptr;
+  }
+
+ private:
+  LineServer* server_;
+};
+
+}  // namespace
+
 void ApiServer::on_gate() {
   for (;;) {
+    WakeupHold hold(*server_);
     // events before requests, so that a subscription's backlog and its stream neither overlap nor skip
     forward_events();
     drain();
@@ -202,7 +224,7 @@ void ApiServer::on_gate() {
       if (shutdown_) return;
     }
     if (stop_check_ && stop_check_()) return;
-    for (OpGroup* g : groups_) g->on_gate([this](uint64_t conn, const Json& m) { send(conn, m); });
+    for (OpGroup* g : groups_) g->on_gate(send_fn_, in_lockstep_fn_);
     announce_ticks();
     uint64_t seq_progress_seen = 0;
     {
@@ -236,6 +258,7 @@ void ApiServer::on_gate() {
                                     {"result", {{"time_s", sim_.time_s()}, {"paused", true}}}});
       step_reply_.reset();
     }
+    hold.release();
     // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)
     // (the endpoint's progress call wakes a seq wait at once; the poll is the fallback for a waiter
     // that makes none)
@@ -295,7 +318,7 @@ void ApiServer::announce_ticks() {
   if (!due.empty() && seq_waiter_ != nullptr) seq_waiter_->flush_sent();
   for (uint64_t conn : due) {
     // what else is due at this tick (the frames) reaches the client before the tick (docs/protocol.md)
-    for (OpGroup* g : groups_) g->before_tick(conn);
+    for (OpGroup* g : groups_) g->before_tick(conn, send_fn_);
     const int64_t tick = lockstep_.begin_tick(conn, now);
     send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
   }

@@ -176,6 +176,9 @@ class ApiServer {
   // every op, registered before start() and read-only afterwards (the I/O thread looks names up)
   OpTable ops_;
   std::vector<OpGroup*> groups_;  // their hooks; set before start()
+  // what the groups' hooks are given: send on this server, and whether a connection is in lockstep
+  const OpGroup::Send send_fn_ = [this](uint64_t conn, const Json& m) { send(conn, m); };
+  const OpGroup::InLockstep in_lockstep_fn_ = [this](uint64_t conn) { return lockstep_.joined(conn); };
   VehicleOps vehicle_ops_;
   std::unique_ptr<FrameStream> frames_;
 

@@ -45,7 +45,7 @@ void FrameStream::register_unavailable(OpTable& table) {
   }
 }
 
-void FrameStream::before_tick(uint64_t conn) {
+void FrameStream::before_tick(uint64_t conn, const Send& /*send*/) {
   if (has_subscriptions(conn)) service_.wait_delivered();
 }
 

@@ -34,7 +34,7 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
   // The camera ops of a server that renders no frames: each answers not_available.
   static void register_unavailable(OpTable& table);
   // A tick is due for conn: the frames due at it reach the client before the tick (docs/protocol.md).
-  void before_tick(uint64_t conn) override;
+  void before_tick(uint64_t conn, const Send& send) override;
   // A reset ends every blackout: their times were on the old clock.
   void on_reset() override { clear_blackouts(); }
   void on_disconnect(uint64_t conn) override;  // Loop thread.

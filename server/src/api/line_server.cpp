@@ -111,8 +111,19 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
       total_pending_ += data.size();
     }
   }
-  wake();
+  if (wakeups_held_.load()) {
+    wake_deferred_.store(true);
+    // released meanwhile: this send's wake-up may have been missed by release_wakeups()
+    if (!wakeups_held_.load() && wake_deferred_.exchange(false)) wake();
+  } else {
+    wake();
+  }
   return true;
+}
+
+void LineServer::release_wakeups() {
+  wakeups_held_.store(false);
+  if (wake_deferred_.exchange(false)) wake();
 }
 
 void LineServer::close_when_sent(uint64_t conn) {

@@ -57,6 +57,12 @@ class LineServer {
   bool send(uint64_t conn, const std::string& data);
   // Closes a connection once everything queued for it has been written (after its EOF). Thread-safe.
   void close_when_sent(uint64_t conn);
+  // While held, send() queues without waking the I/O thread; release_wakeups() wakes it once if
+  // anything was queued meanwhile. The sim API holds them for one pass of its gate, so a connection's
+  // messages of that pass (replies, radio batch, tick) leave in one write and reach the client as
+  // one wake-up instead of one each. Never hold across a wait. Loop thread (one holder at a time).
+  void hold_wakeups() { wakeups_held_.store(true); }
+  void release_wakeups();
   // Connections refused or dropped for the limits above, and accepts that failed for want of file
   // descriptors. Thread-safe.
   uint64_t overload_drops() const { return overload_drops_.load(); }
@@ -106,6 +112,8 @@ class LineServer {
   // I/O thread has drained it (a radio fan-out queues thousands of events a sim second, one syscall and
   // one thread wake-up each before)
   std::atomic<bool> wake_pending_{false};
+  std::atomic<bool> wakeups_held_{false};
+  std::atomic<bool> wake_deferred_{false};  // a send() while held: release_wakeups() wakes
   uint16_t port_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;

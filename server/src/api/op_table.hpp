@@ -95,15 +95,24 @@ class OpGroup {
  public:
   using Json = nlohmann::json;
   using Send = std::function<void(uint64_t conn, const Json& message)>;
+  // Whether a connection gates the clock now (lockstep): it cannot act between its ticks, so what
+  // is due for it may wait for before_tick.
+  using InLockstep = std::function<bool(uint64_t conn)>;
   virtual ~OpGroup() = default;
   // Adds this group's ops to table. Called once, by ApiServer::add_group, before the server starts.
   virtual void register_ops(OpTable& table) = 0;
   // At every pass of the gate, before tick announcements: push async messages with send, so what
   // the group sends for sim time t reaches a lockstep client before tick t.
-  virtual void on_gate(const Send& send) { (void)send; }
+  virtual void on_gate(const Send& send, const InLockstep& in_lockstep) {
+    (void)send;
+    (void)in_lockstep;
+  }
   // A tick is about to be announced to conn: whatever is due for it at the tick must be sent by
-  // now.
-  virtual void before_tick(uint64_t conn) { (void)conn; }
+  // now (with send).
+  virtual void before_tick(uint64_t conn, const Send& send) {
+    (void)conn;
+    (void)send;
+  }
   // The simulation was reset: sim time starts again at 0.
   virtual void on_reset() {}
   // A connection closed.

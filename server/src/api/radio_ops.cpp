@@ -310,13 +310,31 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
   return true;
 }
 
-void RadioOps::on_gate(const Send& send) {
-  // frames that arrived by now go out before this gate announces its ticks; frames sent at this
-  // time go on air at the step, once every lockstep client has sent its own (deterministic draws)
+void RadioOps::on_gate(const Send& send, const InLockstep& in_lockstep) {
+  // frames that arrived by now go out before this gate announces its ticks (a lockstep batch
+  // subscriber's just before its own tick); frames sent at this time go on air at the step, once
+  // every lockstep client has sent its own (deterministic draws)
   radio_.advance(false);
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
-  if (arrived.empty() || subscriptions_.empty()) return;
-  std::map<uint64_t, Json> batches;  // conn -> its frames of this gate, for batch subscribers
+  if (!arrived.empty() && !subscriptions_.empty()) queue_deliveries(arrived, send);
+  // what is held for a connection that has left lockstep (or never joined) goes now
+  for (auto it = held_.begin(); it != held_.end();) {
+    const uint64_t conn = (it++)->first;
+    if (!in_lockstep(conn)) send_held(conn, send);
+  }
+}
+
+void RadioOps::before_tick(uint64_t conn, const Send& send) { send_held(conn, send); }
+
+void RadioOps::send_held(uint64_t conn, const Send& send) {
+  const auto it = held_.find(conn);
+  if (it == held_.end()) return;
+  Json frames = std::move(it->second);
+  held_.erase(it);
+  send(conn, Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
+}
+
+void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send) {
   // a broadcast is one delivery per receiver with the same bytes: encoded once per frame
   std::map<std::pair<size_t, uint64_t>, std::string> encoded;  // (from, seq) -> base64
   auto data_b64 = [&](const radio::Delivery& d) -> const std::string& {
@@ -335,7 +353,7 @@ void RadioOps::on_gate(const Send& send) {
           compact = Json::array(
               {d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, data_b64(d)});
         }
-        Json& batch = batches[conn];
+        Json& batch = held_[conn];
         if (batch.is_null()) batch = Json::array();
         batch.push_back(compact);
         continue;
@@ -353,11 +371,11 @@ void RadioOps::on_gate(const Send& send) {
       send(conn, event);
     }
   }
-  for (auto& [conn, frames] : batches) {
-    send(conn, Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
-  }
 }
 
-void RadioOps::on_disconnect(uint64_t conn) { subscriptions_.erase(conn); }
+void RadioOps::on_disconnect(uint64_t conn) {
+  subscriptions_.erase(conn);
+  held_.erase(conn);
+}
 
 }  // namespace uavsim::server::api

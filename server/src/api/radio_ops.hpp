@@ -3,7 +3,8 @@
 // gcs_link_impair, gcs_link_stats for the ground-station link relay (seed 6.3). Received frames
 // stream to subscribers at the gate, before the tick at whose sim time they arrive: one
 // {"event": "radio", ...} line each, or, for a connection that subscribed with "batch": true, one
-// {"event": "radio_batch", "frames": [...]} line a gate with all of them (a flock's broadcasts fan
+// {"event": "radio_batch", "frames": [...]} line a gate with all of them (a lockstep connection's:
+// one a tick, with everything since its last, just before the tick) (a flock's broadcasts fan
 // out to every neighbour: thousands of frames a sim second, where a line each costs the server a
 // serialisation and a socket write and the client a parse, per frame).
 #pragma once
@@ -33,7 +34,12 @@ class RadioOps : public OpGroup {
   // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
               std::string* code, std::string* message);
-  void on_gate(const Send& send) override;
+  // Frames that arrived by now: radio events at once; a batch subscriber's in one radio_batch, at
+  // once, or, for a connection in lockstep, with the frames of the next gates, just before its tick.
+  void on_gate(const Send& send, const InLockstep& in_lockstep) override;
+  // The radio_batch a lockstep connection's frames wait in goes out before its tick.
+  void before_tick(uint64_t conn, const Send& send) override;
+  void on_reset() override { held_.clear(); }
   void on_disconnect(uint64_t conn) override;
 
  private:
@@ -49,6 +55,13 @@ class RadioOps : public OpGroup {
     bool batch = false;         // one radio_batch line a gate instead of a radio line a frame
   };
   std::map<uint64_t, Subscription> subscriptions_;  // by connection
+  // batch frames not sent yet, by connection: [to, from, seq, broadcast, time, sent_time, data_b64]
+  // each; a lockstep connection's wait here for its tick (it cannot act on them before: one line and
+  // one wake-up a tick instead of one a gate)
+  std::map<uint64_t, Json> held_;
+  void send_held(uint64_t conn, const Send& send);
+  // adds the deliveries to held_ (batch subscribers) or sends a radio event each
+  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send);
 };
 
 }  // namespace uavsim::server::api

@@ -88,7 +88,7 @@ bool SensorOps::handle(uint64_t conn, const std::string& op, const Json& request
   return true;
 }
 
-void SensorOps::on_gate(const Send& send) {
+void SensorOps::on_gate(const Send& send, const InLockstep& /*in_lockstep*/) {
   if (subscriptions_.empty()) return;
   // one reading per vehicle per gate, sent to each subscriber whose last state differs
   std::map<size_t, std::vector<bool>> now;

@@ -39,7 +39,7 @@ class SensorOps : public OpGroup {
   // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
   bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
               std::string* code, std::string* message);
-  void on_gate(const Send& send) override;
+  void on_gate(const Send& send, const InLockstep& in_lockstep) override;
   void on_disconnect(uint64_t conn) override;
 
  private:

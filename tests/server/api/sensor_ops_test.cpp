@@ -49,7 +49,7 @@ Json call(SensorOps& ops, const std::string& op, const Json& request, uint64_t c
 
 std::vector<Json> gate(SensorOps& ops) {
   std::vector<Json> sent;
-  ops.on_gate([&](uint64_t, const Json& m) { sent.push_back(m); });
+  ops.on_gate([&](uint64_t, const Json& m) { sent.push_back(m); }, [](uint64_t) { return false; });
   return sent;
 }
 

@@ -193,8 +193,8 @@ TEST(RadioApi, ALockstepClientGetsAFrameBeforeTheTickAtWhichItArrives) {
     last_tick_s = t;
     ++ticks;
     ASSERT_TRUE(c.request({{"op", "radio_config"}, {"latency_s", ticks % 2 ? 0.0095 : 0.0}})["ok"]);
-    ASSERT_TRUE(
-        c.request(send_op(0, "broadcast", common::base64_encode(std::vector<uint8_t>(10, 3))))["ok"]);
+    ASSERT_TRUE(c.request(
+        send_op(0, "broadcast", common::base64_encode(std::vector<uint8_t>(10, 3))))["ok"]);
     ASSERT_TRUE(c.request({{"op", "done"}, {"tick", m["tick"]}})["ok"]);
   }
   EXPECT_GE(radio_events, 18);
@@ -245,8 +245,71 @@ TEST(RadioApi, ABatchSubscriberGetsOneLineAGateWithTheSameFramesInTheSameOrder) 
 
   // "batch" is a boolean of radio_subscribe only
   EXPECT_EQ(error_code(batch.request({{"op", "radio_subscribe"}, {"batch", 1}})), "bad_field");
-  EXPECT_EQ(error_code(batch.request({{"op", "radio_unsubscribe"}, {"batch", false}})), "bad_field");
+  EXPECT_EQ(error_code(batch.request({{"op", "radio_unsubscribe"}, {"batch", false}})),
+            "bad_field");
   EXPECT_TRUE(batch.request({{"op", "status"}})["ok"]);
+}
+
+TEST(RadioApi, ALockstepBatchSubscriberGetsItsFramesInOneLineJustBeforeEachTick) {
+  RadioServer server;
+  TestClient lockstep(server.port());
+  TestClient free_running(server.port());
+  ASSERT_TRUE(lockstep.request({{"op", "radio_subscribe"}, {"batch", true}})["ok"]);
+  ASSERT_TRUE(free_running.request({{"op", "radio_subscribe"}, {"batch", true}})["ok"]);
+  constexpr double kPeriod_s = 0.02;
+  ASSERT_TRUE(lockstep.request({{"op", "lockstep_join"}, {"period_s", kPeriod_s}})["ok"]);
+  ASSERT_TRUE(lockstep.request({{"op", "resume"}})["ok"]);
+  // at every tick vehicle 0 broadcasts three 100-byte frames; on air one after the other (3.4 ms
+  // each at the default bit rate), so they arrive at three different control steps of the period
+  const std::string frame = common::base64_encode(std::vector<uint8_t>(100, 7));
+  double last_tick_s = -1.0;
+  bool batch_since_tick = false;
+  int batches = 0;
+  for (int ticks = 0; ticks < 12;) {
+    const Json m = lockstep.read_message();
+    ASSERT_FALSE(m.is_null()) << "no message";
+    const std::string event = m.value("event", "");
+    if (event == "radio_batch") {
+      EXPECT_FALSE(batch_since_tick) << "a second radio_batch in one period: " << m;
+      batch_since_tick = true;
+      ++batches;
+      // the frames that arrived since the last tick: every one of the three, none from later
+      ASSERT_EQ(m["frames"].size(), 3u) << m;
+      for (const Json& f : m["frames"]) {
+        EXPECT_GT(f[4].get<double>(), last_tick_s) << m;
+        EXPECT_LE(f[4].get<double>(), last_tick_s + kPeriod_s + kTimeTol_s) << m;
+      }
+      // and the tick it precedes is the very next line
+      const Json next = lockstep.read_message();
+      ASSERT_EQ(next.value("event", ""), "tick") << next;
+      EXPECT_NEAR(next["time"].get<double>(), last_tick_s + kPeriod_s, kTimeTol_s);
+      EXPECT_NEAR(m["time"].get<double>(), next["time"].get<double>(), kTimeTol_s);
+      last_tick_s = next["time"].get<double>();
+      batch_since_tick = false;
+      ++ticks;
+      for (int k = 0; k < 3; ++k)
+        ASSERT_TRUE(lockstep.request(send_op(0, "broadcast", frame))["ok"]);
+      ASSERT_TRUE(lockstep.request({{"op", "done"}, {"tick", next["tick"]}})["ok"]);
+      continue;
+    }
+    if (event != "tick") continue;
+    EXPECT_EQ(ticks, 0) << "a tick without the batch of the frames sent at the one before: " << m;
+    last_tick_s = m["time"].get<double>();
+    ++ticks;
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(lockstep.request(send_op(0, "broadcast", frame))["ok"]);
+    ASSERT_TRUE(lockstep.request({{"op", "done"}, {"tick", m["tick"]}})["ok"]);
+  }
+  EXPECT_EQ(batches, 11);
+  // a connection outside lockstep gets its frames at the gate they arrive at: three lines a period
+  int lines = 0;
+  size_t frames = 0;
+  while (frames < 33) {
+    const Json b = free_running.next_event("radio_batch");
+    ASSERT_FALSE(b.is_null()) << frames;
+    ++lines;
+    frames += b["frames"].size();
+  }
+  EXPECT_EQ(lines, 33);
 }
 
 TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
