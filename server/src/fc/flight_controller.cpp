@@ -1,12 +1,11 @@
 #include "fc/flight_controller.hpp"
-#include "fc/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <stdexcept>
 
+#include "fc/angles.hpp"
 #include "fc/fc_impl.hpp"
 
 namespace uavsim::server::fc {
@@ -87,35 +86,26 @@ FlightController::Impl::Impl(const airframe::AirframeParams& airframe, uint64_t 
     }
   }
   hover_thrust_n_ = mass_kg_ * kGravityM_S2;
-  mission_.reserve(16);
-  mission_.push_back(MissionItem{});  // item 0: home
-}
-
-void FlightController::Impl::status(int severity, std::string_view text) const {
-  FixedText t;
-  t.severity = severity;
-  const std::size_t n = std::min(text.size(), t.text.size() - 1);
-  std::memcpy(t.text.data(), text.data(), n);
-  t.text[n] = '\0';
-  texts_.push(t);
+  mission_.items.reserve(16);
+  mission_.items.push_back(MissionItem{});  // item 0: home
 }
 
 void FlightController::Impl::set_home(const Eigen::Vector3d& home) {
-  home_enu_m_ = home;
-  home_set_ = true;
+  home_.position_enu_m = home;
+  home_.set = true;
   // mission item 0 is home, as in ArduPilot
-  if (!mission_.empty()) mission_[0].position_enu_m = home;
+  if (!mission_.items.empty()) mission_.items[0].position_enu_m = home;
 }
 
-NavLimits FlightController::Impl::nav_limits() const {
-  const DerivedParams& d = params_.derived();
-  NavLimits lim;
-  lim.speed_xy_m_s = speed_xy_override_m_s_ > 0.0 ? speed_xy_override_m_s_ : d.wp_speed_m_s;
-  lim.speed_up_m_s = speed_up_override_m_s_ > 0.0 ? speed_up_override_m_s_ : d.wp_speed_up_m_s;
-  lim.speed_dn_m_s = speed_dn_override_m_s_ > 0.0 ? speed_dn_override_m_s_ : d.wp_speed_dn_m_s;
-  lim.accel_xy_m_s2 = d.wp_accel_m_s2;
-  lim.accel_z_m_s2 = d.wp_accel_z_m_s2;
-  return lim;
+ModeContext FlightController::Impl::mode_context() {
+  return ModeContext({estimator_.state(), now(), params_, home_},
+                     {flight_, command_, yaw_, nav_, pilot_, guided_, mission_, texts_}, *this);
+}
+
+void FlightController::Impl::restart_for_takeoff() {
+  land_detect_s_ = 0.0;
+  pos_ctrl_.reset();
+  att_ctrl_.reset();
 }
 
 void FlightController::Impl::update(double time_s, const TruthState& truth,
@@ -124,7 +114,7 @@ void FlightController::Impl::update(double time_s, const TruthState& truth,
   // reject non-finite input: repeat the previous commands, count it
   if (!std::isfinite(time_s) || !finite(truth) || !std::isfinite(battery.consumed_mah)) {
     ++nonfinite_inputs_;
-    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = armed_ ? motor_cmd_[k] : 0.0;
+    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = flight_.armed ? motor_cmd_[k] : 0.0;
     return;
   }
   // dt from successive sim times
@@ -139,31 +129,31 @@ void FlightController::Impl::update(double time_s, const TruthState& truth,
   const EstimatedState& est = estimator_.state();
   estimator_converged_ = estimator_.converged(time_s);
   // home at the first good fix, until arming sets it again
-  if (!home_set_ && est.gps_ok && estimator_converged_) set_home(est.position_enu_m);
+  if (!home_.set && est.gps_ok && estimator_converged_) set_home(est.position_enu_m);
 
   if (dt_s <= 0.0) {
-    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = armed_ ? motor_cmd_[k] : 0.0;
+    for (std::size_t k = 0; k < n; ++k) motor_cmd[k] = flight_.armed ? motor_cmd_[k] : 0.0;
     return;
   }
 
   // failsafes, then the mode's setpoints, then the cascade
   run_failsafes();
-  if (armed_) {
+  if (flight_.armed) {
     monitor_motors(dt_s);
     run_mode(dt_s);
     update_yaw(dt_s);
     run_land_detector(dt_s);
   }
-  if (!armed_) {
+  if (!flight_.armed) {
     pos_ctrl_.reset();
     att_ctrl_.reset();
     for (std::size_t k = 0; k < n; ++k) motor_cmd_[k] = 0.0;
-  } else if (control_ == ControlKind::kIdle) {
+  } else if (command_.kind == ControlKind::kIdle) {
     // on the ground: spin at MOT_SPIN_ARM, keep the controllers fresh for take-off
     pos_ctrl_.reset();
     att_ctrl_.reset();
-    yaw_target_rad_ = estimator_.yaw_enu_rad();
-    yaw_cmd_rad_ = yaw_target_rad_;
+    yaw_.target_rad = estimator_.yaw_enu_rad();
+    yaw_.cmd_rad = yaw_.target_rad;
     for (std::size_t k = 0; k < n; ++k) motor_cmd_[k] = params_.values().mot_spin_arm;
     mixer_status_ = MixerStatus{};
     mixer_status_.thrust_n = 0.0;
@@ -175,8 +165,10 @@ void FlightController::Impl::update(double time_s, const TruthState& truth,
 
 void FlightController::Impl::monitor_motors(double dt_s) {
   // (commands of the last step, IMU now) => a lost rotor, once, then the degraded mixer
-  const double height = estimator_.state().position_enu_m.z() - (home_set_ ? home_enu_m_.z() : 0.0);
-  const bool airborne = !landed_ && control_ != ControlKind::kIdle && height > kMonitorMinHeightM &&
+  const double height =
+      estimator_.state().position_enu_m.z() - (home_.set ? home_.position_enu_m.z() : 0.0);
+  const bool airborne = !flight_.landed && command_.kind != ControlKind::kIdle &&
+                        height > kMonitorMinHeightM &&
                         collective_demand_n_ > kMonitorMinThrustFraction * hover_thrust_n_;
   motor_monitor_.update(motor_cmd_.data(), frame_.imu.gyro_body_rad_s, frame_.imu.accel_body_m_s2,
                         dt_s, airborne);
@@ -196,18 +188,18 @@ void FlightController::Impl::monitor_motors(double dt_s) {
 
 void FlightController::Impl::update_yaw(double dt_s) {
   // yaw-rate mode integrates the rate; otherwise slew the command toward the target
-  if (yaw_rate_mode_) {
-    yaw_target_rad_ = wrap_pi(yaw_target_rad_ + yaw_rate_cmd_rad_s_ * dt_s);
-    yaw_cmd_rad_ = yaw_target_rad_;
-    yaw_rate_ff_rad_s_ = yaw_rate_cmd_rad_s_;
+  if (yaw_.rate_mode) {
+    yaw_.target_rad = wrap_pi(yaw_.target_rad + yaw_.rate_cmd_rad_s * dt_s);
+    yaw_.cmd_rad = yaw_.target_rad;
+    yaw_.rate_ff_rad_s = yaw_.rate_cmd_rad_s;
     return;
   }
-  const double slew = yaw_slew_override_rad_s_ > 0.0 ? yaw_slew_override_rad_s_
-                                                     : params_.derived().slew_yaw_rad_s;
-  const double err = wrap_pi(yaw_target_rad_ - yaw_cmd_rad_);
+  const double slew =
+      yaw_.slew_override_rad_s > 0.0 ? yaw_.slew_override_rad_s : params_.derived().slew_yaw_rad_s;
+  const double err = wrap_pi(yaw_.target_rad - yaw_.cmd_rad);
   const double step = std::clamp(err, -slew * dt_s, slew * dt_s);
-  yaw_cmd_rad_ = wrap_pi(yaw_cmd_rad_ + step);
-  yaw_rate_ff_rad_s_ = step / dt_s;
+  yaw_.cmd_rad = wrap_pi(yaw_.cmd_rad + step);
+  yaw_.rate_ff_rad_s = step / dt_s;
 }
 
 void FlightController::Impl::run_cascade(double dt_s) {
@@ -223,35 +215,39 @@ void FlightController::Impl::run_cascade(double dt_s) {
   // a lost rotor: yaw is no longer controlled, the heading target follows the vehicle (it may turn)
   // and only the yaw rate is damped as far as the degraded mixer allows
   if (lost_motor_ >= 0) {
-    yaw_target_rad_ = estimator_.yaw_enu_rad();
-    yaw_cmd_rad_ = yaw_target_rad_;
-    yaw_rate_ff_rad_s_ = 0.0;
+    yaw_.target_rad = estimator_.yaw_enu_rad();
+    yaw_.cmd_rad = yaw_.target_rad;
+    yaw_.rate_ff_rad_s = 0.0;
   }
   const Eigen::Vector3d z_body_enu = est.q_enu_body * Eigen::Vector3d::UnitZ();
   // the collective that gives the demanded vertical thrust at the current tilt
   const double cos_tilt = std::max(z_body_enu.z(), 0.5);
-  if (control_ == ControlKind::kPosition) {
-    const Eigen::Vector3d thrust_enu = pos_ctrl_.update(
-        est, estimator_.accel_z_filtered_m_s2(), sp_, p, d, mass_kg_, dt_s, thrust_limits);
-    q_attitude_target_ = attitude_from_thrust(thrust_enu, yaw_cmd_rad_, d.angle_max_rad);
+  if (command_.kind == ControlKind::kPosition) {
+    const Eigen::Vector3d thrust_enu =
+        pos_ctrl_.update(est, estimator_.accel_z_filtered_m_s2(), command_.setpoint, p, d, mass_kg_,
+                         dt_s, thrust_limits);
+    command_.q_attitude_target = attitude_from_thrust(thrust_enu, yaw_.cmd_rad, d.angle_max_rad);
     collective_n = thrust_enu.z() / cos_tilt;
-    torque_body_nm = att_ctrl_.update(q_attitude_target_, yaw_rate_ff_rad_s_, est.q_enu_body,
-                                      est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
+    torque_body_nm =
+        att_ctrl_.update(command_.q_attitude_target, yaw_.rate_ff_rad_s, est.q_enu_body,
+                         est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
   } else {
     // attitude or body rates given; collective from the climb-rate controller or held fixed
-    if (attitude_climb_) {
-      const Eigen::Vector3d thrust_enu = pos_ctrl_.update(
-          est, estimator_.accel_z_filtered_m_s2(), sp_, p, d, mass_kg_, dt_s, thrust_limits);
+    if (command_.attitude_climb) {
+      const Eigen::Vector3d thrust_enu =
+          pos_ctrl_.update(est, estimator_.accel_z_filtered_m_s2(), command_.setpoint, p, d,
+                           mass_kg_, dt_s, thrust_limits);
       collective_n = thrust_enu.z() / cos_tilt;
     } else {
-      collective_n = fixed_thrust_n_;
+      collective_n = command_.fixed_thrust_n;
     }
-    if (control_ == ControlKind::kBodyRate) {
-      torque_body_nm = att_ctrl_.update_rate(rate_target_body_rad_s_, est.rate_body_rad_s,
+    if (command_.kind == ControlKind::kBodyRate) {
+      torque_body_nm = att_ctrl_.update_rate(command_.rate_target_body_rad_s, est.rate_body_rad_s,
                                              inertia_, p, dt_s, rate_limits);
     } else {
-      torque_body_nm = att_ctrl_.update(q_attitude_target_, yaw_rate_ff_rad_s_, est.q_enu_body,
-                                        est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
+      torque_body_nm =
+          att_ctrl_.update(command_.q_attitude_target, yaw_.rate_ff_rad_s, est.q_enu_body,
+                           est.rate_body_rad_s, inertia_, p, d, dt_s, rate_limits);
     }
   }
   // low collective demand: ground contact is likely, relax the rate integrators (ArduCopter)
@@ -279,7 +275,7 @@ void FlightController::update(double time_s, const TruthState& truth,
 
 CommandResult FlightController::arm(bool force) {
   Impl& s = *impl_;
-  if (s.armed_) return CommandResult::kAccepted;
+  if (s.flight_.armed) return CommandResult::kAccepted;
   // modes that cannot arm refuse even a forced arm (ArduCopter's allows_arming)
   if (!s.active_mode().allows_arming()) {
     s.status(2, std::string("Arm: Mode not armable (") + mode_name(s.mode_) + ")");
@@ -288,9 +284,9 @@ CommandResult FlightController::arm(bool force) {
   if (!force && s.params_.values().arming_check > 0.0 && !s.prearm_checks(true)) {
     return CommandResult::kDenied;
   }
-  s.armed_ = true;
-  s.landed_ = true;
-  s.takeoff_active_ = false;
+  s.flight_.armed = true;
+  s.flight_.landed = true;
+  s.flight_.takeoff_active = false;
   s.landed_since_s_ = s.now();
   s.land_detect_s_ = 0.0;
   s.fs_gcs_active_ = false;
@@ -298,9 +294,9 @@ CommandResult FlightController::arm(bool force) {
   s.fs_ekf_active_ = false;
   s.motor_monitor_.reset();
   s.lost_motor_ = -1;
-  s.control_ = ControlKind::kIdle;
-  s.yaw_target_rad_ = s.estimator_.yaw_enu_rad();
-  s.yaw_cmd_rad_ = s.yaw_target_rad_;
+  s.command_.kind = ControlKind::kIdle;
+  s.yaw_.target_rad = s.estimator_.yaw_enu_rad();
+  s.yaw_.cmd_rad = s.yaw_.target_rad;
   // home where we arm (ArduCopter sets home at arming)
   if (s.estimator_.position_ok()) s.set_home(s.estimator_.state().position_enu_m);
   s.init_mode_state();
@@ -310,8 +306,8 @@ CommandResult FlightController::arm(bool force) {
 
 CommandResult FlightController::disarm(bool force) {
   Impl& s = *impl_;
-  if (!s.armed_) return CommandResult::kAccepted;
-  if (!force && !s.landed_) {
+  if (!s.flight_.armed) return CommandResult::kAccepted;
+  if (!force && !s.flight_.landed) {
     s.status(4, "Disarm: vehicle not landed");
     return CommandResult::kDenied;
   }
@@ -328,17 +324,18 @@ CommandResult FlightController::takeoff(double altitude_above_home_m) {
   if (!std::isfinite(altitude_above_home_m)) return CommandResult::kInvalid;
   if (altitude_above_home_m <= 0.0) altitude_above_home_m = s.params_.derived().pilot_tkoff_alt_m;
   if (altitude_above_home_m <= 0.0) return CommandResult::kInvalid;
-  if (!s.armed_) return CommandResult::kDenied;
+  if (!s.flight_.armed) return CommandResult::kDenied;
   // user take-off: GUIDED, LOITER, ALT_HOLD, only from the ground, only upward
   if (s.mode_ != Mode::kGuided && s.mode_ != Mode::kLoiter && s.mode_ != Mode::kAltHold) {
     return CommandResult::kFailed;
   }
-  if (!s.landed_) return CommandResult::kFailed;
-  const double base_z = s.home_set_ ? s.home_enu_m_.z() : s.estimator_.state().position_enu_m.z();
+  if (!s.flight_.landed) return CommandResult::kFailed;
+  const double base_z =
+      s.home_.set ? s.home_.position_enu_m.z() : s.estimator_.state().position_enu_m.z();
   const double target_z = base_z + altitude_above_home_m;
   if (target_z <= s.estimator_.state().position_enu_m.z()) return CommandResult::kFailed;
-  s.start_takeoff(target_z);
-  if (s.mode_ == Mode::kGuided) s.guided_sub_ = GuidedSub::kTakeoff;
+  s.mode_context().start_takeoff(target_z);
+  if (s.mode_ == Mode::kGuided) s.guided_.sub = GuidedSub::kTakeoff;
   return CommandResult::kAccepted;
 }
 
@@ -356,41 +353,41 @@ CommandResult FlightController::set_guided_target(const GuidedTarget& t) {
     return CommandResult::kInvalid;
   }
   if (s.mode_ != Mode::kGuided) return CommandResult::kDenied;
-  s.guided_target_ = t;
-  s.guided_cmd_time_s_ = s.now();
-  s.guided_new_ = true;
+  s.guided_.target = t;
+  s.guided_.cmd_time_s = s.now();
+  s.guided_.is_new = true;
   // yaw: a heading, a rate, or keep the current behaviour
   if (t.yaw_enu_rad) {
-    s.yaw_target_rad_ = wrap_pi(*t.yaw_enu_rad);
-    s.yaw_fixed_ = true;
-    s.yaw_rate_mode_ = false;
-    s.yaw_slew_override_rad_s_ = 0.0;
+    s.yaw_.target_rad = wrap_pi(*t.yaw_enu_rad);
+    s.yaw_.fixed = true;
+    s.yaw_.rate_mode = false;
+    s.yaw_.slew_override_rad_s = 0.0;
   } else if (t.yaw_rate_rad_s) {
-    s.yaw_rate_cmd_rad_s_ = *t.yaw_rate_rad_s;
-    s.yaw_rate_mode_ = true;
-    s.yaw_fixed_ = true;
+    s.yaw_.rate_cmd_rad_s = *t.yaw_rate_rad_s;
+    s.yaw_.rate_mode = true;
+    s.yaw_.fixed = true;
   }
   // dispatch as ArduCopter: pos+vel(+acc), vel(+acc), acc, pos, else hold
-  const bool landed = s.landed_ || !s.armed_;
-  const GuidedSub old_sub = s.guided_sub_;
+  const bool landed = s.flight_.landed || !s.flight_.armed;
+  const GuidedSub old_sub = s.guided_.sub;
   if (t.position_enu_m && (t.velocity_enu_m_s || t.accel_enu_m_s2)) {
-    s.guided_sub_ = GuidedSub::kPosVelAccel;
-    s.nav_active_ = false;
+    s.guided_.sub = GuidedSub::kPosVelAccel;
+    s.nav_.active = false;
   } else if (t.velocity_enu_m_s) {
-    s.guided_sub_ = GuidedSub::kVelAccel;
-    s.nav_active_ = false;
+    s.guided_.sub = GuidedSub::kVelAccel;
+    s.nav_.active = false;
   } else if (t.accel_enu_m_s2) {
-    s.guided_sub_ = GuidedSub::kAccel;
-    s.nav_active_ = false;
+    s.guided_.sub = GuidedSub::kAccel;
+    s.nav_.active = false;
   } else if (t.position_enu_m) {
-    s.guided_sub_ = GuidedSub::kWp;
-    s.takeoff_active_ = s.takeoff_active_ && landed;
-    if (!landed) s.start_nav_to(*t.position_enu_m);
+    s.guided_.sub = GuidedSub::kWp;
+    s.flight_.takeoff_active = s.flight_.takeoff_active && landed;
+    if (!landed) s.mode_context().start_nav_to(*t.position_enu_m);
   } else if (!t.yaw_enu_rad && !t.yaw_rate_rad_s) {
-    s.guided_sub_ = GuidedSub::kHold;
-    if (!landed) s.start_hold();
+    s.guided_.sub = GuidedSub::kHold;
+    if (!landed) s.mode_context().start_hold();
   }
-  s.guided_reinit_ = s.guided_reinit_ || s.guided_sub_ != old_sub;
+  s.guided_.reinit = s.guided_.reinit || s.guided_.sub != old_sub;
   return CommandResult::kAccepted;
 }
 
@@ -403,11 +400,11 @@ CommandResult FlightController::set_attitude_target(const AttitudeTarget& t) {
   }
   if (!t.q_enu_body && !t.rate_body_rad_s) return CommandResult::kInvalid;
   if (s.mode_ != Mode::kGuided) return CommandResult::kDenied;
-  s.attitude_target_ = t;
-  if (t.q_enu_body) s.attitude_target_.q_enu_body = t.q_enu_body->normalized();
-  s.guided_cmd_time_s_ = s.now();
-  s.guided_sub_ = GuidedSub::kAttitude;
-  s.nav_active_ = false;
+  s.guided_.attitude = t;
+  if (t.q_enu_body) s.guided_.attitude.q_enu_body = t.q_enu_body->normalized();
+  s.guided_.cmd_time_s = s.now();
+  s.guided_.sub = GuidedSub::kAttitude;
+  s.nav_.active = false;
   return CommandResult::kAccepted;
 }
 
@@ -420,17 +417,14 @@ CommandResult FlightController::set_pilot_input(const PilotInput& in, double tim
     return CommandResult::kInvalid;
   }
   if (s.params_.values().rc_override_time == 0.0) return CommandResult::kDenied;
-  s.pilot_ = in;
-  s.pilot_time_s_ = time_s;
+  s.pilot_.input = in;
+  s.pilot_.time_s = time_s;
   return CommandResult::kAccepted;
 }
 
 std::optional<PilotInput> FlightController::Impl::pilot() const {
   if (!active_mode().reads_pilot()) return std::nullopt;
-  const double timeout = params_.values().rc_override_time;
-  if (!pilot_time_s_ || timeout == 0.0) return std::nullopt;
-  if (timeout > 0.0 && now() - *pilot_time_s_ > timeout) return std::nullopt;
-  return pilot_;
+  return fresh_pilot_input(pilot_, params_.values(), now());
 }
 
 CommandResult FlightController::set_yaw(const YawCommand& command) {
@@ -438,12 +432,13 @@ CommandResult FlightController::set_yaw(const YawCommand& command) {
   if (!std::isfinite(command.yaw_enu_rad) || !std::isfinite(command.rate_rad_s) || command.rate_rad_s < 0.0) {
     return CommandResult::kInvalid;
   }
-  if (!s.armed_) return CommandResult::kFailed;
-  const double target = command.relative ? s.yaw_target_rad_ + command.yaw_enu_rad : command.yaw_enu_rad;
-  s.yaw_target_rad_ = wrap_pi(target);
-  s.yaw_fixed_ = true;
-  s.yaw_rate_mode_ = false;
-  s.yaw_slew_override_rad_s_ = command.rate_rad_s;
+  if (!s.flight_.armed) return CommandResult::kFailed;
+  const double target =
+      command.relative ? s.yaw_.target_rad + command.yaw_enu_rad : command.yaw_enu_rad;
+  s.yaw_.target_rad = wrap_pi(target);
+  s.yaw_.fixed = true;
+  s.yaw_.rate_mode = false;
+  s.yaw_.slew_override_rad_s = command.rate_rad_s;
   return CommandResult::kAccepted;
 }
 
@@ -453,9 +448,15 @@ CommandResult FlightController::change_speed(SpeedLimit limit, double speed_m_s)
     return CommandResult::kInvalid;
   }
   switch (limit) {
-    case SpeedLimit::kHorizontal: s.speed_xy_override_m_s_ = speed_m_s; break;
-    case SpeedLimit::kClimb: s.speed_up_override_m_s_ = speed_m_s; break;
-    case SpeedLimit::kDescent: s.speed_dn_override_m_s_ = speed_m_s; break;
+    case SpeedLimit::kHorizontal:
+      s.nav_.speed_xy_override_m_s = speed_m_s;
+      break;
+    case SpeedLimit::kClimb:
+      s.nav_.speed_up_override_m_s = speed_m_s;
+      break;
+    case SpeedLimit::kDescent:
+      s.nav_.speed_dn_override_m_s = speed_m_s;
+      break;
     default: return CommandResult::kInvalid;
   }
   return CommandResult::kAccepted;
@@ -466,28 +467,28 @@ CommandResult FlightController::rtl() { return set_mode(Mode::kRtl); }
 
 void FlightController::set_mission(std::vector<MissionItem> items) {
   Impl& s = *impl_;
-  s.mission_ = std::move(items);
-  if (s.mission_.empty()) s.mission_.push_back(MissionItem{});
-  if (s.home_set_) s.mission_[0].position_enu_m = s.home_enu_m_;
-  s.mission_current_ = 1;
-  s.mission_last_ = -1;
+  s.mission_.items = std::move(items);
+  if (s.mission_.items.empty()) s.mission_.items.push_back(MissionItem{});
+  if (s.home_.set) s.mission_.items[0].position_enu_m = s.home_.position_enu_m;
+  s.mission_.current = 1;
+  s.mission_.last = -1;
   // a new mission under a flying AUTO: ArduCopter restarts it from item 1
-  if (s.mode_ == Mode::kAuto && s.armed_ && !s.landed_) s.modes_.automatic.start_item(s, 1);
+  if (s.mode_ == Mode::kAuto && s.flight_.armed && !s.flight_.landed) s.start_mission_item(1);
 }
 
-const std::vector<MissionItem>& FlightController::mission() const { return impl_->mission_; }
+const std::vector<MissionItem>& FlightController::mission() const { return impl_->mission_.items; }
 
 CommandResult FlightController::mission_start(int first_item, int last_item) {
   Impl& s = *impl_;
-  const int size = static_cast<int>(s.mission_.size());
+  const int size = static_cast<int>(s.mission_.items.size());
   if (first_item < 0 || last_item < 0 || first_item >= size || last_item >= size) {
     return CommandResult::kInvalid;
   }
   if (size < 2) return CommandResult::kFailed;
-  s.mission_current_ = first_item > 0 ? first_item : 1;
-  s.mission_last_ = last_item > 0 ? last_item : -1;
+  s.mission_.current = first_item > 0 ? first_item : 1;
+  s.mission_.last = last_item > 0 ? last_item : -1;
   if (s.mode_ == Mode::kAuto) {
-    s.modes_.automatic.start_item(s, s.mission_current_);
+    s.start_mission_item(s.mission_.current);
     return CommandResult::kAccepted;
   }
   return set_mode(Mode::kAuto);
@@ -495,17 +496,17 @@ CommandResult FlightController::mission_start(int first_item, int last_item) {
 
 CommandResult FlightController::set_mission_current(int seq) {
   Impl& s = *impl_;
-  if (seq < 0 || seq >= static_cast<int>(s.mission_.size())) return CommandResult::kInvalid;
-  s.mission_current_ = std::max(seq, 1);
-  if (s.mode_ == Mode::kAuto && s.armed_) s.modes_.automatic.start_item(s, s.mission_current_);
+  if (seq < 0 || seq >= static_cast<int>(s.mission_.items.size())) return CommandResult::kInvalid;
+  s.mission_.current = std::max(seq, 1);
+  if (s.mode_ == Mode::kAuto && s.flight_.armed) s.start_mission_item(s.mission_.current);
   return CommandResult::kAccepted;
 }
 
-int FlightController::mission_current() const { return impl_->mission_current_; }
+int FlightController::mission_current() const { return impl_->mission_.current; }
 
 std::vector<int> FlightController::drain_reached_items() {
   std::vector<int> out;
-  impl_->reached_.drain([&out](int seq) { out.push_back(seq); });
+  impl_->mission_.reached.drain([&out](int seq) { out.push_back(seq); });
   return out;
 }
 
@@ -539,34 +540,35 @@ void FlightController::set_gps_glitch(const Eigen::Vector3d& offset_enu_m) {
 }
 
 Mode FlightController::mode() const { return impl_->mode_; }
-bool FlightController::armed() const { return impl_->armed_; }
+bool FlightController::armed() const { return impl_->flight_.armed; }
 
 LandedState FlightController::landed_state() const {
   const Impl& s = *impl_;
-  if (!s.armed_ || s.landed_) return LandedState::kOnGround;
-  if (s.takeoff_active_) return LandedState::kTakeoff;
+  if (!s.flight_.armed || s.flight_.landed) return LandedState::kOnGround;
+  if (s.flight_.takeoff_active) return LandedState::kTakeoff;
   return s.active_mode().landing() ? LandedState::kLanding : LandedState::kInAir;
 }
 
 const EstimatedState& FlightController::estimate() const { return impl_->estimator_.state(); }
-Eigen::Vector3d FlightController::home_enu_m() const { return impl_->home_enu_m_; }
-bool FlightController::home_set() const { return impl_->home_set_; }
+Eigen::Vector3d FlightController::home_enu_m() const { return impl_->home_.position_enu_m; }
+bool FlightController::home_set() const { return impl_->home_.set; }
 
 std::optional<GuidedTarget> FlightController::current_target() const {
   const Impl& s = *impl_;
-  if (!s.armed_ || s.control_ == ControlKind::kIdle) return std::nullopt;
-  if (s.control_ != ControlKind::kPosition && !s.attitude_climb_) return std::nullopt;
+  if (!s.flight_.armed || s.command_.kind == ControlKind::kIdle) return std::nullopt;
+  if (s.command_.kind != ControlKind::kPosition && !s.command_.attitude_climb) return std::nullopt;
   GuidedTarget t;
-  if (s.control_ == ControlKind::kPosition && s.sp_.use_pos_xy && s.sp_.use_pos_z) {
-    t.position_enu_m = s.sp_.position_enu_m;
+  if (s.command_.kind == ControlKind::kPosition && s.command_.setpoint.use_pos_xy &&
+      s.command_.setpoint.use_pos_z) {
+    t.position_enu_m = s.command_.setpoint.position_enu_m;
   }
   t.velocity_enu_m_s = s.pos_ctrl_.velocity_target();
   t.accel_enu_m_s2 = s.pos_ctrl_.accel_target();
-  t.yaw_enu_rad = s.yaw_cmd_rad_;
+  t.yaw_enu_rad = s.yaw_.cmd_rad;
   return t;
 }
 
-double FlightController::yaw_target_enu_rad() const { return impl_->yaw_target_rad_; }
+double FlightController::yaw_target_enu_rad() const { return impl_->yaw_.target_rad; }
 bool FlightController::prearm_ok() const { return impl_->prearm_checks(false); }
 
 std::vector<StatusText> FlightController::drain_status_texts() {

@@ -90,7 +90,7 @@ class FlightController {
   // motor commands were repeated); telemetry exposes it as a warning counter.
   uint64_t nonfinite_input_count() const;
 
-  struct Impl;  // library internal (fc_impl.hpp): the vehicle context the flight modes run over
+  struct Impl;  // library internal (fc_impl.hpp); the flight modes see it through a ModeContext
 
  private:
   std::unique_ptr<Impl> impl_;

@@ -1,20 +1,23 @@
-// One object per ArduCopter flight mode, over the vehicle context (FlightController::Impl: the
-// estimate, the setpoint, the carrot, the yaw and the services every mode uses — run_nav,
-// start_hold, run_land_descent, the pilot's sticks). A mode keeps its own state (BRAKE's latch,
-// RTL's stage, AUTO's phase) and says what it needs and allows; enter() sets it up when the vehicle
-// is armed (flying or not), update() asks the cascade for one control step while the vehicle is off
-// the ground (or taking off), and exit() runs when another mode takes over. The shared rules (the
-// modes' common entry resets, the idle on the ground, auto-disarm) stay in modes.cpp.
+// One object per ArduCopter flight mode, over the mode context (ModeContext, mode_context.hpp: the
+// estimate, time, parameters and home read-only; the cascade command, the yaw and the carrot it
+// sets; GUIDED's targets, the mission and the services every mode flies with — run_nav, start_hold,
+// start_takeoff, run_land_descent, the pilot's sticks). A mode never sees the flight controller's
+// private state: the failsafes, mixers, sensors, battery, link and arming are out of its reach, so
+// a test can drive a mode over a context it builds itself. A mode keeps its own state (BRAKE's
+// latch, RTL's stage, AUTO's phase) and says what it needs and allows; enter() sets it up when the
+// vehicle is armed (flying or not), update() asks the cascade for one control step while the
+// vehicle is off the ground (or taking off), and exit() runs when another mode takes over. The
+// shared rules (the modes' common entry resets, the idle on the ground, auto-disarm) stay in
+// modes.cpp.
 #pragma once
 
 #include <cstdint>
 
 #include "fc/fc_types.hpp"
-#include "fc/flight_controller.hpp"
 
 namespace uavsim::server::fc {
 
-using Vehicle = FlightController::Impl;
+class ModeContext;
 
 class FlightMode {
  public:
@@ -34,12 +37,12 @@ class FlightMode {
   // a touchdown now ends the flight: the vehicle disarms
   virtual bool ends_flight_at_touchdown() const { return false; }
 
-  virtual void enter(Vehicle& v, bool flying) {
-    (void)v;
+  virtual void enter(ModeContext& c, bool flying) {
+    (void)c;
     (void)flying;
   }
-  virtual void update(Vehicle& v, double dt_s) = 0;
-  virtual void exit(Vehicle& v) { (void)v; }
+  virtual void update(ModeContext& c, double dt_s) = 0;
+  virtual void exit(ModeContext& c) { (void)c; }
 };
 
 class StabilizeMode final : public FlightMode {
@@ -47,8 +50,8 @@ class StabilizeMode final : public FlightMode {
   Mode id() const override { return Mode::kStabilize; }
   bool allows_arming() const override { return true; }
   bool reads_pilot() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
 };
 
 class AltHoldMode final : public FlightMode {
@@ -56,7 +59,7 @@ class AltHoldMode final : public FlightMode {
   Mode id() const override { return Mode::kAltHold; }
   bool allows_arming() const override { return true; }
   bool reads_pilot() const override { return true; }
-  void update(Vehicle& v, double dt_s) override;
+  void update(ModeContext& c, double dt_s) override;
 };
 
 class GuidedMode final : public FlightMode {
@@ -64,8 +67,8 @@ class GuidedMode final : public FlightMode {
   Mode id() const override { return Mode::kGuided; }
   bool needs_position() const override { return true; }
   bool allows_arming() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
 };
 
 class LoiterMode final : public FlightMode {
@@ -74,16 +77,16 @@ class LoiterMode final : public FlightMode {
   bool needs_position() const override { return true; }
   bool allows_arming() const override { return true; }
   bool reads_pilot() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
 };
 
 class BrakeMode final : public FlightMode {
  public:
   Mode id() const override { return Mode::kBrake; }
   bool needs_position() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
 
  private:
   bool holding_ = false;  // stopped: holding the position where it stopped
@@ -95,8 +98,8 @@ class LandMode final : public FlightMode {
   bool disarms_when_landed() const override { return true; }
   bool landing() const override { return true; }
   bool ends_flight_at_touchdown() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
 };
 
 // RTL: climb to RTL_ALT, return, loiter RTL_LOIT_TIME over home, land. AUTO's RTL items run it too.
@@ -107,10 +110,10 @@ class RtlMode final : public FlightMode {
   bool disarms_when_landed() const override { return true; }
   bool landing() const override { return stage_ == Stage::kLand; }
   bool ends_flight_at_touchdown() const override { return true; }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
   // starts the return from where the vehicle is
-  void start(Vehicle& v);
+  void start(ModeContext& c);
 
  private:
   enum class Stage { kClimb, kReturn, kLoiter, kLand };
@@ -131,13 +134,13 @@ class AutoMode final : public FlightMode {
   bool ends_flight_at_touchdown() const override {
     return phase_ == Phase::kLandDescend || phase_ == Phase::kRtl;
   }
-  void enter(Vehicle& v, bool flying) override;
-  void update(Vehicle& v, double dt_s) override;
+  void enter(ModeContext& c, bool flying) override;
+  void update(ModeContext& c, double dt_s) override;
   // starts mission item seq (past the end, or past MISSION_START's last item: mission complete,
   // hold)
-  void start_item(Vehicle& v, int seq);
+  void start_item(ModeContext& c, int seq);
   // the current item is reached: MISSION_ITEM_REACHED, then the next one
-  void complete_item(Vehicle& v);
+  void complete_item(ModeContext& c);
   // the mission is over (it landed)
   void finish() { phase_ = Phase::kDone; }
 

@@ -28,12 +28,12 @@ bool FlightController::Impl::prearm_checks(bool report) const {
     fail = "PreArm: EKF not converged";
   } else if (gps_mode(mode_) && !est.gps_ok) {
     fail = "PreArm: GPS no 3D fix";
-  } else if (gps_mode(mode_) && !home_set_) {
+  } else if (gps_mode(mode_) && !home_.set) {
     fail = "PreArm: home not set";
   } else if (params_.values().batt_capacity > 0.0 &&
              battery_.consumed_mah >= params_.values().batt_capacity) {
     fail = "PreArm: battery empty";
-  } else if (!landed_) {
+  } else if (!flight_.landed) {
     fail = "PreArm: not landed";
   }
   if (fail != nullptr && report) status(2, fail);
@@ -41,32 +41,32 @@ bool FlightController::Impl::prearm_checks(bool report) const {
 }
 
 void FlightController::Impl::do_disarm(std::string_view why) {
-  armed_ = false;
-  landed_ = true;
-  takeoff_active_ = false;
-  nav_active_ = false;
-  control_ = ControlKind::kIdle;
+  flight_.armed = false;
+  flight_.landed = true;
+  flight_.takeoff_active = false;
+  nav_.active = false;
+  command_.kind = ControlKind::kIdle;
   pos_ctrl_.reset();
   att_ctrl_.reset();
   status(6, why);
 }
 
 void FlightController::Impl::on_touchdown() {
-  landed_ = true;
+  flight_.landed = true;
   landed_since_s_ = now();
-  nav_active_ = false;
+  nav_.active = false;
   status(6, "Landed");
   // LAND, RTL and a mission's land or RTL disarm at touchdown; other modes wait DISARM_DELAY
   const bool landing_mode = active_mode().ends_flight_at_touchdown();
   if (mode_ == Mode::kAuto && landing_mode) {
-    reached_.push(mission_current_);
+    mission_.reached.push(mission_.current);
     modes_.automatic.finish();
   }
   if (landing_mode) do_disarm("Disarming motors: landed");
 }
 
 void FlightController::Impl::run_land_detector(double dt_s) {
-  if (!armed_ || landed_ || takeoff_active_) {
+  if (!flight_.armed || flight_.landed || flight_.takeoff_active) {
     land_detect_s_ = 0.0;
     return;
   }
@@ -84,7 +84,7 @@ void FlightController::Impl::run_land_detector(double dt_s) {
 }
 
 void FlightController::Impl::run_failsafes() {
-  if (!armed_) return;
+  if (!flight_.armed) return;
   const ParamValues& p = params_.values();
   const EstimatedState& est = estimator_.state();
 
@@ -94,7 +94,7 @@ void FlightController::Impl::run_failsafes() {
       (mode_ == Mode::kGuided || mode_ == Mode::kAuto)) {
     fs_gcs_active_ = true;
     status(2, "GCS Failsafe");
-    if (landed_) {
+    if (flight_.landed) {
       do_disarm("Disarming motors: GCS failsafe");
       return;
     }
@@ -107,7 +107,7 @@ void FlightController::Impl::run_failsafes() {
       remaining_mah < p.batt_low_mah) {
     fs_batt_triggered_ = true;
     status(2, "Battery failsafe");
-    if (landed_) {
+    if (flight_.landed) {
       do_disarm("Disarming motors: battery failsafe");
       return;
     }
@@ -117,7 +117,7 @@ void FlightController::Impl::run_failsafes() {
   }
 
   // GPS lost in a position mode: land (ArduCopter's EKF failsafe, FS_EKF_ACTION = 1)
-  if (gps_mode(mode_) && !landed_ && !est.gps_ok) {
+  if (gps_mode(mode_) && !flight_.landed && !est.gps_ok) {
     if (gps_lost_since_s_ < 0.0) gps_lost_since_s_ = now();
     if (p.fs_ekf_action > 0.0 && !fs_ekf_active_ && now() - gps_lost_since_s_ >= kGpsLossFailsafeS) {
       fs_ekf_active_ = true;
