@@ -49,6 +49,13 @@ World::World(std::vector<std::unique_ptr<Shard>> shards, int threads)
       vehicles_.push_back(std::move(v));
     }
   }
+  parked_.assign(vehicles_.size(), 0);
+  for (size_t k = 0; k < shards_.size(); ++k) sync_parked(k);
+}
+
+void World::sync_parked(size_t k) {
+  const Shard& s = *shards_[k];
+  for (size_t v = 0; v < s.vehicles().size(); ++v) parked_[first_[k] + v] = s.parked(v) ? 1 : 0;
 }
 
 World::~World() = default;
@@ -84,27 +91,44 @@ void World::apply_wrench(size_t vehicle, const airframe::Wrench& wrench) {
 }
 void World::set_pose(size_t vehicle, const double pos_enu_m[3], const double quat_wxyz[4]) {
   shard_of(vehicle).set_pose(local(vehicle), pos_enu_m, quat_wxyz);
+  parked_[vehicle] = 0;  // set_pose wakes it
 }
 
-void World::step() {
-  // every shard one step, each on its own thread of the pool; then the woken vehicles in world order
-  pool_->run(shard_count(), [this](int k) { shards_[static_cast<size_t>(k)]->step(); });
+void World::step(const std::function<void(size_t first, size_t end)>& before_each_shard) {
+  // every shard one step (after its vehicles' own work), each on its own thread of the pool; then the
+  // woken vehicles in world order
+  pool_->run(shard_count(), [&](int k) {
+    const size_t s = static_cast<size_t>(k);
+    if (before_each_shard) before_each_shard(first_[s], first_[s] + shards_[s]->vehicles().size());
+    shards_[s]->step();
+  });
   woken_.clear();
   for (size_t k = 0; k < shards_.size(); ++k) {
-    for (int v : shards_[k]->woken_by_contact()) woken_.push_back(static_cast<int>(first_[k]) + v);
+    for (int v : shards_[k]->woken_by_contact()) {
+      woken_.push_back(static_cast<int>(first_[k]) + v);
+      parked_[first_[k] + static_cast<size_t>(v)] = 0;
+    }
   }
 }
 
-bool World::parked(size_t vehicle) const { return shard_of(vehicle).parked(local(vehicle)); }
 size_t World::parked_count() const {
   size_t n = 0;
   for (const auto& s : shards_) n += s->parked_count();
   return n;
 }
-void World::park(size_t vehicle) { shard_of(vehicle).park(local(vehicle)); }
-void World::wake(size_t vehicle) { shard_of(vehicle).wake(local(vehicle)); }
+void World::park(size_t vehicle) {
+  shard_of(vehicle).park(local(vehicle));
+  parked_[vehicle] = 1;
+}
+void World::wake(size_t vehicle) {
+  shard_of(vehicle).wake(local(vehicle));
+  parked_[vehicle] = 0;
+}
 void World::park_resting() {
-  for (auto& s : shards_) s->park_resting();
+  for (size_t k = 0; k < shards_.size(); ++k) {
+    shards_[k]->park_resting();
+    sync_parked(k);
+  }
 }
 
 int World::buffer_overflows() const {
@@ -121,7 +145,10 @@ void World::vehicle_contacts(std::vector<VehicleContact>* out) const {
 }
 
 void World::reset() {
-  for (auto& s : shards_) s->reset();
+  for (size_t k = 0; k < shards_.size(); ++k) {
+    shards_[k]->reset();
+    sync_parked(k);
+  }
   woken_.clear();
 }
 

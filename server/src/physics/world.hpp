@@ -107,15 +107,18 @@ class World {
 
   // Advances physics by one timestep (mj_step; when every dof belongs to a parked vehicle and nothing
   // is kinematic, only the clock advances). Parked vehicles are then put back where they are held;
-  // one that something touched wakes instead.
-  void step();
+  // one that something touched wakes instead. With before_each_shard, runs it on each shard's block of
+  // vehicles [first, end) just before that shard's mj_step, on the thread that steps the shard (the
+  // vehicles' own per-step work joins the shard's physics in one batch of the pool); it must touch
+  // only those vehicles' state. Loop thread only.
+  void step(const std::function<void(size_t first, size_t end)>& before_each_shard = {});
 
   // Parking: a vehicle at rest on static geometry is held exactly where it is (qpos fixed, qvel zero)
   // and its geoms stop touching static geometry (no contact constraints: a grounded quad's resting
   // contacts are most of its step), while moving bodies (awake vehicles, kinematic objects) still
   // collide with it and wake it. truth() of a parked vehicle is that pose at rest (zero velocity and
   // acceleration). Loop thread only.
-  bool parked(size_t vehicle) const;
+  bool parked(size_t vehicle) const { return parked_[vehicle] != 0; }
   size_t parked_count() const;
   // Holds the vehicle at its present pose, at rest. Parking a parked vehicle does nothing.
   void park(size_t vehicle);
@@ -149,6 +152,11 @@ class World {
   std::unique_ptr<StepPool> pool_;
   std::vector<VehicleBinding> vehicles_;
   std::vector<int> woken_;
+  // per vehicle, parked or not: a mirror of the shards' parking, one byte each, so that the
+  // simulation's per-step loops over every vehicle read it from one small array
+  std::vector<char> parked_;
+  // copies shard k's parking into parked_
+  void sync_parked(size_t k);
 };
 
 }  // namespace uavsim::server::physics

@@ -32,6 +32,10 @@ constexpr double kParkLiftRatio = 0.01;
 constexpr double kParkAfter_s = 0.5;
 constexpr double kGravity_m_s2 = 9.81;
 
+// the non-finite-state rule's event details
+constexpr const char* kBadControls = "non-finite or runaway rotor force";
+constexpr const char* kBadState = "non-finite or runaway state";
+
 // index of the wind's generator stream (vehicles use 0, 1, ...)
 constexpr uint64_t kWindStream = 0x57494E44ull;
 
@@ -80,19 +84,15 @@ Simulation::Simulation(std::unique_ptr<physics::World> world, const SimConfig& c
 
 void Simulation::schedule_own_work() {
   // the simulation's own work, placed before (kFirst) or after (kLast) every component of its phase:
-  // the API's gate before the vehicles' tasks, world objects and the radio after the wind and before
-  // the rotor forces, the non-finite-state rule before anything judges contacts
+  // the API's gate before the vehicles' tasks, world objects and the radio after the wind (and so
+  // before the rotor forces, which join each shard's mj_step), the non-finite-state rule before
+  // anything judges contacts
   schedule_.add(Phase::kQueuedTasks, "sim.vehicle_tasks", [this] { run_vehicle_tasks(); }, Slot::kLast);
   schedule_.add(Phase::kFlightControl, "sim.flight_control", [this] { flight_control(); }, Slot::kFirst);
   schedule_.add(Phase::kPrePhysics, "sim.wind", [this] {
     if (wind_.active()) wind_.step(physics_dt_s_);
   }, Slot::kFirst);
-  schedule_.add(Phase::kPrePhysics, "sim.rotor_forces", [this] { rotor_forces(); }, Slot::kLast);
-  schedule_.add(Phase::kPrePhysics, "sim.nonfinite_rule.controls", [this] { fault_bad_controls(); }, Slot::kLast);
-  schedule_.add(Phase::kPhysics, "sim.mj_step", [this] {
-    world_->step();
-    ++steps_;
-  }, Slot::kFirst);
+  schedule_.add(Phase::kPhysics, "sim.mj_step", [this] { step_physics(); }, Slot::kFirst);
   schedule_.add(Phase::kContacts, "sim.nonfinite_rule.state", [this] { fault_bad_states(); }, Slot::kFirst);
   schedule_.add(Phase::kContacts, "sim.contacts", [this] { check_contacts(); }, Slot::kFirst);
 }
@@ -179,46 +179,54 @@ void Simulation::step() {
   schedule_.run_step(steps_ % static_cast<uint64_t>(control_decimation_) == 0);
 }
 
-void Simulation::rotor_forces() {
-  // motors -> rotor thrusts (at the battery's voltage) -> wrench about the body origin, with drag on the
-  // velocity relative to the air -> qfrc_applied; each vehicle on the thread that steps its physics shard
-  // (physics/world.hpp), faults handled after, in vehicle order (fault_bad_controls)
-  const Eigen::Vector3d& wind_enu_m_s = wind_.velocity_enu_m_s();
+void Simulation::step_physics() {
+  // each shard on the thread that steps it: its vehicles' motors, rotor thrusts (at the battery's
+  // voltage) and wrenches about the body origin (drag on the velocity relative to the air) into
+  // qfrc_applied, the non-finite-state rule on those wrenches, then the shard's mj_step; the rule's
+  // events after, in vehicle order, at the time the step started
+  const double t0_s = world_->time_s();
   faulted_.assign(vehicles_.size(), 0);
-  world_->for_each_shard_block([&](size_t first, size_t end) {
-    for (size_t i = first; i < end; ++i) {
-      VehicleRuntime& v = vehicles_[i];
-      const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
-      airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
-      airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
-      if (v.thrust_scale != 1.0) {
-        for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
-      }
-      if (world_->parked(i)) continue;  // held in place: no wrench (zeroed when it parked)
-      const fc::TruthState t = world_->truth(i);
-      const airframe::Wrench w =
-          airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
-      faulted_[i] = sane(w) ? 0 : 1;
-      world_->apply_wrench(i, faulted_[i] ? airframe::Wrench{} : w);
-    }
-  });
+  world_->step([this](size_t first, size_t end) { rotor_forces(first, end); });
+  ++steps_;
+  for (size_t i = 0; i < vehicles_.size(); ++i) {
+    if (faulted_[i] == 2) events_.add(t0_s, EventType::kStateFault, static_cast<int>(i), kBadControls);
+  }
 }
 
-void Simulation::fault_bad_controls() {
-  for (size_t i = 0; i < vehicles_.size(); ++i) {
-    if (faulted_[i]) fault_vehicle(i, "non-finite or runaway rotor force");
+void Simulation::rotor_forces(size_t first, size_t end) {
+  const Eigen::Vector3d& wind_enu_m_s = wind_.velocity_enu_m_s();
+  for (size_t i = first; i < end; ++i) {
+    VehicleRuntime& v = vehicles_[i];
+    const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
+    airframe::step_motors_alpha(a, v.motor_cmd.data(), v.motor_lag_alpha.data(), &v.motors);
+    airframe::rotor_thrusts(a, v.motors, v.thrust_n.data());
+    if (v.thrust_scale != 1.0) {
+      for (double& thrust : v.thrust_n) thrust *= v.thrust_scale;
+    }
+    if (world_->parked(i)) continue;  // held in place: no wrench (zeroed when it parked)
+    const fc::TruthState t = world_->truth(i);
+    const airframe::Wrench w =
+        airframe::compute_wrench(a, v.thrust_n.data(), t.q_enu_body, t.velocity_enu_m_s - wind_enu_m_s);
+    if (sane(w)) {
+      world_->apply_wrench(i, w);
+      continue;
+    }
+    // never applied: the vehicle is faulted before its shard steps (its event recorded after)
+    world_->apply_wrench(i, airframe::Wrench{});
+    faulted_[i] = put_back(i) ? 2 : 1;
   }
 }
 
 void Simulation::fault_bad_states() {
   for (size_t i = 0; i < vehicles_.size(); ++i) {
-    if (!sane(world_->truth(i))) fault_vehicle(i, "non-finite or runaway state");
+    if (!sane(world_->truth(i)) && put_back(i)) record(EventType::kStateFault, static_cast<int>(i), kBadState);
   }
 }
 
-void Simulation::fault_vehicle(size_t vehicle, const std::string& what) {
+bool Simulation::put_back(size_t vehicle) {
   // the style rule for a non-finite vehicle: controls zeroed, the vehicle killed and put back where it
-  // started (at rest), one event; the other vehicles fly on
+  // started (at rest), one event; the other vehicles fly on. Touches only this vehicle (its shard's
+  // thread may run it).
   VehicleRuntime& v = vehicles_[vehicle];
   const airframe::AirframeParams& a = world_->vehicles()[vehicle].airframe;
   std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
@@ -228,11 +236,11 @@ void Simulation::fault_vehicle(size_t vehicle, const std::string& what) {
   const Eigen::Quaterniond& q = v.start_q_enu_body;
   const double quat[4] = {q.w(), q.x(), q.y(), q.z()};
   world_->set_pose(vehicle, pos, quat);
-  if (v.state_fault) return;
+  if (v.state_fault) return false;
   v.state_fault = true;
   v.crashed = true;  // dead as after a crash, with this one event instead of a crash event
   v.fc.disarm(true);
-  record(EventType::kStateFault, static_cast<int>(vehicle), what);
+  return true;
 }
 
 void Simulation::run_until(double time_s) {
@@ -263,25 +271,27 @@ void Simulation::run_vehicle_tasks() {
 void Simulation::flight_control() {
   const double now = world_->time_s();
   const double dt = control_dt_s();
-  // each vehicle's flight controller on the thread that steps its physics shard; events after, in
-  // vehicle order
+  // each vehicle's flight controller on the thread that steps its physics shard, noting whether it
+  // armed, disarmed or changed mode (while its state is in cache); the events after, in vehicle order
+  control_events_.assign(vehicles_.size(), 0);
   world_->for_each_shard_block([&](size_t first, size_t end) {
     for (size_t i = first; i < end; ++i) {
       VehicleRuntime& v = vehicles_[i];
       const airframe::AirframeParams& a = world_->vehicles()[i].airframe;
       v.fc.update(now, truth(i), v.battery, v.motor_cmd.data());
       if (v.crashed) std::fill(v.motor_cmd.begin(), v.motor_cmd.end(), 0.0);
-      if (v.fc.armed() && world_->parked(i)) world_->wake(i);  // before the motors spin up
+      const bool armed = v.fc.armed();
+      if (armed && world_->parked(i)) world_->wake(i);  // before the motors spin up
       airframe::step_battery(a, v.thrust_n.data(), dt, &v.battery);
       v.thrust_scale = airframe::battery_thrust_scale(a, v.battery);
+      control_events_[i] = static_cast<char>((armed != v.was_armed ? 1 : 0) | (v.fc.mode() != v.old_mode ? 2 : 0));
     }
   });
   for (size_t i = 0; i < vehicles_.size(); ++i) {
+    if (control_events_[i] == 0) continue;
     VehicleRuntime& v = vehicles_[i];
-    if (v.fc.armed() != v.was_armed) {
-      record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");
-    }
-    if (v.fc.mode() != v.old_mode) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
+    if (control_events_[i] & 1) record(v.fc.armed() ? EventType::kArmed : EventType::kDisarmed, static_cast<int>(i), "");
+    if (control_events_[i] & 2) record(EventType::kModeChange, static_cast<int>(i), fc::mode_name(v.fc.mode()));
   }
 }
 
@@ -296,8 +306,10 @@ bool Simulation::resting(size_t i) const {
 }
 
 void Simulation::check_contacts() {
-  std::vector<char> touching(vehicles_.size(), 0);
-  std::vector<char> touching_moving(vehicles_.size(), 0);
+  std::vector<char>& touching = touching_;
+  std::vector<char>& touching_moving = touching_moving_;
+  touching.assign(vehicles_.size(), 0);
+  touching_moving.assign(vehicles_.size(), 0);
   world_->vehicle_contacts(&contacts_);
   for (const physics::VehicleContact& c : contacts_) {
     VehicleRuntime& v = vehicles_[c.vehicle];

@@ -160,17 +160,20 @@ class Simulation {
   void run_vehicle_tasks();
   // (truth, battery) => motor commands, battery state; arm and mode events
   void flight_control();
-  // (motor commands, truth, wind) => qfrc_applied; a wrench that is not sane is not applied
-  void rotor_forces();
+  // every shard's rotor forces and mj_step, each shard on its own thread (one batch of the pool)
+  void step_physics();
+  // (motor commands, truth, wind) => qfrc_applied for vehicles [first, end) of one shard; a wrench
+  // that is not sane is not applied and faults the vehicle (the non-finite-state rule: before
+  // mj_step, which would reset the whole world on a non-finite value)
+  void rotor_forces(size_t first, size_t end);
   void check_contacts();
-  // the non-finite-state rule: a vehicle whose rotor wrench (before mj_step, which would reset the
-  // whole world on a non-finite value) or state (after it) is non-finite or runaway is faulted
-  void fault_bad_controls();
+  // the non-finite-state rule on the state after mj_step
   void fault_bad_states();
   // disarmed, rotors stopped, (almost) still: a candidate for parking
   bool resting(size_t vehicle) const;
-  // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed (one event)
-  void fault_vehicle(size_t vehicle, const std::string& what);
+  // a vehicle whose rotor force or state is non-finite or runaway: zeroed, put back, killed; true
+  // the first time (when its one state_fault event is due)
+  bool put_back(size_t vehicle);
 
   std::unique_ptr<physics::World> world_;
   SimConfig config_;
@@ -179,7 +182,9 @@ class Simulation {
   uint64_t steps_ = 0;
   std::vector<VehicleRuntime> vehicles_;
   std::vector<physics::VehicleContact> contacts_;
-  std::vector<char> faulted_;  // per vehicle: this step's rotor wrench was not sane
+  std::vector<char> faulted_;  // per vehicle: this step's rotor wrench was not sane (2: event due)
+  std::vector<char> control_events_;  // per vehicle, this control step: 1 armed or disarmed, 2 mode change
+  std::vector<char> touching_, touching_moving_;  // check_contacts' per-vehicle flags, kept allocated
   StepSchedule schedule_;
   std::vector<std::shared_ptr<void>> owned_;  // components the schedule calls (own())
   EventLog events_;
