@@ -99,6 +99,16 @@ void Agent::enter(AgentState s, AgentOutputs& out, const std::string& why) {
   if (s == AgentState::kGoingHome) home_round_ = round_;
 }
 
+bool Agent::descending_when_disarmed(const AgentInputs& in) const {
+  // A landing ends with the autopilot's land detector: the vehicle has stopped on the ground
+  // before it disarms. The autopilot reports "on the ground" at any disarm, so a disarm seen while
+  // the vehicle is still metres up or still sinking is a failure, not a touchdown.
+  constexpr double kLandedMaxHeight_m = 1.0;      // above the take-off spot (estimate drift, gear)
+  constexpr double kLandedMaxSinkRate_m_s = 0.5;  // half the final descent speed (LAND_SPEED)
+  return in.position_enu_m.z() - ground_z_m_ > kLandedMaxHeight_m ||
+         in.velocity_enu_m_s.z() < -kLandedMaxSinkRate_m_s;
+}
+
 AgentOutputs Agent::step(const AgentInputs& in) {
   AgentOutputs out;
   // time: ages advance by the elapsed milliseconds (Algorithm 2 runs every millisecond)
@@ -137,6 +147,7 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     return out;
   }
   if (in.armed && !in.on_ground) airborne_seen_ = true;
+  if (!airborne_seen_ && in.on_ground) ground_z_m_ = in.position_enu_m.z();
 
   receive(in);
   take_picture(in, out);
@@ -161,6 +172,16 @@ void Agent::receive(const AgentInputs& in) {
         recalled_ = !b->going_home;
       }
       if (b->round == round_ && b->going_home) going_home_heard_ = true;
+      // a round that surveys on after we landed: one of its surveying flyers heard to have landed
+      // means it is over (its leader lands last, once every agent it hears has landed); agents
+      // still landing from our round are homebound, not its flyers
+      if (state_ == AgentState::kLanded && round_ != home_round_ && b->round == round_) {
+        if (!b->self.landed && !b->homebound) {
+          later_round_flyers_.insert(b->self.id);
+        } else if (later_round_flyers_.count(b->self.id)) {
+          later_round_over_ = true;
+        }
+      }
     } else if (type == MessageType::kAggregate) {
       if (auto m = reassembler_.add(f)) aggregation_.on_message(*m, adb_.leader(), own_);
     }
@@ -195,6 +216,7 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     // an agent still landing from an earlier round does not send a later round's flock home
     b.going_home = state_ == AgentState::kGoingHome && home_round_ == round_;
     b.round = static_cast<uint8_t>(round_);
+    b.homebound = state_ == AgentState::kGoingHome;
     // the next window of the ADB (rotating, so every record goes out in turn)
     const auto& records = adb_.records();
     if (!records.empty()) {
@@ -472,6 +494,12 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
           config_.altitude_m + (id_ % config_.home_layers) * config_.home_layer_m;
       const Eigen::Vector2d d = home_enu_m_ - here;
       if (land_sent_) {
+        if (!in.armed && descending_when_disarmed(in)) {
+          // the vehicle died in its descent: its pictures died with it, and the flock must not
+          // count them as held by a landed agent
+          enter(AgentState::kFailed, out, "vehicle disarmed in its landing descent");
+          break;
+        }
         if (!in.armed && in.on_ground) {
           enter(AgentState::kLanded, out, "on the ground");
           adb_.set_local_landed(true);

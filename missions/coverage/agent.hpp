@@ -99,7 +99,13 @@ class Agent {
   const std::optional<PlannedPath>& path() const { return path_; }
   bool mission_complete() const { return complete_; }
   // Landed, and every agent this one still hears has landed too: its radio can be switched off.
-  bool flock_landed() const { return state_ == AgentState::kLanded && adb_.all_landed(); }
+  // A recall after this agent landed (a later round than the one it went home in) keeps it on
+  // until the later round is over: the later round's leader may survey out of radio range, where
+  // the landed agents no longer hear it, and needs their pictures when it queries again near home.
+  bool flock_landed() const {
+    return state_ == AgentState::kLanded && adb_.all_landed() &&
+           (round_ == home_round_ || later_round_over_);
+  }
   // The survey round (a recall after a loss on the way home starts the next).
   int round() const { return round_; }
   // Sim seconds spent in each state (fig. 4.9), indexed by AgentState.
@@ -118,6 +124,8 @@ class Agent {
   AreaParts flock_map() const;
   // Going Home, leader: checks the flock's map after a loss; true when it recalled the flock.
   bool verify_after_loss(const AgentInputs& in, AgentOutputs& out);
+  // disarmed, but still above the ground or still sinking: not a landing (Going Home)
+  bool descending_when_disarmed(const AgentInputs& in) const;
   bool flock_in_line(const AgentInputs& in) const;
   // a velocity setpoint towards `target` (2D) at `speed`, holding the survey altitude
   void fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double speed,
@@ -144,6 +152,7 @@ class Agent {
   bool takeoff_sent_ = false;
   bool land_sent_ = false;
   bool airborne_seen_ = false;
+  double ground_z_m_ = 0.0;  // where it stood before take-off (ENU z)
   bool going_home_heard_ = false;
   bool complete_ = false;
   // survey rounds and losses on the way home (verify_after_loss)
@@ -154,6 +163,10 @@ class Agent {
   bool verifying_ = false;
   double verify_since_s_ = 0.0;
   std::set<int> landed_ids_;  // agents heard to have landed: when they age out, nothing is lost
+  // landed before a recall: the agents heard flying in the later round, and whether one of them
+  // has been heard to land since (flock_landed)
+  std::set<int> later_round_flyers_;
+  bool later_round_over_ = false;
 
   // overlay network
   uint16_t seq_ = 0;

@@ -14,6 +14,7 @@ constexpr int kMaxFragments = 255;
 constexpr unsigned kFlagGoingHome = 1;
 constexpr unsigned kFlagLanded = 2;
 constexpr unsigned kRoundShift = 2;  // bits 2-4: the survey round (mod kRounds)
+constexpr unsigned kFlagHomebound = 32;
 // a record's hop count byte: bits 0-6 the hops (a flock of at most kMaxAgents is fewer hops deep),
 // bit 7 the agent's landed flag as last heard
 constexpr unsigned kHopsMask = 0x7F;
@@ -166,7 +167,7 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin) {
   w.u8(static_cast<unsigned>(MessageType::kBeacon));
   w.u8(static_cast<unsigned>(b.self.id));
   w.u8((b.going_home ? kFlagGoingHome : 0u) | (b.self.landed ? kFlagLanded : 0u) |
-       ((b.round % kRounds) << kRoundShift));
+       ((b.round % kRounds) << kRoundShift) | (b.homebound ? kFlagHomebound : 0u));
   write_state(w, b.self, origin);
   const size_t n = std::min(b.records.size(), static_cast<size_t>(kRecordsPerBeacon));
   w.u8(static_cast<unsigned>(n));
@@ -191,6 +192,7 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
   b.going_home = (flags & kFlagGoingHome) != 0;
   b.self.landed = (flags & kFlagLanded) != 0;
   b.round = static_cast<uint8_t>((flags >> kRoundShift) % kRounds);
+  b.homebound = (flags & kFlagHomebound) != 0;
   read_state(r, b.self, origin);
   const unsigned n = r.u8();
   if (n > kRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes)

@@ -6,7 +6,8 @@
 //     u16 heading (2 pi / 65536) | i8 vx (0.1 m/s) | i8 vy | u8 n | n records:
 //       u8 id | u16 seq | i16 x_dm | i16 y_dm | u16 heading | i8 vx | i8 vy | u8 hops | u16 age_ms
 //   flags: bit 0 going home, bit 1 the sender has landed, bits 2-4 the survey round (mod 8; a
-//   recall after a loss on the way home starts the next one, see agent.hpp). A record's hops byte
+//   recall after a loss on the way home starts the next one, see agent.hpp), bit 5 the sender is
+//   homebound (in Going Home, of whichever round: flying home or landing). A record's hops byte
 //   carries that agent's landed flag in bit 7.
 //   A full ADB of 25 agents does not fit one frame; each beacon carries the next n records of the
 //   ADB in turn (a rotating window), so a full copy crosses every hop in ceil(size / 8) beacons.
@@ -52,6 +53,7 @@ struct Beacon {
   AgentRecord self;  // id, seq, x, y, heading, velocity, landed (hops and age unused)
   bool going_home = false;
   uint8_t round = 0;                 // [0, kRounds)
+  bool homebound = false;            // the sender is in Going Home (flying home or landing)
   std::vector<AgentRecord> records;  // at most kRecordsPerBeacon
 };
 

@@ -14,6 +14,7 @@ namespace {
 
 constexpr double kDt_s = 0.05;
 constexpr double kLag_s = 0.4;  // velocity response of a quad in GUIDED
+constexpr double kGravity_m_s2 = 9.81;
 
 struct SimVehicle {
   SimVehicle(Agent a, const Eigen::Vector3d& p) : agent(std::move(a)), position_enu_m(p) {}
@@ -23,6 +24,9 @@ struct SimVehicle {
   Eigen::Vector3d command_enu_m_s = Eigen::Vector3d::Zero();
   double yaw_rad = 0.0, yaw_rate_rad_s = 0.0;
   bool armed = false, alive = true, landing = false;
+  // killed by the simulator: the autopilot disarms (and reports "on the ground", as at any disarm),
+  // the vehicle falls, the agent program runs on; its pictures count as lost
+  bool crashed = false;
   double going_home_since_s = -1.0;
   double takeoff_altitude_m = -1.0;
   std::vector<Frame> inbox;
@@ -45,6 +49,9 @@ struct FlockScenario {
   std::vector<std::pair<double, int>> kills;  // (time, agent)
   // (delay, agent): the agent is killed this long after it enters Going Home
   std::vector<std::pair<double, int>> kills_going_home;
+  // (height, agent): the simulator kills the agent's vehicle in its landing descent as it passes
+  // this height (see SimVehicle::crashed)
+  std::vector<std::pair<double, int>> kills_in_descent;
   double timeout_s = 2000.0;
   uint32_t seed = 1;
 };
@@ -76,6 +83,13 @@ FlockRun fly(const FlockScenario& s) {
       SimVehicle& sv = v[static_cast<size_t>(id)];
       if (sv.going_home_since_s >= 0.0 && t >= sv.going_home_since_s + delay) sv.alive = false;
     }
+    for (const auto& [height, id] : s.kills_in_descent) {
+      SimVehicle& sv = v[static_cast<size_t>(id)];
+      if (sv.landing && !sv.crashed && sv.position_enu_m.z() <= height) {
+        sv.crashed = true;
+        sv.armed = false;
+      }
+    }
     // agents step and broadcast
     std::vector<std::pair<size_t, Frame>> air;
     bool done = true;
@@ -85,7 +99,7 @@ FlockRun fly(const FlockScenario& s) {
       AgentInputs in;
       in.now_s = t;
       in.armed = sv.armed;
-      in.on_ground = sv.position_enu_m.z() <= 0.0;
+      in.on_ground = sv.crashed || sv.position_enu_m.z() <= 0.0;
       in.position_enu_m = sv.position_enu_m;
       in.velocity_enu_m_s = sv.velocity_enu_m_s;
       in.yaw_enu_rad = sv.yaw_rad;
@@ -114,7 +128,7 @@ FlockRun fly(const FlockScenario& s) {
           break;
       }
       for (const Frame& f : out.broadcast) air.emplace_back(i, f);
-      if (sv.agent.state() != AgentState::kLanded) done = false;
+      if (sv.agent.state() != AgentState::kLanded && !sv.crashed) done = false;
     }
     if (done) {
       run.all_done = true;
@@ -131,6 +145,14 @@ FlockRun fly(const FlockScenario& s) {
     }
     // point-mass vehicles
     for (SimVehicle& sv : v) {
+      if (sv.crashed) {  // unpowered: it falls
+        sv.velocity_enu_m_s = {0.0, 0.0,
+                               std::min(0.0, sv.velocity_enu_m_s.z()) - kGravity_m_s2 * kDt_s};
+        sv.position_enu_m.z() =
+            std::max(0.0, sv.position_enu_m.z() + sv.velocity_enu_m_s.z() * kDt_s);
+        if (sv.position_enu_m.z() <= 0.0) sv.velocity_enu_m_s.setZero();
+        continue;
+      }
       if (!sv.alive || !sv.armed) continue;
       Eigen::Vector3d cmd = sv.command_enu_m_s;
       if (sv.takeoff_altitude_m > 0.0)
@@ -148,8 +170,8 @@ FlockRun fly(const FlockScenario& s) {
     }
     for (size_t i = 0; i < v.size(); ++i) {
       for (size_t j = i + 1; j < v.size(); ++j) {
-        if (!v[i].alive || !v[j].alive || v[i].position_enu_m.z() < 5.0 ||
-            v[j].position_enu_m.z() < 5.0)
+        if (!v[i].alive || !v[j].alive || v[i].crashed || v[j].crashed ||
+            v[i].position_enu_m.z() < 5.0 || v[j].position_enu_m.z() < 5.0)
           continue;
         const double d = (v[i].position_enu_m - v[j].position_enu_m).norm();
         if (d < run.min_separation_m && std::getenv("FLOCK_DEBUG"))
@@ -162,7 +184,7 @@ FlockRun fly(const FlockScenario& s) {
   run.mission_time_s = t;
   AreaParts held(config.stripe_count());
   for (const SimVehicle& sv : v) {
-    if (!sv.alive) continue;
+    if (!sv.alive || sv.crashed) continue;
     held.merge(sv.agent.own());
     if (sv.agent.mission_complete()) run.completed_by = sv.agent.id();
   }
@@ -218,6 +240,17 @@ TEST(FlockSim, AgentLostOnTheWayHomeTheFlockGoesBackForItsStripes) {
   EXPECT_GT(r.mission_time_s, plain.mission_time_s);  // the extra pass costs time
   std::printf("recall: mission %.1f s (without the loss %.1f s), distance %.0f m (%.0f m)\n",
               r.mission_time_s, plain.mission_time_s, r.distance_m, plain.distance_m);
+}
+
+TEST(FlockSim, AgentKilledInItsLandingDescentIsAFailureNotALanding) {
+  // the simulator's kill disarms the autopilot, which then reports "on the ground" as at any
+  // disarm: taken for a touchdown, the agent would beacon "landed" with pictures that died with it
+  FlockScenario s;
+  s.kills_in_descent = {{8.0, 3}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.rounds, 2);  // the leader, still flying, noticed the loss and recalled the flock
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
 }
 
 TEST(FlockSim, LeaderLostOnTheWayHomeTheNextOneChecksAndRecalls) {

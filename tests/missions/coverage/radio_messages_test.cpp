@@ -59,6 +59,15 @@ TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
   ASSERT_TRUE(w);
   EXPECT_EQ(w->round, 1);
   EXPECT_TRUE(w->going_home);
+  EXPECT_FALSE(w->homebound);
+  // homebound is its own bit too: the round and the other flags stay
+  b.homebound = true;
+  const auto h = decode_beacon(encode_beacon(b, o), o);
+  ASSERT_TRUE(h);
+  EXPECT_TRUE(h->homebound);
+  EXPECT_EQ(h->round, 1);
+  EXPECT_TRUE(h->going_home);
+  EXPECT_TRUE(h->self.landed);
 }
 
 TEST(RadioMessages, MalformedBeaconsAreRejected) {
