@@ -74,27 +74,28 @@ void GimbalSet::before_step(sim::Simulation& sim) {
     initial_saved_ = true;
   }
   const bool dynamic = dynamics_.time_const_s > 0 || dynamics_.rate_max_rad_s > 0 || dynamics_.accel_max_rad_s2 > 0;
-  if (dynamic) {
-    // the camera rides on the body; the loop slews it towards the target, once a physics step
-    const double now_s = sim.time_s();
-    for (Gimbal& g : gimbals_) {
-      const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
+  const double now_s = sim.time_s();
+  for (Gimbal& g : gimbals_) {
+    const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
+    if (dynamic) {
+      // the camera rides on the body; the loop slews it towards the target, once a physics step
       const double dt_s = g.motion.started ? now_s - g.motion.time_s : 0.0;
       step_gimbal_motion(dynamics_, t.q_enu_body.conjugate() * pointing(g, heading(t.q_enu_body)),
                          dt_s, &g.motion);
       g.motion.time_s = now_s;
     }
+    place(sim, g, t);
   }
-  place(sim);
 }
 
 void GimbalSet::place(sim::Simulation& sim) const {
-  for (const Gimbal& g : gimbals_) {
-    const fc::TruthState t = sim.world().truth(static_cast<size_t>(g.vehicle));
-    const Eigen::Quaterniond q_enu_gimbal =
-        g.motion.started ? actual(g, t.q_enu_body) : pointing(g, heading(t.q_enu_body));
-    physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m, q_enu_gimbal);
-  }
+  for (const Gimbal& g : gimbals_) place(sim, g, sim.world().truth(static_cast<size_t>(g.vehicle)));
+}
+
+void GimbalSet::place(sim::Simulation& sim, const Gimbal& g, const fc::TruthState& t) {
+  const Eigen::Quaterniond q_enu_gimbal =
+      g.motion.started ? actual(g, t.q_enu_body) : pointing(g, heading(t.q_enu_body));
+  physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m, q_enu_gimbal);
 }
 
 void GimbalSet::schedule_capture_pose(sim::Simulation& sim) {

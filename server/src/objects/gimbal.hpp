@@ -81,6 +81,8 @@ class GimbalSet : public sim::WorldObject {
   const sim::GimbalDynamicsParams& dynamics() const { return dynamics_; }
 
  private:
+  // one gimbal body at its vehicle's mount, the vehicle's truth given
+  static void place(sim::Simulation& sim, const Gimbal& gimbal, const fc::TruthState& truth);
   std::vector<Gimbal> gimbals_;
   sim::GimbalDynamicsParams dynamics_;
   std::vector<Gimbal> initial_;
