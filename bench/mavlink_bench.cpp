@@ -1,6 +1,9 @@
 // MAVLink endpoint benchmarks over loopback (Google Benchmark; figures, not a gate):
-//   BM_TelemetryThroughput/N  N vehicles, one client each, every stream group at 50 Hz: frames delivered to
-//                             the clients per wall second while the loop steps as fast as it can.
+//   BM_TelemetryThroughput/N/hover:H  N lean quads on a 4 m grid (bench_fleet.hpp), parked on the ground
+//                             (H = 0) or hovering in formation 5 m up (H = 1), one client each, every stream
+//                             group at 50 Hz: frames delivered to the clients per wall second while the loop
+//                             steps as fast as it can; x_real_time, flying. shards:S = the vehicles in S
+//                             physics shards on one thread (S = 2: two models of 50 stay in cache).
 //   BM_CommandAckLatency/N/R  N vehicles, the loop on its own thread at R x real time (0 = as fast as
 //                             possible); one client on vehicle 0: COMMAND_LONG -> COMMAND_ACK round trip.
 #include <benchmark/benchmark.h>
@@ -13,12 +16,12 @@
 
 #include <atomic>
 #include <chrono>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "bench_fleet.hpp"
 #include "uavsim/common/mavlink/codec.hpp"
 #include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/endpoint.hpp"
@@ -34,23 +37,16 @@ namespace physics = uavsim::server::physics;
 
 namespace {
 
-// a world with n quads on a grid (uavsim_grid), written to a temporary file
-std::unique_ptr<sim::Simulation> make_grid_sim(int n) {
-  // rows x cols = n exactly: the largest divisor of n not above sqrt(n)
-  int rows = 1;
-  for (int d = 1; d * d <= n; ++d) {
-    if (n % d == 0) rows = d;
+// n lean quads on a 4 m grid, parked on the ground; with hover, all launched into a formation 5 m up; in
+// `shards` physics shards stepped by one thread
+std::unique_ptr<sim::Simulation> make_grid_sim(int n, bool hover = false, int shards = 1) {
+  auto s = std::make_unique<sim::Simulation>(
+      uavsim::bench::load(n, 0.0, "lean", physics::ShardOptions{shards, 1}), sim::SimConfig{});
+  if (hover) {
+    while (s->time_s() < 20.0 && !s->fc(0).prearm_ok()) s->step();
+    uavsim::bench::launch_all(*s);
   }
-  const int cols = n / rows;
-  const std::string path = "/tmp/uavsim_mavlink_bench_" + std::to_string(n) + ".xml";
-  std::ofstream(path) << "<mujoco model=\"bench\"><compiler angle=\"radian\"/>"
-                      << "<option timestep=\"0.001\" integrator=\"Euler\"/>"
-                      << "<include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/><worldbody>"
-                      << "<uavsim_grid type=\"quad\" prefix=\"uav\" rows=\"" << rows << "\" cols=\"" << cols
-                      << "\" spacing=\"4\" pos=\"0 0 0\"/></worldbody></mujoco>";
-  physics::ComposeOptions o;
-  o.models_dir = UAVSIM_MODELS_DIR;
-  return std::make_unique<sim::Simulation>(physics::World::load(path, o), sim::SimConfig{});
+  return s;
 }
 
 int connect_to(std::uint16_t port) {
@@ -73,10 +69,12 @@ void send_msg(int fd, const Msg& m) {
 
 void BM_TelemetryThroughput(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  auto s = make_grid_sim(n);
+  const bool hover = state.range(1) != 0;
+  auto s = make_grid_sim(n, hover, static_cast<int>(state.range(2)));
   mav::EndpointConfig c;
   c.base_port = 0;
   mav::MavlinkServer server(*s, c);
+  server.schedule(s->schedule());  // without it the endpoints never handle a message nor send telemetry
   std::vector<int> fds;
   for (int i = 0; i < n; ++i) {
     fds.push_back(connect_to(server.port(i)));
@@ -126,10 +124,21 @@ void BM_TelemetryThroughput(benchmark::State& state) {
   state.counters["x_real_time"] = (s->time_s() - sim_start) / wall_s;
   state.counters["dropped_frames"] = static_cast<double>(dropped);
   state.counters["sent_frames"] = static_cast<double>(sent);
+  std::size_t flying = 0;
+  for (int i = 0; i < n; ++i) flying += s->fc(static_cast<std::size_t>(i)).armed() && !s->truth(static_cast<std::size_t>(i)).on_ground;
+  state.counters["flying"] = static_cast<double>(flying);
   state.SetItemsProcessed(static_cast<int64_t>(received));
   for (int fd : fds) close(fd);
 }
-BENCHMARK(BM_TelemetryThroughput)->Arg(1)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TelemetryThroughput)
+    ->ArgNames({"", "hover", "shards"})
+    ->Args({1, 0, 1})
+    ->Args({10, 0, 1})
+    ->Args({100, 0, 1})
+    ->Args({10, 1, 1})
+    ->Args({100, 1, 1})
+    ->Args({100, 1, 2})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_CommandAckLatency(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -138,6 +147,7 @@ void BM_CommandAckLatency(benchmark::State& state) {
   mav::EndpointConfig c;
   c.base_port = 0;
   mav::MavlinkServer server(*s, c);
+  server.schedule(s->schedule());  // without it the endpoints never handle a message nor send telemetry
   const int fd = connect_to(server.port(0));
   // only the acks matter: stop the streams of this client
   cm::msg::RequestDataStream r;
