@@ -109,6 +109,38 @@ TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {
   EXPECT_DOUBLE_EQ(path_y_at(*p, 2.8), 43.0);
 }
 
+TEST(PathPlanner, ABandLeftThatFitsInsideTheSwathMovesItTowardsItsCentre) {
+  // covered up to 80 m in every stripe: the band left is [80, 100], 20 m. A 5-agent line with the
+  // leader at its bottom (extent 0 below, 30 above) sweeps 40 m: the band fits with 10 m to spare on
+  // each side, so the swath [leader - 5, leader + 35] is centred on y = 90 (leader at 75), from
+  // either side (8 m from the frontier rule's 83 and 67), instead of leaving 2 m of margin
+  const CoverageConfig c = config();
+  AreaParts map(c.stripe_count());
+  for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 80.0});
+  const FlockExtent e{0.0, 30.0};
+  for (bool low : {true, false}) {
+    const auto p = plan_side(c, map, {-10.0, 0.0}, e, low);
+    ASSERT_TRUE(p);
+    for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), 75.0) << "low side: " << low;
+  }
+  // the band [66, 100] with 2 m of margin on both sides fits the 40 m swath (34 + 4 <= 40): centred
+  // on 83, leader at 68; [62, 100] does not (38 + 4 > 40): the frontier rule, 62 + 0 + 5 - 2 = 65
+  for (int i = 0; i < c.stripe_count(); ++i) map.set_stripe(i, {{0.0, 66.0}});
+  const auto p = plan_side(c, map, {-10.0, 0.0}, e, true);
+  ASSERT_TRUE(p);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[1].y(), 68.0);
+  for (int i = 0; i < c.stripe_count(); ++i) map.set_stripe(i, {{0.0, 62.0}});
+  const auto q = plan_side(c, map, {-10.0, 0.0}, e, true);
+  ASSERT_TRUE(q);
+  EXPECT_DOUBLE_EQ(q->points_enu_m[1].y(), 65.0);
+  // at most a footprint (10 m) from the frontier rule: band [90, 100], a 13-agent line (extent 0
+  // below, 60 above): centred would be 65, the frontier rule says 93, the swath moves to 83
+  for (int i = 0; i < c.stripe_count(); ++i) map.set_stripe(i, {{0.0, 90.0}});
+  const auto r = plan_side(c, map, {-10.0, 0.0}, {0.0, 60.0}, true);
+  ASSERT_TRUE(r);
+  EXPECT_DOUBLE_EQ(r->points_enu_m[1].y(), 83.0);
+}
+
 TEST(PathPlanner, NothingToPlanWhenCovered) {
   const CoverageConfig c = config();
   AreaParts map(c.stripe_count());
