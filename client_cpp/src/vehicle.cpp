@@ -228,6 +228,15 @@ struct Vehicle::Impl {
   std::string held_out;  // pipelined lockstep: frames sent during this tick's work (send, release_held)
 
   std::map<std::uint16_t, msg::CommandAck> acks;
+  // commands sent with command_async(), by id: retried on silence like command(); `done` runs (posted
+  // to the loop) with the final answer
+  struct AsyncCommand {
+    std::array<float, 7> params{};
+    int attempt = 0;
+    TimerId retry = 0;
+    std::function<void(Result<void>)> done;
+  };
+  std::map<std::uint16_t, AsyncCommand> async_commands;
   struct ParamSeen {
     float value = 0;
     std::uint8_t type = to_underlying(mav::MavParamType::Real32);
@@ -259,6 +268,7 @@ struct Vehicle::Impl {
       *t = 0;
     }
     resend_setpoint.reset();
+    fail_all_async(why != nullptr ? std::string("the link was lost: ") + why : "the link was closed");
     mission_active = false;
   }
 
@@ -517,6 +527,7 @@ struct Vehicle::Impl {
         const auto m = msg::CommandAck::decode(f.payload.data());
         if (m.target_system != 0 && m.target_system != config.gcs_sysid) return;
         acks[m.command] = m;
+        on_async_ack(m);
         return;
       }
       case msg::ParamValue::kId: {
@@ -612,6 +623,89 @@ struct Vehicle::Impl {
     return Result<void>::fail(Error::kTimeout, os.str());
   }
 
+  // ------------------------------------------------------------------ non-blocking commands
+  void command_async(std::uint16_t cmd, const std::array<float, 7>& p, std::function<void(Result<void>)> done) {
+    loop.assert_in_loop_thread();
+    if (auto r = need_link(); !r) {
+      if (done) loop.post([done = std::move(done), r] { done(r); });
+      return;
+    }
+    finish_async(cmd, Result<void>::fail(Error::kCancelled, command_name(cmd) + ": replaced by a newer one"));
+    AsyncCommand& a = async_commands[cmd];
+    a.params = p;
+    a.done = std::move(done);
+    send_async(cmd);
+  }
+
+  void send_async(std::uint16_t cmd) {
+    AsyncCommand& a = async_commands.at(cmd);
+    msg::CommandLong c;
+    c.target_system = target_sysid;
+    c.target_component = target_compid;
+    c.command = cmd;
+    c.confirmation = static_cast<std::uint8_t>(std::min(a.attempt, 255));
+    c.param1 = a.params[0], c.param2 = a.params[1], c.param3 = a.params[2], c.param4 = a.params[3];
+    c.param5 = a.params[4], c.param6 = a.params[5], c.param7 = a.params[6];
+    if (!send(c)) {
+      finish_async(cmd, Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": the link was lost"));
+      return;
+    }
+    arm_async_retry(cmd);
+  }
+
+  void arm_async_retry(std::uint16_t cmd) {
+    AsyncCommand& a = async_commands.at(cmd);
+    if (a.retry != 0) loop.cancel(a.retry);
+    a.retry = loop.call_after(config.command_timeout_s, [this, cmd] {
+      auto it = async_commands.find(cmd);
+      if (it == async_commands.end()) return;
+      it->second.retry = 0;
+      const int attempts = std::max(1, config.command_attempts);
+      if (++it->second.attempt < attempts) {
+        send_async(cmd);
+        return;
+      }
+      std::ostringstream os;
+      os << "no COMMAND_ACK for " << command_name(cmd) << " after " << attempts << " attempt(s) of "
+         << config.command_timeout_s << " s";
+      finish_async(cmd, Result<void>::fail(Error::kTimeout, os.str()));
+    });
+  }
+
+  void on_async_ack(const msg::CommandAck& m) {
+    if (async_commands.count(m.command) == 0) return;
+    if (m.result == to_underlying(MavResult::InProgress)) {  // the final ack follows
+      arm_async_retry(m.command);
+      return;
+    }
+    if (m.result == to_underlying(MavResult::Accepted)) {
+      finish_async(m.command, {});
+      return;
+    }
+    finish_async(m.command, Result<void>::fail(error_of_mav_result(m.result),
+                                               command_name(m.command) + " refused by the vehicle: MAV_RESULT_" +
+                                                   mav_result_name(m.result) + " (" + std::to_string(m.result) + ")",
+                                               m.result));
+  }
+
+  // ends a pending non-blocking command (nothing when none): its done runs on the loop, after the
+  // caller's own work (a done that sends the next command does not nest inside the I/O handler)
+  void finish_async(std::uint16_t cmd, Result<void> r) {
+    auto it = async_commands.find(cmd);
+    if (it == async_commands.end()) return;
+    if (it->second.retry != 0) loop.cancel(it->second.retry);
+    auto done = std::move(it->second.done);
+    async_commands.erase(it);
+    if (done) loop.post([done = std::move(done), r = std::move(r)] { done(r); });
+  }
+
+  void fail_all_async(const std::string& why) {
+    while (!async_commands.empty()) {
+      const std::uint16_t cmd = async_commands.begin()->first;
+      finish_async(cmd, Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": " + why));
+    }
+  }
+
   void cancel_resend() {
     if (resend_timer != 0) loop.cancel(resend_timer);
     resend_timer = 0;
@@ -672,6 +766,11 @@ Vehicle::Vehicle(EventLoop& loop, VehicleConfig config) : impl_(std::make_unique
 }
 
 Vehicle::~Vehicle() {
+  // pending non-blocking commands end silently: their callbacks may reach this vehicle
+  for (auto& [cmd, a] : impl_->async_commands) {
+    if (a.retry != 0) impl_->loop.cancel(a.retry);
+  }
+  impl_->async_commands.clear();
   impl_->close_link(nullptr);
   LoopServices(impl_->loop).remove_seq_source(impl_->seq_source);
   LoopServices(impl_->loop).remove_output_flusher(impl_->output_flusher);
@@ -809,6 +908,48 @@ Result<void> Vehicle::takeoff(double rel_alt_m, bool wait, double timeout_s) {
   return s.loop.run_until(
       [&] { return s.fd < 0 || (s.tm.has_global_position && std::abs(s.tm.relative_alt_m - rel_alt_m) < 0.5); },
       timeout_s, "take-off altitude " + std::to_string(rel_alt_m) + " m");
+}
+
+void Vehicle::command_long_async(std::uint16_t command, const std::array<float, 7>& params,
+                                 std::function<void(Result<void>)> done) {
+  impl_->command_async(command, params, std::move(done));
+}
+
+void Vehicle::set_mode_async(FlightMode mode, std::function<void(Result<void>)> done) {
+  Impl& s = *impl_;
+  if (mode != FlightMode::kGuided) s.cancel_resend();
+  s.command_async(176, {1.0f, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0},
+                  [&s, mode, done = std::move(done)](Result<void> r) {
+                    if (r) {
+                      s.tm.mode = mode;
+                      s.tm.custom_mode = static_cast<std::uint32_t>(mode);
+                    }
+                    if (done) done(r);
+                  });
+}
+
+void Vehicle::arm_async(std::function<void(Result<void>)> done) {
+  Impl& s = *impl_;
+  s.command_async(400, {1.0f, 0, 0, 0, 0, 0, 0}, [&s, done = std::move(done)](Result<void> r) {
+    if (r) s.tm.armed = true;
+    if (done) done(r);
+  });
+}
+
+void Vehicle::takeoff_async(double rel_alt_m, std::function<void(Result<void>)> done) {
+  Impl& s = *impl_;
+  if (!std::isfinite(rel_alt_m) || rel_alt_m <= 0) {
+    auto r = Result<void>::fail(Error::kInvalidArgument, "take-off altitude must be > 0");
+    if (done) s.loop.post([done = std::move(done), r] { done(r); });
+    return;
+  }
+  s.cancel_resend();
+  s.command_async(22, {0, 0, 0, 0, 0, 0, static_cast<float>(rel_alt_m)}, std::move(done));
+}
+
+void Vehicle::land_async(std::function<void(Result<void>)> done) {
+  impl_->cancel_resend();
+  impl_->command_async(21, {}, std::move(done));
 }
 
 Result<void> Vehicle::land(bool wait, double timeout_s) {

@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -105,6 +106,7 @@ struct Flyer {
   AgentState last_state = AgentState::kTakingOff;
   int last_leader = -2;
   bool takeoff_wanted = false;
+  bool takeoff_in_flight = false;  // GUIDED -> arm -> NAV_TAKEOFF sent, answers pending
   double takeoff_altitude_m = 0.0;
   double next_takeoff_try_s = 0.0;
   AreaParts reported;
@@ -117,6 +119,22 @@ struct Flyer {
   double next_gcs_s = 0.0;
   bool gcs_refused_logged = false;
 };
+
+// GUIDED, arm, NAV_TAKEOFF, each sent when the previous one is accepted (non-blocking: several agents
+// share one event loop); a refusal ends the try (the caller tries again kTakeoffRetry_s later)
+void send_takeoff(Flyer& f, const std::function<void(int, const std::string&)>& log) {
+  auto give_up = [&f, log](const Result<void>& r) {
+    f.takeoff_in_flight = false;
+    if (!r) log(f.id, "take-off: " + r.message() + " (trying again)");
+  };
+  f.vehicle->set_mode_async(FlightMode::kGuided, [&f, give_up](Result<void> r) {
+    if (!r) return give_up(r);
+    f.vehicle->arm_async([&f, give_up](Result<void> r) {
+      if (!r) return give_up(r);
+      f.vehicle->takeoff_async(f.takeoff_altitude_m, give_up);
+    });
+  });
+}
 
 }  // namespace
 
@@ -258,8 +276,18 @@ int main(int argc, char** argv) {
       }
     }
   }
+  // every vehicle of this process ready, then every agent starts at the same tick, as separate
+  // processes would (waiting for one vehicle after the other started them a tick or more apart)
+  (void)loop.run_until(
+      [&] {
+        for (const Flyer& f : flyers) {
+          if (!f.vehicle->ready()) return false;
+        }
+        return true;
+      },
+      120, "the vehicles to be ready");
   for (Flyer& f : flyers) {
-    if (auto r = f.vehicle->wait_ready(120); !r) {
+    if (auto r = f.vehicle->wait_ready(0); !r) {
       log(f.id, "wait ready: " + r.message());
       return 1;
     }
@@ -333,17 +361,18 @@ int main(int argc, char** argv) {
           break;
         case AgentOutputs::Action::kLand:
           f.takeoff_wanted = false;
-          if (auto r = f.vehicle->land(false); !r) log(f.id, "land: " + r.message());
+          f.vehicle->land_async([&f, &log](Result<void> r) {
+            if (!r) log(f.id, "land: " + r.message());
+          });
           break;
       }
-      // take-off until the vehicle is up (a refused arm is tried again)
-      if (f.takeoff_wanted && !t.armed && loop.now() >= f.next_takeoff_try_s &&
+      // take-off until the vehicle is up (a refused arm is tried again); without blocking: the
+      // other agents of this process step on while the commands are answered
+      if (f.takeoff_wanted && !f.takeoff_in_flight && !t.armed && loop.now() >= f.next_takeoff_try_s &&
           f.agent->state() == AgentState::kTakingOff) {
         f.next_takeoff_try_s = loop.now() + kTakeoffRetry_s;
-        auto r = f.vehicle->set_mode(FlightMode::kGuided);
-        if (r) r = f.vehicle->arm();
-        if (r) r = f.vehicle->takeoff(f.takeoff_altitude_m, false);
-        if (!r) log(f.id, "take-off: " + r.message() + " (trying again)");
+        f.takeoff_in_flight = true;
+        send_takeoff(f, log);
       }
       // outputs: the radio, and what we acquired to the station (best effort)
       for (const Frame& frame : out.broadcast) (void)f.radio->broadcast(frame);

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "loop_services.hpp"
 #include "sim_harness.hpp"
@@ -265,6 +268,71 @@ TEST_F(ClientSystemTest, TakeoffWhileDisarmedIsRefusedWithTheMavResult) {
   ASSERT_FALSE(u);
   EXPECT_EQ(u.code(), Error::kUnsupported);
   EXPECT_EQ(u.error().mav_result, 3);
+}
+
+// The non-blocking commands: each call returns at once (the loop's clock does not move), its answer
+// comes back through the callback, a refusal carries the MAV_RESULT, and the GUIDED -> arm -> take-off
+// chain flies the vehicle up.
+TEST_F(ClientSystemTest, NonBlockingCommandsAnswerThroughTheirCallbacks) {
+  ASSERT_TRUE(uav_->wait_ready(60));
+  std::optional<Result<void>> refused;
+  const double t0 = loop_->now();
+  uav_->takeoff_async(10.0, [&](Result<void> r) { refused = r; });  // disarmed: ArduCopter refuses it
+  EXPECT_EQ(loop_->now(), t0);
+  EXPECT_FALSE(refused) << "the callback ran inside the call";
+  ASSERT_TRUE(loop_->run_until([&] { return refused.has_value(); }, 5.0));
+  ASSERT_FALSE(*refused);
+  EXPECT_EQ(refused->code(), Error::kFailed) << refused->message();
+  EXPECT_EQ(refused->error().mav_result, 4);
+
+  std::vector<std::string> steps;
+  std::optional<Result<void>> last;
+  uav_->set_mode_async(FlightMode::kGuided, [&](Result<void> r) {
+    steps.push_back(r ? "guided" : r.message());
+    if (!r) return;
+    uav_->arm_async([&](Result<void> r) {
+      steps.push_back(r ? "armed" : r.message());
+      if (!r) return;
+      uav_->takeoff_async(10.0, [&](Result<void> r) { last = r; });
+    });
+  });
+  EXPECT_TRUE(steps.empty());  // nothing ran inside the call
+  ASSERT_TRUE(loop_->run_until([&] { return last.has_value(); }, 10.0));
+  EXPECT_EQ(steps, (std::vector<std::string>{"guided", "armed"}));
+  ASSERT_TRUE(*last) << last->message();
+  EXPECT_EQ(uav_->telemetry().mode, FlightMode::kGuided);
+  EXPECT_TRUE(uav_->telemetry().armed);
+  ASSERT_TRUE(loop_->run_until([&] { return std::abs(uav_->telemetry().relative_alt_m - 10.0) < 0.5; }, 30.0));
+  EXPECT_NEAR(api_->truth_position_enu().z(), 10.0, kTruthTolM);
+
+  // a second command with the same id replaces the first: the first is told so
+  std::optional<Result<void>> first, second;
+  uav_->land_async([&](Result<void> r) { first = r; });
+  uav_->land_async([&](Result<void> r) { second = r; });
+  ASSERT_TRUE(loop_->run_until([&] { return first.has_value() && second.has_value(); }, 5.0));
+  ASSERT_FALSE(*first);
+  EXPECT_EQ(first->code(), Error::kCancelled);
+  EXPECT_TRUE(*second) << second->message();
+  ASSERT_TRUE(loop_->run_until([&] { return !uav_->telemetry().armed; }, 60.0));
+}
+
+// A pending non-blocking command ends with kConnectionLost when the link goes, and destroying the
+// Vehicle drops its callbacks without running them.
+TEST_F(ClientSystemTest, NonBlockingCommandsEndWithTheLink) {
+  ASSERT_TRUE(uav_->wait_ready(60));
+  std::optional<Result<void>> lost;
+  uav_->set_mode_async(FlightMode::kGuided, [&](Result<void> r) { lost = r; });
+  uav_->disconnect();
+  ASSERT_TRUE(loop_->run_until([&] { return lost.has_value(); }, 1.0));
+  ASSERT_FALSE(*lost);
+  EXPECT_EQ(lost->code(), Error::kConnectionLost) << lost->message();
+
+  ASSERT_TRUE(uav_->connect(server_->mavlink_address(), 10));
+  bool ran = false;
+  uav_->set_mode_async(FlightMode::kGuided, [&](Result<void>) { ran = true; });
+  uav_.reset();
+  ASSERT_TRUE(loop_->run_for(1.0));
+  EXPECT_FALSE(ran);
 }
 
 TEST_F(ClientSystemTest, LockstepTimersRunInSimTime) {

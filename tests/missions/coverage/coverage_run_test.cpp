@@ -110,18 +110,28 @@ TEST(CoverageRun, ThirtyPercentRadioLossStillCoversEverything) {
 }
 
 // All five agents in one coverage-agent process (--vehicles 0-4): each still has its own MAVLink
-// link and radio, and frames between them go through the simulated radio, so the flock behaves as
-// with one process per agent (take-off commands are sent one agent after the other: a few ticks).
-TEST(CoverageRun, OneProcessFlyingAllFiveAgentsCoversTheRectangleToo) {
-  std::string out;
-  const Json r = run_flock("--per-process 5", &out);
-  ASSERT_TRUE(r.is_object()) << out;
-  EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
-  EXPECT_EQ(r["landed"].get<int>(), 5) << out;
-  // one process per agent: 172.2 s; one process for all has flown 172-189 s (its agents' steps
-  // are not in the same order every run: once in a while a 1 % sliver needs one more short pass)
-  EXPECT_NEAR(r["mission_time_s"].get<double>(), 172.0, 25.0) << out;
-  EXPECT_TRUE(r["success"].get<bool>()) << out;
+// link and radio, frames between them go through the simulated radio, and its commands do not block
+// (a blocking take-off of one agent used to hold the others' steps: the mission then varied from
+// 172 to 189 s), so the flock flies the mission of one process per agent.
+TEST(CoverageRun, OneProcessFlyingAllFiveAgentsFliesTheMissionOfOneProcessEach) {
+  std::string out_one, out_each;
+  const Json one = run_flock("--per-process 5", &out_one);
+  const Json each = run_flock("", &out_each);
+  ASSERT_TRUE(one.is_object()) << out_one;
+  ASSERT_TRUE(each.is_object()) << out_each;
+  EXPECT_GE(one["coverage"].get<double>(), kFullCoverage) << out_one;
+  EXPECT_EQ(one["landed"].get<int>(), 5) << out_one;
+  EXPECT_TRUE(one["success"].get<bool>()) << out_one;
+  // the same passes: coverage complete within a tick or two. The take-offs and the landings still
+  // move by a few tenths to a few seconds with the host's load (one process: 177.7-180.9 s, one per
+  // agent: 177.8 s, idle and loaded): the links of one process come up one after the other.
+  EXPECT_NEAR(one["coverage_complete_s"].get<double>(), each["coverage_complete_s"].get<double>(), 0.5)
+      << out_one << out_each;
+  EXPECT_NEAR(one["mission_time_s"].get<double>(), each["mission_time_s"].get<double>(), 6.0)
+      << out_one << out_each;
+  EXPECT_NEAR(one["distance_m_total"].get<double>(), each["distance_m_total"].get<double>(),
+              0.01 * each["distance_m_total"].get<double>())
+      << out_one << out_each;
 }
 
 // The optimised variant (thesis 3.6): the agents send what they acquire to a ground station

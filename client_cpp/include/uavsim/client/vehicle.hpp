@@ -162,6 +162,19 @@ class Vehicle {
   Result<void> land(bool wait = false, double timeout_s = 120.0);  // wait: until disarmed on the ground
   Result<void> return_to_launch();
 
+  // Non-blocking forms, for a program that flies several vehicles from one event loop: a blocking command
+  // runs the loop until its ack, so the program's other vehicles would wait meanwhile and step later than
+  // they would alone. The command is sent now and retried on silence as above; done (optional) runs on the
+  // loop thread with the outcome, never inside the call. A command with the same id while one is pending
+  // replaces it (the first's done gets kCancelled). Link lost or closed: kConnectionLost. Destroying the
+  // Vehicle drops pending callbacks without calling them.
+  void command_long_async(std::uint16_t command, const std::array<float, 7>& params,
+                          std::function<void(Result<void>)> done = {});
+  void set_mode_async(FlightMode mode, std::function<void(Result<void>)> done = {});
+  void arm_async(std::function<void(Result<void>)> done = {});
+  void takeoff_async(double rel_alt_m, std::function<void(Result<void>)> done = {});  // needs GUIDED, armed
+  void land_async(std::function<void(Result<void>)> done = {});
+
   // GUIDED setpoints (SET_POSITION_TARGET_*; ArduCopter does not acknowledge them: kNotReady if the vehicle
   // is not in GUIDED). yaw_rad is NaN to keep the heading; ENU yaw: counter-clockwise from east.
   Result<void> goto_local_enu(const Eigen::Vector3d& enu_m, double yaw_enu_rad = std::numeric_limits<double>::quiet_NaN());
