@@ -36,6 +36,9 @@ constexpr double kHomeSeparationSpeed_m_s = 1.5;
 // Going Home after a loss: once agents have landed, the leader checks the flock's map only this
 // close to its home, where the landed agents (on the take-off line, radios on) answer its query
 constexpr double kVerifyNearHome_m = 50.0;
+// a landed agent that noticed a loss stays on this long for the leader's check (its query, answered
+// by every landed agent, takes a few seconds; kQueryTimeout_s per retry)
+constexpr double kLossWait_s = 2.0 * kQueryTimeout_s;
 // the leader's hover over its home while the others land (it lands last)
 constexpr double kLeaderWaitAltitude_m = 3.0;
 
@@ -126,8 +129,14 @@ AgentOutputs Agent::step(const AgentInputs& in) {
   age_remainder_ms_ -= elapsed_ms;
   if (elapsed_ms > 0) {
     // an agent that aged out on the way home, not known to have landed, died with its pictures
+    // (on the ground too, in our own round: the last agents flying may die after we landed; in a
+    // later round its flyers may just be out of range, surveying)
     for (int id : adb_.age(elapsed_ms)) {
-      if (state_ == AgentState::kGoingHome && !landed_ids_.count(id)) loss_pending_ = true;
+      if (landed_ids_.count(id)) continue;
+      const bool landed_here = state_ == AgentState::kLanded && (round_ == home_round_ || later_round_over_);
+      if (state_ != AgentState::kGoingHome && !landed_here) continue;
+      if (!loss_pending_) loss_since_s_ = in.now_s;
+      loss_pending_ = true;
     }
   }
 
@@ -136,6 +145,12 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     // on the ground the radio stays on: the agent still relays, beacons (landed) and answers the
     // leader's queries, since its pictures are part of the flock's map
     receive(in);
+    // a loss noticed on the ground: when no agent that flies is left to check it, the lowest id
+    // landed checks the flock's map, and takes off again if the rectangle is no longer covered
+    // (verify_after_loss); the others stay on for its query a while
+    if (loss_pending_ && adb_.leader() != id_ && in.now_s - loss_since_s_ > kLossWait_s)
+      loss_pending_ = false;
+    if (loss_pending_ && verify_after_loss(in, out)) return out;
     broadcast(in, out);
     return out;
   }
@@ -213,6 +228,7 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     b.self.vx_m_s = commanded_velocity_enu_m_s_.x();
     b.self.vy_m_s = commanded_velocity_enu_m_s_.y();
     b.self.landed = state_ == AgentState::kLanded;
+    if (b.self.landed) ++landed_beacons_;
     // an agent still landing from an earlier round does not send a later round's flock home
     b.going_home = state_ == AgentState::kGoingHome && home_round_ == round_;
     b.round = static_cast<uint8_t>(round_);
@@ -286,7 +302,10 @@ AreaParts Agent::flock_map() const {
 }
 
 void Agent::finish_query(const AgentInputs& in, AgentOutputs& out) {
-  const AreaParts map = flock_map();
+  AreaParts map = flock_map();
+  // flying alone after taking off again: the landed agents keep their pictures (a landed drone
+  // does not fail), but a query from the far end of the rectangle no longer reaches them
+  if (landed_map_ && adb_.all_landed()) map.merge(*landed_map_);
   last_map_ = map;
   const double fraction = map.covered_fraction(config_.width_y_m);
   if (map.covers_all(config_.width_y_m)) {
@@ -326,7 +345,9 @@ bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {
   // Beyond the thesis (whose mission ends at the going-home broadcast): an agent that dies on the
   // way home takes the pictures only it held. The leader (the lowest id still flying) asks the
   // flock for its map again, and if the rectangle is no longer covered, starts the next survey
-  // round: the agents still flying come back and the frontier is planned over what was lost.
+  // round: the agents still flying come back and the frontier is planned over what was lost. When
+  // the last agents flying die after the others landed, the lowest id landed checks from the ground
+  // and takes off again itself (the others, landed, keep their pictures and answer its queries).
   if (!loss_pending_ || adb_.leader() != id_) return false;
   const double now = in.now_s;
   if (!verifying_) {
@@ -359,6 +380,22 @@ bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {
   complete_ = false;
   path_.reset();
   flock_.reset();
+  if (state_ == AgentState::kLanded) {
+    // nobody left flying: take off again; once up, as the lowest id flying, it queries and plans.
+    // What the landed agents hold now stays held: merged into every query's result while they are
+    // the only others (finish_query)
+    landed_map_ = flock_map();
+    takeoff_sent_ = false;
+    land_sent_ = false;
+    airborne_seen_ = false;
+    adb_.set_local_landed(false);
+    later_round_flyers_.clear();
+    later_round_over_ = false;
+    landed_beacons_ = 0;
+    enter(AgentState::kTakingOff, out, "pictures lost after the others landed: taking off again");
+    out.note += " (recall: round " + std::to_string(round_) + ")";
+    return true;
+  }
   finish_query(in, out);  // plans over the gaps (Deploying)
   out.note += " (recall: round " + std::to_string(round_) + ")";
   return true;

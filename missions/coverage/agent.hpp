@@ -102,9 +102,14 @@ class Agent {
   // A recall after this agent landed (a later round than the one it went home in) keeps it on
   // until the later round is over: the later round's leader may survey out of radio range, where
   // the landed agents no longer hear it, and needs their pictures when it queries again near home.
+  // A loss noticed on the ground keeps it on too, for the check of the lowest id landed; and it
+  // beacons its landing for a second first (kLandedBeacons), or the others, landed, would age it
+  // out as lost.
+  static constexpr int kLandedBeacons = 8;
   bool flock_landed() const {
     return state_ == AgentState::kLanded && adb_.all_landed() &&
-           (round_ == home_round_ || later_round_over_);
+           (round_ == home_round_ || later_round_over_) && !loss_pending_ &&
+           landed_beacons_ >= kLandedBeacons;
   }
   // The survey round (a recall after a loss on the way home starts the next).
   int round() const { return round_; }
@@ -160,6 +165,8 @@ class Agent {
   bool recalled_ = false;
   int home_round_ = 0;  // the round in which this agent went home
   bool loss_pending_ = false;
+  double loss_since_s_ = 0.0;
+  int landed_beacons_ = 0;  // beacons sent with the landed flag (flock_landed)
   bool verifying_ = false;
   double verify_since_s_ = 0.0;
   std::set<int> landed_ids_;  // agents heard to have landed: when they age out, nothing is lost
@@ -180,6 +187,7 @@ class Agent {
   int queries_started_ = 0;
   std::optional<AreaParts> gcs_map_;
   std::optional<AreaParts> last_map_;
+  std::optional<AreaParts> landed_map_;  // taken off again after a loss: what the landed agents held
   std::optional<PlannedPath> path_;
   double planned_fraction_ = 0.0;  // the map's covered fraction when path_ was planned
 

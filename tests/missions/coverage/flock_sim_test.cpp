@@ -40,6 +40,7 @@ struct FlockRun {
   double min_separation_m = 1e9;    // between flying vehicles
   double distance_m = 0.0;          // flown by all
   int rounds = 0;                   // survey rounds (recalls after losses on the way home + 1)
+  int takeoffs = 0;                 // take-off commands, re-launches included
 };
 
 struct FlockScenario {
@@ -113,6 +114,8 @@ FlockRun fly(const FlockScenario& s) {
       run.rounds = std::max(run.rounds, sv.agent.round() + 1);
       switch (out.action) {
         case AgentOutputs::Action::kTakeOff:
+          ++run.takeoffs;
+          sv.landing = false;
           sv.armed = true;
           sv.takeoff_altitude_m = out.takeoff_altitude_m;
           break;
@@ -128,7 +131,10 @@ FlockRun fly(const FlockScenario& s) {
           break;
       }
       for (const Frame& f : out.broadcast) air.emplace_back(i, f);
-      if (sv.agent.state() != AgentState::kLanded && !sv.crashed) done = false;
+      // done when every agent has switched its radio off (landed, and every agent it hears too) or
+      // failed: a landed agent may still check a loss and take off again
+      if (!sv.agent.flock_landed() && sv.agent.state() != AgentState::kFailed && !sv.crashed)
+        done = false;
     }
     if (done) {
       run.all_done = true;
@@ -259,6 +265,19 @@ TEST(FlockSim, LeaderLostOnTheWayHomeTheNextOneChecksAndRecalls) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rounds, 2);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+TEST(FlockSim, LastFlyerLostAfterTheOthersLandedTheLowestLandedTakesOffAgain) {
+  // agent 0 leads and lands last; the simulator kills it in its final descent, after the others
+  // have landed: nobody is left flying to notice. The lowest id landed (1) notices it age out,
+  // queries the landed agents, finds agent 0's pictures missing, takes off and covers them again
+  FlockScenario s;
+  s.kills_in_descent = {{2.0, 0}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.rounds, 2);
+  EXPECT_EQ(r.takeoffs, 6);  // five, and agent 1 again
   EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
 }
 
