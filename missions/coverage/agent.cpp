@@ -151,6 +151,11 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     if (loss_pending_ && adb_.leader() != id_ && in.now_s - loss_since_s_ > kLossWait_s)
       loss_pending_ = false;
     if (loss_pending_ && verify_after_loss(in, out)) return out;
+    const bool quiet = adb_.all_landed() && (round_ == home_round_ || later_round_over_) && !loss_pending_;
+    if (!quiet)
+      all_landed_since_s_ = -1.0;
+    else if (all_landed_since_s_ < 0.0)
+      all_landed_since_s_ = in.now_s;
     broadcast(in, out);
     return out;
   }
@@ -228,7 +233,6 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     b.self.vx_m_s = commanded_velocity_enu_m_s_.x();
     b.self.vy_m_s = commanded_velocity_enu_m_s_.y();
     b.self.landed = state_ == AgentState::kLanded;
-    if (b.self.landed) ++landed_beacons_;
     // an agent still landing from an earlier round does not send a later round's flock home
     b.going_home = state_ == AgentState::kGoingHome && home_round_ == round_;
     b.round = static_cast<uint8_t>(round_);
@@ -391,7 +395,7 @@ bool Agent::verify_after_loss(const AgentInputs& in, AgentOutputs& out) {
     adb_.set_local_landed(false);
     later_round_flyers_.clear();
     later_round_over_ = false;
-    landed_beacons_ = 0;
+    all_landed_since_s_ = -1.0;
     enter(AgentState::kTakingOff, out, "pictures lost after the others landed: taking off again");
     out.note += " (recall: round " + std::to_string(round_) + ")";
     return true;

@@ -103,13 +103,13 @@ class Agent {
   // until the later round is over: the later round's leader may survey out of radio range, where
   // the landed agents no longer hear it, and needs their pictures when it queries again near home.
   // A loss noticed on the ground keeps it on too, for the check of the lowest id landed; and it
-  // beacons its landing for a second first (kLandedBeacons), or the others, landed, would age it
-  // out as lost.
-  static constexpr int kLandedBeacons = 8;
+  // stays on kSwitchOffDelay_s after it first saw every agent landed, beaconing and relaying, so
+  // that agents beyond its neighbours learn of the last landings before it goes silent (else they
+  // would age the last to land out as lost).
+  static constexpr double kSwitchOffDelay_s = 5.0;
   bool flock_landed() const {
-    return state_ == AgentState::kLanded && adb_.all_landed() &&
-           (round_ == home_round_ || later_round_over_) && !loss_pending_ &&
-           landed_beacons_ >= kLandedBeacons;
+    return state_ == AgentState::kLanded && all_landed_since_s_ >= 0.0 &&
+           last_now_s_ - all_landed_since_s_ >= kSwitchOffDelay_s;
   }
   // The survey round (a recall after a loss on the way home starts the next).
   int round() const { return round_; }
@@ -166,7 +166,7 @@ class Agent {
   int home_round_ = 0;  // the round in which this agent went home
   bool loss_pending_ = false;
   double loss_since_s_ = 0.0;
-  int landed_beacons_ = 0;  // beacons sent with the landed flag (flock_landed)
+  double all_landed_since_s_ = -1.0;  // landed, and every agent heard landed, since (flock_landed)
   bool verifying_ = false;
   double verify_since_s_ = 0.0;
   std::set<int> landed_ids_;  // agents heard to have landed: when they age out, nothing is lost
