@@ -581,46 +581,60 @@ struct Vehicle::Impl {
     return Result<void>::fail(Error::kNotConnected, "not connected to a vehicle" + (address.empty() ? "" : " (" + address + ")"));
   }
 
+  // one COMMAND_LONG of a command's attempt (confirmation = the attempt number), for command() and
+  // command_async() alike
+  msg::CommandLong command_long(std::uint16_t cmd, const std::array<float, 7>& p, int attempt) const {
+    msg::CommandLong c;
+    c.target_system = target_sysid;
+    c.target_component = target_compid;
+    c.command = cmd;
+    c.confirmation = static_cast<std::uint8_t>(std::min(attempt, 255));
+    c.param1 = p[0], c.param2 = p[1], c.param3 = p[2], c.param4 = p[3];
+    c.param5 = p[4], c.param6 = p[5], c.param7 = p[6];
+    return c;
+  }
+  // the outcome of a final COMMAND_ACK (any result but IN_PROGRESS)
+  static Result<void> ack_outcome(std::uint16_t cmd, int result) {
+    if (result == static_cast<int>(to_underlying(MavResult::Accepted))) return {};
+    return Result<void>::fail(error_of_mav_result(result),
+                              command_name(cmd) + " refused by the vehicle: MAV_RESULT_" + mav_result_name(result) +
+                                  " (" + std::to_string(result) + ")",
+                              result);
+  }
+  static Result<void> link_lost(std::uint16_t cmd) {
+    return Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": the link was lost");
+  }
+  Result<void> no_ack(std::uint16_t cmd) const {
+    std::ostringstream os;
+    os << "no COMMAND_ACK for " << command_name(cmd) << " after " << std::max(1, config.command_attempts)
+       << " attempt(s) of " << config.command_timeout_s << " s";
+    return Result<void>::fail(Error::kTimeout, os.str());
+  }
+
   Result<void> command(std::uint16_t cmd, const std::array<float, 7>& p) {
     loop.assert_in_loop_thread();
     if (auto r = need_link(); !r) return r;
     const int attempts = std::max(1, config.command_attempts);
     for (int attempt = 0; attempt < attempts; ++attempt) {
       acks.erase(cmd);
-      msg::CommandLong c;
-      c.target_system = target_sysid;
-      c.target_component = target_compid;
-      c.command = cmd;
-      c.confirmation = static_cast<std::uint8_t>(attempt);
-      c.param1 = p[0], c.param2 = p[1], c.param3 = p[2], c.param4 = p[3];
-      c.param5 = p[4], c.param6 = p[5], c.param7 = p[6];
-      if (!send(c)) break;
+      if (!send(command_long(cmd, p, attempt))) break;
       for (;;) {
         auto w = loop.run_until([&] { return acks.count(cmd) > 0 || fd < 0; }, config.command_timeout_s,
                                 "COMMAND_ACK");
-        if (fd < 0) {
-          return Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": the link was lost");
-        }
+        if (fd < 0) return link_lost(cmd);
         if (!w && w.code() == Error::kConnectionLost) return w;
         auto it = acks.find(cmd);
         if (it == acks.end()) break;  // silence: try again
         const int result = it->second.result;
-        if (result == to_underlying(MavResult::InProgress)) {  // the final ack follows
+        if (result == static_cast<int>(to_underlying(MavResult::InProgress))) {  // the final ack follows
           acks.erase(it);
           continue;
         }
-        if (result == to_underlying(MavResult::Accepted)) return {};
-        return Result<void>::fail(error_of_mav_result(result),
-                                  command_name(cmd) + " refused by the vehicle: MAV_RESULT_" + mav_result_name(result) +
-                                      " (" + std::to_string(result) + ")",
-                                  result);
+        return ack_outcome(cmd, result);
       }
     }
-    if (auto r = need_link(); !r) return Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": the link was lost");
-    std::ostringstream os;
-    os << "no COMMAND_ACK for " << command_name(cmd) << " after " << attempts << " attempt(s) of "
-       << config.command_timeout_s << " s";
-    return Result<void>::fail(Error::kTimeout, os.str());
+    if (auto r = need_link(); !r) return link_lost(cmd);
+    return no_ack(cmd);
   }
 
   // ------------------------------------------------------------------ non-blocking commands
@@ -638,16 +652,9 @@ struct Vehicle::Impl {
   }
 
   void send_async(std::uint16_t cmd) {
-    AsyncCommand& a = async_commands.at(cmd);
-    msg::CommandLong c;
-    c.target_system = target_sysid;
-    c.target_component = target_compid;
-    c.command = cmd;
-    c.confirmation = static_cast<std::uint8_t>(std::min(a.attempt, 255));
-    c.param1 = a.params[0], c.param2 = a.params[1], c.param3 = a.params[2], c.param4 = a.params[3];
-    c.param5 = a.params[4], c.param6 = a.params[5], c.param7 = a.params[6];
-    if (!send(c)) {
-      finish_async(cmd, Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": the link was lost"));
+    const AsyncCommand& a = async_commands.at(cmd);
+    if (!send(command_long(cmd, a.params, a.attempt))) {
+      finish_async(cmd, link_lost(cmd));
       return;
     }
     arm_async_retry(cmd);
@@ -660,15 +667,11 @@ struct Vehicle::Impl {
       auto it = async_commands.find(cmd);
       if (it == async_commands.end()) return;
       it->second.retry = 0;
-      const int attempts = std::max(1, config.command_attempts);
-      if (++it->second.attempt < attempts) {
+      if (++it->second.attempt < std::max(1, config.command_attempts)) {
         send_async(cmd);
         return;
       }
-      std::ostringstream os;
-      os << "no COMMAND_ACK for " << command_name(cmd) << " after " << attempts << " attempt(s) of "
-         << config.command_timeout_s << " s";
-      finish_async(cmd, Result<void>::fail(Error::kTimeout, os.str()));
+      finish_async(cmd, no_ack(cmd));
     });
   }
 
@@ -678,14 +681,7 @@ struct Vehicle::Impl {
       arm_async_retry(m.command);
       return;
     }
-    if (m.result == to_underlying(MavResult::Accepted)) {
-      finish_async(m.command, {});
-      return;
-    }
-    finish_async(m.command, Result<void>::fail(error_of_mav_result(m.result),
-                                               command_name(m.command) + " refused by the vehicle: MAV_RESULT_" +
-                                                   mav_result_name(m.result) + " (" + std::to_string(m.result) + ")",
-                                               m.result));
+    finish_async(m.command, ack_outcome(m.command, m.result));
   }
 
   // ends a pending non-blocking command (nothing when none): its done runs on the loop, after the
@@ -704,6 +700,17 @@ struct Vehicle::Impl {
       const std::uint16_t cmd = async_commands.begin()->first;
       finish_async(cmd, Result<void>::fail(Error::kConnectionLost, command_name(cmd) + ": " + why));
     }
+  }
+
+  // DO_SET_MODE (176) and COMPONENT_ARM_DISARM (400) arming, blocking or not
+  static std::array<float, 7> set_mode_params(FlightMode mode) {
+    return {1.0f, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0};
+  }
+  static std::array<float, 7> arm_params(bool force) { return {1.0f, force ? 2989.0f : 0.0f, 0, 0, 0, 0, 0}; }
+  // the mode the vehicle accepted, until its next heartbeat says it
+  void note_mode(FlightMode mode) {
+    tm.mode = mode;
+    tm.custom_mode = static_cast<std::uint32_t>(mode);
   }
 
   void cancel_resend() {
@@ -870,15 +877,14 @@ Result<void> Vehicle::wait_ready(double timeout_s) {
 Result<void> Vehicle::set_mode(FlightMode mode) {
   Impl& s = *impl_;
   if (mode != FlightMode::kGuided) s.cancel_resend();
-  auto r = s.command(176, {1.0f, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0});
+  auto r = s.command(176, Impl::set_mode_params(mode));
   if (!r) return Result<void>::fail(r.code(), std::string("set mode ") + mode_name(mode) + ": " + r.message(), r.error().mav_result);
-  s.tm.mode = mode;
-  s.tm.custom_mode = static_cast<std::uint32_t>(mode);
+  s.note_mode(mode);
   return {};
 }
 
 Result<void> Vehicle::arm(bool force) {
-  auto r = impl_->command(400, {1.0f, force ? 2989.0f : 0.0f, 0, 0, 0, 0, 0});
+  auto r = impl_->command(400, Impl::arm_params(force));
   if (!r) {
     std::string why = r.message();
     if (!impl_->texts.empty()) why += " (vehicle: " + impl_->texts.back() + ")";
@@ -918,19 +924,15 @@ void Vehicle::command_long_async(std::uint16_t command, const std::array<float, 
 void Vehicle::set_mode_async(FlightMode mode, std::function<void(Result<void>)> done) {
   Impl& s = *impl_;
   if (mode != FlightMode::kGuided) s.cancel_resend();
-  s.command_async(176, {1.0f, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0},
-                  [&s, mode, done = std::move(done)](Result<void> r) {
-                    if (r) {
-                      s.tm.mode = mode;
-                      s.tm.custom_mode = static_cast<std::uint32_t>(mode);
-                    }
-                    if (done) done(r);
-                  });
+  s.command_async(176, Impl::set_mode_params(mode), [&s, mode, done = std::move(done)](Result<void> r) {
+    if (r) s.note_mode(mode);
+    if (done) done(r);
+  });
 }
 
 void Vehicle::arm_async(std::function<void(Result<void>)> done) {
   Impl& s = *impl_;
-  s.command_async(400, {1.0f, 0, 0, 0, 0, 0, 0}, [&s, done = std::move(done)](Result<void> r) {
+  s.command_async(400, Impl::arm_params(false), [&s, done = std::move(done)](Result<void> r) {
     if (r) s.tm.armed = true;
     if (done) done(r);
   });
