@@ -80,6 +80,13 @@ inline void launch_all_sharded(sim::Simulation& s, int rows_per_shard, double ho
   s.run_until(s.time_s() + hover_s);
 }
 
+// vehicles armed and not crashed
+inline size_t flying(const sim::Simulation& s) {
+  size_t n = 0;
+  for (size_t i = 0; i < s.vehicle_count(); ++i) n += s.fc(i).armed() && !s.runtime(i).crashed;
+  return n;
+}
+
 // an unsharded world: as many at a time as its constraint rows hold, then hover 10 s
 inline void launch_all(sim::Simulation& s) { launch_all_sharded(s, s.world().model()->njmax, 10.0); }
 

@@ -124,9 +124,7 @@ void BM_TelemetryThroughput(benchmark::State& state) {
   state.counters["x_real_time"] = (s->time_s() - sim_start) / wall_s;
   state.counters["dropped_frames"] = static_cast<double>(dropped);
   state.counters["sent_frames"] = static_cast<double>(sent);
-  std::size_t flying = 0;
-  for (int i = 0; i < n; ++i) flying += s->fc(static_cast<std::size_t>(i)).armed() && !s->truth(static_cast<std::size_t>(i)).on_ground;
-  state.counters["flying"] = static_cast<double>(flying);
+  state.counters["flying"] = static_cast<double>(uavsim::bench::flying(*s));
   state.SetItemsProcessed(static_cast<int64_t>(received));
   for (int fd : fds) close(fd);
 }

@@ -84,8 +84,7 @@ Rig& rig(int kind, int n) {
   sim::Simulation& s = *r.sim;
   while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
   if (kind == kHover) launch_all(s);
-  for (size_t i = 0; i < s.vehicle_count(); ++i)
-    r.flying += s.fc(i).armed() && !s.runtime(i).crashed;
+  r.flying = uavsim::bench::flying(s);
   return r;
 }
 
@@ -174,7 +173,7 @@ void BM_Formation(benchmark::State& state) {
   sim::Simulation& s = *r.sim;
   while (s.time_s() < 20.0 && !s.fc(0).prearm_ok()) s.step();
   launch_all_sharded(s, s.world().model()->njmax, 5.0);
-  for (size_t i = 0; i < s.vehicle_count(); ++i) r.flying += s.fc(i).armed() && !s.runtime(i).crashed;
+  r.flying = uavsim::bench::flying(s);
 
   // physics alone (every shard's step on the pool, the last rotor wrenches held), then the whole step
   constexpr int kPhysicsSteps = 200;

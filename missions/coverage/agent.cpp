@@ -133,7 +133,7 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     // later round its flyers may just be out of range, surveying)
     for (int id : adb_.age(elapsed_ms)) {
       if (landed_ids_.count(id)) continue;
-      const bool landed_here = state_ == AgentState::kLanded && (round_ == home_round_ || later_round_over_);
+      const bool landed_here = state_ == AgentState::kLanded && no_later_round_surveying();
       if (state_ != AgentState::kGoingHome && !landed_here) continue;
       if (!loss_pending_) loss_since_s_ = in.now_s;
       loss_pending_ = true;
@@ -151,7 +151,7 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     if (loss_pending_ && adb_.leader() != id_ && in.now_s - loss_since_s_ > kLossWait_s)
       loss_pending_ = false;
     if (loss_pending_ && verify_after_loss(in, out)) return out;
-    const bool quiet = adb_.all_landed() && (round_ == home_round_ || later_round_over_) && !loss_pending_;
+    const bool quiet = adb_.all_landed() && no_later_round_surveying() && !loss_pending_;
     if (!quiet)
       all_landed_since_s_ = -1.0;
     else if (all_landed_since_s_ < 0.0)

@@ -129,6 +129,9 @@ class Agent {
   AreaParts flock_map() const;
   // Going Home, leader: checks the flock's map after a loss; true when it recalled the flock.
   bool verify_after_loss(const AgentInputs& in, AgentOutputs& out);
+  // landed: no survey round later than the one we went home in is still flying (its flyers may be
+  // out of range, not lost; and it needs our pictures when it queries near home)
+  bool no_later_round_surveying() const { return round_ == home_round_ || later_round_over_; }
   // disarmed, but still above the ground or still sinking: not a landing (Going Home)
   bool descending_when_disarmed(const AgentInputs& in) const;
   bool flock_in_line(const AgentInputs& in) const;
