@@ -19,6 +19,11 @@ constexpr double kWaitTimeout_s = 30.0;
 constexpr double kNoProgressFraction = 1e-3;
 // the leader is at the start of its path when this close
 constexpr double kAtStart_m = 1.5;
+// a pass starts when neighbours' footprints overlap at least this much across the line: a flock
+// that has just deployed a swath sideways trails out (25 quads over 600 x 600 m, seed 3: two
+// neighbours 10.7 m apart for the first 20 m of a pass, slivers left between 10 m footprints and a
+// repair pass at the end, 100 s)
+constexpr double kMinFootprintOverlap_m = 1.0;
 // Running: the leader aims at its path this far ahead, and corrects sideways with this gain
 constexpr double kLookahead_m = 5.0;
 constexpr double kLateralGain_1_s = 0.5;
@@ -279,13 +284,20 @@ void Agent::fly_to(const AgentInputs& in, const Eigen::Vector2d& target, double 
 }
 
 bool Agent::flock_in_line(const AgentInputs& in) const {
-  // every agent of the ADB within the tolerance of the leader's flock line (along the heading)
+  // every agent of the ADB within the tolerance of the leader's flock line (along the heading), and
+  // no two neighbours along the line further apart than a footprint less kMinFootprintOverlap_m
   const Eigen::Vector2d dir(std::cos(target_heading_rad_), std::sin(target_heading_rad_));
+  const Eigen::Vector2d across(-dir.y(), dir.x());
+  std::vector<double> along_line{0.0};  // ourselves
   for (const auto& [id, r] : adb_.records()) {
-    if (r.landed) continue;  // on the ground at home, not part of the formation
+    if (r.landed || id == id_) continue;  // on the ground at home, not part of the formation
     const Eigen::Vector2d d(r.x_m - in.position_enu_m.x(), r.y_m - in.position_enu_m.y());
     if (std::abs(d.dot(dir)) > config_.formation_tolerance_m) return false;
+    along_line.push_back(d.dot(across));
   }
+  std::sort(along_line.begin(), along_line.end());
+  for (size_t i = 1; i < along_line.size(); ++i)
+    if (along_line[i] - along_line[i - 1] > config_.y_sensor_m - kMinFootprintOverlap_m) return false;
   return true;
 }
 

@@ -66,6 +66,9 @@ int usage() {
                           ground station (coverage-gcs) on udp:--gcs-host:P, one port per vehicle
   --gcs-host H            where those ports are (default 127.0.0.1)
   --gcs-period S          an agent sends its APD to the station at most every S seconds (default 1)
+  --thesis-flocking       Algorithm 3 as the thesis writes it: R1 alone wherever a neighbour is
+                          within D_R1 (default: where R1 pushes towards the leader, the faster of
+                          R1 and R3y)
   --pipelined             on the lockstep clock, a one-tick compute latency: the outputs of a step
                           go out at the next tick, and the simulator steps while the agents think
                           (deterministic; the GCS link's own UDP socket is not held back, so do
@@ -154,6 +157,10 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") return usage();
     if (a == "--pipelined") {
       pipelined = true;
+      continue;
+    }
+    if (a == "--thesis-flocking") {
+      config.gains.close_gap = false;
       continue;
     }
     if (i + 1 >= argc) return usage();

@@ -43,6 +43,7 @@ std::string CoverageConfig::validate() const {
            check("gains.s_r3x_m_s", g.s_r3x_m_s, 0.0, 20.0),
            check("gains.kp_r3y", g.kp_r3y, 0.0, 100.0),
            check("gains.s_r3y_m_s", g.s_r3y_m_s, 0.0, 20.0),
+           check("gains.kp_close_gap", g.kp_close_gap, 0.0, 100.0),
            check("broadcast_hz", broadcast_hz, 0.5, 50.0),
            check("max_age_base_s", max_age_base_s, 0.1, 60.0),
            check("max_age_per_hop_s", max_age_per_hop_s, 0.0, 60.0),

@@ -26,6 +26,24 @@ bool direction_obstructed(const Eigen::Vector2d& local_enu_m, double dir_rad,
   return false;
 }
 
+namespace {
+
+// How far across the line the nearest agent towards the leader is (among those within d_m along
+// the heading); infinity when there is none.
+double gap_towards_leader(const FlockInputs& in, const Eigen::Vector2d& parallel_dir,
+                          const Eigen::Vector2d& ortho_dir, double ortho_diff, double d_m) {
+  double gap = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& o : in.others_enu_m) {
+    const Eigen::Vector2d d = o - in.local_enu_m;  // from us to the other agent
+    const double across = ortho_dir.dot(d);
+    if (across * ortho_diff > 0.0 && std::abs(parallel_dir.dot(d)) < d_m)
+      gap = std::min(gap, std::abs(across));
+  }
+  return gap;
+}
+
+}  // namespace
+
 FlockOutputs FlockController::step(const FlockInputs& in) {
   const FlockGains& g = gains_;
   FlockOutputs out;
@@ -73,6 +91,17 @@ FlockOutputs FlockController::step(const FlockInputs& in) {
     const double side = near_ortho > 0.0 ? 1.0 : (near_ortho < 0.0 ? -1.0 : 1.0);
     out.ortho_m_s = saturate(sep, g.s_r1_m_s) * side;
     out.separating = true;
+    const double r3y = saturate(g.kp_r3y * ortho_diff, g.s_r3y_m_s);
+    if (g.close_gap && r3y * side > 0.0) {
+      // R1 pushes us towards the leader: close on the next agent that way, up to D_R1 from it
+      const double room =
+          gap_towards_leader(in, parallel_dir, ortho_dir, ortho_diff, g.d_r1_m) - g.d_r1_m;
+      const double closing = std::min(std::abs(r3y), g.kp_close_gap * room) * side;
+      if (room > 0.0 && std::abs(closing) > std::abs(out.ortho_m_s)) {
+        out.ortho_m_s = closing;
+        out.separating = false;
+      }
+    }
   } else {
     // the thesis writes kp * (-orthoDiff) in its simulator's axes; in ENU, towards the leader is
     // +orthoDiff along ortho_dir

@@ -6,7 +6,9 @@
 //   R2  (alignment) turns to the leader's heading,
 //   R3x (cohesion along the heading) moves onto the flock line with a PI controller unless another
 //       agent is in the way,
-//   R3y (cohesion along the line) moves towards the leader when R1 is idle.
+//   R3y (cohesion along the line) moves towards the leader when R1 is idle; beyond the thesis
+//       (FlockGains::close_gap), where R1 pushes towards the leader, the follower also closes on
+//       the next agent that way, up to D_R1 from it.
 // Pure: the caller passes the ADB's view of the others and the control period.
 #pragma once
 

@@ -72,11 +72,13 @@ struct Options {
   // the agents' one-tick compute latency (coverage-agent --pipelined); never with --gcs, whose UDP
   // links it would make timing-dependent
   bool pipelined = false;
+  bool thesis_flocking = false;  // coverage-agent --thesis-flocking: Algorithm 3 as written
   double gcs_cut_s = -1.0;  // the GCS links cut (every datagram dropped) from this sim time on
   double gcs_loss = 0.0;    // each GCS-link datagram lost with this probability
   std::string json_path;
   bool quiet = false;
   double radio_range_m = 150.0;
+  double line_spacing_m = WorldSpec{}.line_spacing_m;
   double radio_loss = 0.0;
   std::vector<std::pair<double, int>> kills;  // (sim time, agent)
   int per_process = 1;
@@ -106,6 +108,7 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --seed S            seed of the server (sensor noise, radio loss) and of the failures (default 1)
   --kill A@T          kill agent A at sim time T (repeatable; e.g. the leader: 0@60)
   --radio-range M     radio range (default 150 m)
+  --line-spacing M    distance between neighbours on the take-off line (3-100, default 7 m)
   --radio-loss P      probability that a frame heard in range is lost (0-1, default 0)
   --per-process K     agents per coverage-agent process (default 1)
   --budget S          sim-time limit (default 3000)
@@ -133,6 +136,9 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --pipelined         the agents' outputs of a step go out at the next tick (a one-tick compute
                       latency) and the simulator steps while they think; default: zero latency, the
                       simulator waits for them at every tick. Not with --gcs
+  --thesis-flocking   the flocking rules exactly as the thesis's Algorithm 3 (R1 alone wherever a
+                      neighbour is within D_R1); default: where R1 pushes an agent towards the
+                      leader, the faster of R1 and R3y
   --server/--agent/--gcs-program PATH, --models-dir DIR  programs and models (default: the build
                       tree)
 )");
@@ -174,6 +180,10 @@ int main(int argc, char** argv) {
       o.pipelined = true;
       continue;
     }
+    if (a == "--thesis-flocking") {
+      o.thesis_flocking = true;
+      continue;
+    }
     if (a == "--no-record" || a == "--no-run-dir") {
       if (a == "--no-record") o.no_record = true;
       if (a == "--no-run-dir") o.run_dir = "none";
@@ -202,6 +212,8 @@ int main(int argc, char** argv) {
       o.kills.emplace_back(w, static_cast<int>(v));
     } else if (a == "--radio-range" && number(val, 1, 10000, &v)) {
       o.radio_range_m = v;
+    } else if (a == "--line-spacing" && number(val, 3, 100, &v)) {
+      o.line_spacing_m = v;
     } else if (a == "--radio-loss" && number(val, 0, 1, &v)) {
       o.radio_loss = v;
     } else if (a == "--gcs-cut" && number(val, 0, 1e6, &v)) {
@@ -276,6 +288,7 @@ int main(int argc, char** argv) {
   spec.agents = o.agents;
   spec.length_x_m = o.length_x_m;
   spec.width_y_m = o.width_y_m;
+  spec.line_spacing_m = o.line_spacing_m;
   for (const std::string& why : {config.validate(), spec.validate()}) {
     if (!why.empty()) {
       std::fprintf(stderr, "coverage-run: %s\n", why.c_str());
@@ -483,6 +496,7 @@ int main(int argc, char** argv) {
                                     fmt("%.3f", o.agent_status_s)};
       if (o.gcs) args.insert(args.end(), {"--gcs-ports", gcs_ports});
       if (o.pipelined && !o.gcs) args.push_back("--pipelined");
+      if (o.thesis_flocking) args.push_back("--thesis-flocking");
       if (auto s = launch.spawn(name, args, {lockstep}); !s) {
         fail(s.message());
       }
@@ -766,6 +780,8 @@ int main(int argc, char** argv) {
     summary["failure_prob"] = o.failure_prob;
     summary["radio_range_m"] = o.radio_range_m;
     summary["radio_loss"] = o.radio_loss;
+    summary["line_spacing_m"] = o.line_spacing_m;
+    summary["thesis_flocking"] = o.thesis_flocking;
     summary["gcs"] = o.gcs;
     if (o.gcs) {
       summary["gcs_cut_s"] = o.gcs_cut_s;

@@ -42,7 +42,9 @@ TEST(Flocking, CohesionMovesOntoTheLineAndTowardsTheLeader) {
 }
 
 TEST(Flocking, SeparationPushesAwayFromTheNearestAgentAcrossTheLine) {
-  FlockController c{FlockGains{}};
+  FlockGains algorithm3;  // as written: R1 alone, even where it pushes towards the leader
+  algorithm3.close_gap = false;
+  FlockController c{algorithm3};
   FlockInputs in;
   in.local_enu_m = {0.0, 0.0};
   in.leader_enu_m = {0.0, 30.0};
@@ -57,6 +59,39 @@ TEST(Flocking, SeparationPushesAwayFromTheNearestAgentAcrossTheLine) {
   // obstructed, no parallel speed
   EXPECT_TRUE(out.obstructed);
   EXPECT_EQ(out.parallel_m_s, 0.0);
+}
+
+TEST(Flocking, WhereR1PushesTowardsTheLeaderTheFollowerClosesOnTheNextAgentUpToDR1) {
+  // our nearest neighbour 7.4 m behind us across the line, the leader 30 m ahead across it: R1 alone
+  // would crawl towards the leader at 0.6 * (1 - (7.4 / 7.5)^0.4) = 3 mm/s
+  FlockInputs in;
+  in.local_enu_m = {0.0, 0.0};
+  in.leader_enu_m = {0.0, 30.0};
+  in.others_enu_m = {{0.0, -7.4}, in.leader_enu_m};
+  FlockGains algorithm3;
+  algorithm3.close_gap = false;
+  FlockOutputs out = FlockController{algorithm3}.step(in);
+  EXPECT_TRUE(out.separating);
+  EXPECT_NEAR(out.ortho_m_s, 0.6 * (1.0 - std::pow(7.4 / 7.5, 0.4)), kTol);
+  // closing on the next agent that way, the leader 30 m across: 0.5 * (30 - 7.5), capped at s_R3y
+  out = FlockController{FlockGains{}}.step(in);
+  EXPECT_FALSE(out.separating);
+  EXPECT_NEAR(out.ortho_m_s, 2.0, kTol);
+  // an agent 9.5 m across towards the leader: we close on it at kp_close_gap * (9.5 - D_R1) = 1 m/s
+  in.others_enu_m.push_back({1.0, 9.5});
+  out = FlockController{FlockGains{}}.step(in);
+  EXPECT_FALSE(out.separating);
+  EXPECT_NEAR(out.ortho_m_s, 0.5 * (9.5 - 7.5), kTol);
+  // 7.45 m across (7.52 m away: the one behind is still the nearest): within D_R1, R1 alone again
+  in.others_enu_m.back() = {1.0, 7.45};
+  out = FlockController{FlockGains{}}.step(in);
+  EXPECT_TRUE(out.separating);
+  EXPECT_NEAR(out.ortho_m_s, 0.6 * (1.0 - std::pow(7.4 / 7.5, 0.4)), kTol);
+  // where R1 pushes away from the leader, R1 alone (the nearest is 3 m towards the leader)
+  in.others_enu_m = {{0.0, 3.0}, in.leader_enu_m};
+  out = FlockController{FlockGains{}}.step(in);
+  EXPECT_TRUE(out.separating);
+  EXPECT_LT(out.ortho_m_s, 0.0);
 }
 
 TEST(Flocking, SeparationSaturatesAndKeepsItsSide) {

@@ -67,7 +67,7 @@ TEST(PathPlanner, HighSideAndDirectionFromTheNearerEnd) {
   EXPECT_DOUBLE_EQ(low->points_enu_m.front().y(), 73.0);
 }
 
-TEST(PathPlanner, ThresholdDropsAnIsolatedHoleAndSmoothingAverages) {
+TEST(PathPlanner, ThresholdDropsAnIsolatedHoleAndAKeptOneIsCoveredBySmoothing) {
   CoverageConfig c = config();
   AreaParts map(c.stripe_count());
   for (int i = 0; i < c.stripe_count(); ++i) map.add(i, {0.0, 40.0});
@@ -82,14 +82,25 @@ TEST(PathPlanner, ThresholdDropsAnIsolatedHoleAndSmoothingAverages) {
   ASSERT_TRUE(p);
   EXPECT_EQ(p->points_enu_m.size(), 11u);  // stripe 4 dropped
   for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), 43.0);
-  // smoothing (+-1): with the hole kept, its neighbours average (40 + 40 + 10) / 3 = 30
+  // smoothing (+-1) with the hole kept: a plain average, (43 + 43 + 13) / 3 = 33 at the hole, would
+  // leave its footprint's edge at 28, over the hole at 10. Within each window the points are first
+  // pulled down to the hole's bound (13: the edge 2 m under it), so the hole's stripe stays at 13
+  // and its neighbours average (43 + 13 + 13) / 3 = 23
   c.lateral_threshold_m = 100.0;
   c.smoothing_half_window = 1;
   p = plan_side(c, map, {-10.0, 0.0}, {0.0, 0.0}, true);
   ASSERT_TRUE(p);
   // points: run-in, stripes 0..9, run-out; stripe 3 is point 4
-  EXPECT_DOUBLE_EQ(p->points_enu_m[4].y(), 30.0 + 3.0);
-  EXPECT_DOUBLE_EQ(p->points_enu_m[5].y(), 30.0 + 3.0);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[4].y(), 23.0);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[5].y(), 13.0);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[6].y(), 23.0);
+  EXPECT_DOUBLE_EQ(p->points_enu_m[2].y(), 43.0);  // stripe 1: its window holds no hole
+  // the high side mirrors it: covered from 40 up, a hole at [10, 20) in stripe 4 is its highest
+  // uncovered y only if nothing above is open; here the frontier is 100 everywhere (W), and the
+  // whole band fits nowhere (the extent is zero), so nothing binds but the frontier
+  p = plan_side(c, map, {-10.0, 0.0}, {0.0, 0.0}, false);
+  ASSERT_TRUE(p);
+  for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), c.width_y_m - 3.0);
 }
 
 TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {

@@ -53,11 +53,11 @@ TEST(CoverageWorld, QuadsOnATakeOffLineBeforeTheRectangle) {
   s.agents = 3;
   ASSERT_EQ(s.validate(), "");
   const std::string xml = coverage_world_xml(s);
-  // agent i at (origin_x - 10, origin_y + 10 i)
+  // agent i at (origin_x - 10, origin_y + 7 i)
   EXPECT_NE(xml.find(R"(<uavsim_vehicle type="quad" name="uav0" pos="-10.000 0.000 0" collision="lean"/>)"),
             std::string::npos)
       << xml;
-  EXPECT_NE(xml.find(R"(name="uav2" pos="-10.000 20.000 0")"), std::string::npos) << xml;
+  EXPECT_NE(xml.find(R"(name="uav2" pos="-10.000 14.000 0")"), std::string::npos) << xml;
   EXPECT_EQ(xml.find("uav3"), std::string::npos);
   // the ground holds the rectangle with a 50 m margin: x in [-60, 200], y in [-50, 150]
   EXPECT_NE(xml.find(R"(pos="70.000 50.000 0" size="130.000 100.000 0.1")"), std::string::npos)
