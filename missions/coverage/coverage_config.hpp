@@ -86,7 +86,7 @@ struct CoverageConfig {
   // m/s), then lands at its take-off point
   int home_layers = 4;
   double home_layer_m = 3.0;
-  double home_speed_m_s = 10.0;
+  double home_speed_m_s = 12.0;
   // a follower's commanded speed is capped here (above deploy_speed_m_s, so it can catch up; the
   // autopilot's own cap is 1.2 x WPNAV_SPEED, 12 m/s)
   double max_speed_m_s = 11.0;
