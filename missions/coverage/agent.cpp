@@ -578,8 +578,17 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       }
       out.action = AgentOutputs::Action::kVelocity;
       out.yaw_rate_rad_s = 0.0;
-      if (std::abs(in.position_enu_m.z() - layer_alt) > config_.altitude_tolerance_m) {
-        out.velocity_enu_m_s << 0.0, 0.0, altitude_rate(in, layer_alt);
+      // climb or descend to our layer on the spot, and set off only once the next layer's agents,
+      // which left the survey altitude with us, are a layer above ours: an agent that sets off
+      // while its neighbour still climbs through its layer crosses that neighbour's column (8 quads
+      // in the point-mass FlockSim: 1.3 m apart)
+      const double layer_index = id_ % config_.home_layers;
+      const bool next_layer_clear =
+          now - state_since_s_ >= (layer_index + 1.0) * config_.home_layer_m / kMaxClimb_m_s;
+      if (std::abs(in.position_enu_m.z() - layer_alt) > config_.altitude_tolerance_m ||
+          !next_layer_clear) {
+        fly_to(in, here, 0.0, in.yaw_enu_rad, out);
+        out.velocity_enu_m_s.z() = altitude_rate(in, layer_alt);
         break;
       }
       Eigen::Vector2d v =

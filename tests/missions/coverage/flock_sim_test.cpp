@@ -247,6 +247,20 @@ TEST(FlockSim, PassesRunWithNoTwoNeighboursFurtherApartThanAFootprint) {
               r.mission_time_s);
 }
 
+TEST(FlockSim, EightAgentsGoHomeInTheirLayersWithoutCrossingAClimbingNeighbour) {
+  // from the take-off line of the generated worlds (7 m apart), 8 agents end their last pass in
+  // line and go home along it in four layers: the one whose layer is the survey altitude used to
+  // set off at once, through the column its neighbour was still climbing (1.27 m apart)
+  FlockScenario s;
+  s.agents = 8;
+  s.line_spacing_m = 7.0;
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_GT(r.min_separation_m, 2.0);
+  std::printf("min separation %.2f m, mission %.1f s\n", r.min_separation_m, r.mission_time_s);
+}
+
 TEST(FlockSim, LeaderKilledANewLeaderFinishes) {
   FlockScenario s;
   s.kills = {{60.0, 0}};
