@@ -297,7 +297,8 @@ bool Agent::flock_in_line(const AgentInputs& in) const {
   }
   std::sort(along_line.begin(), along_line.end());
   for (size_t i = 1; i < along_line.size(); ++i)
-    if (along_line[i] - along_line[i - 1] > config_.y_sensor_m - kMinFootprintOverlap_m) return false;
+    if (along_line[i] - along_line[i - 1] > config_.y_sensor_m - kMinFootprintOverlap_m)
+      return false;
   return true;
 }
 

@@ -123,8 +123,9 @@ struct Flyer {
   bool gcs_refused_logged = false;
 };
 
-// GUIDED, arm, NAV_TAKEOFF, each sent when the previous one is accepted (non-blocking: several agents
-// share one event loop); a refusal ends the try (the caller tries again kTakeoffRetry_s later)
+// GUIDED, arm, NAV_TAKEOFF, each sent when the previous one is accepted (non-blocking: several
+// agents share one event loop); a refusal ends the try (the caller tries again kTakeoffRetry_s
+// later)
 void send_takeoff(Flyer& f, const std::function<void(int, const std::string&)>& log) {
   auto give_up = [&f, log](const Result<void>& r) {
     f.takeoff_in_flight = false;
@@ -375,8 +376,8 @@ int main(int argc, char** argv) {
       }
       // take-off until the vehicle is up (a refused arm is tried again); without blocking: the
       // other agents of this process step on while the commands are answered
-      if (f.takeoff_wanted && !f.takeoff_in_flight && !t.armed && loop.now() >= f.next_takeoff_try_s &&
-          f.agent->state() == AgentState::kTakingOff) {
+      if (f.takeoff_wanted && !f.takeoff_in_flight && !t.armed &&
+          loop.now() >= f.next_takeoff_try_s && f.agent->state() == AgentState::kTakingOff) {
         f.next_takeoff_try_s = loop.now() + kTakeoffRetry_s;
         f.takeoff_in_flight = true;
         send_takeoff(f, log);

@@ -16,11 +16,11 @@ struct WorldSpec {
   double width_y_m = 100.0;   // H: across it
   double origin_x_m = 0.0;
   double origin_y_m = 0.0;
-  double line_offset_m = 10.0;   // the take-off line lies this far before the x = origin edge
+  double line_offset_m = 10.0;  // the take-off line lies this far before the x = origin edge
   // between neighbours on the line: a little under the flocking separation D_R1 (7.5 m), so the
-  // flock takes off already in formation (formed, it settles ~6.7 m apart). From 10 m apart, 25 quads
-  // took 40 s to close up, the first pass spread wider than the rest, and its ramp left the next
-  // passes notches and holes.
+  // flock takes off already in formation (formed, it settles ~6.7 m apart). From 10 m apart, 25
+  // quads took 40 s to close up, the first pass spread wider than the rest, and its ramp left the
+  // next passes notches and holes.
   double line_spacing_m = 7.0;
   // the autopilots' LAND descent (ArduCopter LAND_SPEED below 10 m, LAND_SPEED_HIGH above): the
   // flock lands from 20-29 m at the end of the mission, which at ArduCopter's defaults (0.5 and

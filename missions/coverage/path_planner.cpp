@@ -34,8 +34,8 @@ SwathBounds swath_bounds(const Eigen::Vector2d& band, const FlockExtent& extent,
 // its neighbours left 25 quads over 600 x 600 m, seed 3, a one-stripe hole under the next pass,
 // closed only by a repair pass at the end: 30 s). Where the window's bounds cross (bands of
 // different width side by side), the frontier's side wins.
-void smooth_within_bounds(std::vector<Eigen::Vector2d>& points, const std::vector<SwathBounds>& bounds,
-                          int k, bool low_side) {
+void smooth_within_bounds(std::vector<Eigen::Vector2d>& points,
+                          const std::vector<SwathBounds>& bounds, int k, bool low_side) {
   const int n = static_cast<int>(points.size());
   std::vector<double> pulled(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) {
@@ -128,8 +128,8 @@ std::optional<PlannedPath> plan_side(const CoverageConfig& config, const AreaPar
     double y = p.y() + offset;
     const bool fits = band[i].y() - band[i].x() + 2.0 * margin <= swath;
     if (fits) {
-      const double centred = 0.5 * (band[i].x() + band[i].y()) -
-                             0.5 * (extent.high_extent_m - extent.low_extent_m);
+      const double centred =
+          0.5 * (band[i].x() + band[i].y()) - 0.5 * (extent.high_extent_m - extent.low_extent_m);
       y += std::clamp(centred - y, -config.y_sensor_m, config.y_sensor_m);
     }
     kept.emplace_back(p.x(), y);

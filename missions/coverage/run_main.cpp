@@ -73,8 +73,8 @@ struct Options {
   // links it would make timing-dependent
   bool pipelined = false;
   bool thesis_flocking = false;  // coverage-agent --thesis-flocking: Algorithm 3 as written
-  double gcs_cut_s = -1.0;  // the GCS links cut (every datagram dropped) from this sim time on
-  double gcs_loss = 0.0;    // each GCS-link datagram lost with this probability
+  double gcs_cut_s = -1.0;       // the GCS links cut (every datagram dropped) from this sim time on
+  double gcs_loss = 0.0;         // each GCS-link datagram lost with this probability
   std::string json_path;
   bool quiet = false;
   double radio_range_m = 150.0;
@@ -90,7 +90,7 @@ struct Options {
   std::string agent;
   std::string gcs_program;
   std::string models_dir = UAVSIM_MODELS_DIR;
-  std::string keep_world;  // write the generated world here too
+  std::string keep_world;                  // write the generated world here too
   std::string run_dir = "auto";            // --run-dir: video, summary, events, logs, ground truth
   std::string record;                      // --record: the video (default video.mp4 in the run dir)
   bool no_record = false;                  // --no-record
@@ -401,11 +401,13 @@ int main(int argc, char** argv) {
     }
   });
   // cameras only for the video: the world's overview camera, which the agents never see
-  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--models-dir", o.models_dir};
+  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--models-dir",
+                                       o.models_dir};
   if (o.record.empty()) {
     server_args.push_back("--no-cameras");
   } else {
-    server_args.insert(server_args.end(), {"--record", o.record, "--record-camera", o.record_camera});
+    server_args.insert(server_args.end(),
+                       {"--record", o.record, "--record-camera", o.record_camera});
   }
   if (!o.run_dir.empty()) {
     server_args.insert(server_args.end(), {"--log-dir", o.run_dir});
@@ -592,9 +594,10 @@ int main(int argc, char** argv) {
           }
           // the video's coverage counter: what the surviving agents' reports hold, as scored
           if (!o.record.empty()) {
-            (void)api.request({{"op", "overlay_counter"},
-                               {"name", "coverage"},
-                               {"text", "coverage " + fmt("%.1f", 100.0 * held_fraction()) + " %"}});
+            (void)api.request(
+                {{"op", "overlay_counter"},
+                 {"name", "coverage"},
+                 {"text", "coverage " + fmt("%.1f", 100.0 * held_fraction()) + " %"}});
           }
           if (t + 1e-9 >= next_progress_s) {
             next_progress_s += o.progress_period_s;
@@ -762,8 +765,9 @@ int main(int argc, char** argv) {
               wall_s() > 0 ? sim_s / wall_s() : 0.0);
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
   if (!o.run_dir.empty()) {
-    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
-                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n",
+                o.run_dir.c_str(), static_cast<unsigned long long>(launch.truth_rows()),
+                o.run_dir.c_str());
   }
   std::printf("RESULT: %s coverage=%.4f mission_s=%.1f coverage_s=%.1f failed=%d landed=%d/%d%s\n",
               success ? "SUCCESS" : "FAILURE", coverage, mission_s, coverage_s, failed, landed,

@@ -101,8 +101,8 @@ TEST(CoverageRun, NonLeaderKilledOnTheWayHomeTheFlockGoesBackForItsPictures) {
 // The leader lands last (it hovers over its home until the others have landed); killed in its final
 // descent (at 177.5 s, 2 m up: its LAND runs from 176 s to 179 s in this seed), it takes its
 // pictures with it and nobody is left flying. The lowest id landed (1) sees it age out, queries the
-// landed agents, takes off again alone and covers what was lost, merging what the landed agents hold
-// into its queries from afar.
+// landed agents, takes off again alone and covers what was lost, merging what the landed agents
+// hold into its queries from afar.
 TEST(CoverageRun, LastFlyerKilledInItsDescentTheLowestLandedTakesOffAgain) {
   std::string out;
   const Json r = run_flock("--kill 0@177.5", &out);
@@ -143,7 +143,8 @@ TEST(CoverageRun, OneProcessFlyingAllFiveAgentsFliesTheMissionOfOneProcessEach) 
   // the same passes: coverage complete within a tick or two. The take-offs and the landings still
   // move by a few tenths to a few seconds with the host's load (one process: 177.7-180.9 s, one per
   // agent: 177.8 s, idle and loaded): the links of one process come up one after the other.
-  EXPECT_NEAR(one["coverage_complete_s"].get<double>(), each["coverage_complete_s"].get<double>(), 0.5)
+  EXPECT_NEAR(one["coverage_complete_s"].get<double>(), each["coverage_complete_s"].get<double>(),
+              0.5)
       << out_one << out_each;
   EXPECT_NEAR(one["mission_time_s"].get<double>(), each["mission_time_s"].get<double>(), 6.0)
       << out_one << out_each;

@@ -62,8 +62,8 @@ TEST(Flocking, SeparationPushesAwayFromTheNearestAgentAcrossTheLine) {
 }
 
 TEST(Flocking, WhereR1PushesTowardsTheLeaderTheFollowerClosesOnTheNextAgentUpToDR1) {
-  // our nearest neighbour 7.4 m behind us across the line, the leader 30 m ahead across it: R1 alone
-  // would crawl towards the leader at 0.6 * (1 - (7.4 / 7.5)^0.4) = 3 mm/s
+  // our nearest neighbour 7.4 m behind us across the line, the leader 30 m ahead across it: R1
+  // alone would crawl towards the leader at 0.6 * (1 - (7.4 / 7.5)^0.4) = 3 mm/s
   FlockInputs in;
   in.local_enu_m = {0.0, 0.0};
   in.leader_enu_m = {0.0, 30.0};

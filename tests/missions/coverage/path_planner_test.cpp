@@ -122,8 +122,8 @@ TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {
 
 TEST(PathPlanner, ABandLeftThatFitsInsideTheSwathMovesItTowardsItsCentre) {
   // covered up to 80 m in every stripe: the band left is [80, 100], 20 m. A 5-agent line with the
-  // leader at its bottom (extent 0 below, 30 above) sweeps 40 m: the band fits with 10 m to spare on
-  // each side, so the swath [leader - 5, leader + 35] is centred on y = 90 (leader at 75), from
+  // leader at its bottom (extent 0 below, 30 above) sweeps 40 m: the band fits with 10 m to spare
+  // on each side, so the swath [leader - 5, leader + 35] is centred on y = 90 (leader at 75), from
   // either side (8 m from the frontier rule's 83 and 67), instead of leaving 2 m of margin
   const CoverageConfig c = config();
   AreaParts map(c.stripe_count());

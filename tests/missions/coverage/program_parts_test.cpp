@@ -54,8 +54,10 @@ TEST(CoverageWorld, QuadsOnATakeOffLineBeforeTheRectangle) {
   ASSERT_EQ(s.validate(), "");
   const std::string xml = coverage_world_xml(s);
   // agent i at (origin_x - 10, origin_y + 7 i)
-  EXPECT_NE(xml.find(R"(<uavsim_vehicle type="quad" name="uav0" pos="-10.000 0.000 0" collision="lean"/>)"),
-            std::string::npos)
+  EXPECT_NE(
+      xml.find(
+          R"(<uavsim_vehicle type="quad" name="uav0" pos="-10.000 0.000 0" collision="lean"/>)"),
+      std::string::npos)
       << xml;
   EXPECT_NE(xml.find(R"(name="uav2" pos="-10.000 14.000 0")"), std::string::npos) << xml;
   EXPECT_EQ(xml.find("uav3"), std::string::npos);
