@@ -44,6 +44,8 @@ std::string CoverageConfig::validate() const {
            check("gains.kp_r3y", g.kp_r3y, 0.0, 100.0),
            check("gains.s_r3y_m_s", g.s_r3y_m_s, 0.0, 20.0),
            check("gains.kp_close_gap", g.kp_close_gap, 0.0, 100.0),
+           check("gains.s_close_gap_m_s", g.s_close_gap_m_s, 0.0, 20.0),
+           check("gains.close_gap_leader_speed_m_s", g.close_gap_leader_speed_m_s, 0.0, 50.0),
            check("broadcast_hz", broadcast_hz, 0.5, 50.0),
            check("max_age_base_s", max_age_base_s, 0.1, 60.0),
            check("max_age_per_hop_s", max_age_per_hop_s, 0.0, 60.0),

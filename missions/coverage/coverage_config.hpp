@@ -29,9 +29,14 @@ struct FlockGains {
   // settled under D_R1 from each other stayed 10-11 m from the rest for tens of seconds after a
   // deploy, more than a footprint (25 quads over 600 x 600 m). Proportional, so that we stop at
   // D_R1 instead of running into it (at R3y's full speed the line compressed to 5.7-6 m, a narrower
-  // swath). false: Algorithm 3 as written.
+  // swath). At most s_close_gap_m_s, and only while the leader flies no faster than
+  // close_gap_leader_speed_m_s: closing at 2 m/s on top of a deploy's 8 m/s, two followers were
+  // still 2.5 m/s apart when the leader braked at the deploy's end and collided, twice (25 quads,
+  // --gcs, p = 0.003, seed 2, 14 crashed). false: Algorithm 3 as written.
   bool close_gap = true;
-  double kp_close_gap = 0.5;  // 1/s
+  double kp_close_gap = 0.5;                // 1/s
+  double s_close_gap_m_s = 1.0;             // m/s
+  double close_gap_leader_speed_m_s = 6.0;  // m/s: over the 5 m/s cruise, under the 8 m/s deploy
 };
 
 struct CoverageConfig {

@@ -92,11 +92,13 @@ FlockOutputs FlockController::step(const FlockInputs& in) {
     out.ortho_m_s = saturate(sep, g.s_r1_m_s) * side;
     out.separating = true;
     const double r3y = saturate(g.kp_r3y * ortho_diff, g.s_r3y_m_s);
-    if (g.close_gap && r3y * side > 0.0) {
+    if (g.close_gap && r3y * side > 0.0 &&
+        in.leader_velocity_enu_m_s.norm() <= g.close_gap_leader_speed_m_s) {
       // R1 pushes us towards the leader: close on the next agent that way, up to D_R1 from it
       const double room =
           gap_towards_leader(in, parallel_dir, ortho_dir, ortho_diff, g.d_r1_m) - g.d_r1_m;
-      const double closing = std::min(std::abs(r3y), g.kp_close_gap * room) * side;
+      const double closing =
+          std::min({std::abs(r3y), g.s_close_gap_m_s, g.kp_close_gap * room}) * side;
       if (room > 0.0 && std::abs(closing) > std::abs(out.ortho_m_s)) {
         out.ortho_m_s = closing;
         out.separating = false;

@@ -73,15 +73,22 @@ TEST(Flocking, WhereR1PushesTowardsTheLeaderTheFollowerClosesOnTheNextAgentUpToD
   FlockOutputs out = FlockController{algorithm3}.step(in);
   EXPECT_TRUE(out.separating);
   EXPECT_NEAR(out.ortho_m_s, 0.6 * (1.0 - std::pow(7.4 / 7.5, 0.4)), kTol);
-  // closing on the next agent that way, the leader 30 m across: 0.5 * (30 - 7.5), capped at s_R3y
+  // closing on the next agent that way, the leader 30 m across: 0.5 * (30 - 7.5), capped at
+  // s_close_gap (1 m/s)
   out = FlockController{FlockGains{}}.step(in);
   EXPECT_FALSE(out.separating);
-  EXPECT_NEAR(out.ortho_m_s, 2.0, kTol);
-  // an agent 9.5 m across towards the leader: we close on it at kp_close_gap * (9.5 - D_R1) = 1 m/s
-  in.others_enu_m.push_back({1.0, 9.5});
+  EXPECT_NEAR(out.ortho_m_s, 1.0, kTol);
+  // not while the leader flies faster than close_gap_leader_speed (a deploy): R1 alone
+  in.leader_velocity_enu_m_s = {0.0, 8.0};
+  out = FlockController{FlockGains{}}.step(in);
+  EXPECT_TRUE(out.separating);
+  EXPECT_NEAR(out.ortho_m_s, 0.6 * (1.0 - std::pow(7.4 / 7.5, 0.4)), kTol);
+  in.leader_velocity_enu_m_s = {5.0, 0.0};  // a pass at the cruise speed: closing again
+  // an agent 9 m across towards the leader: we close on it at kp_close_gap * (9 - D_R1) = 0.75 m/s
+  in.others_enu_m.push_back({1.0, 9.0});
   out = FlockController{FlockGains{}}.step(in);
   EXPECT_FALSE(out.separating);
-  EXPECT_NEAR(out.ortho_m_s, 0.5 * (9.5 - 7.5), kTol);
+  EXPECT_NEAR(out.ortho_m_s, 0.5 * (9.0 - 7.5), kTol);
   // 7.45 m across (7.52 m away: the one behind is still the nearest): within D_R1, R1 alone again
   in.others_enu_m.back() = {1.0, 7.45};
   out = FlockController{FlockGains{}}.step(in);
