@@ -32,9 +32,16 @@ constexpr double kAltitudeGain_1_s = 1.0;
 constexpr double kMaxClimb_m_s = 2.0;
 constexpr double kApproachGain_1_s = 0.5;
 constexpr double kHomeReached_m = 1.0;
+// ... and stays home (hovering over it or landing) until it drifts this far: the leader, hovering
+// 3 m over its home while the others landed, drifted 1.03 m off, took itself for away, climbed
+// back to its layer and landed 16 s late (25 quads over 600 x 600 m, seed 4)
+constexpr double kHomeLeft_m = 3.0;
 // the last metres home: the speed falls with the distance left (1 m/s a metre), twice as steep as
-// kApproachGain_1_s: nothing is photographed here, so only stopping at home matters
+// kApproachGain_1_s: nothing is photographed here, so only stopping at home matters; and before
+// that, no faster than a quad braking at kHomeBraking_m_s2 can stop at home (from 12 m/s, the
+// linear profile alone asked for 12 m/s2 and the leader overshot its home by 20 m)
 constexpr double kHomeApproachGain_1_s = 1.0;
+constexpr double kHomeBraking_m_s2 = 2.5;
 // Going Home: agents of the same altitude layer closer than this push each other apart
 constexpr double kHomeSeparation_m = 5.0;
 constexpr double kHomeSeparationSpeed_m_s = 1.5;
@@ -566,13 +573,15 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       // (verify_after_loss). It waits low over its home, so its own landing after the last one is
       // short.
       const bool hold = lead && (loss_pending_ || !adb_.all_landed());
-      if (d.norm() < kHomeReached_m && hold) {
+      if (d.norm() < kHomeReached_m) home_reached_ = true;
+      if (d.norm() > kHomeLeft_m) home_reached_ = false;
+      if (home_reached_ && hold) {
         fly_to(in, home_enu_m_, 0.0, in.yaw_enu_rad, out);
         out.velocity_enu_m_s.z() =
             altitude_rate(in, loss_pending_ ? layer_alt : kLeaderWaitAltitude_m);
         break;
       }
-      if (d.norm() < kHomeReached_m) {
+      if (home_reached_) {
         land_sent_ = true;
         out.action = AgentOutputs::Action::kLand;
         break;
@@ -592,8 +601,9 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
         out.velocity_enu_m_s.z() = altitude_rate(in, layer_alt);
         break;
       }
-      Eigen::Vector2d v =
-          d / d.norm() * std::min(config_.home_speed_m_s, kHomeApproachGain_1_s * d.norm());
+      Eigen::Vector2d v = d / d.norm() *
+                          std::min({config_.home_speed_m_s, kHomeApproachGain_1_s * d.norm(),
+                                    std::sqrt(2.0 * kHomeBraking_m_s2 * d.norm())});
       // steer away from agents in our layer (their ids tell their layers)
       for (const auto& [id, r] : adb_.records()) {
         if (r.landed || id % config_.home_layers != id_ % config_.home_layers) continue;

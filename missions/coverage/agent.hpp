@@ -159,6 +159,7 @@ class Agent {
   bool started_ = false;
   bool takeoff_sent_ = false;
   bool land_sent_ = false;
+  bool home_reached_ = false;  // Going Home: within kHomeReached_m, until kHomeLeft_m away
   bool airborne_seen_ = false;
   double ground_z_m_ = 0.0;  // where it stood before take-off (ENU z)
   bool going_home_heard_ = false;
@@ -190,7 +191,8 @@ class Agent {
   int queries_started_ = 0;
   std::optional<AreaParts> gcs_map_;
   std::optional<AreaParts> last_map_;
-  std::optional<AreaParts> landed_map_;  // taken off again after a loss: what the landed agents held
+  std::optional<AreaParts>
+      landed_map_;  // taken off again after a loss: what the landed agents held
   std::optional<PlannedPath> path_;
   double planned_fraction_ = 0.0;  // the map's covered fraction when path_ was planned
 
