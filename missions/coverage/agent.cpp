@@ -573,8 +573,9 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       // (verify_after_loss). It waits low over its home, so its own landing after the last one is
       // short.
       const bool hold = lead && (loss_pending_ || !adb_.all_landed());
-      if (d.norm() < kHomeReached_m) home_reached_ = true;
-      if (d.norm() > kHomeLeft_m) home_reached_ = false;
+      const double home_dist = d.norm();
+      if (home_dist < kHomeReached_m) home_reached_ = true;
+      if (home_dist > kHomeLeft_m) home_reached_ = false;
       if (home_reached_ && hold) {
         fly_to(in, home_enu_m_, 0.0, in.yaw_enu_rad, out);
         out.velocity_enu_m_s.z() =
@@ -601,9 +602,9 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
         out.velocity_enu_m_s.z() = altitude_rate(in, layer_alt);
         break;
       }
-      Eigen::Vector2d v = d / d.norm() *
-                          std::min({config_.home_speed_m_s, kHomeApproachGain_1_s * d.norm(),
-                                    std::sqrt(2.0 * kHomeBraking_m_s2 * d.norm())});
+      Eigen::Vector2d v = d / home_dist *
+                          std::min({config_.home_speed_m_s, kHomeApproachGain_1_s * home_dist,
+                                    std::sqrt(2.0 * kHomeBraking_m_s2 * home_dist)});
       // steer away from agents in our layer (their ids tell their layers)
       for (const auto& [id, r] : adb_.records()) {
         if (r.landed || id % config_.home_layers != id_ % config_.home_layers) continue;

@@ -67,8 +67,8 @@ int usage() {
   --gcs-host H            where those ports are (default 127.0.0.1)
   --gcs-period S          an agent sends its APD to the station at most every S seconds (default 1)
   --thesis-flocking       Algorithm 3 as the thesis writes it: R1 alone wherever a neighbour is
-                          within D_R1 (default: where R1 pushes towards the leader, the faster of
-                          R1 and R3y)
+                          within D_R1 (default: where R1 pushes a follower towards the leader, it
+                          also closes on the next agent that way, up to D_R1, at most 1 m/s)
   --pipelined             on the lockstep clock, a one-tick compute latency: the outputs of a step
                           go out at the next tick, and the simulator steps while the agents think
                           (deterministic; the GCS link's own UDP socket is not held back, so do

@@ -24,12 +24,12 @@ struct FlockGains {
   double s_r3y_m_s = 2.0;     // s_R3y
   // Beyond Algorithm 3: where R1 pushes us towards the leader (our nearest neighbour is on our far
   // side), we also close on the next agent towards the leader, at kp_close_gap * (its distance
-  // across - D_R1), at most s_R3y, and the faster of that and R1 applies. Algorithm 3 applies R1
-  // alone, which near D_R1 is a crawl (0.6 * (1 - (7.4 / 7.5)^0.4) = 3 mm/s): a tail of agents
-  // settled under D_R1 from each other stayed 10-11 m from the rest for tens of seconds after a
-  // deploy, more than a footprint (25 quads over 600 x 600 m). Proportional, so that we stop at
-  // D_R1 instead of running into it (at R3y's full speed the line compressed to 5.7-6 m, a narrower
-  // swath). At most s_close_gap_m_s, and only while the leader flies no faster than
+  // across - D_R1) capped by R3y and by s_close_gap_m_s, and the faster of that and R1 applies.
+  // Algorithm 3 applies R1 alone, which near D_R1 is a crawl (0.6 * (1 - (7.4 / 7.5)^0.4) = 3
+  // mm/s): a tail of agents settled under D_R1 from each other stayed 10-11 m from the rest for
+  // tens of seconds after a deploy, more than a footprint (25 quads over 600 x 600 m).
+  // Proportional, so that we stop at D_R1 instead of running into it (at R3y's full speed the line
+  // compressed to 5.7-6 m, a narrower swath). Only while the leader flies no faster than
   // close_gap_leader_speed_m_s: closing at 2 m/s on top of a deploy's 8 m/s, two followers were
   // still 2.5 m/s apart when the leader braked at the deploy's end and collided, twice (25 quads,
   // --gcs, p = 0.003, seed 2, 14 crashed). false: Algorithm 3 as written.

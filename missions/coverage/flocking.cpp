@@ -71,7 +71,10 @@ FlockOutputs FlockController::step(const FlockInputs& in) {
     out.parallel_m_s = saturate(p + integral_m_s_, g.s_r3x_m_s);
   }
 
-  // R1 (separation) from the nearest agent, or R3y (cohesion along the line) towards the leader
+  // R1 (separation) from the nearest agent, or R3y (cohesion along the line) towards the leader.
+  // The thesis writes R3y as kp * (-orthoDiff) in its simulator's axes; in ENU, towards the leader
+  // is +orthoDiff along ortho_dir
+  const double r3y = saturate(g.kp_r3y * ortho_diff, g.s_r3y_m_s);
   double best = std::numeric_limits<double>::infinity();
   double near_parallel = 0.0, near_ortho = 0.0;
   for (const Eigen::Vector2d& o : in.others_enu_m) {
@@ -91,7 +94,6 @@ FlockOutputs FlockController::step(const FlockInputs& in) {
     const double side = near_ortho > 0.0 ? 1.0 : (near_ortho < 0.0 ? -1.0 : 1.0);
     out.ortho_m_s = saturate(sep, g.s_r1_m_s) * side;
     out.separating = true;
-    const double r3y = saturate(g.kp_r3y * ortho_diff, g.s_r3y_m_s);
     if (g.close_gap && r3y * side > 0.0 &&
         in.leader_velocity_enu_m_s.norm() <= g.close_gap_leader_speed_m_s) {
       // R1 pushes us towards the leader: close on the next agent that way, up to D_R1 from it
@@ -105,9 +107,7 @@ FlockOutputs FlockController::step(const FlockInputs& in) {
       }
     }
   } else {
-    // the thesis writes kp * (-orthoDiff) in its simulator's axes; in ENU, towards the leader is
-    // +orthoDiff along ortho_dir
-    out.ortho_m_s = saturate(g.kp_r3y * ortho_diff, g.s_r3y_m_s);
+    out.ortho_m_s = r3y;
   }
 
   out.velocity_enu_m_s =

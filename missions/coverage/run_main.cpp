@@ -137,8 +137,8 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
                       latency) and the simulator steps while they think; default: zero latency, the
                       simulator waits for them at every tick. Not with --gcs
   --thesis-flocking   the flocking rules exactly as the thesis's Algorithm 3 (R1 alone wherever a
-                      neighbour is within D_R1); default: where R1 pushes an agent towards the
-                      leader, the faster of R1 and R3y
+                      neighbour is within D_R1); default: where R1 pushes a follower towards the
+                      leader, it also closes on the next agent that way, up to D_R1, at most 1 m/s
   --server/--agent/--gcs-program PATH, --models-dir DIR  programs and models (default: the build
                       tree)
 )");
