@@ -38,6 +38,7 @@
 #include "apd_report.hpp"
 #include "coverage_config.hpp"
 #include "coverage_world.hpp"
+#include "recovery_meter.hpp"
 #include "uavsim/client/sim_connection.hpp"
 #include "uavsim/launch/launcher.hpp"
 
@@ -348,10 +349,22 @@ int main(int argc, char** argv) {
   std::vector<Json> vehicles_end;
   std::vector<Json> gcs_links;
   std::map<int, int> station_port;  // vehicle -> the ground station's UDP port for its link
+  RecoveryMeter recovery(stripes, config.width_y_m);  // table 4.3's distance flown to recover
+  auto mark_failed = [&](int agent, std::set<int>& set) {
+    set.insert(agent);
+    recovery.agent_failed(agent);
+  };
 
   auto on_agent_line = [&](const std::string& line) {
     if (line.rfind("APD ", 0) == 0) {
-      if (auto r = decode_apd_report(line, stripes)) apd[r->agent] = std::move(*r);
+      if (auto r = decode_apd_report(line, stripes)) {
+        if (r->agent == kStationId) {
+          recovery.station_report(r->apd);
+        } else {
+          recovery.agent_report(r->agent, r->apd, distance_m[r->agent]);
+        }
+        apd[r->agent] = std::move(*r);
+      }
       return false;  // not printed: long
     }
     static const std::regex state_re(R"(^agent (\d+) t=\S+ state (.+) leader (-?\d+)$)");
@@ -538,8 +551,8 @@ int main(int argc, char** argv) {
           if (type == "takeoff" && first_takeoff_s < 0) first_takeoff_s = t;
           if (type == "touchdown" && !killed.count(veh))
             last_touchdown_s = std::max(last_touchdown_s, t);
-          if (type == "vehicle_killed") killed.insert(veh);
-          if (type == "crash" && !killed.count(veh)) crashed.insert(veh);
+          if (type == "vehicle_killed") mark_failed(veh, killed);
+          if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed);
           if (type == "crash" || type == "vehicle_killed") {
             say("[event] t=" + fmt("%.2f", t) + " " + type + " " + e.value("vehicle_name", "") +
                 " " + e.value("detail", ""));
@@ -588,7 +601,7 @@ int main(int argc, char** argv) {
             if (api.request({{"op", "kill_vehicle"},
                              {"vehicle", i},
                              {"reason", "coverage-run: injected failure"}})) {
-              killed.insert(i);
+              mark_failed(i, killed);
               say("coverage-run: t=" + fmt("%.1f", t) + " killed agent " + std::to_string(i));
             }
           }
@@ -760,6 +773,14 @@ int main(int argc, char** argv) {
                 energy_total / vehicles_end.size(), energy_total);
     std::printf("distance flown: %.0f m in all, %.0f m per agent (mean)\n", distance_total,
                 distance_total / vehicles_end.size());
+    if (failed > 0) {
+      std::printf(
+          "distance flown to recover lost data (table 4.3): %.0f m, %.3f %% of the distance "
+          "flown; %.2f %% of the rectangle photographed again after it was lost\n",
+          recovery.distance_m(),
+          distance_total > 0 ? 100.0 * recovery.distance_m() / distance_total : 0.0,
+          100.0 * recovery.recovered_fraction());
+    }
   }
   std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
               wall_s() > 0 ? sim_s / wall_s() : 0.0);
@@ -816,6 +837,9 @@ int main(int argc, char** argv) {
     summary["landed"] = landed;
     summary["energy_mah_mean"] = vehicles_end.empty() ? 0.0 : energy_total / vehicles_end.size();
     summary["distance_m_total"] = distance_total;
+    summary["recovery_distance_m"] = recovery.distance_m();
+    summary["recovered_fraction"] = recovery.recovered_fraction();
+    summary["lost_fraction_at_end"] = recovery.lost_fraction();
     summary["per_agent"] = per_agent;
     // every agent's last APD report, the dead's and the station's (255) too: the coverage map
     summary["stripes"] = stripes;

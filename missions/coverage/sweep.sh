@@ -11,15 +11,19 @@
 #   SWEEP_AGENTS       flock sizes flown without failures (default "5 10 15 20 25")
 #   SWEEP_FAIL_AGENTS  flock size of the failure runs (default 25; empty: no failure runs)
 #   SWEEP_PROBS        failure probabilities (default table 4.3's, 0.0005 .. 0.009)
+#   SWEEP_ARGS         more coverage-run options on every line, e.g. "--gcs --budget 2500" (the
+#                      table keeps runs with a ground station apart: "600x600 gcs")
 # Extra distance: the distance flown by the flock beyond the failure-free run of the same seed and
-# size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS), all agents' and the survivors' only.
+# size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS), all agents' and the survivors' only; and the
+# distance flown to recover (coverage-run's recovery_distance_m: the agents' flight photographing
+# ground that only a failed agent had held) over the run's own distance, the thesis's measure.
 # COVERAGE_RUN overrides the launcher (default: build/missions/coverage/coverage-run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}
 cmd=${1:-}
 out=${2:-}
-usage() { sed -n 2,16p "$0"; exit 2; }
+usage() { sed -n 2,21p "$0"; exit 2; }
 [[ -n "$cmd" && -n "$out" ]] || usage
 case "$cmd" in
   jobs)
@@ -32,7 +36,7 @@ case "$cmd" in
     for n in $agents $fail_agents; do [[ "$n" =~ ^[0-9]+$ ]] || usage; done
     for p in $probs; do [[ "$p" =~ ^0?\.[0-9]+$ ]] || usage; done
     mkdir -p "$out"
-    common="--no-run-dir --no-record --area $area --quiet --budget 5000"
+    common="--no-run-dir --no-record --area $area --quiet --budget 5000 ${SWEEP_ARGS-}"
     for ((s = 1; s <= seeds; s++)); do
       for n in $agents; do
         echo "$run $common --agents $n --seed $s --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
@@ -58,7 +62,7 @@ def mean_sd(xs):
     if not xs: return "-", "-"
     return "%.0f" % statistics.mean(xs), ("%.0f" % statistics.stdev(xs)) if len(xs) > 1 else "-"
 ok = lambda j: j["success"]
-area = lambda j: "%gx%g" % tuple(j["area_m"])
+area = lambda j: "%gx%g" % tuple(j["area_m"]) + (" gcs" if j.get("gcs") else "")
 print("fig. 4.7: no failures (thesis: mission time and energy fall up to 25 agents, then flatten;")
 print("its table 4.2 gives 719 +- 63 s and 479 +- 44 mAh for 25 agents over 600 x 600 m, 0-10 failed)")
 print("| area | agents | runs ok | mission time [s] | sd | coverage complete [s] | energy per agent [mAh] | sd | speed [x real time] |")
@@ -73,8 +77,8 @@ for a, n in sorted({(area(j), j["agents"]) for j in runs if j["failure_prob"] ==
     print("| %s | %d | %d/%d | %s | %s | %s | %s | %s | %.1f |" % (a, n, len(good), len(rs), *t, c[0], *e, speed))
 print()
 print("tables 4.2/4.3: with failures (extra distance against the seed's p = 0 run of the same size)")
-print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance: all agents | survivors (thesis) |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance: all agents | survivors | distance flown to recover (thesis) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 base = {(area(j), j["seed"], j["agents"]): j for j in runs if j["failure_prob"] == 0}
 for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs if j["failure_prob"] > 0}):
     rs = [j for j in runs if area(j) == a and j["agents"] == n and j["failure_prob"] == p]
@@ -90,13 +94,17 @@ for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs i
         more = sum(x["distance_m"] - bd[x["agent"]] for x in j["per_agent"] if not x["failed"])
         return more / b["distance_m_total"]
     extra_s = [survivors_extra(j, base[(a, j["seed"], n)]) for j in rs if (a, j["seed"], n) in base]
+    # the share of the run's flight spent photographing lost ground (runs before the measure: none)
+    recover = [j["recovery_distance_m"] / j["distance_m_total"] for j in rs
+               if "recovery_distance_m" in j and j["distance_m_total"] > 0]
     t = mean_sd([j["mission_time_s"] for j in good])
     e = mean_sd([j["energy_mah_mean"] for j in good])
     th = THESIS_43.get(p)
     pct = lambda xs: ("%+.2f %%" % (100 * statistics.mean(xs))) if xs else "-"
-    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s (%s) |" % (
+    share = ("%.4f %%" % (100 * statistics.mean(recover))) if recover else "-"
+    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s | %s (%s) |" % (
         a, n, p, len(good), len(rs), 100 * failed, ("%.2f %%" % th[0]) if th else "-", 100 * cov, *t, *e,
-        pct(extra), pct(extra_s), ("%.4f %%" % th[1]) if th else "-"))
+        pct(extra), pct(extra_s), share, ("%.4f %%" % th[1]) if th else "-"))
 print()
 print("fig. 4.8: overcoverage, the share of the rectangle the pictures of k agents cover (every agent's")
 print("last APD, the dead ones' included; the thesis plots its distribution and calls it negligible)")
