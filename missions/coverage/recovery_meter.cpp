@@ -36,9 +36,10 @@ std::vector<Interval> stripe_and(const std::vector<Interval>& a, const std::vect
   return out;
 }
 
-RecoveryMeter::RecoveryMeter(int stripes, double width_m)
+RecoveryMeter::RecoveryMeter(int stripes, double width_m, double length_m)
     : stripes_(std::max(stripes, 0)),
       width_m_(width_m > 0.0 ? width_m : 0.0),
+      stripe_length_m_(stripes_ > 0 && length_m > 0.0 ? length_m / stripes_ : 0.0),
       station_(stripes_),
       lost_(stripes_) {}
 
@@ -71,7 +72,7 @@ void RecoveryMeter::lose(const AreaParts& apd) {
   }
 }
 
-void RecoveryMeter::agent_report(int agent, const AreaParts& apd, double distance_m) {
+void RecoveryMeter::agent_report(int agent, const AreaParts& apd) {
   if (apd.stripe_count() != stripes_) return;
   auto [it, added] = agents_.try_emplace(agent);
   Holder& h = it->second;
@@ -85,20 +86,17 @@ void RecoveryMeter::agent_report(int agent, const AreaParts& apd, double distanc
     lose(late);
     return;
   }
-  double gained = 0.0, recovered = 0.0;
   for (int s = 0; s < stripes_; ++s) {
-    const std::vector<Interval> fresh = stripe_minus(apd.stripe(s), h.apd.stripe(s));
-    if (fresh.empty()) continue;
-    gained += length(fresh);
     if (lost_.stripe(s).empty()) continue;
-    recovered += length(stripe_and(fresh, lost_.stripe(s)));
+    const std::vector<Interval> fresh = stripe_minus(apd.stripe(s), h.apd.stripe(s));
+    const double gained = length(fresh);
+    if (!(gained > 0.0)) continue;
+    const double recovered = length(stripe_and(fresh, lost_.stripe(s)));
+    distance_m_ += stripe_length_m_ * recovered / gained;
+    recovered_m_ += recovered;
     lost_.set_stripe(s, stripe_minus(lost_.stripe(s), fresh));
   }
-  if (gained > 0.0 && recovered > 0.0)
-    distance_m_ += std::max(0.0, distance_m - h.distance_m) * recovered / gained;
-  recovered_m_ += recovered;
   h.apd = apd;
-  h.distance_m = distance_m;
 }
 
 void RecoveryMeter::station_report(const AreaParts& map) {

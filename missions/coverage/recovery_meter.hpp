@@ -1,12 +1,13 @@
 // Table 4.3's quantity, "distance flown to recover from failed agents", measured by the launcher
-// from the agents' APD reports and the ground-truth distance they flew (scoring only: no agent
-// sees it). The pictures a failed agent held that nobody alive (nor the ground station) holds are
-// lost ground. A live agent that photographs lost ground again is recovering: each of its reports
-// adds the distance it flew since its previous report, times the share of the ground it newly
-// photographed that was lost. An agent flying beside it over new ground recovers nothing, so this
-// is the flock's flight spent on recovery, not the whole passes that carry it (the launcher also
-// reports the total distance, from which a sweep takes the extra distance against a failure-free
-// run). Pure: no clocks, no I/O.
+// from the agents' APD reports (scoring only: no agent sees it). The pictures a failed agent held
+// that nobody alive (nor the ground station) holds are lost ground. A live agent that photographs
+// lost ground again is recovering: for each stripe its report adds anew, the stripe's length along
+// x (the flight that photographs it) times the share of the new interval that was lost. An agent
+// flying beside it over new ground recovers nothing, so this is the flock's flight spent on
+// recovery, not the whole passes that carry it (the launcher also reports the total distance, from
+// which a sweep takes the extra distance against a failure-free run). From the pictures, not from
+// the distance between reports: an agent reports only when its APD changed, so its first report
+// after a transit would carry the whole transit. Pure: no clocks, no I/O.
 #pragma once
 
 #include <map>
@@ -22,11 +23,11 @@ std::vector<Interval> stripe_and(const std::vector<Interval>& a, const std::vect
 
 class RecoveryMeter {
  public:
-  RecoveryMeter(int stripes, double width_m);
+  // The rectangle's stripes, its width along y and its length along x.
+  RecoveryMeter(int stripes, double width_m, double length_m);
 
-  // An agent's APD report (its own pictures) and the distance it has flown so far (ground
-  // truth). Reports with another stripe count are ignored.
-  void agent_report(int agent, const AreaParts& apd, double distance_m);
+  // An agent's APD report (its own pictures). Reports with another stripe count are ignored.
+  void agent_report(int agent, const AreaParts& apd);
   // The ground station's map (the optimised variant): what it holds is not lost when an agent
   // fails; it flies nothing, so it recovers nothing.
   void station_report(const AreaParts& map);
@@ -44,7 +45,6 @@ class RecoveryMeter {
  private:
   struct Holder {
     AreaParts apd;
-    double distance_m = 0.0;
     bool failed = false;
   };
   // Per stripe: what the live agents and the station hold.
@@ -55,6 +55,7 @@ class RecoveryMeter {
 
   int stripes_;
   double width_m_;
+  double stripe_length_m_;
   std::map<int, Holder> agents_;
   AreaParts station_;
   AreaParts lost_;

@@ -349,7 +349,8 @@ int main(int argc, char** argv) {
   std::vector<Json> vehicles_end;
   std::vector<Json> gcs_links;
   std::map<int, int> station_port;  // vehicle -> the ground station's UDP port for its link
-  RecoveryMeter recovery(stripes, config.width_y_m);  // table 4.3's distance flown to recover
+  RecoveryMeter recovery(stripes, config.width_y_m,
+                         config.length_x_m);  // table 4.3's distance flown to recover
   auto mark_failed = [&](int agent, std::set<int>& set) {
     set.insert(agent);
     recovery.agent_failed(agent);
@@ -361,7 +362,7 @@ int main(int argc, char** argv) {
         if (r->agent == kStationId) {
           recovery.station_report(r->apd);
         } else {
-          recovery.agent_report(r->agent, r->apd, distance_m[r->agent]);
+          recovery.agent_report(r->agent, r->apd);
         }
         apd[r->agent] = std::move(*r);
       }

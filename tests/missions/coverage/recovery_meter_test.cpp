@@ -11,6 +11,7 @@ namespace {
 
 constexpr int kStripes = 10;
 constexpr double kWidth_m = 100.0;
+constexpr double kLength_m = 150.0;  // stripes 15 m long along x
 
 // An APD with the same interval in stripes [first, last].
 AreaParts band(int first, int last, double start_m, double end_m) {
@@ -37,73 +38,74 @@ TEST(StripeSets, MinusAndIntersectionOfNormalFormLists) {
 }
 
 TEST(RecoveryMeter, AgentPhotographingWhatAFailedAgentAloneHeldRecoversInProportion) {
-  RecoveryMeter meter(kStripes, kWidth_m);
+  RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
   // agent 1 alone holds y 10-20 over every stripe; agent 0 holds y 0-12 (2 m shared)
-  meter.agent_report(0, band(0, 9, 0, 12), 100.0);
-  meter.agent_report(1, band(0, 9, 10, 20), 100.0);
+  meter.agent_report(0, band(0, 9, 0, 12));
+  meter.agent_report(1, band(0, 9, 10, 20));
   meter.agent_failed(1);
   EXPECT_NEAR(meter.lost_fraction(), 8.0 / 100.0, 1e-12);  // y 12-20: 8 m of 100 in every stripe
-  // agent 0 flies 200 m and photographs y 12-28 in every stripe: half of it (12-20) was lost
-  meter.agent_report(0, band(0, 9, 0, 28), 300.0);
-  EXPECT_NEAR(meter.distance_m(), 100.0, 1e-9);
+  // agent 0 photographs y 12-28 in every stripe: half of it (12-20) was lost, so half its flight
+  // over the ten 15 m stripes
+  meter.agent_report(0, band(0, 9, 0, 28));
+  EXPECT_NEAR(meter.distance_m(), 75.0, 1e-9);
   EXPECT_NEAR(meter.recovered_fraction(), 0.08, 1e-12);
   EXPECT_NEAR(meter.lost_fraction(), 0.0, 1e-12);
   // ground recovered is no longer lost: flying over it again recovers nothing
-  meter.agent_report(0, unite(band(0, 9, 0, 28), band(0, 4, 30, 40)), 400.0);
-  EXPECT_NEAR(meter.distance_m(), 100.0, 1e-9);
+  meter.agent_report(0, unite(band(0, 9, 0, 28), band(0, 4, 30, 40)));
+  EXPECT_NEAR(meter.distance_m(), 75.0, 1e-9);
 }
 
 TEST(RecoveryMeter, NothingIsLostWhileALiveAgentOrTheStationHoldsIt) {
-  RecoveryMeter meter(kStripes, kWidth_m);
-  meter.agent_report(0, band(0, 9, 0, 10), 50.0);
-  meter.agent_report(1, band(0, 9, 0, 10), 50.0);  // the same ground as agent 0
-  meter.agent_report(2, band(0, 9, 40, 50), 50.0);
+  RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
+  meter.agent_report(0, band(0, 9, 0, 10));
+  meter.agent_report(1, band(0, 9, 0, 10));  // the same ground as agent 0
+  meter.agent_report(2, band(0, 9, 40, 50));
   meter.station_report(band(0, 9, 40, 50));  // agent 2's pictures were delivered
   meter.agent_failed(1);
   meter.agent_failed(2);
   EXPECT_EQ(meter.lost_fraction(), 0.0);
-  meter.agent_report(3, band(0, 9, 0, 60), 200.0);
+  meter.agent_report(3, band(0, 9, 0, 60));
   EXPECT_EQ(meter.distance_m(), 0.0);
   EXPECT_EQ(meter.recovered_fraction(), 0.0);
 }
 
 TEST(RecoveryMeter, WithoutFailuresNothingIsRecoveredAndSliversAreNotLost) {
-  RecoveryMeter meter(kStripes, kWidth_m);
-  meter.agent_report(0, band(0, 9, 0, 10), 100.0);
-  meter.agent_report(1, band(0, 9, 10.1, 20), 100.0);
-  meter.agent_report(0, band(0, 9, 0, 30), 200.0);
+  RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
+  meter.agent_report(0, band(0, 9, 0, 10));
+  meter.agent_report(1, band(0, 9, 10.1, 20));
+  meter.agent_report(0, band(0, 9, 0, 30));
   EXPECT_EQ(meter.distance_m(), 0.0);
   // agent 1's 10.1-20 is under agent 0's 0-30 but for nothing; 30-... nothing else: no loss
   meter.agent_failed(1);
   EXPECT_EQ(meter.lost_fraction(), 0.0);
   // a 0.2 m sliver only the failed agent held is under the scoring's slack: not lost
-  meter.agent_report(2, band(0, 9, 29.8, 40), 100.0);
-  meter.agent_report(3, band(0, 9, 30.2, 45), 100.0);  // leaves 30.0-30.2 to agent 2 alone
+  meter.agent_report(2, band(0, 9, 29.8, 40));
+  meter.agent_report(3, band(0, 9, 30.2, 45));  // leaves 30.0-30.2 to agent 2 alone
   meter.agent_failed(2);
   EXPECT_EQ(meter.lost_fraction(), 0.0);
 }
 
 TEST(RecoveryMeter, AReportReadAfterTheFailureAddsToWhatIsLostAndTheFailedRecoverNothing) {
-  RecoveryMeter meter(kStripes, kWidth_m);
-  meter.agent_report(1, band(0, 9, 0, 10), 100.0);
+  RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
+  meter.agent_report(1, band(0, 9, 0, 10));
   meter.agent_failed(1);
   meter.agent_failed(1);  // the kill and its event both say so
   EXPECT_NEAR(meter.lost_fraction(), 0.10, 1e-12);
   // its last pictures, printed before the kill and read after it
-  meter.agent_report(1, band(0, 9, 0, 20), 150.0);
+  meter.agent_report(1, band(0, 9, 0, 20));
   EXPECT_NEAR(meter.lost_fraction(), 0.20, 1e-12);
   EXPECT_EQ(meter.distance_m(), 0.0);
   // the station's later map (the recovering agent's pictures delivered before its own report)
   // does not hide the recovery
   meter.station_report(band(0, 9, 0, 20));
-  meter.agent_report(0, band(0, 9, 0, 20), 80.0);
-  EXPECT_NEAR(meter.distance_m(), 80.0, 1e-9);
+  meter.agent_report(0, band(0, 9, 0, 20));
+  EXPECT_NEAR(meter.distance_m(), 150.0, 1e-9);  // all of its pictures, over ten 15 m stripes
   EXPECT_NEAR(meter.recovered_fraction(), 0.20, 1e-12);
 }
 
 TEST(RecoveryMeter, ReportsOfAnotherStripeCountAreIgnored) {
-  RecoveryMeter meter(kStripes, kWidth_m);
-  meter.agent_report(0, AreaParts(kStripes + 1), 100.0);
+  RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
+  meter.agent_report(0, AreaParts(kStripes + 1));
   meter.station_report(AreaParts(3));
   meter.agent_failed(0);
   EXPECT_EQ(meter.lost_fraction(), 0.0);
