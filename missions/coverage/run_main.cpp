@@ -7,7 +7,8 @@
 // times), and prints a summary scored from the sim API's ground truth, which the agents never
 // see: the fraction of the rectangle covered by the data that survived (the APDs the agents still
 // alive reported), mission time (first take-off to last touchdown), energy per agent, failed
-// agents, distance flown. With --gcs (the optimised variant, section 3.6) it also starts the
+// agents, distance flown, and the distance flown to recover lost data (recovery_meter.hpp: table
+// 4.3's quantity). With --gcs (the optimised variant, section 3.6) it also starts the
 // ground station (coverage-gcs) with a GCS link per vehicle through the server's relay, which can
 // cut or impair them (--gcs-cut, --gcs-loss); data delivered to the station counts as surviving.
 //
