@@ -480,6 +480,14 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       if (aggregation_.complete(adb_.live_mask())) {
         finish_query(in, out);
       } else if (now - state_since_s_ > kQueryTimeout_s) {
+        // name the agents that did not answer: the ADB holds them live, yet no result reached us
+        const uint64_t missing = adb_.live_mask() & ~aggregation_.responded();
+        out.note = "no answer from";
+        for (int id = 0; id < 64; ++id) {
+          if (!(missing >> id & 1u)) continue;
+          out.note += ' ';
+          out.note += std::to_string(id);
+        }
         state_since_s_ = now;
         start_query(out);
       }

@@ -39,16 +39,18 @@ class AgentsDatabase {
   // this agent are skipped; the others arrive one hop farther than the sender had them.
   void on_message(const AgentRecord& sender, const std::vector<AgentRecord>& sender_adb);
   // Algorithm 1's MERGE: stores the record if the id is unknown or the record is newer. A record
-  // already too old for its distance is not stored (so a neighbour's stale copy cannot bring an
-  // evicted agent back).
+  // already too old for its distance is not stored, nor, beyond the thesis, an evicted agent's
+  // record that is not newer than the one it was evicted with: the farther a copy travels the more
+  // age Algorithm 2 allows it, so agents that hear each other passed a silent agent's last record
+  // back and forth for ever, a hop farther each time (count to infinity).
   void merge(const AgentRecord& r);
 
   // Algorithm 2 over elapsed_ms milliseconds at once: ages every record, drops those past the
   // allowed age; returns the ids dropped.
   std::vector<int> age(int elapsed_ms);
 
-  // Removes an agent at once (e.g. it announced its landing).
-  void drop(int id) { records_.erase(id); }
+  // Removes an agent at once (e.g. it announced its landing); as an eviction.
+  void drop(int id);
 
   // This agent has landed: it no longer leads while an agent that flies is alive.
   void set_local_landed(bool landed) { local_landed_ = landed; }
@@ -67,6 +69,8 @@ class AgentsDatabase {
   int local_id_;
   std::function<int(int)> max_allowed_age_ms_;
   std::map<int, AgentRecord> records_;
+  // the sequence number each evicted agent was evicted with: only a newer one brings it back
+  std::map<int, uint16_t> evicted_seq_;
   bool local_landed_ = false;
 };
 

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 namespace uavsim::missions::coverage {
 namespace {
 
@@ -71,6 +73,44 @@ TEST(AgentsDatabase, AStaleCopyCannotBringAnEvictedAgentBack) {
   // the same stale copy again, now 2600 ms old: beyond the allowed age, not stored
   adb.on_message(rec(1, 2, 0.0), {rec(9, 3, 0.0, 2, 2600)});
   EXPECT_FALSE(adb.records().count(9));
+}
+
+// Agents 0, 1 and 2 hear each other; agent 9, which they knew, has gone silent (out of range, or
+// dead). Each copy of 9's record that one of them takes back from another arrives a hop farther,
+// and Algorithm 2 allows a farther record more age: as written (Algorithm 1 stores a record whose
+// id is not in the ADB, whatever its sequence number), the three kept passing 9's last record
+// around for ever, the hop count climbing by two a round trip. A recall's leader at the far end of
+// the rectangle waited for the landed agents' answers without end (10 quads over 300 x 150 m, seed
+// 3), and landed agents kept each other's radios on. An evicted agent comes back only with a newer
+// message than the one it was evicted with.
+TEST(AgentsDatabase, ASilentAgentsLastRecordDoesNotCirculateForEverAmongTheOthers) {
+  std::vector<AgentsDatabase> adbs{make(0), make(1), make(2)};
+  // 0 heard 9 directly, 1 through 0, 2 through 1: the farther copies may grow older
+  for (int i = 0; i < 3; ++i) adbs[static_cast<size_t>(i)].merge(rec(9, 40, 0.0, i + 1, 0));
+  std::vector<uint16_t> seq{0, 0, 0};
+  double last_seen_s = 0.0;
+  for (int tick = 1; tick <= 240; ++tick) {  // 30 s of 8 Hz broadcasts
+    for (size_t i = 0; i < adbs.size(); ++i) {
+      AgentRecord self = rec(static_cast<int>(i), ++seq[i], 0.0);
+      std::vector<AgentRecord> copy;
+      for (const auto& [id, r] : adbs[i].records()) copy.push_back(r);
+      for (size_t j = 0; j < adbs.size(); ++j)
+        if (j != i) adbs[j].on_message(self, copy);
+    }
+    for (AgentsDatabase& a : adbs) {
+      a.age(125);
+      if (a.records().count(9)) last_seen_s = tick * 0.125;
+    }
+  }
+  // allowed 1500 ms at one hop, a little more through the others: gone within a few seconds
+  EXPECT_LT(last_seen_s, 5.0);
+  for (const AgentsDatabase& a : adbs) {
+    EXPECT_FALSE(a.records().count(9));
+    EXPECT_EQ(a.records().size(), 2u);  // the other two stay
+  }
+  // 9 speaks again (a newer sequence number): back at once
+  adbs[0].on_message(rec(9, 41, 0.0), {});
+  EXPECT_TRUE(adbs[0].records().count(9));
 }
 
 TEST(AgentsDatabase, LeaderIsTheLowestLiveIdAndIsReplacedWhenItAgesOut) {
