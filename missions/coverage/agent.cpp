@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 namespace uavsim::missions::coverage {
 
@@ -51,6 +52,18 @@ constexpr double kVerifyNearHome_m = 50.0;
 // a landed agent that noticed a loss stays on this long for the leader's check (its query, answered
 // by every landed agent, takes a few seconds; kQueryTimeout_s per retry)
 constexpr double kLossWait_s = 2.0 * kQueryTimeout_s;
+// Running: an agent lost in the line leaves its strip open from where it died until its neighbours
+// have closed the gap (15 m wide, closed at up to 1 m/s: 17 m of track, 25 quads over 600 x 600 m,
+// seed 1, p 0.001). Where the strip lies further than the planner's lateral threshold from either
+// edge of the flock, no next pass bends over it, and the last query sent the whole flock back for
+// it (84 s, 58 s of transit). The leader hears of the loss when the record ages out, up to the age
+// allowed for its distance after the death; so it holds the flock until the line has closed (at
+// most kRewindHold_s), flies back along the path by that age at the cruise speed plus
+// kRewindMargin_m, and runs the stretch again (that run: 680.1 s instead of 746.8 s). Nearer an
+// edge, the next pass on that side covers the strip anyway, and the rewind only cost time (5 quads
+// over 150 x 100 m: +15 s).
+constexpr double kRewindHold_s = 20.0;
+constexpr double kRewindMargin_m = 5.0;
 // the leader's hover over its home while the others land (it lands last)
 constexpr double kLeaderWaitAltitude_m = 3.0;
 
@@ -111,6 +124,7 @@ void Agent::enter(AgentState s, AgentOutputs& out, const std::string& why) {
   if (!why.empty()) out.note += " (" + why + ")";
   state_ = s;
   state_since_s_ = last_now_s_;
+  rewind_hold_ = rewind_back_ = false;
   if (s == AgentState::kGoingHome) home_round_ = round_;
 }
 
@@ -143,8 +157,12 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     // an agent that aged out on the way home, not known to have landed, died with its pictures
     // (on the ground too, in our own round: the last agents flying may die after we landed; in a
     // later round its flyers may just be out of range, surveying)
+    // Running: each record as it was, for where and how long ago an agent that ages out died
+    std::map<int, AgentRecord> before;
+    if (state_ == AgentState::kRunning && path_) before = adb_.records();
     for (int id : adb_.age(elapsed_ms)) {
       if (landed_ids_.count(id)) continue;
+      if (const auto it = before.find(id); it != before.end()) start_rewind(in, it->second);
       const bool landed_here = state_ == AgentState::kLanded && no_later_round_surveying();
       if (state_ != AgentState::kGoingHome && !landed_here) continue;
       if (!loss_pending_) loss_since_s_ = in.now_s;
@@ -186,6 +204,31 @@ AgentOutputs Agent::step(const AgentInputs& in) {
   run_state(in, out);
   if (state_ != AgentState::kLanded) broadcast(in, out);
   return out;
+}
+
+void Agent::start_rewind(const AgentInputs& in, const AgentRecord& lost) {
+  // where the lost agent flew across the line, against the flock's edges (the others and us)
+  const Eigen::Vector2d across(-std::sin(target_heading_rad_), std::cos(target_heading_rad_));
+  const Eigen::Vector2d here = in.position_enu_m.head<2>();
+  const double at = across.dot(Eigen::Vector2d(lost.x_m, lost.y_m) - here);
+  double low = std::min(0.0, at), high = std::max(0.0, at);
+  for (const auto& [id, r] : adb_.records()) {
+    if (r.landed) continue;
+    const double a = across.dot(Eigen::Vector2d(r.x_m, r.y_m) - here);
+    low = std::min(low, a);
+    high = std::max(high, a);
+  }
+  if (std::min(at - low, high - at) <= config_.lateral_threshold_m) return;
+  // the longest it can have been dead: the age allowed at its distance, and a beacon period
+  const double dead_s = config_.max_age_base_s + config_.max_age_per_hop_s * lost.distance_hops +
+                        1.0 / config_.broadcast_hz;
+  const double dir = std::cos(path_->heading_rad) >= 0.0 ? 1.0 : -1.0;
+  const double back_m = std::min(dead_s * config_.cruise_speed_m_s + kRewindMargin_m,
+                                 std::abs(in.position_enu_m.x() - path_->points_enu_m.front().x()));
+  if (!rewind_hold_ && !rewind_back_) rewind_x_m_ = in.position_enu_m.x() - dir * back_m;
+  rewind_hold_ = true;
+  rewind_back_ = false;
+  rewind_since_s_ = in.now_s;
 }
 
 void Agent::receive(const AgentInputs& in) {
@@ -508,6 +551,24 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
     case AgentState::kRunning: {
       const double dir = std::cos(path_->heading_rad) >= 0.0 ? 1.0 : -1.0;
       const double end_x = path_->points_enu_m.back().x();
+      if (rewind_hold_) {
+        // an agent deep inside the line was lost: hold until its neighbours have closed the gap
+        fly_to(in, here, 0.0, target_heading_rad_, out);
+        if (flock_in_line(in) || now - rewind_since_s_ > kRewindHold_s) {
+          rewind_hold_ = false;
+          rewind_back_ = true;
+          out.note = "line closed after a loss: back " +
+                     fmt("%.0f m", std::abs(in.position_enu_m.x() - rewind_x_m_));
+        }
+        break;
+      }
+      if (rewind_back_) {
+        // back along the path (still facing the way it runs) to before the loss
+        const Eigen::Vector2d back(rewind_x_m_, path_y_at(*path_, rewind_x_m_));
+        fly_to(in, back, config_.cruise_speed_m_s, target_heading_rad_, out);
+        if ((in.position_enu_m.x() - rewind_x_m_) * dir <= 0.5) rewind_back_ = false;
+        break;
+      }
       if ((in.position_enu_m.x() - end_x) * dir >= 0.0) {
         enter(AgentState::kWaiting, out, "end of path");
         fly_to(in, here, 0.0, target_heading_rad_, out);

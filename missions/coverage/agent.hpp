@@ -125,6 +125,8 @@ class Agent {
   void broadcast(const AgentInputs& in, AgentOutputs& out);
   void run_state(const AgentInputs& in, AgentOutputs& out);
   void start_query(AgentOutputs& out);
+  // Running: a record of the line aged out; rewind if its strip lies deep inside the line
+  void start_rewind(const AgentInputs& in, const AgentRecord& lost);
   void finish_query(const AgentInputs& in, AgentOutputs& out);
   AreaParts flock_map() const;
   // Going Home, leader: checks the flock's map after a loss; true when it recalled the flock.
@@ -170,6 +172,13 @@ class Agent {
   int home_round_ = 0;  // the round in which this agent went home
   bool loss_pending_ = false;
   double loss_since_s_ = 0.0;
+  // Running, leader: an agent deep inside the line was lost during the pass. Its neighbours close
+  // the gap while the flock holds (rewind_hold_), then the flock flies back to rewind_x_m_ (a
+  // little before where the loss happened) and runs that stretch again with the line closed.
+  bool rewind_hold_ = false;
+  bool rewind_back_ = false;
+  double rewind_x_m_ = 0.0;
+  double rewind_since_s_ = 0.0;
   double all_landed_since_s_ = -1.0;  // landed, and every agent heard landed, since (flock_landed)
   bool verifying_ = false;
   double verify_since_s_ = 0.0;

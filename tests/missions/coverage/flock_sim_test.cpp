@@ -45,6 +45,7 @@ struct FlockRun {
   // the widest gap between neighbours along the line (y) while the leader ran a pass over the
   // rectangle: wider than a footprint leaves a sliver between their pictures
   double max_gap_running_m = 0.0;
+  int rewinds = 0;  // passes the leader ran again after a loss inside the line
 };
 
 struct FlockScenario {
@@ -127,6 +128,7 @@ FlockRun fly(const FlockScenario& s) {
       const AgentOutputs out = sv.agent.step(in);
       if (sv.agent.state() == AgentState::kGoingHome && sv.going_home_since_s < 0.0)
         sv.going_home_since_s = t;
+      if (out.note.find("line closed after a loss") != std::string::npos) ++run.rewinds;
       if (!out.note.empty() && std::getenv("FLOCK_DEBUG"))
         std::printf("t=%.2f agent %zu: %s\n", t, i, out.note.c_str());
       run.rounds = std::max(run.rounds, sv.agent.round() + 1);
@@ -276,6 +278,26 @@ TEST(FlockSim, NonLeaderKilledItsStripesAreCoveredAgain) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+}
+
+// An agent deep inside a line of 12 dies in the first pass: the strip it leaves open until its
+// neighbours close the gap lies too far from the flock's edges for the next pass to bend over it.
+// The leader holds the flock until the line has closed, flies back past where the agent died and
+// runs that stretch again, instead of sending the whole flock back for it at the end.
+TEST(FlockSim, AgentLostDeepInsideTheLineTheLeaderRunsTheStretchAgain) {
+  FlockScenario s;
+  s.agents = 12;
+  s.line_spacing_m = 7.0;
+  const FlockRun calm = fly(s);
+  s.kills = {{30.0, 6}};
+  const FlockRun r = fly(s);
+  EXPECT_TRUE(r.all_done);
+  EXPECT_EQ(r.rewinds, 1);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  std::printf("mission %.1f s, without the loss %.1f s\n", r.mission_time_s, calm.mission_time_s);
+  // an agent near the edge: the next pass covers its strip, no rewind
+  s.kills = {{30.0, 10}};
+  EXPECT_EQ(fly(s).rewinds, 0);
 }
 
 TEST(FlockSim, ThirtyPercentRadioLossStillCoversEverything) {
