@@ -64,6 +64,9 @@ constexpr double kLossWait_s = 2.0 * kQueryTimeout_s;
 // over 150 x 100 m: +15 s).
 constexpr double kRewindHold_s = 20.0;
 constexpr double kRewindMargin_m = 5.0;
+// the station's map counts as arriving when the last came this recently (it changes, and is sent,
+// every second or so while the flock takes pictures)
+constexpr double kStationMapFresh_s = 5.0;
 // the leader's hover over its home while the others land (it lands last)
 constexpr double kLeaderWaitAltitude_m = 3.0;
 
@@ -207,6 +210,12 @@ AgentOutputs Agent::step(const AgentInputs& in) {
 }
 
 void Agent::start_rewind(const AgentInputs& in, const AgentRecord& lost) {
+  // Only while the station's map keeps arriving: there the lost agent's pictures survive and the
+  // open strip is all that is missing. In the plain variant its pictures of the pass die with it,
+  // the recovery flies its whole strip again, open stretch included, and a rewind is time lost (25
+  // quads, p 0.001, seed 1: 2340.1 s with it against 1776.9 s without, the longer mission drawing
+  // one failure more).
+  if (in.now_s - gcs_map_at_s_ > kStationMapFresh_s) return;
   // where the lost agent flew across the line, against the flock's edges (the others and us)
   const Eigen::Vector2d across(-std::sin(target_heading_rad_), std::cos(target_heading_rad_));
   const Eigen::Vector2d here = in.position_enu_m.head<2>();
@@ -232,7 +241,10 @@ void Agent::start_rewind(const AgentInputs& in, const AgentRecord& lost) {
 }
 
 void Agent::receive(const AgentInputs& in) {
-  if (in.gcs_map && in.gcs_map->stripe_count() == own_.stripe_count()) gcs_map_ = in.gcs_map;
+  if (in.gcs_map && in.gcs_map->stripe_count() == own_.stripe_count()) {
+    gcs_map_ = in.gcs_map;
+    gcs_map_at_s_ = in.now_s;
+  }
   for (const Frame& f : in.received) {
     const auto type = message_type(f);
     if (type == MessageType::kBeacon) {

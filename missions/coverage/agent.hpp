@@ -199,6 +199,7 @@ class Agent {
   uint16_t query_counter_ = 0;
   int queries_started_ = 0;
   std::optional<AreaParts> gcs_map_;
+  double gcs_map_at_s_ = -1e9;  // when the station's map last arrived
   std::optional<AreaParts> last_map_;
   std::optional<AreaParts>
       landed_map_;  // taken off again after a loss: what the landed agents held

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <random>
 
 #include "agent.hpp"
@@ -62,6 +64,9 @@ struct FlockScenario {
   uint32_t seed = 1;
   double line_spacing_m = 10.0;  // the take-off line
   bool thesis_flocking = false;  // FlockGains::close_gap off: Algorithm 3 as written
+  // a perfect ground station (the optimised variant): every second each live agent receives the
+  // union of every agent's pictures so far, the dead agents' included (delivered before they died)
+  bool station = false;
 };
 
 CoverageConfig area() {
@@ -113,10 +118,16 @@ FlockRun fly(const FlockScenario& s) {
     // agents step and broadcast
     std::vector<std::pair<size_t, Frame>> air;
     bool done = true;
+    std::optional<AreaParts> station_map;
+    if (s.station && std::fmod(t + kDt_s / 2, 1.0) < kDt_s) {
+      station_map = AreaParts(config.stripe_count());
+      for (const SimVehicle& sv : v) station_map->merge(sv.agent.own());
+    }
     for (size_t i = 0; i < v.size(); ++i) {
       SimVehicle& sv = v[i];
       if (!sv.alive) continue;
       AgentInputs in;
+      in.gcs_map = station_map;
       in.now_s = t;
       in.armed = sv.armed;
       in.on_ground = sv.crashed || sv.position_enu_m.z() <= 0.0;
@@ -280,14 +291,16 @@ TEST(FlockSim, NonLeaderKilledItsStripesAreCoveredAgain) {
   EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
 }
 
-// An agent deep inside a line of 12 dies in the first pass: the strip it leaves open until its
-// neighbours close the gap lies too far from the flock's edges for the next pass to bend over it.
+// With a ground station, an agent deep inside a line of 12 dies in the first pass: its pictures
+// survive, but the strip it leaves open until its neighbours close the gap lies too far from the
+// flock's edges for the next pass to bend over it.
 // The leader holds the flock until the line has closed, flies back past where the agent died and
 // runs that stretch again, instead of sending the whole flock back for it at the end.
 TEST(FlockSim, AgentLostDeepInsideTheLineTheLeaderRunsTheStretchAgain) {
   FlockScenario s;
   s.agents = 12;
   s.line_spacing_m = 7.0;
+  s.station = true;
   const FlockRun calm = fly(s);
   s.kills = {{30.0, 6}};
   const FlockRun r = fly(s);
@@ -297,6 +310,11 @@ TEST(FlockSim, AgentLostDeepInsideTheLineTheLeaderRunsTheStretchAgain) {
   std::printf("mission %.1f s, without the loss %.1f s\n", r.mission_time_s, calm.mission_time_s);
   // an agent near the edge: the next pass covers its strip, no rewind
   s.kills = {{30.0, 10}};
+  EXPECT_EQ(fly(s).rewinds, 0);
+  // without the station the dead agent's pictures of the pass are lost and its whole strip is
+  // flown again later, the open stretch with it: no rewind
+  s.station = false;
+  s.kills = {{30.0, 6}};
   EXPECT_EQ(fly(s).rewinds, 0);
 }
 
