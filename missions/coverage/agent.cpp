@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <map>
 
 namespace uavsim::missions::coverage {
 
@@ -160,12 +159,10 @@ AgentOutputs Agent::step(const AgentInputs& in) {
     // an agent that aged out on the way home, not known to have landed, died with its pictures
     // (on the ground too, in our own round: the last agents flying may die after we landed; in a
     // later round its flyers may just be out of range, surveying)
-    // Running: each record as it was, for where and how long ago an agent that ages out died
-    std::map<int, AgentRecord> before;
-    if (state_ == AgentState::kRunning && path_) before = adb_.records();
     for (int id : adb_.age(elapsed_ms)) {
       if (landed_ids_.count(id)) continue;
-      if (const auto it = before.find(id); it != before.end()) start_rewind(in, it->second);
+      // Running: its last record tells where and how long ago it died
+      if (state_ == AgentState::kRunning && path_) start_rewind(in, *adb_.evicted(id));
       const bool landed_here = state_ == AgentState::kLanded && no_later_round_surveying();
       if (state_ != AgentState::kGoingHome && !landed_here) continue;
       if (!loss_pending_) loss_since_s_ = in.now_s;

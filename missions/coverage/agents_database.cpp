@@ -29,9 +29,9 @@ void AgentsDatabase::on_message(const AgentRecord& sender,
 
 void AgentsDatabase::merge(const AgentRecord& r) {
   if (r.id == local_id_ || r.age_ms > max_allowed_age_ms_(r.distance_hops)) return;
-  if (auto gone = evicted_seq_.find(r.id); gone != evicted_seq_.end()) {
-    if (!seq_newer(r.seq, gone->second)) return;  // a copy of what was evicted: not back
-    evicted_seq_.erase(gone);
+  if (auto gone = evicted_.find(r.id); gone != evicted_.end()) {
+    if (!seq_newer(r.seq, gone->second.seq)) return;  // a copy of what was evicted: not back
+    evicted_.erase(gone);
   }
   auto it = records_.find(r.id);
   if (it == records_.end() || seq_newer(r.seq, it->second.seq)) records_[r.id] = r;
@@ -39,9 +39,14 @@ void AgentsDatabase::merge(const AgentRecord& r) {
 
 void AgentsDatabase::drop(int id) {
   if (auto it = records_.find(id); it != records_.end()) {
-    evicted_seq_[id] = it->second.seq;
+    evicted_[id] = it->second;
     records_.erase(it);
   }
+}
+
+const AgentRecord* AgentsDatabase::evicted(int id) const {
+  const auto it = evicted_.find(id);
+  return it == evicted_.end() ? nullptr : &it->second;
 }
 
 std::vector<int> AgentsDatabase::age(int elapsed_ms) {
@@ -53,7 +58,7 @@ std::vector<int> AgentsDatabase::age(int elapsed_ms) {
       ++it;
     } else {
       dropped.push_back(it->first);
-      evicted_seq_[it->first] = it->second.seq;
+      evicted_[it->first] = it->second;
       it = records_.erase(it);
     }
   }

@@ -51,6 +51,9 @@ class AgentsDatabase {
 
   // Removes an agent at once (e.g. it announced its landing); as an eviction.
   void drop(int id);
+  // The record an agent was last evicted (or dropped) with, until a newer message brings it back;
+  // null if none.
+  const AgentRecord* evicted(int id) const;
 
   // This agent has landed: it no longer leads while an agent that flies is alive.
   void set_local_landed(bool landed) { local_landed_ = landed; }
@@ -69,8 +72,8 @@ class AgentsDatabase {
   int local_id_;
   std::function<int(int)> max_allowed_age_ms_;
   std::map<int, AgentRecord> records_;
-  // the sequence number each evicted agent was evicted with: only a newer one brings it back
-  std::map<int, uint16_t> evicted_seq_;
+  // each evicted agent's last record: only a newer sequence number brings it back
+  std::map<int, AgentRecord> evicted_;
   bool local_landed_ = false;
 };
 

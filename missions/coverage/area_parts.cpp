@@ -31,6 +31,13 @@ std::vector<Interval> normalize_stripe(const std::vector<Interval>& patches) {
   return result;
 }
 
+double covered_length(const std::vector<Interval>& intervals, double width_m) {
+  double sum = 0.0;
+  for (const Interval& iv : intervals)
+    sum += std::max(0.0, std::min(iv.end_m, width_m) - std::max(iv.start_m, 0.0));
+  return sum;
+}
+
 AreaParts::AreaParts(int stripes) : stripes_(static_cast<size_t>(std::max(stripes, 0))) {}
 
 bool AreaParts::add(int stripe, Interval covered) {
@@ -102,10 +109,7 @@ bool AreaParts::covers_all(double width_m) const {
 double AreaParts::covered_fraction(double width_m) const {
   if (stripes_.empty() || width_m <= 0.0) return 0.0;
   double sum = 0.0;
-  for (const auto& list : stripes_) {
-    for (const Interval& iv : list)
-      sum += std::max(0.0, std::min(iv.end_m, width_m) - std::max(iv.start_m, 0.0));
-  }
+  for (const auto& list : stripes_) sum += covered_length(list, width_m);
   return sum / (width_m * static_cast<double>(stripes_.size()));
 }
 

@@ -24,6 +24,9 @@ struct Interval {
 // inwards, so two abutting pictures may come back with a sliver between them.
 inline constexpr double kCoverageSlack_m = 0.25;
 
+// The length of a stripe's intervals inside [0, width_m].
+double covered_length(const std::vector<Interval>& intervals, double width_m);
+
 // Algorithm 4's NORMALIZE_STRIPE: the union of the patches as sorted, disjoint intervals (patches
 // that overlap or touch become one). Empty or inverted patches are ignored.
 std::vector<Interval> normalize_stripe(const std::vector<Interval>& patches);

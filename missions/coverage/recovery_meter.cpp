@@ -43,11 +43,10 @@ RecoveryMeter::RecoveryMeter(int stripes, double width_m, double length_m)
       station_(stripes_),
       lost_(stripes_) {}
 
-double RecoveryMeter::length(const std::vector<Interval>& list) const {
-  double sum = 0.0;
-  for (const Interval& v : list)
-    sum += std::max(0.0, std::min(v.end_m, width_m_) - std::max(v.start_m, 0.0));
-  return sum;
+RecoveryMeter::Holder& RecoveryMeter::holder(int agent) {
+  auto [it, added] = agents_.try_emplace(agent);
+  if (added) it->second.apd = AreaParts(stripes_);
+  return it->second;
 }
 
 std::vector<Interval> RecoveryMeter::held(int stripe) const {
@@ -74,9 +73,7 @@ void RecoveryMeter::lose(const AreaParts& apd) {
 
 void RecoveryMeter::agent_report(int agent, const AreaParts& apd) {
   if (apd.stripe_count() != stripes_) return;
-  auto [it, added] = agents_.try_emplace(agent);
-  Holder& h = it->second;
-  if (added) h.apd = AreaParts(stripes_);
+  Holder& h = holder(agent);
   if (h.failed) {
     // a report written just before the failure and read after it: those pictures are lost too
     AreaParts late(stripes_);
@@ -89,9 +86,9 @@ void RecoveryMeter::agent_report(int agent, const AreaParts& apd) {
   for (int s = 0; s < stripes_; ++s) {
     if (lost_.stripe(s).empty()) continue;
     const std::vector<Interval> fresh = stripe_minus(apd.stripe(s), h.apd.stripe(s));
-    const double gained = length(fresh);
+    const double gained = covered_length(fresh, width_m_);
     if (!(gained > 0.0)) continue;
-    const double recovered = length(stripe_and(fresh, lost_.stripe(s)));
+    const double recovered = covered_length(stripe_and(fresh, lost_.stripe(s)), width_m_);
     distance_m_ += stripe_length_m_ * recovered / gained;
     recovered_m_ += recovered;
     lost_.set_stripe(s, stripe_minus(lost_.stripe(s), fresh));
@@ -109,9 +106,7 @@ void RecoveryMeter::station_report(const AreaParts& map) {
 }
 
 void RecoveryMeter::agent_failed(int agent) {
-  auto [it, added] = agents_.try_emplace(agent);
-  Holder& h = it->second;
-  if (added) h.apd = AreaParts(stripes_);
+  Holder& h = holder(agent);
   if (h.failed) return;
   h.failed = true;
   lose(h.apd);
@@ -121,10 +116,6 @@ double RecoveryMeter::recovered_fraction() const {
   return stripes_ > 0 && width_m_ > 0.0 ? recovered_m_ / (stripes_ * width_m_) : 0.0;
 }
 
-double RecoveryMeter::lost_fraction() const {
-  double sum = 0.0;
-  for (int s = 0; s < stripes_; ++s) sum += length(lost_.stripe(s));
-  return stripes_ > 0 && width_m_ > 0.0 ? sum / (stripes_ * width_m_) : 0.0;
-}
+double RecoveryMeter::lost_fraction() const { return lost_.covered_fraction(width_m_); }
 
 }  // namespace uavsim::missions::coverage

@@ -47,11 +47,12 @@ class RecoveryMeter {
     AreaParts apd;
     bool failed = false;
   };
+  // The agent's entry (an empty APD, live, when first seen).
+  Holder& holder(int agent);
   // Per stripe: what the live agents and the station hold.
   std::vector<Interval> held(int stripe) const;
   // Adds to the lost ground what `apd` holds that nobody alive holds.
   void lose(const AreaParts& apd);
-  double length(const std::vector<Interval>& list) const;
 
   int stripes_;
   double width_m_;

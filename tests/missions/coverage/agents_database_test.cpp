@@ -108,9 +108,13 @@ TEST(AgentsDatabase, ASilentAgentsLastRecordDoesNotCirculateForEverAmongTheOther
     EXPECT_FALSE(a.records().count(9));
     EXPECT_EQ(a.records().size(), 2u);  // the other two stay
   }
+  // the record it was evicted with is kept (the leader reads where the agent was lost)
+  ASSERT_NE(adbs[0].evicted(9), nullptr);
+  EXPECT_EQ(adbs[0].evicted(9)->seq, 40);
   // 9 speaks again (a newer sequence number): back at once
   adbs[0].on_message(rec(9, 41, 0.0), {});
   EXPECT_TRUE(adbs[0].records().count(9));
+  EXPECT_EQ(adbs[0].evicted(9), nullptr);
 }
 
 TEST(AgentsDatabase, LeaderIsTheLowestLiveIdAndIsReplacedWhenItAgesOut) {
