@@ -59,16 +59,20 @@ std::vector<Interval> RecoveryMeter::held(int stripe) const {
   return normalize_stripe(all);
 }
 
-void RecoveryMeter::lose(const AreaParts& apd) {
+double RecoveryMeter::lose(const AreaParts& apd) {
+  double lost_now_m = 0.0;
   for (int s = 0; s < stripes_; ++s) {
     if (apd.stripe(s).empty()) continue;
     std::vector<Interval> gone = stripe_minus(apd.stripe(s), held(s));
     // slivers between pictures that abut count as covered in the scoring: not lost either
     std::erase_if(gone, [](const Interval& v) { return v.end_m - v.start_m < kCoverageSlack_m; });
     if (gone.empty()) continue;
+    lost_now_m += covered_length(gone, width_m_);
     gone.insert(gone.end(), lost_.stripe(s).begin(), lost_.stripe(s).end());
     lost_.set_stripe(s, gone);
   }
+  lost_m_ += lost_now_m;
+  return lost_now_m;
 }
 
 void RecoveryMeter::agent_report(int agent, const AreaParts& apd) {
@@ -105,16 +109,20 @@ void RecoveryMeter::station_report(const AreaParts& map) {
   if (map.stripe_count() == stripes_) station_ = map;
 }
 
-void RecoveryMeter::agent_failed(int agent) {
+double RecoveryMeter::agent_failed(int agent) {
   Holder& h = holder(agent);
-  if (h.failed) return;
+  if (h.failed) return 0.0;
   h.failed = true;
-  lose(h.apd);
+  return fraction(lose(h.apd));
 }
 
-double RecoveryMeter::recovered_fraction() const {
-  return stripes_ > 0 && width_m_ > 0.0 ? recovered_m_ / (stripes_ * width_m_) : 0.0;
+double RecoveryMeter::fraction(double length_m) const {
+  return stripes_ > 0 && width_m_ > 0.0 ? length_m / (stripes_ * width_m_) : 0.0;
 }
+
+double RecoveryMeter::recovered_fraction() const { return fraction(recovered_m_); }
+
+double RecoveryMeter::lost_at_failures_fraction() const { return fraction(lost_m_); }
 
 double RecoveryMeter::lost_fraction() const { return lost_.covered_fraction(width_m_); }
 

@@ -31,8 +31,9 @@ class RecoveryMeter {
   // The ground station's map (the optimised variant): what it holds is not lost when an agent
   // fails; it flies nothing, so it recovers nothing.
   void station_report(const AreaParts& map);
-  // The agent was killed or crashed: what it alone held is lost from now on.
-  void agent_failed(int agent);
+  // The agent was killed or crashed: what it alone held is lost from now on. Returns that share
+  // of the rectangle (0 if the agent had failed already).
+  double agent_failed(int agent);
 
   // Distance flown to recover lost ground, all agents together [m].
   double distance_m() const { return distance_m_; }
@@ -41,6 +42,10 @@ class RecoveryMeter {
   double recovered_fraction() const;
   // Share of the rectangle lost now (not recovered yet).
   double lost_fraction() const;
+  // Share of the rectangle lost at the failures, all together (ground lost, recovered and lost
+  // again counts twice). Without a station this is the floor of the recovery: the flock cannot
+  // photograph less again than what died with its agents.
+  double lost_at_failures_fraction() const;
 
  private:
   struct Holder {
@@ -51,8 +56,10 @@ class RecoveryMeter {
   Holder& holder(int agent);
   // Per stripe: what the live agents and the station hold.
   std::vector<Interval> held(int stripe) const;
-  // Adds to the lost ground what `apd` holds that nobody alive holds.
-  void lose(const AreaParts& apd);
+  // Adds to the lost ground what `apd` holds that nobody alive holds; returns its summed length.
+  double lose(const AreaParts& apd);
+  // Summed interval length over stripes -> share of the rectangle.
+  double fraction(double length_m) const;
 
   int stripes_;
   double width_m_;
@@ -62,6 +69,7 @@ class RecoveryMeter {
   AreaParts lost_;
   double distance_m_ = 0.0;
   double recovered_m_ = 0.0;  // summed interval length over stripes
+  double lost_m_ = 0.0;       // the same, lost at failures
 };
 
 }  // namespace uavsim::missions::coverage

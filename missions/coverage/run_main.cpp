@@ -352,9 +352,12 @@ int main(int argc, char** argv) {
   std::map<int, int> station_port;  // vehicle -> the ground station's UDP port for its link
   RecoveryMeter recovery(stripes, config.width_y_m,
                          config.length_x_m);  // table 4.3's distance flown to recover
-  auto mark_failed = [&](int agent, std::set<int>& set) {
+  // per failed agent: when, and the share of the rectangle that died with it
+  std::map<int, std::pair<double, double>> failure_at;
+  auto mark_failed = [&](int agent, std::set<int>& set, double t) {
     set.insert(agent);
-    recovery.agent_failed(agent);
+    const double lost = recovery.agent_failed(agent);
+    failure_at.try_emplace(agent, t, lost);
   };
 
   auto on_agent_line = [&](const std::string& line) {
@@ -553,8 +556,8 @@ int main(int argc, char** argv) {
           if (type == "takeoff" && first_takeoff_s < 0) first_takeoff_s = t;
           if (type == "touchdown" && !killed.count(veh))
             last_touchdown_s = std::max(last_touchdown_s, t);
-          if (type == "vehicle_killed") mark_failed(veh, killed);
-          if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed);
+          if (type == "vehicle_killed") mark_failed(veh, killed, t);
+          if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed, t);
           if (type == "crash" || type == "vehicle_killed") {
             say("[event] t=" + fmt("%.2f", t) + " " + type + " " + e.value("vehicle_name", "") +
                 " " + e.value("detail", ""));
@@ -603,7 +606,7 @@ int main(int argc, char** argv) {
             if (api.request({{"op", "kill_vehicle"},
                              {"vehicle", i},
                              {"reason", "coverage-run: injected failure"}})) {
-              mark_failed(i, killed);
+              mark_failed(i, killed, t);
               say("coverage-run: t=" + fmt("%.1f", t) + " killed agent " + std::to_string(i));
             }
           }
@@ -687,14 +690,19 @@ int main(int argc, char** argv) {
     const double mah = energy_mah[i];
     energy_total += mah;
     distance_total += distance_m[i];
-    per_agent.push_back(
-        {{"agent", i},
-         {"failed", dead},
-         {"landed", down && !dead},
-         {"state", state.count(i) ? state[i] : ""},
-         {"energy_mah", mah},
-         {"held_fraction", apd.count(i) ? apd[i].apd.covered_fraction(config.width_y_m) : 0.0},
-         {"distance_m", distance_m[i]}});
+    Json entry = {
+        {"agent", i},
+        {"failed", dead},
+        {"landed", down && !dead},
+        {"state", state.count(i) ? state[i] : ""},
+        {"energy_mah", mah},
+        {"held_fraction", apd.count(i) ? apd[i].apd.covered_fraction(config.width_y_m) : 0.0},
+        {"distance_m", distance_m[i]}};
+    if (auto f = failure_at.find(i); f != failure_at.end()) {
+      entry["failed_at_s"] = f->second.first;
+      entry["lost_fraction"] = f->second.second;
+    }
+    per_agent.push_back(std::move(entry));
   }
   const bool success = harness_error == 0 && !g_interrupted && !vehicles_end.empty() &&
                        coverage >= kFullCoverage && survivors > 0 && landed == survivors;
@@ -778,10 +786,11 @@ int main(int argc, char** argv) {
     if (failed > 0) {
       std::printf(
           "distance flown to recover lost data (table 4.3): %.0f m, %.3f %% of the distance "
-          "flown; %.2f %% of the rectangle photographed again after it was lost\n",
+          "flown; %.2f %% of the rectangle photographed again after it was lost, %.2f %% lost "
+          "at the failures\n",
           recovery.distance_m(),
           distance_total > 0 ? 100.0 * recovery.distance_m() / distance_total : 0.0,
-          100.0 * recovery.recovered_fraction());
+          100.0 * recovery.recovered_fraction(), 100.0 * recovery.lost_at_failures_fraction());
     }
   }
   std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
@@ -842,6 +851,7 @@ int main(int argc, char** argv) {
     summary["recovery_distance_m"] = recovery.distance_m();
     summary["recovered_fraction"] = recovery.recovered_fraction();
     summary["lost_fraction_at_end"] = recovery.lost_fraction();
+    summary["lost_at_failures_fraction"] = recovery.lost_at_failures_fraction();
     summary["per_agent"] = per_agent;
     // every agent's last APD report, the dead's and the station's (255) too: the coverage map
     summary["stripes"] = stripes;

@@ -16,7 +16,8 @@
 # Extra distance: the distance flown by the flock beyond the failure-free run of the same seed and
 # size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS), all agents' and the survivors' only; and the
 # distance flown to recover (coverage-run's recovery_distance_m: the agents' flight photographing
-# ground that only a failed agent had held) over the run's own distance, the thesis's measure.
+# ground that only a failed agent had held) over the run's own distance, the thesis's measure; and
+# the ground lost at the failures (share of the rectangle, all and per failed agent), its floor.
 # COVERAGE_RUN overrides the launcher (default: build/missions/coverage/coverage-run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
@@ -77,8 +78,8 @@ for a, n in sorted({(area(j), j["agents"]) for j in runs if j["failure_prob"] ==
     print("| %s | %d | %d/%d | %s | %s | %s | %s | %s | %.1f |" % (a, n, len(good), len(rs), *t, c[0], *e, speed))
 print()
 print("tables 4.2/4.3: with failures (extra distance against the seed's p = 0 run of the same size)")
-print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance: all agents | survivors | distance flown to recover (thesis) |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
+print("| area | agents | failure p | runs ok | failed agents (thesis) | coverage held (mean) | mission time [s] | energy [mAh] | extra distance: all agents | survivors | distance flown to recover (thesis) | lost at the failures: all | per failed agent |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 base = {(area(j), j["seed"], j["agents"]): j for j in runs if j["failure_prob"] == 0}
 for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs if j["failure_prob"] > 0}):
     rs = [j for j in runs if area(j) == a and j["agents"] == n and j["failure_prob"] == p]
@@ -97,14 +98,19 @@ for a, n, p in sorted({(area(j), j["agents"], j["failure_prob"]) for j in runs i
     # the share of the run's flight spent photographing lost ground (runs before the measure: none)
     recover = [j["recovery_distance_m"] / j["distance_m_total"] for j in rs
                if "recovery_distance_m" in j and j["distance_m_total"] > 0]
+    # the ground that died with the failed agents (share of the rectangle): the recovery's floor
+    lost = [j["lost_at_failures_fraction"] for j in rs if "lost_at_failures_fraction" in j]
+    lost_each = [j["lost_at_failures_fraction"] / j["failed"] for j in rs
+                 if "lost_at_failures_fraction" in j and j["failed"] > 0]
     t = mean_sd([j["mission_time_s"] for j in good])
     e = mean_sd([j["energy_mah_mean"] for j in good])
     th = THESIS_43.get(p)
     pct = lambda xs: ("%+.2f %%" % (100 * statistics.mean(xs))) if xs else "-"
     share = ("%.4f %%" % (100 * statistics.mean(recover))) if recover else "-"
-    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s | %s (%s) |" % (
+    of_area = lambda xs: ("%.2f %%" % (100 * statistics.mean(xs))) if xs else "-"
+    print("| %s | %d | %g | %d/%d | %.2f %% (%s) | %.2f %% | %s (sd %s) | %s (sd %s) | %s | %s | %s (%s) | %s | %s |" % (
         a, n, p, len(good), len(rs), 100 * failed, ("%.2f %%" % th[0]) if th else "-", 100 * cov, *t, *e,
-        pct(extra), pct(extra_s), share, ("%.4f %%" % th[1]) if th else "-"))
+        pct(extra), pct(extra_s), share, ("%.4f %%" % th[1]) if th else "-", of_area(lost), of_area(lost_each)))
 print()
 print("table 4.2: the runs with failures (p > 0) grouped by failed agents, as the thesis's (25 agents over")
 print("600 x 600 m: 0-10 failed 719 +- 63 s, 479 +- 44 mAh; 10-30 failed 1360 +- 418 s, 913 +- 282 mAh);")

@@ -85,6 +85,14 @@ TEST(CoverageRun, NonLeaderKilledItsStripesAreCoveredAgain) {
   // agents flying 93 m of their 4912 m over it (table 4.3's "distance flown to recover")
   EXPECT_GT(r["recovered_fraction"].get<double>(), 0.02) << out;
   EXPECT_LT(r["lost_fraction_at_end"].get<double>(), 1e-3) << out;
+  // the loss is recorded with the failure: when, and how much died with it (part of what it held,
+  // the rest was under its neighbours' pictures too), all of it recovered
+  EXPECT_NEAR(dead["failed_at_s"].get<double>(), 70.0, 0.1) << out;
+  const double lost = dead["lost_fraction"].get<double>();
+  EXPECT_GT(lost, 0.02) << out;
+  EXPECT_LE(lost, dead["held_fraction"].get<double>()) << out;
+  EXPECT_EQ(r["lost_at_failures_fraction"].get<double>(), lost) << out;
+  EXPECT_NEAR(r["recovered_fraction"].get<double>(), lost, 1e-3) << out;
   EXPECT_GT(r["recovery_distance_m"].get<double>(), 0.0) << out;
   EXPECT_LT(r["recovery_distance_m"].get<double>(), 0.1 * r["distance_m_total"].get<double>())
       << out;

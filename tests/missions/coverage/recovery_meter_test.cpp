@@ -42,8 +42,9 @@ TEST(RecoveryMeter, AgentPhotographingWhatAFailedAgentAloneHeldRecoversInProport
   // agent 1 alone holds y 10-20 over every stripe; agent 0 holds y 0-12 (2 m shared)
   meter.agent_report(0, band(0, 9, 0, 12));
   meter.agent_report(1, band(0, 9, 10, 20));
-  meter.agent_failed(1);
-  EXPECT_NEAR(meter.lost_fraction(), 8.0 / 100.0, 1e-12);  // y 12-20: 8 m of 100 in every stripe
+  // y 12-20: 8 m of 100 in every stripe
+  EXPECT_NEAR(meter.agent_failed(1), 8.0 / 100.0, 1e-12);
+  EXPECT_NEAR(meter.lost_fraction(), 8.0 / 100.0, 1e-12);
   // agent 0 photographs y 12-28 in every stripe: half of it (12-20) was lost, so half its flight
   // over the ten 15 m stripes
   meter.agent_report(0, band(0, 9, 0, 28));
@@ -53,6 +54,11 @@ TEST(RecoveryMeter, AgentPhotographingWhatAFailedAgentAloneHeldRecoversInProport
   // ground recovered is no longer lost: flying over it again recovers nothing
   meter.agent_report(0, unite(band(0, 9, 0, 28), band(0, 4, 30, 40)));
   EXPECT_NEAR(meter.distance_m(), 75.0, 1e-9);
+  // the failure's loss stays counted after its recovery; agent 0 now alone holds 0-28 and
+  // 30-40 in half the stripes: lost with it, and lost a second time for y 12-20
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08, 1e-12);
+  EXPECT_NEAR(meter.agent_failed(0), 0.28 + 0.05, 1e-12);
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08 + 0.33, 1e-12);
 }
 
 TEST(RecoveryMeter, NothingIsLostWhileALiveAgentOrTheStationHoldsIt) {
@@ -61,9 +67,10 @@ TEST(RecoveryMeter, NothingIsLostWhileALiveAgentOrTheStationHoldsIt) {
   meter.agent_report(1, band(0, 9, 0, 10));  // the same ground as agent 0
   meter.agent_report(2, band(0, 9, 40, 50));
   meter.station_report(band(0, 9, 40, 50));  // agent 2's pictures were delivered
-  meter.agent_failed(1);
-  meter.agent_failed(2);
+  EXPECT_EQ(meter.agent_failed(1), 0.0);
+  EXPECT_EQ(meter.agent_failed(2), 0.0);
   EXPECT_EQ(meter.lost_fraction(), 0.0);
+  EXPECT_EQ(meter.lost_at_failures_fraction(), 0.0);
   meter.agent_report(3, band(0, 9, 0, 60));
   EXPECT_EQ(meter.distance_m(), 0.0);
   EXPECT_EQ(meter.recovered_fraction(), 0.0);
@@ -88,12 +95,13 @@ TEST(RecoveryMeter, WithoutFailuresNothingIsRecoveredAndSliversAreNotLost) {
 TEST(RecoveryMeter, AReportReadAfterTheFailureAddsToWhatIsLostAndTheFailedRecoverNothing) {
   RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
   meter.agent_report(1, band(0, 9, 0, 10));
-  meter.agent_failed(1);
-  meter.agent_failed(1);  // the kill and its event both say so
+  EXPECT_NEAR(meter.agent_failed(1), 0.10, 1e-12);
+  EXPECT_EQ(meter.agent_failed(1), 0.0);  // the kill and its event both say so: counted once
   EXPECT_NEAR(meter.lost_fraction(), 0.10, 1e-12);
   // its last pictures, printed before the kill and read after it
   meter.agent_report(1, band(0, 9, 0, 20));
   EXPECT_NEAR(meter.lost_fraction(), 0.20, 1e-12);
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.20, 1e-12);
   EXPECT_EQ(meter.distance_m(), 0.0);
   // the station's later map (the recovering agent's pictures delivered before its own report)
   // does not hide the recovery
