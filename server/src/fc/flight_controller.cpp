@@ -187,19 +187,35 @@ void FlightController::Impl::monitor_motors(double dt_s) {
 }
 
 void FlightController::Impl::update_yaw(double dt_s) {
+  const DerivedParams& d = params_.derived();
+  // No command turns the vehicle faster than ATC_RATE_Y_MAX (a GUIDED yaw rate or a CONDITION_YAW
+  // rate above it is flown at it, as ArduCopter does). The command also never leads the vehicle by
+  // more than the heading error at which the angle loop already asks that rate: a heading command
+  // running away from a vehicle that cannot follow (a 30 rad/s GUIDED yaw rate once did) reaches
+  // errors near 180 deg, where the shortest rotation to the attitude target tilts the vehicle as
+  // much as it turns it, and the copter tumbled.
+  const double rate_max = d.rate_y_max_rad_s;
+  const double p = params_.values().atc_ang_yaw_p;
+  const double lead_max = p > 0.0 ? std::min(rate_max / p, kPi / 2.0) : kPi / 2.0;
+  const double yaw_now = estimator_.yaw_enu_rad();
+  auto within_lead = [&](double yaw) {
+    return wrap_pi(yaw_now + std::clamp(wrap_pi(yaw - yaw_now), -lead_max, lead_max));
+  };
   // yaw-rate mode integrates the rate; otherwise slew the command toward the target
   if (yaw_.rate_mode) {
-    yaw_.target_rad = wrap_pi(yaw_.target_rad + yaw_.rate_cmd_rad_s * dt_s);
+    const double rate = std::clamp(yaw_.rate_cmd_rad_s, -rate_max, rate_max);
+    yaw_.target_rad = within_lead(wrap_pi(yaw_.target_rad + rate * dt_s));
     yaw_.cmd_rad = yaw_.target_rad;
-    yaw_.rate_ff_rad_s = yaw_.rate_cmd_rad_s;
+    yaw_.rate_ff_rad_s = rate;
     return;
   }
   const double slew =
-      yaw_.slew_override_rad_s > 0.0 ? yaw_.slew_override_rad_s : params_.derived().slew_yaw_rad_s;
+      std::min(yaw_.slew_override_rad_s > 0.0 ? yaw_.slew_override_rad_s : d.slew_yaw_rad_s, rate_max);
   const double err = wrap_pi(yaw_.target_rad - yaw_.cmd_rad);
   const double step = std::clamp(err, -slew * dt_s, slew * dt_s);
-  yaw_.cmd_rad = wrap_pi(yaw_.cmd_rad + step);
-  yaw_.rate_ff_rad_s = step / dt_s;
+  const double cmd = within_lead(wrap_pi(yaw_.cmd_rad + step));
+  yaw_.rate_ff_rad_s = wrap_pi(cmd - yaw_.cmd_rad) / dt_s;
+  yaw_.cmd_rad = cmd;
 }
 
 void FlightController::Impl::run_cascade(double dt_s) {

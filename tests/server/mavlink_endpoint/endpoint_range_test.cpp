@@ -34,7 +34,18 @@ class RangeTest : public EndpointTest {
     EXPECT_TRUE(step_until(g, [&] {
       const auto a = g.last<msg::Attitude>();
       return a && std::abs(std::remainder(a->yaw - want, 2 * M_PI)) < kHeadingTolRad;
-    }, 15.0)) << "vehicle did not turn to " << heading_deg << " deg after the bad input";
+    }, 15.0)) << "vehicle did not turn to " << heading_deg << " deg after the bad input; truth heading "
+              << [&] {
+                   const Eigen::Vector3d fwd = sim_->truth(0).q_enu_body * Eigen::Vector3d::UnitX();
+                   return 90.0 - std::atan2(fwd.y(), fwd.x()) * 180.0 / M_PI;
+                 }()
+              << " deg, last ATTITUDE yaw "
+              << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->yaw * 180.0 / M_PI : -999.0)
+              << " at " << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->time_boot_ms : 0)
+              << " ms, yaw target (ENU) " << sim_->fc(0).yaw_target_enu_rad() * 180.0 / M_PI
+              << " ms, sim " << sim_->time_s() << " s, dropped full "
+              << server_->stats(0).frames_dropped_full << ", mode "
+              << (g.last<msg::Heartbeat>() ? g.last<msg::Heartbeat>()->custom_mode : 99);
   }
 
   // uploads a two-item mission (home placeholder + item) and returns the MISSION_ACK type
@@ -101,6 +112,42 @@ TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
   step_for(0.1);
   EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 2);
   expect_turns_to(*g, 180.0);
+}
+
+// A yaw rate the edge accepts (under its 35 rad/s gyro bound) but the vehicle cannot fly: it turns at
+// ATC_RATE_Y_MAX (90 deg/s) and holds its altitude and level. The heading command once ran away from
+// the vehicle at 30 rad/s; near 180 deg of error the attitude target tilted it, and it tumbled to the
+// ground within 2 s.
+TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
+  auto g = connect();
+  take_off(*g);
+  msg::SetPositionTargetLocalNed sp;
+  sp.target_system = 1;
+  sp.coordinate_frame = 1;
+  sp.type_mask = 0x05C7;  // velocity + yaw rate
+  sp.yaw_rate = 30.0f;
+  g->send(sp);
+  sync_client(*g);
+  const double z0 = sim_->truth(0).position_enu_m.z();
+  double max_tilt_rate = 0.0, max_tilt_deg = 0.0, yaw_rate_sum = 0.0;
+  int samples = 0;
+  const double end = sim_->time_s() + 2.5;
+  while (sim_->time_s() < end) {
+    step_for(0.01);
+    const fc::TruthState tr = sim_->truth(0);
+    max_tilt_rate = std::max(max_tilt_rate, tr.rate_body_rad_s.head<2>().norm());
+    const double up = (tr.q_enu_body * Eigen::Vector3d::UnitZ()).z();
+    max_tilt_deg = std::max(max_tilt_deg, std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI);
+    if (sim_->time_s() > end - 1.5) {  // the turn, after a second to reach its rate
+      yaw_rate_sum += tr.rate_body_rad_s.z();
+      ++samples;
+    }
+  }
+  EXPECT_LT(max_tilt_deg, 10.0);
+  EXPECT_LT(max_tilt_rate, 1.0);
+  EXPECT_NEAR(sim_->truth(0).position_enu_m.z(), z0, 0.5);
+  // clockwise seen from above (NED yaw rate > 0) is a negative ENU body rate, at 90 deg/s
+  EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * M_PI / 180.0, 0.15);
 }
 
 TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
