@@ -209,8 +209,8 @@ void FlightController::Impl::update_yaw(double dt_s) {
     yaw_.rate_ff_rad_s = rate;
     return;
   }
-  const double slew =
-      std::min(yaw_.slew_override_rad_s > 0.0 ? yaw_.slew_override_rad_s : d.slew_yaw_rad_s, rate_max);
+  const double slew = std::min(
+      yaw_.slew_override_rad_s > 0.0 ? yaw_.slew_override_rad_s : d.slew_yaw_rad_s, rate_max);
   const double err = wrap_pi(yaw_.target_rad - yaw_.cmd_rad);
   const double step = std::clamp(err, -slew * dt_s, slew * dt_s);
   const double cmd = within_lead(wrap_pi(yaw_.cmd_rad + step));

@@ -114,10 +114,10 @@ TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
   expect_turns_to(*g, 180.0);
 }
 
-// A yaw rate the edge accepts (under its 35 rad/s gyro bound) but the vehicle cannot fly: it turns at
-// ATC_RATE_Y_MAX (90 deg/s) and holds its altitude and level. The heading command once ran away from
-// the vehicle at 30 rad/s; near 180 deg of error the attitude target tilted it, and it tumbled to the
-// ground within 2 s.
+// A yaw rate the edge accepts (under its 35 rad/s gyro bound) but the vehicle cannot fly: it turns
+// at ATC_RATE_Y_MAX (90 deg/s) and holds its altitude and level. The heading command once ran away
+// from the vehicle at 30 rad/s; near 180 deg of error the attitude target tilted it, and it tumbled
+// to the ground within 2 s.
 TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
   auto g = connect();
   take_off(*g);
