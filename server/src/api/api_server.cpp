@@ -508,7 +508,13 @@ void ApiServer::op_lockstep_join(uint64_t conn, const Json& request, OpReply* re
     // the protocol's range: a deadline further out is no different from none
     return reply->fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
   }
-  const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, sim_.time_s());
+  // the first tick is the next multiple of the period at or after now; strictly after now for a
+  // connection whose output of now was prepared before it joined (a camera subscriber: the frame due
+  // at a tick must have been captured for a lockstep client)
+  const bool after_now = std::any_of(groups_.begin(), groups_.end(),
+                                     [&](const OpGroup* g) { return g->prepared_before_join(conn); });
+  const double from_s = sim_.time_s() + (after_now ? 0.5 * sim_.control_dt_s() : 0.0);
+  const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, from_s);
   reply->result = {{"period_s", joined.period_s},
                    {"first_tick_time", joined.first_tick_time_s},
                    {"timeout_s", joined.timeout_s}};

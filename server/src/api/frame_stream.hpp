@@ -35,6 +35,9 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
   static void register_unavailable(OpTable& table);
   // A tick is due for conn: the frames due at it reach the client before the tick (docs/protocol.md).
   void before_tick(uint64_t conn, const Send& send) override;
+  // A subscriber's frames of the current step were captured before the API ran (and may have been
+  // dropped as a free-running subscriber's): it joins lockstep at the next tick, not at this one.
+  bool prepared_before_join(uint64_t conn) const override { return has_subscriptions(conn); }
   // A reset ends every blackout: their times were on the old clock.
   void on_reset() override { clear_blackouts(); }
   void on_disconnect(uint64_t conn) override;  // Loop thread.

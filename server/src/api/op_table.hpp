@@ -113,6 +113,13 @@ class OpGroup {
     (void)conn;
     (void)send;
   }
+  // Whether conn has output of the current sim time prepared before it joined lockstep now (camera
+  // frames are captured at the start of a step, before the API's requests): such a connection's first
+  // tick cannot be now, or what is due for it at that tick was prepared without the lockstep promise.
+  virtual bool prepared_before_join(uint64_t conn) const {
+    (void)conn;
+    return false;
+  }
   // The simulation was reset: sim time starts again at 0.
   virtual void on_reset() {}
   // A connection closed.

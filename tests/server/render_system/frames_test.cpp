@@ -276,6 +276,50 @@ TEST(FramesAcceptance, StampMatchesThePoseShownAndFramesPrecedeTheirTick) {
   EXPECT_GE(checked, 8);
 }
 
+// A camera subscriber that joins lockstep gets its first tick after the join's sim time: the frames of
+// that time were captured at the start of the step, before the API ran, when it was not yet a lockstep
+// client (none for it here, where it subscribed while the clock was held at 0; under load such frames
+// were dropped as a free-running subscriber's). A client without subscriptions may tick at once.
+TEST(FramesAcceptance, ASubscriberJoiningLockstepGetsTheFrameOfEachTickBeforeIt) {
+  ServerOptions o;
+  o.camera_overrides = {"uav0_front:fps=10,width=320,height=240"};
+  o.start_paused = true;
+  FrameServer server(o);
+  FrameClient plain(server.port());
+  const Json plain_join = plain.request({{"op", "lockstep_join"}, {"period_s", 0.1}});
+  ASSERT_TRUE(plain_join["ok"]) << plain_join;
+  EXPECT_EQ(plain_join["result"]["first_tick_time"].get<double>(), 0.0);
+  ASSERT_TRUE(plain.request({{"op", "lockstep_leave"}})["ok"]);
+
+  FrameClient c(server.port());
+  ASSERT_TRUE(c.request({{"op", "camera_subscribe"}, {"camera", "uav0_front"}})["ok"]);
+  const Json join = c.request({{"op", "lockstep_join"}, {"period_s", 0.1}});
+  ASSERT_TRUE(join["ok"]) << join;
+  EXPECT_NEAR(join["result"]["first_tick_time"].get<double>(), 0.1, 1e-9);
+  ASSERT_TRUE(c.request({{"op", "resume"}})["ok"]);
+  for (int n = 0; n < 3; ++n) {
+    std::vector<double> stamps;
+    Message tick;
+    for (;;) {
+      Message m = c.read();
+      ASSERT_FALSE(m.json.is_null());
+      if (m.json.value("event", "") == "tick") {
+        tick = std::move(m);
+        break;
+      }
+      if (m.json.value("event", "") == "frame") {
+        stamps.push_back(m.json["stamp"].get<double>());
+        EXPECT_EQ(m.json["dropped"].get<int>(), 0) << m.json;
+      }
+    }
+    const double t = tick.json["time"];
+    EXPECT_NEAR(t, 0.1 * (n + 1), 1e-9);
+    ASSERT_EQ(stamps.size(), 1u) << "frames before the tick at " << t;
+    EXPECT_NEAR(stamps[0], t, 1e-9);
+    ASSERT_TRUE(c.request({{"op", "done"}, {"tick", tick.json["tick"]}})["ok"]);
+  }
+}
+
 // a subscriber that never reads loses frames; the clock does not slow down for it
 TEST(FramesAcceptance, NonReaderDropsFramesWithoutSlowingSimTime) {
   // as fast as possible: a reader that never reads must not hold the clock, so sim time reaches 20 s
