@@ -34,6 +34,7 @@
 #include "flocking.hpp"
 #include "path_planner.hpp"
 #include "radio_messages.hpp"
+#include "radio_pacer.hpp"
 
 namespace uavsim::missions::coverage {
 
@@ -189,6 +190,7 @@ class Agent {
   bool later_round_over_ = false;
 
   // overlay network
+  RadioPacer aggregate_pacer_;  // the aggregation frames, paced so that beacons go out on time
   uint16_t seq_ = 0;
   double next_beacon_s_ = 0.0;
   size_t record_cursor_ = 0;
