@@ -7,7 +7,7 @@ namespace uavsim::missions::coverage {
 
 namespace {
 constexpr double kBitRate_bit_s = 250000.0;  // 802.15.4, 2.4 GHz O-QPSK PHY
-constexpr size_t kPhyHeaderBytes = 6;        // preamble (4), start-of-frame delimiter (1), length (1)
+constexpr size_t kPhyHeaderBytes = 6;  // preamble (4), start-of-frame delimiter (1), length (1)
 }  // namespace
 
 double frame_airtime_s(size_t frame_bytes) {
