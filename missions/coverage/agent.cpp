@@ -235,7 +235,7 @@ void Agent::start_rewind(const AgentInputs& in, const AgentRecord& lost) {
   // the longest it can have been dead: the age allowed at its distance, and a beacon period
   const double dead_s = config_.max_age_base_s + config_.max_age_per_hop_s * lost.distance_hops +
                         1.0 / config_.broadcast_hz;
-  const double dir = std::cos(path_->heading_rad) >= 0.0 ? 1.0 : -1.0;
+  const double dir = path_x_direction(*path_);
   const double back_m = std::min(dead_s * config_.cruise_speed_m_s + kRewindMargin_m,
                                  std::abs(in.position_enu_m.x() - path_->points_enu_m.front().x()));
   if (!rewind_hold_ && !rewind_back_) rewind_x_m_ = in.position_enu_m.x() - dir * back_m;
@@ -569,7 +569,7 @@ void Agent::run_state(const AgentInputs& in, AgentOutputs& out) {
       break;
     }
     case AgentState::kRunning: {
-      const double dir = std::cos(path_->heading_rad) >= 0.0 ? 1.0 : -1.0;
+      const double dir = path_x_direction(*path_);
       const double end_x = path_->points_enu_m.back().x();
       if (rewind_hold_) {
         // an agent deep inside the line was lost: hold until its neighbours have closed the gap

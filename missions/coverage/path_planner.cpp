@@ -178,6 +178,10 @@ std::optional<PlannedPath> plan_path(const CoverageConfig& config, const AreaPar
   return d_high < d_low ? high : low;
 }
 
+double path_x_direction(const PlannedPath& path) {
+  return std::cos(path.heading_rad) >= 0.0 ? 1.0 : -1.0;
+}
+
 double path_y_at(const PlannedPath& path, double x_enu_m) {
   const auto& p = path.points_enu_m;
   if (p.empty()) return 0.0;

@@ -53,5 +53,7 @@ std::optional<PlannedPath> plan_path(const CoverageConfig& config, const AreaPar
 
 // The path's y at x (linear between control points, constant beyond the ends).
 double path_y_at(const PlannedPath& path, double x_enu_m);
+// The way the path runs along x: +1 (towards +x) or -1.
+double path_x_direction(const PlannedPath& path);
 
 }  // namespace uavsim::missions::coverage

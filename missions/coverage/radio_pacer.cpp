@@ -35,6 +35,4 @@ std::vector<Frame> RadioPacer::take(double dt_s) {
   return out;
 }
 
-void RadioPacer::clear() { queue_.clear(); }
-
 }  // namespace uavsim::missions::coverage

@@ -36,8 +36,6 @@ class RadioPacer {
   // The frames whose airtime fits what the share of the steps so far has earned (dt_s: the time
   // since the last call), earned also while idle, up to burst_s.
   std::vector<Frame> take(double dt_s);
-  // Drops what is queued (the agent stopped taking part).
-  void clear();
 
  private:
   double share_;

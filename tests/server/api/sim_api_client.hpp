@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "uavsim/client/sim_connection.hpp"
 
@@ -91,12 +92,13 @@ class SimApiClient {
     unread_.pop_front();
     return m;
   }
-  // The next streamed message of an event kind, dropping the others before it (null json after the
-  // wait).
-  Message next_event(const std::string& kind) {
+  // The next streamed message of an event kind (null json after the wait); the others before it
+  // are appended to *before, or dropped when before is null.
+  Message next_event(const std::string& kind, std::vector<Message>* before = nullptr) {
     for (;;) {
       Message m = read();
       if (m.json.is_null() || m.json.value("event", "") == kind) return m;
+      if (before) before->push_back(std::move(m));
     }
   }
 

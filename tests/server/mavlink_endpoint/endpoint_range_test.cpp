@@ -48,6 +48,18 @@ class RangeTest : public EndpointTest {
               << (g.last<msg::Heartbeat>() ? g.last<msg::Heartbeat>()->custom_mode : 99);
   }
 
+  // sends a GUIDED velocity setpoint of zero with this yaw rate (NED, rad/s) and waits until the
+  // endpoint has parsed it
+  void send_yaw_rate(TestGcs& g, float yaw_rate) {
+    msg::SetPositionTargetLocalNed sp;
+    sp.target_system = 1;
+    sp.coordinate_frame = 1;
+    sp.type_mask = 0x05C7;  // velocity + yaw rate
+    sp.yaw_rate = yaw_rate;
+    g.send(sp);
+    sync_client(g);
+  }
+
   // uploads a two-item mission (home placeholder + item) and returns the MISSION_ACK type
   int upload_one(TestGcs& g, const msg::MissionItemInt& item) {
     return upload_mission(g, 2, [&](int seq) { return seq == 0 ? msg::MissionItemInt{} : item; });
@@ -92,13 +104,7 @@ TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
   EXPECT_EQ(command(*g, 115, {90, -5, 0, 0}), kDenied);
   // velocity setpoint with yaw_rate 3.4e38: counted as rejected, never applied
   const auto rejected = server_->stats(0).rejected_inputs;
-  msg::SetPositionTargetLocalNed sp;
-  sp.target_system = 1;
-  sp.coordinate_frame = 1;
-  sp.type_mask = 0x05C7;  // velocity + yaw rate
-  sp.yaw_rate = 3.4e38f;
-  g->send(sp);
-  sync_client(*g);
+  send_yaw_rate(*g, 3.4e38f);
   step_for(0.1);
   EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 1);
   // body rates of 1e30 in SET_ATTITUDE_TARGET too
@@ -124,13 +130,7 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
   // settled at 3 m (take_off returns when telemetry says it is there, at a sim time that depends on
   // how fast the I/O thread ran)
   step_for(3.0);
-  msg::SetPositionTargetLocalNed sp;
-  sp.target_system = 1;
-  sp.coordinate_frame = 1;
-  sp.type_mask = 0x05C7;  // velocity + yaw rate
-  sp.yaw_rate = 30.0f;
-  g->send(sp);
-  sync_client(*g);
+  send_yaw_rate(*g, 30.0f);
   const double z0 = sim_->truth(0).position_enu_m.z();
   double max_tilt_rate = 0.0, max_tilt_deg = 0.0, yaw_rate_sum = 0.0;
   int samples = 0;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <set>
+#include <vector>
 
 #include "frame_fixture.hpp"
 
@@ -25,14 +26,10 @@ TEST(FieldCamera, LatencyDeliversAFrameOneLatencyAfterItsExposure) {
       first_tick_us;  // frames exposed before the client joined may have been dropped
   int checked = 0;
   for (int n = 0; n < 10; ++n) {
-    Message tick;
-    for (;;) {
-      Message m = c.read();
-      ASSERT_FALSE(m.json.is_null());
-      if (m.json.value("event", "") == "tick") {
-        tick = std::move(m);
-        break;
-      }
+    std::vector<Message> before;
+    const Message tick = c.next_event("tick", &before);
+    ASSERT_FALSE(tick.json.is_null());
+    for (const Message& m : before) {
       if (m.json.value("event", "") == "frame") stamps_us.insert(m.json["stamp_us"].get<int64_t>());
     }
     const int64_t t_us = std::llround(tick.json["time"].get<double>() * 1e6);

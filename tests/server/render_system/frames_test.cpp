@@ -237,16 +237,8 @@ TEST(FramesAcceptance, StampMatchesThePoseShownAndFramesPrecedeTheirTick) {
   for (int n = 0; n < 12; ++n) {
     // everything up to the tick event: the frame of this tick must be among it
     std::vector<Message> before;
-    Message tick;
-    for (;;) {
-      Message m = c.read();
-      ASSERT_FALSE(m.json.is_null());
-      if (m.json.value("event", "") == "tick") {
-        tick = std::move(m);
-        break;
-      }
-      before.push_back(std::move(m));
-    }
+    const Message tick = c.next_event("tick", &before);
+    ASSERT_FALSE(tick.json.is_null());
     const double t = tick.json["time"];
     std::optional<Message> frame;
     for (const Message& m : before) {
@@ -298,19 +290,14 @@ TEST(FramesAcceptance, ASubscriberJoiningLockstepGetsTheFrameOfEachTickBeforeIt)
   EXPECT_NEAR(join["result"]["first_tick_time"].get<double>(), 0.1, 1e-9);
   ASSERT_TRUE(c.request({{"op", "resume"}})["ok"]);
   for (int n = 0; n < 3; ++n) {
+    std::vector<Message> before;
+    const Message tick = c.next_event("tick", &before);
+    ASSERT_FALSE(tick.json.is_null());
     std::vector<double> stamps;
-    Message tick;
-    for (;;) {
-      Message m = c.read();
-      ASSERT_FALSE(m.json.is_null());
-      if (m.json.value("event", "") == "tick") {
-        tick = std::move(m);
-        break;
-      }
-      if (m.json.value("event", "") == "frame") {
-        stamps.push_back(m.json["stamp"].get<double>());
-        EXPECT_EQ(m.json["dropped"].get<int>(), 0) << m.json;
-      }
+    for (const Message& m : before) {
+      if (m.json.value("event", "") != "frame") continue;
+      stamps.push_back(m.json["stamp"].get<double>());
+      EXPECT_EQ(m.json["dropped"].get<int>(), 0) << m.json;
     }
     const double t = tick.json["time"];
     EXPECT_NEAR(t, 0.1 * (n + 1), 1e-9);
