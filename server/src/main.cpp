@@ -20,8 +20,8 @@ int main(int argc, char** argv) {
     std::cout << parsed.output;
     return parsed.exit_code;
   }
-  std::signal(SIGINT, [](int) { uavsim::server::app::stop_server(); });
-  std::signal(SIGTERM, [](int) { uavsim::server::app::stop_server(); });
+  std::signal(SIGINT, [](int sig) { uavsim::server::app::stop_server(sig); });
+  std::signal(SIGTERM, [](int sig) { uavsim::server::app::stop_server(sig); });
   try {
     return uavsim::server::app::run_server(*parsed.options);
   } catch (const std::exception& e) {

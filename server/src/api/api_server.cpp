@@ -175,7 +175,36 @@ void ApiServer::send(uint64_t conn, const Json& message) { server_->send(conn, d
 
 void ApiServer::reply_error(uint64_t conn, const Json& id, const std::string& code,
                             const std::string& message) {
-  send(conn, error_reply(id, code, message));
+  reply(conn, error_reply(id, code, message));
+}
+
+void ApiServer::reply(uint64_t conn, const Json& message) {
+  // a step's reply is deferred until its steps have run: the replies to the requests its connection
+  // sent after it wait behind it, so that every connection gets its replies in request order
+  if (step_reply_ && step_reply_->first == conn) {
+    replies_behind_step_.push_back(message);
+    return;
+  }
+  send(conn, message);
+}
+
+void ApiServer::finish_step(const char* by_op) {
+  if (!step_reply_) return;
+  const auto [conn, id] = *step_reply_;
+  step_reply_.reset();
+  if (by_op == nullptr) {
+    send(conn, Json{{"id", id}, {"ok", true}, {"result", {{"time_s", sim_.time_s()}, {"paused", true}}}});
+  } else {
+    // another clock op took the clock: the step ends here, and says how far it got
+    const uint64_t done = steps_requested_ - steps_remaining_;
+    send(conn, error_reply(id, "interrupted",
+                           std::string("a ") + by_op + " ended the step after " + std::to_string(done) + " of " +
+                               std::to_string(steps_requested_) + " steps, at time_s " +
+                               dump(Json(sim_.time_s()))));
+    steps_remaining_ = 0;
+  }
+  for (const Json& held : replies_behind_step_) send(conn, held);
+  replies_behind_step_.clear();
 }
 
 void ApiServer::reply_in_order(uint64_t conn, Json reply) {
@@ -208,6 +237,8 @@ class WakeupHold {
 
 void ApiServer::on_gate() {
   for (;;) {
+    // a pass of the gate is progress, though the clock is held (the watchdog tells it from a hang)
+    sim_.schedule().activity().beat();
     WakeupHold hold(*server_);
     // events before requests, so that a subscription's backlog and its stream neither overlap nor skip
     forward_events();
@@ -254,9 +285,7 @@ void ApiServer::on_gate() {
       --steps_remaining_;
       return;
     } else if (step_reply_) {
-      send(step_reply_->first, Json{{"id", step_reply_->second}, {"ok", true},
-                                    {"result", {{"time_s", sim_.time_s()}, {"paused", true}}}});
-      step_reply_.reset();
+      finish_step();
     }
     hold.release();
     // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)
@@ -282,7 +311,10 @@ void ApiServer::drain() {
   for (Request& r : batch) {
     switch (r.kind) {
       case Request::Kind::kDisconnect:
-        if (step_reply_ && step_reply_->first == r.conn) step_reply_.reset();
+        if (step_reply_ && step_reply_->first == r.conn) {
+          step_reply_.reset();
+          replies_behind_step_.clear();
+        }
         lockstep_left(lockstep_.leave(r.conn, sim_.time_s()));
         event_subscribers_.erase(r.conn);
         for (OpGroup* g : groups_) g->on_disconnect(r.conn);
@@ -293,7 +325,7 @@ void ApiServer::drain() {
         handle(r.conn, r.body);
         break;
       case Request::Kind::kReply:
-        send(r.conn, r.body);
+        reply(r.conn, r.body);
         break;
     }
   }
@@ -353,9 +385,13 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
   if (const auto bad = mistyped_field(request, spec->typed_fields)) return reply_error(conn, id, "bad_field", *bad);
   OpReply reply;
+  // the watchdog names the op a stuck loop is in
+  sim::LoopActivity& trail = sim_.schedule().activity();
+  trail.set_detail(spec->name.c_str());
   spec->handler(conn, request, &reply);
+  trail.set_detail(nullptr);
   if (reply.failed()) return reply_error(conn, id, reply.code, reply.message);
-  if (!reply.deferred) send(conn, Json{{"id", id}, {"ok", true}, {"result", reply.result}});
+  if (!reply.deferred) this->reply(conn, Json{{"id", id}, {"ok", true}, {"result", reply.result}});
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -399,6 +435,7 @@ void ApiServer::op_status(uint64_t, const Json&, OpReply* reply) {
 }
 
 void ApiServer::op_pause(uint64_t, const Json&, OpReply* reply) {
+  finish_step("pause");
   paused_ = true;
   reply->result = {{"time_s", sim_.time_s()}, {"paused", true}};
 }
@@ -417,6 +454,7 @@ void ApiServer::op_pause_at(uint64_t, const Json& request, OpReply* reply) {
 }
 
 void ApiServer::op_resume(uint64_t, const Json&, OpReply* reply) {
+  finish_step("resume");
   paused_ = false;
   steps_remaining_ = 0;
   reply->result = {{"time_s", sim_.time_s()}, {"paused", false}};
@@ -436,6 +474,7 @@ void ApiServer::op_step(uint64_t conn, const Json& request, OpReply* reply) {
   if (step_reply_) return reply->fail("busy", "another step request is in progress");
   paused_ = true;
   steps_remaining_ = static_cast<uint64_t>(n);
+  steps_requested_ = steps_remaining_;
   step_reply_ = std::make_pair(conn, request.contains("id") ? request["id"] : Json(nullptr));
   reply->deferred = true;  // answered when the steps are done
 }
@@ -463,6 +502,7 @@ void ApiServer::op_reset(uint64_t, const Json& request, OpReply* reply) {
   }
   if (it != request.end() && !seed) return reply->fail("bad_field", "\"seed\" must be an integer in [0, 2^64)");
   const uint64_t s = seed.value_or(sim_.config().seed);
+  finish_step("reset");
   sim_.reset(s);
   events_forwarded_ = 0;
   pause_at_s_.clear();

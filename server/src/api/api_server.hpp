@@ -137,6 +137,11 @@ class ApiServer {
   void reply_error(uint64_t conn, const Json& id, const std::string& code, const std::string& message);
   // queues a reply behind the connection's earlier requests (the loop sends it in order)
   void reply_in_order(uint64_t conn, Json reply);
+  // Sends a reply to conn, or holds it behind conn's step in progress (replies keep request order).
+  void reply(uint64_t conn, const Json& message);
+  // Answers the step in progress (ok at its end, or an `interrupted` error naming by_op when another
+  // clock op ended it early) and then the replies held behind it.
+  void finish_step(const char* by_op = nullptr);
 
   // loop thread side
   void on_gate();
@@ -201,6 +206,8 @@ class ApiServer {
   bool pause_when_lockstep_empty_ = false;  // pause_at: hold it when the last lockstep client leaves
   uint64_t steps_remaining_ = 0;
   std::optional<std::pair<uint64_t, Json>> step_reply_;  // conn, request id: answered when the steps are done
+  uint64_t steps_requested_ = 0;                        // by the step in progress
+  std::vector<Json> replies_behind_step_;  // to step_reply_'s connection, answered after its step
   size_t events_forwarded_ = 0;
 };
 

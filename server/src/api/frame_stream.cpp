@@ -3,11 +3,16 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
+
+#include "sim/checked_number.hpp"
 
 namespace uavsim::server::api {
 
 namespace {
 constexpr int kDefaultJpegQuality = 90;
+// the most frames a subscription may skip between two it gets (fps = camera fps / every)
+constexpr int kMaxEvery = 1000000;
 // a frame is dropped for a connection that still has more than this many frames' bytes queued unsent
 constexpr size_t kMaxQueuedFrames = 2;
 
@@ -143,11 +148,14 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
   if (auto f = request.find("fps"); f != request.end()) {
     const double fps = f->is_number() ? f->get<double>() : -1.0;
     const double n = fps > 0 ? std::round(info.fps_hz / fps) : 0.0;
-    if (!(fps > 0) || !std::isfinite(fps) || n < 1 || std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
+    // every frame, every second, ... up to one frame in kMaxEvery: a tiny fps (1e-300) once became
+    // a divisor past INT_MAX, and its cast to int was undefined
+    const std::optional<int> whole = sim::checked_integer<int>(n, 1, kMaxEvery);
+    if (!(fps > 0) || !std::isfinite(fps) || !whole || std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
       return fail("bad_field", "\"fps\" must be camera '" + name + "''s fps (" + dump(Json(info.fps_hz)) +
-                                   ") divided by a whole number");
+                                   ") divided by a whole number up to " + std::to_string(kMaxEvery));
     }
-    every = static_cast<int>(n);
+    every = *whole;
   }
   auto& mine = subs_[conn];
   std::shared_ptr<Sub> sub = std::make_shared<Sub>();

@@ -1,5 +1,8 @@
 #include "api/request_fields.hpp"
 
+#include <cmath>
+#include <sstream>
+
 namespace uavsim::server::api {
 
 using Json = nlohmann::json;
@@ -30,23 +33,48 @@ const char* type_name(FieldType type) {
   return "?";
 }
 
+// 2^64 as a double: seeds and sequence numbers are below it (the ops check the exact integer)
+constexpr double kTwoTo64 = 18446744073709551616.0;
+
 constexpr FieldSpec kCoreOpFields[] = {
-    {"steps", FieldType::kNumber},       {"duration_s", FieldType::kNumber},
-    {"rate", FieldType::kNumber},        {"seed", FieldType::kNumber},
-    {"from_seq", FieldType::kNumber},    {"vehicle", FieldType::kIndexOrName},
-    {"reason", FieldType::kString},      {"rotor", FieldType::kNumber},
-    {"failed", FieldType::kBoolean},     {"offset_enu_m", FieldType::kArray},
-    {"denied", FieldType::kBoolean},     {"down", FieldType::kBoolean},
-    {"gimbal", FieldType::kString},      {"mode", FieldType::kString},
-    {"pitch_deg", FieldType::kNumber},   {"yaw_deg", FieldType::kNumber},
-    {"period_s", FieldType::kNumber},    {"timeout_s", FieldType::kNumber},
-    {"tick", FieldType::kNumber},        {"busy_until", FieldType::kNumber},
+    {"steps", FieldType::kNumber, 1, 1e9},
+    {"duration_s", FieldType::kNumber, 0, 1e9},
+    {"rate", FieldType::kNumber, 0, 1e6},
+    {"seed", FieldType::kNumber, 0, kTwoTo64},
+    {"from_seq", FieldType::kNumber, 0, kTwoTo64},
+    {"vehicle", FieldType::kIndexOrName},
+    {"reason", FieldType::kString},
+    {"rotor", FieldType::kNumber, 0, 1024},
+    {"failed", FieldType::kBoolean},
+    {"offset_enu_m", FieldType::kArray},
+    {"denied", FieldType::kBoolean},
+    {"down", FieldType::kBoolean},
+    {"gimbal", FieldType::kString},
+    {"mode", FieldType::kString},
+    {"pitch_deg", FieldType::kNumber, -360, 360},
+    {"yaw_deg", FieldType::kNumber, -360, 360},
+    {"period_s", FieldType::kNumber, 0, 3600},
+    {"timeout_s", FieldType::kNumber, 0, 1e6},
+    {"tick", FieldType::kNumber, 0, kTwoTo64},
+    {"busy_until", FieldType::kNumber},
     {"mavlink_seq", FieldType::kObject},
-    {"speed_m_s", FieldType::kNumber},   {"from_deg", FieldType::kNumber},
-    {"turbulence_sd_m_s", FieldType::kNumber}, {"gust_m_s", FieldType::kNumber},
-    {"gust_duration_s", FieldType::kNumber},
-    {"time_s", FieldType::kNumber},      {"lockstep_empty", FieldType::kBoolean},
+    {"speed_m_s", FieldType::kNumber, 0, 1000},
+    {"from_deg", FieldType::kNumber, -360, 360},
+    {"turbulence_sd_m_s", FieldType::kNumber, 0, 1000},
+    {"gust_m_s", FieldType::kNumber, 0, 1000},
+    {"gust_duration_s", FieldType::kNumber, 0, 86400},
+    {"time_s", FieldType::kNumber},
+    {"lockstep_empty", FieldType::kBoolean},
+    {"fps", FieldType::kNumber, 0, 1e6},
+    {"quality", FieldType::kNumber, 1, 100},
 };
+
+// "[0, 3600]" with the bounds as a person writes them
+std::string range_text(double lo, double hi) {
+  std::ostringstream s;
+  s << "[" << lo << ", " << hi << "]";
+  return s.str();
+}
 
 }  // namespace
 
@@ -93,8 +121,13 @@ ParsedLine parse_request_line(std::string_view line) {
 std::optional<std::string> mistyped_field(const Json& request, std::span<const FieldSpec> specs) {
   for (const FieldSpec& spec : specs) {
     auto it = request.find(spec.name);
-    if (it == request.end() || has_type(*it, spec.type)) continue;
-    return "\"" + std::string(spec.name) + "\" must be " + type_name(spec.type);
+    if (it == request.end()) continue;
+    if (!has_type(*it, spec.type)) return "\"" + std::string(spec.name) + "\" must be " + type_name(spec.type);
+    if (spec.type != FieldType::kNumber) continue;
+    const double v = it->get<double>();
+    if (!std::isfinite(v) || v < spec.min || v > spec.max) {
+      return "\"" + std::string(spec.name) + "\" must be a number in " + range_text(spec.min, spec.max);
+    }
   }
   return std::nullopt;
 }

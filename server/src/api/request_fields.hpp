@@ -16,11 +16,21 @@ namespace uavsim::server::api {
 // request nested 70k deep would overflow the stack of whichever thread touched it.
 inline constexpr int kMaxNestingDepth = 32;
 
+// The default range of a number field: far beyond any sim time, distance or rate, far below where
+// sums and products of two such numbers overflow.
+inline constexpr double kMaxMagnitude = 1e15;
+
 enum class FieldType { kNumber, kBoolean, kString, kArray, kObject, kIndexOrName };
 
+// A field an op reads: its name, its JSON type and, for a number, the closed range it must lie in.
+// Every number is checked finite (1e999 parses as infinity) and within [min, max] before any handler
+// sees it: the one place where a huge, tiny or overflowing number from a client is refused, so no op
+// can carry it into a loop, a cast or an allocation. An op may check a narrower range of its own.
 struct FieldSpec {
   std::string_view name;
   FieldType type;
+  double min = -kMaxMagnitude;
+  double max = kMaxMagnitude;
 };
 
 // The outcome of parsing one request line.
@@ -36,8 +46,9 @@ struct ParsedLine {
 // never echoed) and whose "op" is a string (missing_field). Thread-safe (pure).
 ParsedLine parse_request_line(std::string_view line);
 
-// The first field of request that is present with another type than specs gives it, as a bad_field
-// message naming the field and the expected type; nullopt when every present field is well typed.
+// The first field of request that is present with another type than specs gives it (or a number
+// outside its range), as a bad_field message naming the field and what it must be; nullopt when every
+// present field is well typed and in range.
 // Absent fields are the op's business. Thread-safe (pure).
 std::optional<std::string> mistyped_field(const nlohmann::json& request, std::span<const FieldSpec> specs);
 

@@ -84,6 +84,9 @@ sim socket API (docs/protocol.md):
   --api-token-file FILE  clients must send this file's first line (the token) before any other op
   --allow-remote-gcs  let gcs_link_open send to hosts other than the API client's own address
   --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
+  --watchdog S        report a simulation loop that makes no progress for S wall seconds (with what it
+                      was doing); default 10, 0: off. A SIGTERM or SIGINT the loop has not acted on
+                      within 5 s ends the process anyway (exit 143 / 130), as does a second one at once
 
 cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
@@ -459,6 +462,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       o.allow_remote_gcs = true;
     } else if (a == "--lockstep-timeout") {
       ok = number({0.001, 86400, false, "wall seconds"}, &o.lockstep_timeout_s);
+    } else if (a == "--watchdog") {
+      ok = number({0.0, 86400, false, "wall seconds"}, &o.watchdog_s);
     } else if (a == "--camera") {
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {

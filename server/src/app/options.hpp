@@ -71,6 +71,7 @@ struct Options {
   std::optional<std::string> api_token;  // --api-token-file: clients must authenticate first
   bool allow_remote_gcs = false;      // gcs_link_open may target hosts other than the API peer's
   double lockstep_timeout_s = 10.0;   // wall seconds a lockstep client may take for one tick
+  double watchdog_s = 10.0;           // a loop without progress this long is reported; 0 = off
   int mavlink_base_port = 5760;       // vehicle i: base + 10 i; 0 = ephemeral; -1 = no MAVLink endpoints
   std::string bind_address = "127.0.0.1";
   std::optional<std::array<uint8_t, 32>> mavlink_key;  // MAVLink 2 signing from the start

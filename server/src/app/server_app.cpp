@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -33,6 +35,7 @@
 #include "render/frame_service.hpp"
 #include "render/video_recorder.hpp"
 #include "sim/runner.hpp"
+#include "app/loop_guard.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "sim/simulation.hpp"
 
@@ -40,6 +43,9 @@ namespace uavsim::server::app {
 
 namespace {
 std::atomic<bool> g_stop_requested{false};
+std::atomic<int> g_stop_signal{0};  // the signal that asked to stop (0: none, or stop_server())
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
+              "set from a signal handler");
 
 // a socket error with the option that avoids it: another process (often another uavsim-server) holds the port
 std::string with_port_hint(const std::string& what, const char* flag) {
@@ -146,6 +152,11 @@ std::vector<std::string> option_warnings(const Options& options) {
 }
 
 void stop_server() { g_stop_requested = true; }
+
+void stop_server(int signal) {
+  g_stop_signal = signal;
+  g_stop_requested = true;
+}
 
 int run_server(const Options& given_options) {
   Options options = given_options;
@@ -508,7 +519,14 @@ int run_server(const Options& given_options) {
   }
 
   const double end = options.duration_s > 0 ? options.duration_s : std::numeric_limits<double>::infinity();
+  // the watchdog: a loop stuck in one place is reported, and one that ignores a stop signal is left
+  sim::WatchdogOptions watch;
+  if (options.watchdog_s > 0) watch.stall_s = options.watchdog_s;
+  std::optional<LoopGuard> guard;
+  guard.emplace(s.schedule().activity(), watch, options.watchdog_s > 0, [] { return g_stop_signal.load(); },
+                std::cerr, [](int code) { std::_Exit(code); });
   runner.run_until(end);
+  guard->loop_finished();
   if (api_server) api_server->shutdown();
   if (frames) {
     // the last frames, then the renderer stops before its consumers go
@@ -524,6 +542,9 @@ int run_server(const Options& given_options) {
   }
 
   reporter.on_control_step();  // events of the last step
+  if (const std::string stalls = guard->summary(); stalls != "no stalls") {
+    std::cerr << "uavsim-server: watchdog: " << stalls << " of the simulation loop in this run\n";
+  }
   if (!options.quiet) {
     std::string extra;
     if (mavlink_server) {

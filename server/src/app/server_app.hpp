@@ -28,5 +28,8 @@ common::GeodeticOrigin world_home(const physics::World& world, const Options& op
 
 // Asks a running server to stop (from a signal handler: only sets an atomic flag).
 void stop_server();
+// The same, for a signal: if the loop has not stopped within the watchdog's grace time (5 s), the
+// process exits with 128 + signal without it.
+void stop_server(int signal);
 
 }  // namespace uavsim::server::app

@@ -530,6 +530,10 @@ std::optional<double> FlightController::param(std::string_view name) const {
   return impl_->params_.get(name);
 }
 
+std::optional<ParamKind> FlightController::param_kind(std::string_view name) const {
+  return impl_->params_.kind(name);
+}
+
 CommandResult FlightController::set_param(std::string_view name, double value) {
   return impl_->params_.set(name, value) ? CommandResult::kAccepted : CommandResult::kInvalid;
 }

@@ -17,6 +17,7 @@
 
 #include "airframe/airframe.hpp"
 #include "fc/fc_types.hpp"
+#include "fc/params.hpp"
 
 namespace uavsim::server::fc {
 
@@ -67,6 +68,7 @@ class FlightController {
 
   // --- parameters (ArduPilot names where one exists, e.g. WPNAV_SPEED, PSC_POSXY_P, ATC_RAT_RLL_P) ---
   std::optional<double> param(std::string_view name) const;
+  std::optional<ParamKind> param_kind(std::string_view name) const;  // its storage type
   CommandResult set_param(std::string_view name, double value);  // kInvalid: unknown name or bad value
   const std::vector<std::string>& param_names() const;  // a fixed order: the MAVLink param_index
 

@@ -132,6 +132,13 @@ struct DerivedParams {
   double pilot_speed_dn_m_s = 0.0;
 };
 
+// How a parameter is stored, as ArduPilot declares it: integers keep the whole part of a value set,
+// and MAVLink reports the type in PARAM_VALUE's param_type (the value still travels as a float).
+enum class ParamKind { kFloat, kInt8, kInt16, kInt32 };
+
+// The whole part an integer parameter keeps of value (value itself for kFloat). Thread-safe (pure).
+double stored_value(ParamKind kind, double value);
+
 // One parameter as the documentation lists it: name, accepted range, and its default on a vehicle whose
 // battery holds battery_capacity_mah (BATT_CAPACITY and BATT_LOW_MAH follow the airframe).
 struct ParamInfo {
@@ -139,6 +146,7 @@ struct ParamInfo {
   double min = 0.0;
   double max = 0.0;
   double default_value = 0.0;
+  ParamKind kind = ParamKind::kFloat;
 };
 // Every parameter in table order (the MAVLink param_index). Thread-safe (pure).
 std::vector<ParamInfo> param_info(double battery_capacity_mah);
@@ -150,8 +158,11 @@ class ParamTable {
 
   // The value of a named parameter; std::nullopt if the name is unknown. Linear scan: not hot path.
   std::optional<double> get(std::string_view name) const;
-  // Sets a parameter and re-derives the SI values; false for an unknown name, a non-finite value or
-  // one outside the parameter's documented range.
+  // How a named parameter is stored; std::nullopt if the name is unknown.
+  std::optional<ParamKind> kind(std::string_view name) const;
+  // Sets a parameter and re-derives the SI values (an integer parameter keeps the whole part:
+  // stored_value); false for an unknown name, a non-finite value or one outside the parameter's
+  // documented range.
   bool set(std::string_view name, double value);
   // Names in table order (the MAVLink param_index).
   const std::vector<std::string>& names() const { return names_; }

@@ -3,6 +3,7 @@
 // MISSION_COUNT, MISSION_REQUEST[_INT] -> MISSION_ITEM[_INT]), clear, set current, and DroneKit's guided goto
 // (MISSION_ITEM with current = 2). Item 0 is home, as in ArduPilot. Transfers are per client and time out in
 // sim time: an unanswered request is repeated after 1 s, the upload is cancelled after 8 s of silence.
+#include <algorithm>
 #include <cmath>
 
 #include "uavsim/common/angles.hpp"
@@ -23,6 +24,7 @@ constexpr std::uint8_t kMissionError = result(MavMissionResult::Error);
 constexpr std::uint8_t kMissionUnsupportedFrame = result(MavMissionResult::UnsupportedFrame);
 constexpr std::uint8_t kMissionUnsupported = result(MavMissionResult::Unsupported);
 constexpr std::uint8_t kMissionInvalidSequence = result(MavMissionResult::InvalidSequence);
+constexpr std::uint8_t kMissionDenied = result(MavMissionResult::Denied);
 
 // the mission proper (no fence or rally points)
 constexpr std::uint8_t kMissionTypeMission = to_underlying(MavMissionType::Mission);
@@ -75,7 +77,19 @@ msg::MissionCurrent VehicleLink::mission_current() const {
   return m;
 }
 
+bool VehicleLink::upload_by_another_link(const Link& link) const {
+  return std::any_of(links_.begin(), links_.end(),
+                     [&link](const Link& l) { return &l != &link && l.upload.active(); });
+}
+
 void VehicleLink::handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m) {
+  // one upload at a time per vehicle, as ArduPilot: another client's is DENIED (the last to finish
+  // used to win); the same client's new MISSION_COUNT restarts its own
+  if (m.mission_type == kMissionTypeMission && upload_by_another_link(link)) {
+    StatCounters::add(stats_.rejected_inputs);
+    send_mission_ack(link, f.sysid, f.compid, kMissionDenied, m.mission_type);
+    return;
+  }
   apply_upload_step(link, link.upload.on_count(m.count, m.mission_type, now_s()), f.sysid, f.compid);
 }
 
@@ -331,6 +345,13 @@ void VehicleLink::handle_mission_clear_all(Link& link, const Frame& f, int missi
                                            fc::FlightController& fc) {
   if (!is_one_of<MavMissionType>(mission_type, {MavMissionType::Mission, MavMissionType::All})) {
     send_mission_ack(link, f.sysid, f.compid, kMissionUnsupported, static_cast<std::uint8_t>(mission_type));
+    return;
+  }
+  // an upload in progress (any client's) would set its mission after the clear: the clear is DENIED
+  // and the upload goes on (it used to be ACCEPTED, then overwritten)
+  if (link.upload.active() || upload_by_another_link(link)) {
+    StatCounters::add(stats_.rejected_inputs);
+    send_mission_ack(link, f.sysid, f.compid, kMissionDenied, static_cast<std::uint8_t>(mission_type));
     return;
   }
   fc.set_mission({});

@@ -1,5 +1,7 @@
 // The parameter protocol over the flight controller's live parameter table (behaviour.md §6): values as
-// REAL32, param_index = the FC's fixed order, unknown names and non-finite values ignored as ArduPilot does.
+// float casts with the parameter's own param_type (INT8/INT16/INT32/REAL32, as ArduPilot sends them),
+// param_index = the FC's fixed order, unknown names and non-finite values ignored as ArduPilot does; an
+// integer parameter keeps the whole part of a value set (1.7 -> 1), whatever param_type the setter sent.
 #include <cmath>
 
 #include "mavlink/vehicle_link.hpp"
@@ -7,20 +9,36 @@
 namespace uavsim::server::mavlink {
 
 namespace {
-constexpr std::uint8_t kParamTypeReal32 = 9;
+
+std::uint8_t mav_param_type(fc::ParamKind kind) {
+  MavParamType t = MavParamType::Real32;
+  switch (kind) {
+    case fc::ParamKind::kFloat: t = MavParamType::Real32; break;
+    case fc::ParamKind::kInt8: t = MavParamType::Int8; break;
+    case fc::ParamKind::kInt16: t = MavParamType::Int16; break;
+    case fc::ParamKind::kInt32: t = MavParamType::Int32; break;
+  }
+  return static_cast<std::uint8_t>(to_underlying(t));
+}
+
+// PARAM_VALUE of the named parameter at param_index (65535 for the echo of a set)
+msg::ParamValue param_value(const fc::FlightController& fc, const std::string& name, std::uint16_t index) {
+  msg::ParamValue v;
+  set_string(v.param_id, name);
+  v.param_value = static_cast<float>(fc.param(name).value_or(0.0));
+  v.param_type = mav_param_type(fc.param_kind(name).value_or(fc::ParamKind::kFloat));
+  v.param_count = static_cast<std::uint16_t>(fc.param_names().size());
+  v.param_index = index;
+  return v;
+}
+
 }  // namespace
 
 void VehicleLink::send_param(Link& link, std::size_t index) {
   const fc::FlightController& fc = sim_.fc(vehicle_);
   const auto& names = fc.param_names();
   if (index >= names.size()) return;
-  msg::ParamValue v;
-  set_string(v.param_id, names[index]);
-  v.param_value = static_cast<float>(fc.param(names[index]).value_or(0.0));
-  v.param_type = kParamTypeReal32;
-  v.param_count = static_cast<std::uint16_t>(names.size());
-  v.param_index = static_cast<std::uint16_t>(index);
-  send(link, v);
+  send(link, param_value(fc, names[index], static_cast<std::uint16_t>(index)));
 }
 
 void VehicleLink::handle_param_request_list(Link& link) {
@@ -66,13 +84,7 @@ void VehicleLink::handle_param_set(const msg::ParamSet& m, fc::FlightController&
     if (const auto id = fc.param(name)) sysid_ = static_cast<std::uint8_t>(*id);
   }
   // the echo goes to every client, with param_index 65535 as ArduPilot's send_parameter_value
-  msg::ParamValue v;
-  set_string(v.param_id, name);
-  v.param_value = static_cast<float>(fc.param(name).value_or(0.0));
-  v.param_type = kParamTypeReal32;
-  v.param_count = static_cast<std::uint16_t>(names.size());
-  v.param_index = 65535;
-  broadcast(v);
+  broadcast(param_value(fc, name, 65535));
 }
 
 }  // namespace uavsim::server::mavlink

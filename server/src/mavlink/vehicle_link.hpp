@@ -219,6 +219,8 @@ class VehicleLink {
   void hold_position(fc::FlightController& fc);
 
   // --- mission_protocol.cpp ---
+  // True when a client other than link has a mission upload in progress.
+  bool upload_by_another_link(const Link& link) const;
   void handle_mission_count(Link& link, const Frame& f, const msg::MissionCount& m);
   // answers an item whose numbers could not be read with MISSION_ACK ERROR, ending an upload in progress
   void reject_mission_item(Link& link, const Frame& f);

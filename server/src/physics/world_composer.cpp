@@ -280,6 +280,8 @@ void convert_meshes(XMLElement* root, const std::string& world_path, const Compo
       const bool exists = fs::exists(source, exists_ec);
       if (exists_ec) mesh_fail(world_path, what + ": " + exists_ec.message());
       if (!exists) mesh_fail(world_path, what + ": file not found");
+      // MuJoCo reads a directory as an empty mesh ("no vertices"): say what it is
+      if (fs::is_directory(source, exists_ec)) mesh_fail(world_path, what + ": is a directory, not a mesh file");
       if (mujoco_reads(source)) continue;
 
       const fs::path dir = mesh_cache_dir(options);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace uavsim::server::radio {
@@ -16,6 +17,13 @@ bool frame_before(double start_a, size_t from_a, uint64_t seq_a, double start_b,
   if (start_a != start_b) return start_a < start_b;
   if (from_a != from_b) return from_a < from_b;
   return seq_a < seq_b;
+}
+
+// a bound as a person writes it: 1e+06, 0.004256, -150
+std::string number_text(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
 }
 
 }  // namespace
@@ -51,23 +59,31 @@ const char* error_name(Error e) {
 }
 
 std::string validate(const RadioConfig& c, size_t vehicles) {
-  auto finite = [](double x) { return std::isfinite(x); };
-  if (!(c.range_m > 0.0) || !finite(c.range_m)) return "range_m must be > 0";
-  if (!finite(c.tx_power_dbm) || !finite(c.sensitivity_dbm) || !finite(c.reference_loss_db)) {
-    return "tx_power_dbm, sensitivity_dbm and reference_loss_db must be finite";
-  }
-  if (!(c.path_loss_exponent > 0.0) || !finite(c.path_loss_exponent))
-    return "path_loss_exponent must be > 0";
-  if (!(c.shadowing_sigma_db >= 0.0) || !finite(c.shadowing_sigma_db))
-    return "shadowing_sigma_db must be >= 0";
-  if (!(c.loss_probability >= 0.0 && c.loss_probability <= 1.0))
-    return "loss_probability must be in [0, 1]";
-  if (!(c.latency_s >= 0.0 && c.latency_s <= 3600.0)) return "latency_s must be in [0, 3600]";
+  // every number of a config comes from outside (API, world): each is finite and within the physical
+  // range its field states (radio_model.hpp), so no value reaches a loop, a log or a cast unusable
+  const auto in = [](double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; };
+  const auto range = [](const char* name, double lo, double hi) {
+    return std::string(name) + " must be in [" + number_text(lo) + ", " + number_text(hi) + "]";
+  };
+  if (!in(c.range_m, kMinRangeM, kMaxRangeM)) return range("range_m", kMinRangeM, kMaxRangeM);
+  if (!in(c.tx_power_dbm, kMinTxPowerDbm, kMaxTxPowerDbm))
+    return range("tx_power_dbm", kMinTxPowerDbm, kMaxTxPowerDbm);
+  if (!in(c.sensitivity_dbm, kMinSensitivityDbm, kMaxSensitivityDbm))
+    return range("sensitivity_dbm", kMinSensitivityDbm, kMaxSensitivityDbm);
+  if (!in(c.reference_loss_db, 0.0, kMaxLossDb)) return range("reference_loss_db", 0.0, kMaxLossDb);
+  if (!in(c.path_loss_exponent, kMinPathLossExponent, kMaxPathLossExponent))
+    return range("path_loss_exponent", kMinPathLossExponent, kMaxPathLossExponent);
+  if (!in(c.shadowing_sigma_db, 0.0, kMaxShadowingSigmaDb))
+    return range("shadowing_sigma_db", 0.0, kMaxShadowingSigmaDb);
+  if (!in(c.loss_probability, 0.0, 1.0)) return "loss_probability must be in [0, 1]";
+  if (!in(c.latency_s, 0.0, kMaxLatencyS)) return range("latency_s", 0.0, kMaxLatencyS);
   if (c.max_queue_frames == 0) return "max_queue_frames must be > 0";
   if (c.tdma) {
-    // seed 6.2: D < T/N, and a slot must hold the longest frame
-    if (!(c.period_s > 0.0) || !finite(c.period_s)) return "period_s must be > 0";
-    if (!(c.slot_s >= airtime_s(kMaxFrameBytes))) {
+    // seed 6.2: D < T/N, and a slot must hold the longest frame; T at most an hour keeps the slot
+    // count T / D below a million
+    if (!in(c.period_s, airtime_s(kMaxFrameBytes), kMaxPeriodS))
+      return range("period_s", airtime_s(kMaxFrameBytes), kMaxPeriodS);
+    if (!(std::isfinite(c.slot_s) && c.slot_s >= airtime_s(kMaxFrameBytes))) {
       return "slot_s must be at least the airtime of a 127-byte frame (" +
              std::to_string(airtime_s(kMaxFrameBytes)) + " s)";
     }
@@ -145,16 +161,25 @@ bool RadioModel::has_due(double now_s) const {
 double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
   const double T = config_.period_s;
   const double D = config_.slot_s;
-  // whole slots in a period; the remainder is wasted (seed 6.2)
-  const auto slots = static_cast<size_t>(std::floor(T / D + 1e-9));
-  double period_start = std::floor(t_s / T) * T;
-  for (;;) {
-    for (size_t k = vehicle; k < slots; k += vehicles_) {
-      const double s = period_start + static_cast<double>(k) * D;
-      if (s >= t_s - kTimeEps) return s;
-    }
-    period_start += T;
+  // whole slots in a period; the remainder is wasted (seed 6.2). validate() bounds T / D below a
+  // million and guarantees a slot to every vehicle (N D <= T), so the count is a safe integer and the
+  // answer lies in this period or the next: no loop over slots or periods
+  const auto slots = static_cast<uint64_t>(std::floor(T / D + 1e-9));
+  const auto n = static_cast<uint64_t>(vehicles_);
+  const double period_start = std::floor(t_s / T) * T;
+  // the first slot of this period that starts at or after t_s (within kTimeEps)
+  const double into_s = std::max(0.0, t_s - kTimeEps - period_start);
+  const auto first = static_cast<uint64_t>(std::min(std::ceil(into_s / D - 1e-9), static_cast<double>(slots)));
+  // this vehicle's slots are vehicle, vehicle + N, ...: the first of them at or after `first`
+  uint64_t k = vehicle;
+  if (first > k) k += (first - k + n - 1) / n * n;
+  if (k < slots) {
+    const double s = period_start + static_cast<double>(k) * D;
+    if (s >= t_s - kTimeEps) return s;
+    k += n;  // rounding put the candidate just before t_s: the vehicle's next slot
+    if (k < slots) return period_start + static_cast<double>(k) * D;
   }
+  return period_start + T + static_cast<double>(vehicle) * D;
 }
 
 double RadioModel::uniform() {

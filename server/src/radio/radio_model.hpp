@@ -35,6 +35,22 @@ inline constexpr size_t kPhyOverheadBytes =
     6;  // preamble (4) + start-of-frame delimiter (1) + length (1)
 inline constexpr int kBroadcast = -1;
 
+// The range of every number a RadioConfig accepts (validate() refuses the rest with bad_field's
+// message): physical values with room to spare, so that a huge, negative or denormal number from the API
+// or a world never reaches the propagation maths or the slot arithmetic.
+inline constexpr double kMinRangeM = 0.1;
+inline constexpr double kMaxRangeM = 1e6;
+inline constexpr double kMinTxPowerDbm = -50.0;  // below any real transceiver
+inline constexpr double kMaxTxPowerDbm = 60.0;   // 1 kW
+inline constexpr double kMinSensitivityDbm = -174.0;  // the thermal noise floor in 1 Hz
+inline constexpr double kMaxSensitivityDbm = 0.0;
+inline constexpr double kMaxLossDb = 300.0;
+inline constexpr double kMinPathLossExponent = 1.0;   // waveguide-like corridors go below 2
+inline constexpr double kMaxPathLossExponent = 10.0;  // dense obstruction stays under 6
+inline constexpr double kMaxShadowingSigmaDb = 30.0;
+inline constexpr double kMaxLatencyS = 3600.0;
+inline constexpr double kMaxPeriodS = 3600.0;  // TDMA period T
+
 // Time on air of a frame of frame_bytes (PSDU) bytes at 250 kbit/s, PHY header included:
 // 127 bytes -> (127 + 6) * 8 / 250000 = 4.256 ms.
 double airtime_s(size_t frame_bytes);

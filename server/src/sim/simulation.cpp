@@ -176,6 +176,7 @@ fc::TruthState Simulation::truth(size_t i) const {
 }
 
 void Simulation::step() {
+  schedule_.activity().set_time(time_s());
   schedule_.run_step(steps_ % static_cast<uint64_t>(control_decimation_) == 0);
 }
 

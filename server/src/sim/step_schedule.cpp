@@ -28,7 +28,8 @@ const char* phase_name(Phase phase) {
 bool control_phase(Phase phase) { return phase <= Phase::kPostControl; }
 
 void StepSchedule::add(Phase phase, std::string name, Callback callback, Slot slot) {
-  Entry entry{std::move(name), std::move(callback), slot};
+  trail_names_.push_back(std::string(phase_name(phase)) + "/" + name);
+  Entry entry{std::move(name), std::move(callback), slot, trail_names_.back().c_str()};
   if (running_) {
     pending_.push_back(Pending{phase, std::move(entry)});
     return;
@@ -67,7 +68,10 @@ void StepSchedule::run_step(bool control) {
   running_ = true;
   const std::size_t first = control ? 0 : static_cast<std::size_t>(Phase::kPrePhysics);
   for (std::size_t p = first; p < kPhaseCount; ++p) {
-    for (Entry& e : phases_[p]) e.callback();
+    for (Entry& e : phases_[p]) {
+      activity_.enter(e.trail);
+      e.callback();
+    }
   }
   running_ = false;
   if (!pending_.empty() || !pending_handlers_.empty() || !pending_resets_.empty()) add_pending();

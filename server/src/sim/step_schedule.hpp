@@ -14,6 +14,8 @@
 // even if its phase is still to come. Contact handlers and reset hooks follow the same rule.
 #pragma once
 
+#include <deque>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/loop_watchdog.hpp"
 #include "physics/world.hpp"
 
 namespace uavsim::server::sim {
@@ -67,6 +70,9 @@ class StepSchedule {
   // Runs one step: every phase in order, the control phases only when control is true; then adds
   // what was registered during the step. Loop thread only.
   void run_step(bool control);
+  // The loop's trail for the watchdog: run_step enters each entry under "phase/name".
+  LoopActivity& activity() { return activity_; }
+  const LoopActivity& activity() const { return activity_; }
   // The contact handlers in order until one handles contact; true if one did. Loop thread only.
   bool handle_contact(const physics::VehicleContact& contact);
   // Every reset hook in order. Loop thread only.
@@ -85,6 +91,7 @@ class StepSchedule {
     std::string name;
     Callback callback;
     Slot slot = Slot::kNormal;
+    const char* trail = nullptr;  // "phase/name", in trail_names_ (stable for the watchdog's reads)
   };
   struct Pending {
     Phase phase = Phase::kCapture;
@@ -97,6 +104,8 @@ class StepSchedule {
   std::vector<std::pair<std::string, ContactHandler>> contact_handlers_;
   std::vector<std::pair<std::string, ResetHook>> reset_hooks_;
   bool running_ = false;
+  LoopActivity activity_;
+  std::deque<std::string> trail_names_;  // never shrinks: a deque keeps its elements in place
   std::vector<Pending> pending_;
   std::vector<std::pair<std::string, ContactHandler>> pending_handlers_;
   std::vector<std::pair<std::string, ResetHook>> pending_resets_;

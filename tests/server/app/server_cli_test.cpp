@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -112,9 +114,6 @@ TEST(ServerCli, DemoRunPrintsEventsAndASummary) {
   EXPECT_FALSE(has(quiet, "s of sim time in")) << quiet.output;
 }
 
-}  // namespace
-
-namespace {
 
 TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
   const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " empty" + kWorlds +
@@ -147,6 +146,101 @@ TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
   // the clock was still at 0 when the client's connection was handled
   EXPECT_NE(output.find("t=0.000 uav0: client_connected MAVLink tcp:127.0.0.1:"), std::string::npos) << output;
   EXPECT_NE(output.find("ran 2.000 s of sim time"), std::string::npos) << output;
+}
+
+// A server process with its output on a pipe, read line by line.
+class ServerProcess {
+ public:
+  explicit ServerProcess(const std::vector<std::string>& args) {
+    int fds[2];
+    if (pipe(fds) != 0) return;
+    pid_ = fork();
+    if (pid_ == 0) {
+      dup2(fds[1], 1);
+      dup2(fds[1], 2);
+      close(fds[0]);
+      close(fds[1]);
+      std::vector<char*> argv;
+      argv.push_back(const_cast<char*>(UAVSIM_SERVER_BIN));
+      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      execv(UAVSIM_SERVER_BIN, argv.data());
+      _exit(127);
+    }
+    close(fds[1]);
+    out_ = fdopen(fds[0], "r");
+  }
+  ~ServerProcess() {
+    if (pid_ > 0 && !reaped_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (out_ != nullptr) fclose(out_);
+  }
+  pid_t pid() const { return pid_; }
+  // the lines up to and including the first that contains text ("" at end of output)
+  std::string read_until(const std::string& text) {
+    char line[4096];
+    while (out_ != nullptr && fgets(line, sizeof(line), out_) != nullptr) {
+      output_ += line;
+      if (std::string(line).find(text) != std::string::npos) return line;
+    }
+    return "";
+  }
+  // the rest of the output, then the exit status (waitpid's)
+  int wait_exit() {
+    read_until("\x01never");
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    reaped_ = true;
+    return status;
+  }
+  const std::string& output() const { return output_; }
+
+ private:
+  pid_t pid_ = -1;
+  FILE* out_ = nullptr;
+  std::string output_;
+  bool reaped_ = false;
+};
+
+int connect_loopback(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+TEST(ServerCli, SigtermEndsAServerWhoseClockALockstepClientHolds) {
+  // the clock waits for a lockstep client that never says done: SIGTERM still ends the server, cleanly
+  ServerProcess server({"empty", "--models-dir", UAVSIM_MODELS_DIR, "--rate", "0", "--mavlink-port", "0",
+                        "--api-port", "0", "--no-cameras", "--lockstep-timeout", "86400"});
+  ASSERT_GT(server.pid(), 0);
+  const std::string api = server.read_until("sim API on tcp:127.0.0.1:");
+  ASSERT_FALSE(api.empty()) << server.output();
+  const int fd = connect_loopback(std::stoi(api.substr(api.rfind(':') + 1)));
+  ASSERT_GE(fd, 0);
+  const std::string join = "{\"op\":\"lockstep_join\",\"id\":1,\"period_s\":0.1}\n";
+  ASSERT_EQ(::send(fd, join.data(), join.size(), MSG_NOSIGNAL), static_cast<ssize_t>(join.size()));
+  // the reply and the first tick: from here the clock is held by this client
+  std::string got;
+  char buf[4096];
+  while (got.find("\"tick\"") == std::string::npos) {
+    const ssize_t n = ::recv(fd, buf, sizeof(buf), 0);
+    ASSERT_GT(n, 0) << got;
+    got.append(buf, static_cast<size_t>(n));
+  }
+  ASSERT_EQ(kill(server.pid(), SIGTERM), 0);
+  const int status = server.wait_exit();
+  ::close(fd);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << "\n" << server.output();
+  EXPECT_NE(server.output().find("ran "), std::string::npos) << server.output();
 }
 
 }  // namespace

@@ -162,5 +162,24 @@ TEST_F(WorldMesh, MissingMeshFailsNamingTheWorldAndTheMesh) {
   }
 }
 
+TEST_F(WorldMesh, AMeshPathThatIsADirectorySaysSo) {
+  // it used to fail as "no vertices", from MuJoCo reading the directory as an empty mesh
+  for (const char* name : {"box.dae", "box.stl"}) {
+    fs::remove_all(dir_ / "meshes" / name);
+    fs::create_directories(dir_ / "meshes" / name);
+    std::string xml = kWorld;
+    xml.replace(xml.find("box.dae"), 7, name);
+    std::ofstream(dir_ / "world.xml") << xml;
+    try {
+      World::load(world(), options_);
+      FAIL() << "loaded a directory as a mesh";
+    } catch (const WorldError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(name), std::string::npos) << what;
+      EXPECT_NE(what.find("is a directory"), std::string::npos) << what;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace uavsim::server::physics

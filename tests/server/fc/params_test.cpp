@@ -33,6 +33,22 @@ TEST(Params, NonFiniteAndOutOfRangeAreRejectedAndLeaveValue) {
   EXPECT_EQ(fc.param("ANGLE_MAX"), 3000.0);
 }
 
+TEST(Params, IntegerParametersKeepTheWholePartAsArduPilotStoresThem) {
+  FlightController fc(test::make_quad(), 1);
+  EXPECT_EQ(fc.param_kind("SYSID_THISMAV"), ParamKind::kInt16);
+  EXPECT_EQ(fc.param_kind("PSC_POSXY_P"), ParamKind::kFloat);
+  EXPECT_EQ(fc.set_param("SYSID_THISMAV", 1.7), CommandResult::kAccepted);
+  EXPECT_EQ(fc.param("SYSID_THISMAV"), 1.0);
+  // a float's rounding error below the whole number is not a step down: 3 - 2^-22 is 3
+  EXPECT_EQ(fc.set_param("SYSID_THISMAV", 3.0 - std::ldexp(1.0, -22)), CommandResult::kAccepted);
+  EXPECT_EQ(fc.param("SYSID_THISMAV"), 3.0);
+  // the range is checked on what would be stored: 0.5 stores 0, below SYSID_THISMAV's minimum of 1
+  EXPECT_EQ(fc.set_param("SYSID_THISMAV", 0.5), CommandResult::kInvalid);
+  EXPECT_EQ(fc.param("SYSID_THISMAV"), 3.0);
+  EXPECT_EQ(stored_value(ParamKind::kInt8, -2.7), -2.0);
+  EXPECT_EQ(stored_value(ParamKind::kFloat, -2.7), -2.7);
+}
+
 TEST(Params, OrderIsStableAndNamesUnique) {
   FlightController a(test::make_quad(), 1), b(test::make_hexa(), 2);
   EXPECT_EQ(a.param_names(), b.param_names());

@@ -203,6 +203,57 @@ TEST_F(FlightTest, MissionUploadTimesOutInSimTime) {
   EXPECT_GE(g->count<msg::MissionRequest>(), 7u);
 }
 
+TEST_F(FlightTest, AnUploadInProgressIsNeitherClearedNorOverwrittenByAnother) {
+  // a MISSION_CLEAR_ALL during an upload was ACCEPTED and then overwritten by the upload; a second
+  // client's upload during the first was accepted and the last to finish won
+  auto a = connect();
+  auto b = connect();
+  msg::MissionCount mc;
+  mc.target_system = 1;
+  mc.count = 3;
+  a->send(mc);
+  sync_client(*a);
+  ASSERT_TRUE(step_until(*a, [&] { return a->count<msg::MissionRequest>() > 0; }, 1.0));
+  // b's upload and b's clear are DENIED (14) while a's runs
+  b->send(mc);
+  sync_client(*b);
+  ASSERT_TRUE(step_until(*b, [&] { return b->count<msg::MissionAck>() > 0; }, 1.0));
+  EXPECT_EQ(b->last<msg::MissionAck>()->type, 14);
+  EXPECT_EQ(b->count<msg::MissionRequest>() + b->count<msg::MissionRequestInt>(), 0u);
+  msg::MissionClearAll ca;
+  ca.target_system = 1;
+  for (TestGcs* g : {b.get(), a.get()}) {
+    const std::size_t acks = g->count<msg::MissionAck>();
+    g->send(ca);
+    sync_client(*g);
+    ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::MissionAck>() > acks; }, 1.0));
+    EXPECT_EQ(g->last<msg::MissionAck>()->type, 14);
+  }
+  // a's upload was not disturbed: it completes (restarted by a new count from a, which is allowed)
+  const GeodeticOrigin& o = server_->config().origin;
+  auto item_for = [&](int seq) {
+    msg::MissionItemInt it;
+    it.frame = seq == 0 ? 0 : 6;
+    it.command = seq == 1 ? 22 : 16;
+    it.z = 10;
+    if (seq == 2) {
+      const Geodetic gd = geodetic_from_ned(o, {5, 0, 0});
+      it.x = static_cast<std::int32_t>(std::llround(gd.lat_deg * 1e7));
+      it.y = static_cast<std::int32_t>(std::llround(gd.lon_deg * 1e7));
+    }
+    return it;
+  };
+  ASSERT_EQ(upload_mission(*a, 3, item_for), 0);
+  EXPECT_EQ(sim_->fc(0).mission().size(), 3u);
+  // with no upload running, b may clear it
+  const std::size_t acks = b->count<msg::MissionAck>();
+  b->send(ca);
+  sync_client(*b);
+  ASSERT_TRUE(step_until(*b, [&] { return b->count<msg::MissionAck>() > acks; }, 1.0));
+  EXPECT_EQ(b->last<msg::MissionAck>()->type, 0);
+  EXPECT_EQ(sim_->fc(0).mission().size(), 1u);  // home alone, as after any clear
+}
+
 TEST_F(FlightTest, MissionClearAllAndSetCurrent) {
   auto g = connect();
   msg::MissionClearAll ca;

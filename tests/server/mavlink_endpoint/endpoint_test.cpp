@@ -169,13 +169,40 @@ TEST_F(EndpointTest, ParamListStreamsEveryIndexWithCount) {
   std::vector<bool> seen(count, false);
   for (const auto& v : g->all<msg::ParamValue>()) {
     EXPECT_EQ(v.param_count, count);
-    EXPECT_EQ(v.param_type, 9);  // REAL32
+    // REAL32, or the integer type ArduPilot stores it in (INT8 = 2, INT16 = 4, INT32 = 6)
+    EXPECT_TRUE(v.param_type == 9 || v.param_type == 2 || v.param_type == 4 || v.param_type == 6) << v.param_type;
     ASSERT_LT(v.param_index, count);
     seen[v.param_index] = true;
     EXPECT_EQ(std::string(get_string(v.param_id)), sim_->fc(0).param_names()[v.param_index]);
   }
   EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](bool b) { return b; }));
   EXPECT_GE(g->count<msg::Statustext>(), 1u);  // the banner comes first
+}
+
+TEST_F(EndpointTest, AnIntegerParameterKeepsTheWholePartAndSaysItsType) {
+  // SYSID_THISMAV once stored 1.7, and every PARAM_VALUE said REAL32
+  auto g = connect();
+  msg::ParamSet s;
+  s.target_system = 1;
+  set_string(s.param_id, "SYSID_THISMAV");
+  s.param_value = 1.7f;
+  s.param_type = 9;  // the setter's claim does not change how the vehicle stores it
+  g->send(s);
+  sync_client(*g);
+  ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::ParamValue>() > 0; }, kAnswerS));
+  const auto echo = g->last<msg::ParamValue>();
+  EXPECT_FLOAT_EQ(echo->param_value, 1.0f);
+  EXPECT_EQ(echo->param_type, 4);  // MAV_PARAM_TYPE_INT16, as ArduPilot's AP_Int16
+  EXPECT_DOUBLE_EQ(*sim_->fc(0).param("SYSID_THISMAV"), 1.0);
+  // a float parameter keeps its fraction
+  g->clear();
+  set_string(s.param_id, "PSC_POSXY_P");
+  s.param_value = 1.25f;
+  g->send(s);
+  sync_client(*g);
+  ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::ParamValue>() > 0; }, kAnswerS));
+  EXPECT_EQ(g->last<msg::ParamValue>()->param_type, 9);
+  EXPECT_DOUBLE_EQ(*sim_->fc(0).param("PSC_POSXY_P"), 1.25);
 }
 
 TEST_F(EndpointTest, ParamSetEchoesAndReadsBackByNameAndIndex) {

@@ -104,6 +104,9 @@ TEST(FramesApi, CameraListAndErrorReplies) {
   EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"fps", 30}}), "bad_field");
   EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"fps", 4}}), "bad_field");
   EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"fps", -1}}), "bad_field");
+  // one frame in 1.5e301 once became every = INT_MIN (an undefined float-to-int cast)
+  EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"fps", 1e-300}}), "bad_field");
+  EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"fps", 15.0 / 3e9}}), "bad_field");
   EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"quality", 50}}), "bad_field");
   EXPECT_EQ(code({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"format", "jpeg"}, {"quality", 0}}),
             "bad_field");
