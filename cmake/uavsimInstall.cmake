@@ -1,10 +1,32 @@
-# Install and export rules for the client package. After `cmake --install build --prefix P`:
-#   find_package(uavsim) (CMAKE_PREFIX_PATH=P) gives uavsim::client, uavsim::common, uavsim::client_gcs and,
-#   when vision/ was built, uavsim::vision; pkg-config uavsim-client (PKG_CONFIG_PATH=P/lib/pkgconfig) gives
-#   the flags of the client. The build tree exports the same targets (build/uavsimTargets.cmake).
-# The server is not part of the package: it is a program (uavsim-server), not a library.
+# Install rules. `cmake --install build --prefix P` gives a complete uavsim under P:
+#   P/bin               uavsim (the front door), uavsim-server, the missions' programs and launchers
+#                       (mbzirc2017-*, mbzirc2020-*, coverage-*), uavsim-videolog-export, uavsim-plot
+#   P/share/uavsim/models  the shipped vehicles, objects, parts and worlds: an installed program finds them
+#                       beside its P/bin (common/install_paths.hpp), with no source tree and no --models-dir
+#   P/share/doc/uavsim  the README, the docs and the licence
+#   P/share/bash-completion/completions/uavsim
+#   the client package: find_package(uavsim) (CMAKE_PREFIX_PATH=P) gives uavsim::client, uavsim::common,
+#   uavsim::client_gcs and, when vision/ was built, uavsim::vision; pkg-config uavsim-client
+#   (PKG_CONFIG_PATH=P/lib/pkgconfig) gives the flags of the client. The build tree exports the same targets
+#   (build/uavsimTargets.cmake). The server's headers are not part of it: the server is a program.
+# A new program installs itself beside its add_executable (cmake/README.md): every program in P/bin is
+# what the front door and the launchers look for.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
+
+# the programs: whichever this configuration builds
+foreach(program uavsim-server uavsim-videolog-export mbzirc2017-uav mbzirc2017-run mbzirc2020-uav mbzirc2020-gcs
+                mbzirc2020-run coverage-agent coverage-gcs coverage-run)
+  if(TARGET ${program})
+    install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endforeach()
+# the run plotter as a program of its own (the launchers and `uavsim plot` call it by that name)
+install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/plot_run.py DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME uavsim-plot)
+# the models, where find_models_dir() looks beside P/bin (kInstalledModelsSubdir)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/models/ DESTINATION ${CMAKE_INSTALL_DATADIR}/uavsim/models)
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 
 set(uavsim_package_targets uavsim_common)
 set_target_properties(uavsim_common PROPERTIES EXPORT_NAME common)

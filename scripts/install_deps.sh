@@ -3,21 +3,32 @@
 # the independent MAVLink peer used by interop tests). Idempotent: packages already present are skipped,
 # so the README's commands can call it every time.
 set -euo pipefail
+# usage: install_deps.sh [--demo]
+#   --demo  only what configuring and building the demo's programs (./scripts/demo.sh) needs: the
+#           compiler, CMake, the libraries uavsim-server and the missions link, and the tests' and
+#           benches' headers (small; the configuration looks for them)
+#   (none)  also what only the tests use: clang with its sanitizer runtimes, Node.js for the interop
+#           peer, and the Debian packaging tools of the install tests
 
+# the demo: build tools, the server's and missions' libraries, and what the programs run
 packages=(
-  build-essential cmake pkg-config ninja-build
+  build-essential cmake pkg-config ninja-build ccache
   libmujoco-dev libqhull-dev libeigen3-dev libopencv-dev libosmesa6-dev libassimp-dev
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev llvm python3 ffmpeg ccache python3-matplotlib
+  python3 ffmpeg python3-matplotlib
   libegl-dev libegl-mesa0 libgl1-mesa-dri
 )
 # EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
 # libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
-# clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm), which turns
-# sanitizer reports into file:line, are only recommended by clang: named here for --no-install-recommends
-# node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)
-command -v node >/dev/null 2>&1 || packages+=(nodejs)
-command -v npm >/dev/null 2>&1 || packages+=(npm)
+if [ "${1:-}" != "--demo" ]; then
+  # the tests: clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm),
+  # which turns sanitizer reports into file:line, are only recommended by clang: named here for
+  # --no-install-recommends; dpkg-dev (dpkg-shlibdeps) and file for CPack's .deb (tests/install)
+  packages+=(clang libclang-rt-14-dev llvm dpkg-dev file)
+  # node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)
+  command -v node >/dev/null 2>&1 || packages+=(nodejs)
+  command -v npm >/dev/null 2>&1 || packages+=(npm)
+fi
 
 # pick the packages that are not installed yet
 missing=()
@@ -37,6 +48,7 @@ else
 fi
 
 # node-mavlink for the interop tests, pinned in tests/interop/package.json
+[ "${1:-}" != "--demo" ] || exit 0
 here=$(cd "$(dirname "$0")/.." && pwd)
 if [ -f "$here/tests/interop/package.json" ] && [ ! -d "$here/tests/interop/node_modules" ]; then
   echo "install_deps: npm install in tests/interop"

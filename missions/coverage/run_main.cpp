@@ -41,6 +41,7 @@
 #include "coverage_world.hpp"
 #include "recovery_meter.hpp"
 #include "uavsim/client/sim_connection.hpp"
+#include "uavsim/common/install_paths.hpp"
 #include "uavsim/launch/launcher.hpp"
 
 using namespace uavsim::missions::coverage;
@@ -88,10 +89,12 @@ struct Options {
   double wall_limit_s = 3600.0;
   double progress_period_s = 10.0;
   double agent_status_s = 0.0;
-  std::string server = UAVSIM_SERVER_PATH;
+  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
+  std::string server =
+      uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
   std::string agent;
   std::string gcs_program;
-  std::string models_dir = UAVSIM_MODELS_DIR;
+  std::string models_dir = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path;
   std::string keep_world;                  // write the generated world here too
   std::string run_dir = "auto";            // --run-dir: video, summary, events, logs, ground truth
   std::string record;                      // --record: the video (default video.mp4 in the run dir)
@@ -873,8 +876,9 @@ int main(int argc, char** argv) {
   }
   if (!o.map_png.empty() && !o.json_path.empty() && o.run_dir.find('\'') == std::string::npos) {
     // the picture from the run directory (ground truth, summary); matplotlib's script
-    const std::string cmd = "'" + std::string(UAVSIM_SCRIPTS_DIR) + "/plot_run.py' '" + o.run_dir +
-                            "' --coverage-map '" + o.map_png + "'";
+    const std::string plot = uavsim::common::installed_or_built_program(
+        "uavsim-plot", std::string(UAVSIM_SCRIPTS_DIR) + "/plot_run.py");
+    const std::string cmd = "'" + plot + "' '" + o.run_dir + "' --coverage-map '" + o.map_png + "'";
     if (std::system(cmd.c_str()) != 0)
       std::fprintf(stderr, "coverage-run: the coverage map was not drawn (%s)\n", cmd.c_str());
   }

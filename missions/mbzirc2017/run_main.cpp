@@ -29,8 +29,9 @@
 #include <vector>
 
 #include "uavsim/client/sim_connection.hpp"
-#include "uavsim/launch/launcher.hpp"
+#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
+#include "uavsim/launch/launcher.hpp"
 
 namespace {
 
@@ -139,8 +140,9 @@ std::optional<std::pair<double, std::string>> state_change(const std::string& li
 
 int main(int argc, char** argv) {
   Options o;
-  o.world = std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2017.xml";
-  o.server = UAVSIM_SERVER_PATH;
+  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
+  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2017.xml";
+  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2017-uav");
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];

@@ -20,8 +20,9 @@
 #include <vector>
 
 #include "uavsim/client/sim_connection.hpp"
-#include "uavsim/launch/launcher.hpp"
+#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
+#include "uavsim/launch/launcher.hpp"
 
 namespace {
 
@@ -91,8 +92,9 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
 
 int main(int argc, char** argv) {
   Options o;
-  o.world = std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml";
-  o.server = UAVSIM_SERVER_PATH;
+  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
+  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2020.xml";
+  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
   o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
   bool record = true;

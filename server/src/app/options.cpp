@@ -58,7 +58,12 @@ simulation:
   --demo              fly vehicle 0 through take-off, three waypoints and landing, print what happened,
                       and exit with 0 if the flight succeeded
   --write-world FILE  write the composed MJCF (plain MuJoCo, opens in mujoco-simulate) and exit
-  --models-dir DIR    where vehicles/, objects/ and worlds/ live (default: the source tree's models/)
+  --models-dir DIR    where vehicles/, objects/ and worlds/ live; default: the environment variable
+                      UAVSIM_MODELS_DIR, else PREFIX/share/uavsim/models of an install (beside
+                      PREFIX/bin/uavsim-server), else the source tree's models/ the build came from.
+                      A world's <include file=...> not found beside it is looked up there too, as if
+                      the world were a shipped one (file="../common/ground.xml")
+  --list-worlds       the shipped worlds (name and what each holds) and where they are, then exit
 
 MAVLink (per vehicle, ArduCopter on the wire):
   --mavlink-port BASE TCP port of vehicle 0's MAVLink endpoint; vehicle i listens on BASE + 10 i
@@ -351,6 +356,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       r.output = params_markdown();
       r.exit_code = 0;
       return r;
+    } else if (a == "--list-worlds") {
+      o.list_worlds = true;
     } else if (a == "--print-schedule") {
       o.print_schedule = true;
     } else if (a == "--version") {
@@ -541,7 +548,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
     o.mavlink_key = parse_signing_key(*key_text);
     if (!o.mavlink_key) return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
   }
-  if (o.world_path.empty() && !o.version) return fail("no world given (a world file or a shipped world's name; see --help)");
+  if (o.world_path.empty() && !o.version && !o.list_worlds)
+    return fail("no world given (a world file or a shipped world's name; see --help)");
   r.options = std::move(o);
   r.exit_code = 0;
   return r;

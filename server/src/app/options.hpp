@@ -66,6 +66,7 @@ struct Options {
   bool quiet = false;
   bool print_schedule = false;        // print the step schedule before the clock starts
   bool version = false;               // --version: print it and exit
+  bool list_worlds = false;           // --list-worlds: print the shipped worlds and exit
   int api_port = 5700;                // sim socket API (docs/protocol.md); 0 = ephemeral; -1 = none
   std::string api_bind_address = "127.0.0.1";
   std::optional<std::string> api_token;  // --api-token-file: clients must authenticate first

@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cstdlib>
 #include <optional>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -21,6 +22,7 @@
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
 #include "app/demo_flight.hpp"
+#include "app/endpoint_hooks.hpp"
 #include "app/field_setup.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/param_file.hpp"
@@ -36,7 +38,6 @@
 #include "render/video_recorder.hpp"
 #include "sim/runner.hpp"
 #include "app/loop_guard.hpp"
-#include "app/endpoint_hooks.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::app {
@@ -117,6 +118,50 @@ std::vector<std::string> shipped_worlds(const std::string& models_dir) {
   return names;
 }
 
+std::string world_summary(const std::string& world_path, std::size_t max_chars) {
+  // the leading comment, read from at most the first 64 KiB (a header, not the world)
+  std::ifstream in(world_path);
+  std::string head(64 * 1024, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const std::size_t open = head.find("<!--");
+  if (open == std::string::npos || head.find('<') < open) return "";
+  const std::size_t close = head.find("-->", open);
+  if (close == std::string::npos) return "";
+  // white space collapsed, up to the end of the first sentence
+  std::string text;
+  for (std::size_t i = open + 4; i < close; ++i) {
+    const char c = head[i];
+    const bool space = std::isspace(static_cast<unsigned char>(c)) != 0;
+    if (space && (text.empty() || text.back() == ' ')) continue;
+    text += space ? ' ' : c;
+    if (c == '.' && i + 1 < close && std::isspace(static_cast<unsigned char>(head[i + 1])) != 0)
+      break;
+  }
+  while (!text.empty() && (text.back() == ' ' || text.back() == '.')) text.pop_back();
+  if (text.size() <= max_chars) return text;
+  // cut at the last word that fits with the ellipsis
+  std::size_t cut = text.rfind(' ', max_chars > 3 ? max_chars - 3 : 0);
+  if (cut == std::string::npos || cut == 0) cut = max_chars > 3 ? max_chars - 3 : 0;
+  text.resize(cut);
+  while (!text.empty() && (text.back() == ',' || text.back() == ':' || text.back() == ' '))
+    text.pop_back();
+  return text + "...";
+}
+
+std::string list_worlds_text(const std::string& models_dir, const std::string& from) {
+  std::string out = "# models: " + models_dir + " (" + from + ")\n";
+  const std::vector<std::string> names = shipped_worlds(models_dir);
+  std::size_t width = 0;
+  for (const std::string& n : names) width = std::max(width, n.size());
+  for (const std::string& n : names) {
+    out += n + std::string(width - n.size() + 2, ' ') +
+           world_summary(models_dir + "/worlds/" + n + ".xml") + "\n";
+  }
+  if (names.empty()) out += "# no worlds in " + models_dir + "/worlds\n";
+  return out;
+}
+
 std::string resolve_world_path(const std::string& given, const std::string& models_dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -161,7 +206,12 @@ void stop_server(int signal) {
 int run_server(const Options& given_options) {
   Options options = given_options;
   physics::ComposeOptions compose;
-  compose.models_dir = options.models_dir.empty() ? physics::default_models_dir() : options.models_dir;
+  const common::ModelsDir models = physics::find_models_dir(options.models_dir);
+  compose.models_dir = models.path;
+  if (options.list_worlds) {
+    std::cout << list_worlds_text(models.path, common::to_string(models.from)) << std::flush;
+    return shipped_worlds(models.path).empty() ? 1 : 0;
+  }
   try {
     options.world_path = resolve_world_path(options.world_path, compose.models_dir);
   } catch (const std::exception& e) {

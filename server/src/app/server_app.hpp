@@ -19,6 +19,11 @@ int run_server(const Options& options);
 std::string resolve_world_path(const std::string& given, const std::string& models_dir);
 // The names of the worlds in models_dir/worlds, sorted.
 std::vector<std::string> shipped_worlds(const std::string& models_dir);
+// What a world file holds, in one line: the first sentence of its leading <!-- comment -->, white
+// space collapsed, cut at a word to at most max_chars (with "..."); "" when it has none.
+std::string world_summary(const std::string& world_path, std::size_t max_chars = 80);
+// --list-worlds: "# models: DIR (from)" then "NAME  SUMMARY" per shipped world. Thread-safe.
+std::string list_worlds_text(const std::string& models_dir, const std::string& from);
 // Warnings about options that expose the server (non-loopback --bind / --api-bind), one line each.
 std::vector<std::string> option_warnings(const Options& options);
 

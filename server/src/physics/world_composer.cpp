@@ -1,7 +1,6 @@
 #include "physics/world_composer.hpp"
 
 #include <tinyxml2.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -21,6 +20,7 @@
 #include <vector>
 
 #include "assets/mesh_convert.hpp"
+#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/mavlink/sha256.hpp"
 
 namespace uavsim::server::physics {
@@ -165,24 +165,44 @@ void absolutize_asset_paths(XMLElement* root, const fs::path& base_dir, const st
   }
 }
 
+// The file an <include file="inc"/> names: beside the including file, else (a relative name) in the
+// shipped models as if the including file were a shipped world, so that a world of one's own
+// anywhere includes the shipped parts as the shipped worlds do (file="../common/ground.xml") or by
+// their place in the models (file="common/ground.xml"). Fails naming every place it looked.
+fs::path find_include(const std::string& inc, const fs::path& base_dir, const fs::path& models_dir,
+                      const std::string& file, int line) {
+  std::vector<fs::path> candidates{base_dir / inc};
+  if (fs::path(inc).is_relative() && !models_dir.empty()) {
+    candidates.push_back((models_dir / "worlds" / inc).lexically_normal());
+    candidates.push_back((models_dir / inc).lexically_normal());
+  }
+  std::string looked;
+  for (const fs::path& c : candidates) {
+    std::error_code ec;
+    const bool exists = fs::exists(c, ec);
+    if (ec) fail(file, line, "included file '" + inc + "': " + ec.message());
+    if (exists) return c;
+    looked += (looked.empty() ? "" : ", ") + c.string();
+  }
+  fail(file, line, "included file not found: " + inc + " (looked for " + looked + ")");
+}
+
 // replace each <include file=.../> with the children of the included file's <mujoco>, recursively
 void inline_includes(XMLDocument& doc, XMLElement* element, const fs::path& base_dir,
-                     const std::string& file, int depth, IncludeBudget* budget) {
+                     const fs::path& models_dir, const std::string& file, int depth,
+                     IncludeBudget* budget) {
   if (depth > 16) fail(file, element->GetLineNum(), "includes nested more than 16 deep");
   for (XMLElement* e = element->FirstChildElement(); e;) {
     XMLElement* next = e->NextSiblingElement();
     if (std::string(e->Name()) != "include") {
-      inline_includes(doc, e, base_dir, file, depth, budget);
+      inline_includes(doc, e, base_dir, models_dir, file, depth, budget);
       e = next;
       continue;
     }
     const char* inc = e->Attribute("file");
     if (inc == nullptr) fail(file, e->GetLineNum(), "<include> without file=");
-    const fs::path inc_path = base_dir / inc;
+    const fs::path inc_path = find_include(inc, base_dir, models_dir, file, e->GetLineNum());
     std::error_code ec;
-    const bool exists = fs::exists(inc_path, ec);
-    if (ec) fail(file, e->GetLineNum(), "included file '" + std::string(inc) + "': " + ec.message());
-    if (!exists) fail(file, e->GetLineNum(), "included file not found: " + inc_path.string());
     // every include counts, however often the same file comes back
     budget->bytes += fs::file_size(inc_path, ec);
     if (++budget->files > kMaxIncludedFiles || budget->bytes > kMaxIncludedBytes) {
@@ -194,7 +214,8 @@ void inline_includes(XMLDocument& doc, XMLElement* element, const fs::path& base
     auto inc_doc = load_xml(inc_path.string());
     XMLElement* inc_root = inc_doc->RootElement();
     absolutize_asset_paths(inc_root, inc_path.parent_path(), inc_path.string());
-    inline_includes(*inc_doc, inc_root, inc_path.parent_path(), inc_path.string(), depth + 1, budget);
+    inline_includes(*inc_doc, inc_root, inc_path.parent_path(), models_dir, inc_path.string(),
+                    depth + 1, budget);
     // copy the included children in place of the <include>, keeping their order
     XMLNode* anchor = e->PreviousSibling();
     for (XMLNode* n = inc_root->FirstChild(); n; n = n->NextSibling()) {
@@ -345,7 +366,7 @@ class Composer {
     const fs::path base = fs::absolute(world_path_).parent_path();
     absolutize_asset_paths(root, base, world_path_);
     IncludeBudget budget;
-    inline_includes(*world_, root, base, world_path_, 0, &budget);
+    inline_includes(*world_, root, base, options_.models_dir, world_path_, 0, &budget);
     world_angle_ = compiler_attr(root, "angle", "degree");
     // includes may leave several <worldbody> sections, as MuJoCo allows
     if (root->FirstChildElement("worldbody") == nullptr) fail(world_path_, root->GetLineNum(), "no <worldbody>");
@@ -901,13 +922,14 @@ std::vector<std::string> compose_world_shards(const std::string& world_path, con
   return Composer(world_path, o).compose_shards(shards);
 }
 
-std::string default_models_dir() {
-  if (const char* env = std::getenv("UAVSIM_MODELS_DIR")) return env;
+common::ModelsDir find_models_dir(const std::string& option) {
 #ifdef UAVSIM_MODELS_DIR
-  return UAVSIM_MODELS_DIR;
+  return common::find_models_dir(option, UAVSIM_MODELS_DIR);
 #else
-  return "models";
+  return common::find_models_dir(option, "");
 #endif
 }
+
+std::string default_models_dir() { return find_models_dir("").path; }
 
 }  // namespace uavsim::server::physics

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "uavsim/common/install_paths.hpp"
+
 namespace uavsim::server::physics {
 
 // A startup error in a world or template file; what() names the file and line.
@@ -56,7 +58,11 @@ constexpr int kMaxPhysicsShards = 64;
 std::vector<std::string> compose_world_shards(const std::string& world_path, const ComposeOptions& options,
                                               int shards);
 
-// The directory that holds the shipped models, from UAVSIM_MODELS_DIR in the environment or the build.
+// The shipped models of this build: option (--models-dir, "" when not given), else
+// UAVSIM_MODELS_DIR in the environment, else PREFIX/share/uavsim/models beside an installed
+// PREFIX/bin, else the source tree the build came from (common::find_models_dir). Thread-safe.
+common::ModelsDir find_models_dir(const std::string& option);
+// find_models_dir("").path: where vehicles/, objects/ and worlds/ are when no option says.
 std::string default_models_dir();
 
 }  // namespace uavsim::server::physics

@@ -381,5 +381,47 @@ TEST(Options, UnknownWorldListsTheShippedOnes) {
   }
 }
 
+TEST(Options, ListWorldsNeedsNoWorld) {
+  const ParseResult r = parse({"--list-worlds"});
+  ASSERT_TRUE(r.options.has_value()) << r.error;
+  EXPECT_TRUE(r.options->list_worlds);
+}
+
+TEST(WorldSummary, IsTheFirstSentenceOfTheLeadingComment) {
+  const std::string dir = ::testing::TempDir();
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name) << text;
+    return dir + "/" + name;
+  };
+  // white space collapsed across lines, up to the first sentence's full stop
+  EXPECT_EQ(
+      world_summary(write("a.xml", "<!--\n  Two quads:\n  a test.  More words.\n-->\n<mujoco/>")),
+      "Two quads: a test");
+  // a comment after the first element is not the world's header
+  EXPECT_EQ(world_summary(write("b.xml", "<mujoco>\n<!-- inner -->\n</mujoco>")), "");
+  EXPECT_EQ(world_summary(write("c.xml", "<mujoco/>")), "");
+  EXPECT_EQ(world_summary(dir + "/missing.xml"), "");
+  // cut at a word, with an ellipsis, within max_chars
+  const std::string cut = world_summary(write("d.xml", "<!-- one two three four five six -->"), 16);
+  EXPECT_EQ(cut, "one two three...");
+  EXPECT_LE(cut.size(), 16u);
+}
+
+TEST(WorldSummary, ListsEveryShippedWorldWithWhatItHolds) {
+  const std::string text = list_worlds_text(UAVSIM_MODELS_DIR, "source tree");
+  EXPECT_EQ(text.rfind(std::string("# models: ") + UAVSIM_MODELS_DIR + " (source tree)\n", 0), 0u)
+      << text;
+  for (const std::string& w : shipped_worlds(UAVSIM_MODELS_DIR)) {
+    // each world on its own line, with a summary from its header comment
+    const std::size_t at = text.find("\n" + w + " ");
+    ASSERT_NE(at, std::string::npos) << w << "\n" << text;
+    const std::string line = text.substr(at + 1, text.find('\n', at + 1) - at - 1);
+    EXPECT_FALSE(world_summary(std::string(UAVSIM_MODELS_DIR) + "/worlds/" + w + ".xml").empty())
+        << w;
+    EXPECT_GT(line.size(), w.size() + 10) << line;
+  }
+  EXPECT_NE(text.find("\nmbzirc2017 "), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace uavsim::server::app

@@ -20,8 +20,10 @@ struct ServerRun {
   std::string output;  // stdout and stderr
 };
 
-ServerRun run_server(const std::string& args) {
-  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " " + args + " 2>&1";
+// env: "NAME=VALUE ..." set for the server alone, or ""
+ServerRun run_server_env(const std::string& env, const std::string& args) {
+  const std::string cmd = (env.empty() ? "" : "env " + env + " ") + std::string(UAVSIM_SERVER_BIN) +
+                          " " + args + " 2>&1";
   ServerRun r;
   FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return r;
@@ -32,6 +34,8 @@ ServerRun run_server(const std::string& args) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+ServerRun run_server(const std::string& args) { return run_server_env("", args); }
 
 bool has(const ServerRun& r, const std::string& s) { return r.output.find(s) != std::string::npos; }
 
@@ -65,6 +69,18 @@ TEST(ServerCli, UnknownWorldListsTheShippedWorlds) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(has(r, "no world file 'mbzirc2099'")) << r.output;
   EXPECT_TRUE(has(r, "mbzirc2020")) << r.output;
+}
+
+TEST(ServerCli, ListWorldsSaysWhereTheModelsAreAndExitsZero) {
+  ServerRun r = run_server("--list-worlds" + kWorlds);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, std::string("# models: ") + UAVSIM_MODELS_DIR + " (--models-dir)"))
+      << r.output;
+  EXPECT_TRUE(has(r, "\nmbzirc2020 ")) << r.output;
+  // the environment variable is the next place looked in; a folder without worlds/ fails
+  r = run_server_env("UAVSIM_MODELS_DIR=/nonexistent", "--list-worlds");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r, "# models: /nonexistent (UAVSIM_MODELS_DIR)")) << r.output;
 }
 
 TEST(ServerCli, PortInUseSuggestsEphemeralPorts) {

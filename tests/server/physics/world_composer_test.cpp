@@ -240,6 +240,59 @@ TEST(WorldComposer, MissingIncludeNamesTheIncludingFile) {
   }
 }
 
+TEST(WorldComposer, AWorldOfOnesOwnIncludesTheShippedPartsFromAnywhere) {
+  // a copy of a shipped world's include (file="../common/ground.xml") and the parts' place in the
+  // models (file="common/ground.xml") both resolve, in a folder far from models/
+  const fs::path dir = fs::temp_directory_path() / "uavsim_composer_test" / "elsewhere" / "mine";
+  fs::create_directories(dir);
+  for (const std::string inc : {"../common/ground.xml", "common/ground.xml"}) {
+    const fs::path path = dir / "mine.xml";
+    std::ofstream(path) << R"(<mujoco>
+  <compiler angle="radian"/>
+  <include file=")" << inc
+                        << R"("/>
+  <worldbody><uavsim_vehicle type="quad" name="uav0" pos="0 0 0"/></worldbody>
+</mujoco>)";
+    ASSERT_FALSE(fs::exists(dir / inc));  // not beside the world: only the models have it
+    const std::string mjcf = compose_world(path.string(), options());
+    EXPECT_NE(mjcf.find("name=\"ground\""), std::string::npos) << inc;
+    EXPECT_EQ(World::from_mjcf(mjcf, "mine")->vehicles().size(), 1u) << inc;
+  }
+}
+
+TEST(WorldComposer, AnIncludeBesideTheWorldComesBeforeTheShippedOne) {
+  // the world's own common/ground.xml, not the shipped one
+  fs::create_directories(fs::temp_directory_path() / "uavsim_composer_test" / "common");
+  write_temp(
+      "common/ground.xml",
+      R"(<mujoco><worldbody><geom name="my_ground" type="plane" size="5 5 0.1"/></worldbody></mujoco>)");
+  const std::string path = write_temp("own_ground.xml", R"(<mujoco>
+  <compiler angle="radian"/>
+  <include file="common/ground.xml"/>
+  <worldbody/>
+</mujoco>)");
+  const std::string mjcf = compose_world(path, options());
+  EXPECT_NE(mjcf.find("my_ground"), std::string::npos);
+  EXPECT_EQ(mjcf.find("name=\"ground\""), std::string::npos);
+}
+
+TEST(WorldComposer, AMissingIncludeNamesEveryPlaceLookedIn) {
+  const std::string path = write_temp("bad_include2.xml", R"(<mujoco>
+  <worldbody><include file="parts/nope.xml"/></worldbody>
+</mujoco>)");
+  try {
+    compose_world(path, options());
+    FAIL();
+  } catch (const WorldError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path + ":2:"), std::string::npos) << what;
+    EXPECT_NE(
+        what.find((fs::path(UAVSIM_MODELS_DIR) / "parts/nope.xml").lexically_normal().string()),
+        std::string::npos)
+        << what;
+  }
+}
+
 TEST(WorldComposer, ComposedTextLoadsFromAnywhere) {
   const std::string mjcf =
       compose_world(std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", options());
