@@ -90,8 +90,8 @@ class Daemons:
         self.tmp, self.procs = tmp, []
 
     def start(self, name, argv, env=None):
-        log = open(os.path.join(self.tmp, name + ".out"), "w")
-        p = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        with open(os.path.join(self.tmp, name + ".out"), "w") as log:
+            p = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         self.procs.append((name, p))
         return p
 
@@ -243,6 +243,15 @@ class SweepOnDaemons(unittest.TestCase):
         if MODE == "slurm":
             # the scheduler's own record of the task agrees
             self.assertIn("scheduler: FAILED 4:0", status)
+        else:
+            # every run went through the ssh login (GNU parallel's job log: its Host column)
+            logs = [f for f in os.listdir(remote) if f.startswith("parallel-ssh-")]
+            self.assertEqual(len(logs), 1, logs)
+            with open(os.path.join(remote, logs[0])) as f:
+                rows = [l.split("\t") for l in f.read().splitlines()[1:]]
+            self.assertEqual(len(rows), len(runs))
+            for row in rows:
+                self.assertIn("127.0.0.1", row[1])
         for r in good:
             self.assertTrue(os.path.isfile(os.path.join(remote, "runs", r["id"], "summary.json")), r["id"])
             with open(os.path.join(remote, "runs", r["id"], "started")) as f:
