@@ -249,7 +249,7 @@ class SweepOnDaemons(unittest.TestCase):
             self.assertEqual(len(logs), 1, logs)
             with open(os.path.join(remote, logs[0])) as f:
                 rows = [l.split("\t") for l in f.read().splitlines()[1:]]
-            self.assertEqual(len(rows), len(runs))
+            self.assertEqual(len(rows), len(runs), rows)
             for row in rows:
                 self.assertIn("127.0.0.1", row[1])
         for r in good:
