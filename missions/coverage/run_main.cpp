@@ -638,17 +638,18 @@ int main(int argc, char** argv) {
           const std::string type = e.value("type", "");
           const double t = e.value("time", 0.0);
           const int veh = e.value("vehicle", -1);
-          stamp(t, -1, [&, type, t, veh, name = e.value("vehicle_name", ""),
-                        detail = e.value("detail", "")] {
-            if (type == "takeoff")
-              first_takeoff_s = first_takeoff_s < 0 ? t : std::min(first_takeoff_s, t);
-            if (type == "touchdown" && !killed.count(veh))
-              last_touchdown_s = std::max(last_touchdown_s, t);
-            if (type == "vehicle_killed") mark_failed(veh, killed, t);
-            if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed, t);
-            if (type == "crash" || type == "vehicle_killed")
-              say("[event] t=" + fmt("%.2f", t) + " " + type + " " + name + " " + detail);
-          });
+          stamp(t, -1,
+                [&, type, t, veh, name = e.value("vehicle_name", ""),
+                 detail = e.value("detail", "")] {
+                  if (type == "takeoff")
+                    first_takeoff_s = first_takeoff_s < 0 ? t : std::min(first_takeoff_s, t);
+                  if (type == "touchdown" && !killed.count(veh))
+                    last_touchdown_s = std::max(last_touchdown_s, t);
+                  if (type == "vehicle_killed") mark_failed(veh, killed, t);
+                  if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed, t);
+                  if (type == "crash" || type == "vehicle_killed")
+                    say("[event] t=" + fmt("%.2f", t) + " " + type + " " + name + " " + detail);
+                });
         } else if (ev == "tick" && !ended) {
           const double t = e.value("time", 0.0);
           sim_s = t;
@@ -759,7 +760,7 @@ int main(int argc, char** argv) {
   launch.stop_all(30.0);
   std::filesystem::remove_all(dir);
   apply_pending(std::numeric_limits<double>::infinity());  // the programs' last lines
-  std::array<double, kAgentStateCount> time_in_state_s{};   // summed over agents (fig. 4.9)
+  std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
   for (const auto& [id, times] : agent_time_in_state_s) {
     for (size_t k = 0; k < times.size(); ++k) time_in_state_s[k] += times[k];
   }
