@@ -70,7 +70,8 @@ sys.path.insert(0, os.path.join(sys.argv[2], "missions", "coverage"))
 from plot_sweep import overcoverage
 # uavsim-sweep's run directories (and the JSON files of sweeps made before it)
 runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "runs", "*", "summary.json")) +
-                                          glob.glob(os.path.join(out, "*.json")))]
+                                          glob.glob(os.path.join(out, "*.json")))
+        if os.path.basename(p) != "sweep.json"]  # not uavsim-sweep's plan
 # the thesis's table 4.3: failure probability -> (failed agents, extra distance), both in %
 THESIS_43 = {0.0005: (2.50, 0.0000), 0.0007: (3.75, 0.1493), 0.0009: (5.00, 0.2095),
              0.001: (3.75, 0.1924), 0.003: (12.16, 0.5015), 0.005: (10.94, 0.7475),
