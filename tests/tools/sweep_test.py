@@ -97,6 +97,10 @@ class Plan(unittest.TestCase):
                             ["unknown mission 'mbzirc2019'", "coverage, mbzirc2017, mbzirc2020"], results)
         f = self.write("s.toml", '[[sweep]]\nmission = "coverage"\n[[sweep]]\nmission = "balloons"\n')
         self.assert_refused(["run", f, results], ["sweep 2", "unknown mission 'balloons'"], results)
+        # a runner that cannot run is refused as early
+        self.assert_refused(["run", "--mission", "coverage", results, "--runner", "ssh"],
+                            ["needs --sshloginfile"], results)
+        self.assert_refused(["run", "--mission", "coverage", results, "-j", "0"], ["--jobs 0"], results)
 
     def test_a_bad_grid_is_refused_with_the_reason(self):
         results = os.path.join(self.dir, "results")
