@@ -12,6 +12,10 @@
 // ground station (coverage-gcs) with a GCS link per vehicle through the server's relay, which can
 // cut or impair them (--gcs-cut, --gcs-loss); data delivered to the station counts as surviving.
 //
+// The run ends at the first of the launcher's ticks (1 s) after every agent printed its end, or at
+// the budget; the summary is scored there, so a seed's summary is the same every run (wall time and
+// paths aside).
+//
 // SIGINT or SIGTERM stops the run cleanly: the agents, the station and the server are stopped and
 // the summary so far is printed (JSON "interrupted": true).
 //
@@ -345,7 +349,8 @@ int main(int argc, char** argv) {
   // each agent's sim seconds in each state (fig. 4.9), summed over the agents in id order at the
   // end: floating-point sums in arrival order differ in the last bit from run to run
   std::map<int, std::array<double, kAgentStateCount>> agent_time_in_state_s;
-  std::set<int> over;                // agents that printed their end ("over: ..."), in their order
+  // agents that printed their end ("over: ..."): once all have, the run ends
+  std::set<int> over;
   std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
   std::set<int> crashed;             // crashes other than kills
   std::map<int, double> distance_m;  // horizontal distance flown (ground truth, 1 s samples)
