@@ -17,7 +17,12 @@ packages=(
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3 ffmpeg python3-matplotlib
   libegl-dev libegl-mesa0 libgl1-mesa-dri
+  slurm-wlm munge parallel openssh-server
 )
+# sweeps (tools/sweep/uavsim-sweep): GNU parallel for the local and ssh runners; SLURM (slurm-wlm:
+# slurmctld, slurmd, slurm-client) and munge for the cluster test, which starts them by hand on
+# loopback; openssh-server for the ssh runner's test (an sshd of its own on 127.0.0.1). Installing
+# them starts no service.
 # EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
 # libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
 if [ "${1:-}" != "--demo" ]; then

@@ -91,7 +91,10 @@ def main():
 
     out = sys.argv[1]
     png_dir = sys.argv[2] if len(sys.argv) > 2 else out
-    all_runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "*.json")))]
+    # uavsim-sweep's run directories (and the JSON files of sweeps made before it)
+    all_runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "runs", "*", "summary.json")) +
+                                                   glob.glob(os.path.join(out, "*.json")))
+            if os.path.basename(p) != "sweep.json"]  # not uavsim-sweep's plan
     os.makedirs(png_dir, exist_ok=True)
     fig48 = plot_overcoverage(plt, all_runs, png_dir)
     if fig48:

@@ -12,6 +12,10 @@
 // ground station (coverage-gcs) with a GCS link per vehicle through the server's relay, which can
 // cut or impair them (--gcs-cut, --gcs-loss); data delivered to the station counts as surviving.
 //
+// The run ends at the first of the launcher's ticks (1 s) after every agent printed its end, or at
+// the budget; the summary is scored there, so a seed's summary is the same every run (wall time and
+// paths aside).
+//
 // SIGINT or SIGTERM stops the run cleanly: the agents, the station and the server are stopped and
 // the summary so far is printed (JSON "interrupted": true).
 //
@@ -27,12 +31,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
 #include <map>
 #include <random>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "agent.hpp"
@@ -341,7 +349,11 @@ int main(int argc, char** argv) {
   int completed_by = -1;             // the agent whose query found the rectangle covered
   int recalls = 0;                   // survey rounds restarted after a loss on the way home
   double completed_at_s = -1.0;      // and the sim time it found it (the going-home broadcast)
-  std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
+  // each agent's sim seconds in each state (fig. 4.9), summed over the agents in id order at the
+  // end: floating-point sums in arrival order differ in the last bit from run to run
+  std::map<int, std::array<double, kAgentStateCount>> agent_time_in_state_s;
+  // agents that printed their end ("over: ..."): once all have, the run ends
+  std::set<int> over;
   std::set<int> killed;              // agents killed (ground truth: vehicle_killed)
   std::set<int> crashed;             // crashes other than kills
   std::map<int, double> distance_m;  // horizontal distance flown (ground truth, 1 s samples)
@@ -379,6 +391,7 @@ int main(int argc, char** argv) {
     static const std::regex complete_re(R"(^agent (\d+) t=(\S+) mission complete)");
     static const std::regex recall_re(R"(^agent \d+ t=\S+ .*\(recall: round \d+\))");
     static const std::regex times_re(R"(^agent (\d+) t=\S+ time in states:(.*)$)");
+    static const std::regex over_re(R"(^agent (\d+) t=\S+ over: )");
     std::smatch m;
     if (std::regex_search(line, m, state_re)) {
       const int id = std::stoi(m[1]);
@@ -393,13 +406,72 @@ int main(int argc, char** argv) {
     } else if (std::regex_search(line, m, recall_re)) {
       ++recalls;
     } else if (std::regex_search(line, m, times_re)) {
+      auto& times = agent_time_in_state_s[std::stoi(m[1])];
+      times.fill(0.0);
       std::istringstream in(m[2].str());
       double v = 0.0;
       for (int k = 0; k < kAgentStateCount && in >> v; ++k) {
-        if (std::isfinite(v) && v >= 0.0) time_in_state_s[static_cast<size_t>(k)] += v;
+        if (std::isfinite(v) && v >= 0.0) times[static_cast<size_t>(k)] = v;
       }
+    } else if (std::regex_search(line, m, over_re)) {
+      over.insert(std::stoi(m[1]));
     }
     return true;
+  };
+
+  // The programs' lines and the server's events reach the launcher in an order that depends on
+  // wall-clock timing (one pipe per program, the API's socket); they are applied in sim-time order
+  // instead: by stamp, then events before lines, then the agent's id, then arrival. At each of the
+  // launcher's ticks, whatever is stamped before it is applied: by then all of it has arrived (a
+  // program prints before it reports its tick done, and the server sends an event before the next
+  // tick). So a seed's run scores the same every time, failures and recoveries included.
+  struct Stamped {
+    double t_s;
+    int source;  // -1: an event; otherwise the agent's id (the station's: 255)
+    std::uint64_t arrival;
+    std::function<void()> apply;
+  };
+  std::vector<Stamped> pending;
+  std::uint64_t arrivals = 0;
+  auto stamp = [&](double t_s, int source, std::function<void()> apply) {
+    pending.push_back({t_s, source, arrivals++, std::move(apply)});
+  };
+  // applies what is stamped before t_s (everything: +infinity), in order
+  auto apply_pending = [&](double t_s) {
+    std::sort(pending.begin(), pending.end(), [](const Stamped& a, const Stamped& b) {
+      return std::tie(a.t_s, a.source, a.arrival) < std::tie(b.t_s, b.source, b.arrival);
+    });
+    size_t n = 0;
+    while (n < pending.size() && pending[n].t_s < t_s - 1e-9) ++n;
+    std::vector<Stamped> due(std::make_move_iterator(pending.begin()),
+                             std::make_move_iterator(pending.begin() + static_cast<long>(n)));
+    pending.erase(pending.begin(), pending.begin() + static_cast<long>(n));
+    for (Stamped& s : due) s.apply();
+  };
+  // a program's line: applied in order if it carries a sim time ("agent N t=T ...", an APD
+  // report), at once otherwise (it is only printed)
+  auto on_program_line = [&](const std::string& child, const std::string& line) {
+    static const std::regex stamp_re(R"(^agent (\d+) t=(\S+) )");
+    std::smatch m;
+    int source = -1;
+    double t_s = 0.0;
+    if (line.rfind("APD ", 0) == 0) {
+      if (auto r = decode_apd_report(line, stripes)) {
+        source = r->agent;
+        t_s = r->time_s;
+      }
+    } else if (std::regex_search(line, m, stamp_re)) {
+      source = std::stoi(m[1]);
+      t_s = std::strtod(m[2].str().c_str(), nullptr);
+    }
+    auto apply = [&, child, line] {
+      if (on_agent_line(line)) say("[" + child + "] " + line);
+    };
+    if (source >= 0 && std::isfinite(t_s)) {
+      stamp(t_s, source, apply);
+    } else {
+      apply();
+    }
   };
 
   auto held_apd = [&] {
@@ -417,8 +489,8 @@ int main(int argc, char** argv) {
   launch.on_line([&](const std::string& child, const std::string& line) {
     if (child == "server") {
       if (line.find(": MAVLink on tcp:") == std::string::npos) say("[server] " + line);
-    } else if (on_agent_line(line)) {
-      say("[" + child + "] " + line);
+    } else {
+      on_program_line(child, line);
     }
   });
   // cameras only for the video: the world's overview camera, which the agents never see
@@ -547,6 +619,24 @@ int main(int argc, char** argv) {
     size_t next_kill = 0;
     bool gcs_cut = false;
     double next_progress_s = o.progress_period_s;
+    // the end of the run: the first of the launcher's ticks after every agent printed its end (or
+    // the one at the budget). The ground truth is scored there, the clock held, so the summary
+    // does not depend on when the programs' exits are noticed; the launcher then leaves the
+    // lockstep and reads the programs' last lines until they exit.
+    bool ended = false;
+    auto end_at_tick = [&]() {
+      if (auto v = api.request({{"op", "vehicles"}})) {
+        sim_s = v->value("time_s", sim_s);
+        for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
+      }
+      // what the relay did to each GCS link
+      for (int i = 0; o.gcs && i < o.agents; ++i) {
+        if (auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}))
+          gcs_links.push_back(*g);
+      }
+      (void)api.lockstep_leave();
+      ended = true;
+    };
     while (!harness_error) {
       launch.pump(50);
       for (const SimMessage& msg : api.take_messages()) {
@@ -556,18 +646,24 @@ int main(int argc, char** argv) {
           const std::string type = e.value("type", "");
           const double t = e.value("time", 0.0);
           const int veh = e.value("vehicle", -1);
-          if (type == "takeoff" && first_takeoff_s < 0) first_takeoff_s = t;
-          if (type == "touchdown" && !killed.count(veh))
-            last_touchdown_s = std::max(last_touchdown_s, t);
-          if (type == "vehicle_killed") mark_failed(veh, killed, t);
-          if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed, t);
-          if (type == "crash" || type == "vehicle_killed") {
-            say("[event] t=" + fmt("%.2f", t) + " " + type + " " + e.value("vehicle_name", "") +
-                " " + e.value("detail", ""));
-          }
-        } else if (ev == "tick") {
+          stamp(t, -1,
+                [&, type, t, veh, name = e.value("vehicle_name", ""),
+                 detail = e.value("detail", "")] {
+                  if (type == "takeoff")
+                    first_takeoff_s = first_takeoff_s < 0 ? t : std::min(first_takeoff_s, t);
+                  if (type == "touchdown" && !killed.count(veh))
+                    last_touchdown_s = std::max(last_touchdown_s, t);
+                  if (type == "vehicle_killed") mark_failed(veh, killed, t);
+                  if (type == "crash" && !killed.count(veh)) mark_failed(veh, crashed, t);
+                  if (type == "crash" || type == "vehicle_killed")
+                    say("[event] t=" + fmt("%.2f", t) + " " + type + " " + name + " " + detail);
+                });
+        } else if (ev == "tick" && !ended) {
           const double t = e.value("time", 0.0);
           sim_s = t;
+          // what the programs printed before this tick has arrived: read it, apply it in order
+          launch.pump(0);
+          apply_pending(t);
           // ground truth: distance flown, energy, who is flying
           std::vector<int> flying;
           if (auto v = api.request({{"op", "vehicles"}})) {
@@ -637,6 +733,10 @@ int main(int argc, char** argv) {
             line += " | wall " + fmt("%.1f", wall_s()) + " s";
             say(line);
           }
+          if (static_cast<int>(over.size()) >= o.agents || t + 1e-9 >= o.budget_s) {
+            end_at_tick();
+            continue;
+          }
           if (!api.done(e.value("tick", std::int64_t{0}))) fail("the launcher's done was refused");
         }
       }
@@ -645,7 +745,7 @@ int main(int argc, char** argv) {
         say("coverage-run: interrupted");
         break;
       }
-      if (sim_s > o.budget_s) {
+      if (ended && sim_s + 1e-9 >= o.budget_s) {
         say("coverage-run: sim-time budget spent");
         break;
       }
@@ -659,24 +759,19 @@ int main(int argc, char** argv) {
       }
     }
 
-    // 8. score from ground truth
-    if (!harness_error) {
-      if (auto v = api.request({{"op", "vehicles"}})) {
-        sim_s = v->value("time_s", sim_s);
-        for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
-      }
-      // what the relay did to each GCS link
-      for (int i = 0; o.gcs && i < o.agents; ++i) {
-        if (auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}))
-          gcs_links.push_back(*g);
-      }
-      (void)api.lockstep_leave();
-    }
+    // 8. score from ground truth, where the run did not reach its end (the programs gone before
+    // it, interrupted, the wall-clock limit): as the clock stands
+    if (!harness_error && !ended) end_at_tick();
   }
 
   // 9. stop everything we started (the ground station prints its last map as it stops)
   launch.stop_all(30.0);
   std::filesystem::remove_all(dir);
+  apply_pending(std::numeric_limits<double>::infinity());  // the programs' last lines
+  std::array<double, kAgentStateCount> time_in_state_s{};  // summed over agents (fig. 4.9)
+  for (const auto& [id, times] : agent_time_in_state_s) {
+    for (size_t k = 0; k < times.size(); ++k) time_in_state_s[k] += times[k];
+  }
 
   const double coverage = held_fraction();
   int survivors = 0, landed = 0;

@@ -2,9 +2,10 @@
 # Sweeps of the coverage flock in the simulator (not a ctest: minutes per run), the thesis's section
 # 4.3 experiments: fig. 4.7 (mission time and energy against the number of agents, no failures) and
 # tables 4.2/4.3 (failure probability against failed agents, mission time, energy and the extra
-# distance flown to recover). Three steps, so that any job runner can do the middle:
+# distance flown to recover). A thin wrapper of uavsim-sweep (tools/sweep, docs/sweeps.md) that keeps
+# this sweep's tables and plots. Three steps, so that any job runner can do the middle:
 #   missions/coverage/sweep.sh jobs OUT_DIR [AREA] [SEEDS] > jobs.txt   # one coverage-run per line
-#   parallel -j2 < jobs.txt                      # GNU parallel (or: xargs -P2 -d '\n' -n1 bash -c < jobs.txt)
+#   parallel -j2 < jobs.txt      # or any job runner; or: uavsim-sweep resume OUT_DIR [--runner slurm ...]
 #   missions/coverage/sweep.sh table OUT_DIR                           # the tables, beside the thesis's
 #   missions/coverage/sweep.sh plot OUT_DIR [PNG_DIR]                  # fig. 4.7, 4.8 and 4.9 (matplotlib)
 # AREA defaults to 600x600 (the thesis's), SEEDS to 3. Environment (space-separated lists):
@@ -12,7 +13,8 @@
 #   SWEEP_FAIL_AGENTS  flock size of the failure runs (default 25; empty: no failure runs)
 #   SWEEP_PROBS        failure probabilities (default table 4.3's, 0.0005 .. 0.009)
 #   SWEEP_ARGS         more coverage-run options on every line, e.g. "--gcs --budget 2500" (the
-#                      table keeps runs with a ground station apart: "600x600 gcs")
+#                      table keeps runs with a ground station apart: "600x600 gcs"; default budget 5000)
+# Each run goes into OUT_DIR/runs/ID (its run directory with ground truth at 1 Hz, log, exit code).
 # Extra distance: the distance flown by the flock beyond the failure-free run of the same seed and
 # size (so SWEEP_AGENTS must hold SWEEP_FAIL_AGENTS), all agents' and the survivors' only; and the
 # distance flown to recover (coverage-run's recovery_distance_m: the agents' flight photographing
@@ -24,7 +26,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}
 cmd=${1:-}
 out=${2:-}
-usage() { sed -n 2,21p "$0"; exit 2; }
+usage() { sed -n 2,24p "$0"; exit 2; }
 [[ -n "$cmd" && -n "$out" ]] || usage
 case "$cmd" in
   jobs)
@@ -33,20 +35,32 @@ case "$cmd" in
     agents=${SWEEP_AGENTS-5 10 15 20 25}
     fail_agents=${SWEEP_FAIL_AGENTS-25}
     probs=${SWEEP_PROBS-0.0005 0.0007 0.0009 0.001 0.003 0.005 0.007 0.009}
-    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[0-9]+$ ]] || usage
+    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[1-9][0-9]*$ ]] || usage
     for n in $agents $fail_agents; do [[ "$n" =~ ^[0-9]+$ ]] || usage; done
     for p in $probs; do [[ "$p" =~ ^0?\.[0-9]+$ ]] || usage; done
-    mkdir -p "$out"
-    common="--no-run-dir --no-record --area $area --quiet --budget 5000 ${SWEEP_ARGS-}"
-    for ((s = 1; s <= seeds; s++)); do
-      for n in $agents; do
-        echo "$run $common --agents $n --seed $s --json $out/n${n}_p0_seed$s.json > $out/n${n}_p0_seed$s.log 2>&1"
-      done
-      [[ -n "$fail_agents" ]] || continue
-      for p in $probs; do
-        echo "$run $common --agents $fail_agents --seed $s --failure-prob $p --json $out/n${fail_agents}_p${p}_seed$s.json > $out/n${fail_agents}_p${p}_seed$s.log 2>&1"
-      done
+    # SWEEP_ARGS: its --budget is the sweep's; the rest goes to every run as it is
+    budget=5000
+    extra=""
+    set -- ${SWEEP_ARGS-}
+    while (($#)); do
+      if [[ "$1" == --budget && $# -gt 1 ]]; then budget=$2; shift 2; continue; fi
+      extra+=", \"${1//[\"\\]/}\""
+      shift
     done
+    [[ "$budget" =~ ^[0-9.]+$ ]] || usage
+    list() { local out="" x; for x in "$@"; do out+="${out:+, }$x"; done; echo "[$out]"; }
+    mkdir -p "$out"
+    {
+      echo "name = \"coverage $area, seeds 1-$seeds\""
+      part() {
+        printf '[[sweep]]\nmission = "coverage"\nseeds = "1-%s"\nbudget_s = %s\nargs = ["--quiet", "--truth-hz", "1"%s]\ngrid = { area = "%s", %s }\n' \
+          "$seeds" "$budget" "$extra" "$area" "$1"
+      }
+      # the failure-free flocks, then the failure runs (one flock size, every probability)
+      [[ -z "${agents// /}" ]] || part "agents = $(list $agents)"
+      [[ -z "$fail_agents" ]] || part "agents = $fail_agents, failure_prob = $(list $probs)"
+    } > "$out/sweep.toml"
+    /usr/bin/python3 "$root/tools/sweep/uavsim-sweep" jobs "$out/sweep.toml" "$out" --launcher-dir "$(dirname "$run")"
     ;;
   table)
     python3 - "$out" "$root" <<'PY'
@@ -54,7 +68,10 @@ import glob, json, os, statistics, sys
 out = sys.argv[1]
 sys.path.insert(0, os.path.join(sys.argv[2], "missions", "coverage"))
 from plot_sweep import overcoverage
-runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "*.json")))]
+# uavsim-sweep's run directories (and the JSON files of sweeps made before it)
+runs = [json.load(open(p)) for p in sorted(glob.glob(os.path.join(out, "runs", "*", "summary.json")) +
+                                          glob.glob(os.path.join(out, "*.json")))
+        if os.path.basename(p) != "sweep.json"]  # not uavsim-sweep's plan
 # the thesis's table 4.3: failure probability -> (failed agents, extra distance), both in %
 THESIS_43 = {0.0005: (2.50, 0.0000), 0.0007: (3.75, 0.1493), 0.0009: (5.00, 0.2095),
              0.001: (3.75, 0.1924), 0.003: (12.16, 0.5015), 0.005: (10.94, 0.7475),

@@ -1,36 +1,52 @@
 #!/usr/bin/env bash
-# Seed sweep of the balloon mission (not a ctest: minutes per seed). Two steps, so that any job runner can
-# do the middle:
-#   missions/mbzirc2020/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] [REALISM] > jobs.txt   # one mbzirc2020-run per line
+# Seed sweep of the balloon mission (not a ctest: minutes per seed), a thin wrapper of uavsim-sweep
+# (tools/sweep, docs/sweeps.md) that keeps this sweep's table:
+#   missions/mbzirc2020/sweep.sh jobs OUT_DIR [FIRST_SEED] [COUNT] [REALISM] > jobs.txt   # one run per line
 #     (REALISM: field|ideal, given to every run as --realism; default the world's)
-#   parallel -j2 < jobs.txt                                                     # GNU parallel (or: bash jobs.txt)
+#   parallel -j2 < jobs.txt               # or any job runner; or: uavsim-sweep resume OUT_DIR [--runner slurm ...]
 #   missions/mbzirc2020/sweep.sh table OUT_DIR                                  # the table, beside seed table 7.1
-# Each seed runs twice: both UAVs, and uav1 killed right after take-off (Competition Day 2).
-# MBZIRC2020_RUN overrides the launcher (default: build/missions/mbzirc2020/mbzirc2020-run); MBZIRC2020_ARGS
-# adds options to every run (e.g. --wind 6,270).
+# Each seed runs twice: both UAVs, and uav1 killed right after take-off (Competition Day 2), each into
+# OUT_DIR/runs/ID (its run directory, log and exit code). MBZIRC2020_RUN overrides the launcher (default:
+# build/missions/mbzirc2020/mbzirc2020-run); MBZIRC2020_ARGS adds options to every run (e.g. --wind 6,270).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 run=${MBZIRC2020_RUN:-$root/build/missions/mbzirc2020/mbzirc2020-run}
 cmd=${1:-}
 out=${2:-}
-[[ -n "$cmd" && -n "$out" ]] || { sed -n 2,9p "$0"; exit 2; }
+[[ -n "$cmd" && -n "$out" ]] || { sed -n 2,11p "$0"; exit 2; }
 case "$cmd" in
   jobs)
     first=${3:-1}
-    realism=${5:+--realism $5}
     count=${4:-10}
+    [[ "$first" =~ ^[0-9]+$ && "$count" =~ ^[1-9][0-9]*$ ]] || { sed -n 2,11p "$0"; exit 2; }
+    [[ -z "${5:-}" || "$5" =~ ^(field|ideal)$ ]] || { sed -n 2,11p "$0"; exit 2; }
+    seeds="[$(seq -s, "$first" $((first + count - 1)))]"
+    realism=${5:+realism = \"$5\"}
+    extra=""
+    for a in ${MBZIRC2020_ARGS:-}; do extra+=", \"${a//[\"\\]/}\""; done
     mkdir -p "$out"
-    for ((s = first; s < first + count; s++)); do
-      echo "$run --no-run-dir --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --json $out/two_seed$s.json > $out/two_seed$s.log 2>&1"
-      echo "$run --no-run-dir --no-record --seed $s --budget 400 --quiet $realism ${MBZIRC2020_ARGS:-} --kill uav1 --json $out/one_seed$s.json > $out/one_seed$s.log 2>&1"
-    done
+    # two sweeps in one: both UAVs, and uav1 killed after its take-off
+    {
+      echo "name = \"mbzirc2020 seeds $first-$((first + count - 1))\""
+      for kill in "" 'kill = "uav1"'; do
+        grid="$kill${kill:+${realism:+, }}$realism"
+        printf '[[sweep]]\nmission = "mbzirc2020"\nseeds = %s\nbudget_s = 400\nargs = ["--quiet"%s]\ngrid = { %s }\n' \
+          "$seeds" "$extra" "$grid"
+      done
+    } > "$out/sweep.toml"
+    /usr/bin/python3 "$root/tools/sweep/uavsim-sweep" jobs "$out/sweep.toml" --launcher-dir "$(dirname "$run")" "$out"
     ;;
   table)
     python3 - "$out" <<'PY'
 import glob, json, os, sys
 out = sys.argv[1]
 def load(kind):
+    # uavsim-sweep's run directories (uav1 killed: "one"), and the JSON files of sweeps made before it
     rows = {}
+    for p in glob.glob(os.path.join(out, "runs", "*", "summary.json")):
+        j = json.load(open(p))
+        if ("one" if j["killed"] else "two") == kind:
+            rows[j["seed"]] = j
     for p in glob.glob(os.path.join(out, kind + "_seed*.json")):
         j = json.load(open(p))
         rows[j["seed"]] = j
@@ -59,5 +75,5 @@ print("two UAVs: " + stats(two) + "   (seed table 7.1: 126 s and 162 s, 5/5)")
 print("one UAV:  " + stats(one) + "   (seed table 7.1: 262 s and 306 s, 5/5)")
 PY
     ;;
-  *) sed -n 2,9p "$0"; exit 2 ;;
+  *) sed -n 2,11p "$0"; exit 2 ;;
 esac
