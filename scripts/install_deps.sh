@@ -10,7 +10,12 @@ packages=(
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev llvm python3 ffmpeg ccache python3-matplotlib
   libegl-dev libegl-mesa0 libgl1-mesa-dri
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-opencv python3-setuptools
+  python3-pip python3-venv
 )
+# the Python package (python/): pybind11 and Python's headers build the extension module uavsim._core for
+# Debian's python3; numpy carries its frames, pytest runs its tests (label python), OpenCV its camera
+# example; setuptools, pip and venv are what `pip install ./python` into a user's venv needs offline
 # EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
 # libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
 # clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm), which turns
