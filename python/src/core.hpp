@@ -59,16 +59,19 @@ class CallbackErrors {
  public:
   // Runs fn (a call into Python, GIL held); keeps its exception if it raised, and writes any later one of
   // the same blocking call to sys.unraisablehook (it cannot be raised twice).
+  // Nothing is thrown out of it: a C++ exception (a failed conversion, ...) becomes a Python one.
   template <class F>
   void guard(F&& fn) {
     try {
       fn();
     } catch (py::error_already_set& e) {
-      if (!first_) {
-        first_.emplace(std::move(e));
-      } else {
-        e.discard_as_unraisable("uavsim: a second exception in a callback during the same call");
-      }
+      keep(std::move(e));
+    } catch (py::builtin_exception& e) {
+      e.set_error();
+      keep(py::error_already_set());
+    } catch (const std::exception& e) {
+      PyErr_SetString(PyExc_RuntimeError, e.what());
+      keep(py::error_already_set());
     }
   }
   // Raises the kept exception, if any (GIL held).
@@ -80,6 +83,13 @@ class CallbackErrors {
   }
 
  private:
+  void keep(py::error_already_set&& e) {
+    if (!first_) {
+      first_.emplace(std::move(e));
+    } else {
+      e.discard_as_unraisable("uavsim: a second exception in a callback during the same call");
+    }
+  }
   std::optional<py::error_already_set> first_;
 };
 using CallbackErrorsPtr = std::shared_ptr<CallbackErrors>;

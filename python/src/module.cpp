@@ -266,7 +266,7 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
           "post", [](PyLoop& l, py::function fn) { live(l).post(python_task(l, std::move(fn))); }, py::arg("fn"),
           "Thread-safe: runs fn() on the loop's thread soon (at the current tick under lockstep).")
       .def(
-          "run", [](PyLoop& l) { blocking(*l.errors, [&] { live(l).run(); }); },
+          "run", [](PyLoop& l) { blocking(*l.errors, [&loop = live(l)] { loop.run(); }); },
           "Dispatches until stop() is called.")
       .def(
           "stop", [](PyLoop& l) { live(l).stop(); }, "Thread-safe: ends run().")
@@ -274,7 +274,7 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
           "run_for",
           [](PyLoop& l, double duration_s) {
             checked_duration(duration_s, "duration_s");
-            blocking_result(*l.errors, [&] { return live(l).run_for(duration_s); });
+            blocking_result(*l.errors, [&, &loop = live(l)] { return loop.run_for(duration_s); });
           },
           py::arg("duration_s"), "Dispatches for duration_s of loop time (ConnectionError if the lockstep dies).")
       .def(
@@ -284,8 +284,8 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
             CallbackErrors& errors = *l.errors;
             bool raised = false;
             const auto p = hold_callable(std::move(pred));
-            blocking_result(errors, [&] {
-              return live(l).run_until(
+            blocking_result(errors, [&, &loop = live(l)] {
+              return loop.run_until(
                   [&]() -> bool {
                     py::gil_scoped_acquire gil;
                     bool done = false;
@@ -307,8 +307,8 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
             checked_duration(duration_s, "duration_s");
             CallbackErrors& errors = *l.errors;
             const auto f = hold_callable(std::move(fn));
-            blocking(errors, [&] {
-              live(l).run_busy(duration_s, [&] {
+            blocking(errors, [&, &loop = live(l)] {
+              loop.run_busy(duration_s, [&] {
                 py::gil_scoped_acquire gil;
                 errors.guard([&] { (*f)(); });
               });

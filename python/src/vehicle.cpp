@@ -214,7 +214,7 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
           "connect",
           [](PyVehicle& pv, const std::string& address, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            blocking_result(pv.errors(), [&] { return pv.v().connect(address, timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.connect(address, timeout_s); });
           },
           py::arg("address"), py::arg("timeout_s") = 10.0,
           "Connects to \"tcp:HOST:PORT\", \"udp:HOST:PORT\" or \"udpin:ADDR:PORT\" and waits for a heartbeat.")
@@ -232,7 +232,7 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
           "wait_ready",
           [](PyVehicle& pv, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            blocking_result(pv.errors(), [&] { return pv.v().wait_ready(timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.wait_ready(timeout_s); });
           },
           py::arg("timeout_s") = 60.0, "Waits for heartbeat, home, a 3D GPS fix, a healthy EKF and pre-arm checks.")
       .def_property_readonly("ready", [](PyVehicle& pv) { return pv.v().ready(); })
@@ -268,20 +268,20 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
       .def_property_readonly("status_texts", [](PyVehicle& pv) { return pv.v().status_texts(); })
       .def(
           "set_mode",
-          [](PyVehicle& pv, FlightMode mode) { blocking_result(pv.errors(), [&] { return pv.v().set_mode(mode); }); },
+          [](PyVehicle& pv, FlightMode mode) { blocking_result(pv.errors(), [&, &v = pv.v()] { return v.set_mode(mode); }); },
           py::arg("mode"))
       .def(
-          "arm", [](PyVehicle& pv, bool force) { blocking_result(pv.errors(), [&] { return pv.v().arm(force); }); },
+          "arm", [](PyVehicle& pv, bool force) { blocking_result(pv.errors(), [&, &v = pv.v()] { return v.arm(force); }); },
           py::arg("force") = false)
       .def(
           "disarm",
-          [](PyVehicle& pv, bool force) { blocking_result(pv.errors(), [&] { return pv.v().disarm(force); }); },
+          [](PyVehicle& pv, bool force) { blocking_result(pv.errors(), [&, &v = pv.v()] { return v.disarm(force); }); },
           py::arg("force") = false)
       .def(
           "takeoff",
           [](PyVehicle& pv, double rel_alt_m, bool wait, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            blocking_result(pv.errors(), [&] { return pv.v().takeoff(rel_alt_m, wait, timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.takeoff(rel_alt_m, wait, timeout_s); });
           },
           py::arg("rel_alt_m"), py::arg("wait") = true, py::arg("timeout_s") = 60.0,
           "NAV_TAKEOFF to rel_alt_m above home (GUIDED, armed); wait: until within 0.5 m of it.")
@@ -289,11 +289,11 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
           "land",
           [](PyVehicle& pv, bool wait, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            blocking_result(pv.errors(), [&] { return pv.v().land(wait, timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.land(wait, timeout_s); });
           },
           py::arg("wait") = false, py::arg("timeout_s") = 120.0)
       .def("return_to_launch",
-           [](PyVehicle& pv) { blocking_result(pv.errors(), [&] { return pv.v().return_to_launch(); }); })
+           [](PyVehicle& pv) { blocking_result(pv.errors(), [&, &v = pv.v()] { return v.return_to_launch(); }); })
       .def(
           "command_long_async",
           [](PyVehicle& pv, std::uint16_t command, const std::array<float, 7>& params,
@@ -343,7 +343,7 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
           [](PyVehicle& pv, const Eigen::Vector3d& enu_m, double tolerance_m, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
             positive(tolerance_m, "tolerance_m");
-            blocking_result(pv.errors(), [&] { return pv.v().wait_position_enu(enu_m, tolerance_m, timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.wait_position_enu(enu_m, tolerance_m, timeout_s); });
           },
           py::arg("enu_m"), py::arg("tolerance_m"), py::arg("timeout_s"))
       .def(
@@ -363,41 +363,41 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
       .def(
           "set_yaw",
           [](PyVehicle& pv, double heading_deg, double rate_deg_s, bool relative) {
-            blocking_result(pv.errors(), [&] { return pv.v().set_yaw(heading_deg, rate_deg_s, relative); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.set_yaw(heading_deg, rate_deg_s, relative); });
           },
           py::arg("heading_deg"), py::arg("rate_deg_s") = 30.0, py::arg("relative") = false)
       .def(
           "point_gimbal",
           [](PyVehicle& pv, double pitch_deg, double yaw_deg, double roll_deg) {
-            blocking_result(pv.errors(), [&] { return pv.v().point_gimbal(pitch_deg, yaw_deg, roll_deg); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.point_gimbal(pitch_deg, yaw_deg, roll_deg); });
           },
           py::arg("pitch_deg"), py::arg("yaw_deg"), py::arg("roll_deg") = 0.0)
       .def(
           "upload_mission",
           [](PyVehicle& pv, const std::vector<MissionItem>& items, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            blocking_result(pv.errors(), [&] { return pv.v().upload_mission(items, timeout_s); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.upload_mission(items, timeout_s); });
           },
           py::arg("items"), py::arg("timeout_s") = 10.0)
-      .def("start_mission", [](PyVehicle& pv) { blocking_result(pv.errors(), [&] { return pv.v().start_mission(); }); })
+      .def("start_mission", [](PyVehicle& pv) { blocking_result(pv.errors(), [&, &v = pv.v()] { return v.start_mission(); }); })
       .def(
           "get_param",
           [](PyVehicle& pv, const std::string& name, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            return blocking_result(pv.errors(), [&] { return pv.v().get_param(name, timeout_s); });
+            return blocking_result(pv.errors(), [&, &v = pv.v()] { return v.get_param(name, timeout_s); });
           },
           py::arg("name"), py::arg("timeout_s") = 3.0)
       .def(
           "set_param",
           [](PyVehicle& pv, const std::string& name, float value, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
-            return blocking_result(pv.errors(), [&] { return pv.v().set_param(name, value, timeout_s); });
+            return blocking_result(pv.errors(), [&, &v = pv.v()] { return v.set_param(name, value, timeout_s); });
           },
           py::arg("name"), py::arg("value"), py::arg("timeout_s") = 3.0)
       .def(
           "command_long",
           [](PyVehicle& pv, std::uint16_t command, const std::array<float, 7>& params) {
-            blocking_result(pv.errors(), [&] { return pv.v().command_long(command, params); });
+            blocking_result(pv.errors(), [&, &v = pv.v()] { return v.command_long(command, params); });
           },
           py::arg("command"), py::arg("params"));
 

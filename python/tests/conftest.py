@@ -17,7 +17,7 @@ SMALL_CAMERA = {"overview": "width=64,height=48,fps=10"}
 
 @pytest.fixture(scope="module")
 def empty_world():
-    with uavsim.Server("empty", seed=1, cameras=SMALL_CAMERA) as s:
+    with uavsim.Server("empty", seed=1, cameras=SMALL_CAMERA, echo=bool(os.environ.get("UAVSIM_ECHO"))) as s:
         yield s
 
 

@@ -27,8 +27,9 @@ def test_two_vehicles_talk_over_the_radio():
             r0.send("a str is not bytes")
         with pytest.raises(uavsim.InvalidArgumentError):
             s.radio(3)  # the world has vehicles 0-2
-        with pytest.raises(uavsim.InvalidArgumentError) as e:
-            uavsim.Radio.open(s.loop, 7)
+        with pytest.raises(uavsim.UavsimError) as e:
+            uavsim.Radio.open(s.loop, 7)  # the simulator's refusal
+        assert e.value.code == uavsim.Error.DENIED and "unknown_vehicle" in e.value.message
         r2.close()
         with pytest.raises(uavsim.ConnectionError):
             r2.send(b"closed")

@@ -35,7 +35,11 @@ _STOP_TIMEOUT_S = 5.0
 def find_server(path=None):
     """The uavsim-server to run: path, else $UAVSIM_SERVER, else the build tree this package was built in,
     else uavsim-server on PATH or beside the interpreter (an installed prefix). FileNotFoundError if none."""
-    candidates = [path, os.environ.get("UAVSIM_SERVER")]
+    if path is not None:
+        if os.path.isfile(path) and os.access(path, os.X_OK):
+            return os.fspath(path)
+        raise FileNotFoundError(f"uavsim-server: no program at {path}")
+    candidates = [os.environ.get("UAVSIM_SERVER")]
     try:
         from . import _build_paths  # generated in the build tree only
 
@@ -177,13 +181,17 @@ class Server:
         return self
 
     def stop(self):
-        """Drops the loop and what was handed out on it, then stops the server and reaps it. Idempotent."""
-        self._drop_clients()
-        if self.sim is not None:
-            self.sim.close()
+        """Drops the loop and what was handed out on it, then stops the server and reaps it. Idempotent;
+        the server is stopped whatever else fails."""
+        try:
+            self._drop_clients()
+            if self.sim is not None:
+                self.sim.close()
+        finally:
             self.sim = None
-        if self._finalizer is not None:
-            self._finalizer()  # _terminate, once
+            self.loop = None
+            if self._finalizer is not None:
+                self._finalizer()  # _terminate, once
         if self._reader is not None:
             self._reader.join(_STOP_TIMEOUT_S)
             self._reader = None
@@ -221,9 +229,13 @@ class Server:
         if name in self._vehicles:
             return self._vehicles[name]
         v = _core.Vehicle(self.loop, sim_vehicle=name, **config)
-        v.connect(f"tcp:127.0.0.1:{self.mavlink_ports[name]}", timeout_s)
-        if wait_ready:
-            v.wait_ready(timeout_s)
+        try:
+            v.connect(f"tcp:127.0.0.1:{self.mavlink_ports[name]}", timeout_s)
+            if wait_ready:
+                v.wait_ready(timeout_s)
+        except BaseException:
+            v.close()
+            raise
         self._vehicles[name] = v
         return v
 
