@@ -1,15 +1,16 @@
-// The C++ side of bench/python_bench.py (docs/results/python.md): how fast a client_cpp program runs
-// against a server that the script started, in the same run as the same measurement from Python.
-// A plain program, not a Google Benchmark: it measures one thing against a live server and prints one
-// JSON line.
+// The C++ side of bench/python_bench.py (docs/results/python.md): how fast a client_cpp program
+// runs against a server that the script started, in the same run as the same measurement from
+// Python. A plain program, not a Google Benchmark: it measures one thing against a live server and
+// prints one JSON line.
 //
 //   client_rate_bench --api PORT --mavlink PORT --mode ticks|camera [--seconds S] [--period P]
 //                     [--camera NAME] [--seed N]
 //
-// Both modes: hold the clock, reset to t = 0 with the seed, join the lockstep with a period of P sim
-// seconds, let the clock go, then run the loop for S sim seconds, timing it on the wall clock.
-//   ticks:  one Vehicle connected with a telemetry callback (counting updates): lockstep ticks per second.
-//   camera: a CameraSubscriber on NAME (BGR) with a callback (counting frames): frames per second.
+// Both modes: hold the clock, reset to t = 0 with the seed, join the lockstep with a period of P
+// sim seconds, let the clock go, then run the loop for S sim seconds, timing it on the wall clock.
+//   ticks:  one Vehicle connected with a telemetry callback (counting updates): lockstep ticks per
+//   second. camera: a CameraSubscriber on NAME (BGR) with a callback (counting frames): frames per
+//   second.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -39,16 +40,25 @@ int main(int argc, char** argv) {
   unsigned long long seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--api") api_port = std::atoi(v.c_str());
-    else if (k == "--mavlink") mavlink_port = std::atoi(v.c_str());
-    else if (k == "--mode") mode = v;
-    else if (k == "--seconds") seconds = std::atof(v.c_str());
-    else if (k == "--period") period_s = std::atof(v.c_str());
-    else if (k == "--camera") camera = v;
-    else if (k == "--seed") seed = std::strtoull(v.c_str(), nullptr, 10);
-    else return fail("unknown option " + k);
+    if (k == "--api")
+      api_port = std::atoi(v.c_str());
+    else if (k == "--mavlink")
+      mavlink_port = std::atoi(v.c_str());
+    else if (k == "--mode")
+      mode = v;
+    else if (k == "--seconds")
+      seconds = std::atof(v.c_str());
+    else if (k == "--period")
+      period_s = std::atof(v.c_str());
+    else if (k == "--camera")
+      camera = v;
+    else if (k == "--seed")
+      seed = std::strtoull(v.c_str(), nullptr, 10);
+    else
+      return fail("unknown option " + k);
   }
-  if (api_port < 1 || api_port > 65535 || (mode == "ticks" && (mavlink_port < 1 || mavlink_port > 65535))) {
+  if (api_port < 1 || api_port > 65535 ||
+      (mode == "ticks" && (mavlink_port < 1 || mavlink_port > 65535))) {
     return fail("--api (and for ticks --mavlink) must be ports in 1..65535");
   }
   if (!(seconds > 0.0 && seconds <= 3600.0) || !(period_s > 0.0 && period_s <= 1.0)) {
@@ -71,12 +81,14 @@ int main(int argc, char** argv) {
     VehicleConfig vc;
     vc.sim_vehicle = "uav0";
     vehicle = std::make_unique<Vehicle>(**loop, vc);
-    if (auto c = vehicle->connect("tcp:127.0.0.1:" + std::to_string(mavlink_port)); !c) return fail(c.message());
+    if (auto c = vehicle->connect("tcp:127.0.0.1:" + std::to_string(mavlink_port)); !c)
+      return fail(c.message());
     vehicle->on_telemetry([&](const Telemetry&) { ++telemetry; });
   } else {
     CameraConfig cc;
     cc.camera = camera;
-    auto s = CameraSubscriber::subscribe(**loop, cc, [&](const CameraFrame& f) { frames += f.image.empty() ? 0 : 1; });
+    auto s = CameraSubscriber::subscribe(
+        **loop, cc, [&](const CameraFrame& f) { frames += f.image.empty() ? 0 : 1; });
     if (!s) return fail(s.message());
     cam = std::move(*s);
   }
@@ -84,11 +96,13 @@ int main(int argc, char** argv) {
   const double t0 = (*loop)->now();
   const auto w0 = std::chrono::steady_clock::now();
   if (auto r = (*loop)->run_for(seconds); !r) return fail(r.message());
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   const double sim_s = (*loop)->now() - t0;
-  std::printf("{\"mode\": \"%s\", \"sim_s\": %.6f, \"wall_s\": %.6f, \"ticks\": %.0f, \"telemetry\": %llu, "
-              "\"frames\": %llu}\n",
-              mode.c_str(), sim_s, wall_s, sim_s / period_s, static_cast<unsigned long long>(telemetry),
-              static_cast<unsigned long long>(frames));
+  std::printf(
+      "{\"mode\": \"%s\", \"sim_s\": %.6f, \"wall_s\": %.6f, \"ticks\": %.0f, \"telemetry\": %llu, "
+      "\"frames\": %llu}\n",
+      mode.c_str(), sim_s, wall_s, sim_s / period_s, static_cast<unsigned long long>(telemetry),
+      static_cast<unsigned long long>(frames));
   return 0;
 }

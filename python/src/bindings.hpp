@@ -14,8 +14,8 @@
 namespace uavsim::python {
 
 // An EventLoop with the exceptions its Python callbacks raised. Objects made on a loop (Vehicle,
-// Camera, Radio, Switches) keep its Python object alive, and hold a LoopUse while their C++ object lives:
-// close() destroys the loop (leaving the lockstep) only once none does.
+// Camera, Radio, Switches) keep its Python object alive, and hold a LoopUse while their C++ object
+// lives: close() destroys the loop (leaving the lockstep) only once none does.
 struct PyLoop {
   std::unique_ptr<client::EventLoop> loop;
   CallbackErrorsPtr errors = std::make_shared<CallbackErrors>();
@@ -24,8 +24,8 @@ struct PyLoop {
   client::EventLoop& get();
 };
 
-// One object's use of a loop, for as long as the object's C++ side lives (declare it before that member,
-// so that it is released after it).
+// One object's use of a loop, for as long as the object's C++ side lives (declare it before that
+// member, so that it is released after it).
 class LoopUse {
  public:
   explicit LoopUse(PyLoop& l) : loop_(&l) { ++loop_->users; }
@@ -38,14 +38,14 @@ class LoopUse {
   PyLoop* loop_;
 };
 
-void bind_loop(py::module_& m);          // Error, exceptions, LoopConfig, EventLoop, geodesy
+void bind_loop(py::module_& m);            // Error, exceptions, LoopConfig, EventLoop, geodesy
 void bind_sim_connection(py::module_& m);  // SimConnection, SimMessage
-void bind_vehicle(py::module_& m);       // FlightMode, Telemetry, MissionItem, Vehicle
-void bind_devices(py::module_& m);       // Camera, Radio, Switches (and _testing)
+void bind_vehicle(py::module_& m);         // FlightMode, Telemetry, MissionItem, Vehicle
+void bind_devices(py::module_& m);         // Camera, Radio, Switches (and _testing)
 
 #ifdef UAVSIM_CLIENT_HAS_CAMERA
-// A frame as the Python Frame object: its image as a numpy array over the frame's own pixels (no copy:
-// the array keeps the cv::Mat's buffer alive), stamps, intrinsics and pose. Needs the GIL.
+// A frame as the Python Frame object: its image as a numpy array over the frame's own pixels (no
+// copy: the array keeps the cv::Mat's buffer alive), stamps, intrinsics and pose. Needs the GIL.
 py::object frame_to_python(const client::CameraFrame& f);
 #endif
 

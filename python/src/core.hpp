@@ -1,19 +1,19 @@
-// What the binding units of uavsim._core share: failures raised as Python exceptions, JSON <-> Python,
-// Python callbacks run from the event loop, and blocking calls that release the GIL.
+// What the binding units of uavsim._core share: failures raised as Python exceptions, JSON <->
+// Python, Python callbacks run from the event loop, and blocking calls that release the GIL.
 //
-// The GIL: every call that waits (a blocking Vehicle command, EventLoop.run_for, a SimConnection request)
-// releases it, so other Python threads run meanwhile; the loop's callbacks into Python (telemetry, frames,
-// timers) take it back for the call. A callback that raises does not unwind through the C++ loop: its
-// exception is kept and raised by the blocking call during which it ran, once that call returns.
+// The GIL: every call that waits (a blocking Vehicle command, EventLoop.run_for, a SimConnection
+// request) releases it, so other Python threads run meanwhile; the loop's callbacks into Python
+// (telemetry, frames, timers) take it back for the call. A callback that raises does not unwind
+// through the C++ loop: its exception is kept and raised by the blocking call during which it ran,
+// once that call returns.
 #pragma once
 
 #include <pybind11/pybind11.h>
 
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <utility>
-
-#include <nlohmann/json.hpp>
 
 #include "uavsim/client/result.hpp"
 
@@ -47,19 +47,19 @@ inline void unwrap(Result<void>&& r) {
   if (!r.ok()) raise_failure(r.error());
 }
 
-// JSON value -> Python (dict, list, str, int, float, bool, None) and back. from_python accepts what the
-// json module would (str keys only), plus numpy scalars and arrays (through their tolist()); anything else
-// is a TypeError. Both need the GIL.
+// JSON value -> Python (dict, list, str, int, float, bool, None) and back. from_python accepts what
+// the json module would (str keys only), plus numpy scalars and arrays (through their tolist());
+// anything else is a TypeError. Both need the GIL.
 py::object to_python(const nlohmann::json& j);
 nlohmann::json from_python(py::handle h);
 
-// The first exception raised by a Python callback since the last check, kept for the blocking call the
-// callback ran in. Only touched with the GIL held.
+// The first exception raised by a Python callback since the last check, kept for the blocking call
+// the callback ran in. Only touched with the GIL held.
 class CallbackErrors {
  public:
-  // Runs fn (a call into Python, GIL held); keeps its exception if it raised, and writes any later one of
-  // the same blocking call to sys.unraisablehook (it cannot be raised twice).
-  // Nothing is thrown out of it: a C++ exception (a failed conversion, ...) becomes a Python one.
+  // Runs fn (a call into Python, GIL held); keeps its exception if it raised, and writes any later
+  // one of the same blocking call to sys.unraisablehook (it cannot be raised twice). Nothing is
+  // thrown out of it: a C++ exception (a failed conversion, ...) becomes a Python one.
   template <class F>
   void guard(F&& fn) {
     try {
@@ -104,8 +104,8 @@ inline PyCallable hold_callable(py::object fn) {
   });
 }
 
-// Runs fn (which waits and must not touch Python objects) without the GIL, then raises what a callback
-// raised meanwhile, and returns fn's value.
+// Runs fn (which waits and must not touch Python objects) without the GIL, then raises what a
+// callback raised meanwhile, and returns fn's value.
 template <class F>
 auto blocking(CallbackErrors& errors, F&& fn) {
   if constexpr (std::is_void_v<decltype(fn())>) {

@@ -1,5 +1,5 @@
-// uavsim._core: the devices on a loop: Camera (frames as numpy arrays), Radio (air-to-air frames) and
-// Switches (landing-pad microswitches); and _testing, the C++ side of the binding's own tests.
+// uavsim._core: the devices on a loop: Camera (frames as numpy arrays), Radio (air-to-air frames)
+// and Switches (landing-pad microswitches); and _testing, the C++ side of the binding's own tests.
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -48,24 +48,31 @@ struct PyFrame {
 
 py::dtype dtype_of(int depth) {
   switch (depth) {
-    case CV_8U: return py::dtype::of<std::uint8_t>();
-    case CV_16U: return py::dtype::of<std::uint16_t>();
-    case CV_32F: return py::dtype::of<float>();
-    case CV_64F: return py::dtype::of<double>();
-    default: throw py::type_error("uavsim: a frame of an unsupported pixel type (OpenCV depth " + std::to_string(depth) + ")");
+    case CV_8U:
+      return py::dtype::of<std::uint8_t>();
+    case CV_16U:
+      return py::dtype::of<std::uint16_t>();
+    case CV_32F:
+      return py::dtype::of<float>();
+    case CV_64F:
+      return py::dtype::of<double>();
+    default:
+      throw py::type_error("uavsim: a frame of an unsupported pixel type (OpenCV depth " +
+                           std::to_string(depth) + ")");
   }
 }
 
-// A numpy array over m's pixels without copying them: the array's base owns a cv::Mat header that shares
-// m's reference-counted buffer (each frame's image is a buffer of its own: nothing writes it afterwards).
-// Rows x cols (x channels when more than one), with m's own row stride.
+// A numpy array over m's pixels without copying them: the array's base owns a cv::Mat header that
+// shares m's reference-counted buffer (each frame's image is a buffer of its own: nothing writes it
+// afterwards). Rows x cols (x channels when more than one), with m's own row stride.
 py::array array_over(const cv::Mat& m) {
   if (m.empty()) return py::array(py::dtype::of<std::uint8_t>(), std::vector<py::ssize_t>{0, 0});
   auto* keep = new cv::Mat(m);
   py::capsule owner(keep, [](void* p) { delete static_cast<cv::Mat*>(p); });
   const auto elem = static_cast<py::ssize_t>(keep->elemSize1());
   std::vector<py::ssize_t> shape{keep->rows, keep->cols};
-  std::vector<py::ssize_t> strides{static_cast<py::ssize_t>(keep->step[0]), static_cast<py::ssize_t>(keep->elemSize())};
+  std::vector<py::ssize_t> strides{static_cast<py::ssize_t>(keep->step[0]),
+                                   static_cast<py::ssize_t>(keep->elemSize())};
   if (keep->channels() > 1) {
     shape.push_back(keep->channels());
     strides.push_back(elem);
@@ -73,7 +80,8 @@ py::array array_over(const cv::Mat& m) {
   return py::array(dtype_of(keep->depth()), shape, strides, keep->data, owner);
 }
 
-// what a Camera keeps for Python: the latest frame, a bounded queue of recent ones and the user's callback
+// what a Camera keeps for Python: the latest frame, a bounded queue of recent ones and the user's
+// callback
 struct CameraState {
   py::object latest = py::none();
   std::deque<py::object> queue;
@@ -124,7 +132,8 @@ std::vector<std::uint8_t> bytes_of(const py::buffer& b) {
   if (info.itemsize != 1) throw py::type_error("radio: data must be bytes-like with 1-byte items");
   const auto* p = static_cast<const std::uint8_t*>(info.ptr);
   if (info.ndim > 1) throw py::type_error("radio: data must be one-dimensional");
-  if (info.ndim == 1 && info.strides[0] != 1) throw py::type_error("radio: data must be contiguous");
+  if (info.ndim == 1 && info.strides[0] != 1)
+    throw py::type_error("radio: data must be contiguous");
   return std::vector<std::uint8_t>(p, p + info.size);
 }
 
@@ -152,8 +161,8 @@ void bind_devices(py::module_& m) {
       .value("BGR", CameraFormat::kBgr)
       .value("GREY", CameraFormat::kGrey)
       .value("JPEG", CameraFormat::kJpeg);
-  py::class_<client::CameraIntrinsics>(m, "CameraIntrinsics",
-                                       "Pinhole intrinsics (OpenCV convention, no distortion), pixels.")
+  py::class_<client::CameraIntrinsics>(
+      m, "CameraIntrinsics", "Pinhole intrinsics (OpenCV convention, no distortion), pixels.")
       .def_readonly("fx", &client::CameraIntrinsics::fx)
       .def_readonly("fy", &client::CameraIntrinsics::fy)
       .def_readonly("cx", &client::CameraIntrinsics::cx)
@@ -166,10 +175,12 @@ void bind_devices(py::module_& m) {
             return K;
           },
           "The 3x3 camera matrix K.");
-  py::class_<client::CameraPose>(m, "CameraPose", "Where the camera was: optical centre and camera -> ENU rotation.")
+  py::class_<client::CameraPose>(m, "CameraPose",
+                                 "Where the camera was: optical centre and camera -> ENU rotation.")
       .def_readonly("position_enu_m", &client::CameraPose::position_enu_m)
       .def_readonly("R_enu_cam", &client::CameraPose::R_enu_cam);
-  py::class_<PyFrame>(m, "Frame", "A camera frame: image (numpy, BGR HxWx3 or grey HxW, uint8) and its sim stamp.")
+  py::class_<PyFrame>(
+      m, "Frame", "A camera frame: image (numpy, BGR HxWx3 or grey HxW, uint8) and its sim stamp.")
       .def_readonly("camera", &PyFrame::camera)
       .def_readonly("vehicle", &PyFrame::vehicle)
       .def_readonly("seq", &PyFrame::seq)
@@ -180,7 +191,8 @@ void bind_devices(py::module_& m) {
       .def_readonly("intrinsics", &PyFrame::intrinsics)
       .def_readonly("pose", &PyFrame::pose)
       .def("__repr__", [](const PyFrame& f) {
-        return "<Frame " + f.camera + " seq " + std::to_string(f.seq) + " at " + std::to_string(f.stamp_s) + " s>";
+        return "<Frame " + f.camera + " seq " + std::to_string(f.seq) + " at " +
+               std::to_string(f.stamp_s) + " s>";
       });
 
   py::class_<PyCamera>(m, "Camera", R"(A camera's frames from the simulator, as numpy arrays.
@@ -191,13 +203,16 @@ Each frame goes to on_frame(Frame) if given, becomes `latest`, and is queued for
 oldest dropped past `queue` frames).)")
       .def_static(
           "subscribe",
-          [](PyLoop& loop, const std::string& camera, CameraFormat format, double fps, int jpeg_quality,
-             const std::string& api_address, std::optional<py::function> on_frame, int queue, double timeout_s) {
-            if (!(std::isfinite(fps) && fps >= 0.0)) raise_failure({client::Error::kInvalidArgument, "fps must be >= 0"});
+          [](PyLoop& loop, const std::string& camera, CameraFormat format, double fps,
+             int jpeg_quality, const std::string& api_address, std::optional<py::function> on_frame,
+             int queue, double timeout_s) {
+            if (!(std::isfinite(fps) && fps >= 0.0))
+              raise_failure({client::Error::kInvalidArgument, "fps must be >= 0"});
             if (jpeg_quality < 1 || jpeg_quality > 100) {
               raise_failure({client::Error::kInvalidArgument, "jpeg_quality must be in 1..100"});
             }
-            if (queue < 0 || queue > 4096) raise_failure({client::Error::kInvalidArgument, "queue must be in 0..4096"});
+            if (queue < 0 || queue > 4096)
+              raise_failure({client::Error::kInvalidArgument, "queue must be in 0..4096"});
             checked_duration(timeout_s, "timeout_s");
             client::CameraConfig c;
             c.camera = camera;
@@ -226,13 +241,16 @@ oldest dropped past `queue` frames).)")
               });
             };
             client::EventLoop& l = loop.get();
-            pc->sub = blocking_result(*loop.errors, [&] { return CameraSubscriber::subscribe(l, c, deliver, timeout_s); });
+            pc->sub = blocking_result(*loop.errors, [&] {
+              return CameraSubscriber::subscribe(l, c, deliver, timeout_s);
+            });
             pc->use = std::make_unique<LoopUse>(loop);
             return pc;
           },
           py::arg("loop"), py::arg("camera"), py::kw_only(), py::arg("format") = CameraFormat::kBgr,
           py::arg("fps") = 0.0, py::arg("jpeg_quality") = 90, py::arg("api_address") = "",
-          py::arg("on_frame") = py::none(), py::arg("queue") = 16, py::arg("timeout_s") = 10.0, py::keep_alive<0, 1>(),
+          py::arg("on_frame") = py::none(), py::arg("queue") = 16, py::arg("timeout_s") = 10.0,
+          py::keep_alive<0, 1>(),
           "Subscribes to a camera (its name in the world) and waits for the simulator's answer.")
       .def_property_readonly("width", [](PyCamera& c) { return c.s().width(); })
       .def_property_readonly("height", [](PyCamera& c) { return c.s().height(); })
@@ -240,10 +258,14 @@ oldest dropped past `queue` frames).)")
       .def_property_readonly("intrinsics", [](PyCamera& c) { return c.s().intrinsics(); })
       .def_property_readonly("frames_received", [](PyCamera& c) { return c.s().frames_received(); })
       .def_property_readonly("frames_dropped", [](PyCamera& c) { return c.s().frames_dropped(); })
-      .def_property_readonly("frames_overflowed", [](PyCamera& c) { return c.state->overflowed; },
-                             "Frames dropped from the take_frames() queue because it was full.")
-      .def_property_readonly("connected", [](PyCamera& c) { return c.sub != nullptr && c.sub->connected(); })
-      .def_property_readonly("latest", [](PyCamera& c) { return c.state->latest; }, "The last frame (None before one).")
+      .def_property_readonly(
+          "frames_overflowed", [](PyCamera& c) { return c.state->overflowed; },
+          "Frames dropped from the take_frames() queue because it was full.")
+      .def_property_readonly("connected",
+                             [](PyCamera& c) { return c.sub != nullptr && c.sub->connected(); })
+      .def_property_readonly(
+          "latest", [](PyCamera& c) { return c.state->latest; },
+          "The last frame (None before one).")
       .def(
           "take_frames",
           [](PyCamera& c) {
@@ -274,7 +296,9 @@ oldest dropped past `queue` frames).)")
         return py::bytes(reinterpret_cast<const char*>(f.data.data()), f.data.size());
       });
   m.attr("RADIO_MAX_FRAME_BYTES") = client::kRadioMaxFrameBytes;
-  py::class_<PyRadio>(m, "Radio", R"(A vehicle's air-to-air radio (802.15.4 frames of 1-127 bytes). Needs a lockstep loop.)")
+  py::class_<PyRadio>(
+      m, "Radio",
+      R"(A vehicle's air-to-air radio (802.15.4 frames of 1-127 bytes). Needs a lockstep loop.)")
       .def_static(
           "open",
           [](PyLoop& loop, int vehicle, double timeout_s) {
@@ -282,7 +306,8 @@ oldest dropped past `queue` frames).)")
             auto pr = std::make_unique<PyRadio>();
             pr->loop = &loop;
             client::EventLoop& l = loop.get();
-            pr->radio = blocking_result(*loop.errors, [&] { return client::A2aRadio::open(l, vehicle, timeout_s); });
+            pr->radio = blocking_result(
+                *loop.errors, [&] { return client::A2aRadio::open(l, vehicle, timeout_s); });
             pr->use = std::make_unique<LoopUse>(loop);
             return pr;
           },
@@ -290,8 +315,12 @@ oldest dropped past `queue` frames).)")
           "Opens the radio of the vehicle with this index and waits for the simulator's answer.")
       .def_property_readonly("vehicle", [](PyRadio& r) { return r.r().vehicle(); })
       .def(
-          "send", [](PyRadio& r, const py::buffer& data, int to) { unwrap(r.r().send(bytes_of(data), to)); },
-          py::arg("data"), py::arg("to") = -1, "Puts a frame on air: to every vehicle in range (to < 0) or to one.")
+          "send",
+          [](PyRadio& r, const py::buffer& data, int to) {
+            unwrap(r.r().send(bytes_of(data), to));
+          },
+          py::arg("data"), py::arg("to") = -1,
+          "Puts a frame on air: to every vehicle in range (to < 0) or to one.")
       .def(
           "take_received", [](PyRadio& r) { return r.r().take_received(); },
           "The frames received since the last call, in order of arrival.")
@@ -308,28 +337,35 @@ oldest dropped past `queue` frames).)")
       .def_readonly("time_s", &client::SwitchState::time_s)
       .def_readonly("closed", &client::SwitchState::closed)
       .def("any", &client::SwitchState::any);
-  py::class_<PySwitches>(m, "Switches", "A vehicle's landing-pad microswitches. Needs a lockstep loop.")
+  py::class_<PySwitches>(m, "Switches",
+                         "A vehicle's landing-pad microswitches. Needs a lockstep loop.")
       .def_static(
           "subscribe",
-          [](PyLoop& loop, const std::string& vehicle, std::optional<py::function> on_change, double timeout_s) {
+          [](PyLoop& loop, const std::string& vehicle, std::optional<py::function> on_change,
+             double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
             auto ps = std::make_unique<PySwitches>();
             ps->loop = &loop;
             std::function<void(const client::SwitchState&)> cb;
             if (on_change) {
-              cb = [errors = loop.errors, f = hold_callable(std::move(*on_change))](const client::SwitchState& s) {
+              cb = [errors = loop.errors,
+                    f = hold_callable(std::move(*on_change))](const client::SwitchState& s) {
                 py::gil_scoped_acquire gil;
                 errors->guard([&] { (*f)(s); });
               };
             }
             client::EventLoop& l = loop.get();
-            ps->sw = blocking_result(*loop.errors, [&] { return client::PadSwitches::subscribe(l, vehicle, cb, timeout_s); });
+            ps->sw = blocking_result(*loop.errors, [&] {
+              return client::PadSwitches::subscribe(l, vehicle, cb, timeout_s);
+            });
             ps->use = std::make_unique<LoopUse>(loop);
             return ps;
           },
-          py::arg("loop"), py::arg("vehicle"), py::arg("on_change") = py::none(), py::arg("timeout_s") = 10.0,
-          py::keep_alive<0, 1>(), "Subscribes to the switches of a vehicle (its name, e.g. \"uav0\").")
-      .def_property_readonly("state", [](PySwitches& s) { return s.s().state(); }, "The last state received.")
+          py::arg("loop"), py::arg("vehicle"), py::arg("on_change") = py::none(),
+          py::arg("timeout_s") = 10.0, py::keep_alive<0, 1>(),
+          "Subscribes to the switches of a vehicle (its name, e.g. \"uav0\").")
+      .def_property_readonly(
+          "state", [](PySwitches& s) { return s.s().state(); }, "The last state received.")
       .def(
           "close",
           [](PySwitches& s) {
@@ -339,13 +375,16 @@ oldest dropped past `queue` frames).)")
           "Unsubscribes (later calls raise ConnectionError).");
 
 #ifdef UAVSIM_CLIENT_HAS_CAMERA
-  // the binding's own tests: frames taken with the C++ subscriber alone, each with a byte copy of its
-  // cv::Mat made in C++ beside the Frame the binding makes of it (tests/python compares the two)
+  // the binding's own tests: frames taken with the C++ subscriber alone, each with a byte copy of
+  // its cv::Mat made in C++ beside the Frame the binding makes of it (tests/python compares the
+  // two)
   py::module_ testing = m.def_submodule("_testing", "C++ helpers for the binding's tests.");
   testing.def(
       "capture_frames",
-      [](PyLoop& loop, const std::string& camera, int count, CameraFormat format, double timeout_s) {
-        if (count < 1 || count > 1000) raise_failure({client::Error::kInvalidArgument, "count must be in 1..1000"});
+      [](PyLoop& loop, const std::string& camera, int count, CameraFormat format,
+         double timeout_s) {
+        if (count < 1 || count > 1000)
+          raise_failure({client::Error::kInvalidArgument, "count must be in 1..1000"});
         checked_duration(timeout_s, "timeout_s");
         auto out = make_gil_shared<std::vector<std::pair<py::bytes, py::object>>>();
         client::CameraConfig c;
@@ -355,15 +394,17 @@ oldest dropped past `queue` frames).)")
           // the reference: the pixels row by row, as C++ code reading the cv::Mat sees them
           std::string bytes;
           const std::size_t row = f.image.cols * f.image.elemSize();
-          for (int y = 0; y < f.image.rows; ++y) bytes.append(reinterpret_cast<const char*>(f.image.ptr(y)), row);
+          for (int y = 0; y < f.image.rows; ++y)
+            bytes.append(reinterpret_cast<const char*>(f.image.ptr(y)), row);
           py::gil_scoped_acquire gil;
           out->emplace_back(py::bytes(bytes), frame_to_python(f));
         };
         client::EventLoop& l = loop.get();
-        auto sub = blocking_result(*loop.errors, [&] { return CameraSubscriber::subscribe(l, c, on_frame, timeout_s); });
+        auto sub = blocking_result(
+            *loop.errors, [&] { return CameraSubscriber::subscribe(l, c, on_frame, timeout_s); });
         blocking_result(*loop.errors, [&] {
-          return l.run_until([&] { return out->size() >= static_cast<std::size_t>(count); }, timeout_s,
-                                      "frames of " + camera);
+          return l.run_until([&] { return out->size() >= static_cast<std::size_t>(count); },
+                             timeout_s, "frames of " + camera);
         });
         {
           py::gil_scoped_release nogil;

@@ -1,5 +1,5 @@
-// uavsim._core: the C++ client library (client_cpp) for Python. This unit: the module, its exceptions,
-// JSON <-> Python, the event loop and the geodesy helpers.
+// uavsim._core: the C++ client library (client_cpp) for Python. This unit: the module, its
+// exceptions, JSON <-> Python, the event loop and the geodesy helpers.
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/pybind11.h>
@@ -24,12 +24,16 @@ PyObject* g_connection_error = nullptr;
 
 PyObject* error_class(Error code) {
   switch (code) {
-    case Error::kInvalidArgument: return g_invalid_argument_error;
-    case Error::kTimeout: return g_timeout_error;
+    case Error::kInvalidArgument:
+      return g_invalid_argument_error;
+    case Error::kTimeout:
+      return g_timeout_error;
     case Error::kConnectionRefused:
     case Error::kNotConnected:
-    case Error::kConnectionLost: return g_connection_error;
-    default: return g_uavsim_error;
+    case Error::kConnectionLost:
+      return g_connection_error;
+    default:
+      return g_uavsim_error;
   }
 }
 
@@ -78,16 +82,17 @@ client::EventLoop& PyLoop::get() {
 
 void register_errors(py::module_& m) {
   const py::object runtime = py::reinterpret_borrow<py::object>(PyExc_RuntimeError);
-  g_uavsim_error = new_error_class(
-      m, "UavsimError", py::make_tuple(runtime),
-      "A failure of the client library: .code (Error), .message, .mav_result (the vehicle's MAV_RESULT; -1 if "
-      "none).");
+  g_uavsim_error = new_error_class(m, "UavsimError", py::make_tuple(runtime),
+                                   "A failure of the client library: .code (Error), .message, "
+                                   ".mav_result (the vehicle's MAV_RESULT; -1 if "
+                                   "none).");
   const py::object base = py::reinterpret_borrow<py::object>(g_uavsim_error);
   g_invalid_argument_error =
       new_error_class(m, "InvalidArgumentError", py::make_tuple(base, py::handle(PyExc_ValueError)),
                       "A bad argument (Error.INVALID_ARGUMENT).");
-  g_timeout_error = new_error_class(m, "TimeoutError", py::make_tuple(base, py::handle(PyExc_TimeoutError)),
-                                    "No answer in time, on the loop's clock (Error.TIMEOUT).");
+  g_timeout_error =
+      new_error_class(m, "TimeoutError", py::make_tuple(base, py::handle(PyExc_TimeoutError)),
+                      "No answer in time, on the loop's clock (Error.TIMEOUT).");
   g_connection_error =
       new_error_class(m, "ConnectionError", py::make_tuple(base, py::handle(PyExc_ConnectionError)),
                       "Nothing listens, or the link is down or was lost (Error.CONNECTION_REFUSED, "
@@ -116,7 +121,8 @@ double checked_duration(double v, const char* name, bool allow_infinite) {
 
 int checked_port(int port) {
   if (port < 1 || port > 65535) {
-    raise_failure({Error::kInvalidArgument, "port must be in 1..65535, not " + std::to_string(port)});
+    raise_failure(
+        {Error::kInvalidArgument, "port must be in 1..65535, not " + std::to_string(port)});
   }
   return port;
 }
@@ -125,12 +131,18 @@ py::object to_python(const nlohmann::json& j) {
   using T = nlohmann::json::value_t;
   switch (j.type()) {
     case T::null:
-    case T::discarded: return py::none();
-    case T::boolean: return py::bool_(j.get<bool>());
-    case T::number_integer: return py::int_(j.get<std::int64_t>());
-    case T::number_unsigned: return py::int_(j.get<std::uint64_t>());
-    case T::number_float: return py::float_(j.get<double>());
-    case T::string: return py::str(j.get_ref<const std::string&>());
+    case T::discarded:
+      return py::none();
+    case T::boolean:
+      return py::bool_(j.get<bool>());
+    case T::number_integer:
+      return py::int_(j.get<std::int64_t>());
+    case T::number_unsigned:
+      return py::int_(j.get<std::uint64_t>());
+    case T::number_float:
+      return py::float_(j.get<double>());
+    case T::string:
+      return py::str(j.get_ref<const std::string&>());
     case T::binary: {
       const auto& b = j.get_binary();
       return py::bytes(reinterpret_cast<const char*>(b.data()), b.size());
@@ -181,7 +193,8 @@ nlohmann::json from_python(py::handle h) {
   }
   // numpy scalars and arrays
   if (py::hasattr(h, "tolist") && py::hasattr(h, "dtype")) return from_python(h.attr("tolist")());
-  throw py::type_error(std::string("cannot send a ") + py::str(py::type::handle_of(h).attr("__name__")).cast<std::string>() +
+  throw py::type_error(std::string("cannot send a ") +
+                       py::str(py::type::handle_of(h).attr("__name__")).cast<std::string>() +
                        " as JSON");
 }
 
@@ -202,8 +215,8 @@ void bind_loop(py::module_& m) {
       .value("PROTOCOL", Error::kProtocol);
   register_errors(m);
 
-  py::class_<client::LoopConfig> config(m, "LoopConfig",
-                                        "How an EventLoop keeps time: the host clock or the simulator's lockstep.");
+  py::class_<client::LoopConfig> config(
+      m, "LoopConfig", "How an EventLoop keeps time: the host clock or the simulator's lockstep.");
   py::enum_<client::LoopConfig::Clock>(config, "Clock")
       .value("HOST", client::LoopConfig::Clock::kHost)
       .value("LOCKSTEP", client::LoopConfig::Clock::kLockstep);
@@ -219,7 +232,8 @@ void bind_loop(py::module_& m) {
       .def_static("lockstep", &client::LoopConfig::lockstep, py::arg("host"), py::arg("port"),
                   py::arg("period_s") = 0.01);
 
-  py::class_<PyLoop>(m, "EventLoop", R"(The event loop a program's vehicles, cameras and timers run on.
+  py::class_<PyLoop>(m, "EventLoop",
+                     R"(The event loop a program's vehicles, cameras and timers run on.
 
 Its clock is the host's steady clock, or under lockstep the simulator's: now() is sim time and the
 simulation waits while the program works on a tick. Every method belongs to the thread that made the loop;
@@ -228,7 +242,8 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
       .def(py::init([](const client::LoopConfig& c) { return create_loop(c); }),
            py::arg("config") = client::LoopConfig::host())
       .def_static(
-          "host", [] { return create_loop(client::LoopConfig::host()); }, "A loop on the host clock.")
+          "host", [] { return create_loop(client::LoopConfig::host()); },
+          "A loop on the host clock.")
       .def_static(
           "lockstep",
           [](const std::string& host, int port, double period_s, double wall_timeout_s) {
@@ -236,34 +251,43 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
             c.lockstep_wall_timeout_s = wall_timeout_s;
             return create_loop(c);
           },
-          py::arg("host"), py::arg("port"), py::arg("period_s") = 0.01, py::arg("wall_timeout_s") = 60.0,
+          py::arg("host"), py::arg("port"), py::arg("period_s") = 0.01,
+          py::arg("wall_timeout_s") = 60.0,
           "Joins the simulator's lockstep at host:port with this tick period (sim seconds).")
       .def_static(
           "from_env", [] { return create_loop(client::LoopConfig::from_env()); },
           "Lockstep when UAVSIM_LOCKSTEP=host:port[/period_s] is set, else the host clock.")
-      .def("now", [](PyLoop& l) { return live(l).now(); },
-           "Seconds on the loop's clock (sim time of the current tick under lockstep).")
+      .def(
+          "now", [](PyLoop& l) { return live(l).now(); },
+          "Seconds on the loop's clock (sim time of the current tick under lockstep).")
       .def_property_readonly("is_lockstep", [](PyLoop& l) { return live(l).is_lockstep(); })
       .def_property_readonly("clock_alive", [](PyLoop& l) { return live(l).clock_alive(); })
       .def(
           "call_after",
           [](PyLoop& l, double delay_s, py::function fn) {
-            return live(l).call_after(checked_duration(delay_s, "delay_s"), python_task(l, std::move(fn)));
+            return live(l).call_after(checked_duration(delay_s, "delay_s"),
+                                      python_task(l, std::move(fn)));
           },
-          py::arg("delay_s"), py::arg("fn"), "Runs fn() once after delay_s (loop clock); returns a timer id.")
+          py::arg("delay_s"), py::arg("fn"),
+          "Runs fn() once after delay_s (loop clock); returns a timer id.")
       .def(
           "call_every",
           [](PyLoop& l, double period_s, py::function fn) {
             if (!(std::isfinite(period_s) && period_s > 0.0)) {
               raise_failure({Error::kInvalidArgument,
-                             "period_s must be a finite number of seconds > 0, not " + std::to_string(period_s)});
+                             "period_s must be a finite number of seconds > 0, not " +
+                                 std::to_string(period_s)});
             }
             return live(l).call_every(period_s, python_task(l, std::move(fn)));
           },
-          py::arg("period_s"), py::arg("fn"), "Runs fn() every period_s (loop clock), first one period from now.")
-      .def("cancel", [](PyLoop& l, client::TimerId id) { return live(l).cancel(id); }, py::arg("timer"))
+          py::arg("period_s"), py::arg("fn"),
+          "Runs fn() every period_s (loop clock), first one period from now.")
       .def(
-          "post", [](PyLoop& l, py::function fn) { live(l).post(python_task(l, std::move(fn))); }, py::arg("fn"),
+          "cancel", [](PyLoop& l, client::TimerId id) { return live(l).cancel(id); },
+          py::arg("timer"))
+      .def(
+          "post", [](PyLoop& l, py::function fn) { live(l).post(python_task(l, std::move(fn))); },
+          py::arg("fn"),
           "Thread-safe: runs fn() on the loop's thread soon (at the current tick under lockstep).")
       .def(
           "run", [](PyLoop& l) { blocking(*l.errors, [&loop = live(l)] { loop.run(); }); },
@@ -276,7 +300,8 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
             checked_duration(duration_s, "duration_s");
             blocking_result(*l.errors, [&, &loop = live(l)] { return loop.run_for(duration_s); });
           },
-          py::arg("duration_s"), "Dispatches for duration_s of loop time (ConnectionError if the lockstep dies).")
+          py::arg("duration_s"),
+          "Dispatches for duration_s of loop time (ConnectionError if the lockstep dies).")
       .def(
           "run_until",
           [](PyLoop& l, py::function pred, double timeout_s, const std::string& what) {
@@ -315,7 +340,8 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
             });
           },
           py::arg("duration_s"), py::arg("fn"),
-          "Runs fn() as if it took duration_s of sim time without holding the simulation back (lockstep).")
+          "Runs fn() as if it took duration_s of sim time without holding the simulation back "
+          "(lockstep).")
       .def_property(
           "lockstep_pipelined", [](PyLoop& l) { return live(l).lockstep_pipelined(); },
           [](PyLoop& l, bool on) { live(l).set_lockstep_pipelined(on); })
@@ -324,30 +350,36 @@ on the loop's thread with the GIL, and an exception one raises is raised by the 
           "close",
           [](PyLoop& l) {
             if (l.users > 0) {
-              raise_failure({Error::kNotReady, "event loop: close its " + std::to_string(l.users) +
-                                                   " vehicle(s), camera(s), radio(s) and switches first"});
+              raise_failure(
+                  {Error::kNotReady, "event loop: close its " + std::to_string(l.users) +
+                                         " vehicle(s), camera(s), radio(s) and switches first"});
             }
             l.loop.reset();
           },
-          "Destroys the loop now (a lockstep loop leaves the lockstep); later calls raise ConnectionError.")
+          "Destroys the loop now (a lockstep loop leaves the lockstep); later calls raise "
+          "ConnectionError.")
       .def_property_readonly("closed", [](PyLoop& l) { return l.loop == nullptr; });
 
   // geodesy (pure functions; a local frame about an origin)
   py::class_<client::Geodetic>(m, "Geodetic")
-      .def(py::init([](double lat, double lon, double alt) { return client::Geodetic{lat, lon, alt}; }),
+      .def(py::init([](double lat, double lon, double alt) {
+             return client::Geodetic{lat, lon, alt};
+           }),
            py::arg("lat_deg") = 0.0, py::arg("lon_deg") = 0.0, py::arg("alt_m") = 0.0)
       .def_readwrite("lat_deg", &client::Geodetic::lat_deg)
       .def_readwrite("lon_deg", &client::Geodetic::lon_deg)
       .def_readwrite("alt_m", &client::Geodetic::alt_m)
       .def("__repr__", [](const client::Geodetic& g) {
-        return "Geodetic(lat_deg=" + std::to_string(g.lat_deg) + ", lon_deg=" + std::to_string(g.lon_deg) +
-               ", alt_m=" + std::to_string(g.alt_m) + ")";
+        return "Geodetic(lat_deg=" + std::to_string(g.lat_deg) +
+               ", lon_deg=" + std::to_string(g.lon_deg) + ", alt_m=" + std::to_string(g.alt_m) +
+               ")";
       });
   py::class_<client::GeodeticOrigin>(m, "GeodeticOrigin")
       .def(py::init([](double lat, double lon, double alt, double heading) {
              return client::GeodeticOrigin{lat, lon, alt, heading};
            }),
-           py::arg("lat_deg") = 0.0, py::arg("lon_deg") = 0.0, py::arg("alt_m") = 0.0, py::arg("heading_rad") = 0.0)
+           py::arg("lat_deg") = 0.0, py::arg("lon_deg") = 0.0, py::arg("alt_m") = 0.0,
+           py::arg("heading_rad") = 0.0)
       .def_readwrite("lat_deg", &client::GeodeticOrigin::lat_deg)
       .def_readwrite("lon_deg", &client::GeodeticOrigin::lon_deg)
       .def_readwrite("alt_m", &client::GeodeticOrigin::alt_m)

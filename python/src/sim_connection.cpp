@@ -1,5 +1,7 @@
-// uavsim._core: SimConnection, the blocking client of the simulator's sim API (world control, ground truth,
-// events, faults, wind), with JSON as Python dicts.
+// uavsim._core: SimConnection, the blocking client of the simulator's sim API (world control,
+// ground truth, events, faults, wind), with JSON as Python dicts.
+#include "uavsim/client/sim_connection.hpp"
+
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -9,7 +11,6 @@
 #include <string>
 
 #include "bindings.hpp"
-#include "uavsim/client/sim_connection.hpp"
 
 namespace uavsim::python {
 
@@ -41,7 +42,8 @@ double wall_timeout(double timeout_s) { return checked_duration(timeout_s, "time
 
 void bind_sim_connection(py::module_& m) {
   py::class_<SimMessage>(m, "SimMessage", "A message the server streamed: {\"event\": KIND, ...}.")
-      .def_property_readonly("kind", &SimMessage::kind, "The message's \"event\" field (\"tick\", \"frame\", ...).")
+      .def_property_readonly("kind", &SimMessage::kind,
+                             "The message's \"event\" field (\"tick\", \"frame\", ...).")
       .def_property_readonly(
           "json", [](const SimMessage& s) { return to_python(s.json); }, "The message as a dict.")
       .def_property_readonly(
@@ -49,7 +51,8 @@ void bind_sim_connection(py::module_& m) {
           "A frame's image bytes; empty for every other message.")
       .def("__repr__", [](const SimMessage& s) { return "<SimMessage " + s.json.dump() + ">"; });
 
-  py::class_<PySim>(m, "SimConnection", R"(A blocking client of the simulator's sim API (docs/protocol.md).
+  py::class_<PySim>(m, "SimConnection",
+                    R"(A blocking client of the simulator's sim API (docs/protocol.md).
 
 Requests send a dict with "op" and return the reply's result as a dict; a refused request raises
 UavsimError with the server's code mapped to an Error (e.g. INVALID_ARGUMENT for bad_field, UNSUPPORTED for
@@ -72,9 +75,11 @@ A connection belongs to the thread that made it.)")
           py::arg("host"), py::arg("port"), py::arg("timeout_s") = 10.0,
           "Connects to the sim API at host:port and reads the server's hello.")
       .def_property_readonly("hello", [](PySim& s) { return to_python(open(s).hello()); })
-      .def_property_readonly("connected", [](PySim& s) { return s.conn != nullptr && s.conn->connected(); })
+      .def_property_readonly("connected",
+                             [](PySim& s) { return s.conn != nullptr && s.conn->connected(); })
       .def(
-          "close", [](PySim& s) { s.conn.reset(); }, "Closes the connection (later calls raise ConnectionError).")
+          "close", [](PySim& s) { s.conn.reset(); },
+          "Closes the connection (later calls raise ConnectionError).")
       .def(
           "request",
           [](PySim& s, py::dict req, double timeout_s) {
@@ -91,7 +96,8 @@ A connection belongs to the thread that made it.)")
               open(s).on_message(kind, {});
               return;
             }
-            open(s).on_message(kind, [errors = s.errors, f = hold_callable(std::move(*fn))](const SimMessage& msg) {
+            open(s).on_message(kind, [errors = s.errors,
+                                      f = hold_callable(std::move(*fn))](const SimMessage& msg) {
               py::gil_scoped_acquire gil;
               errors->guard([&] { (*f)(msg); });
             });
@@ -108,12 +114,16 @@ A connection belongs to the thread that made it.)")
             SimConnection& c = open(s);
             blocking_result(*s.errors, [&] { return c.poll(timeout_ms); });
           },
-          py::arg("timeout_ms") = 0, "Reads and dispatches what has arrived, waiting up to timeout_ms.")
+          py::arg("timeout_ms") = 0,
+          "Reads and dispatches what has arrived, waiting up to timeout_ms.")
       .def("status", [](PySim& s) { return call(s, [](SimConnection& c) { return c.status(); }); })
       .def("pause", [](PySim& s) { return call(s, [](SimConnection& c) { return c.pause(); }); })
       .def("resume", [](PySim& s) { return call(s, [](SimConnection& c) { return c.resume(); }); })
       .def(
-          "reset", [](PySim& s, std::uint64_t seed) { return call(s, [&](SimConnection& c) { return c.reset(seed); }); },
+          "reset",
+          [](PySim& s, std::uint64_t seed) {
+            return call(s, [&](SimConnection& c) { return c.reset(seed); });
+          },
           py::arg("seed"), "Back to t = 0 with this seed.")
       .def(
           "step_for",
@@ -124,7 +134,8 @@ A connection belongs to the thread that made it.)")
           },
           py::arg("sim_s"), py::arg("timeout_s") = 60.0,
           "Pauses and advances the clock by sim_s seconds, returning when done.")
-      .def("subscribe_events", [](PySim& s) { return call(s, [](SimConnection& c) { return c.subscribe_events(); }); })
+      .def("subscribe_events",
+           [](PySim& s) { return call(s, [](SimConnection& c) { return c.subscribe_events(); }); })
       .def("truck", [](PySim& s) { return call(s, [](SimConnection& c) { return c.truck(); }); })
       .def(
           "lockstep_join",
@@ -134,14 +145,17 @@ A connection belongs to the thread that made it.)")
             return call(s, [&](SimConnection& c) { return c.lockstep_join(period_s, timeout_s); });
           },
           py::arg("period_s"), py::arg("timeout_s") = 10.0)
-      .def("lockstep_leave", [](PySim& s) { return call(s, [](SimConnection& c) { return c.lockstep_leave(); }); })
+      .def("lockstep_leave",
+           [](PySim& s) { return call(s, [](SimConnection& c) { return c.lockstep_leave(); }); })
       .def(
           "done",
           [](PySim& s, std::int64_t tick, const std::map<std::string, int>& mavlink_seq,
              std::optional<double> busy_until_s) {
-            return call(s, [&](SimConnection& c) { return c.done(tick, mavlink_seq, busy_until_s); });
+            return call(s,
+                        [&](SimConnection& c) { return c.done(tick, mavlink_seq, busy_until_s); });
           },
-          py::arg("tick"), py::arg("mavlink_seq") = std::map<std::string, int>{}, py::arg("busy_until_s") = py::none())
+          py::arg("tick"), py::arg("mavlink_seq") = std::map<std::string, int>{},
+          py::arg("busy_until_s") = py::none())
       .def(
           "radio_send",
           [](PySim& s, int vehicle, py::bytes data, int to) {
@@ -151,7 +165,9 @@ A connection belongs to the thread that made it.)")
           py::arg("vehicle"), py::arg("data"), py::arg("to") = -1)
       .def(
           "radio_subscribe",
-          [](PySim& s, int vehicle) { return call(s, [&](SimConnection& c) { return c.radio_subscribe(vehicle); }); },
+          [](PySim& s, int vehicle) {
+            return call(s, [&](SimConnection& c) { return c.radio_subscribe(vehicle); });
+          },
           py::arg("vehicle") = -1);
 }
 
