@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "core.hpp"
 #include "uavsim/client/event_loop.hpp"
@@ -36,6 +37,36 @@ class LoopUse {
 
  private:
   PyLoop* loop_;
+};
+
+// A client library object made on a loop (Vehicle, CameraSubscriber, A2aRadio, PadSwitches), as its
+// Python object holds it: close() destroys it before the Python object goes, and later calls raise
+// ConnectionError naming it.
+template <class T>
+struct OnLoop {
+  explicit OnLoop(const char* what) : what_(what) {}
+  PyLoop* loop = nullptr;
+  std::unique_ptr<LoopUse> use;  // before obj: released after it
+  std::unique_ptr<T> obj;
+  // Takes obj, made on l; counts as a user of l.
+  void hold(PyLoop& l, std::unique_ptr<T> o) {
+    loop = &l;
+    use = std::make_unique<LoopUse>(l);
+    obj = std::move(o);
+  }
+  // The object; ConnectionError once closed. Needs the GIL.
+  T& get() {
+    if (obj == nullptr)
+      raise_failure({client::Error::kNotConnected, std::string(what_) + ": closed"});
+    return *obj;
+  }
+  void close() {
+    obj.reset();
+    use.reset();
+  }
+
+ private:
+  const char* what_;
 };
 
 void bind_loop(py::module_& m);            // Error, exceptions, LoopConfig, EventLoop, geodesy

@@ -90,40 +90,18 @@ struct CameraState {
   PyCallable on_frame;
 };
 
-struct PyCamera {
-  PyLoop* loop = nullptr;
+struct PyCamera : OnLoop<CameraSubscriber> {
+  PyCamera() : OnLoop("camera") {}
   std::shared_ptr<CameraState> state;
-  std::unique_ptr<LoopUse> use;
-  std::unique_ptr<CameraSubscriber> sub;
-  CameraSubscriber& s() {
-    if (sub == nullptr) raise_failure({client::Error::kNotConnected, "camera: closed"});
-    return *sub;
-  }
 };
 #endif
 
-struct PyRadio {
-  PyLoop* loop = nullptr;
-  std::unique_ptr<LoopUse> use;
-  std::unique_ptr<client::A2aRadio> radio;
-  client::A2aRadio& r() {
-    if (radio == nullptr) raise_failure({client::Error::kNotConnected, "radio: closed"});
-    return *radio;
-  }
+struct PyRadio : OnLoop<client::A2aRadio> {
+  PyRadio() : OnLoop("radio") {}
 };
 
-struct SwitchesState {
-  PyCallable on_change;
-};
-
-struct PySwitches {
-  PyLoop* loop = nullptr;
-  std::unique_ptr<LoopUse> use;
-  std::unique_ptr<client::PadSwitches> sw;
-  client::PadSwitches& s() {
-    if (sw == nullptr) raise_failure({client::Error::kNotConnected, "switches: closed"});
-    return *sw;
-  }
+struct PySwitches : OnLoop<client::PadSwitches> {
+  PySwitches() : OnLoop("switches") {}
 };
 
 // bytes-like (bytes, bytearray, memoryview, a uint8 numpy array) -> the frame's bytes
@@ -221,7 +199,6 @@ oldest dropped past `queue` frames).)")
             c.jpeg_quality = jpeg_quality;
             c.api_address = api_address;
             auto pc = std::make_unique<PyCamera>();
-            pc->loop = &loop;
             pc->state = make_gil_shared<CameraState>();
             pc->state->max_queue = static_cast<std::size_t>(queue);
             if (on_frame) pc->state->on_frame = hold_callable(std::move(*on_frame));
@@ -241,10 +218,9 @@ oldest dropped past `queue` frames).)")
               });
             };
             client::EventLoop& l = loop.get();
-            pc->sub = blocking_result(*loop.errors, [&] {
-              return CameraSubscriber::subscribe(l, c, deliver, timeout_s);
-            });
-            pc->use = std::make_unique<LoopUse>(loop);
+            pc->hold(loop, blocking_result(*loop.errors, [&] {
+                       return CameraSubscriber::subscribe(l, c, deliver, timeout_s);
+                     }));
             return pc;
           },
           py::arg("loop"), py::arg("camera"), py::kw_only(), py::arg("format") = CameraFormat::kBgr,
@@ -252,17 +228,18 @@ oldest dropped past `queue` frames).)")
           py::arg("on_frame") = py::none(), py::arg("queue") = 16, py::arg("timeout_s") = 10.0,
           py::keep_alive<0, 1>(),
           "Subscribes to a camera (its name in the world) and waits for the simulator's answer.")
-      .def_property_readonly("width", [](PyCamera& c) { return c.s().width(); })
-      .def_property_readonly("height", [](PyCamera& c) { return c.s().height(); })
-      .def_property_readonly("fps", [](PyCamera& c) { return c.s().fps(); })
-      .def_property_readonly("intrinsics", [](PyCamera& c) { return c.s().intrinsics(); })
-      .def_property_readonly("frames_received", [](PyCamera& c) { return c.s().frames_received(); })
-      .def_property_readonly("frames_dropped", [](PyCamera& c) { return c.s().frames_dropped(); })
+      .def_property_readonly("width", [](PyCamera& c) { return c.get().width(); })
+      .def_property_readonly("height", [](PyCamera& c) { return c.get().height(); })
+      .def_property_readonly("fps", [](PyCamera& c) { return c.get().fps(); })
+      .def_property_readonly("intrinsics", [](PyCamera& c) { return c.get().intrinsics(); })
+      .def_property_readonly("frames_received",
+                             [](PyCamera& c) { return c.get().frames_received(); })
+      .def_property_readonly("frames_dropped", [](PyCamera& c) { return c.get().frames_dropped(); })
       .def_property_readonly(
           "frames_overflowed", [](PyCamera& c) { return c.state->overflowed; },
           "Frames dropped from the take_frames() queue because it was full.")
       .def_property_readonly("connected",
-                             [](PyCamera& c) { return c.sub != nullptr && c.sub->connected(); })
+                             [](PyCamera& c) { return c.obj != nullptr && c.obj->connected(); })
       .def_property_readonly(
           "latest", [](PyCamera& c) { return c.state->latest; },
           "The last frame (None before one).")
@@ -276,11 +253,7 @@ oldest dropped past `queue` frames).)")
           },
           "The queued frames, oldest first (the queue is emptied).")
       .def(
-          "close",
-          [](PyCamera& c) {
-            c.sub.reset();
-            c.use.reset();
-          },
+          "close", [](PyCamera& c) { c.close(); },
           "Unsubscribes (later calls raise ConnectionError).");
 #endif
 
@@ -304,33 +277,28 @@ oldest dropped past `queue` frames).)")
           [](PyLoop& loop, int vehicle, double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
             auto pr = std::make_unique<PyRadio>();
-            pr->loop = &loop;
             client::EventLoop& l = loop.get();
-            pr->radio = blocking_result(
-                *loop.errors, [&] { return client::A2aRadio::open(l, vehicle, timeout_s); });
-            pr->use = std::make_unique<LoopUse>(loop);
+            pr->hold(loop, blocking_result(*loop.errors, [&] {
+                       return client::A2aRadio::open(l, vehicle, timeout_s);
+                     }));
             return pr;
           },
           py::arg("loop"), py::arg("vehicle"), py::arg("timeout_s") = 10.0, py::keep_alive<0, 1>(),
           "Opens the radio of the vehicle with this index and waits for the simulator's answer.")
-      .def_property_readonly("vehicle", [](PyRadio& r) { return r.r().vehicle(); })
+      .def_property_readonly("vehicle", [](PyRadio& r) { return r.get().vehicle(); })
       .def(
           "send",
           [](PyRadio& r, const py::buffer& data, int to) {
-            unwrap(r.r().send(bytes_of(data), to));
+            unwrap(r.get().send(bytes_of(data), to));
           },
           py::arg("data"), py::arg("to") = -1,
           "Puts a frame on air: to every vehicle in range (to < 0) or to one.")
       .def(
-          "take_received", [](PyRadio& r) { return r.r().take_received(); },
+          "take_received", [](PyRadio& r) { return r.get().take_received(); },
           "The frames received since the last call, in order of arrival.")
-      .def_property_readonly("counters", [](PyRadio& r) { return r.r().counters(); })
+      .def_property_readonly("counters", [](PyRadio& r) { return r.get().counters(); })
       .def(
-          "close",
-          [](PyRadio& r) {
-            r.radio.reset();
-            r.use.reset();
-          },
+          "close", [](PyRadio& r) { r.close(); },
           "Closes the radio (later calls raise ConnectionError).");
 
   py::class_<client::SwitchState>(m, "SwitchState")
@@ -345,7 +313,6 @@ oldest dropped past `queue` frames).)")
              double timeout_s) {
             checked_duration(timeout_s, "timeout_s");
             auto ps = std::make_unique<PySwitches>();
-            ps->loop = &loop;
             std::function<void(const client::SwitchState&)> cb;
             if (on_change) {
               cb = [errors = loop.errors,
@@ -355,23 +322,18 @@ oldest dropped past `queue` frames).)")
               };
             }
             client::EventLoop& l = loop.get();
-            ps->sw = blocking_result(*loop.errors, [&] {
-              return client::PadSwitches::subscribe(l, vehicle, cb, timeout_s);
-            });
-            ps->use = std::make_unique<LoopUse>(loop);
+            ps->hold(loop, blocking_result(*loop.errors, [&] {
+                       return client::PadSwitches::subscribe(l, vehicle, cb, timeout_s);
+                     }));
             return ps;
           },
           py::arg("loop"), py::arg("vehicle"), py::arg("on_change") = py::none(),
           py::arg("timeout_s") = 10.0, py::keep_alive<0, 1>(),
           "Subscribes to the switches of a vehicle (its name, e.g. \"uav0\").")
       .def_property_readonly(
-          "state", [](PySwitches& s) { return s.s().state(); }, "The last state received.")
+          "state", [](PySwitches& s) { return s.get().state(); }, "The last state received.")
       .def(
-          "close",
-          [](PySwitches& s) {
-            s.sw.reset();
-            s.use.reset();
-          },
+          "close", [](PySwitches& s) { s.close(); },
           "Unsubscribes (later calls raise ConnectionError).");
 
 #ifdef UAVSIM_CLIENT_HAS_CAMERA

@@ -26,14 +26,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A vehicle on a loop; the Python object keeps the loop's object alive (keep_alive), so the loop
 // outlives it.
-struct PyVehicle {
-  PyLoop* loop = nullptr;
-  std::unique_ptr<LoopUse> use;
-  std::unique_ptr<Vehicle> vehicle;
-  Vehicle& v() {
-    if (vehicle == nullptr) raise_failure({Error::kNotConnected, "vehicle: closed"});
-    return *vehicle;
-  }
+struct PyVehicle : OnLoop<Vehicle> {
+  PyVehicle() : OnLoop("vehicle") {}
+  Vehicle& v() { return get(); }
   CallbackErrors& errors() { return *loop->errors; }
 };
 
@@ -209,10 +204,7 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
              c.setpoint_resend_s = positive(setpoint_resend_s, "setpoint_resend_s");
              c.sim_vehicle = sim_vehicle;
              auto pv = std::make_unique<PyVehicle>();
-             pv->loop = &loop;
-             client::EventLoop& l = loop.get();
-             pv->use = std::make_unique<LoopUse>(loop);
-             pv->vehicle = std::make_unique<Vehicle>(l, c);
+             pv->hold(loop, std::make_unique<Vehicle>(loop.get(), c));
              return pv;
            }),
            py::arg("loop"), py::kw_only(), py::arg("gcs_sysid") = 255, py::arg("gcs_compid") = 190,
@@ -234,11 +226,7 @@ vehicles and callbacks carry on; under lockstep every timeout is sim time. Failu
                   py::arg("fallback") = "tcp:127.0.0.1:5760")
       .def("disconnect", [](PyVehicle& pv) { pv.v().disconnect(); })
       .def(
-          "close",
-          [](PyVehicle& pv) {
-            pv.vehicle.reset();
-            pv.use.reset();
-          },
+          "close", [](PyVehicle& pv) { pv.close(); },
           "Destroys the vehicle's C++ side now (its link closes); later calls raise "
           "ConnectionError.")
       .def_property_readonly("connected", [](PyVehicle& pv) { return pv.v().connected(); })
