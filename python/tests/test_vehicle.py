@@ -42,13 +42,18 @@ def test_telemetry_callbacks_run_on_the_loop_with_the_gil(empty_world, uav):
 
 
 def test_a_callbacks_exception_comes_out_of_the_blocking_call(empty_world, uav):
+    calls = []
+
     def bad(t):
-        raise RuntimeError("telemetry handler failed")
+        calls.append(t)
+        if len(calls) == 1:
+            raise RuntimeError("telemetry handler failed")
 
     uav.on_telemetry(bad)
     with pytest.raises(RuntimeError, match="telemetry handler failed"):
         empty_world.run_for(0.5)
     uav.on_telemetry(None)
+    assert len(calls) > 1  # the loop went on after the exception
 
 
 def test_parameters(uav):
@@ -159,16 +164,16 @@ def test_async_commands_report_through_done(empty_world, uav):
     uav.takeoff_async(2.0, outcomes.append)
     empty_world.loop.run_until(lambda: len(outcomes) == 3, 10.0)
     assert outcomes[2] is None
-    # a refused command: take-off while already flying is answered, with the vehicle's MAV_RESULT
     uav.wait_position_enu(uav.telemetry.position_enu_m * [1, 1, 0] + [0, 0, 2.0], TOL_M, 30.0)
     uav.land_async(outcomes.append)
     empty_world.loop.run_until(lambda: len(outcomes) == 4, 10.0)
     assert outcomes[3] is None
     empty_world.loop.run_until(lambda: not uav.telemetry.armed, 60.0, "landed and disarmed")
+    # a refused command is answered with the vehicle's MAV_RESULT: take-off while disarmed
     done = []
-    uav.command_long_async(400, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], done.append)  # disarm when disarmed
+    uav.command_long_async(22, [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0], done.append)
     empty_world.loop.run_until(lambda: len(done) == 1, 10.0)
-    assert done[0] is None or isinstance(done[0], uavsim.UavsimError)
+    assert isinstance(done[0], uavsim.UavsimError) and done[0].mav_result > 0
 
 
 def test_mission_upload_and_start_then_return_to_launch(empty_world, uav):
@@ -179,15 +184,16 @@ def test_mission_upload_and_start_then_return_to_launch(empty_world, uav):
     assert items[0].command == 22 and items[1].command == 16 and items[2].command == 20
     uav.upload_mission(items)
     uav.set_mode(FlightMode.GUIDED)
-    uav.arm()
+    start = np.array(empty_world.sim.vehicle(0)["position_enu_m"][:2])
+    uav.arm()  # home is where it arms
     uav.start_mission()
     empty_world.loop.run_until(lambda: uav.telemetry.mission_last_reached >= 2, 60.0, "the waypoint reached")
-    assert empty_world.sim.vehicle(0)["position_enu_m"][0] == pytest.approx(5.0, abs=1.0)
+    assert np.array(empty_world.sim.vehicle(0)["position_enu_m"][:2]) == pytest.approx([5.0, 5.0], abs=1.0)
     uav.set_mode(FlightMode.GUIDED)
     uav.return_to_launch()
     assert uav.telemetry.mode == FlightMode.RTL
     empty_world.loop.run_until(lambda: not uav.telemetry.armed, 120.0, "home and disarmed")
-    assert np.linalg.norm(np.array(empty_world.sim.vehicle(0)["position_enu_m"][:2])) < 1.0
+    assert np.linalg.norm(np.array(empty_world.sim.vehicle(0)["position_enu_m"][:2]) - start) < 1.0
 
 
 def test_status_texts(uav):

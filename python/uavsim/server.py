@@ -30,6 +30,7 @@ from .sim import Sim
 _MAVLINK_RE = re.compile(r"uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+)")
 _API_RE = re.compile(r"sim API on tcp:[0-9.]+:(\d+)")
 _STOP_TIMEOUT_S = 5.0
+_SETTLE_S = 0.1  # sim seconds the clock runs between closing the MAVLink links and a reset
 
 
 def find_server(path=None):
@@ -214,7 +215,7 @@ class Server:
         handed out are dropped, and a new loop joins the clock (call vehicle() again)."""
         if seed is not None:
             self.seed = seed
-        self._drop_clients()
+        self._drop_clients(settle=True)
         self._start_clock(self.seed)
 
     # what a program gets
@@ -335,7 +336,7 @@ class Server:
             self.loop = _core.EventLoop.host()
         self.sim.resume()
 
-    def _drop_clients(self):
+    def _drop_clients(self, settle=False):
         # the devices and vehicles before their loop, which leaves the lockstep as it closes (objects a
         # program still holds raise ConnectionError from then on)
         for d in self._devices:
@@ -343,7 +344,13 @@ class Server:
         self._devices.clear()
         for v in self._vehicles.values():
             v.close()
+        had_vehicles = bool(self._vehicles)
         self._vehicles.clear()
+        if settle and had_vehicles and self.loop is not None and self.loop.clock_alive:
+            # settle: let the clock run while the server takes in the closed MAVLink links, before a
+            # reset. A link event still queued for a vehicle when the world resets is dropped with the
+            # reset, and the server's endpoint then serves that vehicle's links no more.
+            self.loop.run_for(_SETTLE_S)
         if self.loop is not None:
             self.loop.close()
             self.loop = None
