@@ -68,12 +68,17 @@ def rate(r, mode):
 
 
 def compare(exe, world, mode, seconds, period_s, camera, cameras, repeat):
+    """Alternating runs (C++ first in even pairs, Python first in odd ones), so that both sides see the same
+    machine load; the figure is the median of the ratios of each pair's rates."""
     py, cpp = [], []
     with uavsim.Server(world, lockstep=False, cameras=cameras) as server:
-        for i in range(repeat):  # alternating, so both sides see the same machine load
-            cpp.append(rate(cpp_run(exe, server, mode, seconds, period_s, camera, 1), mode))
-            py.append(rate(python_run(server, mode, seconds, period_s, camera, 1), mode))
-    return statistics.median(py), statistics.median(cpp), py, cpp
+        for i in range(repeat):
+            runs = [("cpp", lambda: cpp_run(exe, server, mode, seconds, period_s, camera, 1)),
+                    ("py", lambda: python_run(server, mode, seconds, period_s, camera, 1))]
+            for side, fn in (runs if i % 2 == 0 else runs[::-1]):
+                (cpp if side == "cpp" else py).append(rate(fn(), mode))
+    ratios = [p / c for p, c in zip(py, cpp)]
+    return statistics.median(ratios), statistics.median(py), statistics.median(cpp), ratios
 
 
 def env_rate(steps):
@@ -105,16 +110,15 @@ def main():
     w, h = args.camera_size.split("x")
     cameras = {"overview": f"width={w},height={h},fps={args.camera_fps:g}"}
 
-    py, cpp, py_all, cpp_all = compare(exe, "empty", "ticks", args.tick_seconds, args.period, "overview", False,
-                                       args.repeat)
-    print(f"lockstep ticks/s, one vehicle + telemetry callback (period {args.period} s): "
-          f"Python {py:.0f}, C++ {cpp:.0f}, ratio {py / cpp:.2f}  (runs: py {[round(x) for x in py_all]}, "
-          f"C++ {[round(x) for x in cpp_all]})")
-    py, cpp, py_all, cpp_all = compare(exe, "empty", "camera", args.camera_seconds, args.period, "overview",
-                                       cameras, args.repeat)
-    print(f"camera frames/s delivered ({args.camera_size} BGR at {args.camera_fps:g} fps sim): "
-          f"Python {py:.1f}, C++ {cpp:.1f}, ratio {py / cpp:.2f}  (runs: py {[round(x, 1) for x in py_all]}, "
-          f"C++ {[round(x, 1) for x in cpp_all]})")
+    ratio, py, cpp, ratios = compare(exe, "empty", "ticks", args.tick_seconds, args.period, "overview", False,
+                                     args.repeat)
+    print(f"lockstep ticks/s, one vehicle + telemetry callback (period {args.period} s): Python/C++ {ratio:.2f} "
+          f"(median of {len(ratios)} pairs: {[round(r, 2) for r in ratios]}); medians Python {py:.0f}, C++ {cpp:.0f}")
+    ratio, py, cpp, ratios = compare(exe, "empty", "camera", args.camera_seconds, args.period, "overview",
+                                     cameras, args.repeat)
+    print(f"camera frames/s delivered ({args.camera_size} BGR at {args.camera_fps:g} fps sim): Python/C++ "
+          f"{ratio:.2f} (median of {len(ratios)} pairs: {[round(r, 2) for r in ratios]}); medians Python {py:.1f}, "
+          f"C++ {cpp:.1f}")
     steps_s, speed = env_rate(args.env_steps)
     print(f"HoverEnv: {steps_s:.1f} steps/s ({speed:.1f}x real time at 0.1 s per step)")
 
