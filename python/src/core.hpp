@@ -104,8 +104,9 @@ inline PyCallable hold_callable(py::object fn) {
   });
 }
 
-// Runs fn (which waits and must not touch Python objects) without the GIL, then raises what a
-// callback raised meanwhile, and returns fn's value.
+// Runs fn (which waits) without the GIL, then raises what a callback raised meanwhile, and returns
+// fn's value. fn must neither touch Python objects nor raise: what it needs that can fail (a closed
+// object's ConnectionError) is taken before, with the GIL, e.g. as an init-capture [&v = pv.v()].
 template <class F>
 auto blocking(CallbackErrors& errors, F&& fn) {
   if constexpr (std::is_void_v<decltype(fn())>) {
