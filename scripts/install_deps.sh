@@ -17,12 +17,7 @@ packages=(
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   python3 ffmpeg python3-matplotlib
   libegl-dev libegl-mesa0 libgl1-mesa-dri
-  slurm-wlm munge parallel openssh-server
 )
-# sweeps (tools/sweep/uavsim-sweep): GNU parallel for the local and ssh runners; SLURM (slurm-wlm:
-# slurmctld, slurmd, slurm-client) and munge for the cluster test, which starts them by hand on
-# loopback; openssh-server for the ssh runner's test (an sshd of its own on 127.0.0.1). Installing
-# them starts no service.
 # EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
 # libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
 if [ "${1:-}" != "--demo" ]; then
@@ -30,6 +25,17 @@ if [ "${1:-}" != "--demo" ]; then
   # which turns sanitizer reports into file:line, are only recommended by clang: named here for
   # --no-install-recommends; dpkg-dev (dpkg-shlibdeps) and file for CPack's .deb (tests/install)
   packages+=(clang libclang-rt-14-dev llvm dpkg-dev file)
+  # sweeps (tools/sweep/uavsim-sweep): GNU parallel for the local and ssh runners; SLURM (slurm-wlm:
+  # slurmctld, slurmd, slurm-client) and munge for the cluster test, which starts them by hand on
+  # loopback; openssh-server for the ssh runner's test (an sshd of its own on 127.0.0.1). Installing
+  # them starts no service.
+  packages+=(slurm-wlm munge parallel openssh-server)
+  # the Python package (python/): pybind11 and Python's headers build the extension module uavsim._core
+  # for Debian's python3; numpy carries its frames, pytest runs its tests (label python), OpenCV its
+  # camera example; setuptools, pip and venv are what `pip install ./python` into a user's venv needs
+  # offline
+  packages+=(python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-opencv
+             python3-setuptools python3-pip python3-venv)
   # node and npm: the machine's own Node.js is used when present (its npm may not come from Debian)
   command -v node >/dev/null 2>&1 || packages+=(nodejs)
   command -v npm >/dev/null 2>&1 || packages+=(npm)
