@@ -287,6 +287,26 @@ struct MavlinkServer::Core {
     }
   }
 
+  // a world reset drops every queued vehicle task, this endpoint's inbox drains among them: a vehicle
+  // whose drain was posted would keep task_posted set and never be served again (no heartbeat for a
+  // client that connected around the reset). Loop thread, after the tasks were cleared.
+  void after_reset() {
+    for (std::size_t vehicle = 0; vehicle < vehicles.size(); ++vehicle) {
+      Vehicle& v = *vehicles[vehicle];
+      bool post = false;
+      {
+        std::lock_guard lock(v.inbox_mutex);
+        post = !v.inbox.empty();
+        v.task_posted = post;
+      }
+      if (!post) continue;
+      std::weak_ptr<Core> weak = self;
+      sim.post(vehicle, [weak, vehicle](fc::FlightController& fc) {
+        if (auto core = weak.lock()) core->drain_inbox(vehicle, fc);
+      });
+    }
+  }
+
   // runs on the loop thread as a vehicle task: handle everything queued for the vehicle
   void drain_inbox(std::size_t vehicle, fc::FlightController& fc) {
     Vehicle& v = *vehicles[vehicle];
@@ -633,6 +653,9 @@ void MavlinkServer::schedule(sim::StepSchedule& steps) {
   std::weak_ptr<Core> weak = core_;
   steps.add(sim::Phase::kPostControl, "mavlink", [weak] {
     if (auto core = weak.lock()) core->on_control_step();
+  });
+  steps.add_reset("mavlink", [weak](uint64_t) {
+    if (auto core = weak.lock()) core->after_reset();
   });
 }
 

@@ -179,6 +179,21 @@ TEST_F(EndpointTest, ParamListStreamsEveryIndexWithCount) {
   EXPECT_GE(g->count<msg::Statustext>(), 1u);  // the banner comes first
 }
 
+TEST_F(EndpointTest, AClientThatConnectsAroundAResetIsStillServed) {
+  // the client's connect waits in the endpoint's inbox for a drain task on the loop; a world reset
+  // drops queued tasks, and the vehicle's links used to be served never again (no heartbeat)
+  auto g = connect();
+  sim_->reset(1);
+  ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::Heartbeat>() > 0; }, 2.0));
+  // and what it sends after the reset is answered
+  msg::ParamRequestRead rd;
+  rd.target_system = 1;
+  rd.param_index = 0;
+  g->send(rd);
+  sync_client(*g);
+  EXPECT_TRUE(step_until(*g, [&] { return g->count<msg::ParamValue>() > 0; }, kAnswerS));
+}
+
 TEST_F(EndpointTest, AnIntegerParameterKeepsTheWholePartAndSaysItsType) {
   // SYSID_THISMAV once stored 1.7, and every PARAM_VALUE said REAL32
   auto g = connect();
