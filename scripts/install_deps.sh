@@ -10,7 +10,10 @@ packages=(
   nlohmann-json3-dev libtinyxml2-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev llvm python3 ffmpeg ccache python3-matplotlib
   libegl-dev libegl-mesa0 libgl1-mesa-dri
+  libns3-dev libgsl-dev libsqlite3-dev libxml2-dev libpython3-dev
 )
+# the ns3 radio backend (ns3/README.md): Debian's ns-3 3.37, and the -dev packages its pkg-config and CMake
+# files name (GSL, SQLite, libxml2, Python headers) but libns3-dev does not depend on
 # EGL rendering (--gl egl|auto): GLVND's libEGL (libegl-dev), Mesa's EGL implementation (libegl-mesa0:
 # libegl1 only recommends it) and Mesa's drivers, llvmpipe among them (libgl1-mesa-dri)
 # clang's sanitizer and libFuzzer runtimes (libclang-rt-14-dev) and llvm-symbolizer (llvm), which turns

@@ -84,6 +84,10 @@ sim socket API (docs/protocol.md):
   --api-token-file FILE  clients must send this file's first line (the token) before any other op
   --allow-remote-gcs  let gcs_link_open send to hosts other than the API client's own address
   --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
+  --radio-backend B   the A2A radio's channel: simple (closed form: range or log-distance, seeded loss,
+                      TDMA, optional collisions; the default) or ns3 (ns-3's IEEE 802.15.4 lr-wpan: CSMA-CA,
+                      ACKs and retries, SINR errors, in the helper program uavsim-ns3-radio); over the
+                      world's <text name="uavsim:radio_backend" data="B"/> (docs/protocol.md "Radio")
 
 cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
@@ -459,6 +463,12 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       o.allow_remote_gcs = true;
     } else if (a == "--lockstep-timeout") {
       ok = number({0.001, 86400, false, "wall seconds"}, &o.lockstep_timeout_s);
+    } else if (a == "--radio-backend") {
+      if ((ok = value(&v))) {
+        ok = v == "simple" || v == "ns3";
+        if (!ok) why = "--radio-backend needs simple or ns3, got '" + v + "'";
+        o.radio_backend = v;
+      }
     } else if (a == "--camera") {
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {
