@@ -92,11 +92,12 @@ double SimRadio::link_loss_db(size_t from, size_t to) {
   const Eigen::Vector3d& pa = positions_enu_m_[a];
   const Eigen::Vector3d& pb = positions_enu_m_[b];
   if (!s.valid || s.loss_config_db != config_db || (s.a_enu_m - pa).norm() > kObstacleMove_m ||
-      (s.b_enu_m - pb).norm() > kObstacleMove_m) {
+      (s.b_enu_m - pb).norm() > kObstacleMove_m || sim_.time_s() - s.cast_s > kObstacleMaxAge_s) {
     s.loss_db = sight_.blocked_loss_db(pa, pb, a, b, config_db);
     s.a_enu_m = pa;
     s.b_enu_m = pb;
     s.loss_config_db = config_db;
+    s.cast_s = sim_.time_s();
     s.valid = true;
   }
   return s.loss_db;

@@ -4,7 +4,8 @@
 // pre-physics phase and reset with the world (seeded from the sim seed). Obstacles: the paths
 // frames use are cast through the world (physics/line_of_sight.hpp), each blocked one adding the
 // config's obstacle_loss_db of the geom groups it crosses; cached per link, cast again only when
-// one of its ends has moved more than kObstacleMove_m.
+// a frame uses the link and one of its ends has moved more than kObstacleMove_m, or the cast is
+// older than kObstacleMaxAge_s (obstacles move too: a truck, a wall).
 #pragma once
 
 #include <cstdint>
@@ -86,6 +87,8 @@ class SimRadio {
   static constexpr size_t kMaxInbox = 1u << 16;
   // a link's line of sight is cast again when an end moved more than this since the last cast
   static constexpr double kObstacleMove_m = 0.05;
+  // ... or when the cast is older than this (a truck at 10 m/s moves 1 m)
+  static constexpr double kObstacleMaxAge_s = 0.1;
 
   SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel);  // use attach()
 
@@ -100,6 +103,7 @@ class SimRadio {
     Eigen::Vector3d b_enu_m = Eigen::Vector3d::Zero();
     std::array<double, kGeomGroups> loss_config_db{};
     double loss_db = 0.0;
+    double cast_s = 0.0;
   };
 
   sim::Simulation& sim_;

@@ -333,5 +333,37 @@ TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
   EXPECT_TRUE(c.request({{"op", "gcs_link_stats"}, {"vehicle", 1}})["ok"]);
 }
 
+TEST(RadioApi, TheChannelSaysItsBackendAndHowLargeAFrameMayBe) {
+  RadioServer server;
+  TestClient c(server.port());
+  Json cfg = c.request({{"op", "radio_config"}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["backend"], "simple");
+  EXPECT_EQ(cfg["result"]["max_frame_bytes"], 127);
+  EXPECT_EQ(cfg["result"]["mac_header_bytes"], 0);
+  // accounting for the MAC header as 802.15.4 with short addresses does: 127 - 11 = 116 bytes
+  cfg = c.request({{"op", "radio_config"}, {"mac_header_bytes", 11}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["max_frame_bytes"], 116);
+  const Json sub = c.request({{"op", "radio_subscribe"}, {"vehicle", 1}});
+  EXPECT_EQ(sub["result"]["max_frame_bytes"], 116);
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, common::base64_encode(std::vector<uint8_t>(117, 1))))),
+            "frame_too_large");
+  EXPECT_TRUE(c.request(send_op(0, 1, common::base64_encode(std::vector<uint8_t>(116, 1))))["ok"]);
+  const Json stats = c.request({{"op", "radio_stats"}});
+  EXPECT_EQ(stats["result"]["backend"], "simple");
+  EXPECT_EQ(stats["result"]["vehicles"][0]["channel_access_failures"], 0);
+  // obstacle losses: up to six numbers in [0, 1000] dB, one per geom group
+  cfg = c.request({{"op", "radio_config"}, {"obstacle_loss_db", {0, 0, 0, 25}}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["obstacle_loss_db"][3], 25.0);
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"obstacle_loss_db", {1, 2, 3, 4, 5, 6, 7}}})),
+            "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"obstacle_loss_db", {-1}}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"obstacle_loss_db", {1e308}}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"mac_header_bytes", 26}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"mac_header_bytes", -1}})), "bad_field");
+}
+
 }  // namespace
 }  // namespace uavsim::server::api
