@@ -118,9 +118,9 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
       "radio of vehicle " + std::to_string(vehicle), &result);
   if (!id) return R(id.error());
   // the channel's frame size (a server without the field: 802.15.4's whole 127 bytes)
-  if (auto it = result.find("max_frame_bytes");
-      it != result.end() && it->is_number_unsigned() && it->get<std::uint64_t>() >= 1 &&
-      it->get<std::uint64_t>() <= kRadioMaxFrameBytes) {
+  if (auto it = result.find("max_frame_bytes"); it != result.end() && it->is_number_unsigned() &&
+                                                it->get<std::uint64_t>() >= 1 &&
+                                                it->get<std::uint64_t>() <= kRadioMaxFrameBytes) {
     s->max_frame_bytes = it->get<std::size_t>();
   }
   s->sink_id = *id;

@@ -114,12 +114,14 @@ bool RadioOps::apply_config(const Json& request, std::string* code, std::string*
     // one loss per MuJoCo geom group, in dB; groups not given block nothing
     bool ok = it->is_array() && it->size() <= radio::kGeomGroups;
     for (size_t g = 0; ok && g < it->size(); ++g) {
-      ok = (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
+      ok =
+          (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
     }
     if (!ok) {
-      return set_error(code, message, "bad_field",
-                       "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
-                       "geom group)");
+      return set_error(
+          code, message, "bad_field",
+          "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
+          "geom group)");
     }
     c.obstacle_loss_db.fill(0.0);
     for (size_t g = 0; g < it->size(); ++g) c.obstacle_loss_db[g] = (*it)[g].get<double>();

@@ -125,6 +125,10 @@ Ns3Channel::Ns3Channel(size_t vehicles, const RadioConfig& config, uint64_t seed
   w.put(seed);
   wire::put_channel(w, wire_channel(config_));
   if (!expect_ready(w.message())) {
+    // no destructor runs for a constructor that throws: fail() has reaped the helper, close its
+    // socket
+    ::close(fd_);
+    fd_ = -1;
     throw std::runtime_error("radio (ns3 backend): " + failure_);
   }
   reset_state();

@@ -181,7 +181,8 @@ bool RadioModel::reaches(size_t from, size_t to, const Eigen::Vector3d& a,
   // the range as the log-distance law would, by 10^(-L / (10 n))
   const double blocked_db = link_loss_db(from, to);
   if (config_.propagation == Propagation::kRange) {
-    return d_m <= config_.range_m * std::pow(10.0, -blocked_db / (10.0 * config_.path_loss_exponent));
+    return d_m <=
+           config_.range_m * std::pow(10.0, -blocked_db / (10.0 * config_.path_loss_exponent));
   }
   // log-distance path loss from a 1 m reference, plus a zero-mean gaussian shadowing term in dB
   const double path_loss_db = config_.reference_loss_db +
