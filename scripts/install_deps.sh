@@ -25,6 +25,9 @@ if [ "${1:-}" != "--demo" ]; then
   # which turns sanitizer reports into file:line, are only recommended by clang: named here for
   # --no-install-recommends; dpkg-dev (dpkg-shlibdeps) and file for CPack's .deb (tests/install)
   packages+=(clang libclang-rt-14-dev llvm dpkg-dev file)
+  # the ns3 radio backend (ns3/README.md): Debian's ns-3 3.37, and the -dev packages its pkg-config and
+  # CMake files name (GSL, SQLite, libxml2, Python headers) but libns3-dev does not depend on
+  packages+=(libns3-dev libgsl-dev libsqlite3-dev libxml2-dev libpython3-dev)
   # sweeps (tools/sweep/uavsim-sweep): GNU parallel for the local and ssh runners; SLURM (slurm-wlm:
   # slurmctld, slurmd, slurm-client) and munge for the cluster test, which starts them by hand on
   # loopback; openssh-server for the ssh runner's test (an sshd of its own on 127.0.0.1). Installing

@@ -9,7 +9,8 @@ namespace uavsim::client {
 Result<std::uint64_t> subscribe_lockstep_events(EventLoop& loop, const std::string& event,
                                                 SimChannel::EventSink sink, nlohmann::json request,
                                                 double timeout_s, const std::string& who,
-                                                const std::string& subject) {
+                                                const std::string& subject,
+                                                nlohmann::json* result) {
   using R = Result<std::uint64_t>;
   SimChannel* channel = LoopServices(loop).sim_channel();
   if (channel == nullptr) return R::fail(Error::kConnectionLost, who + ": no simulator connection");
@@ -23,6 +24,7 @@ Result<std::uint64_t> subscribe_lockstep_events(EventLoop& loop, const std::stri
     channel->remove_event_sink(id);
     return R::fail(Error::kDenied, subject + ": " + reply_error_text(*reply));
   }
+  if (result != nullptr) *result = reply->value("result", nlohmann::json::object());
   return id;
 }
 

@@ -18,11 +18,13 @@ namespace uavsim::client {
 // `request` (e.g. radio_subscribe) and waits for its reply. The sink is in place before the request
 // goes out: the first events may follow the reply at the next gate. Returns the sink's id, or a
 // failure (kConnectionLost "<who>: no simulator connection", the wait's failure, or kDenied
-// "<subject>: code: message") with the sink removed. Loop thread only.
+// "<subject>: code: message") with the sink removed. The reply's result goes to *result when given.
+// Loop thread only.
 Result<std::uint64_t> subscribe_lockstep_events(EventLoop& loop, const std::string& event,
                                                 SimChannel::EventSink sink, nlohmann::json request,
                                                 double timeout_s, const std::string& who,
-                                                const std::string& subject);
+                                                const std::string& subject,
+                                                nlohmann::json* result = nullptr);
 
 // Removes the sink registered under id and sends `request` (e.g. radio_unsubscribe) without waiting
 // for its reply. Loop thread only.

@@ -20,6 +20,7 @@ struct A2aRadio::Impl {
   EventLoop& loop;
   int vehicle;
   std::uint64_t sink_id = 0;
+  std::size_t max_frame_bytes = kRadioMaxFrameBytes;  // the channel's, from the subscription
   std::vector<RadioFrame> inbox;
   RadioCounters counters;
 
@@ -64,6 +65,8 @@ A2aRadio::~A2aRadio() {
 
 int A2aRadio::vehicle() const { return impl_->vehicle; }
 
+std::size_t A2aRadio::max_frame_bytes() const { return impl_->max_frame_bytes; }
+
 const RadioCounters& A2aRadio::counters() const { return impl_->counters; }
 
 std::vector<RadioFrame> A2aRadio::take_received() {
@@ -75,9 +78,10 @@ std::vector<RadioFrame> A2aRadio::take_received() {
 
 Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
   impl_->loop.assert_in_loop_thread();
-  if (data.empty() || data.size() > kRadioMaxFrameBytes) {
-    return Result<void>::fail(Error::kInvalidArgument, "radio: a frame carries 1-127 bytes, not " +
-                                                           std::to_string(data.size()));
+  if (data.empty() || data.size() > impl_->max_frame_bytes) {
+    return Result<void>::fail(Error::kInvalidArgument,
+                              "radio: a frame carries 1-" + std::to_string(impl_->max_frame_bytes) +
+                                  " bytes, not " + std::to_string(data.size()));
   }
   Json req = {{"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", common::base64_encode(data)}};
   if (to >= 0) {
@@ -107,11 +111,18 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   Impl* s = impl.get();
   // batched: one line a gate for the connection, not one a frame (a flock's broadcasts fan out to
   // every neighbour, and a line each was most of an agent's parsing)
+  Json result;
   auto id = subscribe_lockstep_events(
       loop, "radio_batch", [s](const Json& e) { s->on_batch(e); },
       {{"op", "radio_subscribe"}, {"vehicle", vehicle}, {"batch", true}}, timeout_s, "radio",
-      "radio of vehicle " + std::to_string(vehicle));
+      "radio of vehicle " + std::to_string(vehicle), &result);
   if (!id) return R(id.error());
+  // the channel's frame size (a server without the field: 802.15.4's whole 127 bytes)
+  if (auto it = result.find("max_frame_bytes"); it != result.end() && it->is_number_unsigned() &&
+                                                it->get<std::uint64_t>() >= 1 &&
+                                                it->get<std::uint64_t>() <= kRadioMaxFrameBytes) {
+    s->max_frame_bytes = it->get<std::size_t>();
+  }
   s->sink_id = *id;
   return std::unique_ptr<A2aRadio>(new A2aRadio(std::move(impl)));
 }

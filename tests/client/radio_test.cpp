@@ -27,13 +27,14 @@ constexpr double kTimeTol_s = 1e-6;
 // uavsim-server on ephemeral ports; the API port read from its banner
 class ServerProcess {
  public:
-  ServerProcess() {
+  explicit ServerProcess(const std::vector<std::string>& extra = {}) {
     std::vector<std::string> args{
         UAVSIM_SERVER,    std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/three_quads.xml",
         "--rate",         "0",
         "--mavlink-port", "0",
         "--api-port",     "0",
         "--no-cameras"};
+    args.insert(args.end(), extra.begin(), extra.end());
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -184,6 +185,39 @@ TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
   const auto on_host = A2aRadio::open(**host, 0);
   ASSERT_FALSE(on_host);
   EXPECT_EQ(on_host.code(), Error::kUnsupported);
+}
+
+TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
+  {
+    ServerProcess server;
+    ASSERT_GT(server.api_port(), 0) << server.output();
+    auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+    ASSERT_TRUE(l) << l.message();
+    auto r = A2aRadio::open(**l, 0);
+    ASSERT_TRUE(r) << r.message();
+    EXPECT_EQ((*r)->max_frame_bytes(), 127u);
+  }
+  // the ns3 backend: 116 bytes (127 less a short-addressed MAC header and FCS), and a frame goes
+  // through ns-3 to the other quads
+#ifndef UAVSIM_HAS_NS3
+  GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh installs it)";
+#endif
+  ServerProcess server({"--radio-backend", "ns3"});
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
+  ASSERT_TRUE(r0 && r1);
+  EXPECT_EQ((*r0)->max_frame_bytes(), 116u);
+  const auto big = (*r0)->send(frame(117, 0));
+  ASSERT_FALSE(big);
+  EXPECT_EQ(big.code(), Error::kInvalidArgument);
+  ASSERT_TRUE((*r0)->send(frame(116, 3)));
+  ASSERT_TRUE(loop.run_for(2 * kPeriod_s));
+  const auto got = (*r1)->take_received();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].data, frame(116, 3));
 }
 
 }  // namespace

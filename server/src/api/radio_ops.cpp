@@ -38,7 +38,8 @@ std::optional<size_t> RadioOps::vehicle(const Json& value, std::string* code,
 
 RadioOps::Json RadioOps::config_json() const {
   const radio::RadioConfig& c = radio_.model().config();
-  return Json{{"model", radio::propagation_name(c.propagation)},
+  return Json{{"backend", radio_.model().backend_name()},
+              {"model", radio::propagation_name(c.propagation)},
               {"range_m", c.range_m},
               {"tx_power_dbm", c.tx_power_dbm},
               {"sensitivity_dbm", c.sensitivity_dbm},
@@ -52,7 +53,9 @@ RadioOps::Json RadioOps::config_json() const {
               {"period_s", c.period_s},
               {"collisions", c.collisions},
               {"max_queue_frames", c.max_queue_frames},
-              {"max_frame_bytes", radio::kMaxFrameBytes}};
+              {"max_frame_bytes", radio_.model().max_payload_bytes()},
+              {"mac_header_bytes", c.mac_header_bytes},
+              {"obstacle_loss_db", c.obstacle_loss_db}};
 }
 
 bool RadioOps::apply_config(const Json& request, std::string* code, std::string* message) {
@@ -99,6 +102,30 @@ bool RadioOps::apply_config(const Json& request, std::string* code, std::string*
     }
     c.max_queue_frames = it->get<size_t>();
   }
+  if (auto it = request.find("mac_header_bytes"); it != request.end()) {
+    if (!it->is_number_unsigned() || it->get<uint64_t>() > radio::kMaxMacHeaderBytes) {
+      return set_error(code, message, "bad_field",
+                       "\"mac_header_bytes\" must be an integer in [0, " +
+                           std::to_string(radio::kMaxMacHeaderBytes) + "]");
+    }
+    c.mac_header_bytes = it->get<size_t>();
+  }
+  if (auto it = request.find("obstacle_loss_db"); it != request.end()) {
+    // one loss per MuJoCo geom group, in dB; groups not given block nothing
+    bool ok = it->is_array() && it->size() <= radio::kGeomGroups;
+    for (size_t g = 0; ok && g < it->size(); ++g) {
+      ok =
+          (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
+    }
+    if (!ok) {
+      return set_error(
+          code, message, "bad_field",
+          "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
+          "geom group)");
+    }
+    c.obstacle_loss_db.fill(0.0);
+    for (size_t g = 0; g < it->size(); ++g) c.obstacle_loss_db[g] = (*it)[g].get<double>();
+  }
   std::string why;
   if (!radio_.model().set_config(c, &why)) return set_error(code, message, "bad_field", why);
   return true;
@@ -131,19 +158,23 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
                        "\"data_b64\" (the frame, base64) is required");
     }
     // a generous bound before decoding: 127 bytes are 172 characters
+    const size_t max_bytes = radio_.model().max_payload_bytes();
     if (dit->get_ref<const std::string&>().size() > 4 * radio::kMaxFrameBytes) {
-      return set_error(
-          code, message, "frame_too_large",
-          "a frame is at most " + std::to_string(radio::kMaxFrameBytes) + " bytes (802.15.4)");
+      return set_error(code, message, "frame_too_large",
+                       "a frame is at most " + std::to_string(max_bytes) + " bytes (802.15.4)");
     }
     const auto data = common::base64_decode(dit->get<std::string>());
     if (!data) return set_error(code, message, "bad_base64", "\"data_b64\" is not valid base64");
     if (data->empty())
       return set_error(code, message, "bad_field", "a frame carries at least one byte");
-    if (data->size() > radio::kMaxFrameBytes) {
+    if (data->size() > max_bytes) {
       return set_error(code, message, "frame_too_large",
-                       "a frame is at most " + std::to_string(radio::kMaxFrameBytes) +
-                           " bytes (802.15.4), got " + std::to_string(data->size()));
+                       "a frame is at most " + std::to_string(max_bytes) +
+                           " bytes (802.15.4 on the " + radio_.model().backend_name() +
+                           " backend), got " + std::to_string(data->size()));
+    }
+    if (const std::string why = radio_.model().failure(); !why.empty()) {
+      return set_error(code, message, "not_available", "the radio failed: " + why);
     }
     const radio::SendResult r = radio_.send(*from, to, *data);
     if (!r.seq) {
@@ -183,6 +214,7 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
     }
     *result = {{"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
                {"batch", sub.batch},
+               {"max_frame_bytes", radio_.model().max_payload_bytes()},
                {"time_s", sim_.time_s()}};
     return true;
   }
@@ -192,7 +224,7 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
       only = vehicle(*vit, code, message);
       if (!only) return false;
     }
-    const radio::RadioModel& m = radio_.model();
+    const radio::RadioChannel& m = radio_.model();
     Json vehicles = Json::array();
     Json links = Json::array();
     for (size_t a = 0; a < m.vehicle_count(); ++a) {
@@ -200,7 +232,8 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
         vehicles.push_back({{"vehicle", a},
                             {"name", sim_.vehicle_name(a)},
                             {"transmitted", m.transmitted(a)},
-                            {"queued", m.queued(a)}});
+                            {"queued", m.queued(a)},
+                            {"channel_access_failures", m.channel_access_failures(a)}});
       }
       for (size_t b = 0; b < m.vehicle_count(); ++b) {
         const radio::LinkStats& s = m.link(a, b);
@@ -211,10 +244,14 @@ bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request,
                          {"delivered", s.delivered},
                          {"lost", s.lost},
                          {"collided", s.collided},
-                         {"out_of_range", s.out_of_range}});
+                         {"out_of_range", s.out_of_range},
+                         {"no_ack", s.no_ack}});
       }
     }
     *result = {{"time_s", sim_.time_s()},
+               {"backend", m.backend_name()},
+               {"max_frame_bytes", m.max_payload_bytes()},
+               {"failure", m.failure()},
                {"vehicles", vehicles},
                {"links", links},
                {"inbox_overflows", radio_.inbox_overflows()}};

@@ -91,7 +91,11 @@ sim socket API (docs/protocol.md):
   --lockstep-timeout S  drop a lockstep client that takes more than S wall seconds for a tick; default 10
   --watchdog S        report a simulation loop that makes no progress for S wall seconds (with what it
                       was doing); default 10, 0: off. A SIGTERM or SIGINT the loop has not acted on
-                      within 5 s ends the process anyway (exit 143 / 130), as does a second one at once
+                      within 5 s ends the process anyway (exit 143 / 130)
+  --radio-backend B   the A2A radio's channel: simple (closed form: range or log-distance, seeded loss,
+                      TDMA, optional collisions; the default) or ns3 (ns-3's IEEE 802.15.4 lr-wpan: CSMA-CA,
+                      ACKs and retries, SINR errors, in the helper program uavsim-ns3-radio); over the
+                      world's <text name="uavsim:radio_backend" data="B"/> (docs/protocol.md "Radio")
 
 cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
@@ -471,6 +475,12 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       ok = number({0.001, 86400, false, "wall seconds"}, &o.lockstep_timeout_s);
     } else if (a == "--watchdog") {
       ok = number({0.0, 86400, false, "wall seconds"}, &o.watchdog_s);
+    } else if (a == "--radio-backend") {
+      if ((ok = value(&v))) {
+        ok = v == "simple" || v == "ns3";
+        if (!ok) why = "--radio-backend needs simple or ns3, got '" + v + "'";
+        o.radio_backend = v;
+      }
     } else if (a == "--camera") {
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {

@@ -95,6 +95,7 @@ struct Options {
   std::string record_camera = "overview";     // --record-camera overview|follow|follow:NAME|top|CAMERA
   bool record_overlay = true;                 // --record-overlay 0: frames without the text
   bool record_tiled = false;                  // --record-layout tiled: onboard cameras beside the view
+  std::optional<std::string> radio_backend;   // --radio-backend simple|ns3: over the world's uavsim:radio_backend
 };
 
 // What parse_args() decided: run with options, or exit with exit_code after printing output (to

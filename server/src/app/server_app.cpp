@@ -467,6 +467,7 @@ int run_server(const Options& given_options) {
 
   // the sim socket API: requests run in the control gate, on this (the loop) thread
   radio::SimRadio* radio = nullptr;  // owned by s
+  bool radio_failed = false;          // the radio's channel failed: the run ended early
   radio::GcsRelaySet* gcs_relays = nullptr;  // likewise
   std::unique_ptr<api::RadioOps> radio_ops;  // outlives api_server, which serves its ops
   std::unique_ptr<api::SensorOps> sensor_ops;  // likewise
@@ -493,7 +494,27 @@ int run_server(const Options& given_options) {
     }
     if (frames) api_server->set_frame_service(frames.get());
     // the A2A radio and the GCS link relay (seed 6.2, 6.3), served as radio_* / gcs_link_* ops
-    radio = &radio::SimRadio::create(s, radio::RadioConfig{});
+    radio::BackendOptions backend;
+    radio::RadioConfig radio_config;
+    try {
+      // the channel: --radio-backend, else the world's uavsim:radio_backend; the world's obstacle losses
+      if (options.radio_backend) backend.backend = *radio::backend_from_name(*options.radio_backend);
+      radio::apply_world_radio_settings(s.world(), &backend, options.radio_backend.has_value(), &radio_config);
+      radio = &radio::SimRadio::create(s, radio_config, backend);
+    } catch (const std::exception& e) {
+      std::cerr << "uavsim-server: radio: " << e.what() << "\n";
+      return 1;
+    }
+    // a radio that fails (the ns3 helper died or hung) ends the run: never a silently perfect radio
+    radio->set_on_failure([&runner, &radio_failed](const std::string& why) {
+      std::cerr << "uavsim-server: radio: " << why << "; ending the run\n";
+      radio_failed = true;
+      runner.stop();
+    });
+    if (!options.quiet) {
+      std::cout << "uavsim-server: radio: " << radio->model().backend_name() << " backend, frames of at most "
+                << radio->model().max_payload_bytes() << " bytes" << "\n";
+    }
     gcs_relays = &radio::GcsRelaySet::create(s, options.api_bind_address);
     radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays);
     api_server->add_group(radio_ops.get());
@@ -595,6 +616,7 @@ int run_server(const Options& given_options) {
   if (const std::string stalls = guard->summary(); stalls != "no stalls") {
     std::cerr << "uavsim-server: watchdog: " << stalls << " of the simulation loop in this run\n";
   }
+  if (radio_failed) return 1;
   if (!options.quiet) {
     std::string extra;
     if (mavlink_server) {

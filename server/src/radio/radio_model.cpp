@@ -78,6 +78,11 @@ std::string validate(const RadioConfig& c, size_t vehicles) {
   if (!in(c.loss_probability, 0.0, 1.0)) return "loss_probability must be in [0, 1]";
   if (!in(c.latency_s, 0.0, kMaxLatencyS)) return range("latency_s", 0.0, kMaxLatencyS);
   if (c.max_queue_frames == 0) return "max_queue_frames must be > 0";
+  if (c.mac_header_bytes > kMaxMacHeaderBytes)
+    return "mac_header_bytes must be in [0, " + std::to_string(kMaxMacHeaderBytes) + "]";
+  for (double loss_db : c.obstacle_loss_db) {
+    if (!(loss_db >= 0.0 && loss_db <= 1000.0)) return "obstacle_loss_db must be in [0, 1000] dB";
+  }
   if (c.tdma) {
     // seed 6.2: D < T/N, and a slot must hold the longest frame; T at most an hour keeps the slot
     // count T / D below a million
@@ -134,7 +139,7 @@ SendResult RadioModel::send(size_t from, int to, const std::vector<uint8_t>& dat
     r.error = Error::kBadDestination;
   } else if (data.empty()) {
     r.error = Error::kEmptyFrame;
-  } else if (data.size() > kMaxFrameBytes) {
+  } else if (data.size() > max_payload_bytes()) {
     r.error = Error::kFrameTooLarge;
   } else if (queues_[from].size() >= config_.max_queue_frames) {
     r.error = Error::kQueueFull;
@@ -194,13 +199,20 @@ double RadioModel::normal() {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
-bool RadioModel::reaches(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+bool RadioModel::reaches(size_t from, size_t to, const Eigen::Vector3d& a,
+                         const Eigen::Vector3d& b) {
   const double d_m = (a - b).norm();
-  if (config_.propagation == Propagation::kRange) return d_m <= config_.range_m;
+  // obstacles on the path (radio/line_of_sight.hpp): with the range model a loss of L dB shrinks
+  // the range as the log-distance law would, by 10^(-L / (10 n))
+  const double blocked_db = link_loss_db(from, to);
+  if (config_.propagation == Propagation::kRange) {
+    return d_m <=
+           config_.range_m * std::pow(10.0, -blocked_db / (10.0 * config_.path_loss_exponent));
+  }
   // log-distance path loss from a 1 m reference, plus a zero-mean gaussian shadowing term in dB
   const double path_loss_db = config_.reference_loss_db +
                               10.0 * config_.path_loss_exponent * std::log10(std::max(d_m, 1.0)) +
-                              config_.shadowing_sigma_db * normal();
+                              config_.shadowing_sigma_db * normal() + blocked_db;
   return config_.tx_power_dbm - path_loss_db >= config_.sensitivity_dbm;
 }
 
@@ -211,7 +223,7 @@ void RadioModel::go_on_air(Frame& f, const std::vector<Eigen::Vector3d>& positio
   ++transmitted_[f.from];
   for (size_t r = 0; r < vehicles_; ++r) {
     if (r == f.from) continue;
-    f.heard[r] = reaches(positions[f.from], positions[r]) ? 1 : 0;
+    f.heard[r] = reaches(f.from, r, positions[f.from], positions[r]) ? 1 : 0;
   }
   for (size_t r = 0; r < vehicles_; ++r) {
     if (r == f.from || (f.to != kBroadcast && static_cast<size_t>(f.to) != r)) continue;
@@ -271,7 +283,7 @@ void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& position
       queues_[v].pop_front();
       const double earliest = std::max(f.queued_s, busy_until_s_[v]);
       f.start_s = config_.tdma ? next_slot_start_s(v, earliest) : earliest;
-      f.end_s = f.start_s + airtime_s(f.data.size());
+      f.end_s = f.start_s + airtime_s(f.data.size() + config_.mac_header_bytes);
       busy_until_s_[v] = f.end_s;
       scheduled_.push_back(std::move(f));
       added = true;

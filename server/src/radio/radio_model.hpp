@@ -27,13 +27,9 @@
 #include <string>
 #include <vector>
 
-namespace uavsim::server::radio {
+#include "radio/radio_channel.hpp"
 
-inline constexpr size_t kMaxFrameBytes = 127;     // 802.15.4 aMaxPHYPacketSize
-inline constexpr double kBitRateBitS = 250000.0;  // 2.4 GHz O-QPSK PHY
-inline constexpr size_t kPhyOverheadBytes =
-    6;  // preamble (4) + start-of-frame delimiter (1) + length (1)
-inline constexpr int kBroadcast = -1;
+namespace uavsim::server::radio {
 
 // The range of every number a RadioConfig accepts (validate() refuses the rest with bad_field's
 // message): physical values with room to spare, so that a huge, negative or denormal number from the API
@@ -51,71 +47,10 @@ inline constexpr double kMaxShadowingSigmaDb = 30.0;
 inline constexpr double kMaxLatencyS = 3600.0;
 inline constexpr double kMaxPeriodS = 3600.0;  // TDMA period T
 
-// Time on air of a frame of frame_bytes (PSDU) bytes at 250 kbit/s, PHY header included:
-// 127 bytes -> (127 + 6) * 8 / 250000 = 4.256 ms.
-double airtime_s(size_t frame_bytes);
-
-enum class Propagation {
-  kRange,        // received within range_m
-  kLogDistance,  // received when tx_power - PL(d) >= sensitivity, PL(d) = PL(1 m) + 10 n log10(d) +
-                 // X_sigma
-};
-const char* propagation_name(Propagation p);
-std::optional<Propagation> propagation_from_name(const std::string& name);
-
-struct RadioConfig {
-  Propagation propagation = Propagation::kRange;
-  double range_m = 100.0;
-  // log-distance path loss with log-normal shadowing (Rappaport, Wireless Communications, eq. 4.69)
-  double tx_power_dbm = 0.0;
-  double sensitivity_dbm =
-      -85.0;  // MRF24J40 datasheet: -95 dBm typical; -85 leaves a fading margin
-  double reference_loss_db = 40.05;  // free space at 1 m, 2.4 GHz: 20 log10(4 pi / 0.125 m)
-  double path_loss_exponent = 2.5;
-  double shadowing_sigma_db = 4.0;  // drawn per (transmission, receiver)
-  double loss_probability = 0.0;    // of a frame that reached a receiver in range
-  double latency_s = 0.0;  // processing after the end of transmission (delivery is >= one step)
-  bool tdma = false;
-  double slot_s = 0.01;   // D
-  double period_s = 1.0;  // T (the GPS pulse)
-  bool collisions =
-      false;  // overlapping frames heard at a receiver are both lost (half duplex too)
-  size_t max_queue_frames = 256;  // per vehicle; send() refuses more
-};
-
 // Why a config is unusable for vehicles vehicles ("" if usable); names the field.
 std::string validate(const RadioConfig& config, size_t vehicles);
 
-enum class Error { kUnknownVehicle, kBadDestination, kEmptyFrame, kFrameTooLarge, kQueueFull };
-const char* error_name(Error e);
-
-struct SendResult {
-  std::optional<uint64_t> seq;           // the frame's sequence number (per sender), if queued
-  Error error = Error::kUnknownVehicle;  // if not
-};
-
-struct Delivery {
-  size_t to = 0;
-  size_t from = 0;
-  uint64_t seq = 0;
-  bool broadcast = false;
-  double queued_s = 0.0;
-  double tx_start_s = 0.0;
-  double time_s = 0.0;  // arrival at the receiver
-  std::vector<uint8_t> data;
-};
-
-// One directed link's counters. Every frame addressed to the receiver (unicast to it, or broadcast)
-// that went on air counts once in sent and, once resolved, once in exactly one of the others.
-struct LinkStats {
-  uint64_t sent = 0;
-  uint64_t delivered = 0;
-  uint64_t lost = 0;          // in range, dropped by the loss draw
-  uint64_t collided = 0;      // overlapped another transmission heard at the receiver
-  uint64_t out_of_range = 0;  // beyond range (or below sensitivity after shadowing)
-};
-
-class RadioModel {
+class RadioModel : public RadioChannel {
  public:
   // step_s: the caller's step (the physics step), the least latency. Throws std::invalid_argument
   // with validate()'s message for an unusable config (a startup error).
@@ -123,7 +58,7 @@ class RadioModel {
 
   // Queues a frame from vehicle from to vehicle to (or kBroadcast) at time now_s. Not thread-safe
   // (one caller: the loop thread).
-  SendResult send(size_t from, int to, const std::vector<uint8_t>& data, double now_s);
+  SendResult send(size_t from, int to, const std::vector<uint8_t>& data, double now_s) override;
 
   // Advances to now_s (non-decreasing) with every vehicle's position at now_s: schedules queued
   // frames, puts due ones on air, resolves finished ones and appends the frames arriving at or
@@ -133,21 +68,25 @@ class RadioModel {
   // may still receive frames for now_s (the API's gate, while lockstep clients are working on the
   // tick) keeps the draws in (start, sender, seq) order whatever order the frames came in.
   void step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
-            std::vector<Delivery>* out, bool starting_now = true);
+            std::vector<Delivery>* out, bool starting_now = true) override;
 
   // True when step(now_s) would put a frame on air (so the caller needs fresh positions).
-  bool has_due(double now_s) const;
+  bool has_due(double now_s) const override;
 
   // Replaces the config; frames already scheduled keep their start. False (and *error) if unusable.
-  bool set_config(const RadioConfig& config, std::string* error);
-  const RadioConfig& config() const { return config_; }
+  bool set_config(const RadioConfig& config, std::string* error) override;
+  const RadioConfig& config() const override { return config_; }
   // Drops every frame and counter and restarts the generator from seed.
-  void reset(uint64_t seed);
+  void reset(uint64_t seed) override;
 
-  size_t vehicle_count() const { return vehicles_; }
-  const LinkStats& link(size_t from, size_t to) const { return links_[from * vehicles_ + to]; }
-  uint64_t transmitted(size_t vehicle) const { return transmitted_[vehicle]; }
-  size_t queued(size_t vehicle) const { return queues_[vehicle].size(); }
+  size_t vehicle_count() const override { return vehicles_; }
+  const LinkStats& link(size_t from, size_t to) const override {
+    return links_[from * vehicles_ + to];
+  }
+  uint64_t transmitted(size_t vehicle) const override { return transmitted_[vehicle]; }
+  size_t queued(size_t vehicle) const override { return queues_[vehicle].size(); }
+  const char* backend_name() const override { return "simple"; }
+  size_t max_payload_bytes() const override { return kMaxFrameBytes - config_.mac_header_bytes; }
 
   // The start of vehicle's first TDMA slot at or after t_s (exact slot arithmetic, seed fig. 6.2).
   double next_slot_start_s(size_t vehicle, double t_s) const;
@@ -167,7 +106,7 @@ class RadioModel {
     bool resolved = false;
   };
 
-  bool reaches(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+  bool reaches(size_t from, size_t to, const Eigen::Vector3d& a, const Eigen::Vector3d& b);
   double uniform();
   double normal();
   void go_on_air(Frame& f, const std::vector<Eigen::Vector3d>& positions);

@@ -1,15 +1,66 @@
 #include "radio/sim_radio.hpp"
 
 #include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "physics/object_bodies.hpp"
 
 namespace uavsim::server::radio {
 
-SimRadio& SimRadio::create(sim::Simulation& sim, const RadioConfig& config) {
-  return sim.own(std::make_unique<SimRadio>(sim, config));
+const char* backend_name(Backend b) { return b == Backend::kNs3 ? "ns3" : "simple"; }
+
+std::optional<Backend> backend_from_name(const std::string& name) {
+  if (name == "simple") return Backend::kSimple;
+  if (name == "ns3") return Backend::kNs3;
+  return std::nullopt;
 }
 
-SimRadio& SimRadio::attach(sim::Simulation& sim, const RadioConfig& config) {
-  SimRadio& radio = create(sim, config);
+void apply_world_radio_settings(const physics::World& world, BackendOptions* backend,
+                                bool backend_given, RadioConfig* config) {
+  for (const auto& [name, data] : physics::custom_texts(world, "uavsim:radio_backend")) {
+    if (name != "uavsim:radio_backend") continue;
+    const auto b = backend_from_name(data);
+    if (!b) {
+      throw physics::WorldError(
+          "text uavsim:radio_backend needs data=\"simple\" or \"ns3\", got \"" + data + "\"");
+    }
+    if (!backend_given) backend->backend = *b;
+  }
+  const std::vector<double> loss = physics::custom_numeric(world, "uavsim:radio_obstacle_loss_db");
+  if (loss.empty()) return;
+  bool ok = loss.size() <= kGeomGroups;
+  for (double db : loss) ok = ok && db >= 0.0 && db <= 1000.0;
+  if (!ok) {
+    throw physics::WorldError(
+        "numeric uavsim:radio_obstacle_loss_db needs data=\"G0 [G1 ... G5]\": the loss in dB (0 to "
+        "1000) a path crossing a geom of MuJoCo geom group 0, 1, ... takes");
+  }
+  config->obstacle_loss_db.fill(0.0);
+  for (size_t g = 0; g < loss.size(); ++g) config->obstacle_loss_db[g] = loss[g];
+}
+
+std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t vehicles,
+                                           const RadioConfig& config, uint64_t seed,
+                                           double step_s) {
+  if (backend.backend == Backend::kSimple) {
+    return std::make_unique<RadioModel>(vehicles, config, seed, step_s);
+  }
+  Ns3Options o = backend.ns3;
+  if (o.helper_path.empty()) o.helper_path = find_ns3_helper().value_or("");
+  return std::make_unique<Ns3Channel>(vehicles, config, seed, step_s, o);
+}
+
+SimRadio& SimRadio::create(sim::Simulation& sim, const RadioConfig& config,
+                           const BackendOptions& backend) {
+  return sim.own(std::make_unique<SimRadio>(
+      sim, make_channel(backend, sim.vehicle_count(), config, radio_seed(sim.config().seed),
+                        sim.physics_dt_s())));
+}
+
+SimRadio& SimRadio::attach(sim::Simulation& sim, const RadioConfig& config,
+                           const BackendOptions& backend) {
+  SimRadio& radio = create(sim, config, backend);
   radio.schedule(sim.schedule());
   return radio;
 }
@@ -19,23 +70,55 @@ void SimRadio::schedule(sim::StepSchedule& steps) {
   steps.add_reset("radio", [this](uint64_t seed) { reset(seed); });
 }
 
-SimRadio::SimRadio(sim::Simulation& sim, const RadioConfig& config)
+SimRadio::SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel)
     : sim_(sim),
-      model_(sim.vehicle_count(), config, radio_seed(sim.config().seed), sim.physics_dt_s()),
-      positions_enu_m_(sim.vehicle_count(), Eigen::Vector3d::Zero()) {}
+      channel_(std::move(channel)),
+      sight_(sim.world()),
+      sights_(sim.vehicle_count() * sim.vehicle_count()),
+      positions_enu_m_(sim.vehicle_count(), Eigen::Vector3d::Zero()),
+      velocities_enu_m_s_(sim.vehicle_count(), Eigen::Vector3d::Zero()) {
+  channel_->set_link_loss([this](size_t from, size_t to) { return link_loss_db(from, to); });
+}
+
+double SimRadio::link_loss_db(size_t from, size_t to) {
+  const std::array<double, kGeomGroups>& config_db = channel_->config().obstacle_loss_db;
+  bool any = false;
+  for (double db : config_db) any = any || db > 0.0;
+  if (!any) return 0.0;
+  // one cast serves both directions (the path is the same segment)
+  const size_t a = std::min(from, to);
+  const size_t b = std::max(from, to);
+  LinkSight& s = sights_[a * positions_enu_m_.size() + b];
+  const Eigen::Vector3d& pa = positions_enu_m_[a];
+  const Eigen::Vector3d& pb = positions_enu_m_[b];
+  if (!s.valid || s.loss_config_db != config_db || (s.a_enu_m - pa).norm() > kObstacleMove_m ||
+      (s.b_enu_m - pb).norm() > kObstacleMove_m || sim_.time_s() - s.cast_s > kObstacleMaxAge_s) {
+    s.loss_db = sight_.blocked_loss_db(pa, pb, a, b, config_db);
+    s.a_enu_m = pa;
+    s.b_enu_m = pb;
+    s.loss_config_db = config_db;
+    s.cast_s = sim_.time_s();
+    s.valid = true;
+  }
+  return s.loss_db;
+}
 
 SendResult SimRadio::send(size_t from, int to, const std::vector<uint8_t>& data) {
-  return model_.send(from, to, data, sim_.time_s());
+  return channel_->send(from, to, data, sim_.time_s());
 }
 
 void SimRadio::advance(bool starting_now) {
-  // positions at the transmit instant, read only when a frame goes on air
-  if (model_.has_due(sim_.time_s())) {
-    for (size_t i = 0; i < positions_enu_m_.size(); ++i)
-      positions_enu_m_[i] = sim_.truth(i).position_enu_m;
+  // positions (and velocities) at the transmit instant, read only when the channel needs them
+  if (channel_->has_due(sim_.time_s())) {
+    for (size_t i = 0; i < positions_enu_m_.size(); ++i) {
+      const fc::TruthState t = sim_.truth(i);
+      positions_enu_m_[i] = t.position_enu_m;
+      velocities_enu_m_s_[i] = t.velocity_enu_m_s;
+    }
+    channel_->set_velocities(velocities_enu_m_s_);
   }
   std::vector<Delivery> arrived;
-  model_.step(sim_.time_s(), positions_enu_m_, &arrived, starting_now);
+  channel_->step(sim_.time_s(), positions_enu_m_, &arrived, starting_now);
   for (Delivery& d : arrived) {
     // bounded: a radio nobody listens to must not grow without end
     if (inbox_.size() >= kMaxInbox) {
@@ -44,6 +127,15 @@ void SimRadio::advance(bool starting_now) {
     }
     inbox_.push_back(std::move(d));
   }
+  check_failure();
+}
+
+void SimRadio::check_failure() {
+  if (failure_reported_) return;
+  const std::string why = channel_->failure();
+  if (why.empty()) return;
+  failure_reported_ = true;
+  if (on_failure_) on_failure_(why);
 }
 
 std::vector<Delivery> SimRadio::take_deliveries() {
@@ -53,8 +145,10 @@ std::vector<Delivery> SimRadio::take_deliveries() {
 }
 
 void SimRadio::reset(uint64_t seed) {
-  model_.reset(radio_seed(seed));
+  channel_->reset(radio_seed(seed));
   inbox_.clear();
+  for (LinkSight& s : sights_) s.valid = false;
+  check_failure();
 }
 
 }  // namespace uavsim::server::radio

@@ -1,24 +1,56 @@
-// The radio in the simulation: a RadioModel stepped in sim time with every vehicle's ground-truth
-// position (the radio is physics, so truth is what it should see). The simulation owns it; schedule()
-// registers it to be advanced in every step's pre-physics phase and reset with the world (seeded from
-// the sim seed).
+// The radio in the simulation: a RadioChannel (radio_channel.hpp: the simple model or ns-3) stepped
+// in sim time with every vehicle's ground-truth position (the radio is physics, so truth is what it
+// should see). The simulation owns it; schedule() registers it to be advanced in every step's
+// pre-physics phase and reset with the world (seeded from the sim seed). Obstacles: the paths
+// frames use are cast through the world (physics/line_of_sight.hpp), each blocked one adding the
+// config's obstacle_loss_db of the geom groups it crosses; cached per link, cast again only when
+// a frame uses the link and one of its ends has moved more than kObstacleMove_m, or the cast is
+// older than kObstacleMaxAge_s (obstacles move too: a truck, a wall).
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
+#include "physics/line_of_sight.hpp"
+#include "radio/ns3_channel.hpp"
+#include "radio/radio_channel.hpp"
 #include "radio/radio_model.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::radio {
 
+enum class Backend { kSimple, kNs3 };
+const char* backend_name(Backend b);
+std::optional<Backend> backend_from_name(const std::string& name);
+
+// Which channel a run uses (--radio-backend, else the world's <text name="uavsim:radio_backend"
+// data="simple|ns3"/>, else simple).
+struct BackendOptions {
+  Backend backend = Backend::kSimple;
+  Ns3Options ns3;  // helper_path empty: find_ns3_helper()
+};
+
+// The world's radio settings: uavsim:radio_backend (above) into *backend unless given (nullopt
+// keeps it), and <numeric name="uavsim:radio_obstacle_loss_db" data="G0 ... G5"/> (dB per MuJoCo
+// geom group, 0 to 1000, up to six values) into config->obstacle_loss_db. Throws
+// physics::WorldError naming the attribute when one is malformed or out of range.
+void apply_world_radio_settings(const physics::World& world, BackendOptions* backend,
+                                bool backend_given, RadioConfig* config);
+
 class SimRadio {
  public:
   // Creates the radio for every vehicle of sim, owned by sim, not yet in its step schedule. Throws
-  // std::invalid_argument for an unusable config. Before the loop starts.
-  static SimRadio& create(sim::Simulation& sim, const RadioConfig& config);
+  // std::invalid_argument for an unusable config and std::runtime_error when the ns3 backend's
+  // helper cannot be started. Before the loop starts.
+  static SimRadio& create(sim::Simulation& sim, const RadioConfig& config,
+                          const BackendOptions& backend = {});
   // create(), then schedule(sim.schedule()). Before the loop starts.
-  static SimRadio& attach(sim::Simulation& sim, const RadioConfig& config);
+  static SimRadio& attach(sim::Simulation& sim, const RadioConfig& config,
+                          const BackendOptions& backend = {});
   // Registers the radio as "radio": advance() in the pre-physics phase, reset() as a reset hook.
   // Before the loop starts.
   void schedule(sim::StepSchedule& steps);
@@ -26,19 +58,23 @@ class SimRadio {
   // Queues a frame from vehicle from to to (a vehicle or kBroadcast) at the current sim time. Loop
   // thread only.
   SendResult send(size_t from, int to, const std::vector<uint8_t>& data);
-  // Steps the model to the current sim time; frames arriving by now move to the inbox. Idempotent
-  // at a given sim time (the API's gate calls it before announcing a tick, the pre-physics phase calls
-  // it again). The gate passes starting_now = false: frames queued at this time (by any lockstep
-  // client, in whatever order their requests come) go on air together in pre-physics, so the
-  // loss and shadowing draws do not depend on the clients' timing. Loop thread only.
+  // Steps the channel to the current sim time; frames arriving by now move to the inbox. Idempotent
+  // at a given sim time (the API's gate calls it before announcing a tick, the pre-physics phase
+  // calls it again). The gate passes starting_now = false: frames queued at this time (by any
+  // lockstep client, in whatever order their requests come) go on air together in pre-physics, so
+  // the loss and shadowing draws do not depend on the clients' timing. Loop thread only.
   void advance(bool starting_now = true);
   // The frames that arrived since the last call, in arrival order. Loop thread only.
   std::vector<Delivery> take_deliveries();
   // Frames dropped because nobody took them from a full inbox. Loop thread only.
   uint64_t inbox_overflows() const { return inbox_overflows_; }
 
-  RadioModel& model() { return model_; }  // Loop thread only.
-  const RadioModel& model() const { return model_; }
+  RadioChannel& model() { return *channel_; }  // Loop thread only.
+  const RadioChannel& model() const { return *channel_; }
+
+  // Called once, on the loop thread, when the channel fails (the ns3 helper died or hung), with
+  // why: the server ends the run. Before the loop starts.
+  void set_on_failure(std::function<void(const std::string&)> fn) { on_failure_ = std::move(fn); }
 
   // Back to the initial state for a reset with seed. Loop thread only.
   void reset(uint64_t seed);
@@ -49,15 +85,41 @@ class SimRadio {
   }
 
   static constexpr size_t kMaxInbox = 1u << 16;
+  // a link's line of sight is cast again when an end moved more than this since the last cast
+  static constexpr double kObstacleMove_m = 0.05;
+  // ... or when the cast is older than this (a truck at 10 m/s moves 1 m)
+  static constexpr double kObstacleMaxAge_s = 0.1;
 
-  SimRadio(sim::Simulation& sim, const RadioConfig& config);  // use attach()
+  SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel);  // use attach()
 
  private:
+  // the obstacle loss of link (from, to) at the positions of this step, cached
+  double link_loss_db(size_t from, size_t to);
+  void check_failure();
+
+  struct LinkSight {
+    bool valid = false;
+    Eigen::Vector3d a_enu_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d b_enu_m = Eigen::Vector3d::Zero();
+    std::array<double, kGeomGroups> loss_config_db{};
+    double loss_db = 0.0;
+    double cast_s = 0.0;
+  };
+
   sim::Simulation& sim_;
-  RadioModel model_;
+  std::unique_ptr<RadioChannel> channel_;
+  physics::LineOfSight sight_;
+  std::vector<LinkSight> sights_;  // min(from, to) * N + max(from, to): paths are symmetric
   std::vector<Eigen::Vector3d> positions_enu_m_;
+  std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Delivery> inbox_;
   uint64_t inbox_overflows_ = 0;
+  std::function<void(const std::string&)> on_failure_;
+  bool failure_reported_ = false;
 };
+
+// A channel of the chosen backend. Throws as SimRadio::create.
+std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t vehicles,
+                                           const RadioConfig& config, uint64_t seed, double step_s);
 
 }  // namespace uavsim::server::radio

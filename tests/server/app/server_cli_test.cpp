@@ -10,6 +10,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -128,6 +129,25 @@ TEST(ServerCli, DemoRunPrintsEventsAndASummary) {
   EXPECT_EQ(quiet.exit_code, 0);
   EXPECT_FALSE(has(quiet, "uav0: armed")) << quiet.output;
   EXPECT_FALSE(has(quiet, "s of sim time in")) << quiet.output;
+}
+
+TEST(ServerCli, TheRadioBackendIsChosenAndNamedAtStart) {
+  ServerRun r = run_server("empty" + kWorlds + " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: radio: simple backend, frames of at most 127 bytes")) << r.output;
+  r = run_server("empty --radio-backend tcp");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r, "--radio-backend needs simple or ns3")) << r.output;
+  // an ns3 helper that cannot work ends the server at start with the reason, never a radio without it
+  // (the server finds the helper through UAVSIM_NS3_RADIO first)
+  setenv("UAVSIM_NS3_RADIO", "/bin/false", 1);
+  r = run_server("empty" + kWorlds +
+                 " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras --radio-backend ns3");
+  unsetenv("UAVSIM_NS3_RADIO");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: radio: ")) << r.output;
+  EXPECT_TRUE(has(r, "the ns-3 radio helper failed")) << r.output;
+  EXPECT_TRUE(has(r, "exited with status 1")) << r.output;
 }
 
 

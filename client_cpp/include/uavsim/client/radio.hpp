@@ -1,4 +1,5 @@
-// A2aRadio: a vehicle's air-to-air radio (IEEE 802.15.4 frames of 1-127 bytes, seed 6.2), as a
+// A2aRadio: a vehicle's air-to-air radio (IEEE 802.15.4 frames of 1-127 bytes, seed 6.2; the
+// simulator's channel may allow fewer: max_frame_bytes()), as a
 // drone's onboard computer drives its radio module. In the simulator it is the server's radio
 // (docs/protocol.md "Radio"), carried on the loop's lockstep connection: a frame that arrives at
 // sim time t is received before the tick at or after t, in the same order in every run, so a
@@ -47,9 +48,12 @@ class A2aRadio {
   A2aRadio& operator=(const A2aRadio&) = delete;
 
   int vehicle() const;
+  // The largest frame the simulator's radio channel carries, bytes: 127 on its simple backend, 116
+  // on ns3 (802.15.4's 127-byte PSDU less the MAC header and FCS the channel accounts for).
+  std::size_t max_frame_bytes() const;
   // Puts a frame on air: to every vehicle in range (to < 0) or to one vehicle. Does not wait for
   // the simulator's answer (a refusal is counted in counters().refused). kInvalidArgument for an
-  // empty frame or one over kRadioMaxFrameBytes; kConnectionLost without a simulator connection.
+  // empty frame or one over max_frame_bytes(); kConnectionLost without a simulator connection.
   Result<void> send(const std::vector<std::uint8_t>& data, int to = -1);
   // The frames received since the last call, in order of arrival.
   std::vector<RadioFrame> take_received();

@@ -1,0 +1,123 @@
+// The ns3 backend of the A2A radio: IEEE 802.15.4 as ns-3's lr-wpan models it (O-QPSK 250 kbit/s,
+// unslotted CSMA-CA, ACK and retries for unicast, SINR-driven errors, so contention, hidden
+// terminals and capture are real), run in the separate program uavsim-ns3-radio (GPL-2.0-only,
+// ns3/README.md: ns-3 never links into this Apache-2.0 server). This class spawns the helper, owns
+// it, and steps it in lockstep with the physics over a socket pair (ns3/wire.hpp): at a step with
+// something to do it pushes every vehicle's position and velocity, the obstacle losses of the links
+// the step's senders use and the frames sent, and the helper runs ns-3 to the step's time
+// (Simulator::Stop(t - Now()) + Run()) and answers with the receptions and counters. While no frame
+// is in flight no round trip is made.
+//
+// Failure: a helper that dies, hangs (no answer within the timeout, wall time) or answers nonsense
+// puts the channel in a failed state with a message (failure()); from then on it refuses frames
+// and delivers nothing, and SimRadio ends the run (never a silently perfect radio).
+//
+// Model: the channel's loss is log-distance (reference_loss_db, path_loss_exponent) with gaussian
+// shadowing per (transmission, receiver), or the range model; tx_power_dbm and sensitivity_dbm
+// are applied by the helper (a signal below sensitivity neither decodes nor interferes). loss,
+// collisions (always modelled), tdma and mac_header_bytes (always 11) are not settings here.
+// Deliveries arrive at max(end of reception + latency_s, queued + one step), like the simple model.
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "radio/radio_channel.hpp"
+
+namespace uavsim::server::radio {
+
+struct Ns3Options {
+  std::string helper_path;        // the uavsim-ns3-radio program
+  double reply_timeout_s = 10.0;  // wall seconds the helper may take for one step
+};
+
+// Where the helper is: $UAVSIM_NS3_RADIO if set, else beside this program's executable, else the
+// build tree's copy (compiled in); nullopt if none exists.
+std::optional<std::string> find_ns3_helper();
+
+class Ns3Channel : public RadioChannel {
+ public:
+  // Spawns the helper and sets it up for vehicles radios. Throws std::runtime_error when the helper
+  // cannot be started or does not answer, std::invalid_argument for an unusable config (startup
+  // errors).
+  Ns3Channel(size_t vehicles, const RadioConfig& config, uint64_t seed, double step_s,
+             const Ns3Options& options);
+  ~Ns3Channel() override;  // asks the helper to quit, then reaps it
+  Ns3Channel(const Ns3Channel&) = delete;
+  Ns3Channel& operator=(const Ns3Channel&) = delete;
+
+  const char* backend_name() const override { return "ns3"; }
+  size_t max_payload_bytes() const override { return max_payload_bytes_; }
+  SendResult send(size_t from, int to, const std::vector<uint8_t>& data, double now_s) override;
+  void step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
+            std::vector<Delivery>* out, bool starting_now = true) override;
+  bool has_due(double now_s) const override;
+  void set_velocities(const std::vector<Eigen::Vector3d>& velocities_enu_m_s) override;
+  bool set_config(const RadioConfig& config, std::string* error) override;
+  const RadioConfig& config() const override { return config_; }
+  void reset(uint64_t seed) override;
+  size_t vehicle_count() const override { return vehicles_; }
+  const LinkStats& link(size_t from, size_t to) const override {
+    return links_[from * vehicles_ + to];
+  }
+  uint64_t transmitted(size_t vehicle) const override { return transmitted_[vehicle]; }
+  size_t queued(size_t vehicle) const override { return queued_[vehicle] + in_flight_[vehicle]; }
+  uint64_t channel_access_failures(size_t vehicle) const override {
+    return access_failures_[vehicle];
+  }
+
+  // Why the helper is unusable ("" while it works).
+  std::string failure() const override { return failure_; }
+  // The helper's process id (tests end it to check the failure path).
+  pid_t helper_pid() const { return pid_; }
+
+  // Why config is unusable on this backend ("" if usable).
+  static std::string validate_ns3(const RadioConfig& config);
+
+ private:
+  struct Queued {
+    size_t from = 0;
+    int to = kBroadcast;
+    uint64_t seq = 0;
+    int64_t queued_ns = 0;
+    std::vector<uint8_t> data;
+  };
+
+  void spawn();
+  void reset_state();
+  // hung: the helper is alive but silent (ended at once, not waited for)
+  void fail(const std::string& why, bool hung = false);
+  // one request and its reply; false (and failed) on any I/O or protocol error
+  bool exchange(const std::vector<uint8_t>& request, std::vector<uint8_t>* reply);
+  bool expect_ready(const std::vector<uint8_t>& request);
+  bool read_step_done(const std::vector<uint8_t>& reply);
+  int64_t to_ns(double t_s) const;
+
+  size_t vehicles_;
+  RadioConfig config_;
+  double step_s_;
+  Ns3Options options_;
+  pid_t pid_ = -1;
+  int fd_ = -1;
+  std::string failure_;
+  size_t max_payload_bytes_ = 0;
+  int64_t helper_ns_ = 0;  // the helper's clock
+  bool busy_ = false;      // frames in flight in the helper
+  std::vector<Eigen::Vector3d> velocities_enu_m_s_;
+  std::vector<Queued> queue_;  // sent, not yet handed to the helper, in (time, from, seq)
+  std::vector<uint64_t> next_seq_;
+  std::vector<size_t> queued_;          // per sender: in queue_
+  std::vector<size_t> in_flight_;       // per sender: handed, not yet confirmed
+  std::vector<double> pushed_loss_db_;  // from * N + to: the obstacle loss the helper has
+  std::vector<Delivery> pending_;       // received, not yet arrived (latency, one-step floor)
+  std::vector<LinkStats> links_;
+  std::vector<uint64_t> transmitted_;
+  std::vector<uint64_t> access_failures_;
+};
+
+}  // namespace uavsim::server::radio
