@@ -267,10 +267,10 @@ std::map<std::string, OpProbe> op_probes() {
   p["radio_subscribe"] = {with({}, "radio_subscribe"), {"vehicle"}};
   p["radio_unsubscribe"] = {with({}, "radio_unsubscribe"), {"vehicle"}};
   p["radio_stats"] = {with({}, "radio_stats"), {"vehicle"}};
-  p["radio_config"] = {
-      with({}, "radio_config"),
-      {"range_m", "tx_power_dbm", "sensitivity_dbm", "reference_loss_db", "path_loss_exponent",
-       "shadowing_sigma_db", "loss", "latency_s", "slot_s", "period_s", "max_queue_frames"}};
+  p["radio_config"] = {with({}, "radio_config"),
+                       {"range_m", "tx_power_dbm", "sensitivity_dbm", "reference_loss_db",
+                        "path_loss_exponent", "shadowing_sigma_db", "loss", "latency_s", "slot_s",
+                        "period_s", "max_queue_frames", "mac_header_bytes"}};
   p["gcs_link_open"] = {with(v0, "gcs_link_open"),
                         {"vehicle", "uav_port", "gcs_port", "gcs_target_port"}};
   p["gcs_link_impair"] = {with(v0, "gcs_link_impair"),
