@@ -55,6 +55,7 @@ const char* landing_state_name(LandingState s) {
 LandingFsm::LandingFsm(const MissionConfig& config)
     : config_(config),
       funnel_(config),
+      envelope_(config),
       pid_x_(approach_gains(config)),
       pid_y_(approach_gains(config)) {}
 
@@ -75,6 +76,9 @@ void LandingFsm::enter(LandingState s, double now_s, FsmOutputs* out, const std:
     open_loop_since_s_.reset();
     outside_reported_ = false;
     open_loop_reported_ = false;
+    ready_for_open_loop_ = false;
+    climb_away_ = false;
+    give_up_after_climb_ = false;
   }
 }
 
@@ -215,6 +219,19 @@ FsmOutputs LandingFsm::step(const FsmInputs& in) {
   return out;
 }
 
+FsmOutputs LandingFsm::climb_away(const FsmInputs& in, const EstimatedTruck& truck,
+                                  const TruckRelative& rel, const std::string& why, bool give_up) {
+  FsmOutputs out;
+  climb_away_ = true;
+  give_up_after_climb_ = give_up;
+  ++climb_aways_;
+  out.note = "climb-away: " + why;
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s =
+      enu_velocity_for(truck, in.position_enu_m, envelope_.abort_velocity_m_s(rel.position_m));
+  return out;
+}
+
 FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   FsmOutputs out;
   // a pad switch closed: all motors off at once (seed 7.1 "Landed")
@@ -226,6 +243,39 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   const double h = height_above_deck_m(in.position_enu_m.z());
   const bool seen = in.now_s - in.truck.last_seen_s <= config_.lost_after_s;
 
+  // the UAV in the truck's frame, from its own estimate, and what the clearance envelope says
+  EstimatedTruck truck;
+  truck.marker_enu_m = in.truck.position_enu_m;
+  truck.velocity_enu_m_s = in.truck.velocity_enu_m_s;
+  truck.heading_enu_rad = in.truck.heading_enu_rad;
+  truck.yaw_rate_rad_s = in.truck.yaw_rate_rad_s;
+  const TruckRelative rel = to_truck_frame(truck, config_, in.position_enu_m, in.velocity_enu_m_s);
+  const EnvelopeCheck check = envelope_.check(rel);
+
+  // the climb-away: up and away from the cab along the truck's way until clear of the truck, then
+  // a new approach (or Go To Centre after an open-loop descent that found no deck)
+  if (climb_away_) {
+    if (h < config_.abort_clear_height_m) {
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s =
+          enu_velocity_for(truck, in.position_enu_m, envelope_.abort_velocity_m_s(rel.position_m));
+      return out;
+    }
+    climb_away_ = false;
+    if (give_up_after_climb_) {
+      enter(LandingState::kGoToCentre, in.now_s, &out, "clear of the truck after the climb-away");
+      out.action = FsmOutputs::Action::kVelocity;
+      out.velocity_enu_m_s = Eigen::Vector3d(0, 0, config_.climb_m_s);
+      return out;
+    }
+    pid_x_.reset();
+    pid_y_.reset();
+    lost_since_s_.reset();
+    open_loop_since_s_.reset();
+    open_loop_reported_ = false;
+    out.note = fmt("clear of the truck at %.1f m: approaching again", h);
+  }
+
   // horizontal: the truck's velocity (feed-forward from the filter) + PID on the offset to the
   // marker
   const Eigen::Vector2d offset = in.truck.position_enu_m - in.position_enu_m.head<2>();
@@ -236,15 +286,22 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
       clamp_norm(in.truck.velocity_enu_m_s + correction, config_.approach_max_speed_m_s);
 
   // vertical: descend inside the funnel, climb outside it or when the marker is lost up high; in
-  // the last decimetres the marker no longer fits the image: open-loop descent, at most 8 s
+  // the last decimetres the marker no longer fits the image: open-loop descent, at most 8 s. The
+  // envelope bounds all of it: below the cab's top only in the deck box and matched, open loop
+  // only from centred and matched, otherwise the climb-away.
   double vz = 0.0;
   if (seen) {
     lost_since_s_.reset();
-    if (h <= config_.open_loop_height_m) {
-      if (!open_loop_since_s_) open_loop_since_s_ = in.now_s;
-    } else {
-      open_loop_since_s_.reset();
+    open_loop_since_s_.reset();
+    if (!check.safe()) {
+      return climb_away(in, truck, rel,
+                        fmt("%.2f m above the deck, (%+.2f, %+.2f) m from the centre", h,
+                            rel.position_m.x(), rel.position_m.y()) +
+                            fmt(" at %.2f m/s relative: outside the deck box or unmatched",
+                                rel.velocity_m_s.head<2>().norm()),
+                        false);
     }
+    ready_for_open_loop_ = check.ready_for_open_loop();
     if (funnel_.contains(h, offset.norm())) {
       vz = -funnel_.descent_rate_m_s(h);
       outside_reported_ = false;
@@ -255,20 +312,33 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
         out.note = fmt("outside the funnel (%.2f m off at %.1f m): climbing", offset.norm(), h);
       }
     }
+    vz = envelope_.limit_vertical_m_s(rel, vz);
   } else if (h <= config_.open_loop_height_m || open_loop_since_s_) {
-    if (!open_loop_since_s_) open_loop_since_s_ = in.now_s;
+    if (!open_loop_since_s_) {
+      if (!ready_for_open_loop_) {
+        return climb_away(
+            in, truck, rel,
+            fmt("marker lost at %.2f m, %.2f m from the centre at %.2f m/s relative: not centred "
+                "and matched",
+                h, rel.position_m.head<2>().norm(), rel.velocity_m_s.head<2>().norm()),
+            false);
+      }
+      open_loop_since_s_ = in.now_s;
+    }
     if (!open_loop_reported_) {
       open_loop_reported_ = true;
       out.note = fmt("marker too close to see at %.2f m: open-loop descent", h);
     }
-    if (in.now_s - *open_loop_since_s_ > config_.open_loop_timeout_s) {
-      enter(LandingState::kGoToCentre, in.now_s, &out,
-            "no touchdown after 8 s of open-loop descent");
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = Eigen::Vector3d(0, 0, config_.climb_m_s);
-      return out;
+    if (!check.safe()) {
+      return climb_away(in, truck, rel,
+                        fmt("open loop at %.2f m left the deck box (%+.2f, %+.2f) or unmatched", h,
+                            rel.position_m.x(), rel.position_m.y()),
+                        false);
     }
-    vz = -config_.open_loop_descent_m_s;
+    if (in.now_s - *open_loop_since_s_ > config_.open_loop_timeout_s) {
+      return climb_away(in, truck, rel, "no touchdown after 8 s of open-loop descent", true);
+    }
+    vz = envelope_.limit_vertical_m_s(rel, -config_.open_loop_descent_m_s);
   } else {
     if (!lost_since_s_) {
       lost_since_s_ = in.now_s;

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "clearance_envelope.hpp"
 #include "funnel.hpp"
 #include "mission_config.hpp"
 #include "uavsim/client/pid.hpp"
@@ -23,6 +24,8 @@ struct TruckKnowledge {
   bool initialised = false;  // the Kalman filter has started (two points)
   Eigen::Vector2d position_enu_m = Eigen::Vector2d::Zero();  // the marker, extrapolated to now
   Eigen::Vector2d velocity_enu_m_s = Eigen::Vector2d::Zero();
+  double heading_enu_rad = 0.0;  // the truck's forward direction (the track's, by its way)
+  double yaw_rate_rad_s = 0.0;   // its turning rate on the track's curve (positive left)
   double last_seen_s = -std::numeric_limits<double>::infinity();  // stamp of the newest sighting
   std::optional<Eigen::Vector2d> interception_enu_m;  // the best meeting point at cruise speed
   double interception_time_to_go_s = 0.0;
@@ -53,6 +56,10 @@ class LandingFsm {
 
   LandingState state() const { return state_; }
   int misses() const { return misses_; }
+  // Climb-aways begun so far (the clearance envelope's aborts).
+  int climb_aways() const { return climb_aways_; }
+  // Whether a climb-away is under way.
+  bool climbing_away() const { return climb_away_; }
   // skids above the deck for a body origin at z
   double height_above_deck_m(double z_enu_m) const;
 
@@ -63,10 +70,14 @@ class LandingFsm {
                          double altitude_m) const;
   double hold_altitude_m_s(const FsmInputs& in, double altitude_m) const;
   FsmOutputs approach(const FsmInputs& in);
+  // begins the climb-away (then Go To Centre if give_up, else a new approach) and commands it
+  FsmOutputs climb_away(const FsmInputs& in, const EstimatedTruck& truck, const TruckRelative& rel,
+                        const std::string& why, bool give_up);
   bool seen_since(const FsmInputs& in, double since_s) const;
 
   MissionConfig config_;
   Funnel funnel_;
+  ClearanceEnvelope envelope_;
   LandingState state_ = LandingState::kStart;
   double entered_s_ = 0.0;
   double last_step_s_ = -1.0;
@@ -80,6 +91,10 @@ class LandingFsm {
   std::optional<double> open_loop_since_s_;
   bool outside_reported_ = false;
   bool open_loop_reported_ = false;
+  bool ready_for_open_loop_ = false;  // at the last sighting: centred and matched in the deck box
+  bool climb_away_ = false;
+  bool give_up_after_climb_ = false;
+  int climb_aways_ = 0;
 };
 
 }  // namespace uavsim::missions::mbzirc2017

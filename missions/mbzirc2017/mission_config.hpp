@@ -53,6 +53,34 @@ struct MissionConfig {
   double descent_max_m_s = 1.2;
   double descent_per_m_1_s = 0.15;
 
+  // the truck as the team measured it before the competition (models/objects/truck.xml), from the
+  // marker's centre on the deck, x forward: the deck's edges and the cab's box
+  double deck_front_m = 1.1;
+  double deck_rear_m = 1.1;
+  double deck_half_width_m = 1.1;
+  double cab_rear_m = 2.0;  // the cab's rear face
+  double cab_front_m = 3.0;
+  double cab_half_width_m = 1.0;
+  double cab_top_above_deck_m = 0.55;
+  double cab_bottom_above_deck_m = -0.15;
+  // the hexa's reach from its centre (models/vehicles/hexa.xml): propeller tips at 0.45 + 0.19 m,
+  // skid corners at 0.212 * sqrt(2) m at any yaw; and its propellers' top above its skids' bottom
+  double rotor_reach_m = 0.64;
+  double skid_reach_m = 0.30;
+  double prop_top_above_skids_m = 0.44;
+
+  // the clearance envelope around the funnel (clearance_envelope.hpp)
+  double clearance_margin_m = 0.1;       // horizontal, on the deck box and the cab's box
+  double cab_vertical_margin_m = 0.25;   // the floor: skids this far above the cab's top
+  double matched_speed_m_s = 0.5;        // horizontal speed relative to the deck: "matched"
+  double envelope_prediction_s = 0.5;    // in the deck box now and this far ahead
+  double centred_m = 0.35;               // the open-loop last metres only this close to the centre
+  double open_loop_matched_m_s = 0.4;    // and this slow relative to the deck
+  double abort_climb_m_s = 1.5;          // the climb-away
+  double abort_retreat_m_s = 1.0;        // away from the cab, relative to the truck
+  double abort_clear_height_m = 2.5;     // skids above the deck where a climb-away ends
+  double floor_approach_gain_1_s = 1.0;  // descent towards the floor when not cleared below it
+
   // vision (seed 7.1: ~7 frames/s on the TX1)
   double vision_latency_s = 0.1;  // processing time of one frame (detached timing)
 };

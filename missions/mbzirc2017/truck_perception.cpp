@@ -25,7 +25,7 @@ const char* frame_outcome_name(FrameOutcome::Kind kind) {
 }
 
 TruckPerception::TruckPerception(const MissionConfig& config)
-    : config_(config), filter_(vision::EightTrack(config.track)) {}
+    : config_(config), track_(config.track), filter_(track_) {}
 
 vision::CameraPose TruckPerception::camera_pose(const Eigen::Vector3d& position_enu_m,
                                                 double yaw_enu_rad) const {
@@ -71,6 +71,11 @@ TruckKnowledge TruckPerception::knowledge(double now_s, const Eigen::Vector2d& u
   k.initialised = true;
   k.position_enu_m = e->position_enu_m;
   k.velocity_enu_m_s = e->velocity_enu_m_s;
+  // the truck drives forward along the track: its heading is the tangent by the sign of its way,
+  // its yaw rate the speed times the curvature
+  const Eigen::Vector2d tangent = track_.tangent_enu(e->s_m) * (e->v_s_m_s < 0.0 ? -1.0 : 1.0);
+  k.heading_enu_rad = std::atan2(tangent.y(), tangent.x());
+  k.yaw_rate_rad_s = e->v_s_m_s * track_.curvature_1_m(e->s_m);
   if (const auto i = filter_.intercept(to_us(now_s), uav_xy_enu_m, config_.cruise_speed_m_s,
                                        kInterceptHorizon_s)) {
     k.interception_enu_m = i->point_enu_m;

@@ -60,6 +60,7 @@ class TruckPerception {
  private:
   MissionConfig config_;
   vision::MarkerDetector detector_;
+  vision::EightTrack track_;
   vision::TrackKalman filter_;
   FrameOutcome last_;
   double last_seen_s_ = -1e18;

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "clearance_envelope.hpp"
 #include "funnel.hpp"
 #include "landing_fsm.hpp"
 
@@ -202,6 +203,7 @@ TEST(LandingFsm, OpenLoopDescentLastsAtMostEightSeconds) {
   // 1 m above the deck, right over the marker, then never seen again and no switch
   h.in.position_enu_m =
       Eigen::Vector3d(h.truck_x, 0, h.config.skid_depth_m + h.config.deck_height_m + 1.0);
+  h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);  // matched
   h.see_truck();
   h.step();
   const double z0 = h.in.position_enu_m.z();
@@ -214,7 +216,84 @@ TEST(LandingFsm, OpenLoopDescentLastsAtMostEightSeconds) {
   }
   EXPECT_GT(descending, 90);
   EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
-  ASSERT_TRUE(h.run_until(LandingState::kGoToCentre, 4.0, false));
+  EXPECT_EQ(h.fsm.climb_aways(), 0);
+  // 8 s after the marker was lost (1 s after the last sighting): the climb-away, from 4 s * 0.6 m/s
+  // below where the height was frozen (no deck here) up to 2.5 m above the deck at 1.5 m/s (3.3 s),
+  // then Go To Centre
+  ASSERT_TRUE(h.run_until(LandingState::kGoToCentre, 4.0 + 3.3 + 0.5, false));
+  EXPECT_EQ(h.fsm.climb_aways(), 1);
+  EXPECT_GE(h.fsm.height_above_deck_m(h.in.position_enu_m.z()), h.config.abort_clear_height_m);
+}
+
+// The crash: the marker lost at 1 m above the deck while 1 m ahead of its centre (towards
+// the cab). No open-loop descent from there: the climb-away, which in the truck's frame goes back
+// and up, never into the cab's volume; clear of the truck the approach starts again, and centred it
+// lands.
+TEST(LandingFsm, MarkerLostOneMetreOffCentreClimbsAwayThenLandsOnALaterApproach) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  const ClearanceEnvelope envelope(h.config);
+  const double deck_z = h.config.skid_depth_m + h.config.deck_height_m;
+  // 1 m ahead of where the truck is at the next step
+  h.in.position_enu_m = Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s + 1.0, 0, deck_z + 1.0);
+  h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
+  // one step with the marker still counted as seen (its last sighting 0.92 s old: the UAV 1 m off,
+  // not centred), then never again (too close to fit the image)
+  h.see_truck();
+  h.in.truck.last_seen_s -= 0.92;
+  const FsmOutputs seen = h.step();
+  EXPECT_GE(seen.velocity_enu_m_s.z(), 0.0);  // outside the funnel (0.85 m at 1 m): climbing
+  EXPECT_FALSE(h.fsm.climbing_away());
+  bool climbed_away = false;
+  for (int i = 0; i < 200 && !climbed_away; ++i) {
+    const FsmOutputs out = h.step();
+    ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+    ASSERT_GE(out.velocity_enu_m_s.z(), 0.0 - 1e-9) << "descended at step " << i;
+    climbed_away = h.fsm.climbing_away();
+  }
+  ASSERT_TRUE(climbed_away);
+  // the climb-away in the truck's frame: back (slower than the truck) and up, out of the cab's way
+  const FsmOutputs first = h.step();
+  EXPECT_LT(first.velocity_enu_m_s.x(), h.truck_speed);
+  EXPECT_GT(first.velocity_enu_m_s.z(), 0.0);
+  for (int i = 0; i < 100 && h.fsm.climbing_away(); ++i) {
+    h.step();
+    const Eigen::Vector3d p_truck(h.in.position_enu_m.x() - h.truck_x, h.in.position_enu_m.y(),
+                                  h.in.position_enu_m.z() - deck_z);
+    ASSERT_FALSE(envelope.in_cab_volume(p_truck));
+  }
+  ASSERT_FALSE(h.fsm.climbing_away());
+  EXPECT_GE(h.fsm.height_above_deck_m(h.in.position_enu_m.z()), h.config.abort_clear_height_m);
+  EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
+  // in view again: down the funnel, centred, onto the deck
+  for (int i = 0; i < 400 && h.fsm.height_above_deck_m(h.in.position_enu_m.z()) > 0.0; ++i) {
+    h.see_truck();
+    h.step();
+  }
+  EXPECT_LT(h.fsm.height_above_deck_m(h.in.position_enu_m.z()), 0.05);
+  EXPECT_LT(std::abs(h.in.position_enu_m.x() - h.truck_x), envelope.box_front_m());
+  EXPECT_EQ(h.fsm.climb_aways(), 1);
+  h.in.switch_closed = true;
+  h.step();
+  EXPECT_EQ(h.fsm.state(), LandingState::kLanded);
+}
+
+// Below the cab's top only over the deck and matched: a UAV pushed 0.5 m above the deck (under the
+// 0.8 m floor) 0.9 m ahead of the centre (out of the 0.7 m deck box) climbs away, back from the
+// cab.
+TEST(LandingFsm, BelowTheCabTopOutsideTheDeckBoxClimbsAway) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  const double deck_z = h.config.skid_depth_m + h.config.deck_height_m;
+  // under the floor, 0.9 m ahead of where the truck is at the next step
+  h.in.position_enu_m = Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s + 0.9, 0, deck_z + 0.5);
+  h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
+  h.see_truck();
+  const FsmOutputs out = h.step();
+  EXPECT_TRUE(h.fsm.climbing_away());
+  EXPECT_NE(out.note.find("climb-away"), std::string::npos);
+  EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
+  EXPECT_LT(out.velocity_enu_m_s.x(), h.truck_speed);  // back, away from the cab
 }
 
 }  // namespace
