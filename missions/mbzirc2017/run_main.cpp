@@ -7,9 +7,20 @@
 // later), time from take-off to touchdown, relative speed at touchdown, distance from the marker's
 // centre, crashes.
 //
-// Faults: --blackout-first-pass blacks the camera out when the UAV first starts waiting for the
-// truck at its interception point (for longer than its 12 s search: the FSM must go back to
-// Intercept);
+// Where and how fast: --start-phase F starts the UAV when the truck has driven the fraction F of a
+// lap of the eight (at its speed then; `random`: F drawn from the seed), so that the UAV meets it
+// anywhere on the eight; --truck-speed-kmh sets its speed. The summary says where on the eight
+// (crossing, straight, curve) the UAV began its approach and touched down, and the near misses: the
+// smallest clearance between the UAV's colliding geoms and the cab (and the chassis), and the
+// skids' margin to the deck's edges while at its height, from the ground truth at every lockstep
+// tick.
+//
+// Faults: --lose-low-off-centre puts the UAV's GPS 1 m off and blacks the camera out as its skids
+// first come within 1 m of the deck: the marker lost while the UAV's estimate has it 1 m off the
+// centre (the open-loop descent of issue 36 hit the cab from there); --random-blackouts N blacks
+// the camera out N times at seeded moments (10-100 s after the start, 0.5-4 s each);
+// --blackout-first-pass blacks the camera out when the UAV first starts waiting for the truck at
+// its interception point (for longer than its 12 s search: the FSM must go back to Intercept);
 // --lose-in-approach blacks it out for 4 s when the UAV first starts its approach (the truck lost
 // from view: climb, re-acquire or go back to the centre). With a fault the launcher joins the
 // lockstep itself and injects it at a tick, from the program's output stamped before that tick, so
@@ -17,6 +28,7 @@
 //
 // Exit status: 0 only when the UAV landed on the deck, stayed there 5 s and nothing crashed.
 // 1: the mission fell short; 2: usage; 4: the harness failed.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,10 +40,12 @@
 #include <string>
 #include <vector>
 
+#include "near_miss.hpp"
 #include "uavsim/client/sim_connection.hpp"
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
+#include "uavsim/vision/eight_track.hpp"
 
 namespace {
 
@@ -45,14 +59,34 @@ constexpr double kStayOnDeck_s = 5.0;          // scored: still carried this lon
 constexpr double kPauseSlack_s = 0.01;  // a pause_at holds the clock within a physics step of its time
 constexpr double kFirstPassBlackout_s = 14.0;  // longer than the 12 s search of Wait Until Visible
 constexpr double kApproachBlackout_s = 4.0;    // longer than the 1 s after which the marker is lost
+// --lose-low-off-centre: at this skid height over the deck, the GPS 1 m off and the camera black
+constexpr double kLoseLowHeight_m = 1.0;
+constexpr double kLoseLowGlitch_m = 1.0;
+constexpr double kLoseLowBlackout_s = 6.0;
+// over the deck: the body origin within the deck's half width of its centre
+constexpr double kOverTheDeck_m = 1.1;
 constexpr double kMaxKmh = 60.0;
 constexpr double kMaxStart_s = 3600.0;
+constexpr double kMinRuleKmh = 5.0;  // the truck's speeds in the MBZIRC 2017 rules
+constexpr double kMaxRuleKmh = 20.0;
+constexpr int kMaxBlackouts = 20;
+// random blackouts: from this long after the start to this long (the median landing is inside)
+constexpr double kBlackoutFrom_s = 10.0;
+constexpr double kBlackoutTo_s = 100.0;
+constexpr double kBlackoutMin_s = 0.5;
+constexpr double kBlackoutMax_s = 4.0;
 
 struct Options {
   uint64_t seed = 1;
   std::string world;
   double truck_speed_kmh = 0.0;  // 0: the world's (15 km/h)
   double start_time_s = 0.0;     // the UAV starts at this sim time (480: the 5 km/h phase)
+  bool slow_phase = false;       // --phase slow
+  // --start-phase: the fraction of a lap the truck drives before the start
+  std::optional<double> start_phase;
+  bool random_start_phase = false;  // --start-phase random
+  bool random_truck_speed = false;  // --truck-speed-kmh random
+  int random_blackouts = 0;
   std::string record;
   std::string json_path;
   std::string events_path;  // the sim's event log, one JSON line per event
@@ -66,6 +100,7 @@ struct Options {
   bool quiet = false;
   bool blackout_first_pass = false;
   bool lose_in_approach = false;
+  bool lose_low_off_centre = false;
   double budget_s = 300.0;  // sim seconds after the UAV's start
   double wall_limit_s = 1200.0;
   std::string server, uav;
@@ -75,11 +110,19 @@ int usage() {
   std::fprintf(stderr, R"(usage: mbzirc2017-run [options]
 Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV program, lockstep at full speed.
   --seed N               the driver's wander and sensor noise (default 1)
-  --truck-speed-kmh V    the truck's speed for the first 8 minutes (default the world's: 15; 0-60)
+  --truck-speed-kmh V    the truck's speed for the first 8 minutes (default the world's: 15; 0-60);
+                         random: drawn from the seed, uniform in the rules' 5-20 km/h
   --phase fast|slow      slow: start the UAV in the 5 km/h phase (same as --start-time 480)
   --start-time S         let the truck drive S seconds of sim time before the UAV starts (0-3600)
+  --start-phase F|random start when the truck has driven F (0-1) of a lap of the eight at its speed
+                         (after the 480 s of the first speed with --phase slow); random: F from the seed
+  --random-blackouts N   black the camera out N times (0-20) at moments drawn from the seed, 10-100 s
+                         after the start, 0.5-4 s each
   --blackout-first-pass  black the camera out for 14 s when the UAV first sets off to intercept
   --lose-in-approach     black the camera out for 4 s when the UAV first starts its approach
+  --lose-low-off-centre  when the UAV's skids first come within 1 m of the deck in its approach: its GPS
+                         1 m off (towards the truck's rear: the UAV believes itself 1 m behind the
+                         marker, its control pulls it towards the cab) and the camera black, both for 6 s
   --record FILE.mp4      video of the run (--record-camera; default video.mp4 in the run directory)
   --no-record            no video
   --realism LEVEL        field|ideal: the server's conditions (default: the world's)
@@ -128,6 +171,67 @@ std::string world_with_speed(const std::string& world, double kmh, uint64_t seed
   return out ? path : "";
 }
 
+// A uniform number in [0, 1) from the seed and a stream number (splitmix64: the same on every
+// platform, unlike the standard library's distributions).
+double seeded_uniform(uint64_t seed, uint64_t stream) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + (stream + 1) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+// The world's truck: its eight (uavsim:truck:track) and speed schedule (uavsim:truck:speed), with
+// the defaults of server/src/objects/truck.hpp where the world says nothing.
+struct TruckSchedule {
+  uavsim::vision::EightTrackParams track;
+  double speed1_kmh = 15.0, speed2_kmh = 5.0, switch_s = 480.0;
+};
+
+std::optional<std::vector<double>> world_numeric(const std::string& text, const std::string& name) {
+  const std::regex re("name=\"" + name + "\"\\s+data=\"([^\"]*)\"");
+  std::smatch m;
+  if (!std::regex_search(text, m, re)) return std::nullopt;
+  std::vector<double> v;
+  std::istringstream in(m[1].str());
+  for (double x = 0.0; in >> x;) v.push_back(x);
+  return v;
+}
+
+// Fails (false, why) on numbers out of range: they would reach the lap time's division.
+bool read_truck_schedule(const std::string& world, TruckSchedule* out, std::string* why) {
+  std::ifstream in(world);
+  if (!in) {
+    *why = "cannot read " + world;
+    return false;
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  if (const auto t = world_numeric(text, "uavsim:truck:track")) {
+    if (t->size() != 5 || !((*t)[0] > 0.0) || !((*t)[1] > 2.0 * (*t)[0]) || (*t)[1] > 1e4) {
+      *why = world + ": uavsim:truck:track needs R_m D_m x_m y_m yaw_deg with D > 2 R > 0";
+      return false;
+    }
+    out->track.circle_radius_m = (*t)[0];
+    out->track.centre_separation_m = (*t)[1];
+    out->track.centre_enu_m = Eigen::Vector2d((*t)[2], (*t)[3]);
+    out->track.yaw_rad = (*t)[4] * M_PI / 180.0;
+  }
+  if (const auto sp = world_numeric(text, "uavsim:truck:speed")) {
+    if (sp->size() < 3 || !((*sp)[0] > 0.0) || !((*sp)[1] > 0.0) || (*sp)[0] > kMaxKmh ||
+        (*sp)[1] > kMaxKmh || !((*sp)[2] >= 0.0)) {
+      *why =
+          world + ": uavsim:truck:speed needs speed1_kmh speed2_kmh switch_s (speeds in (0, 60])";
+      return false;
+    }
+    out->speed1_kmh = (*sp)[0];
+    out->speed2_kmh = (*sp)[1];
+    out->switch_s = (*sp)[2];
+  }
+  return true;
+}
+
 // "uav0 t=12.35 state Intercept -> WaitUntilVisible: ..." => (12.35, "WaitUntilVisible")
 std::optional<std::pair<double, std::string>> state_change(const std::string& line) {
   static const std::regex re(R"(t=([0-9.]+) state \w+ -> (\w+))");
@@ -154,6 +258,8 @@ int main(int argc, char** argv) {
       o.blackout_first_pass = true;
     } else if (a == "--lose-in-approach") {
       o.lose_in_approach = true;
+    } else if (a == "--lose-low-off-centre") {
+      o.lose_low_off_centre = true;
     } else if (a == "--no-record") {
       o.no_record = true;
     } else if (a == "--no-run-dir") {
@@ -165,13 +271,29 @@ int main(int argc, char** argv) {
     } else if (a == "--seed") {
       if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
     } else if (a == "--truck-speed-kmh") {
-      if (!parse_double(v, 0.0, kMaxKmh, &o.truck_speed_kmh)) return usage();
+      if (std::string(v) == "random") {
+        o.random_truck_speed = true;
+      } else if (!parse_double(v, 0.0, kMaxKmh, &o.truck_speed_kmh)) {
+        return usage();
+      }
     } else if (a == "--phase") {
       if (std::string(v) == "slow") {
         o.start_time_s = 480.0;
+        o.slow_phase = true;
       } else if (std::string(v) != "fast") {
         return usage();
       }
+    } else if (a == "--start-phase") {
+      double f = 0.0;
+      if (std::string(v) == "random") {
+        o.random_start_phase = true;
+      } else if (parse_double(v, 0.0, 1.0, &f)) {
+        o.start_phase = f;
+      } else {
+        return usage();
+      }
+    } else if (a == "--random-blackouts") {
+      if (!parse_integer<int>(v, 0, kMaxBlackouts, &o.random_blackouts)) return usage();
     } else if (a == "--start-time") {
       if (!parse_double(v, 0.0, kMaxStart_s, &o.start_time_s)) return usage();
     } else if (a == "--record") {
@@ -223,6 +345,54 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
     harness_error = 4;
   };
+  // where on the eight the UAV starts: a fraction of a lap at the speed of its phase
+  if (o.random_truck_speed) {
+    o.truck_speed_kmh = kMinRuleKmh + (kMaxRuleKmh - kMinRuleKmh) * seeded_uniform(o.seed, 100);
+  }
+  TruckSchedule schedule;
+  if (std::string why; !read_truck_schedule(o.world, &schedule, &why)) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
+    return 2;
+  }
+  if (o.truck_speed_kmh > 0.0) schedule.speed1_kmh = o.truck_speed_kmh;
+  const uavsim::vision::EightTrack track(schedule.track);
+  if (o.random_start_phase) o.start_phase = seeded_uniform(o.seed, 0);
+  if (o.start_phase) {
+    const double kmh = o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh;
+    o.start_time_s =
+        (o.slow_phase ? schedule.switch_s : 0.0) + *o.start_phase * track.length_m() / (kmh / 3.6);
+    if (!o.slow_phase && o.start_time_s > schedule.switch_s) {
+      std::fprintf(stderr, "mbzirc2017-run: a lap at %.1f km/h is longer than the first phase\n",
+                   kmh);
+      return 2;
+    }
+  }
+  // the random blackouts: (time, duration), in time order
+  std::vector<std::pair<double, double>> blackouts;
+  for (int k = 0; k < o.random_blackouts; ++k) {
+    blackouts.emplace_back(
+        o.start_time_s + kBlackoutFrom_s +
+            (kBlackoutTo_s - kBlackoutFrom_s) * seeded_uniform(o.seed, 1 + 2 * k),
+        kBlackoutMin_s + (kBlackoutMax_s - kBlackoutMin_s) * seeded_uniform(o.seed, 2 + 2 * k));
+  }
+  std::sort(blackouts.begin(), blackouts.end());
+  size_t next_blackout = 0;
+  // the near misses, from the models the simulator collides
+  std::optional<uavsim::missions::mbzirc2017::NearMissTracker> near_miss;
+  try {
+    near_miss.emplace(uavsim::missions::mbzirc2017::load_truck_shape(
+                          uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/objects/truck.xml"),
+                      uavsim::missions::mbzirc2017::load_vehicle_shape(
+                          uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/vehicles/hexa.xml"));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", e.what());
+    return 2;
+  }
+  std::string part_at_approach, part_at_touchdown;  // where on the eight
+  std::optional<double> approach_s;                 // the first Approach's time (program output)
+  double truck_s_m = 0.0;                           // the truck's arc length at the latest tick
+  int climb_aways = 0;
+
   std::string world = o.world;
   if (o.truck_speed_kmh > 0.0) {
     world = world_with_speed(o.world, o.truck_speed_kmh, o.seed);
@@ -239,6 +409,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> crashes, states;
   std::string vision_log;  // the UAV program's video log, in the run directory
   double first_blackout_s = -1.0, approach_blackout_s = -1.0;  // when the faults were injected
+  double lose_low_at_s = -1.0;
+  std::string uav_state;  // the program's state, as of its output stamped before the latest tick
+  double glitch_clear_s = -1.0;  // when --lose-low-off-centre's GPS offset ends (-1: none)
 
   uavsim::launch::ServerSpec spec;
   spec.path = o.server;
@@ -259,7 +432,8 @@ int main(int argc, char** argv) {
   } else if (launch.mavlink_port("uav0") == 0) {
     fail("the server did not start (no MAVLink port for uav0)");
   }
-  const bool faults = o.blackout_first_pass || o.lose_in_approach;
+  // the launcher always joins the lockstep: it scores the near misses at every tick (and injects
+  // the faults there)
   std::vector<std::pair<std::int64_t, double>> ticks;  // the fault injector's ticks (number, time)
   std::vector<std::pair<double, std::string>>
       pending_states;  // from the UAV's output, not yet acted on
@@ -280,7 +454,9 @@ int main(int argc, char** argv) {
     }
     launch.on_line([&](const std::string& child, const std::string& line) {
       if (child != "uav0") return;
+      if (line.find("climb-away:") != std::string::npos) ++climb_aways;
       if (auto s = state_change(line)) {
+        if (s->second == "Approach" && !approach_s) approach_s = s->first;
         states.push_back(s->second);
         pending_states.push_back(*s);
       }
@@ -297,15 +473,15 @@ int main(int argc, char** argv) {
       auto u = launch.spawn("uav0", argv, {launch.lockstep_env(kLockstepPeriod_s)});
       if (!u) fail(u.message());
     }
-    if (!harness_error && faults) {
+    if (!harness_error) {
       api.on_message("tick", [&](const SimMessage& m) {
         ticks.emplace_back(m.json.value("tick", std::int64_t{0}), m.json.value("time", 0.0));
       });
       if (!api.lockstep_join(kLockstepPeriod_s, 120.0))
-        fail("the fault injector could not join the lockstep");
+        fail("the launcher could not join the lockstep");
     }
     if (!harness_error) {
-      if (auto w = launch.wait_lockstep_clients(faults ? 2 : 1, 120.0); !w) {
+      if (auto w = launch.wait_lockstep_clients(2, 120.0); !w) {
         fail("the UAV program did not join the lockstep");
       } else if (!api.resume()) {
         fail("resume refused");
@@ -319,6 +495,17 @@ int main(int argc, char** argv) {
     // 3. follow the program and the event stream until it has landed (and 5 s more), it gave up, or
     // the budget is spent
     double sim_s = o.start_time_s, last_status_wall_s = 0.0;
+    double truck_yaw_rad = 0.0;  // at the latest tick
+    auto blackout = [&](double tick_s, double duration_s, const std::string& why) {
+      if (!api.request(
+              {{"op", "camera_blackout"}, {"camera", "uav0_down"}, {"duration_s", duration_s}})) {
+        fail("camera_blackout refused");
+      }
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), "[fault] t=%.2f camera uav0_down black for %.1f s (%s)",
+                    tick_s, duration_s, why.c_str());
+      launch.say(buf);
+    };
     while (!harness_error) {
       launch.pump(ticks.empty() ? 50 : 0);
       for (const SimMessage& m : api.take_messages()) {
@@ -332,6 +519,7 @@ int main(int argc, char** argv) {
           crashes.push_back(vehicle + " at " + std::to_string(t) + " s: " + detail);
         if (type == "landed_on_target" && landed_s < 0) {
           landed_s = t;
+          part_at_touchdown = uavsim::missions::mbzirc2017::eight_part(track, truck_s_m);
           // the clock is then still short of t + 5 s (a few ms of wall time at full speed)
           const auto r = api.request({{"op", "pause_at"}, {"time_s", t + kStayOnDeck_s}});
           if (r && r->value("time_s", 0.0) > t + kStayOnDeck_s) {
@@ -358,6 +546,61 @@ int main(int argc, char** argv) {
       const std::vector<std::pair<std::int64_t, double>> due = std::move(ticks);
       ticks.clear();
       for (const auto& [tick, tick_s] : due) {
+        // the near misses from the ground truth at the tick (the clock holds until done)
+        if (const auto v = api.request({{"op", "vehicles"}}), t = api.truck(); v && t) {
+          for (const Json& veh : v->value("vehicles", Json::array())) {
+            if (veh.value("name", "") != "uav0") continue;
+            for (const Json& k : t->value("trucks", Json::array())) {
+              const auto p = veh.value("position_enu_m", std::vector<double>{});
+              const auto q = veh.value("q_enu_body", std::vector<double>{});
+              const auto tp = k.value("position_enu_m", std::vector<double>{});
+              if (p.size() != 3 || q.size() != 4 || tp.size() != 3) continue;
+              near_miss->add(Eigen::Vector3d(p[0], p[1], p[2]),
+                             Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized(),
+                             Eigen::Vector3d(tp[0], tp[1], tp[2]), k.value("yaw_rad", 0.0));
+              truck_s_m = k.value("s_m", 0.0);
+              truck_yaw_rad = k.value("yaw_rad", 0.0);
+              if (approach_s && part_at_approach.empty() && tick_s >= *approach_s) {
+                part_at_approach = uavsim::missions::mbzirc2017::eight_part(track, truck_s_m);
+              }
+            }
+          }
+        }
+        // the random blackouts due by this tick
+        for (; next_blackout < blackouts.size() && blackouts[next_blackout].first <= tick_s;
+             ++next_blackout) {
+          blackout(tick_s, blackouts[next_blackout].second, "random");
+        }
+        // the marker lost low and off the centre: GPS 1 m towards the truck's rear, camera black
+        if (const auto rel = near_miss->latest();
+            o.lose_low_off_centre && lose_low_at_s < 0 && uav_state == "Approach" && rel &&
+            rel->skid_height_m <= kLoseLowHeight_m &&
+            rel->p_truck_m.head<2>().norm() <= kOverTheDeck_m) {
+          lose_low_at_s = tick_s;
+          const Eigen::Vector2d back =
+              -kLoseLowGlitch_m * Eigen::Vector2d(std::cos(truck_yaw_rad), std::sin(truck_yaw_rad));
+          if (!api.request({{"op", "gps_glitch"},
+                            {"vehicle", "uav0"},
+                            {"offset_enu_m", {back.x(), back.y(), 0.0}}})) {
+            fail("gps_glitch refused");
+          }
+          glitch_clear_s = tick_s + kLoseLowBlackout_s;
+          char buf[200];
+          std::snprintf(buf, sizeof(buf),
+                        "[fault] t=%.2f GPS of uav0 off by (%+.2f, %+.2f) m for %.0f s, at %.2f m "
+                        "above the deck",
+                        tick_s, back.x(), back.y(), kLoseLowBlackout_s, rel->skid_height_m);
+          launch.say(buf);
+          blackout(tick_s, kLoseLowBlackout_s, "low, off the centre");
+        }
+        if (glitch_clear_s >= 0.0 && tick_s >= glitch_clear_s) {
+          glitch_clear_s = -1.0;
+          if (!api.request(
+                  {{"op", "gps_glitch"}, {"vehicle", "uav0"}, {"offset_enu_m", {0.0, 0.0, 0.0}}})) {
+            fail("gps_glitch refused");
+          }
+          launch.say("[fault] GPS of uav0 back");
+        }
         for (auto it = pending_states.begin(); it != pending_states.end();) {
           if (it->first >= tick_s - 1e-9) {
             ++it;
@@ -365,6 +608,7 @@ int main(int argc, char** argv) {
           }
           const std::string state = it->second;
           it = pending_states.erase(it);
+          uav_state = state;
           double duration = 0.0;
           if (o.blackout_first_pass && state == "Intercept" && first_blackout_s < 0) {
             duration = kFirstPassBlackout_s;
@@ -373,17 +617,7 @@ int main(int argc, char** argv) {
             duration = kApproachBlackout_s;
             approach_blackout_s = tick_s;
           }
-          if (duration > 0.0) {
-            if (!api.request({{"op", "camera_blackout"},
-                              {"camera", "uav0_down"},
-                              {"duration_s", duration}})) {
-              fail("camera_blackout refused");
-            }
-            char buf[160];
-            std::snprintf(buf, sizeof(buf), "[fault] t=%.2f camera uav0_down black for %.0f s (%s)",
-                          tick_s, duration, state.c_str());
-            launch.say(buf);
-          }
+          if (duration > 0.0) blackout(tick_s, duration, state);
         }
         sim_s = tick_s;
         if (!api.done(tick)) fail("the fault injector's done was refused");
@@ -415,7 +649,7 @@ int main(int argc, char** argv) {
         break;
       }
     }
-    if (faults) (void)api.lockstep_leave();
+    (void)api.lockstep_leave();
     // the clock holds by itself at the end (pause_at): score once it does
     for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
          launch.pump(10)) {
@@ -464,6 +698,22 @@ int main(int argc, char** argv) {
   } else {
     std::printf("take-off to touchdown: n/a\n");
   }
+  // the near misses (ground truth at every tick) and where on the eight
+  const std::optional<double> cab_clearance = near_miss->min_clearance_m("cab");
+  const std::optional<double> deck_margin = near_miss->min_deck_edge_margin_m();
+  int truck_contacts = 0;  // crashes into any truck part (the deck is never a crash)
+  for (const std::string& c : crashes) truck_contacts += c.find("truck/") != std::string::npos;
+  std::printf(
+      "start: t=%.1f s%s; truck at %.1f km/h; approach began on the %s, touchdown on the %s\n",
+      o.start_time_s,
+      o.start_phase ? (" (" + std::to_string(*o.start_phase) + " of a lap)").c_str() : "",
+      o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh,
+      part_at_approach.empty() ? "-" : part_at_approach.c_str(),
+      part_at_touchdown.empty() ? "-" : part_at_touchdown.c_str());
+  std::printf(
+      "near misses: cab clearance min %s m; skids to the deck's edges min %s m; %d climb-away(s)\n",
+      cab_clearance ? std::to_string(*cab_clearance).c_str() : "-",
+      deck_margin ? std::to_string(*deck_margin).c_str() : "-", climb_aways);
   std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
@@ -486,8 +736,24 @@ int main(int argc, char** argv) {
     summary["video"] = o.record;
     summary["vision_log"] = vision_log;
     summary["seed"] = o.seed;
-    summary["truck_speed_kmh"] = o.truck_speed_kmh > 0.0 ? o.truck_speed_kmh : 15.0;
+    summary["truck_speed_kmh"] = o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh;
     summary["start_time_s"] = o.start_time_s;
+    summary["start_phase"] = o.start_phase ? Json(*o.start_phase) : Json(nullptr);
+    summary["eight_part_at_approach"] =
+        part_at_approach.empty() ? Json(nullptr) : Json(part_at_approach);
+    summary["eight_part_at_touchdown"] =
+        part_at_touchdown.empty() ? Json(nullptr) : Json(part_at_touchdown);
+    Json clearance = Json::object();
+    for (const auto& [part, m] : near_miss->min_clearance_m()) clearance[part] = m;
+    summary["min_clearance_m"] = clearance;
+    summary["min_cab_clearance_m"] = cab_clearance ? Json(*cab_clearance) : Json(nullptr);
+    summary["min_deck_edge_margin_m"] = deck_margin ? Json(*deck_margin) : Json(nullptr);
+    summary["truck_contacts"] = truck_contacts;
+    summary["climb_aways"] = climb_aways;
+    Json random_blackouts = Json::array();
+    for (const auto& [at_s, duration_s] : blackouts)
+      random_blackouts.push_back({{"at_s", at_s}, {"duration_s", duration_s}});
+    summary["random_blackouts"] = random_blackouts;
     summary["landed"] = landed;
     summary["stayed_on_deck"] = stayed_on_deck;
     summary["takeoff_time_s"] = takeoff_s;
@@ -499,6 +765,7 @@ int main(int argc, char** argv) {
     summary["states"] = states;
     summary["blackout_first_pass_at_s"] = first_blackout_s;
     summary["blackout_approach_at_s"] = approach_blackout_s;
+    summary["lose_low_off_centre_at_s"] = lose_low_at_s;
     summary["sim_time_s"] = end_sim_s;
     summary["wall_time_s"] = launch.wall_s();
     summary["success"] = success;
