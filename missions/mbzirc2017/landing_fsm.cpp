@@ -9,6 +9,7 @@ namespace uavsim::missions::mbzirc2017 {
 namespace {
 constexpr double kTakeoffRetry_s = 5.0;
 constexpr double kReachedAltitudeMargin_m = 1.0;
+constexpr double kOpenLoopReadyBand_m = 0.5;  // readiness from sightings this far above it
 
 client::PidGains approach_gains(const MissionConfig& c) {
   client::PidGains g;
@@ -242,6 +243,7 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   }
   const double h = height_above_deck_m(in.position_enu_m.z());
   const bool seen = in.now_s - in.truck.last_seen_s <= config_.lost_after_s;
+  const bool fresh = in.now_s - in.truck.last_seen_s <= config_.fresh_sighting_s;
 
   // the UAV in the truck's frame, from its own estimate, and what the clearance envelope says
   EstimatedTruck truck;
@@ -277,11 +279,15 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   }
 
   // horizontal: the truck's velocity (feed-forward from the filter) + PID on the offset to the
-  // marker
+  // marker (blind, on a point behind it, away from the cab)
   const Eigen::Vector2d offset = in.truck.position_enu_m - in.position_enu_m.head<2>();
-  const Eigen::Vector2d correction(
-      pid_x_.update(in.truck.position_enu_m.x(), in.position_enu_m.x(), step_dt_s_),
-      pid_y_.update(in.truck.position_enu_m.y(), in.position_enu_m.y(), step_dt_s_));
+  const bool blind_low = !fresh && h <= config_.open_loop_height_m;
+  const Eigen::Vector2d target =
+      in.truck.position_enu_m -
+      (blind_low ? config_.open_loop_aim_back_m : 0.0) *
+          Eigen::Vector2d(std::cos(in.truck.heading_enu_rad), std::sin(in.truck.heading_enu_rad));
+  const Eigen::Vector2d correction(pid_x_.update(target.x(), in.position_enu_m.x(), step_dt_s_),
+                                   pid_y_.update(target.y(), in.position_enu_m.y(), step_dt_s_));
   const Eigen::Vector2d v_xy =
       clamp_norm(in.truck.velocity_enu_m_s + correction, config_.approach_max_speed_m_s);
 
@@ -290,7 +296,7 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   // envelope bounds all of it: below the cab's top only in the deck box and matched, open loop
   // only from centred and matched, otherwise the climb-away.
   double vz = 0.0;
-  if (seen) {
+  if (fresh) {
     lost_since_s_.reset();
     open_loop_since_s_.reset();
     if (!check.safe()) {
@@ -301,7 +307,10 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
                                 rel.velocity_m_s.head<2>().norm()),
                         false);
     }
-    ready_for_open_loop_ = check.ready_for_open_loop();
+    // the readiness for the blind last metres, from fresh sightings near where the marker leaves
+    // the image
+    ready_for_open_loop_ =
+        check.ready_for_open_loop() && h <= config_.open_loop_height_m + kOpenLoopReadyBand_m;
     if (funnel_.contains(h, offset.norm())) {
       vz = -funnel_.descent_rate_m_s(h);
       outside_reported_ = false;
@@ -312,8 +321,14 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
         out.note = fmt("outside the funnel (%.2f m off at %.1f m): climbing", offset.norm(), h);
       }
     }
+    // not below the commit height unless centred and matched, nor below the floor unless cleared
+    if (!check.ready_for_open_loop()) {
+      vz = std::max(vz, config_.floor_approach_gain_1_s * (config_.commit_height_m - h));
+    }
     vz = envelope_.limit_vertical_m_s(rel, vz);
-  } else if (h <= config_.open_loop_height_m || open_loop_since_s_) {
+  } else if (open_loop_since_s_ || (blind_low && !in.camera_dark)) {
+    // the marker left the image low down (too close to see, the camera still working): the blind
+    // last metres, only from centred and matched
     if (!open_loop_since_s_) {
       if (!ready_for_open_loop_) {
         return climb_away(
@@ -339,6 +354,12 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
       return climb_away(in, truck, rel, "no touchdown after 8 s of open-loop descent", true);
     }
     vz = envelope_.limit_vertical_m_s(rel, -config_.open_loop_descent_m_s);
+  } else if (!check.above_floor) {
+    // lost below the cab's top and not because it is too close (the camera dark): no blind landing
+    return climb_away(in, truck, rel, fmt("marker lost at %.2f m with the camera dark", h), false);
+  } else if (seen && !in.camera_dark) {
+    // a stale sighting up here: hold, no descent on it, until seen again or lost
+    vz = 0.0;
   } else {
     if (!lost_since_s_) {
       lost_since_s_ = in.now_s;

@@ -37,6 +37,7 @@ struct FsmInputs {
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();  // telemetry (body origin)
   Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
   bool switch_closed = false;  // any landing-pad microswitch
+  bool camera_dark = false;    // the newest camera frame was black (a blinded or failed camera)
   TruckKnowledge truck;
 };
 

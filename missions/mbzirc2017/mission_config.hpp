@@ -38,7 +38,8 @@ struct MissionConfig {
   double lost_after_s = 1.0;           // no detection for this long: the marker is lost
   double lost_give_up_s = 8.0;         // lost above the open-loop height this long: Go To Centre
   double climb_m_s = 0.8;              // outside the funnel, or lost: climb for safety
-  double open_loop_height_m = 1.2;     // skids above the deck below which the marker no longer fits
+  double open_loop_height_m = 1.6;     // skids above the deck below which the marker no longer fits
+                                       // (in the sweeps its last sightings were at 1.4-1.5 m)
   double open_loop_timeout_s = 8.0;    // seed 7.1: up to 8 s of open-loop descent
   double open_loop_descent_m_s = 0.6;  // short: the filter extrapolates blind meanwhile
 
@@ -74,8 +75,18 @@ struct MissionConfig {
   double cab_vertical_margin_m = 0.25;   // the floor: skids this far above the cab's top
   double matched_speed_m_s = 0.5;        // horizontal speed relative to the deck: "matched"
   double envelope_prediction_s = 0.5;    // in the deck box now and this far ahead
-  double centred_m = 0.35;               // the open-loop last metres only this close to the centre
-  double open_loop_matched_m_s = 0.4;    // and this slow relative to the deck
+  double centred_m = 0.45;               // the open-loop last metres only this close to the centre
+  double open_loop_matched_m_s = 0.5;    // and this slow relative to the deck
+  // a sighting older than this is stale: no descent on it above the open-loop height (the marker
+  // gone from there is lost, not too close), and the open-loop readiness is taken on fresh ones
+  // only (2 frames at 7 frames/s and the processing latency)
+  double fresh_sighting_s = 0.4;
+  // the blind descent aims this far behind the marker's centre, away from the cab: the truck's
+  // extrapolation drifts when blind (0.5 m/s seen in a curve at 18 km/h)
+  double open_loop_aim_back_m = 0.25;
+  // the blind last metres are committed to from here only when centred and matched: above it the
+  // UAV holds until they are
+  double commit_height_m = 2.0;
   double abort_climb_m_s = 1.5;          // the climb-away
   double abort_retreat_m_s = 1.0;        // away from the cab, relative to the truck
   double abort_clear_height_m = 2.5;     // skids above the deck where a climb-away ends

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 
@@ -34,6 +35,7 @@ namespace {
 constexpr double kStep_s = 0.05;             // FSM rate 20 Hz
 constexpr double kLinger_s = 3.0;            // after Landed, before exiting
 constexpr double kMaxExtrapolation_s = 0.5;  // of the telemetry's position to now
+constexpr double kDarkFrameMean = 4.0;       // grey levels: below, a frame is black
 constexpr double kBudget_s =
     900.0;  // the program gives up after this long (the run's own limit is shorter)
 
@@ -150,6 +152,7 @@ int main(int argc, char** argv) {
 
   // the landing-pad microswitches
   bool switch_closed = false;
+  bool camera_dark = false;  // the newest processed frame was black
   auto switches =
       PadSwitches::subscribe(loop, vehicle, [&](const SwitchState& s) { switch_closed = s.any(); });
   if (!switches) {
@@ -180,6 +183,8 @@ int main(int argc, char** argv) {
       std::optional<Eigen::Vector2d> seen;
       loop.run_busy(config.vision_latency_s, [&] {
         seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
+        // a black frame: the camera blinded or failed (the ground is never this dark)
+        camera_dark = cv::mean(frame.grey)[0] < kDarkFrameMean;
       });
       if (seen && reported_detections == 0) {
         char buf[128];
@@ -221,6 +226,7 @@ int main(int argc, char** argv) {
     }
     in.velocity_enu_m_s = t.velocity_enu_m_s;
     in.switch_closed = switch_closed;
+    in.camera_dark = camera_dark;
     in.truck = perception.knowledge(in.now_s, in.position_enu_m.head<2>());
     const LandingState before = fsm.state();
     const FsmOutputs out = fsm.step(in);

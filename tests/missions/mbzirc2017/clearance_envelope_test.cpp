@@ -80,7 +80,7 @@ TEST(ClearanceEnvelope, BelowTheCabOnlyInTheDeckBoxAndMatched) {
   EXPECT_TRUE(c.in_deck_box);
   EXPECT_TRUE(c.matched);
   EXPECT_TRUE(c.safe());
-  EXPECT_FALSE(c.ready_for_open_loop());  // 0.6 m off: not centred (0.35)
+  EXPECT_FALSE(c.ready_for_open_loop());  // 0.6 m off: not centred (0.45)
   // drifting forward at 0.3 m/s: 0.6 + 0.3 * 0.5 = 0.75 leaves the box within the prediction
   c = e.check(at(0.6, 0.0, 0.5, 0.3));
   EXPECT_FALSE(c.in_deck_box);
@@ -90,9 +90,11 @@ TEST(ClearanceEnvelope, BelowTheCabOnlyInTheDeckBoxAndMatched) {
   EXPECT_TRUE(c.in_deck_box);
   EXPECT_FALSE(c.matched);
   EXPECT_FALSE(c.safe());
-  // centred: 0.2 m off at 0.3 m/s
+  // centred: 0.2 m off at 0.3 m/s; 0.5 m off (in the box, matched) is not
   EXPECT_TRUE(e.check(at(0.2, 0.0, 0.3, -0.3)).ready_for_open_loop());
-  EXPECT_FALSE(e.check(at(0.2, 0.0, 0.3, -0.45)).ready_for_open_loop());  // 0.45 m/s: too fast
+  c = e.check(at(0.0, 0.5, 0.3));
+  EXPECT_TRUE(c.safe());
+  EXPECT_FALSE(c.ready_for_open_loop());
 }
 
 TEST(ClearanceEnvelope, NoDescentBelowTheFloorUnlessCleared) {
