@@ -257,7 +257,12 @@ void NearMissTracker::score(const Eigen::Vector3d& p_truck_m, const Eigen::Quate
     margin = std::min({margin, deck.half_m.x() - std::abs(w.x() - deck.centre_m.x()),
                        deck.half_m.y() - std::abs(w.y() - deck.centre_m.y())});
   }
-  const bool at_deck = std::abs(lowest - deck_top) <= kAtDeck_m;  // carried tilted, too
+  // at the deck's height (carried tilted, too) and over it: the centre within the deck's half
+  // extents plus kOverDeck_m (beside the truck at that height is no landing)
+  const bool at_deck =
+      std::abs(lowest - deck_top) <= kAtDeck_m &&
+      std::abs(p_truck_m.x() - deck.centre_m.x()) <= deck.half_m.x() + kOverDeck_m &&
+      std::abs(p_truck_m.y() - deck.centre_m.y()) <= deck.half_m.y() + kOverDeck_m;
   if (at_deck && (!min_deck_edge_m_ || margin < *min_deck_edge_m_)) min_deck_edge_m_ = margin;
 }
 

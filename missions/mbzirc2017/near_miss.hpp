@@ -73,7 +73,8 @@ class NearMissTracker {
   const std::map<std::string, double>& min_clearance_m() const { return min_part_m_; }
   std::optional<double> min_clearance_m(const std::string& part) const;
   // The smallest margin of the skids' ends to the deck's edges (negative: over the edge) while the
-  // lowest of them was within kAtDeck_m of the deck's top; unset if it never was.
+  // lowest of them was within kAtDeck_m of the deck's top and the body origin over the deck (within
+  // its half extents plus kOverDeck_m); unset if it never was.
   std::optional<double> min_deck_edge_margin_m() const { return min_deck_edge_m_; }
 
   // The latest sample: the body origin in the truck's frame (x forward, from the marker's centre
@@ -85,6 +86,7 @@ class NearMissTracker {
   std::optional<Relative> latest() const { return latest_; }
 
   static constexpr double kAtDeck_m = 0.05;
+  static constexpr double kOverDeck_m = 0.5;
   static constexpr int kSubsteps = 5;
 
  private:

@@ -84,6 +84,19 @@ TEST(NearMiss, PropellerIntoTheCabIsANegativeClearance) {
   EXPECT_LT(*t.min_clearance_m("cab"), 0.0);
 }
 
+// Beside the truck at the deck's height (climbing away past its side) is no landing: no deck-edge
+// margin from there.
+TEST(NearMiss, BesideTheDeckAtItsHeightIsNoLanding) {
+  NearMissTracker t(load_truck_shape(kModels + "/objects/truck.xml"),
+                    load_vehicle_shape(kModels + "/vehicles/hexa.xml"));
+  t.add(Eigen::Vector3d(2.5, 4.0, 1.862), Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero(),
+        0.0);
+  EXPECT_FALSE(t.min_deck_edge_margin_m());
+  ASSERT_TRUE(t.min_clearance_m("cab"));
+  // beside the cab (x 2.5): propeller 4's tip 4 - 0.45 - 0.19 = 3.36 m out, the cab's side 1.0 m
+  EXPECT_NEAR(*t.min_clearance_m("cab"), 3.36 - 1.0, kRimTol_m);
+}
+
 TEST(NearMiss, PartsOfTheEight) {
   const vision::EightTrack track;
   // R 20, D 45: half straight a = 22.5 cos(asin(20 / 22.5)) = 10.31 m
