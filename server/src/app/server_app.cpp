@@ -373,8 +373,8 @@ int run_server(const Options& given_options) {
   size_t recorded = 0;  // the camera --record films
   if (options.cameras && (options.api_port >= 0 || options.record_path)) {
     std::vector<render::CameraSetup> cameras;
+    render::CameraOwners owners;  // which cameras and geoms are a vehicle's
     try {
-      render::CameraOwners owners;
       for (const physics::VehicleBinding& v : s.world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
       if (world_objects.gimbals != nullptr) {
         for (const objects::Gimbal& g : world_objects.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
@@ -409,6 +409,7 @@ int run_server(const Options& given_options) {
         frame_options.seed = options.seed;
         frame_options.backend = options.gl_backend;
         frame_options.render_threads = options.render_threads;
+        frame_options.owners = owners;
         frames = std::make_unique<render::FrameService>(s.world().model(), cameras, frame_options);
         if (!options.quiet) {
           std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered by " << frames->render_threads()
