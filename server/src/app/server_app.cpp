@@ -429,7 +429,16 @@ int run_server(const Options& given_options) {
         // as fast as possible (--rate 0) nothing is lost by waiting for the video; at a real-time rate it never waits
         render::RecorderOptions ro;
         ro.lossless = options.rate == 0.0;
-        if (options.record_tiled) {
+        for (const std::string& t : options.record_tiles) {
+          // --record-tile CAMERA[:MODALITY] (the modality checked by the options)
+          const size_t colon = t.find(':');
+          const std::optional<int> tile = frames->find(t.substr(0, colon));
+          if (!tile) throw std::invalid_argument("--record-tile " + t + ": no such camera");
+          ro.tiles.push_back(*tile);
+          ro.tile_modalities.push_back(
+              render::encoding_from_name(colon == std::string::npos ? "rgb" : t.substr(colon + 1)).value());
+        }
+        if (options.record_tiled && options.record_tiles.empty()) {
           // the vehicles' onboard cameras, the first kMaxTiles of the world's order
           constexpr size_t kMaxTiles = 4;
           for (size_t i = 0; i < frames->cameras().size() && ro.tiles.size() < kMaxTiles; ++i) {

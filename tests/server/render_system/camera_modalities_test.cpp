@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -20,6 +21,7 @@
 #include "physics/world.hpp"
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
+#include "render/video_recorder.hpp"
 
 namespace uavsim::server::render {
 namespace {
@@ -320,6 +322,79 @@ TEST(CameraDepth, FieldConditionsAreSeededAndNeverTouchSegmentation) {
   EXPECT_NE(std::memcmp(ideal.last("rgbd").depth_m.data(), field.last("rgbd").depth_m.data(),
                         ideal.last("rgbd").depth_m.size() * sizeof(float)),
             0);
+}
+
+TEST(FalseColour, DepthNearRedFarBlueInvalidBlackAndSegmentationByClass) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> depth{1.0f, 100.0f, nan};
+  uint8_t rgb[9];
+  false_colour_depth(depth.data(), 3, 1, 1.0, 100.0, rgb);
+  EXPECT_GT(rgb[0], rgb[2]) << "near is red";
+  EXPECT_GT(rgb[5], rgb[3]) << "far is blue";
+  EXPECT_EQ(rgb[6] + rgb[7] + rgb[8], 0) << "nothing measured is black";
+  // object 5 of class balloon, object 9 of class truck, nothing
+  const uint8_t seg[12] = {5, 0, 3, 0, 9, 0, 5, 0, 0, 0, 0, 0};
+  false_colour_segmentation(seg, 3, 1, rgb);
+  EXPECT_GT(rgb[1], rgb[0] + 50) << "balloon green";
+  EXPECT_GT(rgb[5], rgb[3] + 50) << "truck blue";
+  EXPECT_EQ(rgb[6] + rgb[7] + rgb[8], 0);
+}
+
+// --record-tile rgbd:depth --record-tile rgbd:segmentation: the recorder asks the camera for those
+// images and tiles them in false colour beside the main view
+TEST(FalseColour, RecorderTilesDepthAndSegmentation) {
+  Scene scene;
+  int plain = -1, rgbd = -1;
+  for (size_t i = 0; i < scene.cameras.size(); ++i) {
+    if (scene.cameras[i].config.camera == "plain") plain = static_cast<int>(i);
+    if (scene.cameras[i].config.camera == "rgbd") rgbd = static_cast<int>(i);
+  }
+  std::vector<std::string> composed;
+  int width = 0;
+  RecorderOptions ro;
+  ro.lossless = true;
+  ro.tiles = {rgbd, rgbd};
+  ro.tile_modalities = {Encoding::kDepth, Encoding::kSegmentation};
+  ro.sink = [&](const std::string& rgb, int w, int) {
+    composed.push_back(rgb);
+    width = w;
+  };
+  // a tile of what the camera does not give is refused
+  int above = -1;
+  for (size_t i = 0; i < scene.cameras.size(); ++i) {
+    if (scene.cameras[i].config.camera == "above") above = static_cast<int>(i);
+  }
+  auto ignore = [](const std::string&, int, int) {};
+  EXPECT_THROW(VideoRecorder(*scene.frames, above, "", RecorderOptions{1, false, {plain}, ignore, {Encoding::kDepth}}),
+               std::invalid_argument);
+  auto recorder = std::make_unique<VideoRecorder>(*scene.frames, plain, "", std::move(ro));
+  scene.frames->add_consumer(recorder.get());
+  scene.capture_at(0.0);
+  scene.capture_at(0.1);  // a frame of another instant flushes the first
+  recorder->finish();
+  ASSERT_GE(composed.size(), 1u);
+  const TileLayout layout = tile_layout(320, 240, {{320, 240}, {320, 240}});
+  const std::string& out = composed.front();
+  // count the tiles' pixel kinds below the label band: the depth tile has black sky and coloured ground,
+  // the segmentation tile the balloon's green
+  int black = 0, coloured = 0, green = 0;
+  for (int t = 0; t < 2; ++t) {
+    const PixelRect& r = layout.tiles[static_cast<size_t>(t)];
+    for (int y = r.y_px + 30; y < r.y_px + r.height_px - 4; ++y) {
+      for (int x = r.x_px + 4; x < r.x_px + r.width_px - 4; ++x) {
+        const auto* p = reinterpret_cast<const uint8_t*>(out.data()) + (static_cast<size_t>(y) * width + x) * 3;
+        if (t == 0) {
+          black += p[0] + p[1] + p[2] == 0;
+          coloured += p[0] + p[1] + p[2] > 100;
+        } else {
+          green += p[1] > p[0] + 60 && p[1] > p[2] + 60;
+        }
+      }
+    }
+  }
+  EXPECT_GT(black, 200) << "no sky in the depth tile";
+  EXPECT_GT(coloured, 2000) << "no ground in the depth tile";
+  EXPECT_GT(green, 0) << "no balloon in the segmentation tile";
 }
 
 TEST(CameraModalities, ConfigKeysAreRangeChecked) {
