@@ -158,7 +158,7 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
 
 // depth and segmentation beside colour, typed: one frame per capture with all three images
 TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCapture) {
-  ServerProcess server({"--camera", "overview:width=64,height=48,fps=10,modalities=rgb+depth+segmentation"});
+  ServerProcess server({"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -186,16 +186,16 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   ASSERT_EQ(f.depth_m.size(), f.image.size());
   // the bottom row sees the ground: its depth along the axis is the camera height over the ray's slope,
   // and its label is the ground's
-  const float z = f.depth_m.at<float>(47, 32);
+  const float z = f.depth_m.at<float>(119, 80);
   EXPECT_TRUE(std::isfinite(z) && z > 1.0f && z < 30.0f) << z;
-  const int object = f.object_ids.at<uint16_t>(47, 32);
+  const int object = f.object_ids.at<uint16_t>(119, 80);
   ASSERT_LT(static_cast<std::size_t>(object), objects.size());
   EXPECT_EQ(objects[static_cast<std::size_t>(object)].name, "ground");
-  EXPECT_EQ(classes.at(static_cast<std::size_t>(f.class_ids.at<uint16_t>(47, 32))), "ground");
+  EXPECT_EQ(classes.at(static_cast<std::size_t>(f.class_ids.at<uint16_t>(119, 80))), "ground");
   // the quad at the origin is labelled a vehicle somewhere in the image
   bool vehicle = false;
-  for (int v = 0; v < 48; ++v) {
-    for (int u = 0; u < 64; ++u) vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
+  for (int v = 0; v < 120; ++v) {
+    for (int u = 0; u < 160; ++u) vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
   }
   EXPECT_TRUE(vehicle);
 

@@ -21,6 +21,9 @@ constexpr int64_t kTileSlackUs = 1000;
 // a depth tile's colour map ends here when the camera has no range of its own (the far plane is often
 // kilometres away: everything near would be one colour)
 constexpr double kDepthTileFarM = 100.0;
+// and starts here at the nearest (the near plane is centimetres away: a log scale from there spends half
+// its colours on the first metre)
+constexpr double kDepthTileNearM = 1.0;
 
 std::string shell_quote(const std::string& s) {
   std::string out = "'";
@@ -100,7 +103,7 @@ void false_colour_segmentation(const uint8_t* segmentation, int width_px, int he
 
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, int every, const std::string& path,
                              bool lossless)
-    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr}) {}
+    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr, {}}) {}
 
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std::string& path,
                              RecorderOptions options)
@@ -136,7 +139,7 @@ VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std:
     Tile tile;
     tile.camera = options_.tiles[i];
     tile.modality = i < options_.tile_modalities.size() ? options_.tile_modalities[i] : Encoding::kRgb;
-    tile.near_m = c.depth_near_m;
+    tile.near_m = std::max(c.depth_near_m, kDepthTileNearM);
     tile.far_m = c.depth_max_m.value_or(std::min(c.depth_far_m, kDepthTileFarM));
     tile.rect = layout.tiles[i];
     tile.vehicle = c.vehicle;

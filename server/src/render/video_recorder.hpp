@@ -48,7 +48,8 @@ struct RecorderOptions {
   // (tests)
   std::function<void(const std::string& rgb, int width_px, int height_px)> sink;
   // per tile (missing: rgb): which image of its camera it shows; depth and segmentation in false colour
-  // (false_colour_depth, false_colour_segmentation), so one camera may have several tiles
+  // (false_colour_depth from max(near plane, 1 m) to the camera's depth_max_m, else min(far plane,
+  // 100 m); false_colour_segmentation), so one camera may have several tiles
   std::vector<Encoding> tile_modalities;
 };
 
