@@ -1,10 +1,12 @@
-// What depth and segmentation cost beside colour (issue 33, docs/results/cameras.md): the frame service
-// on the MBZIRC 2020 world's overview camera (ground, arena, five balloons on poles, two quads), one
-// render thread, this thread playing the loop thread (capture at a frame instant, then wait until the
-// frame reached the consumer: render, read-back, encoding).
-//   BM_CameraModalities/WxH  every iteration takes one frame of each variant in turn, so the load of
-//                            other processes falls on all of them alike; counters: fps_VARIANT (frames
-//                            per second of wall time) and ratio_VARIANT = fps_VARIANT / fps_rgb.
+// What depth and segmentation cost beside colour (issue 33, docs/results/cameras.md): the frame
+// service on the MBZIRC 2020 world's overview camera (ground, arena, five balloons on poles, two
+// quads), one render thread, this thread playing the loop thread (capture at a frame instant, then
+// wait until the frame reached the consumer: render, read-back, encoding).
+//   BM_CameraModalities/WxH  every iteration takes one frame of each variant in turn, so the load
+//   of
+//                            other processes falls on all of them alike; counters: fps_VARIANT
+//                            (frames per second of wall time) and ratio_VARIANT = fps_VARIANT /
+//                            fps_rgb.
 //   Variants: rgb (colour alone, the reference), grey, depth, segmentation, depth+segmentation (one
 //   geometry pass for both), rgb+depth+segmentation (a capture with everything).
 #include <benchmark/benchmark.h>
@@ -39,7 +41,8 @@ const std::vector<Variant> kVariants = {
     {"depth", {{Encoding::kDepth, 0}}},
     {"segmentation", {{Encoding::kSegmentation, 0}}},
     {"depth+segmentation", {{Encoding::kDepth, 0}, {Encoding::kSegmentation, 0}}},
-    {"rgb+depth+segmentation", {{Encoding::kRgb, 0}, {Encoding::kDepth, 0}, {Encoding::kSegmentation, 0}}},
+    {"rgb+depth+segmentation",
+     {{Encoding::kRgb, 0}, {Encoding::kDepth, 0}, {Encoding::kSegmentation, 0}}},
 };
 
 // wants the current variant's images of every frame, lockstep (never dropped)
@@ -66,7 +69,8 @@ void BM_CameraModalities(benchmark::State& state, int width, int height) {
   mj_forward(world->model(), d);
   const std::string size = "width=" + std::to_string(width) + ",height=" + std::to_string(height);
   std::vector<render::CameraSetup> all = render::discover_cameras(
-      world->model(), {}, {"overview:" + size + ",fps=100,modalities=rgb+grey+depth+segmentation"}, kFps);
+      world->model(), {}, {"overview:" + size + ",fps=100,modalities=rgb+grey+depth+segmentation"},
+      kFps);
   std::vector<render::CameraSetup> cameras;
   for (const render::CameraSetup& c : all) {
     if (c.config.camera == "overview") cameras.push_back(c);
@@ -92,7 +96,8 @@ void BM_CameraModalities(benchmark::State& state, int width, int height) {
   for (int k = 0; k < 2; ++k) {
     for (const Variant& v : kVariants) frame(v);
   }
-  std::vector<std::chrono::steady_clock::duration> spent(kVariants.size(), std::chrono::steady_clock::duration::zero());
+  std::vector<std::chrono::steady_clock::duration> spent(
+      kVariants.size(), std::chrono::steady_clock::duration::zero());
   int64_t rounds = 0;
   for (auto _ : state) {
     for (size_t i = 0; i < kVariants.size(); ++i) spent[i] += frame(kVariants[i]);
@@ -111,8 +116,9 @@ void BM_CameraModalities(benchmark::State& state, int width, int height) {
 
 int main(int argc, char** argv) {
   for (const auto& [w, h] : std::vector<std::pair<int, int>>{{640, 480}, {384, 216}}) {
-    benchmark::RegisterBenchmark(("BM_CameraModalities/" + std::to_string(w) + "x" + std::to_string(h)).c_str(),
-                                 BM_CameraModalities, w, h)
+    benchmark::RegisterBenchmark(
+        ("BM_CameraModalities/" + std::to_string(w) + "x" + std::to_string(h)).c_str(),
+        BM_CameraModalities, w, h)
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
   }

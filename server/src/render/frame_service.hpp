@@ -11,9 +11,9 @@
 //                 mjModel copy (offscreen buffer sized for its cameras) and its own mjData, and renders a
 //                 fixed share of the cameras (assign_cameras). The first, the render thread, takes the
 //                 snapshots in order; per snapshot every thread with a camera due copies the state in,
-//                 mj_forward's, renders and encodes (RGB, grey, JPEG via OpenCV; depth and segmentation from a second pass,
-//                 only where a job asks for them) its cameras in parallel
-//                 with the others, and the render thread then hands the frames to the consumers in the
+//                 mj_forward's, renders and encodes (RGB, grey, JPEG via OpenCV; depth and segmentation
+//                 from a second pass, only where a job asks for them) its cameras in parallel with the
+//                 others, and the render thread then hands the frames to the consumers in the
 //                 snapshot's camera order. So consumers see the same frames in the same order for any
 //                 thread count; only the wall time differs.
 //

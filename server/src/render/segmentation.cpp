@@ -30,14 +30,22 @@ std::string local_name(const char* name, const std::string& root_name) {
 
 const char* segment_class_name(SegmentClass c) {
   switch (c) {
-    case SegmentClass::kNone: return "none";
-    case SegmentClass::kGround: return "ground";
-    case SegmentClass::kVehicle: return "vehicle";
-    case SegmentClass::kBalloon: return "balloon";
-    case SegmentClass::kPole: return "pole";
-    case SegmentClass::kTruck: return "truck";
-    case SegmentClass::kMarker: return "marker";
-    case SegmentClass::kScenery: return "scenery";
+    case SegmentClass::kNone:
+      return "none";
+    case SegmentClass::kGround:
+      return "ground";
+    case SegmentClass::kVehicle:
+      return "vehicle";
+    case SegmentClass::kBalloon:
+      return "balloon";
+    case SegmentClass::kPole:
+      return "pole";
+    case SegmentClass::kTruck:
+      return "truck";
+    case SegmentClass::kMarker:
+      return "marker";
+    case SegmentClass::kScenery:
+      return "scenery";
   }
   return "?";
 }
@@ -60,7 +68,8 @@ SegmentationLabels label_geoms(const mjModel_* model, const CameraOwners& owners
 
   // vehicle index of a body: its root is a vehicle's root, or it is a gimbal bound to a vehicle
   auto vehicle_of = [&](int body) -> int {
-    if (auto g = owners.gimbal_body_vehicle.find(body); g != owners.gimbal_body_vehicle.end()) return g->second;
+    if (auto g = owners.gimbal_body_vehicle.find(body); g != owners.gimbal_body_vehicle.end())
+      return g->second;
     const int root = m->body_rootid[body];
     for (size_t v = 0; v < owners.vehicle_root_bodies.size(); ++v) {
       if (root != 0 && owners.vehicle_root_bodies[v].first == root) return static_cast<int>(v);
@@ -74,7 +83,8 @@ SegmentationLabels label_geoms(const mjModel_* model, const CameraOwners& owners
     const char* geom_name = mj_id2name(m, mjOBJ_GEOM, g);
     SegmentClass cls = SegmentClass::kScenery;
     std::string name;
-    if (const int v = vehicle_of(body); v >= 0 && static_cast<size_t>(v) < owners.vehicle_root_bodies.size()) {
+    if (const int v = vehicle_of(body);
+        v >= 0 && static_cast<size_t>(v) < owners.vehicle_root_bodies.size()) {
       cls = SegmentClass::kVehicle;
       name = owners.vehicle_root_bodies[static_cast<size_t>(v)].second;
     } else if (root == 0) {
@@ -85,7 +95,8 @@ SegmentationLabels label_geoms(const mjModel_* model, const CameraOwners& owners
                  : (cls == SegmentClass::kGround ? "ground" : "geom" + std::to_string(g));
     } else {
       const char* root_cname = mj_id2name(m, mjOBJ_BODY, root);
-      const std::string root_name = root_cname != nullptr ? root_cname : "body" + std::to_string(root);
+      const std::string root_name =
+          root_cname != nullptr ? root_cname : "body" + std::to_string(root);
       const std::string type = object_type(m, root_name);
       const std::string local = local_name(geom_name, root_name);
       name = root_name;

@@ -1,16 +1,17 @@
 // Segmentation labels: which object and which class every geom of a world belongs to, for the
-// segmentation images of the cameras (docs/protocol.md "Camera frames"). Ground truth for scoring and
-// training; the missions decide from colour and grey alone.
+// segmentation images of the cameras (docs/protocol.md "Camera frames"). Ground truth for scoring
+// and training; the missions decide from colour and grey alone.
 //
-// Classes are fixed (their ids never change); objects are numbered from 1 in the model's geom order, so
-// ids are the same in every frame and every run of one world:
+// Classes are fixed (their ids never change); objects are numbered from 1 in the model's geom
+// order, so ids are the same in every frame and every run of one world:
 //   vehicle  every geom of a vehicle's bodies (and of gimbal bodies bound to it): object VEHICLE
 //   balloon  the sphere of a balloon object (uavsim:object:NAME = balloon): object NAME
 //   pole     the pole it stands on: object NAME/pole
 //   truck    every geom of a truck object but its marker: object NAME
 //   marker   the truck's landing marker (geom NAME/marker): object NAME/marker
 //   ground   a plane of the world body: object GEOMNAME (or "ground")
-//   scenery  everything else: a world-body geom is its own object, another body's geoms are its root's
+//   scenery  everything else: a world-body geom is its own object, another body's geoms are
+//            its root's
 // Object 0 and class 0 are "none": a pixel where nothing was hit.
 #pragma once
 
@@ -54,8 +55,10 @@ struct SegmentationLabels {
 // What the application knows about vehicles and gimbals (no MuJoCo types): which camera belongs to
 // which vehicle (camera_setup.hpp), which geoms are a vehicle's here.
 struct CameraOwners {
-  std::vector<std::pair<int, std::string>> vehicle_root_bodies;  // body id of vehicle i's root, its name
-  std::map<int, int> gimbal_body_vehicle;                        // gimbal body id -> vehicle index
+  // body id of vehicle i's root, its name
+  std::vector<std::pair<int, std::string>> vehicle_root_bodies;
+  // gimbal body id -> vehicle index
+  std::map<int, int> gimbal_body_vehicle;
 };
 
 // The labels of every geom of m. Throws std::invalid_argument if the world has more objects than a

@@ -1,6 +1,7 @@
-// Depth and segmentation through the sim API (docs/protocol.md "Camera frames"): the images of one capture
-// arrive together with one stamp and seq, before their lockstep tick as colour frames do; the subscribe
-// reply carries the depth range and the segmentation's id tables; bad requests get clear errors.
+// Depth and segmentation through the sim API (docs/protocol.md "Camera frames"): the images of one
+// capture arrive together with one stamp and seq, before their lockstep tick as colour frames do;
+// the subscribe reply carries the depth range and the segmentation's id tables; bad requests get
+// clear errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,8 +21,9 @@ TEST(CameraModalitiesApi, CaptureSharesStampAndSeqAndPrecedesItsTick) {
   o.world = kScene;
   FrameServer server(o);
   FrameClient c(server.port());
-  const Json sub = c.request(
-      {{"op", "camera_subscribe"}, {"camera", "rgbd"}, {"modalities", {"segmentation", "rgb", "depth"}}});
+  const Json sub = c.request({{"op", "camera_subscribe"},
+                              {"camera", "rgbd"},
+                              {"modalities", {"segmentation", "rgb", "depth"}}});
   ASSERT_TRUE(sub["ok"]) << sub;
   const Json& r = sub["result"];
   EXPECT_EQ(r["modalities"], Json({"rgb", "depth", "segmentation"}));  // in the protocol's order
@@ -95,7 +97,8 @@ TEST(CameraModalitiesApi, BadRequestsGetClearErrors) {
   const Json list = c.request({{"op", "camera_list"}});
   ASSERT_TRUE(list["ok"]) << list;
   for (const Json& cam : list["result"]["cameras"]) {
-    if (cam["name"] == "rgbd") EXPECT_EQ(cam["modalities"], Json({"rgb", "grey", "depth", "segmentation"}));
+    if (cam["name"] == "rgbd")
+      EXPECT_EQ(cam["modalities"], Json({"rgb", "grey", "depth", "segmentation"}));
     if (cam["name"] == "plain") EXPECT_EQ(cam["modalities"], Json({"rgb", "grey"}));
     if (cam["name"] == "above") EXPECT_EQ(cam["formats"], Json({"rgb", "jpeg"}));
   }
@@ -106,34 +109,49 @@ TEST(CameraModalitiesApi, BadRequestsGetClearErrors) {
     EXPECT_EQ(r["error"]["code"], "bad_field") << r;
     return r["error"]["message"].get<std::string>();
   };
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"rgb", "thermal"}}}).find("thermal"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", "depth"}}).find("list"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", Json::array()}}).find("list"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth", "depth"}}}).find("twice"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth", 3}}}).find("unknown"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"format", "rgb"}, {"modalities", {"depth"}}}).find("not both"),
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"rgb", "thermal"}}}).find("thermal"),
             std::string::npos);
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", "depth"}}).find("list"), std::string::npos);
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", Json::array()}}).find("list"),
+            std::string::npos);
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth", "depth"}}}).find("twice"),
+            std::string::npos);
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth", 3}}}).find("unknown"),
+            std::string::npos);
+  EXPECT_NE(
+      error({{"camera", "rgbd"}, {"format", "rgb"}, {"modalities", {"depth"}}}).find("not both"),
+      std::string::npos);
   Json many = Json::array();
   for (int i = 0; i < 100; ++i) many.push_back("rgb");
   EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", many}}).find("list"), std::string::npos);
   // what the camera does not give
-  EXPECT_NE(error({{"camera", "plain"}, {"modalities", {"rgb", "depth"}}}).find("gives no depth"), std::string::npos);
-  EXPECT_NE(error({{"camera", "plain"}, {"format", "segmentation"}}).find("gives no segmentation"), std::string::npos);
-  EXPECT_NE(error({{"camera", "above"}, {"format", "grey"}}).find("gives no grey"), std::string::npos);
-  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth"}}, {"quality", 80}}).find("jpeg"), std::string::npos);
-  // too large: 1920 x 1080 x (3 + 4 + 4) bytes is over the 20 MiB a capture may have; RGB alone is not
-  EXPECT_NE(error({{"camera", "above"}, {"modalities", {"rgb", "depth", "segmentation"}}}).find("too large"),
+  EXPECT_NE(error({{"camera", "plain"}, {"modalities", {"rgb", "depth"}}}).find("gives no depth"),
             std::string::npos);
-  const Json rgb_only = c.request({{"op", "camera_subscribe"}, {"camera", "above"}, {"format", "rgb"}});
+  EXPECT_NE(error({{"camera", "plain"}, {"format", "segmentation"}}).find("gives no segmentation"),
+            std::string::npos);
+  EXPECT_NE(error({{"camera", "above"}, {"format", "grey"}}).find("gives no grey"),
+            std::string::npos);
+  EXPECT_NE(error({{"camera", "rgbd"}, {"modalities", {"depth"}}, {"quality", 80}}).find("jpeg"),
+            std::string::npos);
+  // too large: 1920 x 1080 x (3 + 4 + 4) bytes is over the 20 MiB a capture may have; RGB alone is
+  // not
+  EXPECT_NE(error({{"camera", "above"}, {"modalities", {"rgb", "depth", "segmentation"}}})
+                .find("too large"),
+            std::string::npos);
+  const Json rgb_only =
+      c.request({{"op", "camera_subscribe"}, {"camera", "above"}, {"format", "rgb"}});
   EXPECT_TRUE(rgb_only["ok"]) << rgb_only;
   // one modality alone, and JPEG with depth
-  const Json depth = c.request({{"op", "camera_subscribe"}, {"camera", "rgbd"}, {"format", "depth"}});
+  const Json depth =
+      c.request({{"op", "camera_subscribe"}, {"camera", "rgbd"}, {"format", "depth"}});
   ASSERT_TRUE(depth["ok"]) << depth;
   EXPECT_EQ(depth["result"]["modalities"], Json({"depth"}));
   EXPECT_TRUE(depth["result"].contains("depth"));
   EXPECT_FALSE(depth["result"].contains("segmentation"));
-  const Json jd = c.request(
-      {{"op", "camera_subscribe"}, {"camera", "rgbd"}, {"modalities", {"depth", "jpeg"}}, {"quality", 70}});
+  const Json jd = c.request({{"op", "camera_subscribe"},
+                             {"camera", "rgbd"},
+                             {"modalities", {"depth", "jpeg"}},
+                             {"quality", 70}});
   ASSERT_TRUE(jd["ok"]) << jd;
   EXPECT_EQ(jd["result"]["quality"], 70);
   EXPECT_EQ(jd["result"]["modalities"], Json({"jpeg", "depth"}));

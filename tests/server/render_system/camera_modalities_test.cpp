@@ -1,10 +1,12 @@
-// Depth and segmentation beside colour (docs/protocol.md "Camera frames"), on a scene with the truck and
-// its marker, a balloon, a quad and the ground (tests/data/worlds/camera_scene.xml):
-//   - depth against physics: at sample pixels the depth equals the distance along the optical axis to what
+// Depth and segmentation beside colour (docs/protocol.md "Camera frames"), on a scene with the
+// truck and its marker, a balloon, a quad and the ground (tests/data/worlds/camera_scene.xml):
+//   - depth against physics: at sample pixels the depth equals the distance along the optical axis
+//   to what
 //     mj_ray hits through that pixel, and pixels whose ray hits nothing are invalid (NaN)
-//   - segmentation against geometry: the balloon's pixels are where its sphere projects, the marker class
-//     covers the marker's projected square, no object out of view is labelled; ids are stable across
-//     frames and runs
+//   - segmentation against geometry: the balloon's pixels are where its sphere projects, the marker
+//   class
+//     covers the marker's projected square, no object out of view is labelled; ids are stable
+//     across frames and runs
 //   - depth field conditions: seeded, the stated statistics, never on segmentation
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
@@ -29,8 +31,9 @@ namespace {
 
 const std::string kScene = std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/camera_scene.xml";
 constexpr double kControlHz = 100.0;
-// depth tolerance: 2 cm for the tessellation of round geoms (MuJoCo's spheres and cylinders are polygons:
-// a 0.35 m wheel's sagitta is under 3 mm) and the 24-bit depth buffer, plus 0.2 % of the depth
+// depth tolerance: 2 cm for the tessellation of round geoms (MuJoCo's spheres and cylinders are
+// polygons: a 0.35 m wheel's sagitta is under 3 mm) and the 24-bit depth buffer, plus 0.2 % of the
+// depth
 constexpr double kDepthTolM = 0.02;
 constexpr double kDepthTolRel = 0.002;
 const Eigen::Vector3d kBalloonCentre(4.0, -12.0, 2.7);  // b0 at (4, -12, 0), its sphere 2.7 m up
@@ -75,17 +78,20 @@ class Taker : public FrameConsumer {
     std::memcpy(c.depth_m.data(), depth.data(), depth.size());
     const std::string& seg = *f.image({Encoding::kSegmentation, 0});
     for (size_t i = 0; i + 3 < seg.size(); i += 4) {
-      c.object.push_back(static_cast<uint16_t>(static_cast<uint8_t>(seg[i]) | static_cast<uint8_t>(seg[i + 1]) << 8));
-      c.cls.push_back(static_cast<uint16_t>(static_cast<uint8_t>(seg[i + 2]) | static_cast<uint8_t>(seg[i + 3]) << 8));
+      c.object.push_back(static_cast<uint16_t>(static_cast<uint8_t>(seg[i]) |
+                                               static_cast<uint8_t>(seg[i + 1]) << 8));
+      c.cls.push_back(static_cast<uint16_t>(static_cast<uint8_t>(seg[i + 2]) |
+                                            static_cast<uint8_t>(seg[i + 3]) << 8));
     }
     captures_[f.info->name].push_back(std::move(c));
   }
-  std::map<std::string, std::vector<Capture>> captures_;  // render thread; read after wait_delivered
+  std::map<std::string, std::vector<Capture>>
+      captures_;  // render thread; read after wait_delivered
   int dropped_ = 0;
 };
 
-// the scene, loaded and forwarded, with its frame service (no objects run: the truck and the balloon stay
-// where the world puts them)
+// the scene, loaded and forwarded, with its frame service (no objects run: the truck and the
+// balloon stay where the world puts them)
 struct Scene {
   std::unique_ptr<physics::World> world;
   std::vector<CameraSetup> cameras;
@@ -98,7 +104,8 @@ struct Scene {
     world = physics::World::load(kScene, co);
     mj_forward(world->model(), world->data());
     CameraOwners owners;
-    for (const auto& v : world->vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
+    for (const auto& v : world->vehicles())
+      owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
     cameras = discover_cameras(world->model(), owners, overrides, kControlHz);
     FrameServiceOptions fo;
     fo.owners = owners;
@@ -127,7 +134,8 @@ Eigen::Vector3d project(const Capture& c, const Eigen::Vector3d& p_enu) {
   return {c.fx * p.x() / p.z() + c.cx, c.fy * p.y() / p.z() + c.cy, p.z()};
 }
 
-// whether the 3 x 3 pixels around (u, v) show one object (not an edge, where a ray and a raster sample differ)
+// whether the 3 x 3 pixels around (u, v) show one object (not an edge, where a ray and a raster
+// sample differ)
 bool interior(const Capture& c, int u, int v) {
   const uint16_t id = c.object[static_cast<size_t>(v) * c.width + u];
   for (int dv = -1; dv <= 1; ++dv) {
@@ -155,20 +163,24 @@ TEST(CameraDepth, MatchesTheRayCastThroughSamplePixels) {
         const Eigen::Vector3d dir_cam((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);
         const Eigen::Vector3d dir_enu = (c.R_enu_cam * dir_cam).normalized();
         int geom = -1;
-        const double r = mj_ray(m, d, c.position_enu_m.data(), dir_enu.data(), nullptr, 1, -1, &geom);
+        const double r =
+            mj_ray(m, d, c.position_enu_m.data(), dir_enu.data(), nullptr, 1, -1, &geom);
         const float z = c.depth_m[static_cast<size_t>(v) * c.width + u];
         if (!interior(c, u, v)) continue;
         if (r < 0) {
-          EXPECT_TRUE(std::isnan(z)) << name << " (" << u << ", " << v << ") sees nothing, depth " << z;
+          EXPECT_TRUE(std::isnan(z))
+              << name << " (" << u << ", " << v << ") sees nothing, depth " << z;
           ++empty;
           continue;
         }
         // distance along the ray => along the optical axis
         const double expected = r / dir_cam.norm();
         ASSERT_FALSE(std::isnan(z)) << name << " (" << u << ", " << v << ") ray hits at " << r;
-        EXPECT_NEAR(z, expected, kDepthTolM + kDepthTolRel * expected) << name << " (" << u << ", " << v << ")";
+        EXPECT_NEAR(z, expected, kDepthTolM + kDepthTolRel * expected)
+            << name << " (" << u << ", " << v << ")";
         // and the segmentation labels what the ray hit
-        EXPECT_EQ(c.object[static_cast<size_t>(v) * c.width + u], labels.geom_object.at(static_cast<size_t>(geom)))
+        EXPECT_EQ(c.object[static_cast<size_t>(v) * c.width + u],
+                  labels.geom_object.at(static_cast<size_t>(geom)))
             << name << " (" << u << ", " << v << ") geom " << mj_id2name(m, mjOBJ_GEOM, geom);
         hit.insert(labels.geom_class.at(static_cast<size_t>(geom)));
         ++checked;
@@ -202,13 +214,15 @@ TEST(CameraSegmentation, BalloonPixelsAreWhereTheBalloonProjects) {
     }
   }
   const Eigen::Vector3d p = project(c, kBalloonCentre);
-  // a sphere at distance D seen at angle theta off the optical axis projects to an ellipse: its angular
-  // radius a = asin(r / D) spans f tan(a) / cos(theta) across and f tan(a) / cos^2(theta) radially, so the
-  // radius of the disc of equal area is f tan(a) / cos^1.5(theta), tan(a) = r / sqrt(D^2 - r^2)
+  // a sphere at distance D seen at angle theta off the optical axis projects to an ellipse: its
+  // angular radius a = asin(r / D) spans f tan(a) / cos(theta) across and f tan(a) / cos^2(theta)
+  // radially, so the radius of the disc of equal area is f tan(a) / cos^1.5(theta), tan(a) = r /
+  // sqrt(D^2 - r^2)
   const Eigen::Vector3d p_cam = c.R_enu_cam.transpose() * (kBalloonCentre - c.position_enu_m);
   const double dist = p_cam.norm();
   const double cos_theta = p_cam.z() / dist;
-  const double radius_px = c.fx * kBalloonRadiusM / std::sqrt(dist * dist - kBalloonRadiusM * kBalloonRadiusM) /
+  const double radius_px = c.fx * kBalloonRadiusM /
+                           std::sqrt(dist * dist - kBalloonRadiusM * kBalloonRadiusM) /
                            std::pow(cos_theta, 1.5);
   ASSERT_GT(n, 20);
   EXPECT_NEAR(su / n, p.x(), 0.5);
@@ -220,8 +234,8 @@ TEST(CameraSegmentation, MarkerClassCoversTheMarkerAndNothingOutOfViewIsLabelled
   Scene scene;
   scene.capture_at(0.0);
   const Capture& c = scene.last("above");
-  // the marker: 1.5 m square, its top 1.501 m up, centred on the origin; straight below the camera its
-  // projection is a square (image x east, y south)
+  // the marker: 1.5 m square, its top 1.501 m up, centred on the origin; straight below the camera
+  // its projection is a square (image x east, y south)
   const Eigen::Vector3d lo = project(c, {-0.75, 0.75, 1.501});
   const Eigen::Vector3d hi = project(c, {0.75, -0.75, 1.501});
   int inside = 0, marker = 0;
@@ -239,9 +253,11 @@ TEST(CameraSegmentation, MarkerClassCoversTheMarkerAndNothingOutOfViewIsLabelled
   }
   const double area = (hi.x() - lo.x()) * (hi.y() - lo.y());
   ASSERT_GT(inside, 100);
-  EXPECT_NEAR(marker, area, 0.08 * area);  // edge pixels: half the perimeter's pixels either way at most
+  EXPECT_NEAR(marker, area,
+              0.08 * area);  // edge pixels: half the perimeter's pixels either way at most
 
-  // the camera above sees the ground, the truck and its marker, not the balloon, its pole or the quad
+  // the camera above sees the ground, the truck and its marker, not the balloon, its pole or the
+  // quad
   std::set<uint16_t> seen(c.object.begin(), c.object.end());
   EXPECT_EQ(seen, (std::set<uint16_t>{scene.object_id("ground"), scene.object_id("truck"),
                                       scene.object_id("truck/marker")}));
@@ -299,7 +315,8 @@ TEST(CameraDepth, FieldConditionsAreSeededAndNeverTouchSegmentation) {
   ASSERT_EQ(std::memcmp(at10.data(), again.data(), kPixels * sizeof(float)), 0) << "not seeded";
   std::vector<float> other(kPixels, 10.0f);
   apply_depth_effects(cam, 7, 0, 4, &other);
-  EXPECT_NE(std::memcmp(at10.data(), other.data(), kPixels * sizeof(float)), 0) << "same noise in two frames";
+  EXPECT_NE(std::memcmp(at10.data(), other.data(), kPixels * sizeof(float)), 0)
+      << "same noise in two frames";
   // sd(10 m) = 0.002 * 10^2 = 0.2 m; 3 % dropped
   double sum = 0, sum2 = 0;
   int valid = 0;
@@ -371,7 +388,8 @@ TEST(FalseColour, RecorderTilesDepthAndSegmentation) {
     if (scene.cameras[i].config.camera == "above") above = static_cast<int>(i);
   }
   auto ignore = [](const std::string&, int, int) {};
-  EXPECT_THROW(VideoRecorder(*scene.frames, above, "", RecorderOptions{1, false, {plain}, ignore, {Encoding::kDepth}}),
+  EXPECT_THROW(VideoRecorder(*scene.frames, above, "",
+                             RecorderOptions{1, false, {plain}, ignore, {Encoding::kDepth}}),
                std::invalid_argument);
   auto recorder = std::make_unique<VideoRecorder>(*scene.frames, plain, "", std::move(ro));
   scene.frames->add_consumer(recorder.get());
@@ -381,14 +399,15 @@ TEST(FalseColour, RecorderTilesDepthAndSegmentation) {
   ASSERT_GE(composed.size(), 1u);
   const TileLayout layout = tile_layout(320, 240, {{320, 240}, {320, 240}});
   const std::string& out = composed.front();
-  // each tile below its label band and inside its border: the camera's depth and segmentation of the
-  // same instant in false colour, shrunk as the recorder shrinks them (nearest pixel); the depth map's
-  // range: max(near plane, 1 m) to min(far plane, 100 m) for a camera without depth_max_m
+  // each tile below its label band and inside its border: the camera's depth and segmentation of
+  // the same instant in false colour, shrunk as the recorder shrinks them (nearest pixel); the
+  // depth map's range: max(near plane, 1 m) to min(far plane, 100 m) for a camera without
+  // depth_max_m
   const Capture& c = scene.taker.captures_.at("rgbd").front();
   const FrameCamera& cam = scene.frames->cameras()[static_cast<size_t>(rgbd)];
   cv::Mat depth_rgb(240, 320, CV_8UC3), seg_rgb(240, 320, CV_8UC3);
-  false_colour_depth(c.depth_m.data(), 320, 240, std::max(cam.depth_near_m, 1.0), std::min(cam.depth_far_m, 100.0),
-                     depth_rgb.data);
+  false_colour_depth(c.depth_m.data(), 320, 240, std::max(cam.depth_near_m, 1.0),
+                     std::min(cam.depth_far_m, 100.0), depth_rgb.data);
   std::vector<uint8_t> seg(c.object.size() * 4);
   for (size_t i = 0; i < c.object.size(); ++i) {
     seg[4 * i] = static_cast<uint8_t>(c.object[i] & 0xFF);
@@ -402,12 +421,13 @@ TEST(FalseColour, RecorderTilesDepthAndSegmentation) {
   for (int t = 0; t < 2; ++t) {
     const PixelRect& r = layout.tiles[static_cast<size_t>(t)];
     cv::Mat expected;
-    cv::resize(t == 0 ? depth_rgb : seg_rgb, expected, cv::Size(r.width_px, r.height_px), 0, 0, cv::INTER_NEAREST);
+    cv::resize(t == 0 ? depth_rgb : seg_rgb, expected, cv::Size(r.width_px, r.height_px), 0, 0,
+               cv::INTER_NEAREST);
     int differ = 0;
     for (int y = kLabelRowsPx; y < r.height_px - kBorderPx; ++y) {
       for (int x = kBorderPx; x < r.width_px - kBorderPx; ++x) {
-        const auto* p =
-            reinterpret_cast<const uint8_t*>(out.data()) + (static_cast<size_t>(r.y_px + y) * width + r.x_px + x) * 3;
+        const auto* p = reinterpret_cast<const uint8_t*>(out.data()) +
+                        (static_cast<size_t>(r.y_px + y) * width + r.x_px + x) * 3;
         const auto* e = expected.ptr<uint8_t>(y) + 3 * x;
         differ += p[0] != e[0] || p[1] != e[1] || p[2] != e[2];
         green += t == 1 && p[1] > p[0] + 60 && p[1] > p[2] + 60;
@@ -427,8 +447,9 @@ TEST(CameraModalities, ConfigKeysAreRangeChecked) {
   EXPECT_FALSE(c.modalities.grey);
   EXPECT_TRUE(c.modalities.depth);
   EXPECT_TRUE(c.modalities.segmentation);
-  for (const char* bad : {"modalities=rgb+thermal", "modalities=", "modalities=rgb+rgb", "depth_noise=-1",
-                          "depth_noise=2", "depth_dropout=1.5", "depth_max_m=0", "depth_max_m=nan"}) {
+  for (const char* bad :
+       {"modalities=rgb+thermal", "modalities=", "modalities=rgb+rgb", "depth_noise=-1",
+        "depth_noise=2", "depth_dropout=1.5", "depth_max_m=0", "depth_max_m=nan"}) {
     EXPECT_THROW(apply_camera_options(bad, "t", &c), std::invalid_argument) << bad;
   }
 }
