@@ -7,8 +7,10 @@
 //                            other processes falls on all of them alike; counters: fps_VARIANT
 //                            (frames per second of wall time) and ratio_VARIANT = fps_VARIANT /
 //                            fps_rgb.
-//   Variants: rgb (colour alone, the reference), grey, depth, segmentation, depth+segmentation (one
-//   geometry pass for both), rgb+depth+segmentation (a capture with everything).
+//   Variants: rgb (colour alone, the reference), rgb_colour_camera (colour alone from the same camera
+//   configured without depth and segmentation, in a frame service of its own: what a colour camera
+//   pays for the feature), grey, depth, segmentation, depth+segmentation (one geometry pass for both),
+//   rgb+depth+segmentation (a capture with everything).
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 
@@ -33,10 +35,12 @@ using render::EncodingKey;
 struct Variant {
   std::string name;
   std::vector<EncodingKey> keys;
+  bool colour_camera = false;  // the same camera configured without depth and segmentation
 };
 
 const std::vector<Variant> kVariants = {
     {"rgb", {{Encoding::kRgb, 0}}},
+    {"rgb_colour_camera", {{Encoding::kRgb, 0}}, true},
     {"grey", {{Encoding::kGrey, 0}}},
     {"depth", {{Encoding::kDepth, 0}}},
     {"segmentation", {{Encoding::kSegmentation, 0}}},
@@ -68,23 +72,28 @@ void BM_CameraModalities(benchmark::State& state, int width, int height) {
   mjData* d = world->data();
   mj_forward(world->model(), d);
   const std::string size = "width=" + std::to_string(width) + ",height=" + std::to_string(height);
-  std::vector<render::CameraSetup> all = render::discover_cameras(
-      world->model(), {}, {"overview:" + size + ",fps=100,modalities=rgb+grey+depth+segmentation"},
-      kFps);
-  std::vector<render::CameraSetup> cameras;
-  for (const render::CameraSetup& c : all) {
-    if (c.config.camera == "overview") cameras.push_back(c);
-  }
-  render::FrameServiceOptions options;
-  options.render_threads = 1;
-  options.queue_depth = 1;
-  render::FrameService service(world->model(), cameras, options);
+  // the overview camera alone, with the modalities given, in a frame service of its own
+  auto service_for = [&](const std::string& modalities) {
+    std::vector<render::CameraSetup> cameras;
+    for (const render::CameraSetup& c : render::discover_cameras(
+             world->model(), {}, {"overview:" + size + ",fps=100,modalities=" + modalities}, kFps)) {
+      if (c.config.camera == "overview") cameras.push_back(c);
+    }
+    render::FrameServiceOptions options;
+    options.render_threads = 1;
+    options.queue_depth = 1;
+    return std::make_unique<render::FrameService>(world->model(), cameras, options);
+  };
+  const auto all = service_for("rgb+grey+depth+segmentation");
+  const auto colour = service_for("rgb+grey");
   Consumer consumer;
-  service.add_consumer(&consumer);
+  all->add_consumer(&consumer);
+  colour->add_consumer(&consumer);
 
   double t = 0.0;
   auto frame = [&](const Variant& v) {
     consumer.keys = &v.keys;
+    render::FrameService& service = v.colour_camera ? *colour : *all;
     const auto t0 = std::chrono::steady_clock::now();
     d->time = t;
     service.capture(d);
