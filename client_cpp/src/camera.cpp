@@ -1,6 +1,7 @@
 #include "uavsim/client/camera.hpp"
 
 #include <cstdlib>
+#include <cstring>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -47,10 +48,50 @@ struct CameraSubscriber::Impl {
   CameraIntrinsics intrinsics;
   std::uint64_t received = 0;
   std::int64_t dropped = 0;
+  double near_m = 0.0, far_m = 0.0;
+  std::vector<std::string> classes;
+  std::vector<SegmentationObject> objects;
+  CameraFrame assembling;  // the capture whose parts are arriving (they come together, in order)
 
   Impl(EventLoop& l, CameraConfig c) : loop(l), config(std::move(c)) {}
 
+  // one part of a capture (docs/protocol.md: a header and its bytes per image, parts 0 .. parts-1)
   void deliver(const Json& h, std::string_view bytes) {
+    const int part = h.value("part", 0);
+    const int parts = h.value("parts", 1);
+    if (part == 0) assembling = header_of(h);
+    CameraFrame& f = assembling;
+    const int w = h.value("width", 0), ht = h.value("height", 0);
+    const std::string format = h.value("format", std::string("rgb"));
+    const std::size_t pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(ht);
+    if (format == "depth" && bytes.size() == pixels * 4) {
+      f.depth_m = cv::Mat(ht, w, CV_32FC1);
+      std::memcpy(f.depth_m.data, bytes.data(), bytes.size());
+    } else if (format == "segmentation" && bytes.size() == pixels * 4) {
+      // per pixel: uint16 object id, uint16 class id, little-endian
+      const cv::Mat both(ht, w, CV_16UC2, const_cast<char*>(bytes.data()));
+      cv::Mat split[2];
+      cv::split(both, split);
+      f.object_ids = split[0];
+      f.class_ids = split[1];
+    } else if (format == "jpeg") {
+      const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+      f.image = cv::imdecode(raw, cv::IMREAD_COLOR);
+    } else if (format == "grey" && bytes.size() == pixels) {
+      f.image = cv::Mat(ht, w, CV_8UC1, const_cast<char*>(bytes.data())).clone();
+    } else if (format == "rgb" && bytes.size() == pixels * 3) {
+      const cv::Mat rgb(ht, w, CV_8UC3, const_cast<char*>(bytes.data()));
+      cv::cvtColor(rgb, f.image, cv::COLOR_RGB2BGR);
+    }
+    if (part + 1 < parts) return;
+    ++received;
+    dropped = f.dropped;
+    if (on_frame) on_frame(f);
+    assembling = CameraFrame();
+  }
+
+  // what every part of a capture says alike: stamps, seq, intrinsics, pose
+  CameraFrame header_of(const Json& h) const {
     CameraFrame f;
     f.camera = config.camera;
     f.vehicle = h.value("vehicle", Json()).is_string() ? h["vehicle"].get<std::string>() : "";
@@ -66,27 +107,40 @@ struct CameraSubscriber::Impl {
     if (pose.contains("R_enu_cam") && pose["R_enu_cam"].size() == 9) {
       for (int i = 0; i < 9; ++i) f.pose.R_enu_cam(i / 3, i % 3) = pose["R_enu_cam"][i].get<double>();
     }
-    const int w = h.value("width", 0), ht = h.value("height", 0);
-    const std::string format = h.value("format", std::string("rgb"));
-    if (format == "jpeg") {
-      const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
-      f.image = cv::imdecode(raw, cv::IMREAD_COLOR);
-    } else if (format == "grey" && bytes.size() == static_cast<std::size_t>(w) * ht) {
-      f.image = cv::Mat(ht, w, CV_8UC1, const_cast<char*>(bytes.data())).clone();
-    } else if (bytes.size() == static_cast<std::size_t>(w) * ht * 3) {
-      const cv::Mat rgb(ht, w, CV_8UC3, const_cast<char*>(bytes.data()));
-      cv::cvtColor(rgb, f.image, cv::COLOR_RGB2BGR);
-    }
-    ++received;
-    dropped = f.dropped;
-    if (on_frame) on_frame(f);
+    return f;
   }
 
   Json request() const {
-    Json r = {{"op", "camera_subscribe"}, {"camera", config.camera}, {"format", wire_format(config.format)}};
+    Json r = {{"op", "camera_subscribe"}, {"camera", config.camera}};
+    if (config.depth || config.segmentation) {
+      Json modalities = Json::array();
+      if (config.colour) modalities.push_back(wire_format(config.format));
+      if (config.depth) modalities.push_back("depth");
+      if (config.segmentation) modalities.push_back("segmentation");
+      r["modalities"] = modalities;
+    } else {
+      r["format"] = wire_format(config.format);
+    }
     if (config.fps > 0) r["fps"] = config.fps;
-    if (config.format == CameraFormat::kJpeg) r["quality"] = config.jpeg_quality;
+    if (config.colour && config.format == CameraFormat::kJpeg) r["quality"] = config.jpeg_quality;
     return r;
+  }
+
+  // the subscribe reply's depth range and segmentation tables
+  void take_tables(const Json& res) {
+    const Json depth = res.value("depth", Json::object());
+    near_m = depth.value("near_m", 0.0);
+    far_m = depth.value("far_m", 0.0);
+    const Json seg = res.value("segmentation", Json::object());
+    for (const Json& k : seg.value("classes", Json::array())) {
+      const int id = k.value("id", -1);
+      if (id < 0 || id > 0xFFFF) continue;
+      if (classes.size() <= static_cast<std::size_t>(id)) classes.resize(static_cast<std::size_t>(id) + 1);
+      classes[static_cast<std::size_t>(id)] = k.value("name", std::string());
+    }
+    for (const Json& o : seg.value("objects", Json::array())) {
+      objects.push_back({o.value("id", 0), o.value("name", std::string()), o.value("class", 0)});
+    }
   }
 
   // The simulator connection the frames come on: the lockstep loop's (every frame due at or before a
@@ -122,6 +176,9 @@ Result<std::unique_ptr<CameraSubscriber>> CameraSubscriber::subscribe(EventLoop&
   using R = Result<std::unique_ptr<CameraSubscriber>>;
   loop.assert_in_loop_thread();
   if (config.camera.empty()) return R::fail(Error::kInvalidArgument, "camera: no camera name");
+  if (!config.colour && !config.depth && !config.segmentation) {
+    return R::fail(Error::kInvalidArgument, "camera " + config.camera + ": no image asked for (colour, depth, segmentation)");
+  }
   auto impl = std::make_unique<Impl>(loop, config);
   impl->on_frame = std::move(on_frame);
   Impl* s = impl.get();
@@ -141,6 +198,7 @@ Result<std::unique_ptr<CameraSubscriber>> CameraSubscriber::subscribe(EventLoop&
   s->height = res.value("height", 0);
   s->fps = res.value("fps", 0.0);
   s->intrinsics = intrinsics_of(res.value("intrinsics", Json()));
+  s->take_tables(res);
   return std::unique_ptr<CameraSubscriber>(new CameraSubscriber(std::move(impl)));
 }
 
@@ -151,5 +209,9 @@ CameraIntrinsics CameraSubscriber::intrinsics() const { return impl_->intrinsics
 std::uint64_t CameraSubscriber::frames_received() const { return impl_->received; }
 std::int64_t CameraSubscriber::frames_dropped() const { return impl_->dropped; }
 bool CameraSubscriber::connected() const { return impl_->channel->is_open(); }
+double CameraSubscriber::depth_near_m() const { return impl_->near_m; }
+double CameraSubscriber::depth_far_m() const { return impl_->far_m; }
+const std::vector<std::string>& CameraSubscriber::segmentation_classes() const { return impl_->classes; }
+const std::vector<SegmentationObject>& CameraSubscriber::segmentation_objects() const { return impl_->objects; }
 
 }  // namespace uavsim::client

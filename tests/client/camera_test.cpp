@@ -156,6 +156,71 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
   EXPECT_NEAR(jpeg[1].stamp_s - jpeg[0].stamp_s, 0.2 * (jpeg[1].seq - jpeg[0].seq), 1e-6);
 }
 
+// depth and segmentation beside colour, typed: one frame per capture with all three images
+TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCapture) {
+  ServerProcess server({"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  std::vector<CameraFrame> frames;
+  CameraConfig config;
+  config.camera = "overview";
+  config.depth = true;
+  config.segmentation = true;
+  auto sub = CameraSubscriber::subscribe(loop, config, [&](const CameraFrame& f) { frames.push_back(f); });
+  ASSERT_TRUE(sub) << sub.message();
+  EXPECT_GT((*sub)->depth_far_m(), (*sub)->depth_near_m());
+  const std::vector<std::string>& classes = (*sub)->segmentation_classes();
+  const std::vector<SegmentationObject>& objects = (*sub)->segmentation_objects();
+  ASSERT_GT(classes.size(), 2u);
+  EXPECT_EQ(classes[0], "none");
+  ASSERT_TRUE(loop.run_for(0.5));
+  ASSERT_GE(frames.size(), 4u);
+  for (std::size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].seq, static_cast<std::int64_t>(i));
+  const CameraFrame& f = frames.back();
+  ASSERT_EQ(f.image.type(), CV_8UC3);
+  ASSERT_EQ(f.depth_m.type(), CV_32FC1);
+  ASSERT_EQ(f.object_ids.type(), CV_16UC1);
+  ASSERT_EQ(f.class_ids.type(), CV_16UC1);
+  ASSERT_EQ(f.depth_m.size(), f.image.size());
+  // the bottom row sees the ground: its depth along the axis is the camera height over the ray's slope,
+  // and its label is the ground's
+  const float z = f.depth_m.at<float>(119, 80);
+  EXPECT_TRUE(std::isfinite(z) && z > 1.0f && z < 30.0f) << z;
+  const int object = f.object_ids.at<uint16_t>(119, 80);
+  ASSERT_LT(static_cast<std::size_t>(object), objects.size());
+  EXPECT_EQ(objects[static_cast<std::size_t>(object)].name, "ground");
+  EXPECT_EQ(classes.at(static_cast<std::size_t>(f.class_ids.at<uint16_t>(119, 80))), "ground");
+  // the quad at the origin is labelled a vehicle somewhere in the image
+  bool vehicle = false;
+  for (int v = 0; v < 120; ++v) {
+    for (int u = 0; u < 160; ++u) vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
+  }
+  EXPECT_TRUE(vehicle);
+
+  // depth alone: no colour image; a camera without it refuses
+  CameraConfig depth_only = config;
+  depth_only.colour = false;
+  depth_only.segmentation = false;
+  (*sub).reset();
+  frames.clear();
+  auto d = CameraSubscriber::subscribe(loop, depth_only, [&](const CameraFrame& fr) { frames.push_back(fr); });
+  ASSERT_TRUE(d) << d.message();
+  ASSERT_TRUE(loop.run_for(0.3));
+  ASSERT_FALSE(frames.empty());
+  EXPECT_TRUE(frames.back().image.empty());
+  EXPECT_FALSE(frames.back().depth_m.empty());
+  EXPECT_TRUE(frames.back().object_ids.empty());
+  CameraConfig none = config;
+  none.colour = false;
+  none.depth = false;
+  none.segmentation = false;
+  auto bad = CameraSubscriber::subscribe(loop, none, nullptr);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.code(), Error::kInvalidArgument);
+}
+
 // the README's example program, unchanged, against a server: UAVSIM_MAVLINK + UAVSIM_LOCKSTEP
 TEST(Examples, FlySquareUnderLockstep) {
   ServerProcess server({"--no-cameras"});

@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -115,6 +117,83 @@ TEST_F(VideoLogTest, TruncatedLogReadsUpToLastWholeFrame) {
   ASSERT_TRUE(reader.ok());
   EXPECT_EQ((*reader)->frame_count(), 4u);
   EXPECT_TRUE((*reader)->read(3).ok());
+}
+
+// a camera's depth and segmentation beside the image come back bit for bit (NaN included)
+TEST_F(VideoLogTest, DepthAndSegmentationPlanesRoundTripExactly) {
+  const cv::Mat image = frame_image(3);
+  cv::Mat depth(image.size(), CV_32FC1), objects(image.size(), CV_16UC1), classes(image.size(), CV_16UC1);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> metres(0.1f, 500.0f);
+  for (int v = 0; v < image.rows; ++v) {
+    for (int u = 0; u < image.cols; ++u) {
+      depth.at<float>(v, u) = (u + v) % 17 == 0 ? std::numeric_limits<float>::quiet_NaN() : metres(rng);
+      objects.at<uint16_t>(v, u) = static_cast<uint16_t>((u * 7 + v) % 65536);
+      classes.at<uint16_t>(v, u) = static_cast<uint16_t>(v % 8);
+    }
+  }
+  {
+    auto writer = VideoLogWriter::open(dir_ / "p.vlog");
+    ASSERT_TRUE(writer.ok());
+    VideoLogFrame with{42, image, {}, "rgbd"};
+    with.depth_m = depth;
+    with.object_ids = objects;
+    with.class_ids = classes;
+    ASSERT_TRUE((*writer)->submit(with));
+    ASSERT_TRUE((*writer)->submit(VideoLogFrame{43, image, {}, "colour only"}));
+    // planes of another size or type are refused
+    VideoLogFrame wrong{44, image, {}, ""};
+    wrong.depth_m = cv::Mat(10, 10, CV_32FC1, cv::Scalar(1.0f));
+    EXPECT_FALSE((*writer)->submit(wrong));
+    wrong.depth_m = cv::Mat(image.size(), CV_64FC1, cv::Scalar(1.0));
+    EXPECT_FALSE((*writer)->submit(wrong));
+    ASSERT_TRUE((*writer)->close().ok());
+  }
+  auto reader = VideoLogReader::open(dir_ / "p.vlog");
+  ASSERT_TRUE(reader.ok());
+  ASSERT_EQ((*reader)->frame_count(), 2u);
+  auto rec = (*reader)->read(0);
+  ASSERT_TRUE(rec.ok()) << to_string(rec.error());
+  ASSERT_EQ(rec->depth_m.type(), CV_32FC1);
+  ASSERT_EQ(rec->depth_m.size(), image.size());
+  EXPECT_EQ(std::memcmp(rec->depth_m.data, depth.data, depth.total() * 4), 0) << "depth not bit-exact";
+  EXPECT_EQ(cv::norm(rec->object_ids, objects, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(rec->class_ids, classes, cv::NORM_INF), 0.0);
+  auto plain = (*reader)->read(1);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_TRUE(plain->depth_m.empty());
+  EXPECT_TRUE(plain->object_ids.empty());
+  EXPECT_EQ(plain->text, "colour only");
+}
+
+// logs written before the planes (version 1) still read
+TEST_F(VideoLogTest, VersionOneLogsStillRead) {
+  std::vector<uchar> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", frame_image(0), jpeg));
+  std::string b("UAVVLOG\0", 8);
+  auto u32 = [&b](uint32_t v) {
+    for (int i = 0; i < 4; ++i) b.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  };
+  u32(1);
+  u32('M' | ('J' << 8) | ('P' << 16) | ('G' << 24));
+  const uint32_t record = 8 + 1 + 4 + static_cast<uint32_t>(jpeg.size()) + 4 + 4 + 2;
+  u32(record);
+  for (int i = 0; i < 8; ++i) b.push_back(static_cast<char>(i == 0 ? 77 : 0));  // stamp 77 us
+  b.push_back(1);
+  u32(static_cast<uint32_t>(jpeg.size()));
+  b.append(reinterpret_cast<const char*>(jpeg.data()), jpeg.size());
+  u32(0);  // overlays
+  u32(2);
+  b += "v1";
+  std::ofstream(dir_ / "v1.vlog", std::ios::binary) << b;
+  auto reader = VideoLogReader::open(dir_ / "v1.vlog");
+  ASSERT_TRUE(reader.ok());
+  ASSERT_EQ((*reader)->frame_count(), 1u);
+  auto rec = (*reader)->read(0);
+  ASSERT_TRUE(rec.ok()) << to_string(rec.error());
+  EXPECT_EQ(rec->stamp_us, 77);
+  EXPECT_EQ(rec->text, "v1");
+  EXPECT_TRUE(rec->depth_m.empty());
 }
 
 TEST_F(VideoLogTest, RejectsForeignFiles) {

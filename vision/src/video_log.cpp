@@ -18,7 +18,11 @@ namespace uavsim::vision {
 namespace {
 
 constexpr char kMagic[8] = {'U', 'A', 'V', 'V', 'L', 'O', 'G', '\0'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;        // written; 1 (no planes) is read too
+constexpr uint32_t kFirstVersion = 1;
+// the planes beside the image (version 2)
+enum PlaneKind : uint8_t { kPlaneDepth = 1, kPlaneObjects = 2, kPlaneClasses = 3 };
+constexpr uint32_t kMaxPlanes = 3;
 constexpr uint32_t kFourccMjpg = 'M' | ('J' << 8) | ('P' << 16) | ('G' << 24);
 constexpr size_t kHeaderBytes = 16;
 constexpr uint8_t kFlagKeyframe = 1;
@@ -101,6 +105,40 @@ void serialise_overlay(const Overlay& o, std::string* b) {
   const int n = o.kind == Overlay::Kind::kCircle || o.kind == Overlay::Kind::kText ? 3 : 4;
   for (int i = 0; i < n; ++i) put_f32(b, o.geometry_px[i]);
   if (o.kind == Overlay::Kind::kText) put_bytes(b, o.text.data(), o.text.size());
+}
+
+// a plane as a lossless PNG: depth's float bits as 4 x 8-bit channels, ids as 16-bit grey
+bool serialise_plane(uint8_t kind, const cv::Mat& plane, std::string* b) {
+  const cv::Mat as_png = kind == kPlaneDepth ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
+                                             : plane;
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", as_png, png)) return false;
+  put_u8(b, kind);
+  put_bytes(b, png.data(), png.size());
+  return true;
+}
+
+bool parse_plane(ByteReader* r, VideoLogRecord* rec) {
+  const uint8_t kind = r->u8();
+  const auto [png, png_bytes] = r->bytes();
+  if (r->failed() || kind < kPlaneDepth || kind > kPlaneClasses) return false;
+  const cv::Mat decoded =
+      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)), cv::IMREAD_UNCHANGED);
+  if (decoded.empty()) return false;
+  if (kind == kPlaneDepth) {
+    if (decoded.type() != CV_8UC4) return false;
+    rec->depth_m = cv::Mat(decoded.rows, decoded.cols, CV_32FC1);
+    std::memcpy(rec->depth_m.data, decoded.data, decoded.total() * 4);
+    return true;
+  }
+  if (decoded.type() != CV_16UC1) return false;
+  (kind == kPlaneObjects ? rec->object_ids : rec->class_ids) = decoded;
+  return true;
+}
+
+// an optional plane: empty, or of the image's size and the type given
+bool plane_fits(const cv::Mat& plane, const cv::Mat& image, int type) {
+  return plane.empty() || (plane.type() == type && plane.size() == image.size());
 }
 
 bool parse_overlay(ByteReader* r, Overlay* o) {
@@ -217,6 +255,19 @@ struct VideoLogWriter::Impl {
       put_u32(&record, static_cast<uint32_t>(frame.overlays.size()));
       for (const auto& o : frame.overlays) serialise_overlay(o, &record);
       put_bytes(&record, frame.text.data(), frame.text.size());
+      const std::pair<uint8_t, const cv::Mat*> planes[] = {
+          {kPlaneDepth, &frame.depth_m}, {kPlaneObjects, &frame.object_ids}, {kPlaneClasses, &frame.class_ids}};
+      uint32_t plane_count = 0;
+      for (const auto& [kind, plane] : planes) plane_count += plane->empty() ? 0 : 1;
+      put_u32(&record, plane_count);
+      bool planes_ok = true;
+      for (const auto& [kind, plane] : planes) {
+        if (!plane->empty()) planes_ok = planes_ok && serialise_plane(kind, *plane, &record);
+      }
+      if (!planes_ok) {
+        write_failed = true;
+        continue;
+      }
       std::string size_prefix;
       put_u32(&size_prefix, static_cast<uint32_t>(record.size()));
       file.write(size_prefix.data(), size_prefix.size());
@@ -254,7 +305,9 @@ Result<std::unique_ptr<VideoLogWriter>, VideoLogError> VideoLogWriter::open(
 }
 
 bool VideoLogWriter::submit(const VideoLogFrame& frame) {
-  if (frame.image.empty() || (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1)) {
+  if (frame.image.empty() || (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1) ||
+      !plane_fits(frame.depth_m, frame.image, CV_32FC1) || !plane_fits(frame.object_ids, frame.image, CV_16UC1) ||
+      !plane_fits(frame.class_ids, frame.image, CV_16UC1)) {
     ++impl_->dropped;
     return false;
   }
@@ -267,7 +320,9 @@ bool VideoLogWriter::submit(const VideoLogFrame& frame) {
   }
   // copy outside the lock (the caller may reuse its buffer); a racing submit may fill the slot
   // meanwhile, then this one is dropped below
-  VideoLogFrame copy{frame.stamp_us, frame.image.clone(), frame.overlays, frame.text};
+  VideoLogFrame copy{frame.stamp_us,         frame.image.clone(),      frame.overlays,
+                     frame.text,             frame.depth_m.clone(),    frame.object_ids.clone(),
+                     frame.class_ids.clone()};
   {
     std::lock_guard lock(impl_->mutex);
     if (impl_->closing || impl_->queue.size() >= impl_->options.queue_capacity) {
@@ -304,6 +359,7 @@ uint64_t VideoLogWriter::frames_dropped() const { return impl_->dropped; }
 
 struct VideoLogReader::Impl {
   std::ifstream file;
+  uint32_t version = 0;
   uint32_t fourcc = 0;
   struct Entry {
     uint64_t offset;  // of the record body, after its size field
@@ -329,9 +385,11 @@ Result<std::unique_ptr<VideoLogReader>, VideoLogError> VideoLogReader::open(
   ByteReader hr(header + 8, 8);
   const uint32_t version = hr.u32();
   impl->fourcc = hr.u32();
-  if (std::memcmp(header, kMagic, 8) != 0 || version != kVersion || impl->fourcc != kFourccMjpg) {
+  if (std::memcmp(header, kMagic, 8) != 0 || version < kFirstVersion || version > kVersion ||
+      impl->fourcc != kFourccMjpg) {
     return VideoLogError::kBadFormat;
   }
+  impl->version = version;
   // index the records: size fields chain them; a truncated last record ends the log
   impl->file.seekg(0, std::ios::end);
   const uint64_t file_bytes = static_cast<uint64_t>(impl->file.tellg());
@@ -385,10 +443,20 @@ Result<VideoLogRecord, VideoLogError> VideoLogReader::read(size_t index) {
   }
   rec.text = r.string();
   if (r.failed()) return VideoLogError::kBadFormat;
+  if (impl_->version >= 2) {
+    const uint32_t plane_count = r.u32();
+    if (r.failed() || plane_count > kMaxPlanes) return VideoLogError::kBadFormat;
+    for (uint32_t i = 0; i < plane_count; ++i) {
+      if (!parse_plane(&r, &rec)) return VideoLogError::kBadFormat;
+    }
+  }
   rec.image =
       cv::imdecode(cv::Mat(1, static_cast<int>(jpeg_bytes), CV_8UC1, const_cast<uint8_t*>(jpeg)),
                    cv::IMREAD_UNCHANGED);
   if (rec.image.empty()) return VideoLogError::kDecodeFailed;
+  for (const cv::Mat* plane : {&rec.depth_m, &rec.object_ids, &rec.class_ids}) {
+    if (!plane->empty() && plane->size() != rec.image.size()) return VideoLogError::kBadFormat;
+  }
   return rec;
 }
 

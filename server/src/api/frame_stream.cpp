@@ -15,8 +15,23 @@ constexpr int kDefaultJpegQuality = 90;
 constexpr int kMaxEvery = 1000000;
 // a frame is dropped for a connection that still has more than this many frames' bytes queued unsent
 constexpr size_t kMaxQueuedFrames = 2;
+// the most bytes one capture (every image of a subscription's frame) may have: with kMaxQueuedFrames
+// more queued it stays below the line server's 64 MiB per connection, beyond which it closes the
+// connection as overloaded
+constexpr size_t kMaxCaptureBytes = 20u << 20;
+// rgb, grey, jpeg, depth, segmentation
+constexpr size_t kMaxModalities = 5;
 
 std::string dump(const nlohmann::json& j) { return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+// the modalities a camera gives, as camera_list names them
+nlohmann::json modality_list(const render::Modalities& m) {
+  nlohmann::json list = nlohmann::json::array();
+  if (m.rgb) list.push_back("rgb");
+  if (m.grey) list.push_back("grey");
+  if (m.depth) list.push_back("depth");
+  if (m.segmentation) list.push_back("segmentation");
+  return list;
+}
 constexpr std::string_view kCameraOps[] = {"camera_list", "camera_subscribe", "camera_unsubscribe",
                                            "camera_blackout"};
 }  // namespace
@@ -56,6 +71,11 @@ void FrameStream::before_tick(uint64_t conn, const Send& /*send*/) {
 
 FrameStream::Json FrameStream::camera_json(int index) const {
   const render::FrameCamera& c = service_.cameras().at(static_cast<size_t>(index));
+  Json formats = Json::array();
+  if (c.modalities.rgb) formats.push_back("rgb");
+  if (c.modalities.grey) formats.push_back("grey");
+  if (c.modalities.rgb) formats.push_back("jpeg");
+  const Json modalities = modality_list(c.modalities);
   return Json{{"name", c.name},
               {"vehicle", c.vehicle >= 0 ? Json(c.vehicle_name) : Json(nullptr)},
               {"vehicle_index", c.vehicle >= 0 ? Json(c.vehicle) : Json(nullptr)},
@@ -63,7 +83,121 @@ FrameStream::Json FrameStream::camera_json(int index) const {
               {"height", c.height_px},
               {"fps", c.fps_hz},
               {"intrinsics", {{"fx", c.fx_px}, {"fy", c.fy_px}, {"cx", c.cx_px}, {"cy", c.cy_px}}},
-              {"formats", {"rgb", "grey", "jpeg"}}};
+              {"formats", formats},
+              {"modalities", modalities}};
+}
+
+FrameStream::Json FrameStream::depth_json(const render::FrameCamera& c) const {
+  return Json{{"near_m", c.depth_near_m},
+              {"far_m", c.depth_far_m},
+              {"invalid", "nan"},
+              {"noise_m", c.depth_noise_m},
+              {"dropout", c.depth_dropout},
+              {"max_m", c.depth_max_m ? Json(*c.depth_max_m) : Json(nullptr)}};
+}
+
+FrameStream::Json FrameStream::segmentation_json() const {
+  Json classes = Json::array();
+  for (int k = 0; k < render::kSegmentClassCount; ++k) {
+    classes.push_back({{"id", k}, {"name", render::segment_class_name(static_cast<render::SegmentClass>(k))}});
+  }
+  Json objects = Json::array();
+  for (const render::SegmentObject& o : service_.labels().objects) {
+    objects.push_back({{"id", o.id}, {"name", o.name}, {"class", static_cast<int>(o.cls)}});
+  }
+  return Json{{"layout", "uint16 object id, uint16 class id per pixel, little-endian"},
+              {"classes", classes},
+              {"objects", objects}};
+}
+
+bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& info,
+                             std::vector<render::EncodingKey>* keys, std::string* code, std::string* message) const {
+  auto fail = [&](const char* c, std::string m) {
+    *code = c;
+    *message = std::move(m);
+    return false;
+  };
+  // "format" (one image) or "modalities" (a list of them), each named once
+  keys->clear();
+  const auto f = request.find("format");
+  const auto mods = request.find("modalities");
+  if (f != request.end() && mods != request.end()) {
+    return fail("bad_field", "give \"format\" or \"modalities\", not both");
+  }
+  if (mods != request.end()) {
+    if (!mods->is_array() || mods->empty() || mods->size() > kMaxModalities) {
+      return fail("bad_field",
+                  "\"modalities\" must be a list of 1 to 5 of \"rgb\", \"grey\", \"jpeg\", \"depth\", "
+                  "\"segmentation\"");
+    }
+    for (const Json& m : *mods) {
+      const auto e = m.is_string() ? render::encoding_from_name(m.get<std::string>()) : std::nullopt;
+      if (!e) {
+        return fail("bad_field", "unknown modality " + dump(m) +
+                                     " in \"modalities\" (rgb, grey, jpeg, depth, segmentation)");
+      }
+      if (std::any_of(keys->begin(), keys->end(), [&](const render::EncodingKey& k) { return k.encoding == *e; })) {
+        return fail("bad_field", "modality " + dump(m) + " is named twice in \"modalities\"");
+      }
+      keys->push_back({*e, 0});
+    }
+    std::sort(keys->begin(), keys->end(),
+              [](const render::EncodingKey& a, const render::EncodingKey& b) { return a.encoding < b.encoding; });
+  } else {
+    render::EncodingKey key;
+    if (f != request.end()) {
+      const auto e = f->is_string() ? render::encoding_from_name(f->get<std::string>()) : std::nullopt;
+      if (!e) {
+        return fail("bad_field",
+                    "\"format\" must be \"rgb\", \"grey\", \"jpeg\", \"depth\" or \"segmentation\"");
+      }
+      key.encoding = *e;
+    }
+    keys->push_back(key);
+  }
+
+  // what the camera gives (its modalities); JPEG is of its colour image
+  const render::Modalities& has = info.modalities;
+  for (const render::EncodingKey& k : *keys) {
+    const bool given = k.encoding == render::Encoding::kGrey ? has.grey
+                       : k.encoding == render::Encoding::kDepth ? has.depth
+                       : k.encoding == render::Encoding::kSegmentation ? has.segmentation
+                                                                        : has.rgb;
+    if (!given) {
+      return fail("bad_field", "camera '" + info.name + "' gives no " + render::encoding_name(k.encoding) +
+                                   " (it gives " + modality_list(has).dump() +
+                                   "; the world's uavsim:camera text or --camera " + info.name +
+                                   ":modalities=... sets what it gives)");
+    }
+  }
+
+  // JPEG quality
+  const auto jpeg = std::find_if(keys->begin(), keys->end(),
+                                 [](const render::EncodingKey& k) { return k.encoding == render::Encoding::kJpeg; });
+  if (auto q = request.find("quality"); q != request.end()) {
+    if (jpeg == keys->end()) return fail("bad_field", "\"quality\" applies to \"jpeg\" only");
+    if (!q->is_number() || q->get<double>() < 1 || q->get<double>() > 100 ||
+        std::floor(q->get<double>()) != q->get<double>()) {
+      return fail("bad_field", "\"quality\" must be an integer in [1, 100]");
+    }
+    jpeg->quality = static_cast<int>(q->get<double>());
+  } else if (jpeg != keys->end()) {
+    jpeg->quality = kDefaultJpegQuality;
+  }
+
+  // a capture must fit the connection's output limit (JPEG counted as RGB, its worst case)
+  size_t bytes = 0;
+  const size_t pixels = static_cast<size_t>(info.width_px) * static_cast<size_t>(info.height_px);
+  for (const render::EncodingKey& k : *keys) {
+    bytes += pixels * static_cast<size_t>(k.encoding == render::Encoding::kJpeg ? 3 : render::bytes_per_pixel(k.encoding));
+  }
+  if (bytes > kMaxCaptureBytes) {
+    return fail("bad_field", "a capture of camera '" + info.name + "' with these modalities is too large: " +
+                                 std::to_string(bytes) + " bytes at " + std::to_string(info.width_px) + "x" +
+                                 std::to_string(info.height_px) + ", at most " + std::to_string(kMaxCaptureBytes) +
+                                 " (ask for fewer modalities, or give the camera a smaller size)");
+  }
+  return true;
 }
 
 bool FrameStream::has_subscriptions(uint64_t conn) const {
@@ -126,24 +260,8 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
   }
 
   // camera_subscribe
-  render::EncodingKey key;
-  if (auto f = request.find("format"); f != request.end()) {
-    const auto e = f->is_string() ? render::encoding_from_name(f->get<std::string>()) : std::nullopt;
-    if (!e) return fail("bad_field", "\"format\" must be \"rgb\", \"grey\" or \"jpeg\"");
-    key.encoding = *e;
-  }
-  if (auto q = request.find("quality"); q != request.end()) {
-    if (key.encoding != render::Encoding::kJpeg) {
-      return fail("bad_field", "\"quality\" applies to \"jpeg\" only");
-    }
-    if (!q->is_number() || q->get<double>() < 1 || q->get<double>() > 100 ||
-        std::floor(q->get<double>()) != q->get<double>()) {
-      return fail("bad_field", "\"quality\" must be an integer in [1, 100]");
-    }
-    key.quality = static_cast<int>(q->get<double>());
-  } else if (key.encoding == render::Encoding::kJpeg) {
-    key.quality = kDefaultJpegQuality;
-  }
+  std::vector<render::EncodingKey> keys;
+  if (!parse_keys(request, info, &keys, code, message)) return false;
   int every = 1;
   if (auto f = request.find("fps"); f != request.end()) {
     const double fps = f->is_number() ? f->get<double>() : -1.0;
@@ -168,17 +286,28 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
   }
   sub->conn = conn;
   sub->camera = *camera;
-  sub->key = key;
+  sub->keys = keys;
   sub->every = every;
   mine[*camera] = sub;
+  Json names = Json::array();
+  Json quality = nullptr;
+  for (const render::EncodingKey& k : keys) {
+    names.push_back(render::encoding_name(k.encoding));
+    if (k.encoding == render::Encoding::kJpeg) quality = k.quality;
+  }
   *result = {{"camera", name},
-             {"format", render::encoding_name(key.encoding)},
+             {"format", render::encoding_name(keys.front().encoding)},
+             {"modalities", names},
              {"fps", info.fps_hz / every},
-             {"quality", key.encoding == render::Encoding::kJpeg ? Json(key.quality) : Json(nullptr)},
+             {"quality", quality},
              {"width", info.width_px},
              {"height", info.height_px},
              {"intrinsics", {{"fx", info.fx_px}, {"fy", info.fy_px}, {"cx", info.cx_px}, {"cy", info.cy_px}}},
              {"every", every}};
+  for (const render::EncodingKey& k : keys) {
+    if (k.encoding == render::Encoding::kDepth) (*result)["depth"] = depth_json(info);
+    if (k.encoding == render::Encoding::kSegmentation) (*result)["segmentation"] = segmentation_json();
+  }
   return true;
 }
 
@@ -227,7 +356,7 @@ void FrameStream::want(int camera, int64_t index, int64_t, std::vector<render::E
     p.seq = p.sub->next_seq++;
     p.must = is_lockstep_ && is_lockstep_(conn);
     *must_deliver = *must_deliver || p.must;
-    encodings->push_back(p.sub->key);
+    encodings->insert(encodings->end(), p.sub->keys.begin(), p.sub->keys.end());
     takers.push_back(std::move(p));
   }
   if (takers.empty()) return;
@@ -264,22 +393,31 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
   const bool black = blackout != blackouts_.end() && frame.stamp_us >= blackout->second.first &&
                      frame.stamp_us < blackout->second.second;
   std::vector<std::pair<render::EncodingKey, std::shared_ptr<const std::string>>> black_images;
+  // a blacked-out camera: the same frame, every pixel black and no depth (encoded once per encoding);
+  // segmentation is ground truth of the scene, not of the sensor, and stays
+  auto image = [&](const render::EncodingKey& key) -> const std::string* {
+    const std::string* bytes = frame.image(key);
+    if (!black || bytes == nullptr || key.encoding == render::Encoding::kSegmentation) return bytes;
+    auto it = std::find_if(black_images.begin(), black_images.end(), [&](const auto& b) { return b.first == key; });
+    if (it == black_images.end()) {
+      black_images.emplace_back(key, render::encode_black_frame(c.width_px, c.height_px, key));
+      it = std::prev(black_images.end());
+    }
+    return it->second.get();
+  };
   for (Pending& p : takers) {
     Sub& sub = *p.sub;
     if (!sub.active) continue;
-    const std::string* bytes = frame.image(sub.key);
-    if (bytes == nullptr) continue;
-    if (black) {
-      // a blacked-out camera: the same frame, every pixel black (encoded once per encoding)
-      auto it = std::find_if(black_images.begin(), black_images.end(),
-                             [&](const auto& b) { return b.first == sub.key; });
-      if (it == black_images.end()) {
-        black_images.emplace_back(sub.key, render::encode_black_frame(c.width_px, c.height_px, sub.key));
-        it = std::prev(black_images.end());
-      }
-      bytes = it->second.get();
+    std::vector<const std::string*> parts;
+    size_t bytes = 0;
+    for (const render::EncodingKey& key : sub.keys) {
+      parts.push_back(image(key));
+      if (parts.back() == nullptr) break;
+      bytes += parts.back()->size();
     }
-    if (!p.must && server_.pending_bytes(sub.conn) > kMaxQueuedFrames * bytes->size()) {
+    if (parts.empty() || parts.back() == nullptr) continue;
+    // all images of a capture or none: a slow reader loses whole captures
+    if (!p.must && server_.pending_bytes(sub.conn) > kMaxQueuedFrames * bytes) {
       ++sub.dropped;
       continue;
     }
@@ -288,23 +426,37 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
     // after this one, which the renderer refused while this one was still being rendered.)
     const uint64_t delivered = sub.delivered.load();
     const uint64_t dropped_before = p.seq > delivered ? p.seq - delivered : 0;
-    const Json header = {{"event", "frame"},
-                         {"camera", c.name},
-                         {"vehicle", c.vehicle >= 0 ? Json(c.vehicle_name) : Json(nullptr)},
-                         {"seq", p.seq},
-                         {"dropped", dropped_before},
-                         {"stamp", frame.stamp_s},
-                         {"stamp_us", frame.stamp_us},
-                         {"width", c.width_px},
-                         {"height", c.height_px},
-                         {"format", render::encoding_name(sub.key.encoding)},
-                         {"bytes", bytes->size()},
-                         {"intrinsics", intrinsics},
-                         {"pose", pose}};
-    std::string message = dump(header);
-    message.reserve(message.size() + 1 + bytes->size());
-    message += '\n';
-    message += *bytes;
+    Json names = Json::array();
+    for (const render::EncodingKey& key : sub.keys) names.push_back(render::encoding_name(key.encoding));
+    // one header line and its bytes per image, all in one send: nothing comes between the parts
+    std::string message;
+    message.reserve(bytes + 1024 * parts.size());
+    for (size_t i = 0; i < parts.size(); ++i) {
+      const render::Encoding e = sub.keys[i].encoding;
+      Json header = {{"event", "frame"},
+                     {"camera", c.name},
+                     {"vehicle", c.vehicle >= 0 ? Json(c.vehicle_name) : Json(nullptr)},
+                     {"seq", p.seq},
+                     {"dropped", dropped_before},
+                     {"stamp", frame.stamp_s},
+                     {"stamp_us", frame.stamp_us},
+                     {"width", c.width_px},
+                     {"height", c.height_px},
+                     {"format", render::encoding_name(e)},
+                     {"bytes", parts[i]->size()},
+                     {"part", i},
+                     {"parts", parts.size()},
+                     {"modalities", names},
+                     {"intrinsics", intrinsics},
+                     {"pose", pose}};
+      if (e == render::Encoding::kDepth) {
+        header["near_m"] = c.depth_near_m;
+        header["far_m"] = c.depth_far_m;
+      }
+      message += dump(header);
+      message += '\n';
+      message += *parts[i];
+    }
     if (server_.send(sub.conn, message)) ++sub.delivered;
   }
 }

@@ -1,6 +1,6 @@
 // The API's camera-frame subscriptions (docs/protocol.md "Camera frames"): camera_list, camera_subscribe,
 // camera_unsubscribe, camera_blackout, and the frame messages (a JSON header line, then the raw image
-// bytes) with their back-pressure rules. An op group like the others, and a render::FrameConsumer:
+// bytes; one such part per image of a capture: colour, depth, segmentation) with their back-pressure rules. An op group like the others, and a render::FrameConsumer:
 // want() and the ops run on the loop thread, deliver() on the render thread.
 #pragma once
 
@@ -62,7 +62,7 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
   struct Sub {
     uint64_t conn = 0;
     int camera = -1;
-    render::EncodingKey key;
+    std::vector<render::EncodingKey> keys;  // the images of each capture, in Encoding order (one part each)
     int every = 1;
     uint64_t next_seq = 0;               // loop thread
     std::atomic<bool> active{true};
@@ -75,6 +75,14 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
     bool must = false;
   };
   Json camera_json(int index) const;
+  // camera_subscribe's images: "format" or "modalities", "quality", checked against what the camera gives
+  // and the size of a capture. Loop thread. Returns false and sets code/message for an error reply.
+  bool parse_keys(const Json& request, const render::FrameCamera& info, std::vector<render::EncodingKey>* keys,
+                  std::string* code, std::string* message) const;
+  // camera_subscribe's reply for the depth and segmentation parts: the clip planes and field conditions,
+  // the class and object tables
+  Json depth_json(const render::FrameCamera& info) const;
+  Json segmentation_json() const;
 
   const sim::Simulation& sim_;
   render::FrameService& service_;

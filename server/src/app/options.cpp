@@ -122,6 +122,8 @@ cameras and logs:
                       the video's frames; default 1
   --record-layout L   single (the default: the main view alone) or tiled (the vehicles' onboard
                       cameras, up to 4, in a column beside the main view, each labelled)
+  --record-tile CAMERA[:MODALITY]  a tile of this camera's rgb (the default), depth or segmentation
+                      (false colour) instead of the automatic choice; repeat for more (up to 6)
   --log-dir DIR       write VEHICLE.tlog per vehicle (every MAVLink frame each way, stamped with sim
                       time, as MAVProxy and QGroundControl write them) and events.jsonl (the server's
                       events, one JSON object a line)
@@ -135,6 +137,9 @@ cameras and logs:
 }
 
 namespace {
+
+// --record-tile: tiles in the column beside the main view (each a sixth of its height at least)
+constexpr size_t kMaxRecordTiles = 6;
 
 // one option's value, checked: a number in [lo, hi], integral when asked
 struct NumberRule {
@@ -509,6 +514,19 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         ok = v == "0" || v == "1";
         if (!ok) why = "--record-overlay needs 0 or 1, got '" + v + "'";
         o.record_overlay = v == "1";
+      }
+    } else if (a == "--record-tile") {
+      if ((ok = value(&v))) {
+        const std::string modality = v.find(':') == std::string::npos ? "rgb" : v.substr(v.find(':') + 1);
+        ok = !v.empty() && v.front() != ':' &&
+             (modality == "rgb" || modality == "depth" || modality == "segmentation") &&
+             o.record_tiles.size() < kMaxRecordTiles;
+        if (!ok) {
+          why = "--record-tile needs CAMERA or CAMERA:rgb|depth|segmentation, at most " +
+                std::to_string(kMaxRecordTiles) + " times, got '" + v + "'";
+        }
+        o.record_tiles.push_back(v);
+        o.record_tiled = true;
       }
     } else if (a == "--record-layout") {
       if ((ok = value(&v))) {

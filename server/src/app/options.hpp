@@ -96,6 +96,7 @@ struct Options {
   bool record_overlay = true;                 // --record-overlay 0: frames without the text
   bool record_tiled = false;                  // --record-layout tiled: onboard cameras beside the view
   std::optional<std::string> radio_backend;   // --radio-backend simple|ns3: over the world's uavsim:radio_backend
+  std::vector<std::string> record_tiles;      // --record-tile CAM[:rgb|depth|segmentation], repeated
 };
 
 // What parse_args() decided: run with options, or exit with exit_code after printing output (to

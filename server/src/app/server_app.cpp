@@ -373,8 +373,8 @@ int run_server(const Options& given_options) {
   size_t recorded = 0;  // the camera --record films
   if (options.cameras && (options.api_port >= 0 || options.record_path)) {
     std::vector<render::CameraSetup> cameras;
+    render::CameraOwners owners;  // which cameras and geoms are a vehicle's
     try {
-      render::CameraOwners owners;
       for (const physics::VehicleBinding& v : s.world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
       if (world_objects.gimbals != nullptr) {
         for (const objects::Gimbal& g : world_objects.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
@@ -409,6 +409,7 @@ int run_server(const Options& given_options) {
         frame_options.seed = options.seed;
         frame_options.backend = options.gl_backend;
         frame_options.render_threads = options.render_threads;
+        frame_options.owners = owners;
         frames = std::make_unique<render::FrameService>(s.world().model(), cameras, frame_options);
         if (!options.quiet) {
           std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered by " << frames->render_threads()
@@ -428,7 +429,16 @@ int run_server(const Options& given_options) {
         // as fast as possible (--rate 0) nothing is lost by waiting for the video; at a real-time rate it never waits
         render::RecorderOptions ro;
         ro.lossless = options.rate == 0.0;
-        if (options.record_tiled) {
+        for (const std::string& t : options.record_tiles) {
+          // --record-tile CAMERA[:MODALITY] (the modality checked by the options)
+          const size_t colon = t.find(':');
+          const std::optional<int> tile = frames->find(t.substr(0, colon));
+          if (!tile) throw std::invalid_argument("--record-tile " + t + ": no such camera");
+          ro.tiles.push_back(*tile);
+          ro.tile_modalities.push_back(
+              render::encoding_from_name(colon == std::string::npos ? "rgb" : t.substr(colon + 1)).value());
+        }
+        if (options.record_tiled && options.record_tiles.empty()) {
           // the vehicles' onboard cameras, the first kMaxTiles of the world's order
           constexpr size_t kMaxTiles = 4;
           for (size_t i = 0; i < frames->cameras().size() && ro.tiles.size() < kMaxTiles; ++i) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -77,6 +78,8 @@ struct CameraRenderer::Impl {
   mjvScene scn;
   mjvOption opt;
   std::vector<uint8_t> rgb;  // bottom-up scratch image from mjr_readPixels
+  std::vector<float> depth;  // bottom-up scratch depth buffer (0 near .. 1 far) from mjr_readPixels
+  MjrSlot* geometry_mjr = nullptr;  // the depth and segmentation pass's context: no multisampling
 
   void make_current() const {
     assert(std::this_thread::get_id() == thread && "CameraRenderer used off its renderer thread");
@@ -157,8 +160,10 @@ CameraRenderer::CameraRenderer(const mjModel* m, std::vector<CameraConfig> camer
   s.make_current();
   s.gl_summary = std::string(s.gl->name()) + " (" + s.gl->detail() + ")";
   if (!fallback_reason.empty()) s.gl_summary += "; auto: EGL unavailable: " + fallback_reason;
-  for (CameraSlot& cam : s.cameras)
+  for (CameraSlot& cam : s.cameras) {
     cam.mjr = s.mjr_for_samples(std::max(0, cam.config.flags.msaa_samples));
+    if (cam.config.modalities.geometry()) s.geometry_mjr = s.mjr_for_samples(0);
+  }
 
   // MuJoCo may clamp the offscreen buffer to what the GL implementation allows
   for (const CameraSlot& cam : s.cameras) {
@@ -221,11 +226,16 @@ bool CameraRenderer::due(const mjData* d, int index) const {
 }
 
 void CameraRenderer::render(mjData* d, int index, CameraFrame* out) {
+  render(d, index, RenderPasses{}, out);
+}
+
+void CameraRenderer::render(mjData* d, int index, const RenderPasses& passes, CameraFrame* out) {
   assert(d != nullptr && out != nullptr);
   Impl& s = *impl_;
   CameraSlot& cam = s.cameras.at(index);
   const int w = cam.config.width_px;
   const int h = cam.config.height_px;
+  const size_t pixels = static_cast<size_t>(w) * h;
   s.make_current();
 
   // scene from the fixed MJCF camera
@@ -247,28 +257,37 @@ void CameraRenderer::render(mjData* d, int index, CameraFrame* out) {
   s.scn.flags[mjRND_REFLECTION] = cam.config.flags.reflections;
   s.scn.flags[mjRND_SKYBOX] = cam.config.flags.skybox;
 
-  // render into MuJoCo's offscreen framebuffer and read it back (bottom row first)
   const mjrRect viewport = {0, 0, w, h};
-  mjr_setBuffer(mjFB_OFFSCREEN, &cam.mjr->con);
-  mjr_render(viewport, &s.scn, &cam.mjr->con);
-  s.rgb.resize(static_cast<size_t>(w) * h * 3);
-  mjr_readPixels(s.rgb.data(), nullptr, viewport, &cam.mjr->con);
+  out->pixels.clear();
+  if (passes.colour) {
+    // render into MuJoCo's offscreen framebuffer and read it back (bottom row first)
+    mjr_setBuffer(mjFB_OFFSCREEN, &cam.mjr->con);
+    mjr_render(viewport, &s.scn, &cam.mjr->con);
+    s.rgb.resize(pixels * 3);
+    mjr_readPixels(s.rgb.data(), nullptr, viewport, &cam.mjr->con);
 
-  // flip to top row first, converting to grey if asked
-  const int channels = cam.config.format == PixelFormat::kRgb8 ? 3 : 1;
-  out->pixels.resize(static_cast<size_t>(w) * h * channels);
-  for (int row = 0; row < h; ++row) {
-    const uint8_t* src = s.rgb.data() + static_cast<size_t>(h - 1 - row) * w * 3;
-    uint8_t* dst = out->pixels.data() + static_cast<size_t>(row) * w * channels;
-    if (channels == 3) {
-      std::copy(src, src + static_cast<size_t>(w) * 3, dst);
-    } else {
-      for (int col = 0; col < w; ++col, src += 3) {
-        dst[col] = static_cast<uint8_t>(
-            (kLumaR * src[0] + kLumaG * src[1] + kLumaB * src[2] + 32768) >> 16);
+    // flip to top row first, converting to grey if asked
+    const int channels = cam.config.format == PixelFormat::kRgb8 ? 3 : 1;
+    out->pixels.resize(pixels * channels);
+    for (int row = 0; row < h; ++row) {
+      const uint8_t* src = s.rgb.data() + static_cast<size_t>(h - 1 - row) * w * 3;
+      uint8_t* dst = out->pixels.data() + static_cast<size_t>(row) * w * channels;
+      if (channels == 3) {
+        std::copy(src, src + static_cast<size_t>(w) * 3, dst);
+      } else {
+        for (int col = 0; col < w; ++col, src += 3) {
+          dst[col] = static_cast<uint8_t>(
+              (kLumaR * src[0] + kLumaG * src[1] + kLumaB * src[2] + 32768) >> 16);
+        }
       }
     }
   }
+
+  out->depth_m.clear();
+  out->geom_ids.clear();
+  out->depth_near_m = s.scn.camera[0].frustum_near;
+  out->depth_far_m = s.scn.camera[0].frustum_far;
+  if (passes.depth || passes.segmentation) render_geometry(w, h, passes, out);
 
   // metadata: time, intrinsics and pose of what was drawn
   out->camera_name = cam.config.camera;
@@ -285,6 +304,67 @@ void CameraRenderer::render(mjData* d, int index, CameraFrame* out) {
       Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d->cam_xmat + 9 * cam.id);
   out->R_enu_cam = R_enu_mjcam * Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
   cam.last_stamp_us = out->stamp_us;
+}
+
+void CameraRenderer::render_geometry(int w, int h, const RenderPasses& passes, CameraFrame* out) {
+  Impl& s = *impl_;
+  const size_t pixels = static_cast<size_t>(w) * h;
+  if (s.geometry_mjr == nullptr) s.geometry_mjr = s.mjr_for_samples(0);
+  mjrContext* con = &s.geometry_mjr->con;
+
+  // every model geom that shows gets its id as segid (the pass colours it segid + 1, 24 bits); decor
+  // and invisible geoms get none
+  for (int i = 0; i < s.scn.ngeom; ++i) {
+    mjvGeom& g = s.scn.geoms[i];
+    g.segid = g.objtype == mjOBJ_GEOM && g.rgba[3] > 0.0f ? g.objid : -1;
+  }
+
+  // flat, unlit, no effects: MuJoCo's segmentation mode, which also writes the depth buffer
+  s.scn.flags[mjRND_SHADOW] = 0;
+  s.scn.flags[mjRND_REFLECTION] = 0;
+  s.scn.flags[mjRND_SKYBOX] = 0;
+  s.scn.flags[mjRND_SEGMENT] = 1;
+  s.scn.flags[mjRND_IDCOLOR] = 1;
+  const mjrRect viewport = {0, 0, w, h};
+  mjr_setBuffer(mjFB_OFFSCREEN, con);
+  mjr_render(viewport, &s.scn, con);
+  s.rgb.resize(pixels * 3);
+  s.depth.resize(pixels);
+  mjr_readPixels(passes.segmentation ? s.rgb.data() : nullptr, passes.depth ? s.depth.data() : nullptr,
+                 viewport, con);
+  s.scn.flags[mjRND_SEGMENT] = 0;
+  s.scn.flags[mjRND_IDCOLOR] = 0;
+
+  // depth buffer (OpenGL's perspective mapping, 0 at near, 1 at far) => metres along the optical axis:
+  // z = n f / (f - b (f - n)); 1 is the cleared buffer: nothing hit
+  if (passes.depth) {
+    const double n = out->depth_near_m;
+    const double f = out->depth_far_m;
+    out->depth_m.resize(pixels);
+    for (int row = 0; row < h; ++row) {
+      const float* src = s.depth.data() + static_cast<size_t>(h - 1 - row) * w;
+      float* dst = out->depth_m.data() + static_cast<size_t>(row) * w;
+      for (int col = 0; col < w; ++col) {
+        const double b = src[col];
+        dst[col] = b >= 1.0 ? std::numeric_limits<float>::quiet_NaN()
+                            : static_cast<float>(n * f / (f - b * (f - n)));
+      }
+    }
+  }
+
+  // id colour => geom id (0: the cleared background)
+  if (passes.segmentation) {
+    out->geom_ids.resize(pixels);
+    const int ngeom = s.m->ngeom;
+    for (int row = 0; row < h; ++row) {
+      const uint8_t* src = s.rgb.data() + static_cast<size_t>(h - 1 - row) * w * 3;
+      int32_t* dst = out->geom_ids.data() + static_cast<size_t>(row) * w;
+      for (int col = 0; col < w; ++col, src += 3) {
+        const int32_t id = static_cast<int32_t>(src[0] | (src[1] << 8) | (src[2] << 16)) - 1;
+        dst[col] = id < ngeom ? id : -1;
+      }
+    }
+  }
 }
 
 }  // namespace uavsim::server::render

@@ -15,6 +15,8 @@
 #include <string_view>
 #include <vector>
 
+#include "render/modalities.hpp"
+
 namespace uavsim::server::render {
 
 enum class PixelFormat {
@@ -33,6 +35,13 @@ struct RenderFlags {
       0;  // 0: no multisampling; otherwise samples per pixel (the model's offsamples is ignored)
 };
 
+// Which images one render() call makes.
+struct RenderPasses {
+  bool colour = true;        // RGB (the camera's format) with the camera's effects
+  bool depth = false;        // CameraFrame::depth_m
+  bool segmentation = false; // CameraFrame::geom_ids
+};
+
 // One camera to render, named as in the MJCF.
 struct CameraConfig {
   std::string camera;  // <camera name="..."> in the model
@@ -48,6 +57,14 @@ struct CameraConfig {
   double noise_sd = 0.0;
   double brightness_sd = 0.0;
   double latency_s = 0.0;
+  Modalities modalities;
+  // depth field conditions (applied by the frame service; never to segmentation, which is ground truth):
+  // noise as a stereo camera has it, standard deviation depth_noise_m at 1 m growing with the square of
+  // the depth (sd(z) = depth_noise_m * z^2 / 1 m); a fraction depth_dropout of the valid pixels invalid
+  // (no texture, no return); beyond depth_max_m nothing is measured (unset: up to the far plane)
+  double depth_noise_m = 0.0;
+  double depth_dropout = 0.0;
+  std::optional<double> depth_max_m;
 };
 
 // Pinhole intrinsics in OpenCV's convention: pixel (u, v) has its centre at integer coordinates, u
@@ -80,6 +97,13 @@ struct CameraFrame {
   // (x right, y down, z forward along the optical axis) into the world
   Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d R_enu_cam = Eigen::Matrix3d::Identity();
+  // depth pass (RenderPasses::depth): metres along the optical axis (the camera frame's z), same layout
+  // as the pixels, NaN where nothing was hit; the clip planes the depth buffer was drawn with
+  std::vector<float> depth_m;
+  double depth_near_m = 0.0;
+  double depth_far_m = 0.0;
+  // segmentation pass (RenderPasses::segmentation): the MuJoCo geom id seen at each pixel, -1 for none
+  std::vector<int32_t> geom_ids;
 };
 
 // The smallest <visual><global offwidth offheight> that lets a set of cameras render.
@@ -137,8 +161,15 @@ class CameraRenderer {
   // Renderer thread only; nothing may write `d` meanwhile: give a renderer thread its own copy
   // (mj_copyData) of a forwarded mjData.
   void render(mjData* d, int index, CameraFrame* out);
+  // The same, with the passes asked for: colour (pixels), and depth and segmentation from one more pass
+  // of flat, unlit geometry (no effects, no multisampling: edges stay exact ids). The extra pass's results
+  // come from the same scene, so every image of one call shows the same instant from the same pose. A
+  // pass not asked for leaves its vector empty. Renderer thread only.
+  void render(mjData* d, int index, const RenderPasses& passes, CameraFrame* out);
 
  private:
+  // the depth and segmentation pass of the scene render() has just built
+  void render_geometry(int width_px, int height_px, const RenderPasses& passes, CameraFrame* out);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -33,6 +33,30 @@ int int_of(const std::string& key, const std::string& value, const std::string& 
 
 }  // namespace
 
+Modalities modalities_of(const std::string& text, const std::string& where) {
+  // '+'-separated names (',' separates the options), each at most once, at least one
+  Modalities m{false, false, false, false};
+  size_t start = 0;
+  for (;;) {
+    const size_t plus = text.find('+', start);
+    const std::string name = text.substr(start, plus == std::string::npos ? std::string::npos : plus - start);
+    bool* slot = name == "rgb"            ? &m.rgb
+                 : name == "grey"         ? &m.grey
+                 : name == "depth"        ? &m.depth
+                 : name == "segmentation" ? &m.segmentation
+                                          : nullptr;
+    if (slot == nullptr) {
+      throw std::invalid_argument(where + ": unknown modality '" + name +
+                                  "' in modalities (rgb, grey, depth, segmentation, joined by '+')");
+    }
+    if (*slot) throw std::invalid_argument(where + ": modality '" + name + "' given twice");
+    *slot = true;
+    if (plus == std::string::npos) break;
+    start = plus + 1;
+  }
+  return m;
+}
+
 void apply_camera_options(const std::string& text, const std::string& where, CameraConfig* c) {
   std::string spaced = text;
   for (char& ch : spaced) {
@@ -78,10 +102,26 @@ void apply_camera_options(const std::string& text, const std::string& where, Cam
       const double ms = number_of(key, value, where);
       if (!(ms >= 0 && ms <= 10000)) throw std::invalid_argument(where + ": latency_ms must be in [0, 10000]");
       c->latency_s = ms / 1000.0;
+    } else if (key == "modalities") {
+      c->modalities = modalities_of(value, where);
+    } else if (key == "depth_noise") {
+      c->depth_noise_m = number_of(key, value, where);
+      if (!(c->depth_noise_m >= 0 && c->depth_noise_m <= 1)) {
+        throw std::invalid_argument(where + ": depth_noise must be in [0, 1] m (the SD at 1 m)");
+      }
+    } else if (key == "depth_dropout") {
+      c->depth_dropout = number_of(key, value, where);
+      if (!(c->depth_dropout >= 0 && c->depth_dropout <= 1)) {
+        throw std::invalid_argument(where + ": depth_dropout must be in [0, 1]");
+      }
+    } else if (key == "depth_max_m") {
+      const double m = number_of(key, value, where);
+      if (!(m > 0 && m <= 1e6)) throw std::invalid_argument(where + ": depth_max_m must be in (0, 1e6]");
+      c->depth_max_m = m;
     } else {
       throw std::invalid_argument(where + ": unknown camera option '" + key +
                                   "' (width, height, fps, fovy, shadows, reflections, skybox, msaa, noise, "
-                                  "brightness, latency_ms)");
+                                  "brightness, latency_ms, modalities, depth_noise, depth_dropout, depth_max_m)");
     }
   }
 }

@@ -3,6 +3,8 @@
 //   <text name="uavsim:camera:CAMNAME" data="width=640 height=480 fps=15 shadows=0 reflections=0 skybox=0 msaa=0"/>
 // (every key optional; defaults 640 x 480 at 15 fps, all effects off: DESIGN.md's frame-rate figures;
 // field conditions: noise=SD brightness=SD latency_ms=MS, all 0 by default),
+// what it gives: modalities=rgb+grey+depth+segmentation (default rgb+grey; depth field conditions
+// depth_noise=M depth_dropout=P depth_max_m=M, all off by default),
 // then by command-line overrides "CAMNAME:width=W,height=H,fps=F" ("*" for every camera).
 // A camera belongs to a vehicle when its body is one of that vehicle's bodies or a gimbal body bound to it.
 #pragma once
@@ -13,6 +15,7 @@
 #include <vector>
 
 #include "render/camera_renderer.hpp"
+#include "render/segmentation.hpp"
 
 namespace uavsim::server::render {
 
@@ -22,11 +25,9 @@ struct CameraSetup {
   std::string vehicle_name;  // "" for a world camera
 };
 
-// What the application knows about vehicles and gimbals (no MuJoCo types).
-struct CameraOwners {
-  std::vector<std::pair<int, std::string>> vehicle_root_bodies;  // body id of vehicle i's root, its name
-  std::map<int, int> gimbal_body_vehicle;                        // gimbal body id -> vehicle index
-};
+// Parses a modality list "rgb+grey+depth+segmentation" (any non-empty subset, '+' between names); throws
+// std::invalid_argument naming `where` for an unknown or repeated name.
+Modalities modalities_of(const std::string& text, const std::string& where);
 
 // Parses "key=value key=value" (spaces or commas between pairs) into config; throws std::invalid_argument
 // naming `where` and the key for an unknown key or a bad value.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -44,14 +45,77 @@ std::shared_ptr<const std::string> encode(const std::vector<uint8_t>& rgb, int w
       out->assign(reinterpret_cast<const char*>(buf.data()), buf.size());
       break;
     }
+    case Encoding::kDepth:
+    case Encoding::kSegmentation:
+      break;  // not of the colour image: encode_depth, encode_segmentation
   }
   return out;
 }
 
+// float32 metres as they lie in memory: little-endian on every platform the server builds for
+std::shared_ptr<const std::string> encode_depth(const std::vector<float>& depth_m) {
+  static_assert(sizeof(float) == 4, "depth is float32");
+  return std::make_shared<std::string>(reinterpret_cast<const char*>(depth_m.data()), depth_m.size() * sizeof(float));
+}
+
+// per pixel: uint16 object id, uint16 class id (little-endian); a geom id outside the labels is nothing
+std::shared_ptr<const std::string> encode_segmentation(const std::vector<int32_t>& geom_ids,
+                                                       const SegmentationLabels& labels) {
+  auto out = std::make_shared<std::string>(geom_ids.size() * 4, '\0');
+  auto* dst = reinterpret_cast<uint8_t*>(out->data());
+  const auto ngeom = static_cast<int32_t>(labels.geom_object.size());
+  for (const int32_t g : geom_ids) {
+    const bool known = g >= 0 && g < ngeom;
+    const uint16_t object = known ? labels.geom_object[static_cast<size_t>(g)] : 0;
+    const auto cls = known ? static_cast<uint16_t>(labels.geom_class[static_cast<size_t>(g)]) : uint16_t{0};
+    dst[0] = static_cast<uint8_t>(object & 0xFF);
+    dst[1] = static_cast<uint8_t>(object >> 8);
+    dst[2] = static_cast<uint8_t>(cls & 0xFF);
+    dst[3] = static_cast<uint8_t>(cls >> 8);
+    dst += 4;
+  }
+  return out;
+}
+
+// The noise of one frame: splitmix64 seeded from (seed, stream, camera, index), so a frame's noise does not
+// depend on thread timing; each kind of effect draws from a stream of its own.
+class FrameNoise {
+ public:
+  FrameNoise(uint64_t seed, uint64_t stream, int camera, int64_t index)
+      : state_(seed ^ (stream + static_cast<uint64_t>(camera) * 0x9E3779B97F4A7C15ull) ^
+               (static_cast<uint64_t>(index) * 0xBF58476D1CE4E5B9ull)) {}
+  uint64_t next() {
+    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  // approximately N(0, 1): the centred sum of four 16-bit uniforms (mean 2, variance 4/12), scaled
+  double gauss() {
+    constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit
+    const uint64_t r = next();
+    const double sum = static_cast<double>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48));
+    return sum * kScale - 2.0 * 65536.0 * kScale;
+  }
+  // uniform in [0, 1)
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+
+ private:
+  uint64_t state_;
+};
+
+constexpr uint64_t kColourStream = 0xCA3E7A00ull;
+constexpr uint64_t kDepthStream = 0xDE9750000ull;
+
 }  // namespace
 
 std::shared_ptr<const std::string> encode_black_frame(int width_px, int height_px, const EncodingKey& key) {
-  const std::vector<uint8_t> black(static_cast<size_t>(width_px) * height_px * 3, 0);
+  const size_t pixels = static_cast<size_t>(width_px) * height_px;
+  if (key.encoding == Encoding::kDepth) {
+    return encode_depth(std::vector<float>(pixels, std::numeric_limits<float>::quiet_NaN()));
+  }
+  if (key.encoding == Encoding::kSegmentation) return std::make_shared<std::string>(pixels * 4, '\0');
+  const std::vector<uint8_t> black(pixels * 3, 0);
   return encode(black, width_px, height_px, key);
 }
 
@@ -60,14 +124,31 @@ const char* encoding_name(Encoding e) {
     case Encoding::kRgb: return "rgb";
     case Encoding::kGrey: return "grey";
     case Encoding::kJpeg: return "jpeg";
+    case Encoding::kDepth: return "depth";
+    case Encoding::kSegmentation: return "segmentation";
   }
   return "?";
+}
+
+bool is_colour(Encoding e) { return e == Encoding::kRgb || e == Encoding::kGrey || e == Encoding::kJpeg; }
+
+int bytes_per_pixel(Encoding e) {
+  switch (e) {
+    case Encoding::kRgb: return 3;
+    case Encoding::kGrey: return 1;
+    case Encoding::kJpeg: return 0;
+    case Encoding::kDepth: return 4;
+    case Encoding::kSegmentation: return 4;
+  }
+  return 0;
 }
 
 std::optional<Encoding> encoding_from_name(const std::string& name) {
   if (name == "rgb") return Encoding::kRgb;
   if (name == "grey") return Encoding::kGrey;
   if (name == "jpeg") return Encoding::kJpeg;
+  if (name == "depth") return Encoding::kDepth;
+  if (name == "segmentation") return Encoding::kSegmentation;
   return std::nullopt;
 }
 
@@ -80,26 +161,30 @@ const std::string* ReadyFrame::image(const EncodingKey& key) const {
 
 void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, int camera, int64_t index,
                           std::vector<uint8_t>* pixels) {
-  // splitmix64 from (seed, camera, index): four 16-bit uniforms per draw
-  uint64_t state = seed ^ (0xCA3E7A00ull + static_cast<uint64_t>(camera) * 0x9E3779B97F4A7C15ull) ^
-                   (static_cast<uint64_t>(index) * 0xBF58476D1CE4E5B9ull);
-  auto next = [&state] {
-    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  };
-  // sum of four U(0, 1): mean 2, variance 4/12; scaled to unit variance
-  constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit
-  auto gauss = [&] {
-    const uint64_t r = next();
-    const double sum = static_cast<double>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48));
-    return sum * kScale - 2.0 * 65536.0 * kScale;
-  };
-  const double gain = std::clamp(1.0 + brightness_sd * gauss(), 0.2, 2.0);
+  FrameNoise noise(seed, kColourStream, camera, index);
+  const double gain = std::clamp(1.0 + brightness_sd * noise.gauss(), 0.2, 2.0);
   for (uint8_t& p : *pixels) {
-    const double v = p * gain + (noise_sd > 0 ? noise_sd * gauss() : 0.0);
+    const double v = p * gain + (noise_sd > 0 ? noise_sd * noise.gauss() : 0.0);
     p = static_cast<uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  }
+}
+
+void apply_depth_effects(const FrameCamera& camera, uint64_t seed, int camera_index, int64_t index,
+                         std::vector<float>* depth_m) {
+  FrameNoise noise(seed, kDepthStream, camera_index, index);
+  constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
+  const double max_m = camera.depth_max_m.value_or(std::numeric_limits<double>::infinity());
+  for (float& z : *depth_m) {
+    if (std::isnan(z)) continue;
+    // out of range, then unmatched, then the measurement's noise (never closer than the near plane)
+    if (z > max_m || (camera.depth_dropout > 0 && noise.uniform() < camera.depth_dropout)) {
+      z = kNan;
+      continue;
+    }
+    if (camera.depth_noise_m > 0) {
+      const double noisy = z + camera.depth_noise_m * static_cast<double>(z) * z * noise.gauss();
+      z = static_cast<float>(std::max(noisy, camera.depth_near_m));
+    }
   }
 }
 
@@ -160,7 +245,7 @@ struct FrameService::Worker {
 
 FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& cameras,
                            const FrameServiceOptions& options)
-    : m_(m), options_(options) {
+    : m_(m), labels_(label_geoms(m, options.owners)), options_(options) {
   for (const CameraSetup& c : cameras) {
     FrameCamera f;
     f.name = c.config.camera;
@@ -172,6 +257,12 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
     f.noise_sd = c.config.noise_sd;
     f.brightness_sd = c.config.brightness_sd;
     f.latency_s = c.config.latency_s;
+    f.modalities = c.config.modalities;
+    f.depth_near_m = m->vis.map.znear * m->stat.extent;
+    f.depth_far_m = m->vis.map.zfar * m->stat.extent;
+    f.depth_noise_m = c.config.depth_noise_m;
+    f.depth_dropout = c.config.depth_dropout;
+    f.depth_max_m = c.config.depth_max_m;
     any_latency_ = any_latency_ || f.latency_s > 0;
     const int id = mj_name2id(m, mjOBJ_CAMERA, c.config.camera.c_str());
     if (id < 0) throw std::invalid_argument("frames: the model has no camera named '" + c.config.camera + "'");
@@ -251,6 +342,12 @@ void FrameService::build_worker(int k, const std::vector<CameraSetup>& cameras) 
     if (seen) continue;
     w.renderer->render(w.d, i, &w.frame);
     warmed.push_back(f);
+  }
+  // and the depth and segmentation pass, if a camera of this worker has it
+  for (int i = 0; i < w.renderer->camera_count(); ++i) {
+    if (!w.renderer->config(i).modalities.geometry()) continue;
+    w.renderer->render(w.d, i, RenderPasses{false, true, true}, &w.frame);
+    break;
   }
 }
 
@@ -545,10 +642,20 @@ void FrameService::render_share(int k, const Snapshot& s, std::vector<std::optio
       Eigen::Map<Eigen::Vector3d>(d->cam_xpos + 3 * id) = pose.position_enu_m;
       Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d->cam_xmat + 9 * id) = R_enu_mjcam;
     }
-    w.renderer->render(d, w.renderer_index[c], &w.frame);
+    // the passes its encodings need: colour, and the geometry pass only for depth or segmentation
+    RenderPasses passes{false, false, false};
+    for (const EncodingKey& key : job.encodings) {
+      passes.colour = passes.colour || is_colour(key.encoding);
+      passes.depth = passes.depth || key.encoding == Encoding::kDepth;
+      passes.segmentation = passes.segmentation || key.encoding == Encoding::kSegmentation;
+    }
+    w.renderer->render(d, w.renderer_index[c], passes, &w.frame);
     const FrameCamera& cam = cameras_[c];
-    if (cam.noise_sd > 0 || cam.brightness_sd > 0) {
+    if (passes.colour && (cam.noise_sd > 0 || cam.brightness_sd > 0)) {
       apply_sensor_effects(cam.noise_sd, cam.brightness_sd, options_.seed, job.camera, job.index, &w.frame.pixels);
+    }
+    if (passes.depth && (cam.depth_noise_m > 0 || cam.depth_dropout > 0 || cam.depth_max_m)) {
+      apply_depth_effects(cam, options_.seed, job.camera, job.index, &w.frame.depth_m);
     }
     ReadyFrame& f = (*out)[i].emplace();
     f.camera = job.camera;
@@ -560,7 +667,13 @@ void FrameService::render_share(int k, const Snapshot& s, std::vector<std::optio
     f.R_enu_cam = w.frame.R_enu_cam;
     f.tracked_enu_m = tracked;
     for (const EncodingKey& key : job.encodings) {
-      f.images.emplace_back(key, encode(w.frame.pixels, w.frame.width_px, w.frame.height_px, key));
+      if (key.encoding == Encoding::kDepth) {
+        f.images.emplace_back(key, encode_depth(w.frame.depth_m));
+      } else if (key.encoding == Encoding::kSegmentation) {
+        f.images.emplace_back(key, encode_segmentation(w.frame.geom_ids, labels_));
+      } else {
+        f.images.emplace_back(key, encode(w.frame.pixels, w.frame.width_px, w.frame.height_px, key));
+      }
     }
   }
 }

@@ -11,8 +11,9 @@
 //                 mjModel copy (offscreen buffer sized for its cameras) and its own mjData, and renders a
 //                 fixed share of the cameras (assign_cameras). The first, the render thread, takes the
 //                 snapshots in order; per snapshot every thread with a camera due copies the state in,
-//                 mj_forward's, renders and encodes (RGB, grey, JPEG via OpenCV) its cameras in parallel
-//                 with the others, and the render thread then hands the frames to the consumers in the
+//                 mj_forward's, renders and encodes (RGB, grey, JPEG via OpenCV; depth and segmentation
+//                 from a second pass, only where a job asks for them) its cameras in parallel with the
+//                 others, and the render thread then hands the frames to the consumers in the
 //                 snapshot's camera order. So consumers see the same frames in the same order for any
 //                 thread count; only the wall time differs.
 //
@@ -31,6 +32,9 @@
 #include <thread>
 #include <vector>
 
+#include "render/modalities.hpp"
+#include "render/segmentation.hpp"
+
 struct mjModel_;
 struct mjData_;
 
@@ -39,9 +43,15 @@ namespace uavsim::server::render {
 struct CameraSetup;
 class CameraDirector;
 
-enum class Encoding : uint8_t { kRgb, kGrey, kJpeg };
-const char* encoding_name(Encoding e);                       // "rgb", "grey", "jpeg"
+// kDepth: float32 metres along the optical axis per pixel (little-endian, NaN: nothing measured);
+// kSegmentation: per pixel a uint16 object id then a uint16 class id (little-endian; 0: nothing)
+enum class Encoding : uint8_t { kRgb, kGrey, kJpeg, kDepth, kSegmentation };
+const char* encoding_name(Encoding e);  // "rgb", "grey", "jpeg", "depth", "segmentation"
 std::optional<Encoding> encoding_from_name(const std::string& name);
+// Whether an encoding is of the colour image (rgb, grey, jpeg), not of the depth and segmentation pass.
+bool is_colour(Encoding e);
+// Bytes per pixel of an encoding's image (0 for JPEG, whose size varies).
+int bytes_per_pixel(Encoding e);
 
 // One encoding of a frame; quality only for JPEG (1-100), 0 otherwise.
 struct EncodingKey {
@@ -50,7 +60,8 @@ struct EncodingKey {
   bool operator==(const EncodingKey& o) const { return encoding == o.encoding && quality == o.quality; }
 };
 
-// An all-black image of that size in that encoding (a camera-blackout fault's frames). Thread-safe.
+// An all-black image of that size in that encoding (a camera-blackout fault's frames): depth all NaN,
+// segmentation all 0. Thread-safe.
 std::shared_ptr<const std::string> encode_black_frame(int width_px, int height_px, const EncodingKey& key);
 
 // A camera as the frame service serves it.
@@ -65,7 +76,20 @@ struct FrameCamera {
   double noise_sd = 0.0;       // field conditions (CameraConfig)
   double brightness_sd = 0.0;
   double latency_s = 0.0;
+  Modalities modalities;        // what the camera gives (CameraConfig::modalities)
+  double depth_near_m = 0.0;    // the clip planes depth is drawn with: nothing nearer or farther is seen
+  double depth_far_m = 0.0;
+  double depth_noise_m = 0.0;   // depth field conditions (CameraConfig)
+  double depth_dropout = 0.0;
+  std::optional<double> depth_max_m;
 };
+
+// Field conditions on one depth image (metres, NaN invalid), in place, as a stereo or ToF camera has them:
+// beyond depth_max_m invalid; Gaussian noise of sd depth_noise_m * z^2 (z in metres); a fraction
+// depth_dropout of the valid pixels invalid. Drawn from (seed, camera, index) like apply_sensor_effects,
+// in a stream of their own. Never applied to segmentation (ground truth). Thread-safe.
+void apply_depth_effects(const FrameCamera& camera, uint64_t seed, int camera_index, int64_t index,
+                         std::vector<float>* depth_m);
 
 // Field conditions on one RGB8 or grey image, in place: a per-frame gain 1 + brightness_sd * n0 and per
 // pixel and channel noise noise_sd * n, both drawn from (seed, camera, index) so a frame's pixels do not
@@ -108,6 +132,7 @@ struct FrameServiceOptions {
   uint64_t seed = 1;                 // camera noise (field conditions)
   std::string backend = "osmesa";    // make_gl_context: "osmesa", "egl" or "auto"
   int render_threads = 0;            // 0: default_render_threads(); more than the cameras: one per camera
+  CameraOwners owners;               // the vehicles, for the segmentation labels (label_geoms)
 };
 
 // Render threads when none are asked for: one per two hardware threads, at most kMaxDefaultRenderThreads,
@@ -141,6 +166,8 @@ class FrameService {
 
   // The cameras, in the world's camera order. Thread-safe (never changes).
   const std::vector<FrameCamera>& cameras() const { return cameras_; }
+  // The object and class of every geom, as the segmentation images give them. Thread-safe (never changes).
+  const SegmentationLabels& labels() const { return labels_; }
   std::optional<int> find(const std::string& name) const;
 
   // Loop thread, before capture() runs for the first time with it.
@@ -201,6 +228,7 @@ class FrameService {
 
   const mjModel_* m_;
   std::vector<FrameCamera> cameras_;
+  SegmentationLabels labels_;
   FrameServiceOptions options_;
   std::vector<FrameConsumer*> consumers_;
   std::vector<int> tracked_bodies_;

@@ -1,5 +1,7 @@
 #include "render/video_recorder.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +18,12 @@ constexpr size_t kQueueFrames = 16;
 // a tile's frames are wanted a recorded frame's period apart, less this: the frames fall on
 // control steps, so their spacing jitters by less than a step
 constexpr int64_t kTileSlackUs = 1000;
+// a depth tile's colour map ends here when the camera has no range of its own (the far plane is often
+// kilometres away: everything near would be one colour)
+constexpr double kDepthTileFarM = 100.0;
+// and starts here at the nearest (the near plane is centimetres away: a log scale from there spends half
+// its colours on the first metre)
+constexpr double kDepthTileNearM = 1.0;
 
 std::string shell_quote(const std::string& s) {
   std::string out = "'";
@@ -54,9 +62,48 @@ TileLayout tile_layout(int main_width_px, int main_height_px,
   return layout;
 }
 
+void false_colour_depth(const float* depth_m, int width_px, int height_px, double near_m, double far_m,
+                        uint8_t* rgb) {
+  // log(z / near) / log(far / near) in [0, 1] => 255 (near) .. 0 (far) on turbo: near red, far blue
+  const double lo = std::max(near_m, 1e-3);
+  const double span = std::log(std::max(far_m, lo * 1.001) / lo);
+  const size_t pixels = static_cast<size_t>(width_px) * height_px;
+  cv::Mat level(height_px, width_px, CV_8UC1);
+  cv::Mat valid(height_px, width_px, CV_8UC1);
+  for (size_t i = 0; i < pixels; ++i) {
+    const float z = depth_m[i];
+    valid.data[i] = std::isfinite(z) ? 255 : 0;
+    const double t = std::isfinite(z) ? std::clamp(std::log(std::max<double>(z, lo) / lo) / span, 0.0, 1.0) : 1.0;
+    level.data[i] = static_cast<uint8_t>(std::lround(255.0 * (1.0 - t)));
+  }
+  cv::Mat bgr;
+  cv::applyColorMap(level, bgr, cv::COLORMAP_TURBO);
+  cv::Mat out(height_px, width_px, CV_8UC3, rgb);
+  out.setTo(cv::Scalar::all(0));
+  cv::Mat colour;
+  cv::cvtColor(bgr, colour, cv::COLOR_BGR2RGB);
+  colour.copyTo(out, valid);
+}
+
+void false_colour_segmentation(const uint8_t* segmentation, int width_px, int height_px, uint8_t* rgb) {
+  // by class id (segmentation.hpp): none, ground, vehicle, balloon, pole, truck, marker, scenery
+  static constexpr uint8_t kClassRgb[kSegmentClassCount][3] = {
+      {0, 0, 0},     {150, 110, 60}, {230, 40, 40},  {40, 220, 60},
+      {170, 170, 170}, {50, 90, 230}, {250, 230, 40}, {160, 80, 200}};
+  const size_t pixels = static_cast<size_t>(width_px) * height_px;
+  for (size_t i = 0; i < pixels; ++i, segmentation += 4, rgb += 3) {
+    const unsigned object = segmentation[0] | (segmentation[1] << 8);
+    const unsigned cls = segmentation[2] | (segmentation[3] << 8);
+    const uint8_t* c = kClassRgb[cls < static_cast<unsigned>(kSegmentClassCount) ? cls : 0];
+    // objects of one class: 60 % to 100 % of its colour, by id
+    const unsigned shade = 60 + (object * 37u) % 41u;
+    for (int k = 0; k < 3; ++k) rgb[k] = static_cast<uint8_t>(c[k] * shade / 100u);
+  }
+}
+
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, int every, const std::string& path,
                              bool lossless)
-    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr}) {}
+    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr, {}}) {}
 
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std::string& path,
                              RecorderOptions options)
@@ -69,9 +116,19 @@ VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std:
   period_us_ = std::llround(1e6 / fps);
   // the tiles: a column beside the main view
   std::vector<std::pair<int, int>> sizes;
-  for (int t : options_.tiles) {
+  for (size_t i = 0; i < options_.tiles.size(); ++i) {
+    const int t = options_.tiles[i];
     const FrameCamera& c = service.cameras().at(static_cast<size_t>(t));
     if (t == camera) throw std::invalid_argument("--record-layout: the recorded camera cannot be a tile");
+    const Encoding e = i < options_.tile_modalities.size() ? options_.tile_modalities[i] : Encoding::kRgb;
+    const bool given = e == Encoding::kDepth          ? c.modalities.depth
+                       : e == Encoding::kSegmentation ? c.modalities.segmentation
+                       : e == Encoding::kRgb          ? c.modalities.rgb
+                                                      : false;
+    if (!given) {
+      throw std::invalid_argument("--record-tile " + c.name + ":" + encoding_name(e) + ": the camera gives no " +
+                                  encoding_name(e) + " (a tile shows rgb, depth or segmentation)");
+    }
     sizes.emplace_back(c.width_px, c.height_px);
   }
   const TileLayout layout = tile_layout(main_width_, main_height_, sizes);
@@ -81,9 +138,13 @@ VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std:
     const FrameCamera& c = service.cameras()[static_cast<size_t>(options_.tiles[i])];
     Tile tile;
     tile.camera = options_.tiles[i];
+    tile.modality = i < options_.tile_modalities.size() ? options_.tile_modalities[i] : Encoding::kRgb;
+    tile.near_m = std::max(c.depth_near_m, kDepthTileNearM);
+    tile.far_m = c.depth_max_m.value_or(std::min(c.depth_far_m, kDepthTileFarM));
     tile.rect = layout.tiles[i];
     tile.vehicle = c.vehicle;
     tile.label = c.vehicle_name.empty() ? c.name : c.vehicle_name + " " + c.name;
+    if (tile.modality != Encoding::kRgb) tile.label += std::string(" ") + encoding_name(tile.modality);
     // no frame yet: dark grey, labelled
     tile.image.assign(static_cast<size_t>(tile.rect.width_px) * tile.rect.height_px * 3, 40);
     draw_tile_label(tile.label, tile.vehicle, tile.rect.width_px, tile.rect.height_px,
@@ -156,15 +217,15 @@ void VideoRecorder::want(int camera, int64_t index, int64_t stamp_us, std::vecto
     }
     return;
   }
-  // a tile's camera: a frame per recorded frame's period at most (a reset starts again)
+  // a tile's camera: a frame per recorded frame's period at most (a reset starts again), with the image
+  // of each of its tiles
   for (Tile& tile : tiles_) {
     if (tile.camera != camera) continue;
     if (stamp_us + period_us_ < tile.next_want_us) tile.next_want_us = 0;
-    if (stamp_us < tile.next_want_us) return;
+    if (stamp_us < tile.next_want_us) continue;
     tile.next_want_us = stamp_us + period_us_ - kTileSlackUs;
-    encodings->push_back({Encoding::kRgb, 0});
+    encodings->push_back({tile.modality, 0});
     if (lossless_) *must_deliver = true;
-    return;
   }
 }
 
@@ -179,18 +240,29 @@ void VideoRecorder::deliver(const ReadyFrame& frame) {
   // a main frame waits for the tiles of its instant, which come after it in the same snapshot; a
   // frame of another instant means they all came
   if (pending_ && (frame.camera == camera_ || frame.stamp_us != pending_->stamp_us)) flush_pending();
+  bool tiled = false;
   for (Tile& tile : tiles_) {
     if (tile.camera != frame.camera) continue;
-    const std::string* rgb = frame.image({Encoding::kRgb, 0});
-    if (rgb == nullptr || frame.info == nullptr) return;
-    const cv::Mat src(frame.info->height_px, frame.info->width_px, CV_8UC3, const_cast<char*>(rgb->data()));
+    tiled = true;
+    const std::string* bytes = frame.image({tile.modality, 0});
+    if (bytes == nullptr || frame.info == nullptr) continue;
+    const int w = frame.info->width_px, h = frame.info->height_px;
+    cv::Mat src(h, w, CV_8UC3, const_cast<char*>(bytes->data()));
+    if (tile.modality == Encoding::kDepth) {
+      src = cv::Mat(h, w, CV_8UC3);
+      false_colour_depth(reinterpret_cast<const float*>(bytes->data()), w, h, tile.near_m, tile.far_m, src.data);
+    } else if (tile.modality == Encoding::kSegmentation) {
+      src = cv::Mat(h, w, CV_8UC3);
+      false_colour_segmentation(reinterpret_cast<const uint8_t*>(bytes->data()), w, h, src.data);
+    }
+    // labels stay sharp when shrunk: nearest neighbour, not an average of ids and depths
+    const int interpolation = tile.modality == Encoding::kRgb ? cv::INTER_AREA : cv::INTER_NEAREST;
     cv::Mat dst(tile.rect.height_px, tile.rect.width_px, CV_8UC3, tile.image.data());
-    cv::resize(src, dst, dst.size(), 0, 0, cv::INTER_AREA);
+    cv::resize(src, dst, dst.size(), 0, 0, interpolation);
     draw_tile_label(tile.label, tile.vehicle, tile.rect.width_px, tile.rect.height_px,
                     reinterpret_cast<uint8_t*>(tile.image.data()));
-    return;
   }
-  if (frame.camera != camera_) return;
+  if (tiled || frame.camera != camera_) return;
   const std::string* bytes = frame.image({Encoding::kRgb, 0});
   if (bytes == nullptr) return;
   std::shared_ptr<const std::string> image;

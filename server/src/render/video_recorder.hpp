@@ -47,7 +47,20 @@ struct RecorderOptions {
   // the composed RGB8 frames go to this function (on the recorder's thread) instead of an encoder
   // (tests)
   std::function<void(const std::string& rgb, int width_px, int height_px)> sink;
+  // per tile (missing: rgb): which image of its camera it shows; depth and segmentation in false colour
+  // (false_colour_depth from max(near plane, 1 m) to the camera's depth_max_m, else min(far plane,
+  // 100 m); false_colour_segmentation), so one camera may have several tiles
+  std::vector<Encoding> tile_modalities;
 };
+
+// A depth image (float32 metres, NaN invalid) as RGB8: log-scaled from near_m (red) to far_m (blue) on
+// OpenCV's turbo colour map, black where nothing was measured. Thread-safe (pure).
+void false_colour_depth(const float* depth_m, int width_px, int height_px, double near_m, double far_m,
+                        uint8_t* rgb);
+// A segmentation image (per pixel uint16 object id, uint16 class id) as RGB8: a colour per class (ground
+// brown, vehicle red, balloon green, pole grey, truck blue, marker yellow, scenery violet), shaded per
+// object so that neighbours of one class stand apart; black where nothing was hit. Thread-safe (pure).
+void false_colour_segmentation(const uint8_t* segmentation, int width_px, int height_px, uint8_t* rgb);
 
 struct RecorderStats {
   uint64_t frames_written = 0;
@@ -83,6 +96,8 @@ class VideoRecorder : public FrameConsumer {
  private:
   struct Tile {
     int camera = -1;
+    Encoding modality = Encoding::kRgb;
+    double near_m = 0.0, far_m = 0.0;  // depth tiles: the colour map's range
     PixelRect rect;
     std::string label;
     int vehicle = -1;

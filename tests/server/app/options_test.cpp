@@ -82,6 +82,18 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
   expect_refused({"a.xml", "b.xml"}, {"more than one world"});
 }
 
+TEST(Options, RecordTilesNameACameraAndOneOfItsImages) {
+  const ParseResult r = parse({"w.xml", "--record-tile", "uav0_front:depth", "--record-tile", "uav1_front"});
+  ASSERT_TRUE(r.options.has_value()) << r.error;
+  EXPECT_EQ(r.options->record_tiles, (std::vector<std::string>{"uav0_front:depth", "uav1_front"}));
+  EXPECT_TRUE(r.options->record_tiled);
+  expect_refused({"w.xml", "--record-tile", "uav0_front:thermal"}, {"--record-tile", "rgb|depth|segmentation"});
+  expect_refused({"w.xml", "--record-tile", ":depth"}, {"--record-tile"});
+  std::vector<std::string> many{"w.xml"};
+  for (int i = 0; i < 7; ++i) many.insert(many.end(), {"--record-tile", "c" + std::to_string(i)});
+  expect_refused(many, {"--record-tile", "at most 6"});
+}
+
 TEST(Options, ValidFlagsSetTheirFields) {
   const ParseResult r = parse({"w.xml",       "--seed",
                                "42",          "--physics-hz",

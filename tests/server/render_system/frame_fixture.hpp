@@ -29,7 +29,7 @@ namespace uavsim::server::render::testing {
 using Json = nlohmann::json;
 
 struct ServerOptions {
-  std::string world = "mbzirc2020.xml";
+  std::string world = "mbzirc2020.xml";  // in models/worlds, or an absolute path
   std::vector<std::string> camera_overrides;
   double rate = 0.0;
   bool mavlink = false;
@@ -44,7 +44,9 @@ class FrameServer {
     physics::ComposeOptions co;
     co.models_dir = UAVSIM_MODELS_DIR;
     sim_ = std::make_unique<sim::Simulation>(
-        physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/" + o.world, co), sim::SimConfig{});
+        physics::World::load(o.world.front() == '/' ? o.world : std::string(UAVSIM_MODELS_DIR) + "/worlds/" + o.world,
+                             co),
+        sim::SimConfig{});
     objects_ = objects::add_world_objects(*sim_);
     if (o.mavlink) {
       mavlink::EndpointConfig ec;
@@ -65,7 +67,9 @@ class FrameServer {
       for (const auto& g : objects_.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
     }
     cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides, 1.0 / sim_->control_dt_s());
-    frames_ = std::make_unique<FrameService>(sim_->world().model(), cameras_);
+    FrameServiceOptions fo;
+    fo.owners = owners;
+    frames_ = std::make_unique<FrameService>(sim_->world().model(), cameras_, fo);
     runner_ = std::make_unique<sim::Runner>(*sim_, o.rate);
     api::ApiConfig config;
     config.port = 0;

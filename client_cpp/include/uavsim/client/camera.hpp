@@ -1,5 +1,6 @@
 // CameraSubscriber: camera frames as cv::Mat with their sim timestamp, pinhole intrinsics and camera pose,
-// from the simulator's frame protocol (docs/protocol.md "Camera frames").
+// and where the camera gives them depth and segmentation of the same capture, from the simulator's frame
+// protocol (docs/protocol.md "Camera frames").
 //
 // The frames arrive one way on either clock, as `frame` messages on a simulator connection; the clock
 // decides only their pacing. Under a lockstep loop that is the loop's own connection, read at ticks, so
@@ -17,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -44,9 +46,22 @@ struct CameraFrame {
   std::int64_t dropped = 0;   // frames of this subscription dropped so far
   double stamp_s = 0.0;       // sim time the image shows
   std::int64_t stamp_us = 0;
-  cv::Mat image;              // CV_8UC3 BGR (OpenCV's order) or CV_8UC1 grey
+  cv::Mat image;              // CV_8UC3 BGR (OpenCV's order) or CV_8UC1 grey; empty without colour
   CameraIntrinsics intrinsics;
   CameraPose pose;
+  // Depth and segmentation (CameraConfig::depth, ::segmentation) of the same capture as the image: the
+  // same instant, pose, stamp and seq. Empty when not asked for.
+  cv::Mat depth_m;     // CV_32FC1, metres along the optical axis (camera z), NaN where nothing was measured
+  cv::Mat object_ids;  // CV_16UC1, 0 where nothing was hit (CameraSubscriber::segmentation_objects())
+  cv::Mat class_ids;   // CV_16UC1, 0 where nothing was hit (CameraSubscriber::segmentation_classes())
+};
+
+// An object of the segmentation images: its id in CameraFrame::object_ids, its name in the world ("uav0",
+// "b0", "b0/pole", "truck/marker", ...) and its class id.
+struct SegmentationObject {
+  int id = 0;
+  std::string name;
+  int class_id = 0;
 };
 
 enum class CameraFormat {
@@ -61,13 +76,19 @@ struct CameraConfig {
   double fps = 0.0;            // 0: the camera's rate; else that rate divided by a whole number
   int jpeg_quality = 90;
   std::string api_address;     // host clock only: "host:port" of the simulator API
+  // what else each frame carries, if the camera gives it (the world's or --camera's modalities=): depth
+  // and segmentation, rendered only for subscribers that ask; colour = false leaves the image out
+  bool colour = true;
+  bool depth = false;
+  bool segmentation = false;
 };
 
 class CameraSubscriber {
  public:
   // Subscribes and waits for the simulator's answer (timeout_s on the loop clock, wall seconds for the
-  // connection on the host clock). kDenied with the simulator's message for an unknown camera, a bad fps or
-  // a server without cameras.
+  // connection on the host clock). kDenied with the simulator's message for an unknown camera, a bad fps,
+  // a modality the camera does not give, or a server without cameras; kInvalidArgument for a config that
+  // asks for no image at all. on_frame gets each capture once all of its images have arrived.
   static Result<std::unique_ptr<CameraSubscriber>> subscribe(EventLoop& loop, const CameraConfig& config,
                                                              std::function<void(const CameraFrame&)> on_frame,
                                                              double timeout_s = 10.0);
@@ -82,6 +103,13 @@ class CameraSubscriber {
   std::uint64_t frames_received() const;
   std::int64_t frames_dropped() const;  // as the simulator counts them
   bool connected() const;
+  // The clip planes of the depth images, in metres (0 without depth): nothing nearer or farther is seen.
+  double depth_near_m() const;
+  double depth_far_m() const;
+  // The segmentation's classes by id ("none", "ground", "vehicle", "balloon", ...) and objects (index =
+  // id); empty without segmentation. Ids are the same in every frame and every run of a world.
+  const std::vector<std::string>& segmentation_classes() const;
+  const std::vector<SegmentationObject>& segmentation_objects() const;
 
  private:
   struct Impl;

@@ -2,12 +2,15 @@
 // overlay drawings and printf-like text per frame. The image is stored without the drawings, so a
 // log can be exported as plain video for offline tuning, or replayed with the drawings on top.
 //
-// File format (little-endian, version 1):
+// File format (little-endian, version 2; version 1 files, without the planes, still read):
 //   header: "UAVVLOG\0" (8 bytes), u32 version, u32 codec fourcc ('MJPG')
 //   frame record: u32 record_bytes (what follows this field), i64 stamp_us, u8 flags (bit 0:
 //   keyframe),
 //     u32 image_bytes, image (a JPEG file), u32 overlay_count, overlays, u32 text_bytes, text
-//     (UTF-8)
+//     (UTF-8), then (version 2) u32 plane_count, planes
+//   plane (a camera's depth or segmentation beside the image, lossless): u8 kind (1 depth: float32
+//     metres, NaN invalid, stored as the float's 4 bytes in a 4-channel 8-bit PNG; 2 object ids,
+//     3 class ids: 16-bit grey PNG), u32 png_bytes, png
 //   overlay: u8 kind, u8 b, u8 g, u8 r, f32 thickness_px, then by kind
 //     circle: f32 cx, cy, radius | line: f32 x1, y1, x2, y2 | rectangle: f32 x, y, width, height |
 //     text: f32 x, y, font_scale, u32 bytes, text
@@ -64,6 +67,11 @@ struct VideoLogFrame {
   cv::Mat image;         // CV_8UC1 or CV_8UC3 (BGR)
   std::vector<Overlay> overlays;
   std::string text;  // printf-like output tied to this frame
+  // optional, the image's size, kept exactly: the camera's depth (CV_32FC1 metres, NaN invalid) and
+  // segmentation (CV_16UC1 object and class ids), as client::CameraFrame has them
+  cv::Mat depth_m;
+  cv::Mat object_ids;
+  cv::Mat class_ids;
 };
 
 // One frame read back.
@@ -73,6 +81,9 @@ struct VideoLogRecord {
   cv::Mat image;  // decoded (BGR or grey, as written)
   std::vector<Overlay> overlays;
   std::string text;
+  cv::Mat depth_m;     // empty when the frame had none
+  cv::Mat object_ids;
+  cv::Mat class_ids;
 };
 
 struct VideoLogWriterOptions {
@@ -92,8 +103,8 @@ class VideoLogWriter {
   VideoLogWriter(const VideoLogWriter&) = delete;
   VideoLogWriter& operator=(const VideoLogWriter&) = delete;
 
-  // Queues a copy of the frame; false if it was dropped (queue full, or closed). Never blocks on
-  // encoding or I/O. Thread-safe.
+  // Queues a copy of the frame; false if it was dropped (queue full, or closed, or a depth or id plane
+  // of another type or size than the image). Never blocks on encoding or I/O. Thread-safe.
   bool submit(const VideoLogFrame& frame);
 
   // Writes what is queued, then stops the worker and closes the file; kWriteFailed if any write
