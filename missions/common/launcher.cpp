@@ -3,7 +3,8 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
+#include <sys/statvfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +19,9 @@
 #include <fstream>
 #include <optional>
 #include <regex>
+#include <sstream>
+
+#include "uavsim/common/record_file.hpp"
 
 extern char** environ;
 
@@ -41,17 +45,16 @@ struct Child {
   bool exited = false;
   int status = 0;
 
+  bool stopped = false;  // stop() sent it a signal: its end is an ordinary one
+  bool reported = false; // its end was said and given to on_exit
+
+  // Starts args with stdout and stderr on a pipe, stdin /dev/null, in process group *group (a new
+  // one, whose id goes to *group, when it is 0 or its members are all gone), and with SIGKILL as its
+  // parent-death signal. fork + exec rather than posix_spawn for the prctl; the child runs only
+  // async-signal-safe calls until exec.
   Result<void> spawn(const std::vector<std::string>& args,
-                     const std::vector<std::string>& env_extra) {
+                     const std::vector<std::string>& env_extra, pid_t* group) {
     if (args.empty()) return Failure{Error::kInvalidArgument, name + ": no program"};
-    int fds[2];
-    if (pipe2(fds, O_CLOEXEC) != 0) {
-      return Failure{Error::kIo, name + ": pipe: " + std::strerror(errno)};
-    }
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 2);
     std::vector<std::string> env;
     for (char** e = environ; *e != nullptr; ++e) {
       if (std::strncmp(*e, "UAVSIM_LOCKSTEP=", 16) != 0) env.emplace_back(*e);
@@ -63,15 +66,59 @@ struct Child {
     argv.push_back(nullptr);
     for (auto& s : env) envp.push_back(s.data());
     envp.push_back(nullptr);
-    const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&fa);
-    close(fds[1]);
-    if (rc != 0) {
+    int fds[2], errfds[2];
+    if (pipe2(fds, O_CLOEXEC) != 0) {
+      return Failure{Error::kIo, name + ": pipe: " + std::strerror(errno)};
+    }
+    // the exec's failure comes back on errfds (closed by a successful exec)
+    if (pipe2(errfds, O_CLOEXEC) != 0) {
       close(fds[0]);
+      close(fds[1]);
+      return Failure{Error::kIo, name + ": pipe: " + std::strerror(errno)};
+    }
+    const int devnull = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    const pid_t parent = getpid();
+    const pid_t want_group = *group;
+    pid = fork();
+    if (pid == 0) {
+      if (setpgid(0, want_group) != 0) (void)setpgid(0, 0);
+      // die with the launcher; if it died before this line, the parent is already someone else
+      if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(127);
+      if (devnull >= 0) dup2(devnull, 0);
+      dup2(fds[1], 1);
+      dup2(fds[1], 2);
+      execve(argv[0], argv.data(), envp.data());
+      const int err = errno;
+      (void)!::write(errfds[1], &err, sizeof(err));
+      _exit(127);
+    }
+    const int fork_errno = errno;
+    if (devnull >= 0) close(devnull);
+    close(fds[1]);
+    close(errfds[1]);
+    if (pid < 0) {
+      close(fds[0]);
+      close(errfds[0]);
       pid = -1;
       exited = true;
-      return Failure{Error::kIo, "cannot start " + args[0] + ": " + std::strerror(rc)};
+      return Failure{Error::kIo, "cannot start " + args[0] + ": fork: " + std::strerror(fork_errno)};
     }
+    // the same group from this side too, so that it holds before either side runs on
+    if (setpgid(pid, want_group) != 0) (void)setpgid(pid, pid);
+    int exec_errno = 0;
+    ssize_t n;
+    while ((n = read(errfds[0], &exec_errno, sizeof(exec_errno))) < 0 && errno == EINTR) {
+    }
+    close(errfds[0]);
+    if (n == static_cast<ssize_t>(sizeof(exec_errno))) {
+      close(fds[0]);
+      waitpid(pid, &status, 0);
+      pid = -1;
+      exited = true;
+      reported = true;
+      return Failure{Error::kIo, "cannot start " + args[0] + ": " + std::strerror(exec_errno)};
+    }
+    if (const pid_t g = getpgid(pid); g > 0) *group = g;
     fd = fds[0];
     fcntl(fd, F_SETFL, O_NONBLOCK);
     return client::ok();
@@ -114,6 +161,7 @@ struct Child {
   }
   void stop(int sig, double wall_timeout_s) {
     if (pid <= 0 || reap()) return;
+    stopped = true;
     kill(pid, sig);
     const auto end = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
                                               std::chrono::duration<double>(wall_timeout_s));
@@ -126,7 +174,81 @@ struct Child {
   }
 };
 
+
+// "SIGKILL"; "signal N" for one without a name
+std::string signal_name(int sig) {
+  const char* abbrev = sigabbrev_np(sig);
+  return abbrev != nullptr ? std::string("SIG") + abbrev : "signal " + std::to_string(sig);
+}
+
+// The OOM killer's count of kills in this process's memory cgroup (children inherit it): cgroup v2's
+// memory.events or v1's memory.oom_control, at the cgroup's path or at the mount's root (a
+// container sees its own cgroup there); nullopt when neither can be read.
+std::optional<std::uint64_t> oom_kills() {
+  std::vector<std::string> files;
+  std::ifstream cg("/proc/self/cgroup");
+  for (std::string line; std::getline(cg, line);) {
+    const size_t a = line.find(':'), b = line.find(':', a + 1);
+    if (a == std::string::npos || b == std::string::npos) continue;
+    const std::string controllers = line.substr(a + 1, b - a - 1), path = line.substr(b + 1);
+    if (controllers.empty()) {
+      files.push_back("/sys/fs/cgroup" + path + "/memory.events");
+      files.push_back("/sys/fs/cgroup/memory.events");
+    } else if (controllers == "memory" || controllers.find("memory,") == 0 ||
+               controllers.find(",memory") != std::string::npos) {
+      files.push_back("/sys/fs/cgroup/memory" + path + "/memory.oom_control");
+      files.push_back("/sys/fs/cgroup/memory/memory.oom_control");
+    }
+  }
+  for (const std::string& f : files) {
+    std::ifstream in(f);
+    for (std::string key; in >> key;) {
+      std::uint64_t n = 0;
+      if (!(in >> n)) break;
+      if (key == "oom_kill") return n;
+    }
+  }
+  return std::nullopt;
+}
+
+// Whether the kernel's log (/dev/kmsg, readable by root) says the OOM killer killed pid.
+bool kernel_log_names_oom_kill(pid_t pid) {
+  const int fd = open("/dev/kmsg", O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  const std::string killed = "Killed process " + std::to_string(pid) + " ";
+  const std::string task = ",pid=" + std::to_string(pid) + ",";
+  bool found = false;
+  char record[8192];
+  // one record per read, oldest first, until EAGAIN (the end); bounded against a flooding log
+  for (int k = 0; k < 100000 && !found; ++k) {
+    const ssize_t n = read(fd, record, sizeof(record) - 1);
+    if (n < 0 && errno == EPIPE) continue;  // records overwritten while reading: go on
+    if (n <= 0) break;
+    const std::string_view r(record, static_cast<size_t>(n));
+    found = r.find(killed) != std::string_view::npos ||
+            (r.find("oom-kill:") != std::string_view::npos && r.find(task) != std::string_view::npos);
+  }
+  close(fd);
+  return found;
+}
+
+std::string sim_time_text(double t_s) {
+  if (t_s < 0) return "before the sim clock ran";
+  char buf[48];
+  std::snprintf(buf, sizeof(buf), "at sim t=%.2f s", t_s);
+  return buf;
+}
+
 }  // namespace
+
+nlohmann::json ProgramEnd::to_json() const {
+  nlohmann::json j = {{"name", name}, {"pid", pid}, {"how", how}, {"abnormal", abnormal()},
+                      {"stopped_by_launcher", stopped}, {"sim_time_s", sim_time_s}};
+  j["exit_code"] = exit_code ? nlohmann::json(*exit_code) : nlohmann::json();
+  j["signal"] = signal ? nlohmann::json(signal_name(*signal)) : nlohmann::json();
+  if (out_of_memory) j["out_of_memory"] = true;
+  return j;
+}
 
 std::string sibling_program(const std::string& name) {
   char self[4096];
@@ -137,15 +259,44 @@ std::string sibling_program(const std::string& name) {
   return dir + "/" + name;
 }
 
-// The ground-truth sampler of record_truth: its own lockstep connection, one CSV per vehicle.
+// The ground-truth sampler of record_truth: its own lockstep connection, one CSV per vehicle. Each
+// tick's rows reach each file in one write(2) (common::RecordFile), so a launcher killed at any
+// moment leaves every tick's rows up to its last, whole.
 struct TruthLog {
+  struct Csv {
+    common::RecordFile file;
+    std::string rows;  // this tick's
+  };
   std::string dir;
   double period_s = 0.1;
   std::unique_ptr<client::SimConnection> conn;
-  std::map<std::string, std::unique_ptr<std::ofstream>> files;
+  std::map<std::string, Csv> files;
   std::uint64_t rows = 0;
+  double time_s = -1.0;  // the sim time of the last tick's rows
   bool failed = false;
   bool trucks = true;  // ask for the truck until the world turns out to have none
+  std::string write_error;  // the first file that could not be written, said once
+
+  // the file of key (made with its header the first time)
+  Csv* csv(const std::string& key, const std::string& file_name, const char* header) {
+    Csv& c = files[key];
+    if (!c.file.is_open() && c.file.error().empty()) {
+      std::string why;
+      if (!c.file.open(dir + "/" + file_name, &why) || !c.file.write(header)) {
+        if (write_error.empty()) write_error = why.empty() ? c.file.error() : why;
+        return nullptr;
+      }
+    }
+    return &c;
+  }
+  // the tick's rows out, one write per file
+  void write_rows() {
+    for (auto& [key, c] : files) {
+      if (c.rows.empty()) continue;
+      if (!c.file.write(c.rows) && write_error.empty()) write_error = c.file.error();
+      c.rows.clear();
+    }
+  }
 
   // the tick's rows, then done; alone on the lockstep (the mission's programs have left), it leaves
   // too, so that a pause armed for an empty lockstep (pause_at lockstep_empty) falls at this tick
@@ -158,18 +309,16 @@ struct TruthLog {
     const auto r = conn->request({{"op", "vehicles"}});
     if (r) {
       const double t = r->value("time_s", 0.0);
+      time_s = t;
       for (const auto& v : r->value("vehicles", nlohmann::json::array())) {
         const std::string name = v.value("name", "vehicle" + std::to_string(v.value("index", 0)));
-        auto& f = files[name];
-        if (!f) {
-          f = std::make_unique<std::ofstream>(dir + "/truth_" + name + ".csv");
-          *f << "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_deg,pitch_deg,yaw_deg,battery_v,"
-                "battery_used_mah,mode,armed,crashed,on_ground\n";
-        }
+        Csv* f = csv(name, "truth_" + name + ".csv",
+                     "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_deg,pitch_deg,yaw_deg,battery_v,"
+                     "battery_used_mah,mode,armed,crashed,on_ground\n");
         const auto p = v.value("position_enu_m", std::vector<double>{0, 0, 0});
         const auto vel = v.value("velocity_enu_m_s", std::vector<double>{0, 0, 0});
         const auto q = v.value("q_enu_body", std::vector<double>{1, 0, 0, 0});  // w x y z
-        if (p.size() < 3 || vel.size() < 3 || q.size() < 4) continue;
+        if (f == nullptr || p.size() < 3 || vel.size() < 3 || q.size() < 4) continue;
         // ZYX Euler angles of q_enu_body (yaw from east, counter-clockwise)
         const double w = q[0], x = q[1], y = q[2], z = q[3];
         constexpr double kDeg = 180.0 / 3.14159265358979323846;
@@ -182,7 +331,7 @@ struct TruthLog {
                       v.value("battery_used_mah", 0.0), v.value("mode", std::string("?")).c_str(),
                       v.value("armed", false) ? 1 : 0, v.value("crashed", false) ? 1 : 0,
                       v.value("on_ground", false) ? 1 : 0);
-        *f << line;
+        f->rows += line;
         ++rows;
       }
     }
@@ -195,21 +344,18 @@ struct TruthLog {
         const double t = tr->value("time_s", 0.0);
         for (const auto& k : tr->value("trucks", nlohmann::json::array())) {
           const std::string name = k.value("name", std::string("truck"));
-          auto& f = files["truck:" + name];
-          if (!f) {
-            f = std::make_unique<std::ofstream>(dir + "/truck_" + name + ".csv");
-            *f << "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,yaw_deg\n";
-          }
+          Csv* f = csv("truck:" + name, "truck_" + name + ".csv", "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,yaw_deg\n");
           const auto p = k.value("position_enu_m", std::vector<double>{0, 0, 0});
           const auto vel = k.value("velocity_enu_m_s", std::vector<double>{0, 0, 0});
-          if (p.size() < 3 || vel.size() < 3) continue;
+          if (f == nullptr || p.size() < 3 || vel.size() < 3) continue;
           char line[256];
           std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f\n", t, p[0], p[1], p[2], vel[0],
                         vel[1], vel[2], k.value("yaw_rad", 0.0) * 180.0 / 3.14159265358979323846);
-          *f << line;
+          f->rows += line;
         }
       }
     }
+    write_rows();
     if (!conn->done(tick)) failed = true;
   }
   // answers every tick that has arrived
@@ -237,6 +383,16 @@ struct Launcher::Impl {
   std::vector<std::function<void(const std::string&, const std::string&)>> line_callbacks;
   std::optional<std::pair<std::string, double>> truth_request;  // record_truth's dir and rate
   TruthLog truth;
+  bool truth_error_said = false;
+  pid_t group = 0;          // the children's process group; 0 before the first
+  double sim_time_s = -1.0;  // the last known
+  std::vector<std::function<void(const ProgramEnd&)>> exit_callbacks;
+  std::vector<ProgramEnd> ends;                  // in the order they were noticed
+  std::optional<std::uint64_t> oom_kills_seen = oom_kills();  // the cgroup's count so far
+  std::string summary_path;                      // keep_summary's
+  nlohmann::json summary = nlohmann::json::object();
+  double next_summary_s = 0.0;
+  bool summary_error_said = false;
 
   void say(const std::string& line) const {
     if (quiet) return;
@@ -252,6 +408,71 @@ struct Launcher::Impl {
   void read_children() {
     for (auto& c : children) read_child(*c);
   }
+
+  // how c (reaped) ended
+  ProgramEnd end_of(const Child& c) {
+    ProgramEnd e;
+    e.name = c.name;
+    e.pid = c.pid;
+    e.stopped = c.stopped;
+    e.sim_time_s = sim_time_s;
+    std::string how;
+    if (WIFSIGNALED(c.status)) {
+      e.signal = WTERMSIG(c.status);
+      how = "killed by " + signal_name(*e.signal);
+      if (*e.signal == SIGKILL && !c.stopped) {
+        // the OOM killer: its count in the cgroup went up, or the kernel's log names the pid
+        const auto now = oom_kills();
+        if (now && oom_kills_seen && *now > *oom_kills_seen) {
+          e.out_of_memory = true;
+          *oom_kills_seen += 1;  // this kill is this program's
+        }
+        if (!e.out_of_memory) e.out_of_memory = kernel_log_names_oom_kill(c.pid);
+        if (e.out_of_memory) how += " \u2014 out of memory?";
+      }
+      if (WCOREDUMP(c.status)) how += " (core dumped)";
+    } else {
+      e.exit_code = WIFEXITED(c.status) ? WEXITSTATUS(c.status) : -1;
+      how = *e.exit_code == 0 ? "exited normally" : "exited with code " + std::to_string(*e.exit_code);
+    }
+    how += " " + sim_time_text(sim_time_s);
+    e.how = c.stopped ? "stopped by the launcher (" + how + ")" : how;
+    return e;
+  }
+
+  // the summary so far: partial, the programs, the first abnormal end
+  nlohmann::json summary_with_programs(nlohmann::json j, bool complete, double wall_s) const {
+    nlohmann::json programs = nlohmann::json::array();
+    for (const auto& c : children) {
+      if (c->pid <= 0 && c->reported && !c->exited) continue;
+      const auto e = std::find_if(ends.begin(), ends.end(), [&](const ProgramEnd& x) { return x.pid == c->pid; });
+      programs.push_back(e != ends.end() ? e->to_json()
+                                         : nlohmann::json{{"name", c->name}, {"pid", c->pid}, {"running", true}});
+    }
+    j["programs"] = std::move(programs);
+    j["process_group"] = group;
+    const auto cause = std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
+    j["cause"] = cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
+    if (!j.contains("sim_time_s") || !complete) j["sim_time_s"] = sim_time_s;
+    if (!j.contains("wall_time_s") || !complete) j["wall_time_s"] = wall_s;
+    j["complete"] = complete;
+    return j;
+  }
+
+  bool write_summary_file(const std::string& path, const nlohmann::json& j) {
+    std::string why;
+    if (common::replace_file_atomically(path, j.dump(2) + "\n", &why)) return true;
+    if (!summary_error_said) {
+      summary_error_said = true;
+      std::fprintf(stderr, "%s: the run summary: %s\n", name.c_str(), why.c_str());
+    }
+    return false;
+  }
+
+  void rewrite_summary(double wall_s) {
+    if (summary_path.empty()) return;
+    (void)write_summary_file(summary_path, summary_with_programs(summary, false, wall_s));
+  }
 };
 
 Launcher::Launcher(std::string name, bool quiet) : impl_(std::make_unique<Impl>()) {
@@ -259,7 +480,83 @@ Launcher::Launcher(std::string name, bool quiet) : impl_(std::make_unique<Impl>(
   impl_->quiet = quiet;
 }
 
-Launcher::~Launcher() { stop_all(kProgramStop_s); }
+Launcher::~Launcher() {
+  // the callbacks may hold what the owner has destroyed by now
+  impl_->exit_callbacks.clear();
+  impl_->line_callbacks.clear();
+  stop_all(kProgramStop_s);
+}
+
+void Launcher::check_children() {
+  Impl& m = *impl_;
+  for (auto& c : m.children) {
+    if (c->reported || c->pid <= 0 || !c->reap()) continue;
+    c->reported = true;
+    m.read_child(*c);  // its last words before its end
+    const ProgramEnd e = m.end_of(*c);
+    m.ends.push_back(e);
+    const std::string line = m.name + ": " + e.name + " (pid " + std::to_string(e.pid) + ") " + e.how;
+    if (e.abnormal()) {
+      std::fprintf(stderr, "%s\n", line.c_str());
+      std::fflush(stderr);
+    } else {
+      m.say(line);
+    }
+    for (auto& cb : m.exit_callbacks) cb(e);
+    m.rewrite_summary(wall_s());
+  }
+  if (!m.truth.write_error.empty() && !m.truth_error_said) {
+    m.truth_error_said = true;
+    std::fprintf(stderr, "%s: the ground truth stops here: %s\n", m.name.c_str(), m.truth.write_error.c_str());
+  }
+}
+
+pid_t Launcher::process_group() const { return impl_->group; }
+
+void Launcher::note_sim_time(double t_s) {
+  Impl& m = *impl_;
+  if (!std::isfinite(t_s)) return;
+  m.sim_time_s = t_s;
+  if (!m.summary_path.empty() && t_s >= m.next_summary_s) {
+    m.next_summary_s = (std::floor(t_s / kSummaryPeriod_s) + 1.0) * kSummaryPeriod_s;
+    m.rewrite_summary(wall_s());
+  }
+}
+
+void Launcher::on_exit(std::function<void(const ProgramEnd&)> cb) {
+  impl_->exit_callbacks.push_back(std::move(cb));
+}
+
+std::optional<ProgramEnd> Launcher::ended(const std::string& name) const {
+  for (const ProgramEnd& e : impl_->ends) {
+    if (e.name == name) return e;
+  }
+  return std::nullopt;
+}
+
+std::string Launcher::server_end() const {
+  const auto e = ended("server");
+  return e ? "the server (pid " + std::to_string(e->pid) + ") " + e->how : "the server exited";
+}
+
+void Launcher::keep_summary(const std::string& path, nlohmann::json partial) {
+  Impl& m = *impl_;
+  m.summary_path = path;
+  m.summary = partial.is_object() ? std::move(partial) : nlohmann::json::object();
+  m.next_summary_s = std::max(0.0, m.sim_time_s) + kSummaryPeriod_s;
+  m.rewrite_summary(wall_s());  // a run killed before its first period still has one
+}
+
+void Launcher::update_summary(const nlohmann::json& fields) {
+  if (fields.is_object()) impl_->summary.update(fields);
+}
+
+bool Launcher::write_summary(const std::string& path, nlohmann::json summary) {
+  Impl& m = *impl_;
+  check_children();
+  if (m.summary_path == path) m.summary_path.clear();  // no partial over the final one
+  return m.write_summary_file(path, m.summary_with_programs(std::move(summary), true, wall_s()));
+}
 
 Result<void> Launcher::start_server(const ServerSpec& spec) {
   Impl& m = *impl_;
@@ -271,7 +568,7 @@ Result<void> Launcher::start_server(const ServerSpec& spec) {
       spec.path, spec.world,           "--rate", "0", "--mavlink-port", "0", "--api-port",
       "0",       "--lockstep-timeout", "120"};
   args.insert(args.end(), spec.extra_args.begin(), spec.extra_args.end());
-  if (auto r = c->spawn(args, {}); !r) return r;
+  if (auto r = c->spawn(args, {}, &m.group); !r) return r;
 
   // the banner: "uavsim-server: uav0: MAVLink on tcp:127.0.0.1:PORT", ..., then the API's port
   static const std::regex mav_re(R"(uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+))");
@@ -316,7 +613,7 @@ Result<void> Launcher::spawn(const std::string& name, const std::vector<std::str
                              const std::vector<std::string>& env) {
   auto& c = impl_->children.emplace_back(std::make_unique<Child>());
   c->name = name;
-  return c->spawn(argv, env);
+  return c->spawn(argv, env, &impl_->group);
 }
 
 std::string Launcher::lockstep_env(double period_s) const {
@@ -341,6 +638,7 @@ Result<void> Launcher::wait_lockstep_clients(int n, double timeout_s) {
                                           std::to_string(n) + " lockstep clients joined"};
     }
     m.read_children();
+    check_children();
     usleep(20000);
   }
 }
@@ -365,6 +663,8 @@ void Launcher::pump(int timeout_ms) {
   m.read_children();
   if (m.api) (void)m.api->poll(0);
   m.truth.serve();
+  if (m.truth.time_s > m.sim_time_s) note_sim_time(m.truth.time_s);
+  check_children();
 }
 
 void Launcher::record_truth(const std::string& dir, double rate_hz) {
@@ -405,6 +705,32 @@ bool make_run_dir(const std::string& dir, std::string* why) {
     if (why != nullptr) *why = "cannot make the run directory " + dir + ": " + ec.message();
     return false;
   }
+  // a file can be made there (a read-only file system says so only now)...
+  const std::string probe = dir + "/.uavsim-write-test-" + std::to_string(getpid());
+  common::RecordFile f;
+  std::string error;
+  if (!f.open(probe, &error) || !f.write("x")) {
+    if (why != nullptr) {
+      *why = "cannot write in the run directory " + dir + ": " + (error.empty() ? f.error() : error);
+    }
+    f.close();
+    std::remove(probe.c_str());
+    return false;
+  }
+  f.close();
+  std::remove(probe.c_str());
+  // ...and the logs have room to start
+  struct statvfs fs{};
+  if (statvfs(dir.c_str(), &fs) == 0) {
+    const auto free_bytes = static_cast<std::uint64_t>(fs.f_bavail) * fs.f_frsize;
+    if (free_bytes < kMinRunDirFreeBytes) {
+      if (why != nullptr) {
+        *why = "the run directory " + dir + " has " + std::to_string(free_bytes / 1024) +
+               " KiB free; a run needs at least " + std::to_string(kMinRunDirFreeBytes >> 10) + " KiB";
+      }
+      return false;
+    }
+  }
   return true;
 }
 
@@ -433,6 +759,7 @@ double Launcher::wall_s() const {
 }
 
 bool Launcher::programs_done(const std::string& except) {
+  check_children();
   bool done = true;
   for (auto& c : impl_->children) {
     if (c.get() == impl_->server || (!except.empty() && c->name == except)) continue;
@@ -441,13 +768,15 @@ bool Launcher::programs_done(const std::string& except) {
   return done;
 }
 
-bool Launcher::server_exited() { return impl_->server == nullptr || impl_->server->reap(); }
+bool Launcher::server_exited() {
+  check_children();
+  return impl_->server == nullptr || impl_->server->reap();
+}
 
 void Launcher::stop_all(double timeout_s) {
   Impl& m = *impl_;
-  // the ground truth first: its files complete, its lockstep membership gone
+  // the ground truth first: its lockstep membership gone (its rows are written tick by tick)
   m.truth.conn.reset();
-  for (auto& [name, f] : m.truth.files) f->flush();
   // the programs first (newest first), then the server
   for (size_t i = m.children.size(); i-- > 0;) {
     if (m.children[i].get() != m.server)
@@ -455,6 +784,7 @@ void Launcher::stop_all(double timeout_s) {
   }
   if (m.server != nullptr) m.server->stop(SIGTERM, timeout_s);
   m.read_children();
+  check_children();
 }
 
 }  // namespace uavsim::launch

@@ -20,7 +20,9 @@
 // the summary so far is printed (JSON "interrupted": true).
 //
 // Exit status: 0 only on full coverage with every surviving agent landed; 1: the mission fell
-// short; 2: usage; 4: the harness failed; 130: interrupted.
+// short; 2: usage (or an unusable run directory); 4: the harness failed (the server died, named
+// with how); 130: interrupted. An agent program that dies (a signal, a non-zero exit) is a failed
+// agent: its quad is killed and the flock covers its area, as after an injected failure.
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
@@ -486,6 +488,19 @@ int main(int argc, char** argv) {
   // 2. the server, on ephemeral ports, as fast as possible; the lines of every program go through
   // on_agent_line (the launcher's own printing is off: APD reports are not for people)
   Launcher launch("coverage-run", /*quiet=*/true);
+  launch.keep_summary(o.json_path, {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  std::map<std::string, std::pair<int, int>> agents_of;  // agent program -> its agents
+  launch.on_exit([&](const uavsim::launch::ProgramEnd& e) {
+    const auto it = agents_of.find(e.name);
+    if (it == agents_of.end() || !e.abnormal()) return;
+    for (int i = it->second.first; i <= it->second.second; ++i) {
+      if (killed.count(i) || crashed.count(i)) continue;
+      if (launch.api().request({{"op", "kill_vehicle"},
+                                {"vehicle", i},
+                                {"reason", "coverage-run: its agent program " + e.how}}))
+        mark_failed(i, killed, sim_s);
+    }
+  });
   launch.on_line([&](const std::string& child, const std::string& line) {
     if (child == "server") {
       if (line.find(": MAVLink on tcp:") == std::string::npos) say("[server] " + line);
@@ -592,6 +607,7 @@ int main(int argc, char** argv) {
       if (o.gcs) args.insert(args.end(), {"--gcs-ports", gcs_ports});
       if (o.pipelined && !o.gcs) args.push_back("--pipelined");
       if (o.thesis_flocking) args.push_back("--thesis-flocking");
+      agents_of[name] = {first, last};
       if (auto s = launch.spawn(name, args, {lockstep}); !s) {
         fail(s.message());
       }
@@ -664,6 +680,7 @@ int main(int argc, char** argv) {
           // what the programs printed before this tick has arrived: read it, apply it in order
           launch.pump(0);
           apply_pending(t);
+          launch.note_sim_time(t);
           // ground truth: distance flown, energy, who is flying
           std::vector<int> flying;
           if (auto v = api.request({{"op", "vehicles"}})) {
@@ -754,7 +771,7 @@ int main(int argc, char** argv) {
         break;
       }
       if (launch.server_exited() || !api.connected()) {
-        fail("the server exited");
+        fail(launch.server_end());
         break;
       }
     }
@@ -964,10 +981,11 @@ int main(int argc, char** argv) {
     summary["wall_time_s"] = wall_s();
     summary["success"] = success;
     summary["interrupted"] = g_interrupted != 0;
-    std::ofstream(o.json_path) << summary.dump(2) << "\n";
+    if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
     const std::string run_summary = o.run_dir + "/summary.json";
-    if (!o.map_png.empty() && o.json_path != run_summary)
-      std::ofstream(run_summary) << summary.dump(2) << "\n";  // what plot_run.py reads
+    if (!o.map_png.empty() && o.json_path != run_summary &&
+        !launch.write_summary(run_summary, summary))  // what plot_run.py reads
+      harness_error = 4;
   }
   if (!o.map_png.empty() && !o.json_path.empty() && o.run_dir.find('\'') == std::string::npos) {
     // the picture from the run directory (ground truth, summary); matplotlib's script

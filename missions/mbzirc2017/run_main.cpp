@@ -340,6 +340,7 @@ int main(int argc, char** argv) {
     o.json_path = files->summary;
   }
   Launcher launch("mbzirc2017-run", o.quiet);
+  launch.keep_summary(o.json_path, {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
@@ -620,12 +621,14 @@ int main(int argc, char** argv) {
           if (duration > 0.0) blackout(tick_s, duration, state);
         }
         sim_s = tick_s;
+        launch.note_sim_time(sim_s);
         if (!api.done(tick)) fail("the fault injector's done was refused");
       }
       if (launch.wall_s() - last_status_wall_s > 0.5) {
         last_status_wall_s = launch.wall_s();
         if (const auto s = api.status(); s) {
           sim_s = s->value("time_s", sim_s);
+          launch.note_sim_time(sim_s);
           // the program exits 3 s after its landing and the clock holds then (pause_at): go on to
           // the 5 s on the deck, where the next armed pause holds it again
           if (landed_s >= 0 && s->value("paused", false) &&
@@ -645,7 +648,7 @@ int main(int argc, char** argv) {
         break;
       }
       if (launch.server_exited()) {
-        fail("the server exited");
+        fail(launch.server_end());
         break;
       }
     }
@@ -769,7 +772,7 @@ int main(int argc, char** argv) {
     summary["sim_time_s"] = end_sim_s;
     summary["wall_time_s"] = launch.wall_s();
     summary["success"] = success;
-    std::ofstream(o.json_path) << summary.dump(2) << "\n";
+    if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
   if (harness_error) return harness_error;
   return success ? 0 : 1;

@@ -176,6 +176,7 @@ int main(int argc, char** argv) {
                                ",height=" + o.camera_size.substr(x + 1) +
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
   Launcher launch("mbzirc2020-run", o.quiet);
+  launch.keep_summary(o.json_path, {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
     std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
@@ -329,6 +330,7 @@ int main(int argc, char** argv) {
       if (launch.wall_s() - last_status_wall_s > 0.5 || all_done) {
         last_status_wall_s = launch.wall_s();
         if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
+        launch.note_sim_time(sim_s);
       }
       if (all_done) break;
       if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
@@ -340,7 +342,7 @@ int main(int argc, char** argv) {
         break;
       }
       if (launch.server_exited()) {
-        fail("the server exited");
+        fail(launch.server_end());
         break;
       }
     }
@@ -429,7 +431,7 @@ int main(int argc, char** argv) {
     summary["video"] = o.record;
     summary["vision_logs"] = vision_logs;
     summary["success"] = success;
-    std::ofstream(o.json_path) << summary.dump(2) << "\n";
+    if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
   if (harness_error) return harness_error;
   return success ? 0 : 1;

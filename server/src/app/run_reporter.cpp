@@ -27,8 +27,9 @@ std::string json_line(const ReportedEvent& event, const std::string& vehicle_nam
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-RunReporter::RunReporter(sim::Simulation& sim, std::ostream* console, std::ostream* json)
-    : sim_(sim), console_(console), json_(json) {}
+RunReporter::RunReporter(sim::Simulation& sim, std::ostream* console, common::RecordFile* json,
+                         std::ostream* errors)
+    : sim_(sim), console_(console), json_(json), errors_(errors) {}
 
 void RunReporter::report(const ReportedEvent& event) {
   const std::string name =
@@ -36,7 +37,10 @@ void RunReporter::report(const ReportedEvent& event) {
           ? sim_.vehicle_name(static_cast<std::size_t>(event.vehicle))
           : std::string();
   if (console_ != nullptr) *console_ << console_line(event, name) << std::endl;
-  if (json_ != nullptr) *json_ << json_line(event, name) << "\n";
+  if (json_ != nullptr && !json_->write(json_line(event, name) + "\n") && !json_failed_) {
+    json_failed_ = true;
+    if (errors_ != nullptr) *errors_ << "uavsim-server: the event log stops here: " << json_->error() << std::endl;
+  }
 }
 
 void RunReporter::on_control_step() {

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "sim/simulation.hpp"
+#include "uavsim/common/record_file.hpp"
 
 namespace uavsim::server::app {
 
@@ -32,8 +33,12 @@ std::string json_line(const ReportedEvent& event, const std::string& vehicle_nam
 
 class RunReporter {
  public:
-  // console: null for --quiet; json: null without --log-dir. Both must outlive the reporter.
-  RunReporter(sim::Simulation& sim, std::ostream* console, std::ostream* json);
+  // console: null for --quiet; json: null without --log-dir. Both must outlive the reporter. Each
+  // event's JSON line goes to json with one write(2) as it is reported, so a server killed at any
+  // moment leaves every event reported so far in the file, whole. A failed write (disk full) is said
+  // once on errors (may be null) and ends the file there; the run goes on.
+  RunReporter(sim::Simulation& sim, std::ostream* console, common::RecordFile* json,
+              std::ostream* errors = nullptr);
 
   // Reports the simulation's events recorded since the last call. Loop thread only.
   void on_control_step();
@@ -60,7 +65,9 @@ class RunReporter {
 
   sim::Simulation& sim_;
   std::ostream* console_;
-  std::ostream* json_;
+  common::RecordFile* json_;
+  std::ostream* errors_;
+  bool json_failed_ = false;  // said once
   std::uint64_t next_event_ = 0;  // the seq of the next event to report
   std::uint64_t clients_connected_ = 0;
   std::uint64_t crashes_ = 0;

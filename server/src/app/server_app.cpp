@@ -272,17 +272,16 @@ int run_server(const Options& given_options) {
   }
 
   // what the server says: event lines (unless --quiet) and --log-dir's events.jsonl
-  std::ofstream event_log;
+  common::RecordFile event_log;
   if (options.log_dir) {
     std::error_code ec;
     std::filesystem::create_directories(*options.log_dir, ec);
-    event_log.open(*options.log_dir + "/events.jsonl");
-    if (!event_log) {
-      std::cerr << "uavsim-server: --log-dir: cannot write " << *options.log_dir << "/events.jsonl\n";
+    if (std::string why; !event_log.open(*options.log_dir + "/events.jsonl", &why)) {
+      std::cerr << "uavsim-server: --log-dir: " << why << "\n";
       return 1;
     }
   }
-  RunReporter reporter(s, options.quiet ? nullptr : &std::cout, options.log_dir ? &event_log : nullptr);
+  RunReporter reporter(s, options.quiet ? nullptr : &std::cout, options.log_dir ? &event_log : nullptr, &std::cerr);
   if (options.log_dir && !options.quiet) {
     std::cout << "uavsim-server: logging to " << *options.log_dir << " (VEHICLE.tlog, events.jsonl)\n";
   }

@@ -15,9 +15,11 @@ std::size_t frame_length(std::span<const std::uint8_t> bytes) {
   return 0;
 }
 
-TlogWriter::TlogWriter(const std::string& path) : path_(path), out_(path, std::ios::binary | std::ios::trunc) {
-  if (!out_) throw std::runtime_error("cannot write the telemetry log " + path);
+TlogWriter::TlogWriter(const std::string& path) : path_(path) {
+  if (std::string why; !file_.open(path, &why)) throw std::runtime_error("telemetry log: " + why);
 }
+
+TlogWriter::~TlogWriter() { (void)flush(); }
 
 void TlogWriter::write(double t_s, std::span<const std::uint8_t> frame) {
   // sim time in microseconds, kept monotonic across a restart of the sim clock
@@ -25,14 +27,20 @@ void TlogWriter::write(double t_s, std::span<const std::uint8_t> frame) {
   if (sim_us + offset_us_ < last_stamp_us_) offset_us_ = last_stamp_us_ - sim_us;
   const std::uint64_t stamp = sim_us + offset_us_;
   last_stamp_us_ = stamp;
-  std::uint8_t be[8];
-  for (int i = 0; i < 8; ++i) be[i] = static_cast<std::uint8_t>(stamp >> (56 - 8 * i));
-  out_.write(reinterpret_cast<const char*>(be), sizeof(be));
-  out_.write(reinterpret_cast<const char*>(frame.data()), static_cast<std::streamsize>(frame.size()));
+  // the records older than the bound go first, so the file never lags more than kFlushSpan_s
+  if (!pending_.empty() && stamp - pending_since_us_ >= static_cast<std::uint64_t>(kFlushSpan_s * 1e6)) (void)flush();
+  if (pending_.empty()) pending_since_us_ = stamp;
+  for (int i = 0; i < 8; ++i) pending_.push_back(static_cast<char>(stamp >> (56 - 8 * i)));
+  pending_.append(reinterpret_cast<const char*>(frame.data()), frame.size());
   ++frames_;
+  if (pending_.size() >= kFlushBytes) (void)flush();
 }
 
-void TlogWriter::flush() { out_.flush(); }
+bool TlogWriter::flush() {
+  const bool ok = pending_.empty() ? file_.error().empty() : file_.write(pending_);
+  pending_.clear();
+  return ok;
+}
 
 std::vector<TlogRecord> read_tlog(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

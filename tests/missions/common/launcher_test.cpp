@@ -1,13 +1,20 @@
 // Launcher with /bin/sh children: their output as prefixed lines (stdout and stderr, a last line
-// without its newline), the environment, programs_done, stop_all ending a running program, and a
-// server that exits before it serves the API.
+// without its newline), the environment, programs_done, stop_all ending a running program, a
+// server that exits before it serves the API, the process group the programs share and their
+// death with a killed launcher, and how each program ended, named in the summary.
 #include "uavsim/launch/launcher.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -77,6 +84,134 @@ TEST(Launcher, SiblingProgramIsBesideThisExecutable) {
   const std::string p = sibling_program("x");
   EXPECT_EQ(p.substr(p.size() - 2), "/x");
   EXPECT_NE(p.find("/tests/missions/common/"), std::string::npos) << p;
+}
+
+
+// a process's state letter and process group from /proc/PID/stat; 0 when it is gone
+std::pair<char, pid_t> proc_state(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t paren = text.rfind(')');
+  if (paren == std::string::npos) return {0, 0};
+  std::istringstream rest(text.substr(paren + 2));
+  char state = 0;
+  long ppid = 0, pgrp = 0;
+  rest >> state >> ppid >> pgrp;
+  return {state, static_cast<pid_t>(pgrp)};
+}
+bool gone(pid_t pid) {
+  const char state = proc_state(pid).first;
+  return state == 0 || state == 'Z' || state == 'X';  // a zombie has died (its reaper is init)
+}
+
+// a launcher in a child process starts two programs that would run for minutes, writes their pids
+// and group to the test, and is killed with SIGKILL: both programs die with it
+TEST(Launcher, ProgramsShareAGroupOfTheirOwnAndDieWithAKilledLauncher) {
+  int out[2];
+  ASSERT_EQ(pipe(out), 0);
+  const pid_t launcher = fork();
+  if (launcher == 0) {
+    close(out[0]);
+    Launcher launch("test", true);
+    if (!launch.spawn("a", {"/bin/sleep", "300"}) || !launch.spawn("b", {"/bin/sh", "-c", "sleep 300"}))
+      _exit(1);
+    launch.pump(0);
+    const std::string group = std::to_string(launch.process_group());
+    (void)!write(out[1], group.data(), group.size());
+    close(out[1]);
+    for (;;) pause();
+  }
+  close(out[1]);
+  std::string text;
+  char buf[64];
+  for (ssize_t n; (n = read(out[0], buf, sizeof(buf))) > 0;) text.append(buf, static_cast<size_t>(n));
+  close(out[0]);
+  const pid_t group = static_cast<pid_t>(std::stol(text));
+  ASSERT_GT(group, 0);
+  ASSERT_NE(group, getpgrp());  // not the test's (nor the launcher's) group
+  // the group's members: the launcher's children
+  std::vector<pid_t> members;
+  for (const auto& e : std::filesystem::directory_iterator("/proc")) {
+    const std::string n = e.path().filename();
+    if (n.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(n));
+    if (proc_state(pid).second == group && !gone(pid)) members.push_back(pid);
+  }
+  EXPECT_GE(members.size(), 2u);
+  ASSERT_EQ(kill(launcher, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(launcher, &status, 0), launcher);
+  // the kernel delivers the parent-death signal as the launcher exits: poll, bounded
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  auto all_gone = [&] { return std::all_of(members.begin(), members.end(), gone); };
+  while (!all_gone() && std::chrono::steady_clock::now() < end) usleep(10000);
+  for (pid_t pid : members) EXPECT_TRUE(gone(pid)) << "pid " << pid << " outlived its launcher";
+}
+
+TEST(Launcher, NamesHowEachProgramEndedWithTheSimTimeAndKeepsItInTheSummary) {
+  const std::string summary = ::testing::TempDir() + "ends_summary.json";
+  Launcher launch("test", true);
+  launch.keep_summary(summary, {{"mission", "test"}});
+  std::vector<ProgramEnd> ends;
+  launch.on_exit([&](const ProgramEnd& e) { ends.push_back(e); });
+  // the first summary is there before anything ran, marked incomplete
+  {
+    const auto j = nlohmann::json::parse(std::ifstream(summary));
+    EXPECT_EQ(j["mission"], "test");
+    EXPECT_FALSE(j["complete"].get<bool>());
+  }
+  launch.note_sim_time(12.5);
+  ASSERT_TRUE(launch.spawn("killed", {"/bin/sh", "-c", "kill -KILL $$"}));
+  ASSERT_TRUE(launch.spawn("failed", {"/bin/sh", "-c", "exit 3"}));
+  ASSERT_TRUE(launch.spawn("fine", {"/bin/true"}));
+  while (!launch.programs_done() && launch.wall_s() < kWallLimit_s) launch.pump(kPumpMs);
+  ASSERT_EQ(ends.size(), 3u);
+  const auto killed = launch.ended("killed");
+  ASSERT_TRUE(killed);
+  EXPECT_EQ(killed->signal, SIGKILL);
+  EXPECT_TRUE(killed->abnormal());
+  EXPECT_EQ(killed->how.rfind("killed by SIGKILL", 0), 0u) << killed->how;
+  EXPECT_NE(killed->how.find("at sim t=12.50 s"), std::string::npos) << killed->how;
+  EXPECT_EQ(launch.ended("failed")->exit_code, 3);
+  EXPECT_EQ(launch.ended("failed")->how, "exited with code 3 at sim t=12.50 s");
+  EXPECT_FALSE(launch.ended("fine")->abnormal());
+  // the summary so far: every end, the first abnormal one as the cause
+  const auto j = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_FALSE(j["complete"].get<bool>());
+  ASSERT_EQ(j["programs"].size(), 3u);
+  EXPECT_NE(j["cause"].get<std::string>().find("SIGKILL"), std::string::npos) << j.dump();
+  EXPECT_EQ(j["sim_time_s"].get<double>(), 12.5);
+  // the final one replaces it, complete
+  ASSERT_TRUE(launch.write_summary(summary, {{"mission", "test"}, {"success", false}}));
+  const auto f = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_TRUE(f["complete"].get<bool>());
+  EXPECT_EQ(f["programs"][1]["exit_code"], 3);
+}
+
+TEST(Launcher, TheSummaryIsRewrittenEveryPeriodOfSimTime) {
+  const std::string summary = ::testing::TempDir() + "periodic_summary.json";
+  Launcher launch("test", true);
+  launch.keep_summary(summary, {{"mission", "test"}});
+  auto sim_time_in_file = [&] {
+    return nlohmann::json::parse(std::ifstream(summary))["sim_time_s"].get<double>();
+  };
+  launch.note_sim_time(Launcher::kSummaryPeriod_s - 0.5);
+  EXPECT_EQ(sim_time_in_file(), -1.0);  // not yet a period
+  launch.note_sim_time(Launcher::kSummaryPeriod_s);
+  EXPECT_EQ(sim_time_in_file(), Launcher::kSummaryPeriod_s);
+  launch.update_summary({{"progress", 0.5}});
+  launch.note_sim_time(2 * Launcher::kSummaryPeriod_s + 1.0);
+  const auto j = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_EQ(j["sim_time_s"].get<double>(), 2 * Launcher::kSummaryPeriod_s + 1.0);
+  EXPECT_EQ(j["progress"].get<double>(), 0.5);
+}
+
+TEST(Launcher, ARunDirectoryUnderAFileIsAClearErrorAtStart) {
+  const std::string file = ::testing::TempDir() + "run_dir_parent_is_a_file";
+  std::ofstream(file) << "x";
+  std::string why;
+  EXPECT_FALSE(make_run_dir(file + "/run", &why));
+  EXPECT_NE(why.find("cannot make the run directory " + file + "/run"), std::string::npos) << why;
 }
 
 TEST(Launcher, DefaultRunDirNamesMissionSeedAndTime) {

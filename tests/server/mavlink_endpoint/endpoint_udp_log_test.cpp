@@ -2,7 +2,11 @@
 // UDP port gets the vehicle's stream and is answered on the same socket; a .tlog holds every frame a
 // client received and sent, in order, with monotonic sim-time stamps.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "mavlink/tlog.hpp"
@@ -216,6 +220,36 @@ TEST(Tlog, StampsStayMonotonicWhenTheSimClockRestarts) {
   EXPECT_EQ(log[1].stamp_us, 2000000u);
   EXPECT_EQ(log[2].stamp_us, 2250000u);
   EXPECT_EQ(log[2].frame.size(), sizeof(frame));
+}
+
+// A server killed with SIGKILL: its tlog holds every frame but those of the last 0.1 s of sim
+// before the newest, each whole (tlog.hpp's bound). 5 s of frames at 100 Hz, 16 bytes a record:
+// 8000 bytes, all of which an iostream's buffer would have kept in memory and lost.
+TEST(Tlog, AKilledWriterLeavesEveryFrameButTheLastTenthOfASecond) {
+  const std::string path = ::testing::TempDir() + "killed.tlog";
+  const std::uint8_t frame[] = {0xFE, 0, 0, 1, 1, 0, 0x12, 0x34};
+  constexpr int kFrames = 500;
+  constexpr double kPeriod_s = 0.01;
+  const pid_t pid = fork();
+  if (pid == 0) {
+    TlogWriter w(path);
+    for (int k = 0; k < kFrames; ++k) w.write(k * kPeriod_s, frame);
+    raise(SIGKILL);  // no destructor, no flush: what a kill leaves
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  const auto log = read_tlog(path);
+  const double newest_s = (kFrames - 1) * kPeriod_s;
+  ASSERT_FALSE(log.empty());
+  EXPECT_GE(log.back().stamp_us / 1e6, newest_s - TlogWriter::kFlushSpan_s - kPeriod_s) << log.size();
+  // whole frames, in order, none missing before the last one kept
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    EXPECT_EQ(log[i].stamp_us, std::uint64_t(std::llround(i * kPeriod_s * 1e6))) << i;
+    EXPECT_EQ(log[i].frame.size(), sizeof(frame)) << i;
+  }
+  EXPECT_EQ(std::filesystem::file_size(path), log.size() * (8 + sizeof(frame)));
 }
 
 }  // namespace

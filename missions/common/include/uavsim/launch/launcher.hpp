@@ -1,10 +1,23 @@
-// Launcher: what a mission launcher (mbzirc2017-run, mbzirc2020-run) does around its mission: start
-// uavsim-server on ephemeral ports (learnt from its banner) and connect a SimConnection to its API,
-// spawn the mission programs with stdout and stderr read line by line (printed prefixed with the
-// program's name unless quiet), put them on the lockstep clock, and stop and reap them all.
+// Launcher: what a mission launcher (mbzirc2017-run, mbzirc2020-run, coverage-run) does around its
+// mission: start uavsim-server on ephemeral ports (learnt from its banner) and connect a
+// SimConnection to its API, spawn the mission programs with stdout and stderr read line by line
+// (printed prefixed with the program's name unless quiet), put them on the lockstep clock, and stop
+// and reap them all.
+//
+// Process tree: the server and every program start in one process group of their own (the first
+// one's pid is its id: process_group()), stdin /dev/null, and with the kernel's parent-death signal
+// set to SIGKILL, so a launcher killed in any way (SIGKILL, OOM, a timeout) takes them all with it:
+// no server or agent outlives its run. A sweep may also kill the whole group at once. Ctrl-C in a
+// terminal reaches only the launcher, which stops the others in order.
+//
+// Run records: when a program ends, the launcher names it, how (exit code, or the signal, with
+// "out of memory?" when the kernel's OOM killer counts a kill in this cgroup or its log names the
+// pid) and the sim time it last knew (note_sim_time, the ground-truth ticks); keep_summary()'s file
+// holds that too, rewritten atomically as the run goes ("complete": false until write_summary()).
 //
 // Thread contract: a Launcher belongs to the thread that made it (its owner thread; its api() too);
-// nothing here is thread-safe.
+// nothing here is thread-safe. The owner thread must outlive the programs it started: the kernel's
+// parent-death signal follows the thread that forked, not the process.
 #pragma once
 
 #include <sys/types.h>
@@ -13,6 +26,8 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +49,10 @@ struct ServerSpec {
 
 // The default run directory of a launcher: "runs/MISSION-seedN-YYYYMMDD-HHMMSS" (UTC). Thread-safe.
 std::string default_run_dir(const std::string& mission, uint64_t seed);
-// Makes dir (and its parents); false with a message on failure. Thread-safe.
+// Makes dir (and its parents) and checks that a file can be written in it and that the file system
+// has kMinRunDirFreeBytes free; false with a message that names the directory and the reason
+// otherwise (a parent that is a file, a read-only or full file system). Thread-safe.
+inline constexpr std::uint64_t kMinRunDirFreeBytes = 1 << 20;
 bool make_run_dir(const std::string& dir, std::string* why);
 
 // Where a launcher's run goes: its run directory ("" for none), the video ("" for none) and the
@@ -56,8 +74,34 @@ Result<RunFiles> resolve_run_files(const std::string& mission, uint64_t seed,
 // The program `name` in the directory of the running executable (/proc/self/exe). Thread-safe.
 std::string sibling_program(const std::string& name);
 
+// How a program of the launcher's ended.
+struct ProgramEnd {
+  std::string name;
+  pid_t pid = -1;
+  std::optional<int> exit_code;  // it exited (0: normally)
+  std::optional<int> signal;     // it was killed by this signal
+  bool stopped = false;          // the launcher stopped it (stop_all): an ordinary end
+  bool out_of_memory = false;    // the kernel's OOM killer counted a kill when it died
+  double sim_time_s = -1.0;      // the launcher's last known sim time; -1 before any
+  // "killed by SIGKILL at sim t=53.20 s", "exited with code 1 at sim t=...", "exited normally ..."
+  std::string how;
+  // An end the run did not ask for: a signal the launcher did not send, or a non-zero exit code.
+  bool abnormal() const { return !stopped && (signal.has_value() || exit_code.value_or(0) != 0); }
+  nlohmann::json to_json() const;
+};
+
+// The exit codes every mission launcher uses (README, "Mission launchers").
+inline constexpr int kExitSuccess = 0;       // the mission's goal was met
+inline constexpr int kExitFellShort = 1;     // the run went to its end; the mission fell short
+inline constexpr int kExitUsage = 2;         // bad options, or the run directory cannot be used
+inline constexpr int kExitHarness = 4;       // the harness failed: the server died, the API failed
+inline constexpr int kExitInterrupted = 130; // SIGINT or SIGTERM stopped the run
+
 class Launcher {
  public:
+  // Sim seconds between two rewrites of keep_summary()'s file.
+  static constexpr double kSummaryPeriod_s = 10.0;
+
   // name prefixes the launcher's own messages; quiet: say() and the children's lines print nothing.
   // The calling thread becomes the owner thread.
   Launcher(std::string name, bool quiet);
@@ -133,8 +177,41 @@ class Launcher {
   // Owner thread only.
   void stop_all(double timeout_s);
 
+  // The process group of the server and the programs (0 before the first start).
+  // Owner thread only.
+  pid_t process_group() const;
+  // The run's sim time as the mission's loop learns it; the ends of programs are stamped with the
+  // latest, and keep_summary()'s file is rewritten every kSummaryPeriod_s of it.
+  // Owner thread only.
+  void note_sim_time(double t_s);
+  // When a program ends (noticed by pump(), programs_done(), server_exited() or stop_all()), cb gets
+  // how, after the launcher said it: an abnormal end on stderr always ("coverage-run: agent3 (pid
+  // 812) killed by SIGKILL at sim t=53.20 s"), an ordinary one as say(). cb may call api(), not
+  // pump(). Callbacks add up. Owner thread only.
+  void on_exit(std::function<void(const ProgramEnd&)> cb);
+  // How the program `name` ended; nullopt while it runs (or if there is none).
+  // Owner thread only.
+  std::optional<ProgramEnd> ended(const std::string& name) const;
+  // "the server was killed by SIGKILL at sim t=53.20 s" when the server ended, else "the server
+  // exited": for the mission's harness-failure message. Owner thread only.
+  std::string server_end() const;
+
+  // From now on path ("" for none) holds the run's summary so far: `partial` plus "complete":
+  // false, sim_time_s, wall_time_s, "programs" (each one's end, or running) and "cause" (the first
+  // abnormal end, if any), replaced atomically (temp file, fsync, rename) every kSummaryPeriod_s of
+  // sim time and whenever a program ends, so a run killed at any moment leaves a summary.
+  // Owner thread only.
+  void keep_summary(const std::string& path, nlohmann::json partial);
+  // Fields of the summary so far that keep_summary()'s next rewrite carries (merged over partial).
+  // Owner thread only.
+  void update_summary(const nlohmann::json& fields);
+  // The final summary: `summary` plus "complete": true, "programs" and "cause", replaced atomically
+  // at path. False when it cannot be written (the reason on stderr). Owner thread only.
+  bool write_summary(const std::string& path, nlohmann::json summary);
+
  private:
   void start_truth();
+  void check_children();
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
