@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 namespace uavsim::server::api {
@@ -26,6 +27,7 @@ LockstepCoordinator::Joined LockstepCoordinator::join(uint64_t conn, double peri
                                                       std::optional<double> timeout_s,
                                                       double sim_time_s) {
   // whole control steps, at least one; the first tick is the next multiple of the period
+  dropped_.erase(conn);
   Client& c = clients_[conn];
   const int64_t period_steps = std::max<int64_t>(1, std::llround(period_s / control_dt_s_));
   c.period_s = static_cast<double>(period_steps) * control_dt_s_;
@@ -36,6 +38,7 @@ LockstepCoordinator::Joined LockstepCoordinator::join(uint64_t conn, double peri
 }
 
 std::optional<double> LockstepCoordinator::leave(uint64_t conn, double sim_time_s) {
+  dropped_.erase(conn);  // it left (or disconnected): nothing more to tell it
   auto it = clients_.find(conn);
   if (it == clients_.end()) return std::nullopt;
   const Client c = it->second;
@@ -73,6 +76,16 @@ std::string LockstepCoordinator::check_done(uint64_t conn, std::optional<double>
                                             std::string* message) const {
   auto it = clients_.find(conn);
   if (it == clients_.end()) {
+    if (const auto d = dropped_.find(conn); d != dropped_.end()) {
+      char buf[256];
+      std::snprintf(buf, sizeof(buf),
+                    "this connection was dropped from the lockstep at sim time %.3f s: no \"done\" for "
+                    "tick %lld within its timeout of %g s of wall time, and the clock went on without "
+                    "it; lockstep_join to take part again",
+                    d->second.sim_time_s, static_cast<long long>(d->second.tick), d->second.timeout_s);
+      *message = buf;
+      return "not_joined";
+    }
     *message = "\"done\" without lockstep_join";
     return "not_joined";
   }
@@ -127,7 +140,13 @@ std::vector<LockstepCoordinator::Dropped> LockstepCoordinator::expire(double sim
     if (c.awaiting && now >= c.deadline_s) late.push_back(conn);
   }
   std::vector<Dropped> dropped;
-  for (uint64_t conn : late) dropped.push_back({conn, leave(conn, sim_time_s)});
+  for (uint64_t conn : late) {
+    const Client& c = clients_.at(conn);
+    const DropRecord record{sim_time_s, c.tick, c.timeout_s};
+    dropped.push_back({conn, leave(conn, sim_time_s)});
+    dropped_[conn] = record;  // after leave(), which forgets a connection's drop
+    if (dropped_.size() > kMaxDropRecords) dropped_.erase(dropped_.begin());
+  }
   return dropped;
 }
 

@@ -60,7 +60,8 @@ class LockstepCoordinator {
   int64_t begin_tick(uint64_t conn, double sim_time_s);
 
   // Whether conn may send "done" now, for tick (if given; it must be the one awaited): empty if so,
-  // otherwise the error code (not_joined, bad_state, bad_field) with *message.
+  // otherwise the error code (not_joined, bad_state, bad_field) with *message. A connection that
+  // was dropped (expire) is told so: when, which tick, its timeout, and to join again.
   std::string check_done(uint64_t conn, std::optional<double> tick, std::string* message) const;
   // Takes conn's "done" (check_done passed) and returns its tick number. busy_until_s: detached
   // timing (no tick until the first at or after it); wait_seq: vehicle -> the last MAVLink sequence
@@ -110,6 +111,14 @@ class LockstepCoordinator {
   double default_timeout_s_;
   WallClock now_s_;
   std::map<uint64_t, Client> clients_;  // the joined connections
+  // the connections expire() dropped, until they join again or leave: what check_done tells them
+  struct DropRecord {
+    double sim_time_s = 0.0;
+    int64_t tick = 0;
+    double timeout_s = 0.0;
+  };
+  static constexpr std::size_t kMaxDropRecords = 1024;  // the oldest go first
+  std::map<uint64_t, DropRecord> dropped_;
 };
 
 }  // namespace uavsim::server::api

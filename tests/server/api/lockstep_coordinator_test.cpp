@@ -128,6 +128,22 @@ TEST_F(Lockstep, AClientThatDoesNotAnswerIsDroppedAtItsTimeout) {
   EXPECT_FALSE(coordinator_.deadline_s());
 }
 
+TEST_F(Lockstep, ADroppedClientThatComesBackIsToldItWasDropped) {
+  coordinator_.join(1, 0.1, 2.0, 0.0);
+  announce(0.0);
+  clock_.advance(2.0);
+  ASSERT_EQ(coordinator_.expire(0.0).size(), 1u);
+  std::string message;
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "not_joined");
+  EXPECT_NE(message.find("dropped from the lockstep at sim time 0.000 s"), std::string::npos) << message;
+  EXPECT_NE(message.find("timeout of 2 s"), std::string::npos) << message;
+  // joined again: an ordinary member; left: an ordinary stranger
+  coordinator_.join(1, 0.1, 2.0, 0.0);
+  coordinator_.leave(1, 0.0);
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "not_joined");
+  EXPECT_EQ(message, "\"done\" without lockstep_join");
+}
+
 TEST_F(Lockstep, ADeadClientIsDroppedWhileTheLiveOneKeepsTicking) {
   coordinator_.join(1, 0.1, 1.0, 0.0);  // answers
   coordinator_.join(2, 0.1, 5.0, 0.0);  // never answers

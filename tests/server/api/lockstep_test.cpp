@@ -2,8 +2,14 @@
 // client's period, the clock held until every joined client is done, busy_until, MAVLink seq waits and
 // the dead-client timeout.
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <thread>
@@ -129,6 +135,85 @@ TEST(Lockstep, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
   for (int i = 0; i < 1000 && t <= held + 0.1; ++i) t = observer.request({{"op", "status"}})["result"]["time_s"];
   EXPECT_GT(t, held + 0.1);
   EXPECT_EQ(error_code_of(dead.request({{"op", "done"}})), "not_joined");
+}
+
+// A real process on the lockstep, stopped (SIGSTOP) for longer than its timeout: the server drops
+// it and the clock goes on; continued (SIGCONT), its next "done" is told that it was dropped. The
+// client is forked before the server starts (no threads to copy) and reports through a pipe.
+TEST(Lockstep, AClientStoppedLongerThanItsTimeoutIsDroppedAndToldSoWhenItComesBack) {
+  constexpr double kTimeout_s = 0.3;  // wall clock
+  int to_child[2], from_child[2];
+  ASSERT_EQ(pipe(to_child), 0);
+  ASSERT_EQ(pipe(from_child), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
+    close(to_child[1]);
+    close(from_child[0]);
+    uint16_t port = 0;
+    if (read(to_child[0], &port, sizeof(port)) != sizeof(port)) _exit(2);
+    TestClient c(port);
+    if (!c.request({{"op", "lockstep_join"}, {"period_s", 0.01}, {"timeout_s", kTimeout_s}})["ok"]) _exit(3);
+    (void)!write(from_child[1], "j", 1);
+    for (;;) {
+      const Json t = c.next_event("tick");
+      if (t.is_null()) continue;
+      const Json r = c.request({{"op", "done"}, {"tick", t["tick"]}});
+      if (!r.value("ok", false)) {
+        const std::string m = r["error"].value("message", "") + "|" + r["error"].value("code", "");
+        (void)!write(from_child[1], m.data(), m.size());
+        _exit(0);
+      }
+    }
+  }
+  close(to_child[0]);
+  close(from_child[1]);
+  struct Reaper {  // whatever happens below, the child does not outlive the test
+    pid_t pid;
+    ~Reaper() {
+      if (pid > 0 && waitpid(pid, nullptr, WNOHANG) == 0) {
+        kill(pid, SIGKILL);
+        waitpid(pid, nullptr, 0);
+      }
+    }
+  } reaper{child};
+  ApiConfig config;
+  TestServer server("empty.xml", config);
+  TestClient observer(server.port());
+  const uint16_t port = server.port();
+  ASSERT_EQ(write(to_child[1], &port, sizeof(port)), static_cast<ssize_t>(sizeof(port)));
+  char joined = 0;
+  ASSERT_EQ(read(from_child[0], &joined, 1), 1);
+  auto status = [&] { return observer.request({{"op", "status"}})["result"]; };
+  // bounded polls: the bound only turns a hang into a failure
+  auto wait_for = [&](auto pred) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!pred() && std::chrono::steady_clock::now() < end) usleep(5000);
+    return pred();
+  };
+  ASSERT_TRUE(wait_for([&] { return status()["time_s"].get<double>() > 0.05; }));  // it ticks
+  ASSERT_EQ(kill(child, SIGSTOP), 0);
+  // dropped after its timeout; the world goes on without it
+  ASSERT_TRUE(wait_for([&] { return status()["lockstep_clients"].get<int>() == 0; })) << status();
+  const double after_drop_s = status()["time_s"];
+  ASSERT_TRUE(wait_for([&] { return status()["time_s"].get<double>() > after_drop_s + 0.1; }));
+  ASSERT_EQ(kill(child, SIGCONT), 0);
+  std::string told;
+  pollfd p{from_child[0], POLLIN, 0};
+  char buf[512];
+  while (::poll(&p, 1, 60000) > 0) {
+    const ssize_t n = read(from_child[0], buf, sizeof(buf));
+    if (n <= 0) break;
+    told.append(buf, static_cast<size_t>(n));
+  }
+  int child_status = 0;
+  ASSERT_EQ(waitpid(child, &child_status, 0), child);
+  reaper.pid = -1;
+  EXPECT_TRUE(WIFEXITED(child_status) && WEXITSTATUS(child_status) == 0) << child_status;
+  EXPECT_NE(told.find("dropped from the lockstep"), std::string::npos) << told;
+  EXPECT_NE(told.find("lockstep_join to take part again|not_joined"), std::string::npos) << told;
+  close(to_child[1]);
+  close(from_child[0]);
 }
 
 // the endpoint's side of the MAVLink race: "done" names a sequence number that is not handled yet
