@@ -48,7 +48,8 @@ struct Child {
   bool stopped = false;  // stop() sent it a signal: its end is an ordinary one
   bool reported = false; // its end was said and given to on_exit
 
-  // Starts args with stdout and stderr on a pipe, stdin /dev/null, in process group *group (a new
+  // Starts args with stdout and stderr on a pipe, stdin /dev/null, no other descriptor of the
+  // launcher's, in process group *group (a new
   // one, whose id goes to *group, when it is 0 or its members are all gone), and with SIGKILL as its
   // parent-death signal. fork + exec rather than posix_spawn for the prctl; the child runs only
   // async-signal-safe calls until exec.
@@ -87,6 +88,10 @@ struct Child {
       if (devnull >= 0) dup2(devnull, 0);
       dup2(fds[1], 1);
       dup2(fds[1], 2);
+      // nothing else of the launcher's (its API socket, a caller's pipes): a program must not keep
+      // them open after the launcher is gone; errfds[1] closes itself at exec
+      if (errfds[1] > 3) (void)close_range(3, static_cast<unsigned>(errfds[1]) - 1, 0);
+      (void)close_range(static_cast<unsigned>(errfds[1]) + 1, ~0U, 0);
       execve(argv[0], argv.data(), envp.data());
       const int err = errno;
       (void)!::write(errfds[1], &err, sizeof(err));

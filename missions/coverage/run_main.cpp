@@ -757,6 +757,11 @@ int main(int argc, char** argv) {
           if (!api.done(e.value("tick", std::int64_t{0}))) fail("the launcher's done was refused");
         }
       }
+      // the server first: its death ends the agents too, and that is the harness's failure
+      if (launch.server_exited() || !api.connected()) {
+        fail(launch.server_end());
+        break;
+      }
       if (launch.programs_done(o.gcs ? "gcs" : "")) break;
       if (g_interrupted) {
         say("coverage-run: interrupted");
@@ -768,10 +773,6 @@ int main(int argc, char** argv) {
       }
       if (wall_s() > o.wall_limit_s) {
         say("coverage-run: wall-clock limit reached");
-        break;
-      }
-      if (launch.server_exited() || !api.connected()) {
-        fail(launch.server_end());
         break;
       }
     }
