@@ -45,13 +45,13 @@ struct Child {
   bool exited = false;
   int status = 0;
 
-  bool stopped = false;  // stop() sent it a signal: its end is an ordinary one
-  bool reported = false; // its end was said and given to on_exit
+  bool stopped = false;   // stop() sent it a signal: its end is an ordinary one
+  bool reported = false;  // its end was said and given to on_exit
 
   // Starts args with stdout and stderr on a pipe, stdin /dev/null, no other descriptor of the
   // launcher's, in process group *group (a new
-  // one, whose id goes to *group, when it is 0 or its members are all gone), and with SIGKILL as its
-  // parent-death signal. fork + exec rather than posix_spawn for the prctl; the child runs only
+  // one, whose id goes to *group, when it is 0 or its members are all gone), and with SIGKILL as
+  // its parent-death signal. fork + exec rather than posix_spawn for the prctl; the child runs only
   // async-signal-safe calls until exec.
   Result<void> spawn(const std::vector<std::string>& args,
                      const std::vector<std::string>& env_extra, pid_t* group) {
@@ -106,7 +106,8 @@ struct Child {
       close(errfds[0]);
       pid = -1;
       exited = true;
-      return Failure{Error::kIo, "cannot start " + args[0] + ": fork: " + std::strerror(fork_errno)};
+      return Failure{Error::kIo,
+                     "cannot start " + args[0] + ": fork: " + std::strerror(fork_errno)};
     }
     // the same group from this side too, so that it holds before either side runs on
     if (setpgid(pid, want_group) != 0) (void)setpgid(pid, pid);
@@ -179,15 +180,14 @@ struct Child {
   }
 };
 
-
 // "SIGKILL"; "signal N" for one without a name
 std::string signal_name(int sig) {
   const char* abbrev = sigabbrev_np(sig);
   return abbrev != nullptr ? std::string("SIG") + abbrev : "signal " + std::to_string(sig);
 }
 
-// The OOM killer's count of kills in this process's memory cgroup (children inherit it): cgroup v2's
-// memory.events or v1's memory.oom_control, at the cgroup's path or at the mount's root (a
+// The OOM killer's count of kills in this process's memory cgroup (children inherit it): cgroup
+// v2's memory.events or v1's memory.oom_control, at the cgroup's path or at the mount's root (a
 // container sees its own cgroup there); nullopt when neither can be read.
 std::optional<std::uint64_t> oom_kills() {
   std::vector<std::string> files;
@@ -230,8 +230,9 @@ bool kernel_log_names_oom_kill(pid_t pid) {
     if (n < 0 && errno == EPIPE) continue;  // records overwritten while reading: go on
     if (n <= 0) break;
     const std::string_view r(record, static_cast<size_t>(n));
-    found = r.find(killed) != std::string_view::npos ||
-            (r.find("oom-kill:") != std::string_view::npos && r.find(task) != std::string_view::npos);
+    found =
+        r.find(killed) != std::string_view::npos ||
+        (r.find("oom-kill:") != std::string_view::npos && r.find(task) != std::string_view::npos);
   }
   close(fd);
   return found;
@@ -247,8 +248,12 @@ std::string sim_time_text(double t_s) {
 }  // namespace
 
 nlohmann::json ProgramEnd::to_json() const {
-  nlohmann::json j = {{"name", name}, {"pid", pid}, {"how", how}, {"abnormal", abnormal()},
-                      {"stopped_by_launcher", stopped}, {"sim_time_s", sim_time_s}};
+  nlohmann::json j = {{"name", name},
+                      {"pid", pid},
+                      {"how", how},
+                      {"abnormal", abnormal()},
+                      {"stopped_by_launcher", stopped},
+                      {"sim_time_s", sim_time_s}};
   j["exit_code"] = exit_code ? nlohmann::json(*exit_code) : nlohmann::json();
   j["signal"] = signal ? nlohmann::json(signal_name(*signal)) : nlohmann::json();
   if (out_of_memory) j["out_of_memory"] = true;
@@ -279,7 +284,7 @@ struct TruthLog {
   std::uint64_t rows = 0;
   double time_s = -1.0;  // the sim time of the last tick's rows
   bool failed = false;
-  bool trucks = true;  // ask for the truck until the world turns out to have none
+  bool trucks = true;       // ask for the truck until the world turns out to have none
   std::string write_error;  // the first file that could not be written, said once
 
   // the file of key (made with its header the first time)
@@ -331,11 +336,12 @@ struct TruthLog {
         const double pitch = std::asin(std::clamp(2 * (w * y - z * x), -1.0, 1.0)) * kDeg;
         const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * kDeg;
         char line[512];
-        std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.3f,%.1f,%s,%d,%d,%d\n",
-                      t, p[0], p[1], p[2], vel[0], vel[1], vel[2], roll, pitch, yaw, v.value("battery_v", 0.0),
-                      v.value("battery_used_mah", 0.0), v.value("mode", std::string("?")).c_str(),
-                      v.value("armed", false) ? 1 : 0, v.value("crashed", false) ? 1 : 0,
-                      v.value("on_ground", false) ? 1 : 0);
+        std::snprintf(line, sizeof(line),
+                      "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.3f,%.1f,%s,%d,%d,%d\n",
+                      t, p[0], p[1], p[2], vel[0], vel[1], vel[2], roll, pitch, yaw,
+                      v.value("battery_v", 0.0), v.value("battery_used_mah", 0.0),
+                      v.value("mode", std::string("?")).c_str(), v.value("armed", false) ? 1 : 0,
+                      v.value("crashed", false) ? 1 : 0, v.value("on_ground", false) ? 1 : 0);
         f->rows += line;
         ++rows;
       }
@@ -349,13 +355,15 @@ struct TruthLog {
         const double t = tr->value("time_s", 0.0);
         for (const auto& k : tr->value("trucks", nlohmann::json::array())) {
           const std::string name = k.value("name", std::string("truck"));
-          Csv* f = csv("truck:" + name, "truck_" + name + ".csv", "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,yaw_deg\n");
+          Csv* f = csv("truck:" + name, "truck_" + name + ".csv",
+                       "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,yaw_deg\n");
           const auto p = k.value("position_enu_m", std::vector<double>{0, 0, 0});
           const auto vel = k.value("velocity_enu_m_s", std::vector<double>{0, 0, 0});
           if (f == nullptr || p.size() < 3 || vel.size() < 3) continue;
           char line[256];
-          std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f\n", t, p[0], p[1], p[2], vel[0],
-                        vel[1], vel[2], k.value("yaw_rad", 0.0) * 180.0 / 3.14159265358979323846);
+          std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f\n", t, p[0],
+                        p[1], p[2], vel[0], vel[1], vel[2],
+                        k.value("yaw_rad", 0.0) * 180.0 / 3.14159265358979323846);
           f->rows += line;
         }
       }
@@ -389,12 +397,12 @@ struct Launcher::Impl {
   std::optional<std::pair<std::string, double>> truth_request;  // record_truth's dir and rate
   TruthLog truth;
   bool truth_error_said = false;
-  pid_t group = 0;          // the children's process group; 0 before the first
+  pid_t group = 0;           // the children's process group; 0 before the first
   double sim_time_s = -1.0;  // the last known
   std::vector<std::function<void(const ProgramEnd&)>> exit_callbacks;
-  std::vector<ProgramEnd> ends;                  // in the order they were noticed
+  std::vector<ProgramEnd> ends;                               // in the order they were noticed
   std::optional<std::uint64_t> oom_kills_seen = oom_kills();  // the cgroup's count so far
-  std::string summary_path;                      // keep_summary's
+  std::string summary_path;                                   // keep_summary's
   nlohmann::json summary = nlohmann::json::object();
   double next_summary_s = 0.0;
   bool summary_error_said = false;
@@ -438,7 +446,8 @@ struct Launcher::Impl {
       if (WCOREDUMP(c.status)) how += " (core dumped)";
     } else {
       e.exit_code = WIFEXITED(c.status) ? WEXITSTATUS(c.status) : -1;
-      how = *e.exit_code == 0 ? "exited normally" : "exited with code " + std::to_string(*e.exit_code);
+      how = *e.exit_code == 0 ? "exited normally"
+                              : "exited with code " + std::to_string(*e.exit_code);
     }
     how += " " + sim_time_text(sim_time_s);
     e.how = c.stopped ? "stopped by the launcher (" + how + ")" : how;
@@ -450,14 +459,18 @@ struct Launcher::Impl {
     nlohmann::json programs = nlohmann::json::array();
     for (const auto& c : children) {
       if (c->pid <= 0 && c->reported && !c->exited) continue;
-      const auto e = std::find_if(ends.begin(), ends.end(), [&](const ProgramEnd& x) { return x.pid == c->pid; });
-      programs.push_back(e != ends.end() ? e->to_json()
-                                         : nlohmann::json{{"name", c->name}, {"pid", c->pid}, {"running", true}});
+      const auto e = std::find_if(ends.begin(), ends.end(),
+                                  [&](const ProgramEnd& x) { return x.pid == c->pid; });
+      programs.push_back(
+          e != ends.end() ? e->to_json()
+                          : nlohmann::json{{"name", c->name}, {"pid", c->pid}, {"running", true}});
     }
     j["programs"] = std::move(programs);
     j["process_group"] = group;
-    const auto cause = std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
-    j["cause"] = cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
+    const auto cause =
+        std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
+    j["cause"] =
+        cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
     if (!j.contains("sim_time_s") || !complete) j["sim_time_s"] = sim_time_s;
     if (!j.contains("wall_time_s") || !complete) j["wall_time_s"] = wall_s;
     j["complete"] = complete;
@@ -500,7 +513,8 @@ void Launcher::check_children() {
     m.read_child(*c);  // its last words before its end
     const ProgramEnd e = m.end_of(*c);
     m.ends.push_back(e);
-    const std::string line = m.name + ": " + e.name + " (pid " + std::to_string(e.pid) + ") " + e.how;
+    const std::string line =
+        m.name + ": " + e.name + " (pid " + std::to_string(e.pid) + ") " + e.how;
     if (e.abnormal()) {
       std::fprintf(stderr, "%s\n", line.c_str());
       std::fflush(stderr);
@@ -512,7 +526,8 @@ void Launcher::check_children() {
   }
   if (!m.truth.write_error.empty() && !m.truth_error_said) {
     m.truth_error_said = true;
-    std::fprintf(stderr, "%s: the ground truth stops here: %s\n", m.name.c_str(), m.truth.write_error.c_str());
+    std::fprintf(stderr, "%s: the ground truth stops here: %s\n", m.name.c_str(),
+                 m.truth.write_error.c_str());
   }
 }
 
@@ -716,7 +731,8 @@ bool make_run_dir(const std::string& dir, std::string* why) {
   std::string error;
   if (!f.open(probe, &error) || !f.write("x")) {
     if (why != nullptr) {
-      *why = "cannot write in the run directory " + dir + ": " + (error.empty() ? f.error() : error);
+      *why =
+          "cannot write in the run directory " + dir + ": " + (error.empty() ? f.error() : error);
     }
     f.close();
     std::remove(probe.c_str());
@@ -725,13 +741,14 @@ bool make_run_dir(const std::string& dir, std::string* why) {
   f.close();
   std::remove(probe.c_str());
   // ...and the logs have room to start
-  struct statvfs fs{};
+  struct statvfs fs {};
   if (statvfs(dir.c_str(), &fs) == 0) {
     const auto free_bytes = static_cast<std::uint64_t>(fs.f_bavail) * fs.f_frsize;
     if (free_bytes < kMinRunDirFreeBytes) {
       if (why != nullptr) {
         *why = "the run directory " + dir + " has " + std::to_string(free_bytes / 1024) +
-               " KiB free; a run needs at least " + std::to_string(kMinRunDirFreeBytes >> 10) + " KiB";
+               " KiB free; a run needs at least " + std::to_string(kMinRunDirFreeBytes >> 10) +
+               " KiB";
       }
       return false;
     }
@@ -752,7 +769,10 @@ Result<RunFiles> resolve_run_files(const std::string& mission, uint64_t seed,
     std::string why;
     if (!make_run_dir(f.dir, &why)) return Failure{Error::kIo, why};
   }
-  f.video = !record ? std::string() : !video.empty() ? video : f.dir.empty() ? "" : f.dir + "/video.mp4";
+  f.video = !record          ? std::string()
+            : !video.empty() ? video
+            : f.dir.empty()  ? ""
+                             : f.dir + "/video.mp4";
   f.summary = !summary.empty() ? summary : f.dir.empty() ? "" : f.dir + "/summary.json";
   return f;
 }

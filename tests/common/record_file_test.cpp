@@ -78,7 +78,8 @@ TEST(ReplaceFileAtomically, AKillAtAnyMomentLeavesTheOldOrANewFileWhole) {
   if (pid == 0) {
     close(ready[0]);
     for (int k = 0;; ++k) {
-      if (!replace_file_atomically(path, std::string(kBytes, static_cast<char>('b' + k % 20)), nullptr))
+      if (!replace_file_atomically(path, std::string(kBytes, static_cast<char>('b' + k % 20)),
+                                   nullptr))
         _exit(1);
       if (k == 0) (void)!write(ready[1], "r", 1);  // one rewrite done: the kill may come
     }

@@ -10,7 +10,8 @@ namespace uavsim::server::mavlink {
 
 std::size_t frame_length(std::span<const std::uint8_t> bytes) {
   if (bytes.size() < 3) return 0;
-  // v1: 6 header bytes, payload, CRC; v2: 10 header bytes, payload, CRC, 13 signature bytes if signed
+  // v1: 6 header bytes, payload, CRC; v2: 10 header bytes, payload, CRC, 13 signature bytes if
+  // signed
   if (bytes[0] == 0xFE) return 6 + std::size_t{bytes[1]} + 2;
   if (bytes[0] == 0xFD) return 10 + std::size_t{bytes[1]} + 2 + ((bytes[2] & 0x01) != 0 ? 13 : 0);
   return 0;
@@ -29,7 +30,9 @@ void TlogWriter::write(double t_s, std::span<const std::uint8_t> frame) {
   const std::uint64_t stamp = sim_us + offset_us_;
   last_stamp_us_ = stamp;
   // the records older than the bound go first, so the file never lags more than kFlushSpan_s
-  if (!pending_.empty() && stamp - pending_since_us_ >= static_cast<std::uint64_t>(kFlushSpan_s * 1e6)) (void)flush();
+  if (!pending_.empty() &&
+      stamp - pending_since_us_ >= static_cast<std::uint64_t>(kFlushSpan_s * 1e6))
+    (void)flush();
   if (pending_.empty()) pending_since_us_ = stamp;
   for (int i = 0; i < 8; ++i) pending_.push_back(static_cast<char>(stamp >> (56 - 8 * i)));
   pending_.append(reinterpret_cast<const char*>(frame.data()), frame.size());
@@ -45,7 +48,8 @@ bool TlogWriter::flush() {
 
 std::vector<TlogRecord> read_tlog(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
   std::vector<TlogRecord> records;
   std::size_t at = 0;
   while (at + 8 < bytes.size()) {

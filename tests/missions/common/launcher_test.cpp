@@ -86,7 +86,6 @@ TEST(Launcher, SiblingProgramIsBesideThisExecutable) {
   EXPECT_NE(p.find("/tests/missions/common/"), std::string::npos) << p;
 }
 
-
 // a process's state letter and process group from /proc/PID/stat; 0 when it is gone
 std::pair<char, pid_t> proc_state(pid_t pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
@@ -113,7 +112,8 @@ TEST(Launcher, ProgramsShareAGroupOfTheirOwnAndDieWithAKilledLauncher) {
   if (launcher == 0) {
     close(out[0]);
     Launcher launch("test", true);
-    if (!launch.spawn("a", {"/bin/sleep", "300"}) || !launch.spawn("b", {"/bin/sh", "-c", "sleep 300"}))
+    if (!launch.spawn("a", {"/bin/sleep", "300"}) ||
+        !launch.spawn("b", {"/bin/sh", "-c", "sleep 300"}))
       _exit(1);
     launch.pump(0);
     const std::string group = std::to_string(launch.process_group());
@@ -124,7 +124,8 @@ TEST(Launcher, ProgramsShareAGroupOfTheirOwnAndDieWithAKilledLauncher) {
   close(out[1]);
   std::string text;
   char buf[64];
-  for (ssize_t n; (n = read(out[0], buf, sizeof(buf))) > 0;) text.append(buf, static_cast<size_t>(n));
+  for (ssize_t n; (n = read(out[0], buf, sizeof(buf))) > 0;)
+    text.append(buf, static_cast<size_t>(n));
   close(out[0]);
   const pid_t group = static_cast<pid_t>(std::stol(text));
   ASSERT_GT(group, 0);
@@ -252,8 +253,9 @@ TEST(Launcher, RunFilesGoIntoTheRunDirectoryUnlessGivenOrOptedOut) {
 #ifdef UAVSIM_SERVER_BIN
 constexpr double kServerWall_s = 60.0;  // a server on a loaded machine
 
-// the ground truth of a run: a mission client on the lockstep for 2 s of sim time; the launcher's own
-// connection samples every vehicle at 10 Hz at exact sim times, then leaves when the client has left
+// the ground truth of a run: a mission client on the lockstep for 2 s of sim time; the launcher's
+// own connection samples every vehicle at 10 Hz at exact sim times, then leaves when the client has
+// left
 TEST(Launcher, RecordsGroundTruthAtItsRateWhileTheMissionRuns) {
   Launcher launch("test", true);
   ServerSpec spec;
@@ -269,7 +271,8 @@ TEST(Launcher, RecordsGroundTruthAtItsRateWhileTheMissionRuns) {
   // the server runs from its start: hold it and go back to t = 0, as the launchers do
   ASSERT_TRUE(launch.api().pause());
   ASSERT_TRUE(launch.api().reset(1));
-  auto client = client::SimConnection::connect("127.0.0.1", static_cast<uint16_t>(launch.api_port()));
+  auto client =
+      client::SimConnection::connect("127.0.0.1", static_cast<uint16_t>(launch.api_port()));
   ASSERT_TRUE(client);
   ASSERT_TRUE((*client)->lockstep_join(0.05, kServerWall_s));
   ASSERT_TRUE(launch.wait_lockstep_clients(1, kServerWall_s));

@@ -93,9 +93,10 @@ class ChaosRun {
   ChaosRun(const std::string& name, const std::vector<std::string>& extra) {
     dir_ = ::testing::TempDir() + "chaos-" + name + "-" + std::to_string(getpid());
     fs::remove_all(dir_);
-    std::vector<std::string> args{COVERAGE_RUN, "--agents", "5", "--area", "60x40", "--seed",
-                                  std::to_string(kSeed), "--no-record", "--progress", "1",
-                                  "--budget", "600", "--wall-limit", "280", "--run-dir", dir_};
+    std::vector<std::string> args{
+        COVERAGE_RUN,          "--agents",    "5",          "--area", "60x40",    "--seed",
+        std::to_string(kSeed), "--no-record", "--progress", "1",      "--budget", "600",
+        "--wall-limit",        "280",         "--run-dir",  dir_};
     args.insert(args.end(), extra.begin(), extra.end());
     int fds[2];
     if (pipe(fds) != 0) return;
@@ -246,8 +247,8 @@ Json events_of(const std::string& dir) {
   return events;
 }
 int count_events(const Json& events, const std::string& kind) {
-  return static_cast<int>(std::count_if(events.begin(), events.end(),
-                                        [&](const Json& e) { return e.value("event", "") == kind; }));
+  return static_cast<int>(std::count_if(
+      events.begin(), events.end(), [&](const Json& e) { return e.value("event", "") == kind; }));
 }
 
 // the newest stamp of a tlog whose records are all whole frames (an incomplete last record is the
@@ -261,8 +262,10 @@ double last_tlog_stamp_s(const std::string& path) {
     for (int i = 0; i < 8; ++i) stamp = (stamp << 8) | static_cast<std::uint8_t>(b[at + i]);
     const auto* f = reinterpret_cast<const std::uint8_t*>(b.data() + at + 8);
     size_t len = 0;
-    if (f[0] == 0xFE) len = 6 + size_t{f[1]} + 2;
-    else if (f[0] == 0xFD) len = 10 + size_t{f[1]} + 2 + ((f[2] & 1) ? 13 : 0);
+    if (f[0] == 0xFE)
+      len = 6 + size_t{f[1]} + 2;
+    else if (f[0] == 0xFD)
+      len = 10 + size_t{f[1]} + 2 + ((f[2] & 1) ? 13 : 0);
     EXPECT_NE(len, 0u) << path << ": not a frame at byte " << at;
     if (len == 0 || at + 8 + len > b.size()) break;
     last_s = stamp / 1e6;
@@ -299,7 +302,8 @@ void expect_logs_readable_up_to(const std::string& dir, double kill_seen_s) {
   EXPECT_EQ(count_events(events, "takeoff"), 5) << dir;  // all five took off before the kill
   for (int i = 0; i < 5; ++i) {
     const std::string uav = "uav" + std::to_string(i);
-    EXPECT_GE(last_tlog_stamp_s(dir + "/" + uav + ".tlog"), kill_seen_s - kTlogBound_s - 0.1) << uav;
+    EXPECT_GE(last_tlog_stamp_s(dir + "/" + uav + ".tlog"), kill_seen_s - kTlogBound_s - 0.1)
+        << uav;
     EXPECT_GE(last_truth_row_s(dir + "/truth_" + uav + ".csv"), kill_seen_s - 1.0) << uav;
   }
 }
@@ -317,14 +321,16 @@ TEST(Chaos, ServerKilledTheCauseIsNamedTheHarnessFailedAndTheLogsHoldTheRunUpToT
   ASSERT_EQ(kill(server->pid, SIGKILL), 0);
   ASSERT_TRUE(run.until_exit()) << run.output();
   EXPECT_TRUE(WIFEXITED(run.status()) && WEXITSTATUS(run.status()) == 4) << run.output();
-  EXPECT_NE(run.output().find("server (pid " + std::to_string(server->pid) + ") killed by SIGKILL at sim t="),
+  EXPECT_NE(run.output().find("server (pid " + std::to_string(server->pid) +
+                              ") killed by SIGKILL at sim t="),
             std::string::npos)
       << run.output();
   expect_no_orphan(snapshot, run.dir());
   expect_logs_readable_up_to(run.dir(), run.seen_s());
   const Json s = summary_of(run.dir());
   ASSERT_TRUE(s.is_object()) << read_file(run.dir() + "/summary.json");
-  EXPECT_NE(s.value("cause", Json()).dump().find("server killed by SIGKILL"), std::string::npos) << s.dump();
+  EXPECT_NE(s.value("cause", Json()).dump().find("server killed by SIGKILL"), std::string::npos)
+      << s.dump();
   EXPECT_FALSE(s["success"].get<bool>());
 }
 
@@ -338,14 +344,16 @@ TEST(Chaos, AgentProgramKilledItIsAFailedAgentAndTheFlockStillCoversTheArea) {
   const std::vector<Proc> snapshot = run.tree();
   ASSERT_EQ(kill(agent->pid, SIGKILL), 0);
   ASSERT_TRUE(run.until_exit()) << run.output();
-  EXPECT_NE(run.output().find("agent3 (pid " + std::to_string(agent->pid) + ") killed by SIGKILL at sim t="),
+  EXPECT_NE(run.output().find("agent3 (pid " + std::to_string(agent->pid) +
+                              ") killed by SIGKILL at sim t="),
             std::string::npos)
       << run.output();
   expect_no_orphan(snapshot, run.dir());
   const Json s = summary_of(run.dir());
   ASSERT_TRUE(s.is_object()) << run.output();
   EXPECT_TRUE(s["complete"].get<bool>());
-  EXPECT_NE(s.value("cause", Json()).dump().find("agent3 killed by SIGKILL"), std::string::npos) << s.dump();
+  EXPECT_NE(s.value("cause", Json()).dump().find("agent3 killed by SIGKILL"), std::string::npos)
+      << s.dump();
   EXPECT_TRUE(s["per_agent"][3]["failed"].get<bool>()) << s.dump();
   EXPECT_GE(s["coverage"].get<double>(), kFullCoverage) << run.output();
   EXPECT_TRUE(s["success"].get<bool>()) << run.output();
@@ -363,13 +371,15 @@ TEST(Chaos, GroundStationKilledTheCauseIsNamedAndTheFlockStillCoversTheArea) {
   const std::vector<Proc> snapshot = run.tree();
   ASSERT_EQ(kill(gcs->pid, SIGKILL), 0);
   ASSERT_TRUE(run.until_exit()) << run.output();
-  EXPECT_NE(run.output().find("gcs (pid " + std::to_string(gcs->pid) + ") killed by SIGKILL at sim t="),
-            std::string::npos)
+  EXPECT_NE(
+      run.output().find("gcs (pid " + std::to_string(gcs->pid) + ") killed by SIGKILL at sim t="),
+      std::string::npos)
       << run.output();
   expect_no_orphan(snapshot, run.dir());
   const Json s = summary_of(run.dir());
   ASSERT_TRUE(s.is_object()) << run.output();
-  EXPECT_NE(s.value("cause", Json()).dump().find("gcs killed by SIGKILL"), std::string::npos) << s.dump();
+  EXPECT_NE(s.value("cause", Json()).dump().find("gcs killed by SIGKILL"), std::string::npos)
+      << s.dump();
   EXPECT_GE(s["coverage"].get<double>(), kFullCoverage) << run.output();
   EXPECT_TRUE(WIFEXITED(run.status()) && WEXITSTATUS(run.status()) == 0) << run.output();
 }
@@ -417,7 +427,8 @@ TEST(Chaos, AFullFileSystemIsAClearErrorAtStart) {
     ChaosRun run("full-fs", {"--run-dir", mnt + "/run"});
     ASSERT_TRUE(run.until_exit()) << run.output();
     EXPECT_TRUE(WIFEXITED(run.status()) && WEXITSTATUS(run.status()) == 2) << run.output();
-    EXPECT_NE(run.output().find("KiB free; a run needs at least"), std::string::npos) << run.output();
+    EXPECT_NE(run.output().find("KiB free; a run needs at least"), std::string::npos)
+        << run.output();
   }
   umount(mnt.c_str());
   fs::remove_all(mnt);

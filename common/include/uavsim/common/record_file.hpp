@@ -2,8 +2,8 @@
 // tlog frames, CSV rows) to the kernel with write(2) at once, with no stdio or iostream buffer in
 // between, so whatever the process had written when it is killed is on the file as whole records.
 // The one residue the kernel allows: a write that spans a page boundary may be cut short there when
-// a fatal signal arrives mid-copy, so a reader drops an unterminated last line or an incomplete last
-// frame (read_tlog and the tests' readers do), never anything before it.
+// a fatal signal arrives mid-copy, so a reader drops an unterminated last line or an incomplete
+// last frame (read_tlog and the tests' readers do), never anything before it.
 //
 // replace_file_atomically() is the other half: a file rewritten whole (summary.json) is written
 // beside its path, fsynced and renamed over it, so a kill at any moment leaves the old file or the
@@ -30,11 +30,11 @@ class RecordFile {
   bool is_open() const { return fd_ >= 0; }
   const std::string& path() const { return path_; }
 
-  // Writes bytes, which must be whole records, with write(2) (retried after EINTR and short writes).
-  // False when the file is not open or the kernel refused (ENOSPC, EIO, ...): the first failure's
-  // text stays in error() and every later write is refused too, so that a record cut short by a
-  // full disk is the file's last and a full disk costs one message, not one per record. One thread
-  // at a time.
+  // Writes bytes, which must be whole records, with write(2) (retried after EINTR and short
+  // writes). False when the file is not open or the kernel refused (ENOSPC, EIO, ...): the first
+  // failure's text stays in error() and every later write is refused too, so that a record cut
+  // short by a full disk is the file's last and a full disk costs one message, not one per record.
+  // One thread at a time.
   bool write(std::string_view bytes);
   // "" until a write failed; then "PATH: strerror".
   const std::string& error() const { return error_; }

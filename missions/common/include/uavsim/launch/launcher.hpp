@@ -91,11 +91,11 @@ struct ProgramEnd {
 };
 
 // The exit codes every mission launcher uses (README, "Mission launchers").
-inline constexpr int kExitSuccess = 0;       // the mission's goal was met
-inline constexpr int kExitFellShort = 1;     // the run went to its end; the mission fell short
-inline constexpr int kExitUsage = 2;         // bad options, or the run directory cannot be used
-inline constexpr int kExitHarness = 4;       // the harness failed: the server died, the API failed
-inline constexpr int kExitInterrupted = 130; // SIGINT or SIGTERM stopped the run
+inline constexpr int kExitSuccess = 0;        // the mission's goal was met
+inline constexpr int kExitFellShort = 1;      // the run went to its end; the mission fell short
+inline constexpr int kExitUsage = 2;          // bad options, or the run directory cannot be used
+inline constexpr int kExitHarness = 4;        // the harness failed: the server died, the API failed
+inline constexpr int kExitInterrupted = 130;  // SIGINT or SIGTERM stopped the run
 
 class Launcher {
  public:
@@ -138,10 +138,10 @@ class Launcher {
   // Owner thread only.
   Result<void> wait_lockstep_clients(int n, double timeout_s);
 
-  // Ground truth for the run directory: from the moment wait_lockstep_clients() has seen the mission's
-  // clients, a connection of the launcher's own joins the lockstep with period 1 / rate_hz (so it is
-  // not counted among them) and at each of its ticks writes one row per vehicle into
-  // dir/truth_NAME.csv (t_s, position and velocity ENU, roll/pitch/yaw, battery, mode, armed,
+  // Ground truth for the run directory: from the moment wait_lockstep_clients() has seen the
+  // mission's clients, a connection of the launcher's own joins the lockstep with period 1 /
+  // rate_hz (so it is not counted among them) and at each of its ticks writes one row per vehicle
+  // into dir/truth_NAME.csv (t_s, position and velocity ENU, roll/pitch/yaw, battery, mode, armed,
   // crashed, on_ground) from the `vehicles` query; pump() answers the ticks. Call before
   // wait_lockstep_clients(); dir must exist.
   // Owner thread only.
@@ -184,10 +184,10 @@ class Launcher {
   // latest, and keep_summary()'s file is rewritten every kSummaryPeriod_s of it.
   // Owner thread only.
   void note_sim_time(double t_s);
-  // When a program ends (noticed by pump(), programs_done(), server_exited() or stop_all()), cb gets
-  // how, after the launcher said it: an abnormal end on stderr always ("coverage-run: agent3 (pid
-  // 812) killed by SIGKILL at sim t=53.20 s"), an ordinary one as say(). cb may call api(), not
-  // pump(). Callbacks add up. Owner thread only.
+  // When a program ends (noticed by pump(), programs_done(), server_exited() or stop_all()), cb
+  // gets how, after the launcher said it: an abnormal end on stderr always ("coverage-run: agent3
+  // (pid 812) killed by SIGKILL at sim t=53.20 s"), an ordinary one as say(). cb may call api(),
+  // not pump(). Callbacks add up. Owner thread only.
   void on_exit(std::function<void(const ProgramEnd&)> cb);
   // How the program `name` ended; nullopt while it runs (or if there is none).
   // Owner thread only.
