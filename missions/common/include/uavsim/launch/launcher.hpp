@@ -90,7 +90,7 @@ struct ProgramEnd {
   nlohmann::json to_json() const;
 };
 
-// The exit codes every mission launcher uses (README, "Mission launchers").
+// The exit codes every mission launcher uses (docs/missions.md, "When a run is killed").
 inline constexpr int kExitSuccess = 0;        // the mission's goal was met
 inline constexpr int kExitFellShort = 1;      // the run went to its end; the mission fell short
 inline constexpr int kExitUsage = 2;          // bad options, or the run directory cannot be used
