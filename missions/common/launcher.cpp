@@ -467,8 +467,14 @@ struct Launcher::Impl {
     }
     j["programs"] = std::move(programs);
     j["process_group"] = group;
-    const auto cause =
-        std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
+    // the cause: a program killed by a signal rather than those that exited because of it (agents
+    // end with a code when the server dies, and may be noticed first); else the first abnormal end
+    auto cause = std::find_if(ends.begin(), ends.end(),
+                              [](const ProgramEnd& e) { return e.abnormal() && e.signal; });
+    if (cause == ends.end()) {
+      cause =
+          std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
+    }
     j["cause"] =
         cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
     if (!j.contains("sim_time_s") || !complete) j["sim_time_s"] = sim_time_s;

@@ -198,7 +198,8 @@ class Launcher {
 
   // From now on path ("" for none) holds the run's summary so far: `partial` plus "complete":
   // false, sim_time_s, wall_time_s, "programs" (each one's end, or running) and "cause" (the first
-  // abnormal end, if any), replaced atomically (temp file, fsync, rename) every kSummaryPeriod_s of
+  // program killed by a signal the launcher did not send, else the first abnormal end; null if
+  // none), replaced atomically (temp file, fsync, rename) every kSummaryPeriod_s of
   // sim time and whenever a program ends, so a run killed at any moment leaves a summary.
   // Owner thread only.
   void keep_summary(const std::string& path, nlohmann::json partial);
