@@ -9,10 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "api/radio_ops.hpp"
 #include "api_fixture.hpp"
-#include "radio/gcs_relay.hpp"
-#include "radio/sim_radio.hpp"
+#include "radio_server.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -21,45 +19,6 @@ using testing::error_code;
 using testing::Json;
 using testing::paused;
 using testing::RawClient;
-
-// A paused server on the MBZIRC 2020 world (two quads, objects) with the radio ops, as server_app
-// wires them.
-class RadioWorldServer {
- public:
-  RadioWorldServer() {
-    physics::ComposeOptions o;
-    o.models_dir = UAVSIM_MODELS_DIR;
-    sim_ = std::make_unique<sim::Simulation>(
-        physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o),
-        sim::SimConfig{});
-    objects_ = objects::add_world_objects(*sim_);
-    radio::SimRadio& radio = radio::SimRadio::attach(*sim_, radio::RadioConfig{});
-    radio::GcsRelaySet& relays = radio::GcsRelaySet::attach(*sim_, "127.0.0.1");
-    ops_ = std::make_unique<RadioOps>(*sim_, radio, &relays);
-    runner_ = std::make_unique<sim::Runner>(*sim_, 0.0);
-    ApiConfig config = paused();
-    config.port = 0;
-    api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
-    api_->add_group(ops_.get());
-    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
-    api_->start();
-    loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
-  }
-  ~RadioWorldServer() {
-    runner_->stop();
-    api_->shutdown();
-    loop_.join();
-  }
-  uint16_t port() const { return api_->port(); }
-
- private:
-  std::unique_ptr<sim::Simulation> sim_;
-  objects::ObjectSet objects_;
-  std::unique_ptr<RadioOps> ops_;
-  std::unique_ptr<sim::Runner> runner_;
-  std::unique_ptr<ApiServer> api_;
-  std::thread loop_;
-};
 
 double time_s(RawClient& c) {
   return c.request({{"op", "status"}})["result"]["time_s"].get<double>();
@@ -76,7 +35,7 @@ void expect_clock_advances(RawClient& c, const std::string& after) {
 TEST(ApiChaos, ATdmaPeriodPastTheSlotArithmeticIsRefusedAndTheClockGoesOn) {
   // period_s / slot_s past 2^64 made the slot count's cast undefined and the slot loop spin for
   // ever at the next radio_send: no reply, no clock, no SIGTERM
-  RadioWorldServer server;
+  testing::RadioServer server;
   RawClient c(server.port());
   for (const char* period : {"1e308", "1e18", "1e300", "4e3"}) {
     c.send_raw(
@@ -102,7 +61,7 @@ TEST(ApiChaos, ATdmaPeriodPastTheSlotArithmeticIsRefusedAndTheClockGoesOn) {
 }
 
 TEST(ApiChaos, RadioConfigRefusesEveryNumberOutsideItsRange) {
-  RadioWorldServer server;
+  testing::RadioServer server;
   RawClient c(server.port());
   const Json before = c.request({{"op", "radio_config"}})["result"];
   const std::vector<std::string> fields = {
@@ -286,7 +245,7 @@ std::map<std::string, OpProbe> op_probes() {
 }
 
 TEST(ApiChaos, EveryNumericFieldOfEveryOpTakesHostileNumbersAndTheClockGoesOn) {
-  RadioWorldServer server;
+  testing::RadioServer server;
   RawClient c(server.port());
   const std::map<std::string, OpProbe> probes = op_probes();
   std::set<std::string> unprobed;

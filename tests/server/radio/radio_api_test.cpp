@@ -8,6 +8,7 @@
 
 #include "api/radio_ops.hpp"
 #include "api_fixture.hpp"
+#include "radio_server.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
 #include "uavsim/common/base64.hpp"
@@ -16,50 +17,11 @@ namespace uavsim::server::api {
 namespace {
 
 using testing::Json;
+using testing::RadioServer;
 using testing::TestClient;
 
 constexpr double kTimeTol_s = 1e-9;
 constexpr double kStep_s = 0.001;  // physics
-
-class RadioServer {
- public:
-  explicit RadioServer(radio::Backend backend = radio::Backend::kSimple) {
-    physics::ComposeOptions o;
-    o.models_dir = UAVSIM_MODELS_DIR;
-    sim_ = std::make_unique<sim::Simulation>(
-        physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o),
-        sim::SimConfig{});
-    objects_ = objects::add_world_objects(*sim_);
-    radio::BackendOptions b;
-    b.backend = backend;
-    radio::SimRadio& radio = radio::SimRadio::attach(*sim_, radio::RadioConfig{}, b);
-    radio::GcsRelaySet& relays = radio::GcsRelaySet::attach(*sim_, "127.0.0.1");
-    ops_ = std::make_unique<RadioOps>(*sim_, radio, &relays);
-    runner_ = std::make_unique<sim::Runner>(*sim_, 0.0);
-    ApiConfig config;
-    config.port = 0;
-    config.start_paused = true;
-    api_ = std::make_unique<ApiServer>(*sim_, runner_.get(), objects_, config);
-    api_->add_group(ops_.get());
-    runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
-    api_->start();
-    loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
-  }
-  ~RadioServer() {
-    runner_->stop();
-    api_->shutdown();
-    loop_.join();
-  }
-  uint16_t port() const { return api_->port(); }
-
- private:
-  std::unique_ptr<sim::Simulation> sim_;
-  objects::ObjectSet objects_;
-  std::unique_ptr<RadioOps> ops_;
-  std::unique_ptr<sim::Runner> runner_;
-  std::unique_ptr<ApiServer> api_;
-  std::thread loop_;
-};
 
 std::string error_code(const Json& reply) {
   return reply.value("ok", true) ? "" : reply["error"].value("code", "");
