@@ -248,12 +248,22 @@ std::string sim_time_text(double t_s) {
 }  // namespace
 
 nlohmann::json ProgramEnd::to_json() const {
+  // no pid or process group: a summary is the same for the same seed, whatever the machine numbered
+  // the processes (the launcher's own lines name the pids)
   nlohmann::json j = {{"name", name},
-                      {"pid", pid},
                       {"how", how},
                       {"abnormal", abnormal()},
                       {"stopped_by_launcher", stopped},
                       {"sim_time_s", sim_time_s}};
+  if (!abnormal()) {
+    // an expected end's sim time is when the launcher noticed it, after the run's pinned end: it
+    // depends on the machine's load, and a summary is the same for the same seed
+    j.erase("sim_time_s");
+    std::string how_s = how;
+    const std::string at = " " + sim_time_text(sim_time_s);
+    if (const auto pos = how_s.find(at); pos != std::string::npos) how_s.erase(pos, at.size());
+    j["how"] = how_s;
+  }
   j["exit_code"] = exit_code ? nlohmann::json(*exit_code) : nlohmann::json();
   j["signal"] = signal ? nlohmann::json(signal_name(*signal)) : nlohmann::json();
   if (out_of_memory) j["out_of_memory"] = true;
@@ -463,10 +473,9 @@ struct Launcher::Impl {
                                   [&](const ProgramEnd& x) { return x.pid == c->pid; });
       programs.push_back(
           e != ends.end() ? e->to_json()
-                          : nlohmann::json{{"name", c->name}, {"pid", c->pid}, {"running", true}});
+                          : nlohmann::json{{"name", c->name}, {"running", true}});
     }
     j["programs"] = std::move(programs);
-    j["process_group"] = group;
     // the cause: a program killed by a signal rather than those that exited because of it (agents
     // end with a code when the server dies, and may be noticed first); else the first abnormal end
     auto cause = std::find_if(ends.begin(), ends.end(),

@@ -41,7 +41,7 @@ seeds = [7]
 budget_s = 900
 grid = { agents = 5, area = "150x100" }
 [[sweep]]
-# made to fail: a world that is not there (the launcher's harness fails, exit 4)
+# made to fail: a world that is not there (refused at start as unusable input, exit 2)
 mission = "mbzirc2017"
 seeds = [3]
 args = ["--world", "/nonexistent/mbzirc2017.xml"]
@@ -236,13 +236,13 @@ class SweepOnDaemons(unittest.TestCase):
         self.assertEqual(rc, 1, status)
         self.assertIn("%d/%d: done %d, running 0, failed 1, left 0" % (len(runs), len(runs), len(good)), status)
         log = os.path.join(remote, "runs", bad[0]["id"], "launcher.log")
-        self.assertIn("failed: %s (exit 4" % bad[0]["id"], status)
+        self.assertIn("failed: %s (exit 2" % bad[0]["id"], status)
         self.assertIn("log: " + log, status)
         with open(log) as f:
             self.assertIn("nonexistent", f.read())
         if MODE == "slurm":
             # the scheduler's own record of the task agrees
-            self.assertIn("scheduler: FAILED 4:0", status)
+            self.assertIn("scheduler: FAILED 2:0", status)
         else:
             # every run went through the ssh login (GNU parallel's job log: its Host column)
             logs = [f for f in os.listdir(remote) if f.startswith("parallel-ssh-")]
