@@ -415,19 +415,7 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
   }
 
   // arrivals up to now, in (time, receiver, sender, seq) order
-  auto arrived = std::stable_partition(pending_.begin(), pending_.end(), [&](const Delivery& d) {
-    return d.time_s > now_s + kTimeEps;
-  });
-  std::vector<Delivery> ready(std::make_move_iterator(arrived),
-                              std::make_move_iterator(pending_.end()));
-  pending_.erase(arrived, pending_.end());
-  std::sort(ready.begin(), ready.end(), [](const Delivery& a, const Delivery& b) {
-    if (a.time_s != b.time_s) return a.time_s < b.time_s;
-    if (a.to != b.to) return a.to < b.to;
-    if (a.from != b.from) return a.from < b.from;
-    return a.seq < b.seq;
-  });
-  for (Delivery& d : ready) out->push_back(std::move(d));
+  take_arrivals(&pending_, now_s, out);
 }
 
 bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {

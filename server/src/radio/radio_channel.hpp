@@ -88,6 +88,11 @@ struct Delivery {
   std::vector<uint8_t> data;
 };
 
+// Moves the deliveries of pending that arrive at or before now_s (within 1 ns) to the end of *out,
+// in (arrival, receiver, sender, seq) order: how every backend hands its arrivals over. The rest
+// stay.
+void take_arrivals(std::vector<Delivery>* pending, double now_s, std::vector<Delivery>* out);
+
 // One directed link's counters. Every frame addressed to the receiver (unicast to it, or broadcast)
 // that went on air counts once in sent and, once resolved, once in exactly one of the others.
 struct LinkStats {

@@ -32,6 +32,21 @@ double airtime_s(size_t frame_bytes) {
   return static_cast<double>((frame_bytes + kPhyOverheadBytes) * 8) / kBitRateBitS;
 }
 
+void take_arrivals(std::vector<Delivery>* pending, double now_s, std::vector<Delivery>* out) {
+  auto arrived = std::stable_partition(pending->begin(), pending->end(), [&](const Delivery& d) {
+    return d.time_s > now_s + kTimeEps;
+  });
+  std::vector<Delivery> ready(std::make_move_iterator(arrived), std::make_move_iterator(pending->end()));
+  pending->erase(arrived, pending->end());
+  std::sort(ready.begin(), ready.end(), [](const Delivery& a, const Delivery& b) {
+    if (a.time_s != b.time_s) return a.time_s < b.time_s;
+    if (a.to != b.to) return a.to < b.to;
+    if (a.from != b.from) return a.from < b.from;
+    return a.seq < b.seq;
+  });
+  for (Delivery& d : ready) out->push_back(std::move(d));
+}
+
 const char* propagation_name(Propagation p) {
   return p == Propagation::kRange ? "range" : "log_distance";
 }
@@ -318,19 +333,7 @@ void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& position
              air_.end());
 
   // arrivals up to now, in (time, receiver, sender, seq) order
-  auto arrived = std::stable_partition(pending_.begin(), pending_.end(), [&](const Delivery& d) {
-    return d.time_s > now_s + kTimeEps;
-  });
-  std::vector<Delivery> ready(std::make_move_iterator(arrived),
-                              std::make_move_iterator(pending_.end()));
-  pending_.erase(arrived, pending_.end());
-  std::sort(ready.begin(), ready.end(), [](const Delivery& a, const Delivery& b) {
-    if (a.time_s != b.time_s) return a.time_s < b.time_s;
-    if (a.to != b.to) return a.to < b.to;
-    if (a.from != b.from) return a.from < b.from;
-    return a.seq < b.seq;
-  });
-  for (Delivery& d : ready) out->push_back(std::move(d));
+  take_arrivals(&pending_, now_s, out);
 }
 
 }  // namespace uavsim::server::radio
