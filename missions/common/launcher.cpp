@@ -695,8 +695,13 @@ void Launcher::pump(int timeout_ms) {
   } else if (timeout_ms > 0) {
     usleep(static_cast<useconds_t>(timeout_ms) * 1000);
   }
-  m.read_children();
+  // the API first, then the programs' output: a program writes a line before it sends the lockstep
+  // `done` that lets the clock reach the next tick, so once a tick has been read here every line the
+  // programs wrote before it is in their pipes, and the reads below see it in the same pass. (In the
+  // other order a line written between the two reads would meet a later tick: the fault injector of
+  // the 2017 run then acted a tick late on a loaded machine, and two runs of one seed diverged.)
   if (m.api) (void)m.api->poll(0);
+  m.read_children();
   m.truth.serve();
   if (m.truth.time_s > m.sim_time_s) note_sim_time(m.truth.time_s);
   check_children();

@@ -235,6 +235,15 @@ class WakeupHold {
 
 }  // namespace
 
+bool ApiServer::count_down_step() {
+  if (steps_remaining_ > 0) {
+    --steps_remaining_;
+    return true;
+  }
+  if (step_reply_) finish_step();
+  return false;
+}
+
 void ApiServer::on_gate() {
   for (;;) {
     // a pass of the gate is progress, though the clock is held (the watchdog tells it from a hang)
@@ -254,7 +263,12 @@ void ApiServer::on_gate() {
       std::lock_guard<std::mutex> lock(mutex_);
       if (shutdown_) return;
     }
-    if (stop_check_ && stop_check_()) return;
+    if (stop_check_ && stop_check_()) {
+      // a stopping loop (or a caller whose gate must never hold, like the fuzz harness) still counts a
+      // paused step down and answers it once done, with the replies held behind it: no reply is lost
+      if (paused_ && !lockstep_.blocked()) count_down_step();
+      return;
+    }
     for (OpGroup* g : groups_) g->on_gate(send_fn_, in_lockstep_fn_);
     announce_ticks();
     uint64_t seq_progress_seen = 0;
@@ -281,11 +295,8 @@ void ApiServer::on_gate() {
       waiting_seq = lockstep_.waiting_on_seq();
     } else if (!paused_) {
       return;
-    } else if (steps_remaining_ > 0) {
-      --steps_remaining_;
+    } else if (count_down_step()) {
       return;
-    } else if (step_reply_) {
-      finish_step();
     }
     hold.release();
     // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)

@@ -142,6 +142,8 @@ class ApiServer {
   // Answers the step in progress (ok at its end, or an `interrupted` error naming by_op when another
   // clock op ended it early) and then the replies held behind it.
   void finish_step(const char* by_op = nullptr);
+  // paused: true when a requested step is to run now; once the steps are done, sends the step's reply
+  bool count_down_step();
 
   // loop thread side
   void on_gate();
