@@ -33,6 +33,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <regex>
@@ -57,6 +58,7 @@ using uavsim::launch::Launcher;
 constexpr double kLockstepPeriod_s = 0.05;     // the UAV program's and the fault injector's ticks
 constexpr double kStayOnDeck_s = 5.0;          // scored: still carried this long after touchdown
 constexpr double kPauseSlack_s = 0.01;  // a pause_at holds the clock within a physics step of its time
+constexpr double kTruckHistory_s = 10.0;  // ticks kept for lines stamped before the tick they meet
 constexpr double kFirstPassBlackout_s = 14.0;  // longer than the 12 s search of Wait Until Visible
 constexpr double kApproachBlackout_s = 4.0;    // longer than the 1 s after which the marker is lost
 // --lose-low-off-centre: at this skid height over the deck, the GPS 1 m off and the camera black
@@ -392,6 +394,7 @@ int main(int argc, char** argv) {
   std::string part_at_approach, part_at_touchdown;  // where on the eight
   std::optional<double> approach_s;                 // the first Approach's time (program output)
   double truck_s_m = 0.0;                           // the truck's arc length at the latest tick
+  std::map<double, double> truck_s_by_tick_m;       // ... and at the ticks of the last kTruckHistory_s
   int climb_aways = 0;
 
   std::string world = o.world;
@@ -561,8 +564,17 @@ int main(int argc, char** argv) {
                              Eigen::Vector3d(tp[0], tp[1], tp[2]), k.value("yaw_rad", 0.0));
               truck_s_m = k.value("s_m", 0.0);
               truck_yaw_rad = k.value("yaw_rad", 0.0);
-              if (approach_s && part_at_approach.empty() && tick_s >= *approach_s) {
-                part_at_approach = uavsim::missions::mbzirc2017::eight_part(track, truck_s_m);
+              // the part of the eight at the approach's own tick: the program's line stamped with it may
+              // come in before or after that tick is handled here (the two processes get the tick at
+              // once), so it is looked up in the recent ticks, not taken from the tick it meets
+              truck_s_by_tick_m[tick_s] = truck_s_m;
+              truck_s_by_tick_m.erase(truck_s_by_tick_m.begin(),
+                                      truck_s_by_tick_m.lower_bound(tick_s - kTruckHistory_s));
+              if (approach_s && part_at_approach.empty()) {
+                const auto at = truck_s_by_tick_m.upper_bound(*approach_s + 1e-9);
+                if (at != truck_s_by_tick_m.begin()) {
+                  part_at_approach = uavsim::missions::mbzirc2017::eight_part(track, std::prev(at)->second);
+                }
               }
             }
           }
