@@ -18,7 +18,7 @@ namespace uavsim::vision {
 namespace {
 
 constexpr char kMagic[8] = {'U', 'A', 'V', 'V', 'L', 'O', 'G', '\0'};
-constexpr uint32_t kVersion = 2;        // written; 1 (no planes) is read too
+constexpr uint32_t kVersion = 2;  // written; 1 (no planes) is read too
 constexpr uint32_t kFirstVersion = 1;
 // the planes beside the image (version 2)
 enum PlaneKind : uint8_t { kPlaneDepth = 1, kPlaneObjects = 2, kPlaneClasses = 3 };
@@ -109,8 +109,9 @@ void serialise_overlay(const Overlay& o, std::string* b) {
 
 // a plane as a lossless PNG: depth's float bits as 4 x 8-bit channels, ids as 16-bit grey
 bool serialise_plane(uint8_t kind, const cv::Mat& plane, std::string* b) {
-  const cv::Mat as_png = kind == kPlaneDepth ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
-                                             : plane;
+  const cv::Mat as_png = kind == kPlaneDepth
+                             ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
+                             : plane;
   std::vector<uchar> png;
   if (!cv::imencode(".png", as_png, png)) return false;
   put_u8(b, kind);
@@ -123,7 +124,8 @@ bool parse_plane(ByteReader* r, VideoLogRecord* rec) {
   const auto [png, png_bytes] = r->bytes();
   if (r->failed() || kind < kPlaneDepth || kind > kPlaneClasses) return false;
   const cv::Mat decoded =
-      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)), cv::IMREAD_UNCHANGED);
+      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)),
+                   cv::IMREAD_UNCHANGED);
   if (decoded.empty()) return false;
   if (kind == kPlaneDepth) {
     if (decoded.type() != CV_8UC4) return false;
@@ -255,8 +257,9 @@ struct VideoLogWriter::Impl {
       put_u32(&record, static_cast<uint32_t>(frame.overlays.size()));
       for (const auto& o : frame.overlays) serialise_overlay(o, &record);
       put_bytes(&record, frame.text.data(), frame.text.size());
-      const std::pair<uint8_t, const cv::Mat*> planes[] = {
-          {kPlaneDepth, &frame.depth_m}, {kPlaneObjects, &frame.object_ids}, {kPlaneClasses, &frame.class_ids}};
+      const std::pair<uint8_t, const cv::Mat*> planes[] = {{kPlaneDepth, &frame.depth_m},
+                                                           {kPlaneObjects, &frame.object_ids},
+                                                           {kPlaneClasses, &frame.class_ids}};
       uint32_t plane_count = 0;
       for (const auto& [kind, plane] : planes) plane_count += plane->empty() ? 0 : 1;
       put_u32(&record, plane_count);
@@ -306,7 +309,8 @@ Result<std::unique_ptr<VideoLogWriter>, VideoLogError> VideoLogWriter::open(
 
 bool VideoLogWriter::submit(const VideoLogFrame& frame) {
   if (frame.image.empty() || (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1) ||
-      !plane_fits(frame.depth_m, frame.image, CV_32FC1) || !plane_fits(frame.object_ids, frame.image, CV_16UC1) ||
+      !plane_fits(frame.depth_m, frame.image, CV_32FC1) ||
+      !plane_fits(frame.object_ids, frame.image, CV_16UC1) ||
       !plane_fits(frame.class_ids, frame.image, CV_16UC1)) {
     ++impl_->dropped;
     return false;
@@ -320,9 +324,9 @@ bool VideoLogWriter::submit(const VideoLogFrame& frame) {
   }
   // copy outside the lock (the caller may reuse its buffer); a racing submit may fill the slot
   // meanwhile, then this one is dropped below
-  VideoLogFrame copy{frame.stamp_us,         frame.image.clone(),      frame.overlays,
-                     frame.text,             frame.depth_m.clone(),    frame.object_ids.clone(),
-                     frame.class_ids.clone()};
+  VideoLogFrame copy{
+      frame.stamp_us,        frame.image.clone(),      frame.overlays,         frame.text,
+      frame.depth_m.clone(), frame.object_ids.clone(), frame.class_ids.clone()};
   {
     std::lock_guard lock(impl_->mutex);
     if (impl_->closing || impl_->queue.size() >= impl_->options.queue_capacity) {

@@ -81,7 +81,7 @@ struct VideoLogRecord {
   cv::Mat image;  // decoded (BGR or grey, as written)
   std::vector<Overlay> overlays;
   std::string text;
-  cv::Mat depth_m;     // empty when the frame had none
+  cv::Mat depth_m;  // empty when the frame had none
   cv::Mat object_ids;
   cv::Mat class_ids;
 };
@@ -103,8 +103,8 @@ class VideoLogWriter {
   VideoLogWriter(const VideoLogWriter&) = delete;
   VideoLogWriter& operator=(const VideoLogWriter&) = delete;
 
-  // Queues a copy of the frame; false if it was dropped (queue full, or closed, or a depth or id plane
-  // of another type or size than the image). Never blocks on encoding or I/O. Thread-safe.
+  // Queues a copy of the frame; false if it was dropped (queue full, or closed, or a depth or id
+  // plane of another type or size than the image). Never blocks on encoding or I/O. Thread-safe.
   bool submit(const VideoLogFrame& frame);
 
   // Writes what is queued, then stops the worker and closes the file; kWriteFailed if any write
