@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -174,8 +175,26 @@ const char* to_string(VideoLogError error) {
       return "image does not decode";
     case VideoLogError::kExportFailed:
       return "export failed";
+    case VideoLogError::kNoSuchPlane:
+      return "a frame without the plane asked for";
+    case VideoLogError::kBadOption:
+      return "an export option out of range";
   }
   return "unknown error";
+}
+
+const char* to_string(VideoLogPlane plane) {
+  switch (plane) {
+    case VideoLogPlane::kImage:
+      return "image";
+    case VideoLogPlane::kDepth:
+      return "depth";
+    case VideoLogPlane::kObjectIds:
+      return "objects";
+    case VideoLogPlane::kClassIds:
+      return "classes";
+  }
+  return "unknown";
 }
 
 // --- Overlay ---
@@ -514,8 +533,44 @@ void draw_text_block(const std::string& text, cv::Mat* image_bgr) {
   }
 }
 
+namespace {
+
+bool export_options_in_range(const VideoLogExportOptions& o) {
+  const bool fps_ok =
+      o.fps == 0.0 || (std::isfinite(o.fps) && o.fps > 0.0 && o.fps <= kMaxExportFps);
+  const bool depth_ok = std::isfinite(o.depth_near_m) && std::isfinite(o.depth_far_m) &&
+                        o.depth_near_m > 0.0 && o.depth_far_m > o.depth_near_m &&
+                        o.depth_far_m <= kMaxExportDepthM;
+  // the image is a decoded JPEG: nothing exact to dump (its PNGs are the lossless picture of it)
+  const bool raw_ok = o.raw_dir.empty() || o.plane != VideoLogPlane::kImage;
+  return fps_ok && depth_ok && raw_ok;
+}
+
+// the record's plane an export asks for; nullptr for the image
+const cv::Mat* plane_of(const VideoLogRecord& rec, VideoLogPlane plane) {
+  switch (plane) {
+    case VideoLogPlane::kDepth:
+      return &rec.depth_m;
+    case VideoLogPlane::kObjectIds:
+      return &rec.object_ids;
+    case VideoLogPlane::kClassIds:
+      return &rec.class_ids;
+    case VideoLogPlane::kImage:
+      break;
+  }
+  return nullptr;
+}
+
+// ffmpeg's pipe, closed on every way out
+struct PipeCloser {
+  void operator()(FILE* f) const { pclose(f); }
+};
+
+}  // namespace
+
 Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog_path,
                                                const VideoLogExportOptions& options) {
+  if (!export_options_in_range(options)) return VideoLogError::kBadOption;
   auto reader = VideoLogReader::open(vlog_path);
   if (!reader) return reader.error();
   VideoLogReader& log = *reader.value();
@@ -535,20 +590,33 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
     }
   }
 
-  if (!options.png_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(options.png_dir, ec);
-    if (ec) return VideoLogError::kExportFailed;
-  }
   cv::VideoWriter video;
-  FILE* ffmpeg = nullptr;
+  std::unique_ptr<FILE, PipeCloser> ffmpeg;
   cv::Size video_size;
   size_t exported = 0;
   for (size_t i = 0; i < n; ++i) {
     auto rec = log.read(i);
     if (!rec) return rec.error();
-    cv::Mat frame = rec->image;
-    if (frame.type() == CV_8UC1) cv::cvtColor(frame, frame, cv::COLOR_GRAY2BGR);
+    // the picture: the image, or the plane in false colour (a log of colour only fails on frame 0,
+    // before anything is written)
+    const cv::Mat* plane = plane_of(*rec, options.plane);
+    if (plane != nullptr && plane->empty()) return VideoLogError::kNoSuchPlane;
+    if (i == 0) {
+      for (const auto* dir : {&options.png_dir, &options.raw_dir}) {
+        std::error_code ec;
+        if (!dir->empty()) std::filesystem::create_directories(*dir, ec);
+        if (ec) return VideoLogError::kExportFailed;
+      }
+    }
+    cv::Mat frame;
+    if (plane == nullptr) {
+      frame = rec->image;
+      if (frame.type() == CV_8UC1) cv::cvtColor(frame, frame, cv::COLOR_GRAY2BGR);
+    } else if (options.plane == VideoLogPlane::kDepth) {
+      frame = false_colour_depth(*plane, options.depth_near_m, options.depth_far_m);
+    } else {
+      frame = false_colour_ids(*plane);
+    }
     if (options.draw_overlays) draw_overlays(rec->overlays, &frame);
     if (options.draw_text) draw_text_block(rec->text, &frame);
     if (!options.png_dir.empty()) {
@@ -557,6 +625,11 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
       if (!cv::imwrite((options.png_dir / name).string(), frame)) {
         return VideoLogError::kExportFailed;
       }
+    }
+    if (!options.raw_dir.empty()) {
+      char name[48];
+      std::snprintf(name, sizeof(name), "%s_%06zu.npy", to_string(options.plane), i);
+      if (!write_npy(options.raw_dir / name, *plane)) return VideoLogError::kExportFailed;
     }
     if (!options.mp4_path.empty()) {
       if (i == 0) {
@@ -569,7 +642,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
                                   std::to_string(video_size.width) + "x" +
                                   std::to_string(video_size.height) + " -r " + std::to_string(fps) +
                                   " -i - -c:v mpeg4 -q:v 3 '" + options.mp4_path.string() + "'";
-          ffmpeg = popen(cmd.c_str(), "w");
+          ffmpeg.reset(popen(cmd.c_str(), "w"));
           if (!ffmpeg) return VideoLogError::kExportFailed;
         }
       }
@@ -578,13 +651,13 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
         video.write(frame);
       } else if (ffmpeg) {
         const cv::Mat contiguous = frame.isContinuous() ? frame : frame.clone();
-        fwrite(contiguous.data, 1, contiguous.total() * contiguous.elemSize(), ffmpeg);
+        fwrite(contiguous.data, 1, contiguous.total() * contiguous.elemSize(), ffmpeg.get());
       }
     }
     ++exported;
   }
   if (video.isOpened()) video.release();
-  if (ffmpeg && pclose(ffmpeg) != 0) return VideoLogError::kExportFailed;
+  if (ffmpeg && pclose(ffmpeg.release()) != 0) return VideoLogError::kExportFailed;
   return exported;
 }
 
