@@ -521,36 +521,6 @@ oldest dropped past `queue` frames).)")
       py::arg("timeout_s") = 30.0,
       "[({plane: bytes}, Frame)]: each frame's planes (image, depth_m, object_ids, class_ids) "
       "as C++ reads them, row by row, beside the Frame.");
-  testing.def(
-      "count_frames",
-      [](PyLoop& loop, const std::string& camera, const std::vector<std::string>& modalities,
-         double duration_s, double timeout_s) {
-        checked_duration(duration_s, "duration_s");
-        checked_duration(timeout_s, "timeout_s");
-        client::CameraConfig c;
-        c.camera = camera;
-        apply_modalities(modalities, &c);
-        // the C++ subscriber alone, frames touched in C++ only (the reference of the numpy path's
-        // frame rate, python/bench/camera_numpy_bench.py)
-        auto frames = std::make_shared<std::uint64_t>(0);
-        auto on_frame = [frames](const CameraFrame&) { ++*frames; };
-        client::EventLoop& l = loop.get();
-        auto sub = blocking_result(
-            *loop.errors, [&] { return CameraSubscriber::subscribe(l, c, on_frame, timeout_s); });
-        const double end_s = l.now() + duration_s;
-        blocking_result(*loop.errors, [&] {
-          return l.run_until([&] { return l.now() >= end_s; }, duration_s + timeout_s,
-                             "frames of " + camera);
-        });
-        {
-          py::gil_scoped_release nogil;
-          sub.reset();
-        }
-        return *frames;
-      },
-      py::arg("loop"), py::arg("camera"), py::arg("modalities"), py::arg("duration_s"),
-      py::arg("timeout_s") = 30.0,
-      "Frames the C++ subscriber alone receives in duration_s of loop time.");
 #endif
 }
 
