@@ -278,7 +278,7 @@ void bind_devices(py::module_& m) {
       });
   py::class_<PyFrame>(m, "Frame", R"(A camera frame: the images of one capture and its sim stamp.
 
-The images are numpy arrays over the C++ frame's buffers (no copy; read-only use), None where the
+The images are numpy arrays over the C++ frame's own buffers (no copy), None where the
 subscription did not ask for them: image (uint8, BGR H x W x 3 or grey H x W), depth_m (float32 H x W,
 metres along the optical axis, NaN where nothing was measured), object_ids and class_ids (uint16 H x W,
 0 where nothing was hit; names in Camera.segmentation_objects and Camera.segmentation_classes).)")

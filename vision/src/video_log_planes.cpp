@@ -2,6 +2,7 @@
 // export_video_log.
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -33,7 +34,7 @@ const std::vector<cv::Vec3b>& id_palette() {
 }  // namespace
 
 cv::Mat false_colour_depth(const cv::Mat& depth_m, double near_m, double far_m) {
-  CV_Assert(depth_m.type() == CV_32FC1 && near_m > 0.0 && far_m > near_m);
+  assert(depth_m.type() == CV_32FC1 && near_m > 0.0 && far_m > near_m);
   // (z, near, far) => level 255 (near) .. 0 (far) on a log scale; NaN => masked out, black
   const double log_span = std::log(far_m / near_m);
   cv::Mat level(depth_m.size(), CV_8UC1);
@@ -90,7 +91,7 @@ cv::Vec3b id_colour_bgr(uint16_t id) {
 }
 
 cv::Mat false_colour_ids(const cv::Mat& ids) {
-  CV_Assert(ids.type() == CV_16UC1);
+  assert(ids.type() == CV_16UC1);
   const std::vector<cv::Vec3b>& palette = id_palette();
   cv::Mat out(ids.size(), CV_8UC3);
   for (int y = 0; y < ids.rows; ++y) {
