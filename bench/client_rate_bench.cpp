@@ -4,13 +4,14 @@
 // prints one JSON line.
 //
 //   client_rate_bench --api PORT --mavlink PORT --mode ticks|camera [--seconds S] [--period P]
-//                     [--camera NAME] [--seed N]
+//                     [--camera NAME] [--modalities M] [--seed N]
 //
 // Both modes: hold the clock, reset to t = 0 with the seed, join the lockstep with a period of P
 // sim seconds, let the clock go, then run the loop for S sim seconds, timing it on the wall clock.
 //   ticks:  one Vehicle connected with a telemetry callback (counting updates): lockstep ticks per
-//   second. camera: a CameraSubscriber on NAME (BGR) with a callback (counting frames): frames per
-//   second.
+//   second. camera: a CameraSubscriber on NAME (BGR; or --modalities "depth+segmentation", any of
+//   rgb, depth, segmentation joined by '+') with a callback (counting frames): frames per second.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -35,7 +36,7 @@ int fail(const std::string& what) {
 
 int main(int argc, char** argv) {
   int api_port = 0, mavlink_port = 0;
-  std::string mode = "ticks", camera = "overview";
+  std::string mode = "ticks", camera = "overview", modalities = "rgb";
   double seconds = 10.0, period_s = 0.01;
   unsigned long long seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -52,6 +53,8 @@ int main(int argc, char** argv) {
       period_s = std::atof(v.c_str());
     else if (k == "--camera")
       camera = v;
+    else if (k == "--modalities")
+      modalities = v;
     else if (k == "--seed")
       seed = std::strtoull(v.c_str(), nullptr, 10);
     else
@@ -65,6 +68,21 @@ int main(int argc, char** argv) {
     return fail("--seconds must be in (0, 3600] and --period in (0, 1]");
   }
   if (mode != "ticks" && mode != "camera") return fail("--mode must be ticks or camera");
+  CameraConfig cc;
+  cc.camera = camera;
+  cc.colour = cc.depth = cc.segmentation = false;
+  for (size_t start = 0; start <= modalities.size();) {
+    const size_t end = std::min(modalities.find('+', start), modalities.size());
+    const std::string m = modalities.substr(start, end - start);
+    bool* on = m == "rgb"            ? &cc.colour
+               : m == "depth"        ? &cc.depth
+               : m == "segmentation" ? &cc.segmentation
+                                     : nullptr;
+    if (on == nullptr)
+      return fail("--modalities: rgb, depth, segmentation joined by '+', not " + modalities);
+    *on = true;
+    start = end + 1;
+  }
 
   // t = 0 with the seed, the clock held until this program has joined
   auto api = SimConnection::connect("127.0.0.1", static_cast<uint16_t>(api_port));
@@ -85,10 +103,9 @@ int main(int argc, char** argv) {
       return fail(c.message());
     vehicle->on_telemetry([&](const Telemetry&) { ++telemetry; });
   } else {
-    CameraConfig cc;
-    cc.camera = camera;
-    auto s = CameraSubscriber::subscribe(
-        **loop, cc, [&](const CameraFrame& f) { frames += f.image.empty() ? 0 : 1; });
+    auto s = CameraSubscriber::subscribe(**loop, cc, [&](const CameraFrame& f) {
+      frames += f.image.empty() && f.depth_m.empty() && f.object_ids.empty() ? 0 : 1;
+    });
     if (!s) return fail(s.message());
     cam = std::move(*s);
   }

@@ -1,5 +1,6 @@
-// uavsim._core: the devices on a loop: Camera (frames as numpy arrays), Radio (air-to-air frames)
-// and Switches (landing-pad microswitches); and _testing, the C++ side of the binding's own tests.
+// uavsim._core: the devices on a loop: Camera (frames as numpy arrays: colour, depth,
+// segmentation), Radio (air-to-air frames) and Switches (landing-pad microswitches); and _testing,
+// the C++ side of the binding's own tests.
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -9,6 +10,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bindings.hpp"
@@ -33,7 +35,8 @@ using client::CameraFormat;
 using client::CameraFrame;
 using client::CameraSubscriber;
 
-// The Python Frame: the image as a numpy array over the frame's pixels, and what describes them.
+// The Python Frame: the images of one capture as numpy arrays over the frame's own buffers, and
+// what describes them. A plane the subscription did not ask for is None.
 struct PyFrame {
   std::string camera;
   std::string vehicle;
@@ -41,7 +44,10 @@ struct PyFrame {
   std::int64_t dropped = 0;
   double stamp_s = 0.0;
   std::int64_t stamp_us = 0;
-  py::array image;
+  py::object image;       // uint8 H x W x 3 (BGR) or H x W (grey)
+  py::object depth_m;     // float32 H x W, metres along the optical axis, NaN: nothing measured
+  py::object object_ids;  // uint16 H x W, index into Camera.segmentation_objects, 0: nothing hit
+  py::object class_ids;   // uint16 H x W, index into Camera.segmentation_classes, 0: nothing hit
   client::CameraIntrinsics intrinsics;
   client::CameraPose pose;
 };
@@ -78,6 +84,58 @@ py::array array_over(const cv::Mat& m) {
     strides.push_back(elem);
   }
   return py::array(dtype_of(keep->depth()), shape, strides, keep->data, owner);
+}
+
+// a plane of the frame as an array, None when the frame has none
+py::object plane_or_none(const cv::Mat& m) {
+  if (m.empty()) return py::none();
+  return array_over(m);
+}
+
+// The modalities asked for from Python ("rgb", "grey", "jpeg", "depth", "segmentation"; the
+// protocol's names) => the subscriber's config: at most one colour format (a frame has one image),
+// each name once. InvalidArgumentError naming the offending entry and the names there are.
+void apply_modalities(const std::vector<std::string>& names, client::CameraConfig* c) {
+  const std::string known = "rgb, grey, jpeg, depth, segmentation";
+  if (names.empty() || names.size() > 5) {
+    raise_failure({client::Error::kInvalidArgument, "camera: modalities must name 1-5 of " + known +
+                                                        ", not " + std::to_string(names.size())});
+  }
+  std::optional<std::string> colour;  // the colour format's name
+  bool depth = false;
+  bool segmentation = false;
+  for (const std::string& n : names) {
+    bool repeated = false;
+    if (n == "rgb" || n == "grey" || n == "jpeg") {
+      if (colour && *colour != n) {
+        raise_failure({client::Error::kInvalidArgument,
+                       "camera: modalities may hold one of rgb, grey, jpeg (a frame has one colour "
+                       "image), not both '" +
+                           *colour + "' and '" + n + "'"});
+      }
+      repeated = colour.has_value();
+      colour = n;
+    } else if (n == "depth") {
+      repeated = std::exchange(depth, true);
+    } else if (n == "segmentation") {
+      repeated = std::exchange(segmentation, true);
+    } else {
+      raise_failure({client::Error::kInvalidArgument,
+                     "camera: unknown modality '" + n + "' (known: " + known + ")"});
+    }
+    if (repeated) {
+      raise_failure({client::Error::kInvalidArgument,
+                     "camera: modality '" + n + "' named twice in modalities"});
+    }
+  }
+  c->colour = colour.has_value();
+  if (colour) {
+    c->format = *colour == "rgb"    ? CameraFormat::kBgr
+                : *colour == "grey" ? CameraFormat::kGrey
+                                    : CameraFormat::kJpeg;
+  }
+  c->depth = depth;
+  c->segmentation = segmentation;
 }
 
 // what a Camera keeps for Python: the latest frame, a bounded queue of recent ones and the user's
@@ -126,11 +184,62 @@ py::object frame_to_python(const CameraFrame& f) {
   p.dropped = f.dropped;
   p.stamp_s = f.stamp_s;
   p.stamp_us = f.stamp_us;
-  p.image = array_over(f.image);
+  p.image = plane_or_none(f.image);
+  p.depth_m = plane_or_none(f.depth_m);
+  p.object_ids = plane_or_none(f.object_ids);
+  p.class_ids = plane_or_none(f.class_ids);
   p.intrinsics = f.intrinsics;
   p.pose = f.pose;
   return py::cast(std::move(p));
 }
+#endif
+
+#ifdef UAVSIM_CLIENT_HAS_CAMERA
+namespace {
+
+// a cv::Mat's pixels row by row, as C++ code reading it sees them
+py::bytes mat_bytes(const cv::Mat& m) {
+  std::string bytes;
+  const std::size_t row = m.cols * m.elemSize();
+  for (int y = 0; y < m.rows; ++y) bytes.append(reinterpret_cast<const char*>(m.ptr(y)), row);
+  return py::bytes(bytes);
+}
+
+// count frames from the C++ subscriber alone, each as ({plane: its bytes as C++ sees them}, the
+// Frame the binding makes of it)
+std::vector<std::pair<py::dict, py::object>> capture_with_references(PyLoop& loop,
+                                                                     const client::CameraConfig& c,
+                                                                     int count, double timeout_s) {
+  if (count < 1 || count > 1000)
+    raise_failure({client::Error::kInvalidArgument, "count must be in 1..1000"});
+  checked_duration(timeout_s, "timeout_s");
+  auto out = make_gil_shared<std::vector<std::pair<py::dict, py::object>>>();
+  auto on_frame = [out](const CameraFrame& f) {
+    py::gil_scoped_acquire gil;
+    py::dict refs;
+    const std::pair<const char*, const cv::Mat*> planes[] = {{"image", &f.image},
+                                                             {"depth_m", &f.depth_m},
+                                                             {"object_ids", &f.object_ids},
+                                                             {"class_ids", &f.class_ids}};
+    for (const auto& [name, mat] : planes)
+      if (!mat->empty()) refs[name] = mat_bytes(*mat);
+    out->emplace_back(refs, frame_to_python(f));
+  };
+  client::EventLoop& l = loop.get();
+  auto sub = blocking_result(
+      *loop.errors, [&] { return CameraSubscriber::subscribe(l, c, on_frame, timeout_s); });
+  blocking_result(*loop.errors, [&] {
+    return l.run_until([&] { return out->size() >= static_cast<std::size_t>(count); }, timeout_s,
+                       "frames of " + c.camera);
+  });
+  {
+    py::gil_scoped_release nogil;
+    sub.reset();
+  }
+  return std::move(*out);
+}
+
+}  // namespace
 #endif
 
 void bind_devices(py::module_& m) {
@@ -157,8 +266,22 @@ void bind_devices(py::module_& m) {
                                  "Where the camera was: optical centre and camera -> ENU rotation.")
       .def_readonly("position_enu_m", &client::CameraPose::position_enu_m)
       .def_readonly("R_enu_cam", &client::CameraPose::R_enu_cam);
-  py::class_<PyFrame>(
-      m, "Frame", "A camera frame: image (numpy, BGR HxWx3 or grey HxW, uint8) and its sim stamp.")
+  py::class_<client::SegmentationObject>(
+      m, "SegmentationObject",
+      "An object of the segmentation images: its id (in Frame.object_ids), name and class id.")
+      .def_readonly("id", &client::SegmentationObject::id)
+      .def_readonly("name", &client::SegmentationObject::name)
+      .def_readonly("class_id", &client::SegmentationObject::class_id)
+      .def("__repr__", [](const client::SegmentationObject& o) {
+        return "<SegmentationObject " + std::to_string(o.id) + " " + o.name + " class " +
+               std::to_string(o.class_id) + ">";
+      });
+  py::class_<PyFrame>(m, "Frame", R"(A camera frame: the images of one capture and its sim stamp.
+
+The images are numpy arrays over the C++ frame's own buffers (no copy), None where the
+subscription did not ask for them: image (uint8, BGR H x W x 3 or grey H x W), depth_m (float32 H x W,
+metres along the optical axis, NaN where nothing was measured), object_ids and class_ids (uint16 H x W,
+0 where nothing was hit; names in Camera.segmentation_objects and Camera.segmentation_classes).)")
       .def_readonly("camera", &PyFrame::camera)
       .def_readonly("vehicle", &PyFrame::vehicle)
       .def_readonly("seq", &PyFrame::seq)
@@ -166,6 +289,9 @@ void bind_devices(py::module_& m) {
       .def_readonly("stamp_s", &PyFrame::stamp_s)
       .def_readonly("stamp_us", &PyFrame::stamp_us)
       .def_readonly("image", &PyFrame::image)
+      .def_readonly("depth_m", &PyFrame::depth_m)
+      .def_readonly("object_ids", &PyFrame::object_ids)
+      .def_readonly("class_ids", &PyFrame::class_ids)
       .def_readonly("intrinsics", &PyFrame::intrinsics)
       .def_readonly("pose", &PyFrame::pose)
       .def("__repr__", [](const PyFrame& f) {
@@ -175,15 +301,20 @@ void bind_devices(py::module_& m) {
 
   py::class_<PyCamera>(m, "Camera", R"(A camera's frames from the simulator, as numpy arrays.
 
+What each frame holds: one colour format (format=, default BGR), or modalities=, a list of the
+protocol's names "rgb", "grey", "jpeg" (at most one of these three), "depth", "segmentation", where the
+camera gives them (the world's or --camera's modalities=); all images of a frame show one instant.
+
 Under a lockstep loop every frame due at or before a tick is delivered before that tick's timers run;
 on the host clock frames come as they arrive (a slow reader loses some, counted in frames_dropped).
 Each frame goes to on_frame(Frame) if given, becomes `latest`, and is queued for take_frames() (the
 oldest dropped past `queue` frames).)")
       .def_static(
           "subscribe",
-          [](PyLoop& loop, const std::string& camera, CameraFormat format, double fps,
-             int jpeg_quality, const std::string& api_address, std::optional<py::function> on_frame,
-             int queue, double timeout_s) {
+          [](PyLoop& loop, const std::string& camera, std::optional<CameraFormat> format,
+             std::optional<std::vector<std::string>> modalities, double fps, int jpeg_quality,
+             const std::string& api_address, std::optional<py::function> on_frame, int queue,
+             double timeout_s) {
             if (!(std::isfinite(fps) && fps >= 0.0))
               raise_failure({client::Error::kInvalidArgument, "fps must be >= 0"});
             if (jpeg_quality < 1 || jpeg_quality > 100) {
@@ -192,9 +323,14 @@ oldest dropped past `queue` frames).)")
             if (queue < 0 || queue > 4096)
               raise_failure({client::Error::kInvalidArgument, "queue must be in 0..4096"});
             checked_duration(timeout_s, "timeout_s");
+            if (format && modalities) {
+              raise_failure(
+                  {client::Error::kInvalidArgument, "camera: give format or modalities, not both"});
+            }
             client::CameraConfig c;
             c.camera = camera;
-            c.format = format;
+            if (format) c.format = *format;
+            if (modalities) apply_modalities(*modalities, &c);
             c.fps = fps;
             c.jpeg_quality = jpeg_quality;
             c.api_address = api_address;
@@ -223,15 +359,29 @@ oldest dropped past `queue` frames).)")
                      }));
             return pc;
           },
-          py::arg("loop"), py::arg("camera"), py::kw_only(), py::arg("format") = CameraFormat::kBgr,
-          py::arg("fps") = 0.0, py::arg("jpeg_quality") = 90, py::arg("api_address") = "",
-          py::arg("on_frame") = py::none(), py::arg("queue") = 16, py::arg("timeout_s") = 10.0,
-          py::keep_alive<0, 1>(),
+          py::arg("loop"), py::arg("camera"), py::kw_only(), py::arg("format") = py::none(),
+          py::arg("modalities") = py::none(), py::arg("fps") = 0.0, py::arg("jpeg_quality") = 90,
+          py::arg("api_address") = "", py::arg("on_frame") = py::none(), py::arg("queue") = 16,
+          py::arg("timeout_s") = 10.0, py::keep_alive<0, 1>(),
           "Subscribes to a camera (its name in the world) and waits for the simulator's answer.")
       .def_property_readonly("width", [](PyCamera& c) { return c.get().width(); })
       .def_property_readonly("height", [](PyCamera& c) { return c.get().height(); })
       .def_property_readonly("fps", [](PyCamera& c) { return c.get().fps(); })
       .def_property_readonly("intrinsics", [](PyCamera& c) { return c.get().intrinsics(); })
+      .def_property_readonly(
+          "depth_near_m", [](PyCamera& c) { return c.get().depth_near_m(); },
+          "The depth images' near clip plane, metres (0 without depth): nothing nearer is seen.")
+      .def_property_readonly(
+          "depth_far_m", [](PyCamera& c) { return c.get().depth_far_m(); },
+          "The depth images' far clip plane, metres (0 without depth): nothing farther is seen.")
+      .def_property_readonly(
+          "segmentation_classes", [](PyCamera& c) { return c.get().segmentation_classes(); },
+          "The class names by class id (list index = id; 0 \"none\"); empty without segmentation.")
+      .def_property_readonly(
+          "segmentation_objects", [](PyCamera& c) { return c.get().segmentation_objects(); },
+          "The objects by object id (list index = id; 0 \"none\"): SegmentationObjects with name "
+          "and class id; the same ids in every frame and run of a world. Empty without "
+          "segmentation.")
       .def_property_readonly("frames_received",
                              [](PyCamera& c) { return c.get().frames_received(); })
       .def_property_readonly("frames_dropped", [](PyCamera& c) { return c.get().frames_dropped(); })
@@ -337,47 +487,40 @@ oldest dropped past `queue` frames).)")
           "Unsubscribes (later calls raise ConnectionError).");
 
 #ifdef UAVSIM_CLIENT_HAS_CAMERA
-  // the binding's own tests: frames taken with the C++ subscriber alone, each with a byte copy of
-  // its cv::Mat made in C++ beside the Frame the binding makes of it (tests/python compares the
+  // the binding's own tests: frames taken with the C++ subscriber alone, each with byte copies of
+  // its cv::Mats made in C++ beside the Frame the binding makes of it (tests/python compares the
   // two)
   py::module_ testing = m.def_submodule("_testing", "C++ helpers for the binding's tests.");
   testing.def(
       "capture_frames",
       [](PyLoop& loop, const std::string& camera, int count, CameraFormat format,
          double timeout_s) {
-        if (count < 1 || count > 1000)
-          raise_failure({client::Error::kInvalidArgument, "count must be in 1..1000"});
-        checked_duration(timeout_s, "timeout_s");
-        auto out = make_gil_shared<std::vector<std::pair<py::bytes, py::object>>>();
         client::CameraConfig c;
         c.camera = camera;
         c.format = format;
-        auto on_frame = [out](const CameraFrame& f) {
-          // the reference: the pixels row by row, as C++ code reading the cv::Mat sees them
-          std::string bytes;
-          const std::size_t row = f.image.cols * f.image.elemSize();
-          for (int y = 0; y < f.image.rows; ++y)
-            bytes.append(reinterpret_cast<const char*>(f.image.ptr(y)), row);
-          py::gil_scoped_acquire gil;
-          out->emplace_back(py::bytes(bytes), frame_to_python(f));
-        };
-        client::EventLoop& l = loop.get();
-        auto sub = blocking_result(
-            *loop.errors, [&] { return CameraSubscriber::subscribe(l, c, on_frame, timeout_s); });
-        blocking_result(*loop.errors, [&] {
-          return l.run_until([&] { return out->size() >= static_cast<std::size_t>(count); },
-                             timeout_s, "frames of " + camera);
-        });
-        {
-          py::gil_scoped_release nogil;
-          sub.reset();
-        }
         py::list frames;
-        for (auto& [bytes, frame] : *out) frames.append(py::make_tuple(bytes, frame));
+        for (auto& [refs, frame] : capture_with_references(loop, c, count, timeout_s))
+          frames.append(py::make_tuple(refs["image"], frame));
         return frames;
       },
       py::arg("loop"), py::arg("camera"), py::arg("count"), py::arg("format") = CameraFormat::kBgr,
       py::arg("timeout_s") = 30.0);
+  testing.def(
+      "capture_planes",
+      [](PyLoop& loop, const std::string& camera, int count,
+         const std::vector<std::string>& modalities, double timeout_s) {
+        client::CameraConfig c;
+        c.camera = camera;
+        apply_modalities(modalities, &c);
+        py::list frames;
+        for (auto& [refs, frame] : capture_with_references(loop, c, count, timeout_s))
+          frames.append(py::make_tuple(refs, frame));
+        return frames;
+      },
+      py::arg("loop"), py::arg("camera"), py::arg("count"), py::arg("modalities"),
+      py::arg("timeout_s") = 30.0,
+      "[({plane: bytes}, Frame)]: each frame's planes (image, depth_m, object_ids, class_ids) "
+      "as C++ reads them, row by row, beside the Frame.");
 #endif
 }
 

@@ -44,7 +44,7 @@ from ._core import (
 )
 
 try:  # the camera (frames as numpy arrays) is there when the client library was built with OpenCV
-    from ._core import Camera, CameraFormat, CameraIntrinsics, CameraPose, Frame
+    from ._core import Camera, CameraFormat, CameraIntrinsics, CameraPose, Frame, SegmentationObject
 except ImportError:  # pragma: no cover - a client library without OpenCV
     pass
 from .envs import CameraHoverEnv, HoverEnv, register_gymnasium
@@ -54,7 +54,7 @@ from .sim import Sim
 __all__ = [
     "Camera", "CameraFormat", "CameraIntrinsics", "CameraPose", "ConnectionError", "Error", "EventLoop", "FlightMode", "Frame", "Geodetic",
     "GeodeticOrigin", "InvalidArgumentError", "LandedState", "LoopConfig", "MissionItem", "Radio", "RadioFrame",
-    "SimConnection", "SimMessage", "Switches", "SwitchState", "Telemetry", "TimeoutError", "UavsimError",
+    "SegmentationObject", "SimConnection", "SimMessage", "Switches", "SwitchState", "Telemetry", "TimeoutError", "UavsimError",
     "Vehicle", "enu_from_geodetic", "geodetic_from_enu", "geodetic_from_ned", "mode_name", "ned_from_geodetic",
     "wrap_pi", "CameraHoverEnv", "HoverEnv", "Server", "Sim", "find_server",
 ]

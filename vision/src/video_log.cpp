@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -18,7 +19,7 @@ namespace uavsim::vision {
 namespace {
 
 constexpr char kMagic[8] = {'U', 'A', 'V', 'V', 'L', 'O', 'G', '\0'};
-constexpr uint32_t kVersion = 2;        // written; 1 (no planes) is read too
+constexpr uint32_t kVersion = 2;  // written; 1 (no planes) is read too
 constexpr uint32_t kFirstVersion = 1;
 // the planes beside the image (version 2)
 enum PlaneKind : uint8_t { kPlaneDepth = 1, kPlaneObjects = 2, kPlaneClasses = 3 };
@@ -109,8 +110,9 @@ void serialise_overlay(const Overlay& o, std::string* b) {
 
 // a plane as a lossless PNG: depth's float bits as 4 x 8-bit channels, ids as 16-bit grey
 bool serialise_plane(uint8_t kind, const cv::Mat& plane, std::string* b) {
-  const cv::Mat as_png = kind == kPlaneDepth ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
-                                             : plane;
+  const cv::Mat as_png = kind == kPlaneDepth
+                             ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
+                             : plane;
   std::vector<uchar> png;
   if (!cv::imencode(".png", as_png, png)) return false;
   put_u8(b, kind);
@@ -123,7 +125,8 @@ bool parse_plane(ByteReader* r, VideoLogRecord* rec) {
   const auto [png, png_bytes] = r->bytes();
   if (r->failed() || kind < kPlaneDepth || kind > kPlaneClasses) return false;
   const cv::Mat decoded =
-      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)), cv::IMREAD_UNCHANGED);
+      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)),
+                   cv::IMREAD_UNCHANGED);
   if (decoded.empty()) return false;
   if (kind == kPlaneDepth) {
     if (decoded.type() != CV_8UC4) return false;
@@ -172,8 +175,26 @@ const char* to_string(VideoLogError error) {
       return "image does not decode";
     case VideoLogError::kExportFailed:
       return "export failed";
+    case VideoLogError::kNoSuchPlane:
+      return "a frame without the plane asked for";
+    case VideoLogError::kBadOption:
+      return "an export option out of range";
   }
   return "unknown error";
+}
+
+const char* to_string(VideoLogPlane plane) {
+  switch (plane) {
+    case VideoLogPlane::kImage:
+      return "image";
+    case VideoLogPlane::kDepth:
+      return "depth";
+    case VideoLogPlane::kObjectIds:
+      return "objects";
+    case VideoLogPlane::kClassIds:
+      return "classes";
+  }
+  return "unknown";
 }
 
 // --- Overlay ---
@@ -255,8 +276,9 @@ struct VideoLogWriter::Impl {
       put_u32(&record, static_cast<uint32_t>(frame.overlays.size()));
       for (const auto& o : frame.overlays) serialise_overlay(o, &record);
       put_bytes(&record, frame.text.data(), frame.text.size());
-      const std::pair<uint8_t, const cv::Mat*> planes[] = {
-          {kPlaneDepth, &frame.depth_m}, {kPlaneObjects, &frame.object_ids}, {kPlaneClasses, &frame.class_ids}};
+      const std::pair<uint8_t, const cv::Mat*> planes[] = {{kPlaneDepth, &frame.depth_m},
+                                                           {kPlaneObjects, &frame.object_ids},
+                                                           {kPlaneClasses, &frame.class_ids}};
       uint32_t plane_count = 0;
       for (const auto& [kind, plane] : planes) plane_count += plane->empty() ? 0 : 1;
       put_u32(&record, plane_count);
@@ -306,7 +328,8 @@ Result<std::unique_ptr<VideoLogWriter>, VideoLogError> VideoLogWriter::open(
 
 bool VideoLogWriter::submit(const VideoLogFrame& frame) {
   if (frame.image.empty() || (frame.image.type() != CV_8UC3 && frame.image.type() != CV_8UC1) ||
-      !plane_fits(frame.depth_m, frame.image, CV_32FC1) || !plane_fits(frame.object_ids, frame.image, CV_16UC1) ||
+      !plane_fits(frame.depth_m, frame.image, CV_32FC1) ||
+      !plane_fits(frame.object_ids, frame.image, CV_16UC1) ||
       !plane_fits(frame.class_ids, frame.image, CV_16UC1)) {
     ++impl_->dropped;
     return false;
@@ -320,9 +343,9 @@ bool VideoLogWriter::submit(const VideoLogFrame& frame) {
   }
   // copy outside the lock (the caller may reuse its buffer); a racing submit may fill the slot
   // meanwhile, then this one is dropped below
-  VideoLogFrame copy{frame.stamp_us,         frame.image.clone(),      frame.overlays,
-                     frame.text,             frame.depth_m.clone(),    frame.object_ids.clone(),
-                     frame.class_ids.clone()};
+  VideoLogFrame copy{
+      frame.stamp_us,        frame.image.clone(),      frame.overlays,         frame.text,
+      frame.depth_m.clone(), frame.object_ids.clone(), frame.class_ids.clone()};
   {
     std::lock_guard lock(impl_->mutex);
     if (impl_->closing || impl_->queue.size() >= impl_->options.queue_capacity) {
@@ -510,8 +533,44 @@ void draw_text_block(const std::string& text, cv::Mat* image_bgr) {
   }
 }
 
+namespace {
+
+bool export_options_in_range(const VideoLogExportOptions& o) {
+  const bool fps_ok =
+      o.fps == 0.0 || (std::isfinite(o.fps) && o.fps > 0.0 && o.fps <= kMaxExportFps);
+  const bool depth_ok = std::isfinite(o.depth_near_m) && std::isfinite(o.depth_far_m) &&
+                        o.depth_near_m > 0.0 && o.depth_far_m > o.depth_near_m &&
+                        o.depth_far_m <= kMaxExportDepthM;
+  // the image is a decoded JPEG: nothing exact to dump (its PNGs are the lossless picture of it)
+  const bool raw_ok = o.raw_dir.empty() || o.plane != VideoLogPlane::kImage;
+  return fps_ok && depth_ok && raw_ok;
+}
+
+// the record's plane an export asks for; nullptr for the image
+const cv::Mat* plane_of(const VideoLogRecord& rec, VideoLogPlane plane) {
+  switch (plane) {
+    case VideoLogPlane::kDepth:
+      return &rec.depth_m;
+    case VideoLogPlane::kObjectIds:
+      return &rec.object_ids;
+    case VideoLogPlane::kClassIds:
+      return &rec.class_ids;
+    case VideoLogPlane::kImage:
+      break;
+  }
+  return nullptr;
+}
+
+// ffmpeg's pipe, closed on every way out
+struct PipeCloser {
+  void operator()(FILE* f) const { pclose(f); }
+};
+
+}  // namespace
+
 Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog_path,
                                                const VideoLogExportOptions& options) {
+  if (!export_options_in_range(options)) return VideoLogError::kBadOption;
   auto reader = VideoLogReader::open(vlog_path);
   if (!reader) return reader.error();
   VideoLogReader& log = *reader.value();
@@ -531,20 +590,33 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
     }
   }
 
-  if (!options.png_dir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(options.png_dir, ec);
-    if (ec) return VideoLogError::kExportFailed;
-  }
   cv::VideoWriter video;
-  FILE* ffmpeg = nullptr;
+  std::unique_ptr<FILE, PipeCloser> ffmpeg;
   cv::Size video_size;
   size_t exported = 0;
   for (size_t i = 0; i < n; ++i) {
     auto rec = log.read(i);
     if (!rec) return rec.error();
-    cv::Mat frame = rec->image;
-    if (frame.type() == CV_8UC1) cv::cvtColor(frame, frame, cv::COLOR_GRAY2BGR);
+    // the picture: the image, or the plane in false colour (a log of colour only fails on frame 0,
+    // before anything is written)
+    const cv::Mat* plane = plane_of(*rec, options.plane);
+    if (plane != nullptr && plane->empty()) return VideoLogError::kNoSuchPlane;
+    if (i == 0) {
+      for (const auto* dir : {&options.png_dir, &options.raw_dir}) {
+        std::error_code ec;
+        if (!dir->empty()) std::filesystem::create_directories(*dir, ec);
+        if (ec) return VideoLogError::kExportFailed;
+      }
+    }
+    cv::Mat frame;
+    if (plane == nullptr) {
+      frame = rec->image;
+      if (frame.type() == CV_8UC1) cv::cvtColor(frame, frame, cv::COLOR_GRAY2BGR);
+    } else if (options.plane == VideoLogPlane::kDepth) {
+      frame = false_colour_depth(*plane, options.depth_near_m, options.depth_far_m);
+    } else {
+      frame = false_colour_ids(*plane);
+    }
     if (options.draw_overlays) draw_overlays(rec->overlays, &frame);
     if (options.draw_text) draw_text_block(rec->text, &frame);
     if (!options.png_dir.empty()) {
@@ -553,6 +625,11 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
       if (!cv::imwrite((options.png_dir / name).string(), frame)) {
         return VideoLogError::kExportFailed;
       }
+    }
+    if (!options.raw_dir.empty()) {
+      char name[48];
+      std::snprintf(name, sizeof(name), "%s_%06zu.npy", to_string(options.plane), i);
+      if (!write_npy(options.raw_dir / name, *plane)) return VideoLogError::kExportFailed;
     }
     if (!options.mp4_path.empty()) {
       if (i == 0) {
@@ -565,7 +642,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
                                   std::to_string(video_size.width) + "x" +
                                   std::to_string(video_size.height) + " -r " + std::to_string(fps) +
                                   " -i - -c:v mpeg4 -q:v 3 '" + options.mp4_path.string() + "'";
-          ffmpeg = popen(cmd.c_str(), "w");
+          ffmpeg.reset(popen(cmd.c_str(), "w"));
           if (!ffmpeg) return VideoLogError::kExportFailed;
         }
       }
@@ -574,13 +651,13 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
         video.write(frame);
       } else if (ffmpeg) {
         const cv::Mat contiguous = frame.isContinuous() ? frame : frame.clone();
-        fwrite(contiguous.data, 1, contiguous.total() * contiguous.elemSize(), ffmpeg);
+        fwrite(contiguous.data, 1, contiguous.total() * contiguous.elemSize(), ffmpeg.get());
       }
     }
     ++exported;
   }
   if (video.isOpened()) video.release();
-  if (ffmpeg && pclose(ffmpeg) != 0) return VideoLogError::kExportFailed;
+  if (ffmpeg && pclose(ffmpeg.release()) != 0) return VideoLogError::kExportFailed;
   return exported;
 }
 

@@ -35,6 +35,8 @@ enum class VideoLogError {
   kOutOfRange,    // frame index beyond the end
   kDecodeFailed,  // the stored image does not decode
   kExportFailed,  // cannot write the PNG files or the MP4
+  kNoSuchPlane,   // a frame without the plane the export asked for (depth, object or class ids)
+  kBadOption,     // an export option out of its range (fps, depth range, a raw dump of the image)
 };
 
 const char* to_string(VideoLogError error);
@@ -81,7 +83,7 @@ struct VideoLogRecord {
   cv::Mat image;  // decoded (BGR or grey, as written)
   std::vector<Overlay> overlays;
   std::string text;
-  cv::Mat depth_m;     // empty when the frame had none
+  cv::Mat depth_m;  // empty when the frame had none
   cv::Mat object_ids;
   cv::Mat class_ids;
 };
@@ -103,8 +105,8 @@ class VideoLogWriter {
   VideoLogWriter(const VideoLogWriter&) = delete;
   VideoLogWriter& operator=(const VideoLogWriter&) = delete;
 
-  // Queues a copy of the frame; false if it was dropped (queue full, or closed, or a depth or id plane
-  // of another type or size than the image). Never blocks on encoding or I/O. Thread-safe.
+  // Queues a copy of the frame; false if it was dropped (queue full, or closed, or a depth or id
+  // plane of another type or size than the image). Never blocks on encoding or I/O. Thread-safe.
   bool submit(const VideoLogFrame& frame);
 
   // Writes what is queued, then stops the worker and closes the file; kWriteFailed if any write
@@ -152,18 +154,64 @@ void draw_overlays(const std::vector<Overlay>& overlays, cv::Mat* image_bgr);
 // Paints a frame's text block in the top-left corner, one line per '\n'. Thread-safe.
 void draw_text_block(const std::string& text, cv::Mat* image_bgr);
 
+// Which image of each frame an export shows.
+enum class VideoLogPlane {
+  kImage,      // the camera image (JPEG-decoded)
+  kDepth,      // the depth plane, in false colour (false_colour_depth)
+  kObjectIds,  // the object-id plane, a colour per id (false_colour_ids)
+  kClassIds,   // the class-id plane, a colour per id (false_colour_ids)
+};
+
+// The plane's name in options and file names: "image", "depth", "objects", "classes".
+const char* to_string(VideoLogPlane plane);
+
 struct VideoLogExportOptions {
   std::filesystem::path png_dir;  // if set: frame_000000.png, ...
   std::filesystem::path
       mp4_path;  // if set: an MP4 (OpenCV mp4v; ffmpeg through a pipe as fallback)
   bool draw_overlays = true;
   bool draw_text = true;
-  double fps = 0.0;  // 0: from the timestamps (median frame interval)
+  double fps = 0.0;  // 0: from the timestamps (median frame interval); else (0, kMaxExportFps]
+  VideoLogPlane plane = VideoLogPlane::kImage;  // what the PNGs and the MP4 show
+  // the depth false colour's range, metres: 0 < near < far <= kMaxExportDepthM; what is nearer is
+  // drawn as near, what is farther as far
+  double depth_near_m = 1.0;
+  double depth_far_m = 100.0;
+  // if set (depth or id planes only): each frame's plane exactly as logged, for analysis:
+  // PLANE_000000.npy (NumPy .npy, v1.0: float32 '<f4' metres with NaN for depth, uint16 '<u2' for
+  // ids; shape (height, width), row-major)
+  std::filesystem::path raw_dir;
 };
 
+constexpr double kMaxExportFps = 1000.0;
+constexpr double kMaxExportDepthM = 1e6;
+
 // The player/exporter (seed 6.4 "VLOG Player"): decodes every frame, optionally paints overlays and
-// text, writes PNGs and/or an MP4. Returns the number of frames exported.
+// text on the plane's picture, writes PNGs and/or an MP4, and the raw plane. Returns the number of
+// frames exported. kBadOption before anything is written for options out of range; kNoSuchPlane
+// when a frame lacks the plane (checked on frame 0 before anything is written: a log of colour
+// only).
 Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog_path,
                                                const VideoLogExportOptions& options);
+
+// A depth plane (CV_32FC1 metres, NaN: nothing measured) in false colour, CV_8UC3 BGR: the level
+// 255 (1 - log(z / near) / log(far / near)), z clamped to [near, far], through OpenCV's turbo map
+// (near dark red, far dark blue; log so that near detail keeps its contrast, as the server's
+// --record-tile depth tiles), black where NaN. Preconditions: 0 < near_m < far_m. Thread-safe.
+cv::Mat false_colour_depth(const cv::Mat& depth_m, double near_m, double far_m);
+
+// The colour of an id in the id planes' false colour (BGR): black for 0 (nothing hit); else hue
+// (id x 137.508 deg) mod 360 (the golden angle: consecutive ids far apart on the colour wheel),
+// saturation 0.85, value 1.0 for odd and 0.7 for even ids. The same id has the same colour in every
+// frame, log and run. Thread-safe.
+cv::Vec3b id_colour_bgr(uint16_t id);
+
+// An id plane (CV_16UC1 object or class ids) in false colour, CV_8UC3 BGR (id_colour_bgr).
+// Thread-safe.
+cv::Mat false_colour_ids(const cv::Mat& ids);
+
+// Writes a CV_32FC1 or CV_16UC1 Mat as a NumPy .npy file (format 1.0, little-endian, C order);
+// false if it cannot be written or is of another type. Thread-safe.
+bool write_npy(const std::filesystem::path& path, const cv::Mat& plane);
 
 }  // namespace uavsim::vision
