@@ -194,7 +194,7 @@ void LineServer::accept_all() {
   }
 }
 
-std::string LineServer::peer_address(uint64_t conn) {
+std::string LineServer::peer_address(uint64_t conn) const {
   std::lock_guard<std::mutex> lock(out_mutex_);
   auto it = conns_.find(conn);
   return it == conns_.end() ? std::string() : it->second.peer;

@@ -70,7 +70,7 @@ class LineServer {
   // Bytes queued for a connection and not yet written to its socket (0 if it is gone). Thread-safe.
   size_t pending_bytes(uint64_t conn);
   // The IPv4 address of a connection's peer ("" if it is gone). Thread-safe.
-  std::string peer_address(uint64_t conn);
+  std::string peer_address(uint64_t conn) const;
 
  private:
   struct Conn {
@@ -117,7 +117,7 @@ class LineServer {
   uint16_t port_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
-  std::mutex out_mutex_;               // guards conns_ membership and every Conn::out
+  mutable std::mutex out_mutex_;       // guards conns_ membership and every Conn::out
   std::map<uint64_t, Conn> conns_;     // membership changes on the I/O thread only
   uint64_t next_id_ = 1;
 };
