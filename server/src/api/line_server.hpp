@@ -63,9 +63,7 @@ class LineServer {
   // one wake-up instead of one each. Never hold across a wait. Loop thread (one holder at a time).
   void hold_wakeups() { wakeups_held_.store(true); }
   void release_wakeups();
-  // Connections refused or dropped for the limits above, and accepts that failed for want of file
-  // descriptors. Thread-safe.
-  uint64_t overload_drops() const { return overload_drops_.load(); }
+  // Accepts that failed for want of file descriptors. Thread-safe.
   uint64_t fd_exhausted_accepts() const { return fd_exhausted_accepts_.load(); }
   // Bytes queued for a connection and not yet written to its socket (0 if it is gone). Thread-safe.
   size_t pending_bytes(uint64_t conn);
@@ -104,7 +102,6 @@ class LineServer {
   size_t max_line_bytes_;
   size_t total_pending_ = 0;           // sum of every Conn's out + unsent; guarded by out_mutex_
   int spare_fd_ = -1;                  // given up to accept (and close) when out of file descriptors
-  std::atomic<uint64_t> overload_drops_{0};
   std::atomic<uint64_t> fd_exhausted_accepts_{0};
   int listen_fd_ = -1;
   int wake_fds_[2] = {-1, -1};

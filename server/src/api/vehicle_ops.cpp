@@ -7,6 +7,7 @@
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
 #include "sim/checked_number.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::api {
 
@@ -198,12 +199,12 @@ void VehicleOps::gimbal(const Json& request, OpReply* reply) {
               : *mode == "forward" ? objects::GimbalMode::kForward
                                    : objects::GimbalMode::kTargets;
   }
-  if (pitch_deg) g->pitch_rad = *pitch_deg * M_PI / 180.0;
-  if (yaw_deg) g->yaw_rad = *yaw_deg * M_PI / 180.0;
+  if (pitch_deg) g->pitch_rad = *pitch_deg * common::kPi / 180.0;
+  if (yaw_deg) g->yaw_rad = *yaw_deg * common::kPi / 180.0;
   reply->result = {{"gimbal", g->name},
                    {"mode", objects::gimbal_mode_name(g->mode)},
-                   {"pitch_deg", g->pitch_rad * 180.0 / M_PI},
-                   {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
+                   {"pitch_deg", g->pitch_rad * 180.0 / common::kPi},
+                   {"yaw_deg", g->yaw_rad * 180.0 / common::kPi}};
 }
 
 void VehicleOps::wind(const Json& request, OpReply* reply) {
