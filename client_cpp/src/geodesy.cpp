@@ -31,7 +31,7 @@ Geodetic geodetic_from_enu(const GeodeticOrigin& origin, const Eigen::Vector3d& 
   return geodetic_from_ned(origin, ned_from_enu(enu_m));
 }
 
-double enu_yaw_from_ned(double ned_yaw_rad) { return wrap_pi(M_PI / 2.0 - ned_yaw_rad); }
-double ned_yaw_from_enu(double enu_yaw_rad) { return wrap_pi(M_PI / 2.0 - enu_yaw_rad); }
+double enu_yaw_from_ned(double ned_yaw_rad) { return wrap_pi(common::kPi / 2.0 - ned_yaw_rad); }
+double ned_yaw_from_enu(double enu_yaw_rad) { return wrap_pi(common::kPi / 2.0 - enu_yaw_rad); }
 
 }  // namespace uavsim::client

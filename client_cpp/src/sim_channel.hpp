@@ -84,7 +84,6 @@ class SimChannel {
   void feed(const char* data, std::size_t size);
   // From inside a handler: the messages after this one stay unread (buffered) until resume_input().
   void hold_input() { stream_.hold(); }
-  bool input_held() const { return stream_.held(); }
   void resume_input();
 
   // ---- routing

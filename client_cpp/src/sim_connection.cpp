@@ -18,6 +18,7 @@
 #include "api_stream.hpp"
 #include "net.hpp"
 #include "uavsim/common/base64.hpp"
+#include "uavsim/common/api_error.hpp"
 
 namespace uavsim::client {
 
@@ -51,17 +52,35 @@ std::string SimMessage::kind() const {
 }
 
 Error sim_api_error(std::string_view code) {
-  if (code == "bad_json" || code == "bad_request" || code == "line_too_long" ||
-      code == "missing_field" || code == "bad_field" || code == "unknown_vehicle" ||
-      code == "frame_too_large" || code == "bad_base64") {
-    return Error::kInvalidArgument;
+  const std::optional<common::ApiError> e = common::api_error_from_code(code);
+  if (!e) return Error::kFailed;  // a code of a newer server
+  switch (*e) {
+    case common::ApiError::kBadJson:
+    case common::ApiError::kBadRequest:
+    case common::ApiError::kLineTooLong:
+    case common::ApiError::kMissingField:
+    case common::ApiError::kBadField:
+    case common::ApiError::kUnknownVehicle:
+    case common::ApiError::kFrameTooLarge:
+    case common::ApiError::kBadBase64:
+      return Error::kInvalidArgument;
+    case common::ApiError::kUnknownOp:
+    case common::ApiError::kNotAvailable:
+      return Error::kUnsupported;
+    case common::ApiError::kNotJoined:
+    case common::ApiError::kBadState:
+      return Error::kNotReady;
+    case common::ApiError::kBusy:
+    case common::ApiError::kQueueFull:
+    case common::ApiError::kOverloaded:
+      return Error::kTemporarilyRejected;
+    case common::ApiError::kUnauthorized:
+    case common::ApiError::kForbidden:
+      return Error::kDenied;
+    case common::ApiError::kInterrupted:
+    case common::ApiError::kIoError:
+      return Error::kFailed;
   }
-  if (code == "unknown_op" || code == "not_available") return Error::kUnsupported;
-  if (code == "not_joined" || code == "bad_state") return Error::kNotReady;
-  if (code == "busy" || code == "queue_full" || code == "overloaded") {
-    return Error::kTemporarilyRejected;
-  }
-  if (code == "unauthorized" || code == "forbidden") return Error::kDenied;
   return Error::kFailed;
 }
 

@@ -1,11 +1,12 @@
 #include "uavsim/common/geodesy.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <cmath>
 
 namespace uavsim::common {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 constexpr double kDegToRad = kPi / 180.0;
 }  // namespace
 

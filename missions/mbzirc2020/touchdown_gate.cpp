@@ -4,11 +4,12 @@
 #include <cmath>
 
 #include "uavsim/client/geodesy.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 
 using client::wrap_pi;
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 
 void TouchdownGate::reset() { *this = TouchdownGate(config_); }
 

@@ -5,12 +5,13 @@
 #include <cstdio>
 
 #include "uavsim/client/geodesy.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
 using client::wrap_pi;
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 constexpr double kGainXy_1_s = 1.0;       // position error -> horizontal speed
 constexpr double kGainZ_1_s = 1.5;        // altitude error -> climb rate
 constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost"

@@ -1,4 +1,5 @@
 #include "airframe/airframe.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,7 @@ namespace uavsim::server::airframe {
 
 namespace {
 constexpr double kAirDensityKgM3 = 1.225;  // ISA sea level, as in seed eq. 4.6
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 }  // namespace
 
 double AirframeParams::max_total_thrust_n() const {

@@ -1,4 +1,5 @@
 #include "airframe/wind.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,7 @@
 namespace uavsim::server::airframe {
 
 namespace {
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = common::kPi / 180.0;
 constexpr double kMinAdvection_m_s = 1.0;  // below this the frozen field passes at walking pace
 constexpr double kVerticalSdRatio =
     0.5;  // sigma_w / sigma_u near the ground (MIL-F-8785C low altitude)
@@ -89,7 +90,7 @@ void WindField::update_velocity() {
   gust_now_m_s_ = 0.0;
   if (gust_left_s_ > 0) {
     const double phase = 1.0 - gust_left_s_ / gust_duration_s_;
-    gust_now_m_s_ = 0.5 * gust_peak_m_s_ * (1.0 - std::cos(2.0 * M_PI * phase));
+    gust_now_m_s_ = 0.5 * gust_peak_m_s_ * (1.0 - std::cos(2.0 * common::kPi * phase));
   }
   const Eigen::Vector3d dir = wind_direction_enu(params_.from_deg);
   velocity_enu_m_s_ = (params_.speed_m_s + gust_now_m_s_) * dir + turbulence_enu_m_s_;

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "api/request_fields.hpp"
+#include "api/vehicle_arg.hpp"
 #include "sim/checked_number.hpp"
 
 namespace uavsim::server::api {
@@ -26,8 +27,10 @@ constexpr double kMaxRate = 1e6;            // set_rate: above this "as fast as 
 constexpr double kMinRate = 1e-3;           // below, a control step would take minutes of wall time
 constexpr double kMaxLockstepTimeout_s = 1e6;
 
-Json error_reply(const Json& id, const std::string& code, const std::string& message) {
-  return Json{{"id", id}, {"ok", false}, {"error", {{"code", code}, {"message", message}}}};
+Json error_reply(const Json& id, ApiError code, const std::string& message) {
+  return Json{{"id", id},
+              {"ok", false},
+              {"error", {{"code", common::api_error_code(code)}, {"message", message}}}};
 }
 
 // compares secrets in time independent of where they differ
@@ -62,10 +65,10 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     // replies keep the order of the requests on the connection
     if (line.find_first_not_of(" \t") == std::string::npos) return;
     ParsedLine parsed = parse_request_line(line);
-    if (!parsed.error_code.empty()) {
-      return reply_in_order(conn, error_reply(parsed.id, parsed.error_code, parsed.error_message));
+    if (parsed.error) {
+      return reply_in_order(conn, error_reply(parsed.id, *parsed.error, parsed.error_message));
     }
-    Json& body = parsed.body;
+    const Json& body = parsed.body;
     const Json& id = parsed.id;
     const std::string op = body["op"].get<std::string>();
     // --api-token-file: nothing is served before the token (an auth op, or a token field on a request)
@@ -73,33 +76,21 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
       const auto token = string_field(body, "token");
       if (!token || !same_secret(*token, *config_.token)) {
         return reply_in_order(
-            conn, error_reply(id, "unauthorized",
+            conn, error_reply(id, ApiError::kUnauthorized,
                               token ? "wrong token" : "this server needs a token first: {\"op\":\"auth\",\"token\":...}"));
       }
       authenticated_.insert(conn);
     }
     const OpSpec* spec = ops_.find(op);
-    if (spec == nullptr) return reply_in_order(conn, error_reply(id, "unknown_op", "unknown op '" + op + "'"));
+    if (spec == nullptr) return reply_in_order(conn, error_reply(id, ApiError::kUnknownOp, "unknown op '" + op + "'"));
     if (spec->thread == OpThread::kIo) {  // auth, the one op answered here
       return reply_in_order(conn,
                             Json{{"id", id}, {"ok", true}, {"result", {{"authenticated", config_.token.has_value()}}}});
     }
-    // gcs_link_open sends UDP datagrams: only to the requesting client's own host, unless allowed
-    if (op == "gcs_link_open" && !config_.allow_remote_gcs) {
-      const std::string peer = server_->peer_address(conn);
-      auto host = body.find("gcs_target_host");
-      if (host == body.end()) {
-        body["gcs_target_host"] = peer;
-      } else if (host->is_string() && host->get<std::string>() != peer) {
-        return reply_in_order(conn, error_reply(id, "forbidden",
-                                                "gcs_target_host must be this client's own address (" + peer +
-                                                    ") unless the server runs with --allow-remote-gcs"));
-      }
-    }
     enqueue({Request::Kind::kLine, conn, std::move(parsed.body)});
   };
   cb.on_line_too_long = [this](uint64_t conn) {
-    reply_in_order(conn, error_reply(nullptr, "line_too_long", "request lines are limited to " +
+    reply_in_order(conn, error_reply(nullptr, ApiError::kLineTooLong, "request lines are limited to " +
                                                                   std::to_string(config_.max_line_bytes) +
                                                                   " bytes"));
   };
@@ -113,13 +104,15 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
   limits.max_connections = config_.max_connections;
   limits.max_pending_bytes = config_.max_pending_bytes;
   limits.max_total_pending_bytes = config_.max_total_pending_bytes;
-  limits.overload_line = dump(error_reply(nullptr, "overloaded",
+  limits.overload_line = dump(error_reply(nullptr, ApiError::kOverloaded,
                                           "the server's connection or reply-queue limit was reached; this "
                                           "connection is closed (read replies as they come, or connect later)"));
   server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb);
 }
 
 ApiServer::~ApiServer() { shutdown(); }
+
+std::string ApiServer::peer_address(uint64_t conn) const { return server_->peer_address(conn); }
 
 void ApiServer::start() {
   if (!frames_) FrameStream::register_unavailable(ops_);
@@ -173,7 +166,7 @@ void ApiServer::enqueue(Request request) {
 
 void ApiServer::send(uint64_t conn, const Json& message) { server_->send(conn, dump(message)); }
 
-void ApiServer::reply_error(uint64_t conn, const Json& id, const std::string& code,
+void ApiServer::reply_error(uint64_t conn, const Json& id, ApiError code,
                             const std::string& message) {
   reply(conn, error_reply(id, code, message));
 }
@@ -197,7 +190,7 @@ void ApiServer::finish_step(const char* by_op) {
   } else {
     // another clock op took the clock: the step ends here, and says how far it got
     const uint64_t done = steps_requested_ - steps_remaining_;
-    send(conn, error_reply(id, "interrupted",
+    send(conn, error_reply(id, ApiError::kInterrupted,
                            std::string("a ") + by_op + " ended the step after " + std::to_string(done) + " of " +
                                std::to_string(steps_requested_) + " steps, at time_s " +
                                dump(Json(sim_.time_s()))));
@@ -394,14 +387,14 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);
   const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
   const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
-  if (const auto bad = mistyped_field(request, spec->typed_fields)) return reply_error(conn, id, "bad_field", *bad);
+  if (const auto bad = mistyped_field(request, spec->typed_fields)) return reply_error(conn, id, ApiError::kBadField, *bad);
   OpReply reply;
   // the watchdog names the op a stuck loop is in
   sim::LoopActivity& trail = sim_.schedule().activity();
   trail.set_detail(spec->name.c_str());
   spec->handler(conn, request, &reply);
   trail.set_detail(nullptr);
-  if (reply.failed()) return reply_error(conn, id, reply.code, reply.message);
+  if (reply.failed()) return reply_error(conn, id, *reply.error, reply.message);
   if (!reply.deferred) this->reply(conn, Json{{"id", id}, {"ok", true}, {"result", reply.result}});
 }
 
@@ -455,8 +448,8 @@ void ApiServer::op_pause_at(uint64_t, const Json& request, OpReply* reply) {
   // arm a pause at a sim time and/or when the last lockstep client leaves (deterministic ends)
   const auto at = number_field(request, "time_s");
   const bool empty = request.value("lockstep_empty", false);
-  if (!at && !empty) return reply->fail("missing_field", "\"time_s\" or \"lockstep_empty\": true is required");
-  if (at && !std::isfinite(*at)) return reply->fail("bad_field", "\"time_s\" must be a finite sim time");
+  if (!at && !empty) return reply->fail(ApiError::kMissingField, "\"time_s\" or \"lockstep_empty\": true is required");
+  if (at && !std::isfinite(*at)) return reply->fail(ApiError::kBadField, "\"time_s\" must be a finite sim time");
   if (at) pause_at_s_.insert(*at);
   if (empty) pause_when_lockstep_empty_ = true;
   reply->result = {{"time_s", sim_.time_s()},
@@ -479,10 +472,10 @@ void ApiServer::op_step(uint64_t conn, const Json& request, OpReply* reply) {
   if (steps) n = *steps;
   if (duration) n = std::round(*duration / sim_.control_dt_s());
   if (!(n >= 1 && n <= 1e9) || std::floor(n) != n) {
-    return reply->fail("bad_field",
+    return reply->fail(ApiError::kBadField,
                        "\"steps\" must be an integer in [1, 1e9] (or \"duration_s\" at least one control step)");
   }
-  if (step_reply_) return reply->fail("busy", "another step request is in progress");
+  if (step_reply_) return reply->fail(ApiError::kBusy, "another step request is in progress");
   paused_ = true;
   steps_remaining_ = static_cast<uint64_t>(n);
   steps_requested_ = steps_remaining_;
@@ -493,12 +486,12 @@ void ApiServer::op_step(uint64_t conn, const Json& request, OpReply* reply) {
 void ApiServer::op_set_rate(uint64_t, const Json& request, OpReply* reply) {
   const auto rate = number_field(request, "rate");
   if (!rate) {
-    return reply->fail("missing_field", "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
+    return reply->fail(ApiError::kMissingField, "\"rate\" (a number: 1 = real time, 0 = as fast as possible) is required");
   }
   if (*rate != 0.0 && !sim::finite_in(*rate, kMinRate, kMaxRate)) {
-    return reply->fail("bad_field", "\"rate\" must be 0 (as fast as possible) or in [0.001, 1e6]");
+    return reply->fail(ApiError::kBadField, "\"rate\" must be 0 (as fast as possible) or in [0.001, 1e6]");
   }
-  if (runner_ == nullptr) return reply->fail("not_available", "this server has no clock runner");
+  if (runner_ == nullptr) return reply->fail(ApiError::kNotAvailable, "this server has no clock runner");
   runner_->set_rate(*rate);
   reply->result = {{"rate", *rate}};
 }
@@ -511,7 +504,7 @@ void ApiServer::op_reset(uint64_t, const Json& request, OpReply* reply) {
     seed = it->is_number_unsigned() ? std::optional<uint64_t>(it->get<uint64_t>())
                                     : sim::checked_integer<uint64_t>(it->get<double>());
   }
-  if (it != request.end() && !seed) return reply->fail("bad_field", "\"seed\" must be an integer in [0, 2^64)");
+  if (it != request.end() && !seed) return reply->fail(ApiError::kBadField, "\"seed\" must be an integer in [0, 2^64)");
   const uint64_t s = seed.value_or(sim_.config().seed);
   finish_step("reset");
   sim_.reset(s);
@@ -527,7 +520,7 @@ void ApiServer::op_reset(uint64_t, const Json& request, OpReply* reply) {
 void ApiServer::op_events(uint64_t, const Json& request, OpReply* reply) {
   const auto from_number = number_field(request, "from_seq");
   const auto from = from_number ? sim::checked_integer<uint64_t>(*from_number) : std::optional<uint64_t>(0);
-  if (!from) return reply->fail("bad_field", "\"from_seq\" must be a non-negative integer");
+  if (!from) return reply->fail(ApiError::kBadField, "\"from_seq\" must be a non-negative integer");
   // the events already forwarded (later ones stream to subscribers), from from_seq or the oldest
   // still held: first_seq > from_seq tells the client that the ones between were dropped
   const uint64_t from_seq = *from;
@@ -551,13 +544,13 @@ void ApiServer::op_unsubscribe_events(uint64_t conn, const Json&, OpReply*) { ev
 void ApiServer::op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply) {
   const auto period = number_field(request, "period_s");
   const auto timeout = number_field(request, "timeout_s");
-  if (!period) return reply->fail("missing_field", "\"period_s\" (sim seconds between ticks) is required");
+  if (!period) return reply->fail(ApiError::kMissingField, "\"period_s\" (sim seconds between ticks) is required");
   if (!(*period > 0.0) || !std::isfinite(*period) || *period > 3600.0) {
-    return reply->fail("bad_field", "\"period_s\" must be in (0, 3600]");
+    return reply->fail(ApiError::kBadField, "\"period_s\" must be in (0, 3600]");
   }
   if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
     // the protocol's range: a deadline further out is no different from none
-    return reply->fail("bad_field", "\"timeout_s\" must be in (0, 1e6]");
+    return reply->fail(ApiError::kBadField, "\"timeout_s\" must be in (0, 1e6]");
   }
   // the first tick is the next multiple of the period at or after now; strictly after now for a
   // connection whose output of now was prepared before it joined (a camera subscriber: the frame due
@@ -580,14 +573,14 @@ void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
   const auto busy = number_field(request, "busy_until");
   auto seqs = request.find("mavlink_seq");
   std::string message;
-  if (std::string code = lockstep_.check_done(conn, tick, &message); !code.empty()) {
-    return reply->fail(std::move(code), std::move(message));
+  if (const auto refused = lockstep_.check_done(conn, tick, &message)) {
+    return reply->fail(*refused, std::move(message));
   }
   if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
-    return reply->fail("bad_field", "\"busy_until\" must be a sim time in seconds");
+    return reply->fail(ApiError::kBadField, "\"busy_until\" must be a sim time in seconds");
   }
   if (seqs != request.end() && !seqs->is_object()) {
-    return reply->fail("bad_field", "\"mavlink_seq\" must be an object {vehicle: seq}");
+    return reply->fail(ApiError::kBadField, "\"mavlink_seq\" must be an object {vehicle: seq}");
   }
   std::map<size_t, uint8_t> wait;
   if (seqs != request.end()) {
@@ -597,10 +590,10 @@ void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
       char* end = nullptr;
       const long index = std::strtol(it.key().c_str(), &end, 10);
       if (!it.key().empty() && *end == '\0') probe["vehicle"] = index;
-      const auto v = vehicle_field(sim_, probe, reply);
+      const auto v = required_vehicle(sim_, probe, reply);
       if (!v) return;
       if (!it.value().is_number_integer() || it.value().get<int64_t>() < 0 || it.value().get<int64_t>() > 255) {
-        return reply->fail("bad_field", "MAVLink sequence numbers are integers in [0, 255]");
+        return reply->fail(ApiError::kBadField, "MAVLink sequence numbers are integers in [0, 255]");
       }
       wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
     }

@@ -77,9 +77,6 @@ struct ApiConfig {
   // A shared secret: a connection must send it ({"op":"auth","token":...}, or a "token" field in its
   // first request) before any other op is served. Unset: no authentication.
   std::optional<std::string> token;
-  // gcs_link_open may name a gcs_target_host other than the requesting client's own address (and
-  // without one sends to the API bind address); false: only the client's address, its default.
-  bool allow_remote_gcs = true;
 };
 
 class ApiServer {
@@ -100,6 +97,9 @@ class ApiServer {
   // Serves a group's ops (registers them in the op table) and calls its hooks; it must outlive this
   // server. Throws std::logic_error if it registers an op name already served. Before start().
   void add_group(OpGroup* group);
+  // The address a connection came from (for op groups whose policy depends on it, e.g. RadioOps'
+  // GcsTargetPolicy); empty once it has closed. Thread-safe.
+  std::string peer_address(uint64_t conn) const;
   // Every op served, in registration order (the hello's "ops"). After start(). Thread-safe.
   std::vector<std::string> op_names() const { return ops_.names(); }
   // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
@@ -134,7 +134,7 @@ class ApiServer {
   // I/O thread side
   void enqueue(Request request);
   void send(uint64_t conn, const Json& message);
-  void reply_error(uint64_t conn, const Json& id, const std::string& code, const std::string& message);
+  void reply_error(uint64_t conn, const Json& id, ApiError code, const std::string& message);
   // queues a reply behind the connection's earlier requests (the loop sends it in order)
   void reply_in_order(uint64_t conn, Json reply);
   // Sends a reply to conn, or holds it behind conn's step in progress (replies keep request order).

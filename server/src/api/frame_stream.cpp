@@ -41,25 +41,24 @@ FrameStream::FrameStream(const sim::Simulation& sim, render::FrameService& servi
     : sim_(sim), service_(service), server_(server), is_lockstep_(std::move(is_lockstep)) {}
 
 void FrameStream::register_ops(OpTable& table) {
-  for (std::string_view name : kCameraOps) {
-    const std::string op(name);
-    table.add({op, "camera",
-               [this, op](uint64_t conn, const Json& request, OpReply* reply) {
-                 if (op == "camera_blackout") {
-                   blackout(request, sim_.time_s(), &reply->result, &reply->code, &reply->message);
-                 } else {
-                   handle(conn, op, request, &reply->result, &reply->code, &reply->message);
-                 }
-               },
-               core_op_fields()});
-  }
+  table.add({"camera_list", "camera",
+             [this](uint64_t, const Json& request, OpReply* reply) { op_list(request, reply); }, core_op_fields()});
+  table.add({"camera_subscribe", "camera",
+             [this](uint64_t conn, const Json& request, OpReply* reply) { op_subscribe(conn, request, reply); },
+             core_op_fields()});
+  table.add({"camera_unsubscribe", "camera",
+             [this](uint64_t conn, const Json& request, OpReply* reply) { op_unsubscribe(conn, request, reply); },
+             core_op_fields()});
+  table.add({"camera_blackout", "camera",
+             [this](uint64_t, const Json& request, OpReply* reply) { op_blackout(request, reply); },
+             core_op_fields()});
 }
 
 void FrameStream::register_unavailable(OpTable& table) {
   for (std::string_view name : kCameraOps) {
     table.add({std::string(name), "camera",
                [](uint64_t, const Json&, OpReply* reply) {
-                 reply->fail("not_available", "this server renders no camera frames");
+                 reply->fail(ApiError::kNotAvailable, "this server renders no camera frames");
                },
                core_op_fields()});
   }
@@ -111,10 +110,9 @@ FrameStream::Json FrameStream::segmentation_json() const {
 }
 
 bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& info,
-                             std::vector<render::EncodingKey>* keys, std::string* code, std::string* message) const {
-  auto fail = [&](const char* c, std::string m) {
-    *code = c;
-    *message = std::move(m);
+                             std::vector<render::EncodingKey>* keys, OpReply* reply) const {
+  auto fail = [&](ApiError c, std::string m) {
+    reply->fail(c, std::move(m));
     return false;
   };
   // "format" (one image) or "modalities" (a list of them), each named once
@@ -122,22 +120,22 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   const auto f = request.find("format");
   const auto mods = request.find("modalities");
   if (f != request.end() && mods != request.end()) {
-    return fail("bad_field", "give \"format\" or \"modalities\", not both");
+    return fail(ApiError::kBadField, "give \"format\" or \"modalities\", not both");
   }
   if (mods != request.end()) {
     if (!mods->is_array() || mods->empty() || mods->size() > kMaxModalities) {
-      return fail("bad_field",
+      return fail(ApiError::kBadField,
                   "\"modalities\" must be a list of 1 to 5 of \"rgb\", \"grey\", \"jpeg\", \"depth\", "
                   "\"segmentation\"");
     }
     for (const Json& m : *mods) {
       const auto e = m.is_string() ? render::encoding_from_name(m.get<std::string>()) : std::nullopt;
       if (!e) {
-        return fail("bad_field", "unknown modality " + dump(m) +
+        return fail(ApiError::kBadField, "unknown modality " + dump(m) +
                                      " in \"modalities\" (rgb, grey, jpeg, depth, segmentation)");
       }
       if (std::any_of(keys->begin(), keys->end(), [&](const render::EncodingKey& k) { return k.encoding == *e; })) {
-        return fail("bad_field", "modality " + dump(m) + " is named twice in \"modalities\"");
+        return fail(ApiError::kBadField, "modality " + dump(m) + " is named twice in \"modalities\"");
       }
       keys->push_back({*e, 0});
     }
@@ -148,7 +146,7 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
     if (f != request.end()) {
       const auto e = f->is_string() ? render::encoding_from_name(f->get<std::string>()) : std::nullopt;
       if (!e) {
-        return fail("bad_field",
+        return fail(ApiError::kBadField,
                     "\"format\" must be \"rgb\", \"grey\", \"jpeg\", \"depth\" or \"segmentation\"");
       }
       key.encoding = *e;
@@ -164,7 +162,7 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
                        : k.encoding == render::Encoding::kSegmentation ? has.segmentation
                                                                         : has.rgb;
     if (!given) {
-      return fail("bad_field", "camera '" + info.name + "' gives no " + render::encoding_name(k.encoding) +
+      return fail(ApiError::kBadField, "camera '" + info.name + "' gives no " + render::encoding_name(k.encoding) +
                                    " (it gives " + modality_list(has).dump() +
                                    "; the world's uavsim:camera text or --camera " + info.name +
                                    ":modalities=... sets what it gives)");
@@ -175,10 +173,10 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   const auto jpeg = std::find_if(keys->begin(), keys->end(),
                                  [](const render::EncodingKey& k) { return k.encoding == render::Encoding::kJpeg; });
   if (auto q = request.find("quality"); q != request.end()) {
-    if (jpeg == keys->end()) return fail("bad_field", "\"quality\" applies to \"jpeg\" only");
+    if (jpeg == keys->end()) return fail(ApiError::kBadField, "\"quality\" applies to \"jpeg\" only");
     if (!q->is_number() || q->get<double>() < 1 || q->get<double>() > 100 ||
         std::floor(q->get<double>()) != q->get<double>()) {
-      return fail("bad_field", "\"quality\" must be an integer in [1, 100]");
+      return fail(ApiError::kBadField, "\"quality\" must be an integer in [1, 100]");
     }
     jpeg->quality = static_cast<int>(q->get<double>());
   } else if (jpeg != keys->end()) {
@@ -192,7 +190,7 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
     bytes += pixels * static_cast<size_t>(k.encoding == render::Encoding::kJpeg ? 3 : render::bytes_per_pixel(k.encoding));
   }
   if (bytes > kMaxCaptureBytes) {
-    return fail("bad_field", "a capture of camera '" + info.name + "' with these modalities is too large: " +
+    return fail(ApiError::kBadField, "a capture of camera '" + info.name + "' with these modalities is too large: " +
                                  std::to_string(bytes) + " bytes at " + std::to_string(info.width_px) + "x" +
                                  std::to_string(info.height_px) + ", at most " + std::to_string(kMaxCaptureBytes) +
                                  " (ask for fewer modalities, or give the camera a smaller size)");
@@ -212,56 +210,63 @@ void FrameStream::on_disconnect(uint64_t conn) {
   subs_.erase(it);
 }
 
-bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-                         std::string* code, std::string* message) {
-  auto fail = [&](const char* c, std::string m) {
-    *code = c;
-    *message = std::move(m);
-    return false;
-  };
-  if (op == "camera_list") {
-    Json list = Json::array();
-    for (size_t i = 0; i < service_.cameras().size(); ++i) list.push_back(camera_json(static_cast<int>(i)));
-    *result = {{"cameras", list}};
-    return true;
-  }
+void FrameStream::op_list(const Json&, OpReply* reply) const {
+  Json list = Json::array();
+  for (size_t i = 0; i < service_.cameras().size(); ++i) list.push_back(camera_json(static_cast<int>(i)));
+  reply->result = {{"cameras", list}};
+}
+
+std::optional<int> FrameStream::camera_field(const Json& request, OpReply* reply) const {
   auto cam_it = request.find("camera");
-  if (cam_it == request.end()) return fail("missing_field", "\"camera\" (a camera name) is required");
-  if (!cam_it->is_string()) return fail("bad_field", "\"camera\" must be a camera name (a string)");
+  if (cam_it == request.end()) {
+    reply->fail(ApiError::kMissingField, "\"camera\" (a camera name) is required");
+    return std::nullopt;
+  }
+  if (!cam_it->is_string()) {
+    reply->fail(ApiError::kBadField, "\"camera\" must be a camera name (a string)");
+    return std::nullopt;
+  }
   const std::string name = cam_it->get<std::string>();
   const std::optional<int> camera = service_.find(name);
   if (!camera) {
     std::string names;
     for (const render::FrameCamera& c : service_.cameras()) names += (names.empty() ? "" : ", ") + c.name;
-    return fail("bad_field", "no camera named '" + name + "' (cameras: " + (names.empty() ? "none" : names) + ")");
+    reply->fail(ApiError::kBadField,
+                "no camera named '" + name + "' (cameras: " + (names.empty() ? "none" : names) + ")");
   }
+  return camera;
+}
+
+void FrameStream::op_unsubscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  const std::optional<int> camera = camera_field(request, reply);
+  if (!camera) return;
+  std::shared_ptr<Sub> sub;
+  auto it = subs_.find(conn);
+  if (it != subs_.end()) {
+    auto s = it->second.find(*camera);
+    if (s != it->second.end()) {
+      sub = s->second;
+      it->second.erase(s);
+    }
+  }
+  if (sub) {
+    // under the delivery lock: no frame of this subscription is written after the reply
+    std::lock_guard<std::mutex> lock(mutex_);
+    sub->active = false;
+  }
+  reply->result = {{"camera", service_.cameras()[static_cast<size_t>(*camera)].name},
+                   {"subscribed", sub != nullptr},
+                   {"delivered", sub ? sub->delivered.load() : 0},
+                   {"dropped", sub ? sub->dropped.load() : 0}};
+}
+
+void FrameStream::op_subscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  const std::optional<int> camera = camera_field(request, reply);
+  if (!camera) return;
   const render::FrameCamera& info = service_.cameras()[static_cast<size_t>(*camera)];
-
-  if (op == "camera_unsubscribe") {
-    std::shared_ptr<Sub> sub;
-    auto it = subs_.find(conn);
-    if (it != subs_.end()) {
-      auto s = it->second.find(*camera);
-      if (s != it->second.end()) {
-        sub = s->second;
-        it->second.erase(s);
-      }
-    }
-    if (sub) {
-      // under the delivery lock: no frame of this subscription is written after the reply
-      std::lock_guard<std::mutex> lock(mutex_);
-      sub->active = false;
-    }
-    *result = {{"camera", name},
-               {"subscribed", sub != nullptr},
-               {"delivered", sub ? sub->delivered.load() : 0},
-               {"dropped", sub ? sub->dropped.load() : 0}};
-    return true;
-  }
-
-  // camera_subscribe
+  const std::string& name = info.name;
   std::vector<render::EncodingKey> keys;
-  if (!parse_keys(request, info, &keys, code, message)) return false;
+  if (!parse_keys(request, info, &keys, reply)) return;
   int every = 1;
   if (auto f = request.find("fps"); f != request.end()) {
     const double fps = f->is_number() ? f->get<double>() : -1.0;
@@ -270,8 +275,9 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
     // a divisor past INT_MAX, and its cast to int was undefined
     const std::optional<int> whole = sim::checked_integer<int>(n, 1, kMaxEvery);
     if (!(fps > 0) || !std::isfinite(fps) || !whole || std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
-      return fail("bad_field", "\"fps\" must be camera '" + name + "''s fps (" + dump(Json(info.fps_hz)) +
-                                   ") divided by a whole number up to " + std::to_string(kMaxEvery));
+      return reply->fail(ApiError::kBadField, "\"fps\" must be camera '" + name + "''s fps (" +
+                                                  dump(Json(info.fps_hz)) + ") divided by a whole number up to " +
+                                                  std::to_string(kMaxEvery));
     }
     every = *whole;
   }
@@ -295,7 +301,8 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
     names.push_back(render::encoding_name(k.encoding));
     if (k.encoding == render::Encoding::kJpeg) quality = k.quality;
   }
-  *result = {{"camera", name},
+  Json& result = reply->result;
+  result = {{"camera", name},
              {"format", render::encoding_name(keys.front().encoding)},
              {"modalities", names},
              {"fps", info.fps_hz / every},
@@ -305,30 +312,25 @@ bool FrameStream::handle(uint64_t conn, const std::string& op, const Json& reque
              {"intrinsics", {{"fx", info.fx_px}, {"fy", info.fy_px}, {"cx", info.cx_px}, {"cy", info.cy_px}}},
              {"every", every}};
   for (const render::EncodingKey& k : keys) {
-    if (k.encoding == render::Encoding::kDepth) (*result)["depth"] = depth_json(info);
-    if (k.encoding == render::Encoding::kSegmentation) (*result)["segmentation"] = segmentation_json();
+    if (k.encoding == render::Encoding::kDepth) result["depth"] = depth_json(info);
+    if (k.encoding == render::Encoding::kSegmentation) result["segmentation"] = segmentation_json();
   }
-  return true;
 }
 
-bool FrameStream::blackout(const Json& request, double now_s, Json* result, std::string* code,
-                           std::string* message) {
-  auto fail = [&](const char* c, std::string m) {
-    *code = c;
-    *message = std::move(m);
-    return false;
-  };
+void FrameStream::op_blackout(const Json& request, OpReply* reply) {
+  const double now_s = sim_.time_s();
+  auto fail = [&](ApiError c, std::string m) { reply->fail(c, std::move(m)); };
   auto cam_it = request.find("camera");
-  if (cam_it == request.end()) return fail("missing_field", "\"camera\" (a camera name) is required");
+  if (cam_it == request.end()) return fail(ApiError::kMissingField, "\"camera\" (a camera name) is required");
   const std::optional<int> camera =
       cam_it->is_string() ? service_.find(cam_it->get<std::string>()) : std::nullopt;
-  if (!camera) return fail("bad_field", "\"camera\" must name a camera of camera_list");
+  if (!camera) return fail(ApiError::kBadField, "\"camera\" must name a camera of camera_list");
   auto d = request.find("duration_s");
-  if (d == request.end()) return fail("missing_field", "\"duration_s\" is required");
+  if (d == request.end()) return fail(ApiError::kMissingField, "\"duration_s\" is required");
   // at most a day of sim time: the end stays an exact integer of microseconds
   constexpr double kMaxBlackout_s = 86400.0;
   if (!d->is_number() || !(d->get<double>() >= 0.0) || d->get<double>() > kMaxBlackout_s) {
-    return fail("bad_field", "\"duration_s\" must be a number of seconds in [0, 86400]");
+    return fail(ApiError::kBadField, "\"duration_s\" must be a number of seconds in [0, 86400]");
   }
   const int64_t from_us = std::llround(now_s * 1e6);
   const int64_t until_us = from_us + std::llround(d->get<double>() * 1e6);
@@ -336,8 +338,7 @@ bool FrameStream::blackout(const Json& request, double now_s, Json* result, std:
     std::lock_guard<std::mutex> lock(mutex_);
     blackouts_[*camera] = {from_us, until_us};
   }
-  *result = {{"camera", cam_it->get<std::string>()}, {"from_s", from_us * 1e-6}, {"until_s", until_us * 1e-6}};
-  return true;
+  reply->result = {{"camera", cam_it->get<std::string>()}, {"from_s", from_us * 1e-6}, {"until_s", until_us * 1e-6}};
 }
 
 void FrameStream::clear_blackouts() {

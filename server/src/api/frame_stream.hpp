@@ -42,13 +42,14 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
   void on_reset() override { clear_blackouts(); }
   void on_disconnect(uint64_t conn) override;  // Loop thread.
 
-  // The camera ops. Loop thread. Returns false and sets code/message for an error reply.
-  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result, std::string* code,
-              std::string* message);
-  // camera_blackout {camera, duration_s}: the camera's frames with a stamp in [now_s, now_s + duration)
-  // are black (a blinded or failed sensor: frames keep coming, showing nothing); 0 ends a blackout.
-  // Loop thread. Returns false and sets code/message for an error reply.
-  bool blackout(const Json& request, double now_s, Json* result, std::string* code, std::string* message);
+  // The camera ops (camera_list, camera_subscribe, camera_unsubscribe, camera_blackout), each answering
+  // in *reply. Loop thread.
+  void op_list(const Json& request, OpReply* reply) const;
+  void op_subscribe(uint64_t conn, const Json& request, OpReply* reply);
+  void op_unsubscribe(uint64_t conn, const Json& request, OpReply* reply);
+  // camera_blackout {camera, duration_s}: the camera's frames with a stamp in [now, now + duration) are
+  // black (a blinded or failed sensor: frames keep coming, showing nothing); 0 ends a blackout.
+  void op_blackout(const Json& request, OpReply* reply);
   // Ends every blackout (a reset: sim time restarts). Loop thread.
   void clear_blackouts();
   bool has_subscriptions(uint64_t conn) const;      // Loop thread.
@@ -76,9 +77,11 @@ class FrameStream : public OpGroup, public render::FrameConsumer {
   };
   Json camera_json(int index) const;
   // camera_subscribe's images: "format" or "modalities", "quality", checked against what the camera gives
-  // and the size of a capture. Loop thread. Returns false and sets code/message for an error reply.
+  // and the size of a capture. Loop thread. Returns false with reply failed for an error reply.
   bool parse_keys(const Json& request, const render::FrameCamera& info, std::vector<render::EncodingKey>* keys,
-                  std::string* code, std::string* message) const;
+                  OpReply* reply) const;
+  // the request's "camera" (a name of camera_list), or nullopt with reply failed
+  std::optional<int> camera_field(const Json& request, OpReply* reply) const;
   // camera_subscribe's reply for the depth and segmentation parts: the clip planes and field conditions,
   // the class and object tables
   Json depth_json(const render::FrameCamera& info) const;

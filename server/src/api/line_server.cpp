@@ -91,7 +91,6 @@ void LineServer::mark_overloaded(Conn& c) {
   c.overloaded_at_s = steady_now_s();
   c.out += limits_.overload_line;
   total_pending_ += limits_.overload_line.size();
-  overload_drops_.fetch_add(1);
 }
 
 bool LineServer::send(uint64_t conn, const std::string& data) {
@@ -176,7 +175,6 @@ void LineServer::accept_all() {
       std::lock_guard<std::mutex> lock(out_mutex_);
       if (conns_.size() >= limits_.max_connections) {
         // over the connection limit: say why, then close (a best-effort write into a fresh socket)
-        overload_drops_.fetch_add(1);
         [[maybe_unused]] const ssize_t n =
             ::send(fd, limits_.overload_line.data(), limits_.overload_line.size(), MSG_NOSIGNAL);
         close(fd);
@@ -194,7 +192,7 @@ void LineServer::accept_all() {
   }
 }
 
-std::string LineServer::peer_address(uint64_t conn) {
+std::string LineServer::peer_address(uint64_t conn) const {
   std::lock_guard<std::mutex> lock(out_mutex_);
   auto it = conns_.find(conn);
   return it == conns_.end() ? std::string() : it->second.peer;

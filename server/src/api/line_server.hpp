@@ -63,14 +63,12 @@ class LineServer {
   // one wake-up instead of one each. Never hold across a wait. Loop thread (one holder at a time).
   void hold_wakeups() { wakeups_held_.store(true); }
   void release_wakeups();
-  // Connections refused or dropped for the limits above, and accepts that failed for want of file
-  // descriptors. Thread-safe.
-  uint64_t overload_drops() const { return overload_drops_.load(); }
+  // Accepts that failed for want of file descriptors. Thread-safe.
   uint64_t fd_exhausted_accepts() const { return fd_exhausted_accepts_.load(); }
   // Bytes queued for a connection and not yet written to its socket (0 if it is gone). Thread-safe.
   size_t pending_bytes(uint64_t conn);
   // The IPv4 address of a connection's peer ("" if it is gone). Thread-safe.
-  std::string peer_address(uint64_t conn);
+  std::string peer_address(uint64_t conn) const;
 
  private:
   struct Conn {
@@ -104,7 +102,6 @@ class LineServer {
   size_t max_line_bytes_;
   size_t total_pending_ = 0;           // sum of every Conn's out + unsent; guarded by out_mutex_
   int spare_fd_ = -1;                  // given up to accept (and close) when out of file descriptors
-  std::atomic<uint64_t> overload_drops_{0};
   std::atomic<uint64_t> fd_exhausted_accepts_{0};
   int listen_fd_ = -1;
   int wake_fds_[2] = {-1, -1};
@@ -117,7 +114,7 @@ class LineServer {
   uint16_t port_ = 0;
   std::atomic<bool> stop_{false};
   std::thread thread_;
-  std::mutex out_mutex_;               // guards conns_ membership and every Conn::out
+  mutable std::mutex out_mutex_;       // guards conns_ membership and every Conn::out
   std::map<uint64_t, Conn> conns_;     // membership changes on the I/O thread only
   uint64_t next_id_ = 1;
 };

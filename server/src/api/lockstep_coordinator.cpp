@@ -72,7 +72,7 @@ int64_t LockstepCoordinator::begin_tick(uint64_t conn, double sim_time_s) {
   return c.tick;
 }
 
-std::string LockstepCoordinator::check_done(uint64_t conn, std::optional<double> tick,
+std::optional<common::ApiError> LockstepCoordinator::check_done(uint64_t conn, std::optional<double> tick,
                                             std::string* message) const {
   auto it = clients_.find(conn);
   if (it == clients_.end()) {
@@ -84,21 +84,21 @@ std::string LockstepCoordinator::check_done(uint64_t conn, std::optional<double>
                     "it; lockstep_join to take part again",
                     d->second.sim_time_s, static_cast<long long>(d->second.tick), d->second.timeout_s);
       *message = buf;
-      return "not_joined";
+      return common::ApiError::kNotJoined;
     }
     *message = "\"done\" without lockstep_join";
-    return "not_joined";
+    return common::ApiError::kNotJoined;
   }
   const Client& c = it->second;
   if (!c.awaiting || c.done_received) {
     *message = "no tick is waiting for \"done\"";
-    return "bad_state";
+    return common::ApiError::kBadState;
   }
   if (tick && *tick != static_cast<double>(c.tick)) {
     *message = "the tick waiting is " + std::to_string(c.tick);
-    return "bad_field";
+    return common::ApiError::kBadField;
   }
-  return "";
+  return std::nullopt;
 }
 
 int64_t LockstepCoordinator::take_done(uint64_t conn, std::optional<double> busy_until_s,

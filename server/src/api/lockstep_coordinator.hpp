@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "uavsim/common/api_error.hpp"
+
 namespace uavsim::server::api {
 
 class LockstepCoordinator {
@@ -59,10 +61,11 @@ class LockstepCoordinator {
   // deadline, timeout_s of wall time from now). Returns the tick number (sim time / period).
   int64_t begin_tick(uint64_t conn, double sim_time_s);
 
-  // Whether conn may send "done" now, for tick (if given; it must be the one awaited): empty if so,
-  // otherwise the error code (not_joined, bad_state, bad_field) with *message. A connection that
+  // Whether conn may send "done" now, for tick (if given; it must be the one awaited): nullopt if so,
+  // otherwise the error (not_joined, bad_state, bad_field) with *message. A connection that
   // was dropped (expire) is told so: when, which tick, its timeout, and to join again.
-  std::string check_done(uint64_t conn, std::optional<double> tick, std::string* message) const;
+  std::optional<common::ApiError> check_done(uint64_t conn, std::optional<double> tick,
+                                             std::string* message) const;
   // Takes conn's "done" (check_done passed) and returns its tick number. busy_until_s: detached
   // timing (no tick until the first at or after it); wait_seq: vehicle -> the last MAVLink sequence
   // number the client sent before done, each of which must be handled before the tick completes.

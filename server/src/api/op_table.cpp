@@ -1,6 +1,5 @@
 #include "api/op_table.hpp"
 
-#include <cassert>
 #include <stdexcept>
 
 namespace uavsim::server::api {
@@ -12,18 +11,6 @@ void OpTable::add(OpSpec spec) {
   }
   index_.emplace(spec.name, ops_.size());
   ops_.push_back(std::move(spec));
-}
-
-void OpTable::add_named(const std::string& group, std::span<const std::string_view> names,
-                        const NamedHandler& handle) {
-  for (std::string_view name : names) {
-    std::string op(name);
-    add({op, group, [handle, op](uint64_t conn, const nlohmann::json& request, OpReply* reply) {
-           const bool ok = handle(conn, op, request, &reply->result, &reply->code, &reply->message);
-           assert(ok || !reply->code.empty());  // a failing handler names its error
-           (void)ok;
-         }});
-  }
 }
 
 const OpSpec* OpTable::find(std::string_view name) const {

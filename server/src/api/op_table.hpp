@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -18,22 +19,25 @@
 #include <vector>
 
 #include "api/request_fields.hpp"
+#include "uavsim/common/api_error.hpp"
 
 namespace uavsim::server::api {
 
-// What an op handler answers: a result, an error (code set), or nothing yet (deferred: the op
-// replies later itself, as step does once its steps have run).
+using common::ApiError;
+
+// What an op handler answers: a result, an error (a typed code and a message), or nothing yet
+// (deferred: the op replies later itself, as step does once its steps have run).
 struct OpReply {
   nlohmann::json result = nlohmann::json::object();
-  std::string code;  // an error reply when set
+  std::optional<ApiError> error;
   std::string message;
   bool deferred = false;
 
-  void fail(std::string error_code, std::string error_message) {
-    code = std::move(error_code);
+  void fail(ApiError code, std::string error_message) {
+    error = code;
     message = std::move(error_message);
   }
-  bool failed() const { return !code.empty(); }
+  bool failed() const { return error.has_value(); }
 };
 
 // Where an op is answered.
@@ -71,14 +75,6 @@ class OpTable {
   // Registers an op. A name registered twice is a programming error between groups: throws
   // std::logic_error naming it (at startup, before the server starts).
   void add(OpSpec spec);
-  // Registers ops a group dispatches by name itself: handle(conn, op, request, &result, &code,
-  // &message) returns false with code and message set for an error reply.
-  using NamedHandler =
-      std::function<bool(uint64_t conn, const std::string& op, const nlohmann::json& request,
-                         nlohmann::json* result, std::string* code, std::string* message)>;
-  void add_named(const std::string& group, std::span<const std::string_view> names,
-                 const NamedHandler& handle);
-
   // The op with this name, or null. Thread-safe once the server runs (read-only).
   const OpSpec* find(std::string_view name) const;
   // Every op name, in registration order (the hello's "ops"). Thread-safe once the server runs.

@@ -1,7 +1,7 @@
 #include "api/overlay_ops.hpp"
 
 #include <algorithm>
-#include <functional>
+#include <optional>
 
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
@@ -16,11 +16,30 @@ bool overlay_text(const std::string& s, size_t max_bytes) {
          std::all_of(s.begin(), s.end(), [](char c) { return c >= 0x20 && c < 0x7f; });
 }
 
+// the text field both ops carry: printable ASCII of at most kMaxOverlayTextBytes
+std::optional<std::string> overlay_text_field(const nlohmann::json& request, OpReply* reply) {
+  const std::optional<std::string> text = string_field(request, "text");
+  if (!text) {
+    reply->fail(ApiError::kMissingField, "\"text\" (a string) is required");
+  } else if (!overlay_text(*text, kMaxOverlayTextBytes)) {
+    reply->fail(ApiError::kBadField, "\"text\" must be printable ASCII of at most " +
+                                         std::to_string(kMaxOverlayTextBytes) + " bytes");
+    return std::nullopt;
+  }
+  return text;
+}
+
 }  // namespace
 
 void OverlayOps::register_ops(OpTable& table) {
-  static constexpr std::string_view kOps[] = {"overlay_counter", "overlay_note"};
-  table.add_named("overlay", kOps, std::bind_front(&OverlayOps::handle, this));
+  static constexpr FieldSpec kCounterFields[] = {{"name", FieldType::kString}, {"text", FieldType::kString}};
+  static constexpr FieldSpec kNoteFields[] = {{"text", FieldType::kString},
+                                              {"vehicle", FieldType::kIndexOrName}};
+  table.add({"overlay_counter", "overlay",
+             [this](uint64_t, const Json& request, OpReply* reply) { counter(request, reply); },
+             kCounterFields});
+  table.add({"overlay_note", "overlay",
+             [this](uint64_t, const Json& request, OpReply* reply) { note(request, reply); }, kNoteFields});
 }
 
 std::vector<std::string> OverlayOps::counters() const {
@@ -29,46 +48,36 @@ std::vector<std::string> OverlayOps::counters() const {
   return out;
 }
 
-bool OverlayOps::handle(uint64_t, const std::string& op, const Json& request, Json* result,
-                        std::string* code, std::string* message) {
-  const auto fail = [&](const std::string& c, const std::string& m) {
-    *code = c;
-    *message = m;
-    return false;
-  };
-  const std::optional<std::string> text = string_field(request, "text");
-  if (!text) return fail("missing_field", "\"text\" (a string) is required");
-  if (!overlay_text(*text, kMaxOverlayTextBytes)) {
-    return fail("bad_field", "\"text\" must be printable ASCII of at most " +
-                                 std::to_string(kMaxOverlayTextBytes) + " bytes");
+void OverlayOps::counter(const Json& request, OpReply* reply) {
+  const std::optional<std::string> text = overlay_text_field(request, reply);
+  if (!text) return;
+  const std::optional<std::string> name = string_field(request, "name");
+  if (!name || name->empty() || !overlay_text(*name, kMaxOverlayNameBytes)) {
+    return reply->fail(ApiError::kBadField, "\"name\" must be printable ASCII of 1 to " +
+                                                std::to_string(kMaxOverlayNameBytes) + " bytes");
   }
-  if (op == "overlay_counter") {
-    const std::optional<std::string> name = string_field(request, "name");
-    if (!name || name->empty() || !overlay_text(*name, kMaxOverlayNameBytes)) {
-      return fail("bad_field", "\"name\" must be printable ASCII of 1 to " +
-                                   std::to_string(kMaxOverlayNameBytes) + " bytes");
-    }
-    if (text->empty()) {
-      counters_.erase(*name);
-    } else if (counters_.count(*name) == 0 && counters_.size() >= kMaxOverlayCounters) {
-      return fail("bad_field", "at most " + std::to_string(kMaxOverlayCounters) + " counters");
-    } else {
-      counters_[*name] = *text;
-    }
-    *result = {{"counters", counters_.size()}};
-    return true;
+  if (text->empty()) {
+    counters_.erase(*name);
+  } else if (counters_.count(*name) == 0 && counters_.size() >= kMaxOverlayCounters) {
+    return reply->fail(ApiError::kBadField, "at most " + std::to_string(kMaxOverlayCounters) + " counters");
+  } else {
+    counters_[*name] = *text;
   }
-  // overlay_note
+  reply->result = {{"counters", counters_.size()}};
+}
+
+void OverlayOps::note(const Json& request, OpReply* reply) {
+  const std::optional<std::string> text = overlay_text_field(request, reply);
+  if (!text) return;
   int vehicle = -1;
   if (has_field(request, "vehicle")) {
-    const auto v = vehicle_index(sim_, request["vehicle"], code, message);
-    if (!v) return false;
+    const auto v = optional_vehicle(sim_, request, reply);
+    if (!v) return;
     vehicle = static_cast<int>(*v);
   }
   notes_.push_back({sim_.time_s(), vehicle, *text});
   if (notes_.size() > kMaxOverlayNotes) notes_.pop_front();
-  *result = {{"time_s", sim_.time_s()}};
-  return true;
+  reply->result = {{"time_s", sim_.time_s()}};
 }
 
 }  // namespace uavsim::server::api

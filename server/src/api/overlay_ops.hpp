@@ -38,9 +38,6 @@ class OverlayOps : public OpGroup {
 
   // overlay_counter, overlay_note.
   void register_ops(OpTable& table) override;
-  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
-  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message);
 
   // The counters' texts in name order. Loop thread only.
   std::vector<std::string> counters() const;
@@ -48,6 +45,10 @@ class OverlayOps : public OpGroup {
   const std::deque<OverlayNote>& notes() const { return notes_; }
 
  private:
+  // the ops (loop thread)
+  void counter(const Json& request, OpReply* reply);
+  void note(const Json& request, OpReply* reply);
+
   const sim::Simulation& sim_;
   std::map<std::string, std::string> counters_;
   std::deque<OverlayNote> notes_;

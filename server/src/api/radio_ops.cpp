@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <functional>
+#include <span>
 
+#include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
 #include "uavsim/common/base64.hpp"
 
@@ -10,30 +12,75 @@ namespace uavsim::server::api {
 
 namespace {
 
-bool set_error(std::string* code, std::string* message, const std::string& c,
-               const std::string& m) {
-  *code = c;
-  *message = m;
-  return false;
+constexpr double kPortLimit = 65535;
+
+constexpr FieldSpec kSendFields[] = {{"vehicle", FieldType::kIndexOrName},
+                                     {"to", FieldType::kIndexOrName},
+                                     {"data_b64", FieldType::kString}};
+constexpr FieldSpec kSubscribeFields[] = {{"vehicle", FieldType::kIndexOrName},
+                                          {"batch", FieldType::kBoolean}};
+constexpr FieldSpec kVehicleFields[] = {{"vehicle", FieldType::kIndexOrName}};
+// radio_config's numbers are checked here for type and finiteness; their own ranges by the channel
+// (RadioChannel::set_config), which names the range it refuses
+constexpr FieldSpec kConfigFields[] = {{"range_m", FieldType::kNumber},
+                                       {"tx_power_dbm", FieldType::kNumber},
+                                       {"sensitivity_dbm", FieldType::kNumber},
+                                       {"reference_loss_db", FieldType::kNumber},
+                                       {"path_loss_exponent", FieldType::kNumber},
+                                       {"shadowing_sigma_db", FieldType::kNumber},
+                                       {"loss", FieldType::kNumber},
+                                       {"latency_s", FieldType::kNumber},
+                                       {"slot_s", FieldType::kNumber},
+                                       {"period_s", FieldType::kNumber},
+                                       {"tdma", FieldType::kBoolean},
+                                       {"collisions", FieldType::kBoolean},
+                                       {"model", FieldType::kString},
+                                       {"max_queue_frames", FieldType::kNumber, 1, 1000000},
+                                       {"mac_header_bytes", FieldType::kNumber, 0, radio::kMaxMacHeaderBytes},
+                                       {"obstacle_loss_db", FieldType::kArray}};
+constexpr FieldSpec kLinkOpenFields[] = {{"vehicle", FieldType::kIndexOrName},
+                                         {"uav_port", FieldType::kNumber, 0, kPortLimit},
+                                         {"gcs_port", FieldType::kNumber, 0, kPortLimit},
+                                         {"gcs_target_port", FieldType::kNumber, 0, kPortLimit},
+                                         {"gcs_target_host", FieldType::kString}};
+constexpr FieldSpec kLinkImpairFields[] = {{"vehicle", FieldType::kIndexOrName},
+                                           {"loss", FieldType::kNumber, 0, 1},
+                                           {"latency_s", FieldType::kNumber, 0, 3600},
+                                           {"outage_s", FieldType::kNumber, 0, 1e6}};
+
+// A whole-number field whose range its FieldSpec has checked: true with *out set (left alone when
+// absent), or false with reply failed for a fraction.
+template <typename T>
+bool whole_field(const nlohmann::json& request, const char* key, std::optional<T>* out, OpReply* reply) {
+  const auto it = request.find(key);
+  if (it == request.end()) return true;
+  if (!it->is_number_integer() && !it->is_number_unsigned()) {
+    reply->fail(ApiError::kBadField, std::string("\"") + key + "\" must be a whole number");
+    return false;
+  }
+  *out = static_cast<T>(it->get<int64_t>());
+  return true;
 }
 
 }  // namespace
 
-RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays)
-    : sim_(sim), radio_(radio), relays_(relays) {}
+RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays,
+                   GcsTargetPolicy policy)
+    : sim_(sim), radio_(radio), relays_(relays), policy_(std::move(policy)) {}
 
 void RadioOps::register_ops(OpTable& table) {
-  static constexpr std::string_view kRadio[] = {"radio_send", "radio_subscribe", "radio_unsubscribe",
-                                                "radio_stats", "radio_config"};
-  static constexpr std::string_view kGcsLink[] = {"gcs_link_open", "gcs_link_impair", "gcs_link_stats"};
-  const auto handler = std::bind_front(&RadioOps::handle, this);
-  table.add_named("radio", kRadio, handler);
-  table.add_named("gcs_link", kGcsLink, handler);
-}
-
-std::optional<size_t> RadioOps::vehicle(const Json& value, std::string* code,
-                                        std::string* message) const {
-  return vehicle_index(sim_, value, code, message);
+  using Op = void (RadioOps::*)(uint64_t, const Json&, OpReply*);
+  const auto add = [&](const char* name, const char* group, Op op, std::span<const FieldSpec> fields) {
+    table.add({name, group, std::bind_front(op, this), fields});
+  };
+  add("radio_send", "radio", &RadioOps::op_send, kSendFields);
+  add("radio_subscribe", "radio", &RadioOps::op_subscribe, kSubscribeFields);
+  add("radio_unsubscribe", "radio", &RadioOps::op_unsubscribe, kVehicleFields);
+  add("radio_stats", "radio", &RadioOps::op_stats, kVehicleFields);
+  add("radio_config", "radio", &RadioOps::op_config, kConfigFields);
+  add("gcs_link_open", "gcs_link", &RadioOps::op_link_open, kLinkOpenFields);
+  add("gcs_link_impair", "gcs_link", &RadioOps::op_link_impair, kLinkImpairFields);
+  add("gcs_link_stats", "gcs_link", &RadioOps::op_link_stats, kVehicleFields);
 }
 
 RadioOps::Json RadioOps::config_json() const {
@@ -58,9 +105,9 @@ RadioOps::Json RadioOps::config_json() const {
               {"obstacle_loss_db", c.obstacle_loss_db}};
 }
 
-bool RadioOps::apply_config(const Json& request, std::string* code, std::string* message) {
+void RadioOps::op_config(uint64_t, const Json& request, OpReply* reply) {
+  // every field optional, each of its type (kConfigFields); nothing is applied unless all are good
   radio::RadioConfig c = radio_.model().config();
-  // every field optional; a present field of the wrong type is an error, nothing is applied then
   const std::pair<const char*, double*> numbers[] = {{"range_m", &c.range_m},
                                                      {"tx_power_dbm", &c.tx_power_dbm},
                                                      {"sensitivity_dbm", &c.sensitivity_dbm},
@@ -72,279 +119,238 @@ bool RadioOps::apply_config(const Json& request, std::string* code, std::string*
                                                      {"slot_s", &c.slot_s},
                                                      {"period_s", &c.period_s}};
   for (const auto& [key, field] : numbers) {
-    auto it = request.find(key);
-    if (it == request.end()) continue;
-    if (!it->is_number())
-      return set_error(code, message, "bad_field", std::string("\"") + key + "\" must be a number");
-    *field = it->get<double>();
+    if (const auto v = number_field(request, key)) *field = *v;
   }
-  const std::pair<const char*, bool*> flags[] = {{"tdma", &c.tdma}, {"collisions", &c.collisions}};
-  for (const auto& [key, field] : flags) {
-    auto it = request.find(key);
-    if (it == request.end()) continue;
-    if (!it->is_boolean())
-      return set_error(code, message, "bad_field",
-                       std::string("\"") + key + "\" must be a boolean");
-    *field = it->get<bool>();
-  }
-  if (auto it = request.find("model"); it != request.end()) {
-    const auto p =
-        it->is_string() ? radio::propagation_from_name(it->get<std::string>()) : std::nullopt;
-    if (!p)
-      return set_error(code, message, "bad_field",
-                       "\"model\" must be \"range\" or \"log_distance\"");
+  if (const auto v = bool_field(request, "tdma")) c.tdma = *v;
+  if (const auto v = bool_field(request, "collisions")) c.collisions = *v;
+  if (const auto name = string_field(request, "model")) {
+    const auto p = radio::propagation_from_name(*name);
+    if (!p) return reply->fail(ApiError::kBadField, "\"model\" must be \"range\" or \"log_distance\"");
     c.propagation = *p;
   }
-  if (auto it = request.find("max_queue_frames"); it != request.end()) {
-    if (!it->is_number_unsigned() || it->get<uint64_t>() > 1000000) {
-      return set_error(code, message, "bad_field",
-                       "\"max_queue_frames\" must be an integer in [1, 1000000]");
-    }
-    c.max_queue_frames = it->get<size_t>();
+  std::optional<size_t> queue_frames, header_bytes;
+  if (!whole_field(request, "max_queue_frames", &queue_frames, reply) ||
+      !whole_field(request, "mac_header_bytes", &header_bytes, reply)) {
+    return;
   }
-  if (auto it = request.find("mac_header_bytes"); it != request.end()) {
-    if (!it->is_number_unsigned() || it->get<uint64_t>() > radio::kMaxMacHeaderBytes) {
-      return set_error(code, message, "bad_field",
-                       "\"mac_header_bytes\" must be an integer in [0, " +
-                           std::to_string(radio::kMaxMacHeaderBytes) + "]");
-    }
-    c.mac_header_bytes = it->get<size_t>();
-  }
+  if (queue_frames) c.max_queue_frames = *queue_frames;
+  if (header_bytes) c.mac_header_bytes = *header_bytes;
   if (auto it = request.find("obstacle_loss_db"); it != request.end()) {
     // one loss per MuJoCo geom group, in dB; groups not given block nothing
-    bool ok = it->is_array() && it->size() <= radio::kGeomGroups;
+    bool ok = it->size() <= radio::kGeomGroups;
     for (size_t g = 0; ok && g < it->size(); ++g) {
-      ok =
-          (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
+      ok = (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
     }
     if (!ok) {
-      return set_error(
-          code, message, "bad_field",
-          "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
-          "geom group)");
+      return reply->fail(ApiError::kBadField,
+                         "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
+                         "geom group)");
     }
     c.obstacle_loss_db.fill(0.0);
     for (size_t g = 0; g < it->size(); ++g) c.obstacle_loss_db[g] = (*it)[g].get<double>();
   }
   std::string why;
-  if (!radio_.model().set_config(c, &why)) return set_error(code, message, "bad_field", why);
-  return true;
+  if (!radio_.model().set_config(c, &why)) return reply->fail(ApiError::kBadField, why);
+  reply->result = config_json();
 }
 
-bool RadioOps::handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-                      std::string* code, std::string* message) {
-  const auto vit = request.find("vehicle");
-  if (op == "radio_send") {
-    if (vit == request.end())
-      return set_error(code, message, "missing_field", "\"vehicle\" (the sender) is required");
-    const auto from = vehicle(*vit, code, message);
-    if (!from) return false;
-    const auto tit = request.find("to");
-    if (tit == request.end()) {
-      return set_error(code, message, "missing_field",
-                       "\"to\" (a vehicle or \"broadcast\") is required");
-    }
-    int to = radio::kBroadcast;
-    if (!(tit->is_string() && tit->get<std::string>() == "broadcast")) {
-      const auto v = vehicle(*tit, code, message);
-      if (!v) return false;
-      if (*v == *from)
-        return set_error(code, message, "bad_field", "a vehicle cannot send a frame to itself");
-      to = static_cast<int>(*v);
-    }
-    const auto dit = request.find("data_b64");
-    if (dit == request.end() || !dit->is_string()) {
-      return set_error(code, message, "missing_field",
-                       "\"data_b64\" (the frame, base64) is required");
-    }
-    // a generous bound before decoding: 127 bytes are 172 characters
-    const size_t max_bytes = radio_.model().max_payload_bytes();
-    if (dit->get_ref<const std::string&>().size() > 4 * radio::kMaxFrameBytes) {
-      return set_error(code, message, "frame_too_large",
+void RadioOps::op_send(uint64_t, const Json& request, OpReply* reply) {
+  const auto from = required_vehicle(sim_, request, reply, "the sender");
+  if (!from) return;
+  const auto to_field = request.find("to");
+  if (to_field == request.end()) {
+    return reply->fail(ApiError::kMissingField, "\"to\" (a vehicle or \"broadcast\") is required");
+  }
+  int to = radio::kBroadcast;
+  if (!(to_field->is_string() && to_field->get<std::string>() == "broadcast")) {
+    const auto v = vehicle_index(sim_, *to_field, reply);
+    if (!v) return;
+    if (*v == *from) return reply->fail(ApiError::kBadField, "a vehicle cannot send a frame to itself");
+    to = static_cast<int>(*v);
+  }
+  const auto data_b64 = string_field(request, "data_b64");
+  if (!data_b64) return reply->fail(ApiError::kMissingField, "\"data_b64\" (the frame, base64) is required");
+  // a generous bound before decoding: 127 bytes are 172 characters
+  const size_t max_bytes = radio_.model().max_payload_bytes();
+  if (data_b64->size() > 4 * radio::kMaxFrameBytes) {
+    return reply->fail(ApiError::kFrameTooLarge,
                        "a frame is at most " + std::to_string(max_bytes) + " bytes (802.15.4)");
-    }
-    const auto data = common::base64_decode(dit->get<std::string>());
-    if (!data) return set_error(code, message, "bad_base64", "\"data_b64\" is not valid base64");
-    if (data->empty())
-      return set_error(code, message, "bad_field", "a frame carries at least one byte");
-    if (data->size() > max_bytes) {
-      return set_error(code, message, "frame_too_large",
-                       "a frame is at most " + std::to_string(max_bytes) +
-                           " bytes (802.15.4 on the " + radio_.model().backend_name() +
-                           " backend), got " + std::to_string(data->size()));
-    }
-    if (const std::string why = radio_.model().failure(); !why.empty()) {
-      return set_error(code, message, "not_available", "the radio failed: " + why);
-    }
-    const radio::SendResult r = radio_.send(*from, to, *data);
-    if (!r.seq) {
-      const bool full = r.error == radio::Error::kQueueFull;
-      return set_error(code, message, full ? "queue_full" : "bad_field",
-                       full ? "the sender's radio queue is full" : radio::error_name(r.error));
-    }
-    *result = {{"vehicle", *from}, {"seq", *r.seq}, {"time_s", sim_.time_s()}};
-    return true;
   }
-  if (op == "radio_subscribe" || op == "radio_unsubscribe") {
-    // one vehicle, or every vehicle without "vehicle"
-    std::set<size_t> which;
-    if (vit != request.end()) {
-      const auto v = vehicle(*vit, code, message);
-      if (!v) return false;
-      which.insert(*v);
-    } else {
-      for (size_t i = 0; i < sim_.vehicle_count(); ++i) which.insert(i);
-    }
-    std::optional<bool> batch;
-    if (auto it = request.find("batch"); it != request.end()) {
-      if (op != "radio_subscribe" || !it->is_boolean()) {
-        return set_error(code, message, "bad_field",
-                         "\"batch\" is a boolean of radio_subscribe (one radio_batch event a gate)");
-      }
-      batch = it->get<bool>();
-    }
-    Subscription& sub = subscriptions_[conn];
-    if (batch) sub.batch = *batch;  // the connection's delivery form, for all its vehicles
-    for (size_t v : which) {
-      if (op == "radio_subscribe") {
-        sub.vehicles.insert(v);
-      } else {
-        sub.vehicles.erase(v);
-      }
-    }
-    *result = {{"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
-               {"batch", sub.batch},
-               {"max_frame_bytes", radio_.model().max_payload_bytes()},
-               {"time_s", sim_.time_s()}};
-    return true;
+  const auto data = common::base64_decode(*data_b64);
+  if (!data) return reply->fail(ApiError::kBadBase64, "\"data_b64\" is not valid base64");
+  if (data->empty()) return reply->fail(ApiError::kBadField, "a frame carries at least one byte");
+  if (data->size() > max_bytes) {
+    return reply->fail(ApiError::kFrameTooLarge, "a frame is at most " + std::to_string(max_bytes) +
+                                                     " bytes (802.15.4 on the " + radio_.model().backend_name() +
+                                                     " backend), got " + std::to_string(data->size()));
   }
-  if (op == "radio_stats") {
-    std::optional<size_t> only;
-    if (vit != request.end()) {
-      only = vehicle(*vit, code, message);
-      if (!only) return false;
-    }
-    const radio::RadioChannel& m = radio_.model();
-    Json vehicles = Json::array();
-    Json links = Json::array();
-    for (size_t a = 0; a < m.vehicle_count(); ++a) {
-      if (!only || *only == a) {
-        vehicles.push_back({{"vehicle", a},
-                            {"name", sim_.vehicle_name(a)},
-                            {"transmitted", m.transmitted(a)},
-                            {"queued", m.queued(a)},
-                            {"channel_access_failures", m.channel_access_failures(a)}});
-      }
-      for (size_t b = 0; b < m.vehicle_count(); ++b) {
-        const radio::LinkStats& s = m.link(a, b);
-        if (s.sent == 0 || (only && *only != a && *only != b)) continue;
-        links.push_back({{"from", a},
-                         {"to", b},
-                         {"sent", s.sent},
-                         {"delivered", s.delivered},
-                         {"lost", s.lost},
-                         {"collided", s.collided},
-                         {"out_of_range", s.out_of_range},
-                         {"no_ack", s.no_ack}});
-      }
-    }
-    *result = {{"time_s", sim_.time_s()},
-               {"backend", m.backend_name()},
-               {"max_frame_bytes", m.max_payload_bytes()},
-               {"failure", m.failure()},
-               {"vehicles", vehicles},
-               {"links", links},
-               {"inbox_overflows", radio_.inbox_overflows()}};
-    return true;
+  if (const std::string why = radio_.model().failure(); !why.empty()) {
+    return reply->fail(ApiError::kNotAvailable, "the radio failed: " + why);
   }
-  if (op == "radio_config") {
-    if (!apply_config(request, code, message)) return false;
-    *result = config_json();
-    return true;
+  const radio::SendResult r = radio_.send(*from, to, *data);
+  if (!r.seq) {
+    if (r.error == radio::Error::kQueueFull) {
+      return reply->fail(ApiError::kQueueFull, "the sender's radio queue is full");
+    }
+    return reply->fail(ApiError::kBadField, radio::error_name(r.error));
   }
+  reply->result = {{"vehicle", *from}, {"seq", *r.seq}, {"time_s", sim_.time_s()}};
+}
 
-  // the ground-station link relay
-  if (relays_ == nullptr)
-    return set_error(code, message, "not_available", "this server has no GCS link relay");
-  if (vit == request.end())
-    return set_error(code, message, "missing_field", "\"vehicle\" (index or name) is required");
-  const auto v = vehicle(*vit, code, message);
-  if (!v) return false;
-  auto port_field = [&](const char* key, std::optional<uint16_t>* out) {
-    auto it = request.find(key);
-    if (it == request.end()) return true;
-    if (!it->is_number_unsigned() || it->get<uint64_t>() > 65535) {
-      return set_error(code, message, "bad_field",
-                       std::string("\"") + key + "\" must be a port in [0, 65535]");
-    }
-    *out = static_cast<uint16_t>(it->get<uint64_t>());
-    return true;
-  };
-  auto relay_json = [&](radio::GcsRelay& r) {
-    const radio::RelayImpairment& i = r.impairment();
-    const radio::RelayStats& s = r.stats();
-    return Json{{"vehicle", *v},
-                {"uav_port", r.uav_port()},
-                {"gcs_port", r.gcs_port()},
-                {"loss", i.loss_probability},
-                {"latency_s", i.latency_s},
-                {"outage_until_s",
-                 std::isfinite(i.outage_until_s) ? Json(i.outage_until_s) : Json(nullptr)},
-                {"to_gcs_forwarded", s.to_gcs_forwarded},
-                {"to_gcs_dropped", s.to_gcs_dropped},
-                {"to_uav_forwarded", s.to_uav_forwarded},
-                {"to_uav_dropped", s.to_uav_dropped},
-                {"time_s", sim_.time_s()}};
-  };
-  if (op == "gcs_link_open") {
-    std::optional<uint16_t> uav_port, gcs_port, target_port;
-    if (!port_field("uav_port", &uav_port) || !port_field("gcs_port", &gcs_port) ||
-        !port_field("gcs_target_port", &target_port)) {
-      return false;
-    }
-    std::optional<std::string> target_host;
-    if (auto it = request.find("gcs_target_host"); it != request.end()) {
-      if (!it->is_string())
-        return set_error(code, message, "bad_field", "\"gcs_target_host\" must be an IPv4 address");
-      target_host = it->get<std::string>();
-    }
-    std::string why;
-    radio::GcsRelay* r = relays_->open(*v, uav_port.value_or(0), gcs_port.value_or(0), target_host,
-                                       target_port, &why);
-    if (r == nullptr) return set_error(code, message, "io_error", why);
-    *result = relay_json(*r);
-    return true;
+void RadioOps::op_subscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  subscription_op(conn, request, true, reply);
+}
+
+void RadioOps::op_unsubscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  if (has_field(request, "batch")) {
+    return reply->fail(ApiError::kBadField, "\"batch\" is a boolean of radio_subscribe (one radio_batch event a gate)");
   }
-  radio::GcsRelay* r = relays_->relay(*v);
+  subscription_op(conn, request, false, reply);
+}
+
+void RadioOps::subscription_op(uint64_t conn, const Json& request, bool subscribe, OpReply* reply) {
+  // one vehicle, or every vehicle without "vehicle"
+  std::set<size_t> which;
+  if (has_field(request, "vehicle")) {
+    const auto v = optional_vehicle(sim_, request, reply);
+    if (!v) return;
+    which.insert(*v);
+  } else {
+    for (size_t i = 0; i < sim_.vehicle_count(); ++i) which.insert(i);
+  }
+  Subscription& sub = subscriptions_[conn];
+  // the connection's delivery form, for all its vehicles (radio_subscribe only: kSubscribeFields)
+  if (const auto batch = bool_field(request, "batch")) sub.batch = *batch;
+  for (size_t v : which) {
+    if (subscribe) {
+      sub.vehicles.insert(v);
+    } else {
+      sub.vehicles.erase(v);
+    }
+  }
+  reply->result = {{"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
+                   {"batch", sub.batch},
+                   {"max_frame_bytes", radio_.model().max_payload_bytes()},
+                   {"time_s", sim_.time_s()}};
+}
+
+void RadioOps::op_stats(uint64_t, const Json& request, OpReply* reply) {
+  std::optional<size_t> only;
+  if (has_field(request, "vehicle")) {
+    only = optional_vehicle(sim_, request, reply);
+    if (!only) return;
+  }
+  const radio::RadioChannel& m = radio_.model();
+  Json vehicles = Json::array();
+  Json links = Json::array();
+  for (size_t a = 0; a < m.vehicle_count(); ++a) {
+    if (!only || *only == a) {
+      vehicles.push_back({{"vehicle", a},
+                          {"name", sim_.vehicle_name(a)},
+                          {"transmitted", m.transmitted(a)},
+                          {"queued", m.queued(a)},
+                          {"channel_access_failures", m.channel_access_failures(a)}});
+    }
+    for (size_t b = 0; b < m.vehicle_count(); ++b) {
+      const radio::LinkStats& s = m.link(a, b);
+      if (s.sent == 0 || (only && *only != a && *only != b)) continue;
+      links.push_back({{"from", a},
+                       {"to", b},
+                       {"sent", s.sent},
+                       {"delivered", s.delivered},
+                       {"lost", s.lost},
+                       {"collided", s.collided},
+                       {"out_of_range", s.out_of_range},
+                       {"no_ack", s.no_ack}});
+    }
+  }
+  reply->result = {{"time_s", sim_.time_s()},
+                   {"backend", m.backend_name()},
+                   {"max_frame_bytes", m.max_payload_bytes()},
+                   {"failure", m.failure()},
+                   {"vehicles", vehicles},
+                   {"links", links},
+                   {"inbox_overflows", radio_.inbox_overflows()}};
+}
+
+// ---------------------------------------------------------------------------------------------------
+// the ground-station link relay (seed 6.3)
+
+RadioOps::Json RadioOps::relay_json(size_t vehicle, radio::GcsRelay& r) const {
+  const radio::RelayImpairment& i = r.impairment();
+  const radio::RelayStats& s = r.stats();
+  return Json{{"vehicle", vehicle},
+              {"uav_port", r.uav_port()},
+              {"gcs_port", r.gcs_port()},
+              {"loss", i.loss_probability},
+              {"latency_s", i.latency_s},
+              {"outage_until_s", std::isfinite(i.outage_until_s) ? Json(i.outage_until_s) : Json(nullptr)},
+              {"to_gcs_forwarded", s.to_gcs_forwarded},
+              {"to_gcs_dropped", s.to_gcs_dropped},
+              {"to_uav_forwarded", s.to_uav_forwarded},
+              {"to_uav_dropped", s.to_uav_dropped},
+              {"time_s", sim_.time_s()}};
+}
+
+std::optional<size_t> RadioOps::relay_vehicle(const Json& request, OpReply* reply) const {
+  if (relays_ == nullptr) {
+    reply->fail(ApiError::kNotAvailable, "this server has no GCS link relay");
+    return std::nullopt;
+  }
+  return required_vehicle(sim_, request, reply);
+}
+
+radio::GcsRelay* RadioOps::open_relay(size_t vehicle, OpReply* reply) const {
+  radio::GcsRelay* r = relays_->relay(vehicle);
   if (r == nullptr) {
-    return set_error(code, message, "not_available",
-                     "vehicle " + std::to_string(*v) + " has no relay (gcs_link_open)");
+    reply->fail(ApiError::kNotAvailable, "vehicle " + std::to_string(vehicle) + " has no relay (gcs_link_open)");
   }
-  if (op == "gcs_link_impair") {
-    auto num = [&](const char* key, double fallback, double lo, double hi, double* out) {
-      auto it = request.find(key);
-      if (it == request.end()) {
-        *out = fallback;
-        return true;
-      }
-      if (!it->is_number() || !(it->get<double>() >= lo && it->get<double>() <= hi)) {
-        return set_error(code, message, "bad_field",
-                         std::string("\"") + key + "\" must be a number in [" + std::to_string(lo) +
-                             ", " + std::to_string(hi) + "]");
-      }
-      *out = it->get<double>();
-      return true;
-    };
-    double loss = 0.0, latency = 0.0, outage = 0.0;
-    if (!num("loss", r->impairment().loss_probability, 0.0, 1.0, &loss) ||
-        !num("latency_s", r->impairment().latency_s, 0.0, 3600.0, &latency) ||
-        !num("outage_s", 0.0, 0.0, 1e6, &outage)) {
-      return false;
+  return r;
+}
+
+void RadioOps::op_link_open(uint64_t conn, const Json& request, OpReply* reply) {
+  const auto v = relay_vehicle(request, reply);
+  if (!v) return;
+  std::optional<uint16_t> uav_port, gcs_port, target_port;
+  if (!whole_field(request, "uav_port", &uav_port, reply) || !whole_field(request, "gcs_port", &gcs_port, reply) ||
+      !whole_field(request, "gcs_target_port", &target_port, reply)) {
+    return;
+  }
+  // the relay sends UDP datagrams: to the requesting client's own host only, unless the server
+  // allows others (a relay aimed at a third host would make the server a traffic source)
+  std::optional<std::string> target_host = string_field(request, "gcs_target_host");
+  if (!policy_.allow_remote) {
+    const std::string peer = policy_.peer_address ? policy_.peer_address(conn) : std::string();
+    if (!target_host) {
+      target_host = peer;
+    } else if (*target_host != peer) {
+      return reply->fail(ApiError::kForbidden, "gcs_target_host must be this client's own address (" + peer +
+                                                   ") unless the server runs with --allow-remote-gcs");
     }
-    r->impair(loss, latency, outage, sim_.time_s());
   }
-  *result = relay_json(*r);
-  return true;
+  std::string why;
+  radio::GcsRelay* r =
+      relays_->open(*v, uav_port.value_or(0), gcs_port.value_or(0), target_host, target_port, &why);
+  if (r == nullptr) return reply->fail(ApiError::kIoError, why);
+  reply->result = relay_json(*v, *r);
+}
+
+void RadioOps::op_link_impair(uint64_t, const Json& request, OpReply* reply) {
+  const auto v = relay_vehicle(request, reply);
+  if (!v) return;
+  radio::GcsRelay* r = open_relay(*v, reply);
+  if (r == nullptr) return;
+  // each in its range (kLinkImpairFields); absent: loss and latency as they are, no outage
+  r->impair(number_field(request, "loss").value_or(r->impairment().loss_probability),
+            number_field(request, "latency_s").value_or(r->impairment().latency_s),
+            number_field(request, "outage_s").value_or(0.0), sim_.time_s());
+  reply->result = relay_json(*v, *r);
+}
+
+void RadioOps::op_link_stats(uint64_t, const Json& request, OpReply* reply) {
+  const auto v = relay_vehicle(request, reply);
+  if (!v) return;
+  if (radio::GcsRelay* r = open_relay(*v, reply)) reply->result = relay_json(*v, *r);
 }
 
 void RadioOps::on_gate(const Send& send, const InLockstep& in_lockstep) {

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -24,16 +25,22 @@
 
 namespace uavsim::server::api {
 
+// Where gcs_link_open may aim a relay's datagrams (docs/protocol.md): with allow_remote false
+// (uavsim-server's default, --allow-remote-gcs turns it off) only at the requesting API client's own
+// address, which peer_address gives for a connection (thread-safe; empty if unknown).
+struct GcsTargetPolicy {
+  bool allow_remote = true;
+  std::function<std::string(uint64_t conn)> peer_address;
+};
+
 class RadioOps : public OpGroup {
  public:
   // relays may be null (the gcs_link_* ops then answer not_available). All must outlive the server.
-  RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays);
+  RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelaySet* relays,
+           GcsTargetPolicy policy = {});
 
   // radio_send, radio_subscribe, radio_unsubscribe, radio_stats, radio_config and the gcs_link_* ops.
   void register_ops(OpTable& table) override;
-  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
-  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message);
   // Frames that arrived by now: radio events at once; a batch subscriber's in one radio_batch, at
   // once, or, for a connection in lockstep, with the frames of the next gates, just before its tick.
   void on_gate(const Send& send, const InLockstep& in_lockstep) override;
@@ -43,13 +50,28 @@ class RadioOps : public OpGroup {
   void on_disconnect(uint64_t conn) override;
 
  private:
-  std::optional<size_t> vehicle(const Json& value, std::string* code, std::string* message) const;
+  // the ops (loop thread): each answers in *reply
+  void op_send(uint64_t conn, const Json& request, OpReply* reply);
+  void op_subscribe(uint64_t conn, const Json& request, OpReply* reply);
+  void op_unsubscribe(uint64_t conn, const Json& request, OpReply* reply);
+  void subscription_op(uint64_t conn, const Json& request, bool subscribe, OpReply* reply);
+  void op_stats(uint64_t conn, const Json& request, OpReply* reply);
+  void op_config(uint64_t conn, const Json& request, OpReply* reply);
+  void op_link_open(uint64_t conn, const Json& request, OpReply* reply);
+  void op_link_impair(uint64_t conn, const Json& request, OpReply* reply);
+  void op_link_stats(uint64_t conn, const Json& request, OpReply* reply);
+
   Json config_json() const;
-  bool apply_config(const Json& request, std::string* code, std::string* message);
+  Json relay_json(size_t vehicle, radio::GcsRelay& r) const;
+  // the request's vehicle for a gcs_link op (not_available without relays)
+  std::optional<size_t> relay_vehicle(const Json& request, OpReply* reply) const;
+  // the vehicle's open relay, or null with not_available
+  radio::GcsRelay* open_relay(size_t vehicle, OpReply* reply) const;
 
   sim::Simulation& sim_;
   radio::SimRadio& radio_;
   radio::GcsRelaySet* relays_;
+  GcsTargetPolicy policy_;
   struct Subscription {
     std::set<size_t> vehicles;  // whose received frames this connection gets
     bool batch = false;         // one radio_batch line a gate instead of a radio line a frame

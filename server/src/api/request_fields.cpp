@@ -83,9 +83,9 @@ std::span<const FieldSpec> core_op_fields() { return kCoreOpFields; }
 ParsedLine parse_request_line(std::string_view line) {
   ParsedLine out;
   out.id = nullptr;
-  auto fail = [&out](const char* code, std::string message) {
+  auto fail = [&out](common::ApiError code, std::string message) {
     out.body = Json();
-    out.error_code = code;
+    out.error = code;
     out.error_message = std::move(message);
     return out;
   };
@@ -98,19 +98,19 @@ ParsedLine parse_request_line(std::string_view line) {
   };
   Json body = Json::parse(line.begin(), line.end(), limit_depth, false);
   if (too_deep) {
-    return fail("bad_request", "requests nest at most " + std::to_string(kMaxNestingDepth) + " levels deep");
+    return fail(common::ApiError::kBadRequest, "requests nest at most " + std::to_string(kMaxNestingDepth) + " levels deep");
   }
-  if (body.is_discarded()) return fail("bad_json", "the line is not valid JSON");
-  if (!body.is_object()) return fail("bad_request", "a request is a JSON object");
+  if (body.is_discarded()) return fail(common::ApiError::kBadJson, "the line is not valid JSON");
+  if (!body.is_object()) return fail(common::ApiError::kBadRequest, "a request is a JSON object");
   if (auto it = body.find("id"); it != body.end()) {
     if (it->is_structured() || it->is_binary()) {
-      return fail("bad_field", "\"id\" must be a number, a string, a boolean or null");
+      return fail(common::ApiError::kBadField, "\"id\" must be a number, a string, a boolean or null");
     }
     out.id = *it;
   }
   if (!string_field(body, "op")) {
     Json id = out.id;
-    fail("missing_field", "a request needs \"op\" (a string)");
+    fail(common::ApiError::kMissingField, "a request needs \"op\" (a string)");
     out.id = std::move(id);
     return out;
   }

@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "uavsim/common/api_error.hpp"
+
 namespace uavsim::server::api {
 
 // Deeper JSON is refused at parse time: nlohmann copies, prints and compares values recursively, so a
@@ -37,7 +39,7 @@ struct FieldSpec {
 struct ParsedLine {
   nlohmann::json body;   // the request object, when error_code is empty
   nlohmann::json id;     // the request's id (a scalar or null), for the reply
-  std::string error_code;
+  std::optional<common::ApiError> error;  // set when the line is refused
   std::string error_message;
 };
 

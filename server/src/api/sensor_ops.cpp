@@ -1,7 +1,6 @@
 #include "api/sensor_ops.hpp"
 
-#include <functional>
-
+#include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
 
 namespace uavsim::server::api {
@@ -14,9 +13,16 @@ SensorOps::SensorOps(sim::Simulation& sim)
     : sim_(sim), switches_(physics::vehicle_touch_sensors(sim.world())) {}
 
 void SensorOps::register_ops(OpTable& table) {
-  static constexpr std::string_view kOps[] = {"sensor_list", "sensor_read", "sensor_subscribe",
-                                              "sensor_unsubscribe"};
-  table.add_named("sensor", kOps, std::bind_front(&SensorOps::handle, this));
+  static constexpr FieldSpec kFields[] = {{"vehicle", FieldType::kIndexOrName}};
+  table.add({"sensor_list", "sensor", [this](uint64_t, const Json&, OpReply* reply) { list(reply); }});
+  table.add({"sensor_read", "sensor",
+             [this](uint64_t, const Json& request, OpReply* reply) { read_now(request, reply); }, kFields});
+  table.add({"sensor_subscribe", "sensor",
+             [this](uint64_t conn, const Json& request, OpReply* reply) { subscribe(conn, request, reply); },
+             kFields});
+  table.add({"sensor_unsubscribe", "sensor",
+             [this](uint64_t conn, const Json& request, OpReply* reply) { unsubscribe(conn, request, reply); },
+             kFields});
 }
 
 std::vector<bool> SensorOps::read(size_t vehicle) const {
@@ -38,54 +44,57 @@ SensorOps::Json SensorOps::reading_json(size_t vehicle, const std::vector<bool>&
               {"any", any}};
 }
 
-bool SensorOps::handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-                       std::string* code, std::string* message) {
-  if (op == "sensor_list") {
-    Json list = Json::array();
-    for (size_t v = 0; v < switches_.size(); ++v) {
-      if (switches_[v].empty()) continue;
-      Json names = Json::array();
-      for (const physics::TouchSensor& s : switches_[v]) names.push_back(s.name);
-      list.push_back({{"vehicle", sim_.vehicle_name(v)},
-                      {"vehicle_index", v},
-                      {"sensor", kSwitchesSensor},
-                      {"names", names},
-                      {"closed_above_n", kSwitchClosedForce_n}});
-    }
-    *result = {{"sensors", list}};
-    return true;
+void SensorOps::list(OpReply* reply) const {
+  Json list = Json::array();
+  for (size_t v = 0; v < switches_.size(); ++v) {
+    if (switches_[v].empty()) continue;
+    Json names = Json::array();
+    for (const physics::TouchSensor& s : switches_[v]) names.push_back(s.name);
+    list.push_back({{"vehicle", sim_.vehicle_name(v)},
+                    {"vehicle_index", v},
+                    {"sensor", kSwitchesSensor},
+                    {"names", names},
+                    {"closed_above_n", kSwitchClosedForce_n}});
   }
-  auto field = request.find("vehicle");
-  if (field == request.end()) {
-    *code = "missing_field";
-    *message = "\"vehicle\" (an index or a name) is required";
-    return false;
+  reply->result = {{"sensors", list}};
+}
+
+std::optional<size_t> SensorOps::vehicle_with_switches(const Json& request, OpReply* reply) const {
+  const std::optional<size_t> vehicle = required_vehicle(sim_, request, reply);
+  if (vehicle && switches_[*vehicle].empty()) {
+    reply->fail(ApiError::kNotAvailable,
+                "vehicle " + sim_.vehicle_name(*vehicle) + " has no switches (touch sensors)");
+    return std::nullopt;
   }
-  const std::optional<size_t> vehicle = vehicle_index(sim_, *field, code, message);
-  if (!vehicle) return false;
-  if (switches_[*vehicle].empty() && op != "sensor_unsubscribe") {
-    *code = "not_available";
-    *message = "vehicle " + sim_.vehicle_name(*vehicle) + " has no switches (touch sensors)";
-    return false;
+  return vehicle;
+}
+
+void SensorOps::read_now(const Json& request, OpReply* reply) const {
+  if (const auto vehicle = vehicle_with_switches(request, reply)) {
+    reply->result = reading_json(*vehicle, read(*vehicle));
   }
-  if (op == "sensor_read") {
-    *result = reading_json(*vehicle, read(*vehicle));
-  } else if (op == "sensor_subscribe") {
-    // the current state goes out at the next gate, as the first event
-    subscriptions_[conn][*vehicle].clear();
-    *result = {{"vehicle", sim_.vehicle_name(*vehicle)},
-               {"sensor", kSwitchesSensor},
-               {"subscribed", true}};
-  } else {  // sensor_unsubscribe
-    bool was = false;
-    if (auto it = subscriptions_.find(conn); it != subscriptions_.end()) {
-      was = it->second.erase(*vehicle) > 0;
-      if (it->second.empty()) subscriptions_.erase(it);
-    }
-    *result = {
-        {"vehicle", sim_.vehicle_name(*vehicle)}, {"sensor", kSwitchesSensor}, {"subscribed", was}};
+}
+
+void SensorOps::subscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  const auto vehicle = vehicle_with_switches(request, reply);
+  if (!vehicle) return;
+  // the current state goes out at the next gate, as the first event
+  subscriptions_[conn][*vehicle].clear();
+  reply->result = {
+      {"vehicle", sim_.vehicle_name(*vehicle)}, {"sensor", kSwitchesSensor}, {"subscribed", true}};
+}
+
+void SensorOps::unsubscribe(uint64_t conn, const Json& request, OpReply* reply) {
+  // any vehicle may be unsubscribed, switches or not: there is nothing to stop then
+  const auto vehicle = required_vehicle(sim_, request, reply);
+  if (!vehicle) return;
+  bool was = false;
+  if (auto it = subscriptions_.find(conn); it != subscriptions_.end()) {
+    was = it->second.erase(*vehicle) > 0;
+    if (it->second.empty()) subscriptions_.erase(it);
   }
-  return true;
+  reply->result = {
+      {"vehicle", sim_.vehicle_name(*vehicle)}, {"sensor", kSwitchesSensor}, {"subscribed", was}};
 }
 
 void SensorOps::on_gate(const Send& send, const InLockstep& /*in_lockstep*/) {

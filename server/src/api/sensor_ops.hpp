@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -36,9 +37,6 @@ class SensorOps : public OpGroup {
 
   // sensor_list, sensor_read, sensor_subscribe, sensor_unsubscribe.
   void register_ops(OpTable& table) override;
-  // Handles one of those ops: true with *result, or false with *code and *message. Loop thread only.
-  bool handle(uint64_t conn, const std::string& op, const Json& request, Json* result,
-              std::string* code, std::string* message);
   void on_gate(const Send& send, const InLockstep& in_lockstep) override;
   void on_disconnect(uint64_t conn) override;
 
@@ -46,6 +44,13 @@ class SensorOps : public OpGroup {
   // the switch states of a vehicle now
   std::vector<bool> read(size_t vehicle) const;
   Json reading_json(size_t vehicle, const std::vector<bool>& closed) const;
+  // the ops (loop thread)
+  void list(OpReply* reply) const;
+  void read_now(const Json& request, OpReply* reply) const;
+  void subscribe(uint64_t conn, const Json& request, OpReply* reply);
+  void unsubscribe(uint64_t conn, const Json& request, OpReply* reply);
+  // the request's vehicle, which must have switches
+  std::optional<size_t> vehicle_with_switches(const Json& request, OpReply* reply) const;
 
   sim::Simulation& sim_;
   std::vector<std::vector<physics::TouchSensor>> switches_;  // per vehicle

@@ -7,6 +7,7 @@
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
 #include "sim/checked_number.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::api {
 
@@ -21,18 +22,6 @@ Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()});
 
 }  // namespace
 
-std::optional<size_t> vehicle_field(const sim::Simulation& sim, const Json& request,
-                                    OpReply* reply) {
-  auto it = request.find("vehicle");
-  if (it == request.end()) {
-    reply->fail("missing_field", "\"vehicle\" (index or name) is required");
-    return std::nullopt;
-  }
-  const std::optional<size_t> v = vehicle_index(sim, *it, &reply->code, &reply->message);
-  if (!v && reply->code == "bad_field") reply->message = "\"vehicle\" must be an index or a name";
-  return v;
-}
-
 void VehicleOps::register_ops(OpTable& table) {
   using Query = void (VehicleOps::*)(const Json&, OpReply*);
   using Fault = void (VehicleOps::*)(size_t, const Json&, OpReply*);
@@ -46,7 +35,7 @@ void VehicleOps::register_ops(OpTable& table) {
   const auto fault = [&](const char* name, Fault op) {
     table.add({name, "fault",
                [this, op](uint64_t, const Json& request, OpReply* reply) {
-                 const std::optional<size_t> v = vehicle_field(sim_, request, reply);
+                 const std::optional<size_t> v = required_vehicle(sim_, request, reply);
                  if (!v) return;
                  (this->*op)(*v, request, reply);
                  if (!reply->failed()) reply->result = {{"vehicle", *v}, {"time_s", sim_.time_s()}};
@@ -99,7 +88,7 @@ void VehicleOps::vehicles(const Json&, OpReply* reply) {
 }
 
 void VehicleOps::truck(const Json&, OpReply* reply) {
-  if (objects_.trucks.empty()) return reply->fail("not_available", "this world has no truck");
+  if (objects_.trucks.empty()) return reply->fail(ApiError::kNotAvailable, "this world has no truck");
   Json trucks = Json::array();
   for (const objects::Truck* truck : objects_.trucks) {
     const objects::TruckState s = truck->state(sim_.time_s());
@@ -119,7 +108,7 @@ void VehicleOps::truck(const Json&, OpReply* reply) {
 
 void VehicleOps::balloons(const Json&, OpReply* reply) {
   if (objects_.balloons == nullptr)
-    return reply->fail("not_available", "this world has no balloons");
+    return reply->fail(ApiError::kNotAvailable, "this world has no balloons");
   Json balloons = Json::array();
   for (const objects::BalloonState& b : objects_.balloons->balloons()) {
     balloons.push_back({{"name", b.name},
@@ -144,9 +133,9 @@ void VehicleOps::kill_vehicle(size_t v, const Json& request, OpReply*) {
 void VehicleOps::motor_failure(size_t v, const Json& request, OpReply* reply) {
   const auto rotor = number_field(request, "rotor");
   const size_t rotors = sim_.airframe(v).rotors.size();
-  if (!rotor) return reply->fail("missing_field", "\"rotor\" (index) is required");
+  if (!rotor) return reply->fail(ApiError::kMissingField, "\"rotor\" (index) is required");
   if (*rotor < 0 || *rotor >= static_cast<double>(rotors) || std::floor(*rotor) != *rotor) {
-    return reply->fail("bad_field", "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
+    return reply->fail(ApiError::kBadField, "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
   }
   sim_.set_motor_failed(v, static_cast<size_t>(*rotor),
                         bool_field(request, "failed").value_or(true));
@@ -155,14 +144,14 @@ void VehicleOps::motor_failure(size_t v, const Json& request, OpReply* reply) {
 void VehicleOps::gps_glitch(size_t v, const Json& request, OpReply* reply) {
   auto it = request.find("offset_enu_m");
   if (it == request.end()) {
-    return reply->fail("missing_field",
+    return reply->fail(ApiError::kMissingField,
                        "\"offset_enu_m\" [x, y, z] is required ([0, 0, 0] clears the glitch)");
   }
   const auto in_range = [](const Json& x) {
     return x.is_number() && std::abs(x.get<double>()) <= kMaxGlitch_m;
   };
   if (it->size() != 3 || !in_range((*it)[0]) || !in_range((*it)[1]) || !in_range((*it)[2])) {
-    return reply->fail("bad_field", "\"offset_enu_m\" must be three numbers of at most 1e5 m");
+    return reply->fail(ApiError::kBadField, "\"offset_enu_m\" must be three numbers of at most 1e5 m");
   }
   sim_.fc(v).set_gps_glitch(
       Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()));
@@ -174,9 +163,9 @@ void VehicleOps::gps_denied(size_t v, const Json& request, OpReply*) {
 
 void VehicleOps::link_drop(size_t v, const Json& request, OpReply* reply) {
   if (link_ == nullptr)
-    return reply->fail("not_available", "no MAVLink endpoint is attached to this server");
+    return reply->fail(ApiError::kNotAvailable, "no MAVLink endpoint is attached to this server");
   if (!link_->set_link_down(v, bool_field(request, "down").value_or(true))) {
-    reply->fail("not_available", "vehicle " + std::to_string(v) + " has no MAVLink link");
+    reply->fail(ApiError::kNotAvailable, "vehicle " + std::to_string(v) + " has no MAVLink link");
   }
 }
 
@@ -197,25 +186,25 @@ void VehicleOps::gimbal(const Json& request, OpReply* reply) {
   const auto angle_ok = [](const std::optional<double>& a) {
     return !a || sim::finite_in(*a, -kMaxGimbalAngle_deg, kMaxGimbalAngle_deg);
   };
-  if (!name) return reply->fail("missing_field", "\"gimbal\" (the gimbal body's name) is required");
-  if (g == nullptr) return reply->fail("bad_field", "no gimbal named '" + *name + "'");
+  if (!name) return reply->fail(ApiError::kMissingField, "\"gimbal\" (the gimbal body's name) is required");
+  if (g == nullptr) return reply->fail(ApiError::kBadField, "no gimbal named '" + *name + "'");
   if (mode && *mode != "down" && *mode != "forward" && *mode != "targets") {
-    return reply->fail("bad_field", "\"mode\" must be down, forward or targets");
+    return reply->fail(ApiError::kBadField, "\"mode\" must be down, forward or targets");
   }
   if (!angle_ok(pitch_deg) || !angle_ok(yaw_deg)) {
-    return reply->fail("bad_field", "\"pitch_deg\" and \"yaw_deg\" must be in [-360, 360]");
+    return reply->fail(ApiError::kBadField, "\"pitch_deg\" and \"yaw_deg\" must be in [-360, 360]");
   }
   if (mode) {
     g->mode = *mode == "down"      ? objects::GimbalMode::kDown
               : *mode == "forward" ? objects::GimbalMode::kForward
                                    : objects::GimbalMode::kTargets;
   }
-  if (pitch_deg) g->pitch_rad = *pitch_deg * M_PI / 180.0;
-  if (yaw_deg) g->yaw_rad = *yaw_deg * M_PI / 180.0;
+  if (pitch_deg) g->pitch_rad = *pitch_deg * common::kPi / 180.0;
+  if (yaw_deg) g->yaw_rad = *yaw_deg * common::kPi / 180.0;
   reply->result = {{"gimbal", g->name},
                    {"mode", objects::gimbal_mode_name(g->mode)},
-                   {"pitch_deg", g->pitch_rad * 180.0 / M_PI},
-                   {"yaw_deg", g->yaw_rad * 180.0 / M_PI}};
+                   {"pitch_deg", g->pitch_rad * 180.0 / common::kPi},
+                   {"yaw_deg", g->yaw_rad * 180.0 / common::kPi}};
 }
 
 void VehicleOps::wind(const Json& request, OpReply* reply) {
@@ -231,11 +220,11 @@ void VehicleOps::wind(const Json& request, OpReply* reply) {
   if (turbulence) w.turbulence_sd_m_s = *turbulence;
   const std::string why = airframe::validate(w);
   if (!why.empty() || (from && std::abs(*from) > 360.0)) {
-    return reply->fail("bad_field", why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
+    return reply->fail(ApiError::kBadField, why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
   }
   if ((gust && !sim::finite_in(*gust, 0.0, 50.0)) ||
       (gust_duration && !sim::finite_in(*gust_duration, 0.01, 600.0))) {
-    return reply->fail("bad_field",
+    return reply->fail(ApiError::kBadField,
                        "\"gust_m_s\" must be in [0, 50] and \"gust_duration_s\" in [0.01, 600]");
   }
   if (speed || from || turbulence) sim_.wind().set_params(w);

@@ -22,11 +22,6 @@ class LinkControl {
   virtual bool set_link_down(size_t vehicle, bool down) = 0;
 };
 
-// A request's "vehicle" field (an index or a name): the vehicle, or nullopt with reply failed
-// (missing_field, bad_field or unknown_vehicle). Loop thread only.
-std::optional<size_t> vehicle_field(const sim::Simulation& sim, const nlohmann::json& request,
-                                    OpReply* reply);
-
 class VehicleOps : public OpGroup {
  public:
   // sim must outlive this object. Before the server starts.

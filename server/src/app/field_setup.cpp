@@ -3,12 +3,13 @@
 #include <cmath>
 
 #include "physics/object_bodies.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::app {
 
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = common::kPi / 180.0;
 
 // a world numeric with at most max_size finite values (empty if absent)
 std::vector<double> numeric(const physics::World& world, const std::string& name, size_t min_size,

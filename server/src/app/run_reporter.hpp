@@ -50,7 +50,6 @@ class RunReporter {
   void on_status_text(std::size_t vehicle, int severity, const std::string& text);
 
   // Counts so far, for the summary.
-  std::uint64_t clients_connected() const { return clients_connected_; }
   std::uint64_t crashes() const { return crashes_; }
   std::uint64_t failsafes() const { return failsafes_; }
   // The last few failsafes reported, oldest first (the recording's overlay shows them). Loop thread only.

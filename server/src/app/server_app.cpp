@@ -488,7 +488,6 @@ int run_server(const Options& given_options) {
     api_config.bind_address = options.api_bind_address;
     api_config.lockstep_timeout_s = options.lockstep_timeout_s;
     api_config.token = options.api_token;
-    api_config.allow_remote_gcs = options.allow_remote_gcs;
     try {
       api_server = std::make_unique<api::ApiServer>(s, &runner, world_objects, api_config);
     } catch (const std::exception& e) {
@@ -525,7 +524,9 @@ int run_server(const Options& given_options) {
                 << radio->model().max_payload_bytes() << " bytes" << "\n";
     }
     gcs_relays = &radio::GcsRelaySet::create(s, options.api_bind_address);
-    radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays);
+    api::GcsTargetPolicy gcs_targets{options.allow_remote_gcs,
+                                     [api = api_server.get()](uint64_t conn) { return api->peer_address(conn); }};
+    radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays, std::move(gcs_targets));
     api_server->add_group(radio_ops.get());
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);

@@ -62,7 +62,6 @@ class Sensors {
   bool gps_denied() const { return gps_denied_; }
   // The present GPS bias (the field error added to truth, before the glitch offset) and baro drift.
   const Eigen::Vector3d& gps_bias_enu_m() const { return gps_bias_enu_m_; }
-  double baro_drift_m() const { return baro_drift_m_; }
 
  private:
   double gauss(double sd) { return sd > 0.0 ? sd * noise_() : 0.0; }

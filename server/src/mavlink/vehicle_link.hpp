@@ -108,7 +108,6 @@ class VehicleLink {
   // a frame a client sent, for the telemetry log (before on_frame)
   void log_received(std::span<const std::uint8_t> frame);
 
-  bool has_clients() const { return !links_.empty(); }
   // whether a frame was queued for a client since the last call: the endpoint wakes its I/O thread only
   // then
   bool take_queued() { return std::exchange(queued_, false); }

@@ -1,4 +1,5 @@
 #include "objects/balloons.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <cmath>
 
@@ -117,7 +118,7 @@ void BalloonField::before_step(sim::Simulation& sim) {
     Binding& b = bindings_[i];
     if (state_[i].popped && b.lean_rad.isZero() && b.lean_rate_rad_s.isZero()) continue;
     const double h_m = b.centre_in_body_m.z() + b.lift_m;
-    const double area_m2 = M_PI * state_[i].radius_m * state_[i].radius_m;
+    const double area_m2 = common::kPi * state_[i].radius_m * state_[i].radius_m;
     const double inertia = kBalloonMass_kg * h_m * h_m;
     // a popped balloon no longer catches the wind
     Eigen::Vector2d force_n = Eigen::Vector2d::Zero();

@@ -1,4 +1,5 @@
 #include "objects/eight_track.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -10,7 +11,7 @@
 namespace uavsim::server::objects {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 }  // namespace
 
 double TrackPoint::heading_rad() const { return std::atan2(tangent_enu.y(), tangent_enu.x()); }

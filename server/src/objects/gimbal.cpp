@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "physics/object_bodies.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::objects {
 
@@ -18,7 +19,7 @@ const char* gimbal_mode_name(GimbalMode mode) {
 Eigen::Quaterniond GimbalSet::pointing(const Gimbal& g, double vehicle_yaw_rad) {
   double pitch = 0.0, yaw = 0.0;
   switch (g.mode) {
-    case GimbalMode::kDown: pitch = -M_PI / 2; break;
+    case GimbalMode::kDown: pitch = -common::kPi / 2; break;
     case GimbalMode::kForward: break;
     case GimbalMode::kTargets: pitch = g.pitch_rad; yaw = g.yaw_rad; break;
   }

@@ -1,4 +1,5 @@
 #include "objects/truck_driver.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <cmath>
 #include <functional>
@@ -7,7 +8,7 @@
 namespace uavsim::server::objects {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 // periods of the driver's corrections: steering every 10-40 s, throttle every 15-60 s
 constexpr double kLateralPeriodMin_s = 10.0, kLateralPeriodMax_s = 40.0;
 constexpr double kWobblePeriodMin_s = 15.0, kWobblePeriodMax_s = 60.0;

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "physics/object_bodies.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::objects {
 
@@ -36,7 +37,7 @@ TruckParams truck_params(const physics::World& world, const std::string& name) {
   if (t.size() > 1) p.track.centre_separation_m = t[1];
   if (t.size() > 2) p.track.centre_enu_m.x() = t[2];
   if (t.size() > 3) p.track.centre_enu_m.y() = t[3];
-  if (t.size() > 4) p.track.yaw_rad = t[4] * M_PI / 180.0;
+  if (t.size() > 4) p.track.yaw_rad = t[4] * common::kPi / 180.0;
   if (const std::string e = validate(p.track); !e.empty()) {
     throw physics::WorldError("custom numeric '" + track_name + "': " + e);
   }

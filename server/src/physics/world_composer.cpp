@@ -22,6 +22,7 @@
 #include "assets/mesh_convert.hpp"
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/mavlink/sha256.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::physics {
 
@@ -32,7 +33,7 @@ using tinyxml2::XMLNode;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 
 // bounds on what a world file may ask for; each error says which and why
 constexpr double kMaxCoordinate_m = 1e5;  // MuJoCo resets (t = 0, forever) on positions past 1e10

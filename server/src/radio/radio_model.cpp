@@ -1,4 +1,5 @@
 #include "radio/radio_model.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -211,7 +212,7 @@ double RadioModel::normal() {
   // Box-Muller (one of the pair), portable unlike std::normal_distribution
   const double u1 = 1.0 - uniform();  // (0, 1]
   const double u2 = uniform();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * common::kPi * u2);
 }
 
 bool RadioModel::reaches(size_t from, size_t to, const Eigen::Vector3d& a,

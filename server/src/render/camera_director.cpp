@@ -1,4 +1,5 @@
 #include "render/camera_director.hpp"
+#include "uavsim/common/angles.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -7,7 +8,7 @@
 namespace uavsim::server::render {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 }  // namespace
 
 Eigen::Matrix3d look_at_rotation(const Eigen::Vector3d& from_enu_m,

@@ -11,12 +11,13 @@
 #include <thread>
 
 #include "render/gl_context.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 constexpr int kMinSceneGeoms =
     1000;  // mjvScene capacity floor: decor geoms come on top of the model's
 

@@ -1,4 +1,5 @@
 #include "sim/field_conditions.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::sim {
 
@@ -26,8 +27,8 @@ FieldConditions field_conditions(Realism realism) {
   c.battery_resistance_ohm = 0.015;
   // a small brushless 2-axis gimbal: 50 ms loop, 180 deg/s, 1000 deg/s^2
   c.gimbal.time_const_s = 0.05;
-  c.gimbal.rate_max_rad_s = 180.0 * M_PI / 180.0;
-  c.gimbal.accel_max_rad_s2 = 1000.0 * M_PI / 180.0;
+  c.gimbal.rate_max_rad_s = 180.0 * common::kPi / 180.0;
+  c.gimbal.accel_max_rad_s2 = 1000.0 * common::kPi / 180.0;
   c.balloons.height_spread_m = 0.5;
   c.balloons.sway = true;
   // a standalone u-blox M8-class GPS: wandering bias, jumps; baro drift; a residual compass offset

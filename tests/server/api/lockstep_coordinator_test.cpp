@@ -36,7 +36,7 @@ class Lockstep : public ::testing::Test {
   void done(uint64_t conn, std::optional<double> busy_until_s = std::nullopt,
             std::map<size_t, uint8_t> seq = {}) {
     std::string message;
-    ASSERT_EQ(coordinator_.check_done(conn, std::nullopt, &message), "") << message;
+    ASSERT_EQ(coordinator_.check_done(conn, std::nullopt, &message), std::nullopt) << message;
     coordinator_.take_done(conn, busy_until_s, std::move(seq));
   }
   // conn joins at t = 0 with a 0.1 s period and completes its first tick (at 0) with this done
@@ -81,15 +81,15 @@ TEST_F(Lockstep, ATickHoldsTheClockUntilItsDone) {
 
 TEST_F(Lockstep, DoneIsRefusedWithoutJoinWithoutATickTwiceAndForAnotherTick) {
   std::string message;
-  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "not_joined");
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), common::ApiError::kNotJoined);
   coordinator_.join(1, 0.1, std::nullopt, 0.0);
-  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "bad_state");
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), common::ApiError::kBadState);
   announce(0.0);
-  EXPECT_EQ(coordinator_.check_done(1, 3.0, &message), "bad_field");
+  EXPECT_EQ(coordinator_.check_done(1, 3.0, &message), common::ApiError::kBadField);
   EXPECT_EQ(message, "the tick waiting is 0");
-  EXPECT_EQ(coordinator_.check_done(1, 0.0, &message), "");
+  EXPECT_EQ(coordinator_.check_done(1, 0.0, &message), std::nullopt);
   coordinator_.take_done(1, std::nullopt, {});
-  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "bad_state");
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), common::ApiError::kBadState);
 }
 
 TEST_F(Lockstep, TheTickEndsOnlyOnceTheNamedMavlinkMessagesAreHandled) {
@@ -134,13 +134,13 @@ TEST_F(Lockstep, ADroppedClientThatComesBackIsToldItWasDropped) {
   clock_.advance(2.0);
   ASSERT_EQ(coordinator_.expire(0.0).size(), 1u);
   std::string message;
-  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "not_joined");
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), common::ApiError::kNotJoined);
   EXPECT_NE(message.find("dropped from the lockstep at sim time 0.000 s"), std::string::npos) << message;
   EXPECT_NE(message.find("timeout of 2 s"), std::string::npos) << message;
   // joined again: an ordinary member; left: an ordinary stranger
   coordinator_.join(1, 0.1, 2.0, 0.0);
   coordinator_.leave(1, 0.0);
-  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), "not_joined");
+  EXPECT_EQ(coordinator_.check_done(1, std::nullopt, &message), common::ApiError::kNotJoined);
   EXPECT_EQ(message, "\"done\" without lockstep_join");
 }
 
@@ -224,7 +224,7 @@ class LockstepRunner : public Lockstep {
       while (coordinator_.blocked()) {
         if (!coordinator_.expire(t).empty()) dropped_at_.push_back({t, clock_.now_s()});
         if (!coordinator_.blocked()) break;
-        if (answer_after_s && coordinator_.check_done(conn, std::nullopt, &message_).empty()) {
+        if (answer_after_s && coordinator_.!check_done(conn, std::nullopt, &message_)) {
           clock_.advance(*answer_after_s);
           coordinator_.take_done(conn, std::nullopt, {});
           coordinator_.complete(nullptr);

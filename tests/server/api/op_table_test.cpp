@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,7 @@
 #include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
+#include "uavsim/common/api_error.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "radio/gcs_relay.hpp"
@@ -48,26 +50,41 @@ TEST(OpTable, AnOpRegisteredTwiceIsAStartupErrorNamingBothGroups) {
   }
 }
 
-TEST(OpTable, NamedHandlersGetTheirOpNameAndReportErrors) {
+TEST(ApiErrorCodes, EveryCodeHasItsOwnWireNameThatReadsBack) {
+  std::set<std::string_view> names;
+  for (const auto& [code, name] : common::kApiErrorCodes) {
+    EXPECT_TRUE(names.insert(name).second) << name << " named twice";
+    EXPECT_EQ(common::api_error_code(code), name);
+    EXPECT_EQ(common::api_error_from_code(name), code) << name;
+  }
+  EXPECT_EQ(common::api_error_from_code("no_such_code"), std::nullopt);
+}
+
+// every op of the radio, sensor and overlay groups that reads a field declares it: a mistyped field
+// is refused before the op runs, as for the server's own ops
+TEST(OpTable, RadioSensorAndOverlayOpsDeclareTheirFields) {
+  physics::ComposeOptions o;
+  o.models_dir = UAVSIM_MODELS_DIR;
+  sim::Simulation sim(physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", o),
+                      sim::SimConfig{});
+  RadioOps radio(sim, radio::SimRadio::attach(sim, radio::RadioConfig{}),
+                 &radio::GcsRelaySet::attach(sim, "127.0.0.1"));
+  SensorOps sensors(sim);
+  OverlayOps overlay(sim);
   OpTable table;
-  constexpr std::string_view kNames[] = {"x_get", "x_set"};
-  table.add_named("x", kNames,
-                  [](uint64_t, const std::string& op, const Json&, Json* result, std::string* code,
-                     std::string* message) {
-                    if (op == "x_set") {
-                      *code = "bad_field";
-                      *message = "read-only";
-                      return false;
-                    }
-                    *result = {{"op", op}};
-                    return true;
-                  });
-  OpReply get, set;
-  table.find("x_get")->handler(1, Json::object(), &get);
-  table.find("x_set")->handler(1, Json::object(), &set);
-  EXPECT_FALSE(get.failed());
-  EXPECT_EQ(get.result["op"], "x_get");
-  EXPECT_EQ(set.code, "bad_field");
+  radio.register_ops(table);
+  sensors.register_ops(table);
+  overlay.register_ops(table);
+  EXPECT_EQ(table.names().size(), 14u);
+  for (const std::string& op : table.names()) {
+    if (op == "sensor_list") continue;  // reads no field
+    const OpSpec* spec = table.find(op);
+    ASSERT_NE(spec, nullptr);
+    EXPECT_FALSE(spec->typed_fields.empty()) << op;
+  }
+  // radio_send's sender is an index or a name: a number of another kind is refused by the table's spec
+  Json bad = {{"op", "radio_send"}, {"vehicle", 0.5}, {"to", "broadcast"}, {"data_b64", "AA=="}};
+  EXPECT_TRUE(mistyped_field(bad, table.find("radio_send")->typed_fields).has_value());
 }
 
 // every op of a server with every group (camera ops answer not_available without frames, but are

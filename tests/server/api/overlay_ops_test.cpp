@@ -8,6 +8,7 @@
 #include <string>
 
 #include "physics/world.hpp"
+#include "call_op.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -24,10 +25,7 @@ std::unique_ptr<sim::Simulation> two_quads() {
 
 // the result, or {"error": code}
 Json call(OverlayOps& ops, const std::string& op, const Json& request) {
-  Json result;
-  std::string code, message;
-  if (!ops.handle(1, op, request, &result, &code, &message)) return Json{{"error", code}};
-  return result;
+  return testing::call_op(ops, op, request);
 }
 
 TEST(OverlayOps, CountersAreReplacedByNameAndRemovedByEmptyText) {
@@ -82,7 +80,8 @@ TEST(OverlayOps, TextsAreCheckedAtTheEdge) {
   auto sim = two_quads();
   OverlayOps ops(*sim);
   EXPECT_EQ(call(ops, "overlay_note", Json::object())["error"], "missing_field");
-  EXPECT_EQ(call(ops, "overlay_note", {{"text", 3}})["error"], "missing_field");
+  // a field of another type is bad_field (docs/protocol.md), refused before the op runs
+  EXPECT_EQ(call(ops, "overlay_note", {{"text", 3}})["error"], "bad_field");
   EXPECT_EQ(
       call(ops, "overlay_note", {{"text", std::string(kMaxOverlayTextBytes + 1, 'a')}})["error"],
       "bad_field");

@@ -13,6 +13,7 @@
 #include "objects/world_objects.hpp"
 #include "physics/object_bodies.hpp"
 #include "physics/world.hpp"
+#include "call_op.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -41,10 +42,7 @@ std::unique_ptr<sim::Simulation> hexa_and_truck(const std::string& label) {
 }
 
 Json call(SensorOps& ops, const std::string& op, const Json& request, uint64_t conn = 1) {
-  Json result;
-  std::string code, message;
-  if (!ops.handle(conn, op, request, &result, &code, &message)) return Json{{"error", code}};
-  return result;
+  return testing::call_op(ops, op, request, conn);
 }
 
 std::vector<Json> gate(SensorOps& ops) {

@@ -87,7 +87,7 @@ TEST(RadioApi, BadInputGetsAnErrorAndTheServerCarriesOn) {
             "missing_field");
   EXPECT_EQ(
       error_code(c.request({{"op", "radio_send"}, {"vehicle", 0}, {"to", 1}, {"data_b64", 5}})),
-      "missing_field");
+      "bad_field");  // of another type: refused before the op runs
   EXPECT_EQ(error_code(c.request({{"op", "radio_subscribe"}, {"vehicle", 3}})), "unknown_vehicle");
   EXPECT_EQ(error_code(c.request({{"op", "radio_stats"}, {"vehicle", true}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"loss", 2}})), "bad_field");
@@ -295,6 +295,29 @@ TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
   EXPECT_EQ(error_code(c.request({{"op", "gcs_link_impair"}, {"vehicle", 1}, {"loss", -0.1}})),
             "bad_field");
   EXPECT_TRUE(c.request({{"op", "gcs_link_stats"}, {"vehicle", 1}})["ok"]);
+}
+
+// uavsim-server without --allow-remote-gcs: the relay's datagrams go to the requesting client only
+TEST(RadioApi, AGcsLinkAimsOnlyAtTheClientsOwnAddressUnlessRemoteTargetsAreAllowed) {
+  RadioServer held(radio::Backend::kSimple, /*allow_remote_gcs=*/false);
+  TestClient c(held.port());
+  constexpr int kTargetPort = 14550;  // a ground station's (nothing listens: no datagram is sent here)
+  const Json elsewhere = c.request(
+      {{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_host", "127.0.0.2"}, {"gcs_target_port", kTargetPort}});
+  EXPECT_EQ(error_code(elsewhere), "forbidden") << elsewhere;
+  EXPECT_NE(elsewhere["error"].value("message", "").find("127.0.0.1"), std::string::npos) << elsewhere;
+  // aimed at the client, with or without its address given
+  EXPECT_TRUE(c.request({{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_port", kTargetPort}})["ok"]);
+  EXPECT_TRUE(c.request({{"op", "gcs_link_open"},
+                         {"vehicle", 1},
+                         {"gcs_target_host", "127.0.0.1"},
+                         {"gcs_target_port", kTargetPort}})["ok"]);
+
+  RadioServer open;  // allowed
+  TestClient d(open.port());
+  const Json r = d.request(
+      {{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_host", "127.0.0.2"}, {"gcs_target_port", kTargetPort}});
+  EXPECT_TRUE(r["ok"]) << r;
 }
 
 TEST(RadioApi, TheChannelSaysItsBackendAndHowLargeAFrameMayBe) {

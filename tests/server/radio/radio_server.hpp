@@ -17,7 +17,9 @@ namespace uavsim::server::api::testing {
 
 class RadioServer {
  public:
-  explicit RadioServer(radio::Backend backend = radio::Backend::kSimple) {
+  // allow_remote_gcs: gcs_link_open may aim at any host (false: only at the client's own address, as
+  // uavsim-server without --allow-remote-gcs)
+  explicit RadioServer(radio::Backend backend = radio::Backend::kSimple, bool allow_remote_gcs = true) {
     physics::ComposeOptions o;
     o.models_dir = UAVSIM_MODELS_DIR;
     sim_ = std::make_unique<sim::Simulation>(
@@ -28,7 +30,9 @@ class RadioServer {
     b.backend = backend;
     radio::SimRadio& radio = radio::SimRadio::attach(*sim_, radio::RadioConfig{}, b);
     radio::GcsRelaySet& relays = radio::GcsRelaySet::attach(*sim_, "127.0.0.1");
-    ops_ = std::make_unique<RadioOps>(*sim_, radio, &relays);
+    // the policy asks the API server (made below, before any request) for a connection's address
+    GcsTargetPolicy targets{allow_remote_gcs, [this](uint64_t conn) { return api_->peer_address(conn); }};
+    ops_ = std::make_unique<RadioOps>(*sim_, radio, &relays, std::move(targets));
     runner_ = std::make_unique<sim::Runner>(*sim_, 0.0);
     ApiConfig config;
     config.port = 0;

@@ -65,9 +65,8 @@ class Parser {
   // history are kept.
   void configure(const ParserConfig& config) { config_ = config; }
 
-  // Counters since construction or the last reset_stats().
+  // Counters since construction.
   const ParserStats& stats() const { return stats_; }
-  void reset_stats() { stats_ = {}; }
 
   // Bytes held while waiting for the rest of a frame.
   std::size_t buffered() const { return len_ - emitted_len_; }
