@@ -26,8 +26,11 @@
 // lockstep itself and injects it at a tick, from the program's output stamped before that tick, so
 // a seed's run is the same every time.
 //
+// SIGINT or SIGTERM stops the run cleanly: the program and the server are stopped, the summary so
+// far is printed and written (JSON "interrupted": true, the interruption its "cause").
+//
 // Exit status: 0 only when the UAV landed on the deck, stayed there 5 s and nothing crashed.
-// 1: the mission fell short; 2: usage; 4: the harness failed.
+// 1: the mission fell short; 2: usage; 4: the harness failed; 130: interrupted.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -341,6 +344,7 @@ int main(int argc, char** argv) {
     o.record = files->video;
     o.json_path = files->summary;
   }
+  uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2017-run", o.quiet);
   launch.keep_summary(o.json_path, {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
@@ -651,6 +655,7 @@ int main(int argc, char** argv) {
       // scored: still on the deck 5 s after touchdown
       if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
       if (launch.programs_done() && landed_s < 0) break;
+      if (uavsim::launch::interrupted()) break;
       if (sim_s >= o.start_time_s + o.budget_s - kPauseSlack_s) {
         launch.say("mbzirc2017-run: sim-time budget spent");
         break;
@@ -665,8 +670,9 @@ int main(int argc, char** argv) {
       }
     }
     (void)api.lockstep_leave();
-    // the clock holds by itself at the end (pause_at): score once it does
-    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it stands)
+    for (const double until_s = launch.wall_s() + 10.0;
+         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
          launch.pump(10)) {
       const auto st = api.status();
       if (!st || st->value("paused", false)) break;
@@ -698,7 +704,8 @@ int main(int argc, char** argv) {
   if (world != o.world) std::remove(world.c_str());
 
   const bool landed = landed_s >= 0;
-  const bool success = harness_error == 0 && landed && stayed_on_deck && crashes.empty();
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && landed &&
+                       stayed_on_deck && crashes.empty();
   const double mission_s = landed && takeoff_s >= 0 ? landed_s - takeoff_s : -1.0;
   std::printf("==== MBZIRC 2017 landing on the moving truck, seed %llu ====\n",
               static_cast<unsigned long long>(o.seed));
@@ -741,7 +748,8 @@ int main(int argc, char** argv) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
   }
-  std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
+  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
+              uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -786,6 +794,5 @@ int main(int argc, char** argv) {
     summary["success"] = success;
     if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
-  if (harness_error) return harness_error;
-  return success ? 0 : 1;
+  return uavsim::launch::run_exit_code(harness_error != 0, success);
 }

@@ -5,9 +5,12 @@
 // scored from the sim API's ground truth (the programs never see it): balloons popped, mission
 // time, crashes, the video.
 //
+// SIGINT or SIGTERM stops the run cleanly: the programs and the server are stopped, the summary so
+// far is printed and written (JSON "interrupted": true, the interruption its "cause").
+//
 // Exit status: 0 only when every balloon is popped and no vehicle crashed (other than one killed on
 // purpose with --kill, Competition Day 2's failed UAV). 1: the mission fell short; 2: usage; 4: the
-// harness failed.
+// harness failed; 130: interrupted.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -175,6 +178,7 @@ int main(int argc, char** argv) {
   const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
                                ",height=" + o.camera_size.substr(x + 1) +
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
+  uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2020-run", o.quiet);
   launch.keep_summary(o.json_path, {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
@@ -243,7 +247,7 @@ int main(int argc, char** argv) {
       fail("cannot start " + o.gcs);
     }
     while (!harness_error && gcs_port.size() < 2 && launch.wall_s() < 60 &&
-           !launch.programs_done()) {
+           !launch.programs_done() && !uavsim::launch::interrupted()) {
       launch.pump(200);
     }
     if (!harness_error && gcs_port.size() < 2) fail("the ground station did not start");
@@ -332,7 +336,7 @@ int main(int argc, char** argv) {
         if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
         launch.note_sim_time(sim_s);
       }
-      if (all_done) break;
+      if (all_done || uavsim::launch::interrupted()) break;
       if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
         launch.say("mbzirc2020-run: sim-time budget spent");
         break;
@@ -347,8 +351,9 @@ int main(int argc, char** argv) {
       }
     }
 
-    // the clock holds by itself at the end (pause_at): score once it does
-    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it stands)
+    for (const double until_s = launch.wall_s() + 10.0;
+         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
          launch.pump(10)) {
       const auto st = api.status();
       if (!st || st->value("paused", false)) break;
@@ -383,8 +388,8 @@ int main(int argc, char** argv) {
   // 8. stop everything we started: the programs, then the server (it finishes the video)
   launch.stop_all(60.0);
 
-  const bool success =
-      harness_error == 0 && balloons_total > 0 && popped == balloons_total && crashes.empty();
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && balloons_total > 0 &&
+                       popped == balloons_total && crashes.empty();
   const double mission_s =
       (first_armed_s >= 0 && last_pop_s >= 0) ? last_pop_s - first_armed_s : -1;
   std::printf("==== MBZIRC 2020 balloons, seed %llu%s ====\n",
@@ -411,7 +416,8 @@ int main(int argc, char** argv) {
     std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
                 static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
   }
-  std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
+  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
+              uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -433,6 +439,5 @@ int main(int argc, char** argv) {
     summary["success"] = success;
     if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
-  if (harness_error) return harness_error;
-  return success ? 0 : 1;
+  return uavsim::launch::run_exit_code(harness_error != 0, success);
 }

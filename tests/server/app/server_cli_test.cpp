@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "../../support/piped_child.hpp"
+
 namespace {
 
 struct ServerRun {
@@ -188,23 +190,11 @@ TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
 class ServerProcess {
  public:
   explicit ServerProcess(const std::vector<std::string>& args) {
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(fds[1], 1);
-      dup2(fds[1], 2);
-      close(fds[0]);
-      close(fds[1]);
-      std::vector<char*> argv;
-      argv.push_back(const_cast<char*>(UAVSIM_SERVER_BIN));
-      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(UAVSIM_SERVER_BIN, argv.data());
-      _exit(127);
-    }
-    close(fds[1]);
-    out_ = fdopen(fds[0], "r");
+    std::vector<std::string> argv{UAVSIM_SERVER_BIN};
+    argv.insert(argv.end(), args.begin(), args.end());
+    int fd = -1;
+    pid_ = uavsim::testing::spawn_piped(std::move(argv), &fd);
+    if (fd >= 0) out_ = fdopen(fd, "r");
   }
   ~ServerProcess() {
     if (pid_ > 0 && !reaped_) {
