@@ -502,16 +502,15 @@ struct Launcher::Impl {
       if (c->pid <= 0 && c->reported && !c->exited) continue;
       const auto e = std::find_if(ends.begin(), ends.end(),
                                   [&](const ProgramEnd& x) { return x.pid == c->pid; });
-      programs.push_back(
-          e != ends.end() ? e->to_json()
-                          : nlohmann::json{{"name", c->name}, {"running", true}});
+      programs.push_back(e != ends.end() ? e->to_json()
+                                         : nlohmann::json{{"name", c->name}, {"running", true}});
     }
     j["programs"] = std::move(programs);
     // the cause: among the ends before an interruption, a program killed by a signal rather than
     // those that exited because of it (agents end with a code when the server dies, and may be
     // noticed first), else the first abnormal end; then the interruption; then any abnormal end
-    const auto before = ends.begin() + static_cast<std::ptrdiff_t>(
-                                           ends_before_interrupt.value_or(ends.size()));
+    const auto before =
+        ends.begin() + static_cast<std::ptrdiff_t>(ends_before_interrupt.value_or(ends.size()));
     auto cause = std::find_if(ends.begin(), before,
                               [](const ProgramEnd& e) { return e.abnormal() && e.signal; });
     if (cause == before) {
@@ -523,8 +522,8 @@ struct Launcher::Impl {
       j["cause"] = "the launcher was interrupted by " + signal_name(interrupted()) + " " +
                    sim_time_text(interrupt_sim_time_s);
     } else {
-      cause = std::find_if(ends.begin(), ends.end(),
-                           [](const ProgramEnd& e) { return e.abnormal(); });
+      cause =
+          std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
       j["cause"] =
           cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
     }
@@ -755,10 +754,11 @@ void Launcher::pump(int timeout_ms) {
     usleep(static_cast<useconds_t>(timeout_ms) * 1000);
   }
   // the API first, then the programs' output: a program writes a line before it sends the lockstep
-  // `done` that lets the clock reach the next tick, so once a tick has been read here every line the
-  // programs wrote before it is in their pipes, and the reads below see it in the same pass. (In the
-  // other order a line written between the two reads would meet a later tick: the fault injector of
-  // the 2017 run then acted a tick late on a loaded machine, and two runs of one seed diverged.)
+  // `done` that lets the clock reach the next tick, so once a tick has been read here every line
+  // the programs wrote before it is in their pipes, and the reads below see it in the same pass.
+  // (In the other order a line written between the two reads would meet a later tick: the fault
+  // injector of the 2017 run then acted a tick late on a loaded machine, and two runs of one seed
+  // diverged.)
   if (m.api) (void)m.api->poll(0);
   m.read_children();
   m.truth.serve();

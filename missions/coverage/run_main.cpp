@@ -69,7 +69,6 @@ constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz
 constexpr double kFullCoverage = 1.0 - 1e-3;
 constexpr int kStationId = 255;
 
-
 struct Options {
   int agents = 5;
   double length_x_m = 150.0, width_y_m = 100.0;
@@ -481,7 +480,8 @@ int main(int argc, char** argv) {
   // 2. the server, on ephemeral ports, as fast as possible; the lines of every program go through
   // on_agent_line (the launcher's own printing is off: APD reports are not for people)
   Launcher launch("coverage-run", /*quiet=*/true);
-  launch.keep_summary(o.json_path, {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  launch.keep_summary(o.json_path,
+                      {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   std::map<std::string, std::pair<int, int>> agents_of;  // agent program -> its agents
   launch.on_exit([&](const uavsim::launch::ProgramEnd& e) {
     const auto it = agents_of.find(e.name);
@@ -810,8 +810,9 @@ int main(int argc, char** argv) {
     }
     per_agent.push_back(std::move(entry));
   }
-  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && !vehicles_end.empty() &&
-                       coverage >= kFullCoverage && survivors > 0 && landed == survivors;
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() &&
+                       !vehicles_end.empty() && coverage >= kFullCoverage && survivors > 0 &&
+                       landed == survivors;
   const double mission_s = first_takeoff_s >= 0 && last_touchdown_s >= first_takeoff_s
                                ? last_touchdown_s - first_takeoff_s
                                : -1.0;

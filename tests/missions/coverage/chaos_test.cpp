@@ -39,8 +39,8 @@ using uavsim::tests::events_of;
 using uavsim::tests::expect_no_orphan;
 using uavsim::tests::Proc;
 using uavsim::tests::RunProcess;
-constexpr double kTlogBound_s = 0.1;    // tlog.hpp: frames of the last 0.1 s of sim may be lost
-constexpr std::uint64_t kSeed = 29;     // the issue's
+constexpr double kTlogBound_s = 0.1;  // tlog.hpp: frames of the last 0.1 s of sim may be lost
+constexpr std::uint64_t kSeed = 29;   // the issue's
 constexpr double kFullCoverage = 0.999;
 
 std::string read_file(const std::string& path) { return uavsim::tests::read_whole_file(path); }
