@@ -447,6 +447,14 @@ struct Launcher::Impl {
   // the interruption, once noticed: how many ends were noticed before it, and the sim time then
   std::optional<std::size_t> ends_before_interrupt;
   double interrupt_sim_time_s = -1.0;
+  // the first run record that could not be written (the launcher's ground truth, or the server's
+  // event log or a tlog as it says), with the sim time then: records_error()
+  std::string records_error;
+
+  void note_records_error(const std::string& why) {
+    if (!records_error.empty()) return;
+    records_error = why + " " + sim_time_text(sim_time_s);
+  }
 
   void say(const std::string& line) const {
     if (quiet) return;
@@ -454,8 +462,12 @@ struct Launcher::Impl {
     std::fflush(stdout);
   }
   void read_child(Child& c) {
+    // the server says once when one of its logs cannot be written on (a full disk)
+    static const std::regex log_stops(R"(uavsim-server: the (event log|tlog) stops here: (.*))");
     for (const std::string& l : c.read_lines()) {
       say("[" + c.name + "] " + l);
+      std::smatch m;
+      if (&c == server && std::regex_search(l, m, log_stops)) note_records_error(m[2].str());
       for (auto& cb : line_callbacks) cb(c.name, l);
     }
   }
@@ -518,6 +530,8 @@ struct Launcher::Impl {
     }
     if (cause != before) {
       j["cause"] = cause->name + " " + cause->how;
+    } else if (!records_error.empty()) {
+      j["cause"] = "the run's records cannot be written: " + records_error;
     } else if (ends_before_interrupt) {
       j["cause"] = "the launcher was interrupted by " + signal_name(interrupted()) + " " +
                    sim_time_text(interrupt_sim_time_s);
@@ -528,6 +542,7 @@ struct Launcher::Impl {
           cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
     }
     j["interrupted"] = ends_before_interrupt.has_value();
+    j["records_error"] = records_error.empty() ? nlohmann::json() : nlohmann::json(records_error);
     if (!j.contains("sim_time_s") || !complete) j["sim_time_s"] = sim_time_s;
     if (!j.contains("wall_time_s") || !complete) j["wall_time_s"] = wall_s;
     j["complete"] = complete;
@@ -593,6 +608,7 @@ void Launcher::check_children() {
   }
   if (!m.truth.write_error.empty() && !m.truth_error_said) {
     m.truth_error_said = true;
+    m.note_records_error(m.truth.write_error);
     std::fprintf(stderr, "%s: the ground truth stops here: %s\n", m.name.c_str(),
                  m.truth.write_error.c_str());
   }
@@ -620,6 +636,8 @@ std::optional<ProgramEnd> Launcher::ended(const std::string& name) const {
   }
   return std::nullopt;
 }
+
+const std::string& Launcher::records_error() const { return impl_->records_error; }
 
 std::string Launcher::server_end() const {
   const auto e = ended("server");

@@ -757,6 +757,10 @@ int main(int argc, char** argv) {
       }
       if (launch.programs_done(o.gcs ? "gcs" : "")) break;
       if (uavsim::launch::interrupted()) break;
+      if (!launch.records_error().empty()) {
+        fail("the run's records cannot be written: " + launch.records_error());
+        break;
+      }
       if (ended && sim_s + 1e-9 >= o.budget_s) {
         say("coverage-run: sim-time budget spent");
         break;

@@ -674,6 +674,10 @@ int main(int argc, char** argv) {
         fail(launch.server_end());
         break;
       }
+      if (!launch.records_error().empty()) {
+        fail("the run's records cannot be written: " + launch.records_error());
+        break;
+      }
     }
     (void)api.lockstep_leave();
     // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it

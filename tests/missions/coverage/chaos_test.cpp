@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -48,9 +50,11 @@ std::string read_file(const std::string& path) { return uavsim::tests::read_whol
 // coverage-run as a child process, its output read as it comes
 class ChaosRun {
  public:
-  ChaosRun(const std::string& name, const std::vector<std::string>& extra)
+  // before_exec: run in the launcher's process before its exec (limits it and all it starts)
+  ChaosRun(const std::string& name, const std::vector<std::string>& extra,
+           const std::function<void()>& before_exec = {})
       : dir_(::testing::TempDir() + "chaos-" + name + "-" + std::to_string(getpid())),
-        run_(args(dir_, extra)) {}
+        run_(args(dir_, extra), before_exec) {}
   ~ChaosRun() {
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
   }
@@ -107,7 +111,8 @@ int count_events(const Json& events, const std::string& kind) {
 
 // the newest stamp of a tlog whose records are all whole frames (an incomplete last record is the
 // kill's residue); -1 for none
-double last_tlog_stamp_s(const std::string& path) {
+// (the bytes after the last whole record in *torn_bytes, if given)
+double last_tlog_stamp_s(const std::string& path, size_t* torn_bytes = nullptr) {
   const std::string b = read_file(path);
   size_t at = 0;
   double last_s = -1.0;
@@ -126,6 +131,7 @@ double last_tlog_stamp_s(const std::string& path) {
     at += 8 + len;
   }
   EXPECT_LE(b.size() - at, 8u + 280u) << path << ": more than one record torn";
+  if (torn_bytes != nullptr) *torn_bytes = b.size() - at;
   return last_s;
 }
 
@@ -256,6 +262,52 @@ TEST(Chaos, LauncherKilledNoProcessOfTheRunSurvivesAndItsRecordsStay) {
   EXPECT_EQ(s["mission"], "coverage");
   // rewritten every 10 s of sim: at most one period behind the kill
   EXPECT_GE(s["sim_time_s"].get<double>(), run.seen_s() - 10.0 - 1.0) << s.dump();
+}
+
+// A disk that fills up mid-run, without root: the launcher and everything it starts get a file
+// size limit of 64 KiB (RLIMIT_FSIZE, SIGXFSZ ignored, so a write past it fails with EFBIG as one
+// on a full disk fails with ENOSPC). The first log to reach it ends the run as a harness failure
+// that names the file; every log keeps whole records up to where it stopped.
+TEST(Chaos, ADiskFullMidRunEndsTheRunNamingTheFileAndKeepsWholeRecords) {
+  constexpr rlim_t kFileLimitBytes = 64 * 1024;
+  ChaosRun run("disk-full", {}, [] {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{kFileLimitBytes, kFileLimitBytes};
+    (void)setrlimit(RLIMIT_FSIZE, &limit);
+  });
+  ASSERT_TRUE(run.until_sim_time(5.0)) << run.output();
+  const std::vector<Proc> snapshot = run.tree();
+  ASSERT_TRUE(run.until_exit()) << run.output();
+  EXPECT_TRUE(WIFEXITED(run.status()) && WEXITSTATUS(run.status()) == 4) << run.output();
+  EXPECT_NE(run.output().find("the run's records cannot be written: " + run.dir()),
+            std::string::npos)
+      << run.output();
+  EXPECT_NE(run.output().find(": File too large at sim t="), std::string::npos) << run.output();
+  expect_no_orphan(snapshot, run.dir());
+  const Json s = summary_of(run.dir());
+  ASSERT_TRUE(s.is_object()) << read_file(run.dir() + "/summary.json");
+  EXPECT_TRUE(s["complete"].get<bool>()) << s.dump();
+  EXPECT_FALSE(s["success"].get<bool>()) << s.dump();
+  EXPECT_NE(s.value("records_error", Json()).dump().find("File too large"), std::string::npos)
+      << s.dump();
+  EXPECT_NE(s.value("cause", Json()).dump().find("the run's records cannot be written"),
+            std::string::npos)
+      << s.dump();
+  // whole records in every log up to where it stopped: events, tlogs, ground truth
+  events_of(run.dir());
+  for (int i = 0; i < 5; ++i) {
+    const std::string uav = "uav" + std::to_string(i);
+    const std::string tlog = run.dir() + "/" + uav + ".tlog";
+    EXPECT_LE(fs::file_size(tlog), kFileLimitBytes);
+    size_t torn_bytes = 0;
+    EXPECT_GT(last_tlog_stamp_s(tlog, &torn_bytes), 1.0) << uav;
+    EXPECT_EQ(torn_bytes, 0u) << tlog << ": a frame cut at the limit";
+    const std::string truth = run.dir() + "/truth_" + uav + ".csv";
+    const std::string text = read_file(truth);
+    ASSERT_FALSE(text.empty()) << truth;
+    EXPECT_EQ(text.back(), '\n') << truth << ": a row cut at the limit";
+    EXPECT_GT(last_truth_row_s(truth), 1.0) << uav;
+  }
 }
 
 TEST(Chaos, ARunDirectoryUnderAFileIsAClearErrorAtStart) {

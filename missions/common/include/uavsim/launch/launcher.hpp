@@ -212,11 +212,18 @@ class Launcher {
   // "the server was killed by SIGKILL at sim t=53.20 s" when the server ended, else "the server
   // exited": for the mission's harness-failure message. Owner thread only.
   std::string server_end() const;
+  // "" while every record of the run is written; else the first that could not be (a full disk,
+  // the file size limit), noticed by pump() and the waits: the launcher's ground truth, or the
+  // server's event log or a tlog as the server says, "PATH: File too large at sim t=72.40 s". A
+  // mission ends its run then, as a harness failure: the summary names it ("records_error", and
+  // as the cause unless a program had ended abnormally before). Owner thread only.
+  const std::string& records_error() const;
 
   // From now on path ("" for none) holds the run's summary so far: `partial` plus "complete":
   // false, sim_time_s, wall_time_s, "programs" (each one's end, or running), "interrupted" and
-  // "cause" (among the ends noticed before an interruption, the first program killed by a signal
-  // the launcher did not send, else the first abnormal end; else the interruption, "the launcher
+  // "records_error" (records_error(), null if none) and "cause" (among the ends noticed before an
+  // interruption, the first program killed by a signal the launcher did not send, else the first
+  // abnormal end; else a record that could not be written; else the interruption, "the launcher
   // was interrupted by SIGINT at sim t=..."; else the first abnormal end; null if none), replaced
   // atomically (temp file, fsync, rename) every kSummaryPeriod_s of
   // sim time and whenever a program ends, so a run killed at any moment leaves a summary.
