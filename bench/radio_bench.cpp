@@ -64,6 +64,55 @@ void BM_RadioBroadcastCollisions(benchmark::State& state) { run_radio(state, tru
 BENCHMARK(BM_RadioBroadcast)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RadioBroadcastCollisions)->Arg(10)->Arg(100)->Unit(benchmark::kMillisecond);
 
+// One client flooding the radio (issue 29: ~7000 radio_send a second from one client slowed the
+// clock to 0.23x): vehicle 0 of 5 sends range(0) frames of 16 bytes every 1 ms step for range(1)
+// s of sim time, against a channel that carries (16 + 6) * 8 / 250000 = 0.704 ms a frame, at
+// most 1420 a second. 1 frame a step is under that; 7 a step (7000/s) is the flood. Reports sim
+// seconds per wall second, the frames accepted, refused (queue_full) and delivered, and the
+// sender's backlog (accepted, not yet on air) at the end.
+void BM_RadioFlood(benchmark::State& state) {
+  constexpr size_t kVehicles = 5;
+  constexpr double kStep_s = 0.001;
+  const auto per_step = static_cast<int>(state.range(0));
+  const auto steps = static_cast<int>(state.range(1) * 1000);
+  std::vector<Eigen::Vector3d> pos;
+  for (size_t i = 0; i < kVehicles; ++i) pos.emplace_back(20.0 * i, 0.0, 10.0);
+  const std::vector<uint8_t> frame(16, 0x5A);
+  int64_t accepted = 0, refused = 0, deliveries = 0;
+  double sim_s = 0.0;
+  size_t backlog = 0;
+  std::vector<Delivery> out;
+  for (auto _ : state) {
+    RadioModel m(kVehicles, RadioConfig{}, 1, kStep_s);
+    for (int k = 0; k < steps; ++k) {
+      const double t = k * kStep_s;
+      for (int f = 0; f < per_step; ++f) {
+        if (m.send(0, kBroadcast, frame, t).seq) {
+          ++accepted;
+        } else {
+          ++refused;
+        }
+      }
+      out.clear();
+      m.step(t, pos, &out);
+      deliveries += static_cast<int64_t>(out.size());
+    }
+    sim_s += steps * kStep_s;
+    backlog = m.queued(0);
+  }
+  state.counters["sim_s/wall_s"] = benchmark::Counter(sim_s, benchmark::Counter::kIsRate);
+  state.counters["accepted"] = static_cast<double>(accepted);
+  state.counters["refused"] = static_cast<double>(refused);
+  state.counters["deliveries"] = static_cast<double>(deliveries);
+  state.counters["backlog"] = static_cast<double>(backlog);
+}
+BENCHMARK(BM_RadioFlood)
+    ->Args({1, 4})
+    ->Args({7, 4})
+    ->Iterations(1)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
 namespace radio = uavsim::server::radio;
 
 // a process's resident memory, MB (VmRSS of /proc/PID/status), 0 if unreadable

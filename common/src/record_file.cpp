@@ -68,6 +68,11 @@ bool RecordFile::write(std::string_view bytes) {
   if (fd_ < 0 || !error_.empty()) return false;
   if (!write_all(fd_, bytes)) {
     error_ = reason(path_, errno);
+    // a full disk (ENOSPC) or the file size limit (EFBIG) takes what fits and refuses the rest:
+    // the part of this batch that got in is cut off again, so the file ends on a whole record
+    // (shrinking needs no space)
+    if (::ftruncate(fd_, static_cast<off_t>(bytes_written_)) == 0)
+      (void)::lseek(fd_, static_cast<off_t>(bytes_written_), SEEK_SET);
     return false;
   }
   bytes_written_ += bytes.size();

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -174,7 +175,9 @@ struct Child {
     while (!reap() && SteadyClock::now() < end) usleep(10000);
     if (!exited) {
       kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
+      // a second Ctrl-C (catch_interrupts: no SA_RESTART) must not leave it unreaped
+      while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+      }
       exited = true;
     }
   }
@@ -238,6 +241,13 @@ bool kernel_log_names_oom_kill(pid_t pid) {
   return found;
 }
 
+// the signal that interrupted the run (catch_interrupts); 0 for none. A process-wide flag because
+// a signal handler can reach nothing else.
+volatile std::sig_atomic_t g_interrupt_signal = 0;
+extern "C" void on_interrupt(int sig) {
+  if (g_interrupt_signal == 0) g_interrupt_signal = sig;
+}
+
 std::string sim_time_text(double t_s) {
   if (t_s < 0) return "before the sim clock ran";
   char buf[48];
@@ -268,6 +278,24 @@ nlohmann::json ProgramEnd::to_json() const {
   j["signal"] = signal ? nlohmann::json(signal_name(*signal)) : nlohmann::json();
   if (out_of_memory) j["out_of_memory"] = true;
   return j;
+}
+
+void catch_interrupts() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  // no SA_RESTART: a wait in poll() or a read ends at once with EINTR and the loop looks again
+  sa.sa_flags = 0;
+  (void)sigaction(SIGINT, &sa, nullptr);
+  (void)sigaction(SIGTERM, &sa, nullptr);
+}
+
+int interrupted() { return g_interrupt_signal; }
+
+int run_exit_code(bool harness_failed, bool success) {
+  if (interrupted() != 0) return kExitInterrupted;
+  if (harness_failed) return kExitHarness;
+  return success ? kExitSuccess : kExitFellShort;
 }
 
 std::string sibling_program(const std::string& name) {
@@ -416,6 +444,17 @@ struct Launcher::Impl {
   nlohmann::json summary = nlohmann::json::object();
   double next_summary_s = 0.0;
   bool summary_error_said = false;
+  // the interruption, once noticed: how many ends were noticed before it, and the sim time then
+  std::optional<std::size_t> ends_before_interrupt;
+  double interrupt_sim_time_s = -1.0;
+  // the first run record that could not be written (the launcher's ground truth, or the server's
+  // event log or a tlog as it says), with the sim time then: records_error()
+  std::string records_error;
+
+  void note_records_error(const std::string& why) {
+    if (!records_error.empty()) return;
+    records_error = why + " " + sim_time_text(sim_time_s);
+  }
 
   void say(const std::string& line) const {
     if (quiet) return;
@@ -423,8 +462,12 @@ struct Launcher::Impl {
     std::fflush(stdout);
   }
   void read_child(Child& c) {
+    // the server says once when one of its logs cannot be written on (a full disk)
+    static const std::regex log_stops(R"(uavsim-server: the (event log|tlog) stops here: (.*))");
     for (const std::string& l : c.read_lines()) {
       say("[" + c.name + "] " + l);
+      std::smatch m;
+      if (&c == server && std::regex_search(l, m, log_stops)) note_records_error(m[2].str());
       for (auto& cb : line_callbacks) cb(c.name, l);
     }
   }
@@ -471,21 +514,35 @@ struct Launcher::Impl {
       if (c->pid <= 0 && c->reported && !c->exited) continue;
       const auto e = std::find_if(ends.begin(), ends.end(),
                                   [&](const ProgramEnd& x) { return x.pid == c->pid; });
-      programs.push_back(
-          e != ends.end() ? e->to_json()
-                          : nlohmann::json{{"name", c->name}, {"running", true}});
+      programs.push_back(e != ends.end() ? e->to_json()
+                                         : nlohmann::json{{"name", c->name}, {"running", true}});
     }
     j["programs"] = std::move(programs);
-    // the cause: a program killed by a signal rather than those that exited because of it (agents
-    // end with a code when the server dies, and may be noticed first); else the first abnormal end
-    auto cause = std::find_if(ends.begin(), ends.end(),
+    // the cause: among the ends before an interruption, a program killed by a signal rather than
+    // those that exited because of it (agents end with a code when the server dies, and may be
+    // noticed first), else the first abnormal end; then the interruption; then any abnormal end
+    const auto before =
+        ends.begin() + static_cast<std::ptrdiff_t>(ends_before_interrupt.value_or(ends.size()));
+    auto cause = std::find_if(ends.begin(), before,
                               [](const ProgramEnd& e) { return e.abnormal() && e.signal; });
-    if (cause == ends.end()) {
+    if (cause == before) {
+      cause = std::find_if(ends.begin(), before, [](const ProgramEnd& e) { return e.abnormal(); });
+    }
+    if (cause != before) {
+      j["cause"] = cause->name + " " + cause->how;
+    } else if (!records_error.empty()) {
+      j["cause"] = "the run's records cannot be written: " + records_error;
+    } else if (ends_before_interrupt) {
+      j["cause"] = "the launcher was interrupted by " + signal_name(interrupted()) + " " +
+                   sim_time_text(interrupt_sim_time_s);
+    } else {
       cause =
           std::find_if(ends.begin(), ends.end(), [](const ProgramEnd& e) { return e.abnormal(); });
+      j["cause"] =
+          cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
     }
-    j["cause"] =
-        cause == ends.end() ? nlohmann::json() : nlohmann::json(cause->name + " " + cause->how);
+    j["interrupted"] = ends_before_interrupt.has_value();
+    j["records_error"] = records_error.empty() ? nlohmann::json() : nlohmann::json(records_error);
     if (!j.contains("sim_time_s") || !complete) j["sim_time_s"] = sim_time_s;
     if (!j.contains("wall_time_s") || !complete) j["wall_time_s"] = wall_s;
     j["complete"] = complete;
@@ -522,6 +579,16 @@ Launcher::~Launcher() {
 
 void Launcher::check_children() {
   Impl& m = *impl_;
+  if (interrupted() != 0 && !m.ends_before_interrupt) {
+    // said once (on stderr, quiet or not, as an abnormal end), and recorded before the ends that
+    // stopping the programs brings
+    m.ends_before_interrupt = m.ends.size();
+    m.interrupt_sim_time_s = m.sim_time_s;
+    std::fprintf(stderr, "%s: interrupted by %s %s: stopping the run\n", m.name.c_str(),
+                 signal_name(interrupted()).c_str(), sim_time_text(m.sim_time_s).c_str());
+    std::fflush(stderr);
+    m.rewrite_summary(wall_s());
+  }
   for (auto& c : m.children) {
     if (c->reported || c->pid <= 0 || !c->reap()) continue;
     c->reported = true;
@@ -541,6 +608,7 @@ void Launcher::check_children() {
   }
   if (!m.truth.write_error.empty() && !m.truth_error_said) {
     m.truth_error_said = true;
+    m.note_records_error(m.truth.write_error);
     std::fprintf(stderr, "%s: the ground truth stops here: %s\n", m.name.c_str(),
                  m.truth.write_error.c_str());
   }
@@ -568,6 +636,8 @@ std::optional<ProgramEnd> Launcher::ended(const std::string& name) const {
   }
   return std::nullopt;
 }
+
+const std::string& Launcher::records_error() const { return impl_->records_error; }
 
 std::string Launcher::server_end() const {
   const auto e = ended("server");
@@ -608,7 +678,7 @@ Result<void> Launcher::start_server(const ServerSpec& spec) {
   // the banner: "uavsim-server: uav0: MAVLink on tcp:127.0.0.1:PORT", ..., then the API's port
   static const std::regex mav_re(R"(uavsim-server: (\S+): MAVLink on tcp:[0-9.]+:(\d+))");
   static const std::regex api_re(R"(sim API on tcp:[0-9.]+:(\d+))");
-  while (m.api_port == 0 && wall_s() < spec.start_timeout_s) {
+  while (m.api_port == 0 && wall_s() < spec.start_timeout_s && interrupted() == 0) {
     pollfd p{c->fd, POLLIN, 0};
     ::poll(&p, 1, 200);
     for (const std::string& l : c->read_lines()) {
@@ -625,6 +695,9 @@ Result<void> Launcher::start_server(const ServerSpec& spec) {
       }
     }
     if (c->fd < 0) break;
+  }
+  if (m.api_port == 0 && interrupted() != 0) {
+    return Failure{Error::kCancelled, "interrupted by " + signal_name(interrupted())};
   }
   if (m.api_port == 0) {
     return Failure{Error::kTimeout, c->fd < 0 ? "the server exited before it served the API"
@@ -668,6 +741,9 @@ Result<void> Launcher::wait_lockstep_clients(int n, double timeout_s) {
       if (m.truth_request && !m.truth.conn) start_truth();
       return client::ok();
     }
+    if (interrupted() != 0) {
+      return Failure{Error::kCancelled, "interrupted by " + signal_name(interrupted())};
+    }
     if (wall_s() > end_s) {
       return Failure{Error::kTimeout, std::to_string(s->value("lockstep_clients", 0)) + " of " +
                                           std::to_string(n) + " lockstep clients joined"};
@@ -696,10 +772,11 @@ void Launcher::pump(int timeout_ms) {
     usleep(static_cast<useconds_t>(timeout_ms) * 1000);
   }
   // the API first, then the programs' output: a program writes a line before it sends the lockstep
-  // `done` that lets the clock reach the next tick, so once a tick has been read here every line the
-  // programs wrote before it is in their pipes, and the reads below see it in the same pass. (In the
-  // other order a line written between the two reads would meet a later tick: the fault injector of
-  // the 2017 run then acted a tick late on a loaded machine, and two runs of one seed diverged.)
+  // `done` that lets the clock reach the next tick, so once a tick has been read here every line
+  // the programs wrote before it is in their pipes, and the reads below see it in the same pass.
+  // (In the other order a line written between the two reads would meet a later tick: the fault
+  // injector of the 2017 run then acted a tick late on a loaded machine, and two runs of one seed
+  // diverged.)
   if (m.api) (void)m.api->poll(0);
   m.read_children();
   m.truth.serve();

@@ -17,7 +17,7 @@
 // paths aside).
 //
 // SIGINT or SIGTERM stops the run cleanly: the agents, the station and the server are stopped and
-// the summary so far is printed (JSON "interrupted": true).
+// the summary so far is printed (JSON "interrupted": true, the interruption its "cause").
 //
 // Exit status: 0 only on full coverage with every surviving agent landed; 1: the mission fell
 // short; 2: usage (or an unusable run directory); 4: the harness failed (the server died, named
@@ -28,7 +28,6 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -69,12 +68,6 @@ constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (the
 constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
 constexpr double kFullCoverage = 1.0 - 1e-3;
 constexpr int kStationId = 255;
-
-// set by SIGINT / SIGTERM: the run loop ends at its next turn and everything is stopped in order
-volatile std::sig_atomic_t g_interrupted = 0;
-void on_interrupt(int) {
-  g_interrupted = 1;
-}  // the ground station's APD reports (coverage-gcs, client kGcsId)
 
 struct Options {
   int agents = 5;
@@ -312,8 +305,7 @@ int main(int argc, char** argv) {
   }
   const int stripes = config.stripe_count();
 
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  uavsim::launch::catch_interrupts();
   const auto wall_start = WallClock::now();
   auto wall_s = [&] {
     return std::chrono::duration<double>(WallClock::now() - wall_start).count();
@@ -488,7 +480,8 @@ int main(int argc, char** argv) {
   // 2. the server, on ephemeral ports, as fast as possible; the lines of every program go through
   // on_agent_line (the launcher's own printing is off: APD reports are not for people)
   Launcher launch("coverage-run", /*quiet=*/true);
-  launch.keep_summary(o.json_path, {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  launch.keep_summary(o.json_path,
+                      {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   std::map<std::string, std::pair<int, int>> agents_of;  // agent program -> its agents
   launch.on_exit([&](const uavsim::launch::ProgramEnd& e) {
     const auto it = agents_of.find(e.name);
@@ -763,8 +756,9 @@ int main(int argc, char** argv) {
         break;
       }
       if (launch.programs_done(o.gcs ? "gcs" : "")) break;
-      if (g_interrupted) {
-        say("coverage-run: interrupted");
+      if (uavsim::launch::interrupted()) break;
+      if (!launch.records_error().empty()) {
+        fail("the run's records cannot be written: " + launch.records_error());
         break;
       }
       if (ended && sim_s + 1e-9 >= o.budget_s) {
@@ -820,8 +814,9 @@ int main(int argc, char** argv) {
     }
     per_agent.push_back(std::move(entry));
   }
-  const bool success = harness_error == 0 && !g_interrupted && !vehicles_end.empty() &&
-                       coverage >= kFullCoverage && survivors > 0 && landed == survivors;
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() &&
+                       !vehicles_end.empty() && coverage >= kFullCoverage && survivors > 0 &&
+                       landed == survivors;
   const double mission_s = first_takeoff_s >= 0 && last_touchdown_s >= first_takeoff_s
                                ? last_touchdown_s - first_takeoff_s
                                : -1.0;
@@ -919,7 +914,7 @@ int main(int argc, char** argv) {
   }
   std::printf("RESULT: %s coverage=%.4f mission_s=%.1f coverage_s=%.1f failed=%d landed=%d/%d%s\n",
               success ? "SUCCESS" : "FAILURE", coverage, mission_s, coverage_s, failed, landed,
-              survivors, g_interrupted ? " (interrupted)" : "");
+              survivors, uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -981,7 +976,6 @@ int main(int argc, char** argv) {
     summary["sim_time_s"] = sim_s;
     summary["wall_time_s"] = wall_s();
     summary["success"] = success;
-    summary["interrupted"] = g_interrupted != 0;
     if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
     const std::string run_summary = o.run_dir + "/summary.json";
     if (!o.map_png.empty() && o.json_path != run_summary &&
@@ -996,7 +990,5 @@ int main(int argc, char** argv) {
     if (std::system(cmd.c_str()) != 0)
       std::fprintf(stderr, "coverage-run: the coverage map was not drawn (%s)\n", cmd.c_str());
   }
-  if (harness_error) return harness_error;
-  if (g_interrupted) return 130;
-  return success ? 0 : 1;
+  return uavsim::launch::run_exit_code(harness_error != 0, success);
 }

@@ -26,8 +26,11 @@
 // lockstep itself and injects it at a tick, from the program's output stamped before that tick, so
 // a seed's run is the same every time.
 //
+// SIGINT or SIGTERM stops the run cleanly: the program and the server are stopped, the summary so
+// far is printed and written (JSON "interrupted": true, the interruption its "cause").
+//
 // Exit status: 0 only when the UAV landed on the deck, stayed there 5 s and nothing crashed.
-// 1: the mission fell short; 2: usage; 4: the harness failed.
+// 1: the mission fell short; 2: usage; 4: the harness failed; 130: interrupted.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -55,9 +58,10 @@ using uavsim::client::SimConnection;
 using uavsim::client::SimMessage;
 using uavsim::launch::Launcher;
 
-constexpr double kLockstepPeriod_s = 0.05;     // the UAV program's and the fault injector's ticks
-constexpr double kStayOnDeck_s = 5.0;          // scored: still carried this long after touchdown
-constexpr double kPauseSlack_s = 0.01;  // a pause_at holds the clock within a physics step of its time
+constexpr double kLockstepPeriod_s = 0.05;  // the UAV program's and the fault injector's ticks
+constexpr double kStayOnDeck_s = 5.0;       // scored: still carried this long after touchdown
+constexpr double kPauseSlack_s =
+    0.01;  // a pause_at holds the clock within a physics step of its time
 constexpr double kTruckHistory_s = 10.0;  // ticks kept for lines stamped before the tick they meet
 constexpr double kFirstPassBlackout_s = 14.0;  // longer than the 12 s search of Wait Until Visible
 constexpr double kApproachBlackout_s = 4.0;    // longer than the 1 s after which the marker is lost
@@ -91,9 +95,9 @@ struct Options {
   int random_blackouts = 0;
   std::string record;
   std::string json_path;
-  std::string events_path;  // the sim's event log, one JSON line per event
-  std::string realism;      // --realism for the server (empty: the world's)
-  std::string wind;         // --wind for the server
+  std::string events_path;               // the sim's event log, one JSON line per event
+  std::string realism;                   // --realism for the server (empty: the world's)
+  std::string wind;                      // --wind for the server
   std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
   bool no_record = false;                // --no-record: no video
   std::string record_camera = "follow";  // the server's --record-camera
@@ -331,8 +335,8 @@ int main(int argc, char** argv) {
     }
   }
 
-  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2017", o.seed, o.run_dir, o.record,
-                                                           o.json_path, !o.no_record);
+  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2017", o.seed, o.run_dir,
+                                                           o.record, o.json_path, !o.no_record);
       !files) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", files.message().c_str());
     return 2;
@@ -341,8 +345,10 @@ int main(int argc, char** argv) {
     o.record = files->video;
     o.json_path = files->summary;
   }
+  uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2017-run", o.quiet);
-  launch.keep_summary(o.json_path, {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  launch.keep_summary(o.json_path,
+                      {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
@@ -383,10 +389,11 @@ int main(int argc, char** argv) {
   // the near misses, from the models the simulator collides
   std::optional<uavsim::missions::mbzirc2017::NearMissTracker> near_miss;
   try {
-    near_miss.emplace(uavsim::missions::mbzirc2017::load_truck_shape(
-                          uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/objects/truck.xml"),
-                      uavsim::missions::mbzirc2017::load_vehicle_shape(
-                          uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/vehicles/hexa.xml"));
+    near_miss.emplace(
+        uavsim::missions::mbzirc2017::load_truck_shape(
+            uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/objects/truck.xml"),
+        uavsim::missions::mbzirc2017::load_vehicle_shape(
+            uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/vehicles/hexa.xml"));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", e.what());
     return 2;
@@ -394,7 +401,7 @@ int main(int argc, char** argv) {
   std::string part_at_approach, part_at_touchdown;  // where on the eight
   std::optional<double> approach_s;                 // the first Approach's time (program output)
   double truck_s_m = 0.0;                           // the truck's arc length at the latest tick
-  std::map<double, double> truck_s_by_tick_m;       // ... and at the ticks of the last kTruckHistory_s
+  std::map<double, double> truck_s_by_tick_m;  // ... and at the ticks of the last kTruckHistory_s
   int climb_aways = 0;
 
   std::string world = o.world;
@@ -422,8 +429,9 @@ int main(int argc, char** argv) {
   spec.world = world;
   spec.extra_args = {"--seed", std::to_string(o.seed)};
   if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera,
-                                                   "--record-layout", o.record_layout});
+    spec.extra_args.insert(spec.extra_args.end(),
+                           {"--record", o.record, "--record-camera", o.record_camera,
+                            "--record-layout", o.record_layout});
   }
   if (!o.run_dir.empty()) {
     spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
@@ -467,8 +475,8 @@ int main(int argc, char** argv) {
     });
     // 2. the UAV program (and the fault injector) on the lockstep clock, then let the clock go
     if (!harness_error) {
-      std::vector<std::string> argv{
-          o.uav, "--mavlink", "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port("uav0"))};
+      std::vector<std::string> argv{o.uav, "--mavlink",
+                                    "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port("uav0"))};
       if (!o.run_dir.empty()) {
         // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
         vision_log = o.run_dir + "/uav0_vision.vlog";
@@ -564,16 +572,18 @@ int main(int argc, char** argv) {
                              Eigen::Vector3d(tp[0], tp[1], tp[2]), k.value("yaw_rad", 0.0));
               truck_s_m = k.value("s_m", 0.0);
               truck_yaw_rad = k.value("yaw_rad", 0.0);
-              // the part of the eight at the approach's own tick: the program's line stamped with it may
-              // come in before or after that tick is handled here (the two processes get the tick at
-              // once), so it is looked up in the recent ticks, not taken from the tick it meets
+              // the part of the eight at the approach's own tick: the program's line stamped with
+              // it may come in before or after that tick is handled here (the two processes get the
+              // tick at once), so it is looked up in the recent ticks, not taken from the tick it
+              // meets
               truck_s_by_tick_m[tick_s] = truck_s_m;
               truck_s_by_tick_m.erase(truck_s_by_tick_m.begin(),
                                       truck_s_by_tick_m.lower_bound(tick_s - kTruckHistory_s));
               if (approach_s && part_at_approach.empty()) {
                 const auto at = truck_s_by_tick_m.upper_bound(*approach_s + 1e-9);
                 if (at != truck_s_by_tick_m.begin()) {
-                  part_at_approach = uavsim::missions::mbzirc2017::eight_part(track, std::prev(at)->second);
+                  part_at_approach =
+                      uavsim::missions::mbzirc2017::eight_part(track, std::prev(at)->second);
                 }
               }
             }
@@ -656,6 +666,7 @@ int main(int argc, char** argv) {
       // scored: still on the deck 5 s after touchdown
       if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
       if (launch.programs_done() && landed_s < 0) break;
+      if (uavsim::launch::interrupted()) break;
       if (sim_s >= o.start_time_s + o.budget_s - kPauseSlack_s) {
         launch.say("mbzirc2017-run: sim-time budget spent");
         break;
@@ -668,10 +679,16 @@ int main(int argc, char** argv) {
         fail(launch.server_end());
         break;
       }
+      if (!launch.records_error().empty()) {
+        fail("the run's records cannot be written: " + launch.records_error());
+        break;
+      }
     }
     (void)api.lockstep_leave();
-    // the clock holds by itself at the end (pause_at): score once it does
-    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
+    // stands)
+    for (const double until_s = launch.wall_s() + 10.0;
+         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
          launch.pump(10)) {
       const auto st = api.status();
       if (!st || st->value("paused", false)) break;
@@ -703,7 +720,8 @@ int main(int argc, char** argv) {
   if (world != o.world) std::remove(world.c_str());
 
   const bool landed = landed_s >= 0;
-  const bool success = harness_error == 0 && landed && stayed_on_deck && crashes.empty();
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && landed &&
+                       stayed_on_deck && crashes.empty();
   const double mission_s = landed && takeoff_s >= 0 ? landed_s - takeoff_s : -1.0;
   std::printf("==== MBZIRC 2017 landing on the moving truck, seed %llu ====\n",
               static_cast<unsigned long long>(o.seed));
@@ -743,10 +761,12 @@ int main(int argc, char** argv) {
                 vision_log.c_str());
   }
   if (!o.run_dir.empty()) {
-    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
-                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n",
+                o.run_dir.c_str(), static_cast<unsigned long long>(launch.truth_rows()),
+                o.run_dir.c_str());
   }
-  std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
+  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
+              uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -791,6 +811,5 @@ int main(int argc, char** argv) {
     summary["success"] = success;
     if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
-  if (harness_error) return harness_error;
-  return success ? 0 : 1;
+  return uavsim::launch::run_exit_code(harness_error != 0, success);
 }

@@ -5,9 +5,12 @@
 // scored from the sim API's ground truth (the programs never see it): balloons popped, mission
 // time, crashes, the video.
 //
+// SIGINT or SIGTERM stops the run cleanly: the programs and the server are stopped, the summary so
+// far is printed and written (JSON "interrupted": true, the interruption its "cause").
+//
 // Exit status: 0 only when every balloon is popped and no vehicle crashed (other than one killed on
 // purpose with --kill, Competition Day 2's failed UAV). 1: the mission fell short; 2: usage; 4: the
-// harness failed.
+// harness failed; 130: interrupted.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -115,8 +118,7 @@ int main(int argc, char** argv) {
       return usage();
     else if (a == "--seed") {
       if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
-    }
-    else if (a == "--world")
+    } else if (a == "--world")
       o.world = v;
     else if (a == "--record")
       o.record = v;
@@ -160,8 +162,8 @@ int main(int argc, char** argv) {
       return usage();
     if (!ok) return usage();
   }
-  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2020", o.seed, o.run_dir, o.record,
-                                                           o.json_path, record);
+  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2020", o.seed, o.run_dir,
+                                                           o.record, o.json_path, record);
       !files) {
     std::fprintf(stderr, "mbzirc2020-run: %s\n", files.message().c_str());
     return 2;
@@ -175,8 +177,10 @@ int main(int argc, char** argv) {
   const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
                                ",height=" + o.camera_size.substr(x + 1) +
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
+  uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2020-run", o.quiet);
-  launch.keep_summary(o.json_path, {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  launch.keep_summary(o.json_path,
+                      {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
   int harness_error = 0;
   auto fail = [&](const std::string& why) {
     std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
@@ -190,8 +194,9 @@ int main(int argc, char** argv) {
   spec.extra_args = {"--seed",   std::to_string(o.seed),  "--camera", "uav0_front:" + cam_opts,
                      "--camera", "uav1_front:" + cam_opts};
   if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--record", o.record, "--record-camera", o.record_camera,
-                                                   "--record-layout", o.record_layout});
+    spec.extra_args.insert(spec.extra_args.end(),
+                           {"--record", o.record, "--record-camera", o.record_camera,
+                            "--record-layout", o.record_layout});
   }
   if (!o.run_dir.empty()) {
     spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
@@ -217,8 +222,8 @@ int main(int argc, char** argv) {
     (void)api.pause();
     (void)api.reset(o.seed);
     (void)api.subscribe_events();
-    // the clock stops by itself when the last program leaves the lockstep or the budget is spent, so
-    // the end of the run (its sim time, the score) is the same every run
+    // the clock stops by itself when the last program leaves the lockstep or the budget is spent,
+    // so the end of the run (its sim time, the score) is the same every run
     (void)api.request({{"op", "pause_at"}, {"time_s", o.budget_s}, {"lockstep_empty", true}});
     const std::string lockstep = launch.lockstep_env(0.05);
 
@@ -234,16 +239,18 @@ int main(int argc, char** argv) {
       // the ground station's failover (a UAV out, the other taking its side over) is the
       // mission's, not the server's: told to the video's overlay
       // ("gcs t=3.65 uav1 failed: out of the mission" => uav1's line "failed: out of the mission")
-      static const std::regex failover_re(R"(^gcs t=\S+ (uav\d+) (.*(out of the mission|takes over).*)$)");
+      static const std::regex failover_re(
+          R"(^gcs t=\S+ (uav\d+) (.*(out of the mission|takes over).*)$)");
       if (!o.record.empty() && child == "gcs" && std::regex_search(l, m, failover_re)) {
-        (void)api.request({{"op", "overlay_note"}, {"text", m[2].str().substr(0, 80)}, {"vehicle", m[1].str()}});
+        (void)api.request(
+            {{"op", "overlay_note"}, {"text", m[2].str().substr(0, 80)}, {"vehicle", m[1].str()}});
       }
     });
     if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {
       fail("cannot start " + o.gcs);
     }
     while (!harness_error && gcs_port.size() < 2 && launch.wall_s() < 60 &&
-           !launch.programs_done()) {
+           !launch.programs_done() && !uavsim::launch::interrupted()) {
       launch.pump(200);
     }
     if (!harness_error && gcs_port.size() < 2) fail("the ground station did not start");
@@ -270,9 +277,13 @@ int main(int argc, char** argv) {
       }
       // 4. the UAV programs
       const std::string name = "uav" + std::to_string(i);
-      std::vector<std::string> argv{o.uav, "--index", std::to_string(i), "--mavlink",
+      std::vector<std::string> argv{o.uav,
+                                    "--index",
+                                    std::to_string(i),
+                                    "--mavlink",
                                     "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)),
-                                    "--gcs", "127.0.0.1:" + std::to_string(uav_port)};
+                                    "--gcs",
+                                    "127.0.0.1:" + std::to_string(uav_port)};
       if (!o.run_dir.empty()) {
         // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
         vision_logs.push_back(o.run_dir + "/" + name + "_vision.vlog");
@@ -332,7 +343,7 @@ int main(int argc, char** argv) {
         if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
         launch.note_sim_time(sim_s);
       }
-      if (all_done) break;
+      if (all_done || uavsim::launch::interrupted()) break;
       if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
         launch.say("mbzirc2020-run: sim-time budget spent");
         break;
@@ -345,10 +356,16 @@ int main(int argc, char** argv) {
         fail(launch.server_end());
         break;
       }
+      if (!launch.records_error().empty()) {
+        fail("the run's records cannot be written: " + launch.records_error());
+        break;
+      }
     }
 
-    // the clock holds by itself at the end (pause_at): score once it does
-    for (const double until_s = launch.wall_s() + 10.0; !harness_error && launch.wall_s() < until_s;
+    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
+    // stands)
+    for (const double until_s = launch.wall_s() + 10.0;
+         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
          launch.pump(10)) {
       const auto st = api.status();
       if (!st || st->value("paused", false)) break;
@@ -383,8 +400,8 @@ int main(int argc, char** argv) {
   // 8. stop everything we started: the programs, then the server (it finishes the video)
   launch.stop_all(60.0);
 
-  const bool success =
-      harness_error == 0 && balloons_total > 0 && popped == balloons_total && crashes.empty();
+  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && balloons_total > 0 &&
+                       popped == balloons_total && crashes.empty();
   const double mission_s =
       (first_armed_s >= 0 && last_pop_s >= 0) ? last_pop_s - first_armed_s : -1;
   std::printf("==== MBZIRC 2020 balloons, seed %llu%s ====\n",
@@ -408,10 +425,12 @@ int main(int argc, char** argv) {
     std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", v.c_str(), v.c_str());
   }
   if (!o.run_dir.empty()) {
-    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n", o.run_dir.c_str(),
-                static_cast<unsigned long long>(launch.truth_rows()), o.run_dir.c_str());
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n",
+                o.run_dir.c_str(), static_cast<unsigned long long>(launch.truth_rows()),
+                o.run_dir.c_str());
   }
-  std::printf("RESULT: %s\n", success ? "SUCCESS" : "FAILURE");
+  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
+              uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
 
   if (!o.json_path.empty()) {
@@ -433,6 +452,5 @@ int main(int argc, char** argv) {
     summary["success"] = success;
     if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
   }
-  if (harness_error) return harness_error;
-  return success ? 0 : 1;
+  return uavsim::launch::run_exit_code(harness_error != 0, success);
 }

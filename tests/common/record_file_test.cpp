@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -55,6 +56,34 @@ TEST(RecordFile, AProcessKilledAfterItsLastRecordLeavesEveryRecordWhole) {
     ASSERT_EQ(line, "{\"n\":" + std::to_string(n) + "}") << "line " << n;
   }
   EXPECT_EQ(n, kLines);
+}
+
+// A full disk mid-record: a child process whose file size limit (RLIMIT_FSIZE, SIGXFSZ ignored so
+// a write past it fails with EFBIG as on a full disk) lets the third 40-byte record in only in
+// part. The file keeps the two whole records, the failure names the file, later writes are refused.
+TEST(RecordFile, ADiskFullMidRecordLeavesTheWholeRecordsBeforeIt) {
+  constexpr int kRecordBytes = 40;
+  const std::string path = ::testing::TempDir() + "record_file_full.csv";
+  const std::string record = std::string(kRecordBytes - 1, 'r') + "\n";
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{100, 100};  // two records and half of the third
+    if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(1);
+    RecordFile f;
+    if (!f.open(path, nullptr)) _exit(2);
+    if (!f.write(record) || !f.write(record)) _exit(3);
+    if (f.write(record)) _exit(4);  // past the limit
+    if (f.error().find(path + ": File too large") == std::string::npos) _exit(5);
+    if (f.write("x\n")) _exit(6);  // refused from now on
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the child's check that failed";
+  EXPECT_EQ(read_all(path), record + record);
 }
 
 TEST(RecordFile, WritesFailWithTheReasonWhenNotOpen) {

@@ -1,6 +1,7 @@
 #include "api/radio_ops.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <span>
 
@@ -190,7 +191,19 @@ void RadioOps::op_send(uint64_t, const Json& request, OpReply* reply) {
   const radio::SendResult r = radio_.send(*from, to, *data);
   if (!r.seq) {
     if (r.error == radio::Error::kQueueFull) {
-      return reply->fail(ApiError::kQueueFull, "the sender's radio queue is full");
+      // the sender offers more than its airtime carries: said with what would fit, and counted
+      const radio::RadioConfig& c = radio_.model().config();
+      char carries[64];
+      std::snprintf(carries, sizeof(carries), "%.2f ms",
+                    1e3 * radio::airtime_s(data->size() + c.mac_header_bytes));
+      return reply->fail(ApiError::kQueueFull,
+                         "vehicle " + std::to_string(*from) + " has " +
+                             std::to_string(radio_.model().queued(*from)) +
+                             " frames waiting to go on air (max_queue_frames " +
+                             std::to_string(c.max_queue_frames) +
+                             "): the channel carries one such frame per " + carries +
+                             (c.tdma ? " in the sender's own TDMA slots" : "") +
+                             "; this frame is dropped (radio_stats: refused)");
     }
     return reply->fail(ApiError::kBadField, radio::error_name(r.error));
   }
@@ -249,6 +262,7 @@ void RadioOps::op_stats(uint64_t, const Json& request, OpReply* reply) {
                           {"name", sim_.vehicle_name(a)},
                           {"transmitted", m.transmitted(a)},
                           {"queued", m.queued(a)},
+                          {"refused", radio_.refused(a)},
                           {"channel_access_failures", m.channel_access_failures(a)}});
     }
     for (size_t b = 0; b < m.vehicle_count(); ++b) {

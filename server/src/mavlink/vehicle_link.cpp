@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 
 namespace uavsim::server::mavlink {
@@ -75,15 +76,24 @@ VehicleLink::Link* VehicleLink::find_link(std::uint64_t client) {
   return nullptr;
 }
 
-void VehicleLink::log_received(std::span<const std::uint8_t> frame) {
-  if (tlog_) tlog_->write(now_s(), frame);
+void VehicleLink::log_frame(std::span<const std::uint8_t> frame) {
+  if (!tlog_) return;
+  tlog_->write(now_s(), frame);
+  if (!tlog_error_said_ && !tlog_->error().empty()) {
+    // a full disk or the file size limit: said once (the launcher ends the run on it); the frames
+    // logged before stay whole (RecordFile cuts a partly written batch off)
+    tlog_error_said_ = true;
+    std::fprintf(stderr, "uavsim-server: the tlog stops here: %s\n", tlog_->error().c_str());
+  }
 }
+
+void VehicleLink::log_received(std::span<const std::uint8_t> frame) { log_frame(frame); }
 
 void VehicleLink::push_frame(Link& link, std::span<const std::uint8_t> frame) {
   if (link.outbox->push(frame)) {
     queued_ = true;
     StatCounters::add(stats_.frames_sent);
-    if (tlog_) tlog_->write(now_s(), frame);
+    log_frame(frame);
   } else {
     StatCounters::add(stats_.frames_dropped_full);
   }

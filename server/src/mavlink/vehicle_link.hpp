@@ -268,6 +268,9 @@ class VehicleLink {
   std::uint16_t next_text_id_ = 1;  // STATUSTEXT chunk ids
   fc::PilotInput pilot_;  // the sticks as last overridden (a channel sent as "ignore" keeps its value)
   std::unique_ptr<TlogWriter> tlog_;  // config.tlog_dir's log of this vehicle, if any
+  bool tlog_error_said_ = false;      // its write failure was said (once)
+  // frame into the tlog, if any; a write failure said on stderr once
+  void log_frame(std::span<const std::uint8_t> frame);
 };
 
 }  // namespace uavsim::server::mavlink

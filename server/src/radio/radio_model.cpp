@@ -133,6 +133,7 @@ void RadioModel::reset(uint64_t seed) {
   pending_.clear();
   links_.assign(vehicles_ * vehicles_, LinkStats{});
   transmitted_.assign(vehicles_, 0);
+  backlog_.assign(vehicles_, 0);
 }
 
 bool RadioModel::set_config(const RadioConfig& config, std::string* error) {
@@ -157,7 +158,7 @@ SendResult RadioModel::send(size_t from, int to, const std::vector<uint8_t>& dat
     r.error = Error::kEmptyFrame;
   } else if (data.size() > max_payload_bytes()) {
     r.error = Error::kFrameTooLarge;
-  } else if (queues_[from].size() >= config_.max_queue_frames) {
+  } else if (backlog_[from] >= config_.max_queue_frames) {
     r.error = Error::kQueueFull;
   } else {
     Frame f;
@@ -167,6 +168,7 @@ SendResult RadioModel::send(size_t from, int to, const std::vector<uint8_t>& dat
     f.queued_s = now_s;
     f.data = data;
     queues_[from].push_back(std::move(f));
+    ++backlog_[from];
     r.seq = queues_[from].back().seq;
   }
   return r;
@@ -237,6 +239,7 @@ void RadioModel::go_on_air(Frame& f, const std::vector<Eigen::Vector3d>& positio
   f.heard.assign(vehicles_, 0);
   f.dropped.assign(vehicles_, 0);
   ++transmitted_[f.from];
+  --backlog_[f.from];
   for (size_t r = 0; r < vehicles_; ++r) {
     if (r == f.from) continue;
     f.heard[r] = reaches(f.from, r, positions[f.from], positions[r]) ? 1 : 0;
@@ -292,7 +295,7 @@ void RadioModel::resolve(const Frame& f, std::vector<Delivery>* arrivals) {
 void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
                       std::vector<Delivery>* out, bool starting_now) {
   // schedule queued frames: after the sender's previous frame, and in TDMA at its next own slot
-  bool added = false;
+  const size_t scheduled_before = scheduled_.size();
   for (size_t v = 0; v < vehicles_; ++v) {
     while (!queues_[v].empty()) {
       Frame f = std::move(queues_[v].front());
@@ -302,13 +305,17 @@ void RadioModel::step(double now_s, const std::vector<Eigen::Vector3d>& position
       f.end_s = f.start_s + airtime_s(f.data.size() + config_.mac_header_bytes);
       busy_until_s_[v] = f.end_s;
       scheduled_.push_back(std::move(f));
-      added = true;
     }
   }
-  if (added) {
-    std::stable_sort(scheduled_.begin(), scheduled_.end(), [](const Frame& a, const Frame& b) {
+  if (scheduled_.size() > scheduled_before) {
+    // the new frames sorted among themselves, then merged into the sorted rest: linear in the
+    // backlog, not a sort of it every step
+    const auto before = [](const Frame& a, const Frame& b) {
       return frame_before(a.start_s, a.from, a.seq, b.start_s, b.from, b.seq);
-    });
+    };
+    const auto added = scheduled_.begin() + static_cast<std::ptrdiff_t>(scheduled_before);
+    std::stable_sort(added, scheduled_.end(), before);
+    std::inplace_merge(scheduled_.begin(), added, scheduled_.end(), before);
   }
 
   // due frames go on air, in (start, sender, seq) order: the order of the random draws

@@ -76,7 +76,8 @@ SimRadio::SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel)
       sight_(sim.world()),
       sights_(sim.vehicle_count() * sim.vehicle_count()),
       positions_enu_m_(sim.vehicle_count(), Eigen::Vector3d::Zero()),
-      velocities_enu_m_s_(sim.vehicle_count(), Eigen::Vector3d::Zero()) {
+      velocities_enu_m_s_(sim.vehicle_count(), Eigen::Vector3d::Zero()),
+      refused_(sim.vehicle_count(), 0) {
   channel_->set_link_loss([this](size_t from, size_t to) { return link_loss_db(from, to); });
 }
 
@@ -104,7 +105,9 @@ double SimRadio::link_loss_db(size_t from, size_t to) {
 }
 
 SendResult SimRadio::send(size_t from, int to, const std::vector<uint8_t>& data) {
-  return channel_->send(from, to, data, sim_.time_s());
+  SendResult r = channel_->send(from, to, data, sim_.time_s());
+  if (!r.seq && r.error == Error::kQueueFull && from < refused_.size()) ++refused_[from];
+  return r;
 }
 
 void SimRadio::advance(bool starting_now) {
@@ -147,6 +150,7 @@ std::vector<Delivery> SimRadio::take_deliveries() {
 void SimRadio::reset(uint64_t seed) {
   channel_->reset(radio_seed(seed));
   inbox_.clear();
+  refused_.assign(refused_.size(), 0);
   for (LinkSight& s : sights_) s.valid = false;
   check_failure();
 }

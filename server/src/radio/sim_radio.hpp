@@ -68,6 +68,11 @@ class SimRadio {
   std::vector<Delivery> take_deliveries();
   // Frames dropped because nobody took them from a full inbox. Loop thread only.
   uint64_t inbox_overflows() const { return inbox_overflows_; }
+  // Frames of vehicle that send() refused because max_queue_frames of its frames were still
+  // waiting to go on air (queue_full: it offered more than its airtime carries). Loop thread only.
+  uint64_t refused(size_t vehicle) const {
+    return vehicle < refused_.size() ? refused_[vehicle] : 0;
+  }
 
   RadioChannel& model() { return *channel_; }  // Loop thread only.
   const RadioChannel& model() const { return *channel_; }
@@ -114,6 +119,7 @@ class SimRadio {
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Delivery> inbox_;
   uint64_t inbox_overflows_ = 0;
+  std::vector<uint64_t> refused_;  // per sender: queue_full refusals
   std::function<void(const std::string&)> on_failure_;
   bool failure_reported_ = false;
 };

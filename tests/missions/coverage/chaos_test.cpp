@@ -8,19 +8,19 @@
 // start. The kill moment is read from the launcher's progress lines (sim time); the waits are
 // bounded polls whose bound only turns a hang into a failure.
 #include <gtest/gtest.h>
-#include <poll.h>
 #include <signal.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -31,221 +31,79 @@
 #include <string>
 #include <vector>
 
+#include "../support/run_process.hpp"
+
 namespace {
 
 using Json = nlohmann::json;
-using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
-
-constexpr double kWallBound_s = 300.0;  // a hang, not a slow machine
-constexpr double kTlogBound_s = 0.1;    // tlog.hpp: frames of the last 0.1 s of sim may be lost
-constexpr std::uint64_t kSeed = 29;     // the issue's
+using uavsim::tests::events_of;
+using uavsim::tests::expect_no_orphan;
+using uavsim::tests::Proc;
+using uavsim::tests::RunProcess;
+constexpr double kTlogBound_s = 0.1;  // tlog.hpp: frames of the last 0.1 s of sim may be lost
+constexpr std::uint64_t kSeed = 29;   // the issue's
 constexpr double kFullCoverage = 0.999;
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-// a process's argv and parent, from /proc
-struct Proc {
-  pid_t pid = 0;
-  pid_t ppid = 0;
-  pid_t pgrp = 0;
-  char state = 0;
-  std::vector<std::string> argv;
-};
-std::optional<Proc> read_proc(pid_t pid) {
-  const std::string dir = "/proc/" + std::to_string(pid);
-  const std::string stat = read_file(dir + "/stat");
-  const size_t paren = stat.rfind(')');
-  if (paren == std::string::npos) return std::nullopt;
-  Proc p;
-  p.pid = pid;
-  long ppid = 0, pgrp = 0;
-  std::istringstream rest(stat.substr(paren + 2));
-  rest >> p.state >> ppid >> pgrp;
-  p.ppid = static_cast<pid_t>(ppid);
-  p.pgrp = static_cast<pid_t>(pgrp);
-  std::string cmd = read_file(dir + "/cmdline");
-  for (size_t a = 0; a < cmd.size();) {
-    const size_t z = cmd.find('\0', a);
-    p.argv.push_back(cmd.substr(a, z == std::string::npos ? std::string::npos : z - a));
-    if (z == std::string::npos) break;
-    a = z + 1;
-  }
-  return p;
-}
-std::vector<Proc> all_procs() {
-  std::vector<Proc> out;
-  for (const auto& e : fs::directory_iterator("/proc")) {
-    const std::string n = e.path().filename();
-    if (n.find_first_not_of("0123456789") != std::string::npos) continue;
-    if (auto p = read_proc(static_cast<pid_t>(std::stol(n)))) out.push_back(*p);
-  }
-  return out;
-}
-bool alive(const Proc& p) { return p.state != 0 && p.state != 'Z' && p.state != 'X'; }
+std::string read_file(const std::string& path) { return uavsim::tests::read_whole_file(path); }
 
 // coverage-run as a child process, its output read as it comes
 class ChaosRun {
  public:
-  ChaosRun(const std::string& name, const std::vector<std::string>& extra) {
-    dir_ = ::testing::TempDir() + "chaos-" + name + "-" + std::to_string(getpid());
-    fs::remove_all(dir_);
-    std::vector<std::string> args{
-        COVERAGE_RUN,          "--agents",    "5",          "--area", "60x40",    "--seed",
-        std::to_string(kSeed), "--no-record", "--progress", "1",      "--budget", "600",
-        "--wall-limit",        "280",         "--run-dir",  dir_};
-    args.insert(args.end(), extra.begin(), extra.end());
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(fds[1], 1);
-      dup2(fds[1], 2);
-      close(fds[0]);
-      close(fds[1]);
-      std::vector<char*> argv;
-      for (auto& a : args) argv.push_back(a.data());
-      argv.push_back(nullptr);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-    close(fds[1]);
-    fd_ = fds[0];
-  }
+  // before_exec: run in the launcher's process before its exec (limits it and all it starts)
+  ChaosRun(const std::string& name, const std::vector<std::string>& extra,
+           const std::function<void()>& before_exec = {})
+      : dir_(::testing::TempDir() + "chaos-" + name + "-" + std::to_string(getpid())),
+        run_(args(dir_, extra), before_exec) {}
   ~ChaosRun() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, &status_, 0);
-    }
-    if (fd_ >= 0) close(fd_);
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
   }
-  pid_t pid() const { return pid_; }
+  pid_t pid() const { return run_.pid(); }
   const std::string& dir() const { return dir_; }
-  const std::string& output() const { return output_; }
-  int status() const { return status_; }
+  const std::string& output() const { return run_.output(); }
+  int status() const { return run_.status(); }
 
   // reads output until the launcher's progress line says sim time t_s has passed; false if it
   // ended (or hung) first
   bool until_sim_time(double t_s) {
     static const std::regex progress(R"(coverage-run: t=(\d+) s coverage)");
-    const auto end = Clock::now() + std::chrono::duration<double>(kWallBound_s);
-    while (Clock::now() < end) {
-      std::smatch m;
-      for (auto it = std::sregex_iterator(output_.begin(), output_.end(), progress);
+    return run_.until([&] {
+      const std::string& out = run_.output();
+      for (auto it = std::sregex_iterator(out.begin(), out.end(), progress);
            it != std::sregex_iterator(); ++it) {
         if (std::stod((*it)[1]) >= t_s) {
           seen_s_ = std::stod((*it)[1]);
           return true;
         }
       }
-      if (!read_some()) return false;
-    }
-    return false;
+      return false;
+    });
   }
   // the last progress line's sim time at until_sim_time's return
   double seen_s() const { return seen_s_; }
-  // reads all output until the launcher exits; false if it does not within the bound
-  bool until_exit() {
-    const auto end = Clock::now() + std::chrono::duration<double>(kWallBound_s);
-    while (read_some() && Clock::now() < end) {
-    }
-    while (Clock::now() < end) {
-      const pid_t r = waitpid(pid_, &status_, WNOHANG);
-      if (r == pid_) {
-        exited_ = true;
-        return true;
-      }
-      usleep(10000);
-    }
-    return false;
-  }
-  // the run's processes now: the launcher's children and the members of their process group
-  std::vector<Proc> tree() const {
-    std::vector<Proc> procs = all_procs(), out;
-    std::set<pid_t> groups;
-    for (const Proc& p : procs) {
-      if (p.ppid == pid_ && alive(p)) groups.insert(p.pgrp);
-    }
-    for (const Proc& p : procs) {
-      if (alive(p) && (p.ppid == pid_ || groups.count(p.pgrp))) out.push_back(p);
-    }
-    return out;
-  }
-  // the first of tree() whose argv[0] ends with program (and holds arg, if given)
+  bool until_exit() { return run_.until_exit(); }
+  std::vector<Proc> tree() const { return run_.tree(); }
   std::optional<Proc> find(const std::string& program, const std::string& arg = "") const {
-    for (const Proc& p : tree()) {
-      if (p.argv.empty() || p.argv[0].size() < program.size() ||
-          p.argv[0].compare(p.argv[0].size() - program.size(), program.size(), program) != 0)
-        continue;
-      if (arg.empty() || std::find(p.argv.begin(), p.argv.end(), arg) != p.argv.end()) return p;
-    }
-    return std::nullopt;
+    return run_.find(program, arg);
   }
 
  private:
-  // waits up to 100 ms for output; false at its end
-  bool read_some() {
-    pollfd p{fd_, POLLIN, 0};
-    if (::poll(&p, 1, 100) <= 0) return true;
-    char buf[65536];
-    const ssize_t n = read(fd_, buf, sizeof(buf));
-    if (n > 0) output_.append(buf, static_cast<size_t>(n));
-    return n > 0 || (n < 0 && errno == EINTR);
+  static std::vector<std::string> args(const std::string& dir,
+                                       const std::vector<std::string>& extra) {
+    fs::remove_all(dir);
+    std::vector<std::string> a{
+        COVERAGE_RUN,          "--agents",    "5",          "--area", "60x40",    "--seed",
+        std::to_string(kSeed), "--no-record", "--progress", "1",      "--budget", "600",
+        "--wall-limit",        "280",         "--run-dir",  dir};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
   }
 
   std::string dir_;
-  pid_t pid_ = -1;
-  int fd_ = -1;
-  bool exited_ = false;
-  int status_ = 0;
-  std::string output_;
+  RunProcess run_;
   double seen_s_ = -1.0;
 };
 
-// no process of the run left: the snapshot's processes end (bounded poll), and none anywhere names
-// the run directory on its command line
-void expect_no_orphan(const std::vector<Proc>& snapshot, const std::string& dir) {
-  const auto end = Clock::now() + std::chrono::duration<double>(30.0);
-  auto survivors = [&] {
-    std::vector<Proc> left;
-    for (const Proc& p : snapshot) {
-      const auto now = read_proc(p.pid);
-      if (now && alive(*now) && now->argv == p.argv) left.push_back(*now);
-    }
-    for (const Proc& p : all_procs()) {
-      if (!alive(p)) continue;
-      for (const std::string& a : p.argv) {
-        if (a.find(dir) != std::string::npos) left.push_back(p);
-      }
-    }
-    return left;
-  };
-  std::vector<Proc> left = survivors();
-  while (!left.empty() && Clock::now() < end) {
-    usleep(20000);
-    left = survivors();
-  }
-  for (const Proc& p : left) ADD_FAILURE() << "orphan: pid " << p.pid << " " << p.argv[0];
-}
-
-// every line of events.jsonl is a JSON object (a last line cut by the kill may lack its newline:
-// record_file.hpp), and it holds the events of the run up to the kill
-Json events_of(const std::string& dir) {
-  const std::string text = read_file(dir + "/events.jsonl");
-  Json events = Json::array();
-  size_t at = 0;
-  for (size_t nl; (nl = text.find('\n', at)) != std::string::npos; at = nl + 1) {
-    const Json e = Json::parse(text.substr(at, nl - at), nullptr, false);
-    EXPECT_TRUE(e.is_object()) << "events.jsonl line: " << text.substr(at, nl - at);
-    events.push_back(e);
-  }
-  EXPECT_LE(text.size() - at, 4096u) << "more than the last write is unterminated";
-  return events;
-}
 int count_events(const Json& events, const std::string& kind) {
   return static_cast<int>(std::count_if(
       events.begin(), events.end(), [&](const Json& e) { return e.value("event", "") == kind; }));
@@ -253,7 +111,8 @@ int count_events(const Json& events, const std::string& kind) {
 
 // the newest stamp of a tlog whose records are all whole frames (an incomplete last record is the
 // kill's residue); -1 for none
-double last_tlog_stamp_s(const std::string& path) {
+// (the bytes after the last whole record in *torn_bytes, if given)
+double last_tlog_stamp_s(const std::string& path, size_t* torn_bytes = nullptr) {
   const std::string b = read_file(path);
   size_t at = 0;
   double last_s = -1.0;
@@ -272,6 +131,7 @@ double last_tlog_stamp_s(const std::string& path) {
     at += 8 + len;
   }
   EXPECT_LE(b.size() - at, 8u + 280u) << path << ": more than one record torn";
+  if (torn_bytes != nullptr) *torn_bytes = b.size() - at;
   return last_s;
 }
 
@@ -402,6 +262,52 @@ TEST(Chaos, LauncherKilledNoProcessOfTheRunSurvivesAndItsRecordsStay) {
   EXPECT_EQ(s["mission"], "coverage");
   // rewritten every 10 s of sim: at most one period behind the kill
   EXPECT_GE(s["sim_time_s"].get<double>(), run.seen_s() - 10.0 - 1.0) << s.dump();
+}
+
+// A disk that fills up mid-run, without root: the launcher and everything it starts get a file
+// size limit of 64 KiB (RLIMIT_FSIZE, SIGXFSZ ignored, so a write past it fails with EFBIG as one
+// on a full disk fails with ENOSPC). The first log to reach it ends the run as a harness failure
+// that names the file; every log keeps whole records up to where it stopped.
+TEST(Chaos, ADiskFullMidRunEndsTheRunNamingTheFileAndKeepsWholeRecords) {
+  constexpr rlim_t kFileLimitBytes = 64 * 1024;
+  ChaosRun run("disk-full", {}, [] {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{kFileLimitBytes, kFileLimitBytes};
+    (void)setrlimit(RLIMIT_FSIZE, &limit);
+  });
+  ASSERT_TRUE(run.until_sim_time(5.0)) << run.output();
+  const std::vector<Proc> snapshot = run.tree();
+  ASSERT_TRUE(run.until_exit()) << run.output();
+  EXPECT_TRUE(WIFEXITED(run.status()) && WEXITSTATUS(run.status()) == 4) << run.output();
+  EXPECT_NE(run.output().find("the run's records cannot be written: " + run.dir()),
+            std::string::npos)
+      << run.output();
+  EXPECT_NE(run.output().find(": File too large at sim t="), std::string::npos) << run.output();
+  expect_no_orphan(snapshot, run.dir());
+  const Json s = summary_of(run.dir());
+  ASSERT_TRUE(s.is_object()) << read_file(run.dir() + "/summary.json");
+  EXPECT_TRUE(s["complete"].get<bool>()) << s.dump();
+  EXPECT_FALSE(s["success"].get<bool>()) << s.dump();
+  EXPECT_NE(s.value("records_error", Json()).dump().find("File too large"), std::string::npos)
+      << s.dump();
+  EXPECT_NE(s.value("cause", Json()).dump().find("the run's records cannot be written"),
+            std::string::npos)
+      << s.dump();
+  // whole records in every log up to where it stopped: events, tlogs, ground truth
+  events_of(run.dir());
+  for (int i = 0; i < 5; ++i) {
+    const std::string uav = "uav" + std::to_string(i);
+    const std::string tlog = run.dir() + "/" + uav + ".tlog";
+    EXPECT_LE(fs::file_size(tlog), kFileLimitBytes);
+    size_t torn_bytes = 0;
+    EXPECT_GT(last_tlog_stamp_s(tlog, &torn_bytes), 1.0) << uav;
+    EXPECT_EQ(torn_bytes, 0u) << tlog << ": a frame cut at the limit";
+    const std::string truth = run.dir() + "/truth_" + uav + ".csv";
+    const std::string text = read_file(truth);
+    ASSERT_FALSE(text.empty()) << truth;
+    EXPECT_EQ(text.back(), '\n') << truth << ": a row cut at the limit";
+    EXPECT_GT(last_truth_row_s(truth), 1.0) << uav;
+  }
 }
 
 TEST(Chaos, ARunDirectoryUnderAFileIsAClearErrorAtStart) {

@@ -1,18 +1,19 @@
-// uavsim-server as a user meets it: a bad option, a world it cannot find, a port in use say why (and
-// what to do); a run prints one line per event and a summary, unless --quiet.
+// uavsim-server as a user meets it: a bad option, a world it cannot find, a port in use say why
+// (and what to do); a run prints one line per event and a summary, unless --quiet.
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
+
+#include "../../support/piped_child.hpp"
 
 namespace {
 
@@ -59,7 +60,8 @@ TEST(ServerCli, VersionPrintsAndExitsZero) {
 
 TEST(ServerCli, BasePortTooHighForTheWorldsVehicles) {
   // grid100: vehicle 99 on 65000 + 990 = 65990
-  const ServerRun r = run_server("grid100" + kWorlds + " --mavlink-port 65000 --api-port -1 --no-cameras --out none");
+  const ServerRun r = run_server("grid100" + kWorlds +
+                                 " --mavlink-port 65000 --api-port -1 --no-cameras --out none");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(has(r, "65990")) << r.output;
   EXPECT_TRUE(has(r, "--mavlink-port 0")) << r.output;
@@ -96,7 +98,7 @@ TEST(ServerCli, PortInUseSuggestsEphemeralPorts) {
   ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
   const int port = ntohs(a.sin_port);
   ServerRun r = run_server("empty" + kWorlds + " --mavlink-port " + std::to_string(port) +
-                     " --api-port -1 --out none --duration 0.1 --rate 0");
+                           " --api-port -1 --out none --duration 0.1 --rate 0");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(has(r, "in use")) << r.output;
   EXPECT_TRUE(has(r, "--mavlink-port 0")) << r.output;
@@ -108,16 +110,18 @@ TEST(ServerCli, PortInUseSuggestsEphemeralPorts) {
 }
 
 TEST(ServerCli, NonLoopbackApiBindWarns) {
-  const ServerRun r = run_server("empty" + kWorlds +
-                           " --api-bind 0.0.0.0 --api-port 0 --mavlink-port -1 --out none --no-cameras"
-                           " --duration 0.05 --rate 0 --quiet");
+  const ServerRun r =
+      run_server("empty" + kWorlds +
+                 " --api-bind 0.0.0.0 --api-port 0 --mavlink-port -1 --out none --no-cameras"
+                 " --duration 0.05 --rate 0 --quiet");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r, "warning: --api-bind 0.0.0.0")) << r.output;
   EXPECT_TRUE(has(r, "no authentication")) << r.output;
 }
 
 TEST(ServerCli, DemoRunPrintsEventsAndASummary) {
-  const ServerRun r = run_server("empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none");
+  const ServerRun r =
+      run_server("empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(has(r, "uav0: armed")) << r.output;
   EXPECT_TRUE(has(r, "uav0: mode GUIDED")) << r.output;
@@ -125,24 +129,29 @@ TEST(ServerCli, DemoRunPrintsEventsAndASummary) {
   EXPECT_TRUE(has(r, "uav0: disarmed")) << r.output;
   EXPECT_TRUE(has(r, "s of sim time in")) << r.output;
   EXPECT_TRUE(has(r, "0 crash(es)")) << r.output;
-  const ServerRun quiet = run_server("empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none --quiet");
+  const ServerRun quiet = run_server(
+      "empty" + kWorlds + " --demo --rate 0 --api-port -1 --mavlink-port -1 --out none --quiet");
   EXPECT_EQ(quiet.exit_code, 0);
   EXPECT_FALSE(has(quiet, "uav0: armed")) << quiet.output;
   EXPECT_FALSE(has(quiet, "s of sim time in")) << quiet.output;
 }
 
 TEST(ServerCli, TheRadioBackendIsChosenAndNamedAtStart) {
-  ServerRun r = run_server("empty" + kWorlds + " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras");
+  ServerRun r =
+      run_server("empty" + kWorlds +
+                 " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras");
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_TRUE(has(r, "uavsim-server: radio: simple backend, frames of at most 127 bytes")) << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: radio: simple backend, frames of at most 127 bytes"))
+      << r.output;
   r = run_server("empty --radio-backend tcp");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(has(r, "--radio-backend needs simple or ns3")) << r.output;
-  // an ns3 helper that cannot work ends the server at start with the reason, never a radio without it
-  // (the server finds the helper through UAVSIM_NS3_RADIO first)
+  // an ns3 helper that cannot work ends the server at start with the reason, never a radio without
+  // it (the server finds the helper through UAVSIM_NS3_RADIO first)
   setenv("UAVSIM_NS3_RADIO", "/bin/false", 1);
   r = run_server("empty" + kWorlds +
-                 " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras --radio-backend ns3");
+                 " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none --no-cameras "
+                 "--radio-backend ns3");
   unsetenv("UAVSIM_NS3_RADIO");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_TRUE(has(r, "uavsim-server: radio: ")) << r.output;
@@ -150,11 +159,11 @@ TEST(ServerCli, TheRadioBackendIsChosenAndNamedAtStart) {
   EXPECT_TRUE(has(r, "exited with status 1")) << r.output;
 }
 
-
 TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
-  const std::string cmd = std::string(UAVSIM_SERVER_BIN) + " empty" + kWorlds +
-                          " --wait-for-clients 1 --rate 0 --duration 2 --mavlink-port 0 --api-port -1 --no-cameras"
-                          " 2>&1";
+  const std::string cmd =
+      std::string(UAVSIM_SERVER_BIN) + " empty" + kWorlds +
+      " --wait-for-clients 1 --rate 0 --duration 2 --mavlink-port 0 --api-port -1 --no-cameras"
+      " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   ASSERT_NE(p, nullptr);
   std::string output;
@@ -180,7 +189,8 @@ TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
   EXPECT_NE(output.find("waiting for 1 client(s)"), std::string::npos) << output;
   // the clock was still at 0 when the client's connection was handled
-  EXPECT_NE(output.find("t=0.000 uav0: client_connected MAVLink tcp:127.0.0.1:"), std::string::npos) << output;
+  EXPECT_NE(output.find("t=0.000 uav0: client_connected MAVLink tcp:127.0.0.1:"), std::string::npos)
+      << output;
   EXPECT_NE(output.find("ran 2.000 s of sim time"), std::string::npos) << output;
 }
 
@@ -188,23 +198,11 @@ TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
 class ServerProcess {
  public:
   explicit ServerProcess(const std::vector<std::string>& args) {
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(fds[1], 1);
-      dup2(fds[1], 2);
-      close(fds[0]);
-      close(fds[1]);
-      std::vector<char*> argv;
-      argv.push_back(const_cast<char*>(UAVSIM_SERVER_BIN));
-      for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(UAVSIM_SERVER_BIN, argv.data());
-      _exit(127);
-    }
-    close(fds[1]);
-    out_ = fdopen(fds[0], "r");
+    std::vector<std::string> argv{UAVSIM_SERVER_BIN};
+    argv.insert(argv.end(), args.begin(), args.end());
+    int fd = -1;
+    pid_ = uavsim::testing::spawn_piped(std::move(argv), &fd);
+    if (fd >= 0) out_ = fdopen(fd, "r");
   }
   ~ServerProcess() {
     if (pid_ > 0 && !reaped_) {
@@ -254,9 +252,10 @@ int connect_loopback(int port) {
 }
 
 TEST(ServerCli, SigtermEndsAServerWhoseClockALockstepClientHolds) {
-  // the clock waits for a lockstep client that never says done: SIGTERM still ends the server, cleanly
-  ServerProcess server({"empty", "--models-dir", UAVSIM_MODELS_DIR, "--rate", "0", "--mavlink-port", "0",
-                        "--api-port", "0", "--no-cameras", "--lockstep-timeout", "86400"});
+  // the clock waits for a lockstep client that never says done: SIGTERM still ends the server,
+  // cleanly
+  ServerProcess server({"empty", "--models-dir", UAVSIM_MODELS_DIR, "--rate", "0", "--mavlink-port",
+                        "0", "--api-port", "0", "--no-cameras", "--lockstep-timeout", "86400"});
   ASSERT_GT(server.pid(), 0);
   const std::string api = server.read_until("sim API on tcp:127.0.0.1:");
   ASSERT_FALSE(api.empty()) << server.output();

@@ -8,9 +8,9 @@
 
 #include "api/radio_ops.hpp"
 #include "api_fixture.hpp"
-#include "radio_server.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
+#include "radio_server.hpp"
 #include "uavsim/common/base64.hpp"
 
 namespace uavsim::server::api {
@@ -354,6 +354,74 @@ TEST(RadioApi, TheChannelSaysItsBackendAndHowLargeAFrameMayBe) {
             "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"mac_header_bytes", 26}})), "bad_field");
   EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"mac_header_bytes", -1}})), "bad_field");
+}
+
+// issue 29: one lockstep client sending 70 frames a tick of 10 ms (7000 a second) against a
+// channel that carries 1420 of its 16-byte frames a second. Those it cannot carry are refused at
+// once (queue_full, saying why, counted in radio_stats); another client is answered every tick;
+// the clock goes from tick to tick as without the flood.
+TEST(RadioApi, AFloodingClientIsRefusedWithCountsWhileTheClockAndOtherClientsGoOn) {
+  constexpr int kTicks = 100;         // 1 s of sim
+  constexpr int kFramesPerTick = 70;  // 7000 a second
+  constexpr double kPeriod_s = 0.01;
+  RadioServer server;
+  testing::RawClient flood(server.port());
+  TestClient other(server.port());
+  ASSERT_TRUE(flood.request({{"op", "lockstep_join"}, {"period_s", kPeriod_s}})["ok"]);
+  ASSERT_TRUE(other.request({{"op", "resume"}})["ok"]);
+  std::string burst;
+  for (int f = 0; f < kFramesPerTick; ++f) {
+    burst +=
+        send_op(0, "broadcast", common::base64_encode(std::vector<uint8_t>(16, 7))).dump() + "\n";
+  }
+  int accepted = 0, refused = 0;
+  double first_tick_s = -1.0, last_tick_s = -1.0;
+  for (int k = 0; k < kTicks; ++k) {
+    const Json tick = flood.next_event("tick");
+    ASSERT_FALSE(tick.is_null()) << "tick " << k;
+    const double t = tick["time"].get<double>();
+    if (k == 0) first_tick_s = t;
+    if (k > 0) EXPECT_NEAR(t, last_tick_s + kPeriod_s, kTimeTol_s) << "tick " << k;
+    last_tick_s = t;
+    flood.send_raw(burst);
+    for (int f = 0; f < kFramesPerTick; ++f) {
+      const Json r = flood.reply();
+      ASSERT_TRUE(r.is_object()) << "no reply to frame " << f << " of tick " << k;
+      if (r["ok"].get<bool>()) {
+        ++accepted;
+        continue;
+      }
+      ASSERT_EQ(error_code(r), "queue_full") << r;
+      EXPECT_NE(r["error"]["message"].get<std::string>().find("max_queue_frames 256"),
+                std::string::npos)
+          << r;
+      ++refused;
+    }
+    // the other client is answered while the flood goes on
+    const Json st = other.request({{"op", "radio_stats"}, {"vehicle", 0}});
+    ASSERT_TRUE(st["ok"]) << st;
+    EXPECT_LE(st["result"]["vehicles"][0]["queued"].get<int>(), 256) << st;
+    ASSERT_TRUE(flood.request({{"op", "done"}, {"tick", tick["tick"]}})["ok"]);
+  }
+  EXPECT_NEAR(last_tick_s - first_tick_s, (kTicks - 1) * kPeriod_s, kTimeTol_s);
+  EXPECT_EQ(accepted + refused, kTicks * kFramesPerTick);
+  // at most a second of airtime (1420 frames) and a full backlog accepted, the rest refused
+  EXPECT_LE(accepted, 1421 + 256);
+  EXPECT_GT(refused, 5000);
+  const Json stats = other.request({{"op", "radio_stats"}, {"vehicle", 0}});
+  ASSERT_TRUE(stats["ok"]) << stats;
+  const Json& v0 = stats["result"]["vehicles"][0];
+  EXPECT_EQ(v0["refused"].get<int>(), refused) << stats;
+  EXPECT_EQ(v0["transmitted"].get<int>() + v0["queued"].get<int>(), accepted) << stats;
+  // the backlog drains once the flood stops: 256 frames of 0.704 ms in under 0.2 s
+  ASSERT_TRUE(flood.request({{"op", "lockstep_leave"}})["ok"]);
+  ASSERT_TRUE(other.request({{"op", "pause"}})["ok"]);
+  ASSERT_TRUE(other.request({{"op", "step"}, {"steps", 200}})["ok"]);
+  const Json after = other.request({{"op", "radio_stats"}, {"vehicle", 0}});
+  EXPECT_EQ(after["result"]["vehicles"][0]["queued"], 0) << after;
+  EXPECT_EQ(after["result"]["vehicles"][0]["transmitted"].get<int>(), accepted) << after;
+  // and the vehicle sends again
+  EXPECT_TRUE(other.request(send_op(0, 1, "aGk="))["ok"]);
 }
 
 TEST(RadioApi, OnNs3ASaturatedChannelShowsChannelAccessFailuresInTheStats) {

@@ -89,7 +89,8 @@ TEST(RadioModel, LossDrawsDoNotDependOnTheOrderFramesWereSentInWithinATime) {
         EXPECT_TRUE(m.send(from, kBroadcast, bytes(40, static_cast<uint8_t>(from)), t).seq);
         m.step(t, pos, &out, /*starting_now=*/false);  // the gate, between two clients' requests
       }
-      for (int s = 0; s < 50; ++s) m.step(t + s * kStep_s, pos, &out);  // the steps to the next tick
+      for (int s = 0; s < 50; ++s)
+        m.step(t + s * kStep_s, pos, &out);  // the steps to the next tick
     }
     std::vector<std::tuple<size_t, size_t, uint64_t>> seen;
     for (const Delivery& d : out) seen.emplace_back(d.to, d.from, d.seq);
@@ -414,6 +415,46 @@ TEST(RadioModel, BadFramesAndDestinationsAreRefused) {
   EXPECT_TRUE(m.send(0, 1, bytes(127), 0.0).seq);
   EXPECT_TRUE(m.send(0, 1, bytes(127), 0.0).seq);
   EXPECT_EQ(m.send(0, 1, bytes(1), 0.0).error, Error::kQueueFull);
+}
+
+// issue 29: one sender offering 7000 frames a second to a channel that carries 1420 of them. The
+// frames it cannot carry are refused at send() once max_queue_frames wait to go on air, instead of
+// piling up (22000 after 4 s before, each step sorting them all); what it accepts goes out at the
+// channel's rate, and another sender's frames are not held up by the flood.
+TEST(RadioModel, AFloodingSenderIsRefusedPastItsBacklogAndTheOthersStillGoOnAir) {
+  RadioConfig c;  // max_queue_frames 256, no collisions
+  RadioModel m(3, c, 1, kStep_s);
+  // 16 bytes: (16 + 6) * 8 / 250000 = 0.704 ms on air, 1420 frames a second at most
+  const double airtime = airtime_s(16);
+  int accepted = 0, refused = 0, other_sent = 0;
+  size_t most_waiting = 0;
+  const auto out = run(m, line({0.0, 10.0, 20.0}), 1.0, [&](double t) {
+    for (int f = 0; f < 7; ++f) {
+      const SendResult r = m.send(0, kBroadcast, bytes(16), t);
+      if (r.seq) {
+        ++accepted;
+      } else {
+        EXPECT_EQ(r.error, Error::kQueueFull);
+        ++refused;
+      }
+    }
+    most_waiting = std::max(most_waiting, m.queued(0));
+    if (std::llround(t / kStep_s) % 10 == 0 && t < 0.995) {
+      ASSERT_TRUE(m.send(1, 2, bytes(16), t).seq);  // 100 a second, delivered by the end
+      ++other_sent;
+    }
+  });
+  EXPECT_EQ(accepted + refused, 7 * 1001);
+  EXPECT_LE(most_waiting, c.max_queue_frames);
+  // what was accepted is what went on air plus what still waits, and it went at the channel's
+  // rate: every frame back to back from the first step on
+  EXPECT_EQ(m.transmitted(0) + m.queued(0), static_cast<uint64_t>(accepted));
+  EXPECT_NEAR(static_cast<double>(m.transmitted(0)), std::ceil(1.0 / airtime), 2.0);
+  // still flooding at the end: the backlog full but for the frames of the last step's airtime
+  EXPECT_GE(m.queued(0) + 2, c.max_queue_frames);
+  int from_other = 0;
+  for (const Delivery& d : out) from_other += d.from == 1 ? 1 : 0;
+  EXPECT_EQ(from_other, other_sent);  // every one of them, none held behind the flood
 }
 
 TEST(RadioModel, UnusableConfigsAreNamed) {

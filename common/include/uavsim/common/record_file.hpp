@@ -31,9 +31,10 @@ class RecordFile {
   const std::string& path() const { return path_; }
 
   // Writes bytes, which must be whole records, with write(2) (retried after EINTR and short
-  // writes). False when the file is not open or the kernel refused (ENOSPC, EIO, ...): the first
-  // failure's text stays in error() and every later write is refused too, so that a record cut
-  // short by a full disk is the file's last and a full disk costs one message, not one per record.
+  // writes). False when the file is not open or the kernel refused (ENOSPC, EFBIG, EIO, ...): what
+  // this call got onto the file is cut off again (the file ends on the records of the calls that
+  // succeeded), the first failure's text stays in error() and every later write is refused too,
+  // so a full disk costs one message, not one per record.
   // One thread at a time.
   bool write(std::string_view bytes);
   // "" until a write failed; then "PATH: strerror".

@@ -97,6 +97,23 @@ inline constexpr int kExitUsage = 2;          // bad options, or the run directo
 inline constexpr int kExitHarness = 4;        // the harness failed: the server died, the API failed
 inline constexpr int kExitInterrupted = 130;  // SIGINT or SIGTERM stopped the run
 
+// Ctrl-C in a terminal and a scheduler's SIGTERM: from this call on SIGINT and SIGTERM no longer
+// end the launcher at once but set what interrupted() reads, so the run loop ends at its next turn
+// and everything is stopped in order: the programs, then the server (which closes its logs), then
+// the summary, written with "interrupted": true and the interruption as its cause (unless a program
+// had already ended abnormally), and the exit code kExitInterrupted. A Launcher's waits
+// (start_server, wait_lockstep_clients) end early with Error::kCancelled once it is set.
+// Call once in main() before the launcher starts anything. Not thread-safe (it sets the process's
+// signal dispositions); the handler itself is async-signal-safe.
+void catch_interrupts();
+// The signal (SIGINT or SIGTERM) that interrupted the run since catch_interrupts(); 0 while none
+// has. Thread-safe.
+int interrupted();
+// The launcher's exit code at the end of a run: kExitInterrupted once interrupted() (whatever
+// failed while it stopped), else kExitHarness when harness_failed, else kExitSuccess or
+// kExitFellShort. Thread-safe.
+int run_exit_code(bool harness_failed, bool success);
+
 class Launcher {
  public:
   // Sim seconds between two rewrites of keep_summary()'s file.
@@ -195,11 +212,20 @@ class Launcher {
   // "the server was killed by SIGKILL at sim t=53.20 s" when the server ended, else "the server
   // exited": for the mission's harness-failure message. Owner thread only.
   std::string server_end() const;
+  // "" while every record of the run is written; else the first that could not be (a full disk,
+  // the file size limit), noticed by pump() and the waits: the launcher's ground truth, or the
+  // server's event log or a tlog as the server says, "PATH: File too large at sim t=72.40 s". A
+  // mission ends its run then, as a harness failure: the summary names it ("records_error", and
+  // as the cause unless a program had ended abnormally before). Owner thread only.
+  const std::string& records_error() const;
 
   // From now on path ("" for none) holds the run's summary so far: `partial` plus "complete":
-  // false, sim_time_s, wall_time_s, "programs" (each one's end, or running) and "cause" (the first
-  // program killed by a signal the launcher did not send, else the first abnormal end; null if
-  // none), replaced atomically (temp file, fsync, rename) every kSummaryPeriod_s of
+  // false, sim_time_s, wall_time_s, "programs" (each one's end, or running), "interrupted" and
+  // "records_error" (records_error(), null if none) and "cause" (among the ends noticed before an
+  // interruption, the first program killed by a signal the launcher did not send, else the first
+  // abnormal end; else a record that could not be written; else the interruption, "the launcher
+  // was interrupted by SIGINT at sim t=..."; else the first abnormal end; null if none), replaced
+  // atomically (temp file, fsync, rename) every kSummaryPeriod_s of
   // sim time and whenever a program ends, so a run killed at any moment leaves a summary.
   // Owner thread only.
   void keep_summary(const std::string& path, nlohmann::json partial);
