@@ -80,6 +80,7 @@ void LandingFsm::enter(LandingState s, double now_s, FsmOutputs* out, const std:
     ready_for_open_loop_ = false;
     climb_away_ = false;
     give_up_after_climb_ = false;
+    settling_reported_ = false;
   }
 }
 
@@ -233,6 +234,50 @@ FsmOutputs LandingFsm::climb_away(const FsmInputs& in, const EstimatedTruck& tru
   return out;
 }
 
+FsmOutputs LandingFsm::approach_while_settling(const FsmInputs& in, double h) {
+  // Neither the UAV's position relative to the truck (its own position stepped; the track was made
+  // before) nor its velocity (the FC flies its own estimate, off meanwhile) can be trusted, so the
+  // envelope's checks and the PID, which work on them, would act on the error: a climb-away's
+  // retreat and the PID's correction add to the drift the FC makes anyway. The truck's velocity
+  // does not depend on it, nor do height changes (barometric). So: follow the truck's velocity
+  // alone, and decide by height. In the blind last metres, low, the deck is nearer than any way out
+  // (issue 36's seed 52: the FC's drift put a propeller in the cab 0.9 s after the step, the
+  // climb-away still sinking): motors off onto the deck. Blind and higher, or below the floor:
+  // climb, the drift then carries the UAV over the cab's top, not into it. Above the floor: hold;
+  // nothing reaches the cab from there.
+  FsmOutputs out;
+  const bool blind_descent = open_loop_since_s_.has_value();
+  if (blind_descent) {
+    // the height from where the marker left the image and the barometer's change since
+    const double h_blind =
+        config_.marker_lost_height_m - (open_loop_start_z_m_ - in.position_enu_m.z());
+    if (h_blind <= config_.drop_height_m) {
+      enter(LandingState::kLanded, in.now_s, &out,
+            fmt("position estimate stepped (a GPS jump?) %.2f m above the deck in the blind last "
+                "metres: motors off onto the deck",
+                h_blind));
+      out.action = FsmOutputs::Action::kForceDisarm;
+      return out;
+    }
+  }
+  const bool climb = blind_descent || h < envelope_.floor_height_m();
+  if (!settling_reported_) {
+    settling_reported_ = true;
+    out.note = fmt("position estimate stepped (a GPS jump?) at %.2f m: following the truck's "
+                   "velocity, ",
+                   h) +
+               (climb ? "climbing" : "holding");
+  }
+  pid_x_.reset();
+  pid_y_.reset();
+  const Eigen::Vector2d v_xy =
+      in.truck.initialised ? clamp_norm(in.truck.velocity_enu_m_s, config_.approach_max_speed_m_s)
+                           : Eigen::Vector2d::Zero();
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s = Eigen::Vector3d(v_xy.x(), v_xy.y(), climb ? config_.abort_climb_m_s : 0.0);
+  return out;
+}
+
 FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   FsmOutputs out;
   // a pad switch closed: all motors off at once (seed 7.1 "Landed")
@@ -242,6 +287,8 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
     return out;
   }
   const double h = height_above_deck_m(in.position_enu_m.z());
+  if (in.estimate_settling) return approach_while_settling(in, h);
+  settling_reported_ = false;
   const bool seen = in.now_s - in.truck.last_seen_s <= config_.lost_after_s;
   const bool fresh = in.now_s - in.truck.last_seen_s <= config_.fresh_sighting_s;
 
@@ -339,6 +386,7 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
             false);
       }
       open_loop_since_s_ = in.now_s;
+      open_loop_start_z_m_ = in.position_enu_m.z();
     }
     if (!open_loop_reported_) {
       open_loop_reported_ = true;

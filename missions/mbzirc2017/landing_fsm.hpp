@@ -38,6 +38,9 @@ struct FsmInputs {
   Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
   bool switch_closed = false;  // any landing-pad microswitch
   bool camera_dark = false;    // the newest camera frame was black (a blinded or failed camera)
+  // the FC's position estimate stepped lately (a GPS jump being blended in: estimate_monitor.hpp):
+  // its position and velocity are off by up to metres and metres per second meanwhile
+  bool estimate_settling = false;
   TruckKnowledge truck;
 };
 
@@ -75,6 +78,9 @@ class LandingFsm {
   FsmOutputs climb_away(const FsmInputs& in, const EstimatedTruck& truck, const TruckRelative& rel,
                         const std::string& why, bool give_up);
   bool seen_since(const FsmInputs& in, double since_s) const;
+  // the Approach while the FC's estimate settles after a step: no descent on it and no correction
+  // towards the marker from it (FsmInputs::estimate_settling)
+  FsmOutputs approach_while_settling(const FsmInputs& in, double h);
 
   MissionConfig config_;
   Funnel funnel_;
@@ -94,6 +100,8 @@ class LandingFsm {
   bool open_loop_reported_ = false;
   bool ready_for_open_loop_ = false;  // at the last sighting: centred and matched in the deck box
   bool climb_away_ = false;
+  bool settling_reported_ = false;
+  double open_loop_start_z_m_ = 0.0;  // the estimate's altitude as the blind last metres began
   bool give_up_after_climb_ = false;
   int climb_aways_ = 0;
 };

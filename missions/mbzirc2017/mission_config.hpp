@@ -71,12 +71,12 @@ struct MissionConfig {
   double prop_top_above_skids_m = 0.44;
 
   // the clearance envelope around the funnel (clearance_envelope.hpp)
-  double clearance_margin_m = 0.1;       // horizontal, on the deck box and the cab's box
-  double cab_vertical_margin_m = 0.25;   // the floor: skids this far above the cab's top
-  double matched_speed_m_s = 0.5;        // horizontal speed relative to the deck: "matched"
-  double envelope_prediction_s = 0.5;    // in the deck box now and this far ahead
-  double centred_m = 0.45;               // the open-loop last metres only this close to the centre
-  double open_loop_matched_m_s = 0.5;    // and this slow relative to the deck
+  double clearance_margin_m = 0.1;      // horizontal, on the deck box and the cab's box
+  double cab_vertical_margin_m = 0.25;  // the floor: skids this far above the cab's top
+  double matched_speed_m_s = 0.5;       // horizontal speed relative to the deck: "matched"
+  double envelope_prediction_s = 0.5;   // in the deck box now and this far ahead
+  double centred_m = 0.45;              // the open-loop last metres only this close to the centre
+  double open_loop_matched_m_s = 0.5;   // and this slow relative to the deck
   // a sighting older than this is stale: no descent on it above the open-loop height (the marker
   // gone from there is lost, not too close), and the open-loop readiness is taken on fresh ones
   // only (2 frames at 7 frames/s and the processing latency)
@@ -87,6 +87,15 @@ struct MissionConfig {
   // the blind last metres are committed to from here only when centred and matched: above it the
   // UAV holds until they are
   double commit_height_m = 2.0;
+  // the skids' height above the deck at which the marker leaves the image (the 1.5 m marker fills
+  // the down camera's 65 deg field of view; ground truth of the sweeps: the blind last metres began
+  // 1.0-1.1 m above the deck): with the barometric change since, the height in the blind last
+  // metres whatever the barometer's drift
+  double marker_lost_height_m = 1.05;
+  // the FC's position estimate stepping in the blind last metres (estimate_monitor.hpp): at or
+  // below this the motors go off, the deck nearer than any way out; above it the UAV climbs over
+  // the cab
+  double drop_height_m = 0.45;
   double abort_climb_m_s = 1.5;          // the climb-away
   double abort_retreat_m_s = 1.0;        // away from the cab, relative to the truck
   double abort_clear_height_m = 2.5;     // skids above the deck where a climb-away ends

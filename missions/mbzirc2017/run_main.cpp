@@ -403,6 +403,7 @@ int main(int argc, char** argv) {
   double truck_s_m = 0.0;                           // the truck's arc length at the latest tick
   std::map<double, double> truck_s_by_tick_m;  // ... and at the ticks of the last kTruckHistory_s
   int climb_aways = 0;
+  int estimate_steps = 0;  // the program's "position estimate stepped" (a GPS jump it noticed)
 
   std::string world = o.world;
   if (o.truck_speed_kmh > 0.0) {
@@ -467,6 +468,7 @@ int main(int argc, char** argv) {
     launch.on_line([&](const std::string& child, const std::string& line) {
       if (child != "uav0") return;
       if (line.find("climb-away:") != std::string::npos) ++climb_aways;
+      if (line.find("position estimate stepped") != std::string::npos) ++estimate_steps;
       if (auto s = state_change(line)) {
         if (s->second == "Approach" && !approach_s) approach_s = s->first;
         states.push_back(s->second);
@@ -749,9 +751,10 @@ int main(int argc, char** argv) {
       part_at_approach.empty() ? "-" : part_at_approach.c_str(),
       part_at_touchdown.empty() ? "-" : part_at_touchdown.c_str());
   std::printf(
-      "near misses: cab clearance min %s m; skids to the deck's edges min %s m; %d climb-away(s)\n",
+      "near misses: cab clearance min %s m; skids to the deck's edges min %s m; %d climb-away(s); "
+      "%d step(s) of the position estimate noticed\n",
       cab_clearance ? std::to_string(*cab_clearance).c_str() : "-",
-      deck_margin ? std::to_string(*deck_margin).c_str() : "-", climb_aways);
+      deck_margin ? std::to_string(*deck_margin).c_str() : "-", climb_aways, estimate_steps);
   std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
   for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
   std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
@@ -790,6 +793,7 @@ int main(int argc, char** argv) {
     summary["min_deck_edge_margin_m"] = deck_margin ? Json(*deck_margin) : Json(nullptr);
     summary["truck_contacts"] = truck_contacts;
     summary["climb_aways"] = climb_aways;
+    summary["estimate_steps"] = estimate_steps;
     Json random_blackouts = Json::array();
     for (const auto& [at_s, duration_s] : blackouts)
       random_blackouts.push_back({{"at_s", at_s}, {"duration_s", duration_s}});

@@ -4,9 +4,11 @@
 // program would fly a real drone (frames from its camera driver, switches from its GPIO);
 // UAVSIM_LOCKSTEP puts it on sim time.
 //
-// usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME] [--video-log FILE.vlog]
-// --video-log: every processed camera frame with what the vision saw drawn on it (the marker's ring,
-// whether the filter took it, the deck position it gave, the FSM state; detection_drawing.hpp)
+// usage: mbzirc2017-uav --mavlink tcp:HOST:PORT [--vehicle NAME] [--camera NAME] [--video-log
+// FILE.vlog]
+// --video-log: every processed camera frame with what the vision saw drawn on it (the marker's
+// ring, whether the filter took it, the deck position it gave, the FSM state;
+// detection_drawing.hpp)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +19,7 @@
 #include <string>
 
 #include "detection_drawing.hpp"
+#include "estimate_monitor.hpp"
 #include "landing_fsm.hpp"
 #include "mission_config.hpp"
 #include "truck_perception.hpp"
@@ -98,8 +101,12 @@ int main(int argc, char** argv) {
   // the clock offset (a position arrives up to a telemetry period after it was taken; at 4 m/s a 50
   // ms error would put every marker 0.2 m off)
   double vehicle_clock_offset_s = std::numeric_limits<double>::infinity();
+  // steps in the FC's own position estimate (a GPS jump blended in), told from the UAV's motion
+  EstimateMonitor estimate_monitor;
   uav.on_telemetry([&](const Telemetry& t) {
     if (!t.has_local_position) return;
+    estimate_monitor.add(t.vehicle_time_s, t.position_enu_m.head<2>(),
+                         t.velocity_enu_m_s.head<2>());
     vehicle_clock_offset_s = std::min(vehicle_clock_offset_s, loop.now() - t.vehicle_time_s);
     pose = {t.vehicle_time_s + vehicle_clock_offset_s, t.position_enu_m, t.velocity_enu_m_s,
             enu_yaw_from_ned(t.yaw_rad)};
@@ -227,6 +234,7 @@ int main(int argc, char** argv) {
     in.velocity_enu_m_s = t.velocity_enu_m_s;
     in.switch_closed = switch_closed;
     in.camera_dark = camera_dark;
+    in.estimate_settling = estimate_monitor.settling();
     in.truck = perception.knowledge(in.now_s, in.position_enu_m.head<2>());
     const LandingState before = fsm.state();
     const FsmOutputs out = fsm.step(in);
@@ -271,7 +279,7 @@ int main(int argc, char** argv) {
         char buf[160];
         std::snprintf(
             buf, sizeof(buf),
-            "touchdown: motors off on the pad switch; the marker estimated at (%+.2f, %+.2f) m",
+            "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m",
             off.x(), off.y());
         log(buf);
       }

@@ -296,5 +296,100 @@ TEST(LandingFsm, BelowTheCabTopOutsideTheDeckBoxClimbsAway) {
   EXPECT_LT(out.velocity_enu_m_s.x(), h.truck_speed);  // back, away from the cab
 }
 
+// Issue 36's seed 52: centred and matched in the blind last metres, the FC's position estimate
+// steps (a GPS jump: the UAV's own position moves 1.5 m back against the truck's track). The old
+// Approach took the stepped estimate for the truth: out of the deck box, a climb-away whose retreat
+// and the FC's drift flew the UAV into the cab. Settling, the FSM follows the truck's velocity
+// alone and decides by the blind height (where the marker left the image, 1.05 m, less the
+// barometric descent since).
+class BlindDescent : public ::testing::Test {
+ protected:
+  // over the marker 1.0 m above the deck, matched; seen once, then not (too close): the open loop
+  void SetUp() override {
+    ASSERT_TRUE(h.reach_approach());
+    h.in.position_enu_m = Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s, 0, deck_z() + 1.0);
+    h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
+    h.see_truck();
+    h.step();
+    for (int i = 0; i < 40 && open_loop_z_ < 0.0; ++i) {
+      if (h.step().note.find("open-loop descent") != std::string::npos) {
+        open_loop_z_ = h.in.position_enu_m.z() + h.config.open_loop_descent_m_s * kStep_s;
+      }
+    }
+    ASSERT_GT(open_loop_z_, 0.0);
+  }
+  double deck_z() const { return h.config.skid_depth_m + h.config.deck_height_m; }
+  // the blind height the FSM counts: where the marker left the image less the descent since
+  double blind_height_m() const {
+    return h.config.marker_lost_height_m - (open_loop_z_ - h.in.position_enu_m.z());
+  }
+  // descends open loop until the blind height is at most h_m
+  void descend_to(double h_m) {
+    for (int i = 0; i < 200 && blind_height_m() > h_m; ++i) {
+      const FsmOutputs out = h.step();
+      ASSERT_LT(out.velocity_enu_m_s.z(), 0.0);
+    }
+    ASSERT_LE(blind_height_m(), h_m);
+  }
+  // the estimate steps: 1.5 m back along the truck's way, the track unchanged
+  void step_the_estimate() {
+    h.in.estimate_settling = true;
+    h.in.position_enu_m.x() -= 1.5;
+  }
+
+  FsmHarness h;
+  double open_loop_z_ = -1.0;
+};
+
+TEST_F(BlindDescent, EstimateStepLowCutsTheMotorsOntoTheDeckInsteadOfClimbingAway) {
+  descend_to(h.config.drop_height_m);
+  step_the_estimate();
+  const FsmOutputs out = h.step();
+  EXPECT_EQ(out.action, FsmOutputs::Action::kForceDisarm);
+  EXPECT_EQ(h.fsm.state(), LandingState::kLanded);
+  EXPECT_NE(out.note.find("motors off onto the deck"), std::string::npos) << out.note;
+  EXPECT_EQ(h.fsm.climb_aways(), 0);
+}
+
+// Higher in the blind descent (0.9 m), the step makes it climb straight up at the truck's velocity:
+// no retreat or PID correction computed from the stepped position (1.5 m "behind" the marker).
+TEST_F(BlindDescent, EstimateStepHigherClimbsAtTheTrucksVelocityWithoutCorrectingTheStep) {
+  descend_to(0.9);
+  ASSERT_GT(blind_height_m(), h.config.drop_height_m);
+  step_the_estimate();
+  for (int i = 0; i < 20; ++i) {
+    const FsmOutputs out = h.step();
+    ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+    EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.x(), h.truck_speed);
+    EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.y(), 0.0);
+    EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.z(), h.config.abort_climb_m_s);
+  }
+  EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
+  EXPECT_EQ(h.fsm.climb_aways(), 0);
+}
+
+// Above the floor, in sight: the step only holds the height and follows the truck.
+TEST(LandingFsm, EstimateStepAboveTheFloorHoldsAndFollowsTheTruck) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  h.in.position_enu_m = Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s + 0.3, 0.2,
+                                        h.config.skid_depth_m + h.config.deck_height_m + 3.0);
+  h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
+  h.see_truck();
+  ASSERT_LT(h.step().velocity_enu_m_s.z(), 0.0);  // in the funnel: descending
+  h.in.estimate_settling = true;
+  h.see_truck();
+  const FsmOutputs out = h.step();
+  ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.x(), h.truck_speed);
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.y(), 0.0);
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.z(), 0.0);
+  EXPECT_NE(out.note.find("holding"), std::string::npos) << out.note;
+  // settled: the funnel again
+  h.in.estimate_settling = false;
+  h.see_truck();
+  EXPECT_LT(h.step().velocity_enu_m_s.z(), 0.0);
+}
+
 }  // namespace
 }  // namespace uavsim::missions::mbzirc2017
