@@ -224,7 +224,7 @@ class LockstepRunner : public Lockstep {
       while (coordinator_.blocked()) {
         if (!coordinator_.expire(t).empty()) dropped_at_.push_back({t, clock_.now_s()});
         if (!coordinator_.blocked()) break;
-        if (answer_after_s && coordinator_.!check_done(conn, std::nullopt, &message_)) {
+        if (answer_after_s && !coordinator_.check_done(conn, std::nullopt, &message_)) {
           clock_.advance(*answer_after_s);
           coordinator_.take_done(conn, std::nullopt, {});
           coordinator_.complete(nullptr);
