@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "../api/call_op.hpp"
 #include "physics/world.hpp"
 
 namespace uavsim::server::app {
@@ -51,12 +52,9 @@ TEST(RecordOverlay, EventLinesNameTheirVehicleAndMarkersStayWhereItHappened) {
   s.record(sim::EventType::kBalloonPopped, 0, "balloon2");
   s.record(sim::EventType::kLandedOnTarget, 1, "");
   s.record(sim::EventType::kCrash, 1, "hard landing");
-  nlohmann::json result;
-  std::string code, message;
-  ASSERT_TRUE(r.notes->handle(1, "overlay_note",
-                              {{"text", "uav0 takes over the side of uav1"}, {"vehicle", "uav0"}},
-                              &result, &code, &message))
-      << message;
+  const nlohmann::json note = api::testing::call_op(
+      *r.notes, "overlay_note", {{"text", "uav0 takes over the side of uav1"}, {"vehicle", "uav0"}});
+  ASSERT_FALSE(note.contains("error")) << note;
   const render::OverlayInfo info = r.source();
 
   // every line names the vehicle and is drawn in its colour
@@ -97,11 +95,9 @@ TEST(RecordOverlay, EventLinesNameTheirVehicleAndMarkersStayWhereItHappened) {
 
 TEST(RecordOverlay, LaunchersCountersFollowTheServersOwn) {
   Recorded r = mbzirc2020();
-  nlohmann::json result;
-  std::string code, message;
-  ASSERT_TRUE(r.notes->handle(1, "overlay_counter",
-                              {{"name", "coverage"}, {"text", "coverage 62.0 %"}}, &result, &code,
-                              &message));
+  const nlohmann::json counter =
+      api::testing::call_op(*r.notes, "overlay_counter", {{"name", "coverage"}, {"text", "coverage 62.0 %"}});
+  ASSERT_FALSE(counter.contains("error")) << counter;
   const render::OverlayInfo info = r.source();
   ASSERT_EQ(info.counters.size(), 2u);
   EXPECT_EQ(info.counters[0], "balloons popped 0/5");
