@@ -113,7 +113,9 @@ TEST(Launcher, ProgramsShareAGroupOfTheirOwnAndDieWithAKilledLauncher) {
     close(out[0]);
     Launcher launch("test", true);
     if (!launch.spawn("a", {"/bin/sleep", "300"}) ||
-        !launch.spawn("b", {"/bin/sh", "-c", "sleep 300"}))
+        // exec: the shell becomes the program (a shell that forks it would leave a grandchild, which
+        // the parent-death signal of the launcher's own children does not reach)
+        !launch.spawn("b", {"/bin/sh", "-c", "exec sleep 300"}))
       _exit(1);
     launch.pump(0);
     const std::string group = std::to_string(launch.process_group());
