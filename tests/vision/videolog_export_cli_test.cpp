@@ -11,31 +11,19 @@
 #include <string>
 
 #include "plane_log.hpp"
+#include "../support/run_command.hpp"
 
 namespace uavsim::vision {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct ExportRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using ExportRun = uavsim::testing::CommandRun;
+using uavsim::testing::has;
 
 ExportRun run_export(const std::string& args) {
-  const std::string cmd = std::string(UAVSIM_VIDEOLOG_EXPORT_BIN) + " " + args + " 2>&1";
-  ExportRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return uavsim::testing::run_command(std::string(UAVSIM_VIDEOLOG_EXPORT_BIN) + " " + args);
 }
-
-bool has(const ExportRun& r, const std::string& s) { return r.output.find(s) != std::string::npos; }
 
 class VideologExportCli : public ::testing::Test {
  protected:

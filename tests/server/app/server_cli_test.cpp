@@ -14,32 +14,20 @@
 #include <vector>
 
 #include "../../support/piped_child.hpp"
+#include "../../support/run_command.hpp"
 
 namespace {
 
-struct ServerRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using ServerRun = uavsim::testing::CommandRun;
+using uavsim::testing::has;
 
 // env: "NAME=VALUE ..." set for the server alone, or ""
 ServerRun run_server_env(const std::string& env, const std::string& args) {
-  const std::string cmd = (env.empty() ? "" : "env " + env + " ") + std::string(UAVSIM_SERVER_BIN) +
-                          " " + args + " 2>&1";
-  ServerRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (p == nullptr) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return uavsim::testing::run_command((env.empty() ? "" : "env " + env + " ") + std::string(UAVSIM_SERVER_BIN) +
+                                      " " + args);
 }
 
 ServerRun run_server(const std::string& args) { return run_server_env("", args); }
-
-bool has(const ServerRun& r, const std::string& s) { return r.output.find(s) != std::string::npos; }
 
 const std::string kWorlds = std::string(" --models-dir ") + UAVSIM_MODELS_DIR;
 
