@@ -345,9 +345,13 @@ TEST_F(ClientSystemTest, LockstepTimersRunInSimTime) {
   EXPECT_TRUE(loop_->cancel(id));
   // the simulator is exactly where the loop says (it holds the tick while we work)
   EXPECT_NEAR(api_->sim_time(), loop_->now(), 1e-9);
-  // detached timing: fn takes wall time, appears to take 0.5 s of sim time, and the sim runs meanwhile
+  // detached timing: fn appears to take 0.5 s of sim time, and the sim runs meanwhile: fn returns only once
+  // the simulator (asked over another connection) has gone past the busy section's end without this loop
   const double b0 = loop_->now();
-  loop_->run_busy(0.5, [] { usleep(50000); });
+  loop_->run_busy(0.5, [&] {
+    while (api_->sim_time() < b0 + 0.5 - 1e-9) {
+    }
+  });
   EXPECT_GE(loop_->now(), b0 + 0.5 - 1e-9);
   EXPECT_LT(loop_->now(), b0 + 0.5 + 0.02 + 1e-9);
   EXPECT_NEAR(api_->sim_time(), loop_->now(), 1e-9);

@@ -13,6 +13,7 @@ Every figure comes from one invocation: compare them as ratios, the machine is s
 """
 
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -94,6 +95,12 @@ def main():
             for runner, s, st in rows:
                 print("| %s | %.0f | %.0f | %s |" % (runner, s, 3600.0 * n / s, st))
             print("tables (sweep.csv, sweep.md) the same: %s" % ("yes" if same else "NO"))
+            if not same:
+                # The daemons' scratch directory goes with them: keep both tables to find which cell differs.
+                kept = tempfile.mkdtemp(prefix="sweep_bench_differ_")
+                for runner in ("slurm", "local"):
+                    shutil.copytree(os.path.join(work, runner, "collect"), os.path.join(kept, runner))
+                print("both tables kept in %s" % kept)
             with open(os.path.join(work, "slurm", "collect", "sweep.md")) as f:
                 print(f.read())
     finally:
