@@ -6,8 +6,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "circle_fit.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::vision {
+
+using common::kPi;
 
 Eigen::Vector3d sphere_position_from_circle(const PinholeIntrinsics& intrinsics,
                                             const cv::Point2d& centre_px, double radius_px,
@@ -19,7 +22,7 @@ Eigen::Vector3d sphere_position_from_circle(const PinholeIntrinsics& intrinsics,
   Eigen::Vector3d rays[kRimSamples];
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
   for (int i = 0; i < kRimSamples; ++i) {
-    const double t = 2.0 * M_PI * i / kRimSamples;
+    const double t = 2.0 * kPi * i / kRimSamples;
     rays[i] = intrinsics.ray_cam(
         {centre_px.x + radius_px * std::cos(t), centre_px.y + radius_px * std::sin(t)});
     axis += rays[i];
@@ -52,7 +55,7 @@ std::vector<BalloonDetection> BalloonDetector::detect(const cv::Mat& bgr) {
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(mask_, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
 
-  const double min_area_px = M_PI * params_.min_radius_px * params_.min_radius_px * 0.5;
+  const double min_area_px = kPi * params_.min_radius_px * params_.min_radius_px * 0.5;
   std::vector<cv::Point2d> rim;
   for (const auto& contour : contours) {
     const double area_px = cv::contourArea(contour);
@@ -68,7 +71,7 @@ std::vector<BalloonDetection> BalloonDetector::detect(const cv::Mat& bgr) {
     if (!fit.ok) continue;
     // shape tests: round outline, filled disc
     const double residual = fit.rms_residual_px / fit.radius_px;
-    const double fill = area_px / (M_PI * fit.radius_px * fit.radius_px);
+    const double fill = area_px / (kPi * fit.radius_px * fit.radius_px);
     if (residual > params_.max_fit_residual || fill < params_.min_fill_ratio || fill > 1.15)
       continue;
     // the outline runs through the centres of the blob's edge pixels: the edge is half a pixel out

@@ -4,37 +4,6 @@
 
 namespace uavsim::vision {
 
-PinholeIntrinsics PinholeIntrinsics::from_fovy(int width_px, int height_px, double fovy_rad) {
-  PinholeIntrinsics k;
-  k.width_px = width_px;
-  k.height_px = height_px;
-  // MuJoCo's frustum spans the full image height: fy = (h / 2) / tan(fovy / 2), square pixels
-  k.fy_px = 0.5 * height_px / std::tan(0.5 * fovy_rad);
-  k.fx_px = k.fy_px;
-  // the optical axis passes between the two middle pixels in OpenCV's pixel-centre convention
-  k.cx_px = 0.5 * (width_px - 1);
-  k.cy_px = 0.5 * (height_px - 1);
-  return k;
-}
-
-Eigen::Vector2d PinholeIntrinsics::project(const Eigen::Vector3d& p_cam_m) const {
-  return {fx_px * p_cam_m.x() / p_cam_m.z() + cx_px, fy_px * p_cam_m.y() / p_cam_m.z() + cy_px};
-}
-
-Eigen::Vector3d PinholeIntrinsics::ray_cam(const Eigen::Vector2d& pixel_px) const {
-  return Eigen::Vector3d((pixel_px.x() - cx_px) / fx_px, (pixel_px.y() - cy_px) / fy_px, 1.0)
-      .normalized();
-}
-
-cv::Matx33d PinholeIntrinsics::camera_matrix() const {
-  return {fx_px, 0.0, cx_px, 0.0, fy_px, cy_px, 0.0, 0.0, 1.0};
-}
-
-bool PinholeIntrinsics::contains(const Eigen::Vector2d& pixel_px) const {
-  return pixel_px.x() >= -0.5 && pixel_px.y() >= -0.5 && pixel_px.x() < width_px - 0.5 &&
-         pixel_px.y() < height_px - 0.5;
-}
-
 Eigen::Vector3d CameraPose::cam_to_enu(const Eigen::Vector3d& p_cam_m) const {
   return position_enu_m + R_enu_cam * p_cam_m;
 }

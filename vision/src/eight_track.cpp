@@ -6,7 +6,11 @@
 #include <limits>
 #include <stdexcept>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::vision {
+
+using common::kPi;
 
 namespace {
 
@@ -24,8 +28,8 @@ struct Segment {
 };
 
 double wrap_2pi(double a) {
-  a = std::fmod(a, 2.0 * M_PI);
-  return a < 0.0 ? a + 2.0 * M_PI : a;
+  a = std::fmod(a, 2.0 * kPi);
+  return a < 0.0 ? a + 2.0 * kPi : a;
 }
 
 }  // namespace
@@ -41,7 +45,7 @@ EightTrack::EightTrack(const EightTrackParams& params) : params_(params) {
   // R
   tangent_angle_rad_ = std::asin(r / half_sep_m_);
   half_straight_m_ = half_sep_m_ * std::cos(tangent_angle_rad_);
-  arc_m_ = r * (M_PI + 2.0 * tangent_angle_rad_);
+  arc_m_ = r * (kPi + 2.0 * tangent_angle_rad_);
   length_m_ = 4.0 * half_straight_m_ + 2.0 * arc_m_;
 }
 
@@ -69,11 +73,11 @@ static void build_segments(double c, double phi, double a, double arc, Segment o
   const Eigen::Vector2d u(std::cos(phi), std::sin(phi));   // first straight
   const Eigen::Vector2d w(-std::cos(phi), std::sin(phi));  // second straight
   out[0] = {false, 0.0, a, Eigen::Vector2d::Zero(), u, 0.0, 0.0};
-  out[1] = {true, a, arc, Eigen::Vector2d(c, 0.0), Eigen::Vector2d::Zero(), phi + M_PI / 2, -1.0};
+  out[1] = {true, a, arc, Eigen::Vector2d(c, 0.0), Eigen::Vector2d::Zero(), phi + kPi / 2, -1.0};
   out[2] = {false, a + arc, 2.0 * a, a * Eigen::Vector2d(std::cos(phi), -std::sin(phi)),
             w,     0.0,     0.0};
   out[3] = {
-      true, 3.0 * a + arc, arc, Eigen::Vector2d(-c, 0.0), Eigen::Vector2d::Zero(), M_PI / 2 - phi,
+      true, 3.0 * a + arc, arc, Eigen::Vector2d(-c, 0.0), Eigen::Vector2d::Zero(), kPi / 2 - phi,
       1.0};
   out[4] = {
       false, 3.0 * a + 2.0 * arc, a, a * Eigen::Vector2d(-std::cos(phi), -std::sin(phi)), u, 0.0,
@@ -147,7 +151,7 @@ std::vector<TrackCoordinates> EightTrack::project_all(const Eigen::Vector2d& p_e
       if (sigma <= sweep) {
         local = sigma * r;
       } else {
-        local = (sigma - sweep < 2.0 * M_PI - sigma) ? sg.length_m : 0.0;  // nearer end
+        local = (sigma - sweep < 2.0 * kPi - sigma) ? sg.length_m : 0.0;  // nearer end
       }
     }
     const double s = wrap_s(sg.s0_m + local);

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::vision {
+
+using common::kPi;
 
 namespace {
 
@@ -13,8 +17,8 @@ namespace {
 double ellipse_residual(const std::vector<cv::Point>& outline, const cv::RotatedRect& e) {
   const double a = 0.5 * e.size.width;
   const double b = 0.5 * e.size.height;
-  const double c = std::cos(e.angle * M_PI / 180.0);
-  const double s = std::sin(e.angle * M_PI / 180.0);
+  const double c = std::cos(e.angle * kPi / 180.0);
+  const double s = std::sin(e.angle * kPi / 180.0);
   double sum_sq = 0.0;
   for (const auto& p : outline) {
     const double dx = p.x - e.center.x;
@@ -67,7 +71,7 @@ void MarkerDetector::find_candidates(const cv::Mat& binary) {
   std::vector<cv::Vec4i> hierarchy;
   cv::findContours(binary, contours, hierarchy, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
 
-  const double min_area_px = M_PI * params_.min_radius_px * params_.min_radius_px;
+  const double min_area_px = kPi * params_.min_radius_px * params_.min_radius_px;
   for (size_t i = 0; i < contours.size(); ++i) {
     // outer boundaries of white components that have holes (the ring's inside)
     if (hierarchy[i][3] >= 0 || hierarchy[i][2] < 0) continue;

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::vision::synthetic {
+
+using common::kPi;
 
 namespace {
 
@@ -117,7 +121,7 @@ void render_green_clutter(uint64_t seed, cv::Mat* image_bgr) {
     std::vector<cv::Point> poly;
     constexpr int kSpikes = 9;
     for (int i = 0; i < 2 * kSpikes; ++i) {
-      const double a = M_PI * i / kSpikes;
+      const double a = kPi * i / kSpikes;
       const double rr = (i % 2 == 0 ? 1.0 : 0.45) * r * rng.uniform(0.85, 1.15);
       poly.emplace_back(cvRound(c.x + rr * std::cos(a)), cvRound(c.y + rr * std::sin(a)));
     }

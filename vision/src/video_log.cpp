@@ -433,7 +433,6 @@ Result<std::unique_ptr<VideoLogReader>, VideoLogError> VideoLogReader::open(
 }
 
 size_t VideoLogReader::frame_count() const { return impl_->index.size(); }
-uint32_t VideoLogReader::codec_fourcc() const { return impl_->fourcc; }
 
 int64_t VideoLogReader::stamp_us(size_t index) const { return impl_->index.at(index).stamp_us; }
 

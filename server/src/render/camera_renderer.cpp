@@ -55,20 +55,6 @@ OffscreenSize required_offscreen_size(const std::vector<CameraConfig>& cameras) 
   return size;
 }
 
-CameraIntrinsics pinhole_intrinsics(int width_px, int height_px, double fovy_deg) {
-  // the frustum spans the image edges, h/2 pixels either side of the axis, at tan(fovy/2);
-  // OpenGL samples pixel centres at half-integers, so the axis falls at (w-1)/2, (h-1)/2 in OpenCV
-  // pixels
-  CameraIntrinsics k;
-  k.width_px = width_px;
-  k.height_px = height_px;
-  k.fy_px = 0.5 * height_px / std::tan(0.5 * fovy_deg * kPi / 180.0);
-  k.fx_px = k.fy_px;
-  k.cx_px = 0.5 * width_px - 0.5;
-  k.cy_px = 0.5 * height_px - 0.5;
-  return k;
-}
-
 struct CameraRenderer::Impl {
   const mjModel* m = nullptr;
   std::unique_ptr<GlContext> gl;
@@ -215,7 +201,7 @@ const std::string& CameraRenderer::gl_summary() const { return impl_->gl_summary
 
 CameraIntrinsics CameraRenderer::intrinsics(int index) const {
   const CameraSlot& cam = impl_->cameras.at(index);
-  return pinhole_intrinsics(cam.config.width_px, cam.config.height_px, cam.fovy_deg);
+  return CameraIntrinsics::from_fovy_deg(cam.config.width_px, cam.config.height_px, cam.fovy_deg);
 }
 
 bool CameraRenderer::due(const mjData* d, int index) const {
@@ -297,7 +283,7 @@ void CameraRenderer::render(mjData* d, int index, const RenderPasses& passes, Ca
   out->format = cam.config.format;
   out->width_px = w;
   out->height_px = h;
-  out->intrinsics = pinhole_intrinsics(w, h, cam.fovy_deg);
+  out->intrinsics = CameraIntrinsics::from_fovy_deg(w, h, cam.fovy_deg);
   out->position_enu_m = Eigen::Map<const Eigen::Vector3d>(d->cam_xpos + 3 * cam.id);
   // cam_xmat is row-major; its columns are MuJoCo's camera axes (x right, y up, looking along -z):
   // the OpenCV camera frame flips y and z

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "render/modalities.hpp"
+#include "uavsim/common/pinhole.hpp"
 
 namespace uavsim::server::render {
 
@@ -67,21 +68,9 @@ struct CameraConfig {
   std::optional<double> depth_max_m;
 };
 
-// Pinhole intrinsics in OpenCV's convention: pixel (u, v) has its centre at integer coordinates, u
-// to the right, v down, (0, 0) the centre of the top-left pixel; a point X_cam projects to u = fx *
-// X/Z + cx, v = fy * Y/Z + cy. No distortion.
-struct CameraIntrinsics {
-  double fx_px = 0.0;
-  double fy_px = 0.0;
-  double cx_px = 0.0;
-  double cy_px = 0.0;
-  int width_px = 0;
-  int height_px = 0;
-};
-
-// Intrinsics of MuJoCo's perspective camera: fovy is vertical, pixels are square, the optical axis
-// passes through the image centre. fy = (h/2) / tan(fovy/2), fx = fy, cx = (w-1)/2, cy = (h-1)/2.
-CameraIntrinsics pinhole_intrinsics(int width_px, int height_px, double fovy_deg);
+// The intrinsics a frame carries: the one pinhole model (common/pinhole.hpp) that vision projects with;
+// a MuJoCo camera's are PinholeIntrinsics::from_fovy_deg(width, height, fovy).
+using CameraIntrinsics = common::PinholeIntrinsics;
 
 // One rendered image and what a vision pipeline needs to use it.
 struct CameraFrame {

@@ -267,7 +267,7 @@ FrameService::FrameService(const mjModel_* m, const std::vector<CameraSetup>& ca
     const int id = mj_name2id(m, mjOBJ_CAMERA, c.config.camera.c_str());
     if (id < 0) throw std::invalid_argument("frames: the model has no camera named '" + c.config.camera + "'");
     const CameraIntrinsics k =
-        pinhole_intrinsics(f.width_px, f.height_px, c.config.fovy_deg.value_or(m->cam_fovy[id]));
+        CameraIntrinsics::from_fovy_deg(f.width_px, f.height_px, c.config.fovy_deg.value_or(m->cam_fovy[id]));
     f.fx_px = k.fx_px;
     f.fy_px = k.fy_px;
     f.cx_px = k.cx_px;

@@ -132,7 +132,7 @@ class CameraRendererTest : public ::testing::Test {
 TEST_F(CameraRendererTest, IntrinsicsFollowMujocosVerticalFovy) {
   // fy = (h/2) / tan(fovy/2) = 240 / tan(22.5 deg) = 579.41 px; square pixels; centre (w-1)/2,
   // (h-1)/2
-  const CameraIntrinsics k = pinhole_intrinsics(640, 480, 45.0);
+  const CameraIntrinsics k = CameraIntrinsics::from_fovy_deg(640, 480, 45.0);
   EXPECT_NEAR(k.fy_px, 579.411, 1e-3);
   EXPECT_DOUBLE_EQ(k.fx_px, k.fy_px);
   EXPECT_DOUBLE_EQ(k.cx_px, 319.5);

@@ -72,8 +72,8 @@ TEST(BalloonRendered, NothingInBalloonFreeArenaFrames) {
   int frames = 0, false_positives = 0;
   for (const uint64_t seed : {1u, 2u}) {
     RenderedWorld w = arena_without_balloons(seed);
-    BalloonDetector front({}, to_intrinsics(w.renderer->intrinsics(0)));
-    BalloonDetector overview({}, to_intrinsics(w.renderer->intrinsics(2)));
+    BalloonDetector front({}, w.renderer->intrinsics(0));
+    BalloonDetector overview({}, w.renderer->intrinsics(2));
     for_each_arena_frame(
         w, seed, [&](const server::render::CameraFrame& f, const std::string& what) {
           BalloonDetector& detector = f.camera_name == "overview" ? overview : front;
@@ -97,8 +97,8 @@ TEST(BalloonRendered, NothingInFramesOfTheTruck) {
   RenderedWorld w(
       "mbzirc2017.xml", 1,
       {camera("uav0_down", kWidthPx, kHeightPx), camera("overview", kWidthPx, kHeightPx)});
-  BalloonDetector down({}, to_intrinsics(w.renderer->intrinsics(0)));
-  BalloonDetector overview({}, to_intrinsics(w.renderer->intrinsics(1)));
+  BalloonDetector down({}, w.renderer->intrinsics(0));
+  BalloonDetector overview({}, w.renderer->intrinsics(1));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int frames = 0;

@@ -44,7 +44,7 @@ struct BalloonTruth {
 BalloonTruth balloon_truth(RenderedWorld& w, const server::render::CameraFrame& f,
                            const server::objects::BalloonState& b, int geom_id, int pole_id) {
   BalloonTruth t;
-  const PinholeIntrinsics k = to_intrinsics(f.intrinsics);
+  const PinholeIntrinsics k = f.intrinsics;
   const Eigen::Vector3d p_cam = to_pose(f).enu_to_cam(b.position_enu_m);
   t.range_m = p_cam.norm();
   t.in_front = p_cam.z() > b.radius_m;
@@ -106,7 +106,7 @@ TEST(BalloonRendered, DetectsAndRangesBalloonsFrom3To25m) {
   sky_and_shadows.flags.shadows = true;
   RenderedWorld w("mbzirc2020.xml", 1,
                   {camera("uav0_front", kWidthPx, kHeightPx), sky_and_shadows});
-  const PinholeIntrinsics k = to_intrinsics(w.renderer->intrinsics(0));
+  const PinholeIntrinsics k = w.renderer->intrinsics(0);
   BalloonDetector detector({}, k);
   std::vector<int> geoms, poles;
   for (int i = 0; i < kBalloons; ++i) {

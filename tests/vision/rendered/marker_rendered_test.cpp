@@ -105,7 +105,7 @@ TEST(MarkerRendered, LocatesMarkerOnTheDrivingTruckFrom10mWithTilt) {
       ++l.frames;
       const auto d = detector.detect(to_bgr(f));
       if (!d) continue;
-      const auto p = marker_position_enu(*d, to_intrinsics(f.intrinsics), to_pose(f),
+      const auto p = marker_position_enu(*d, f.intrinsics, to_pose(f),
                                          truth.deck_centre_enu_m.z());
       ASSERT_TRUE(p.has_value());
       ++l.detected;
@@ -127,7 +127,7 @@ TEST(MarkerRendered, LocatesMarkerOnTheDrivingTruckFrom10mWithTilt) {
 TEST(TrackKalmanRendered, TracksTheDrivingTruckAt7HzWith150msLatency) {
   RenderedWorld w("mbzirc2017.xml", 1, {camera("uav0_down", kWidthPx, kHeightPx)});
   const server::objects::Truck& truck = *w.objects.trucks.at(0);
-  const PinholeIntrinsics k = to_intrinsics(w.renderer->intrinsics(0));
+  const PinholeIntrinsics k = w.renderer->intrinsics(0);
   MarkerDetector detector;
   // the vision library's eight, from the world's numbers (uavsim:truck:track = 20 45 0 0 0)
   const server::objects::EightTrackParams& tp = truck.params().track;

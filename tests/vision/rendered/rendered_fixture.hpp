@@ -108,17 +108,6 @@ inline cv::Mat to_bgr(const render::CameraFrame& f) {
   return bgr;
 }
 
-inline PinholeIntrinsics to_intrinsics(const render::CameraIntrinsics& k) {
-  PinholeIntrinsics p;
-  p.fx_px = k.fx_px;
-  p.fy_px = k.fy_px;
-  p.cx_px = k.cx_px;
-  p.cy_px = k.cy_px;
-  p.width_px = k.width_px;
-  p.height_px = k.height_px;
-  return p;
-}
-
 inline CameraPose to_pose(const render::CameraFrame& f) {
   CameraPose p;
   p.position_enu_m = f.position_enu_m;

@@ -26,7 +26,7 @@ constexpr double kCentreTolShare = 0.05;  // of the radius
 
 TEST(VideoLogRendered, LogsRenderedFramesWithOverlaysAndReadsThemBack) {
   RenderedWorld w("mbzirc2020.xml", 1, {camera("uav0_front", 640, 480)});
-  const PinholeIntrinsics k = to_intrinsics(w.renderer->intrinsics(0));
+  const PinholeIntrinsics k = w.renderer->intrinsics(0);
   BalloonDetector detector({}, k);
   const Eigen::Vector3d balloon = w.objects.balloons->balloons().at(0).position_enu_m;
 

@@ -8,35 +8,15 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-#include <opencv2/core.hpp>
 #include <optional>
+
+#include "uavsim/common/pinhole.hpp"
 
 namespace uavsim::vision {
 
-// Pinhole intrinsics without distortion (the simulator renders an ideal pinhole).
-struct PinholeIntrinsics {
-  double fx_px = 0.0;
-  double fy_px = 0.0;
-  double cx_px = 0.0;
-  double cy_px = 0.0;
-  int width_px = 0;
-  int height_px = 0;
-
-  // Intrinsics of a centred camera with square pixels from its vertical field of view, as MuJoCo's
-  // <camera fovy> defines it: fy = (height / 2) / tan(fovy / 2).
-  static PinholeIntrinsics from_fovy(int width_px, int height_px, double fovy_rad);
-
-  // Projects a point in the camera frame to pixels. Precondition: p_cam_m.z() > 0.
-  Eigen::Vector2d project(const Eigen::Vector3d& p_cam_m) const;
-
-  // Unit ray in the camera frame through a pixel.
-  Eigen::Vector3d ray_cam(const Eigen::Vector2d& pixel_px) const;
-
-  // The 3x3 camera matrix K, for OpenCV calls.
-  cv::Matx33d camera_matrix() const;
-
-  bool contains(const Eigen::Vector2d& pixel_px) const;
-};
+// The pinhole model the renderer draws with (common/pinhole.hpp): one model, so what vision projects is
+// what was rendered.
+using PinholeIntrinsics = common::PinholeIntrinsics;
 
 // A camera's pose in the world: where its optical centre is and how its axes lie.
 struct CameraPose {

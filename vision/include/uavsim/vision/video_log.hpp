@@ -131,7 +131,6 @@ class VideoLogReader {
   ~VideoLogReader();
 
   size_t frame_count() const;
-  uint32_t codec_fourcc() const;
 
   // The frame at an index (seed 6.4's player seeks by index; every MJPEG frame is a keyframe).
   Result<VideoLogRecord, VideoLogError> read(size_t index);
