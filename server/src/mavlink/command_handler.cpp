@@ -181,6 +181,7 @@ void VehicleLink::handle_set_position_target_global(const msg::SetPositionTarget
   if ((m.type_mask & kPosMask) == 0) {
     const double lat = m.lat_int / 1e7, lon = m.lon_int / 1e7;
     if (!limits::valid_lat_lon(lat, lon) || !within(m.alt, limits::kPosition_m)) {
+      StatCounters::add(stats_.rejected_inputs);  // counted like the local setpoint's bad fields
       hold_position(fc);
       return;
     }
@@ -214,7 +215,15 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
     }
     t.rate_body_rad_s = frames::flu_from_frd(w_frd);
   }
-  if ((m.type_mask & 64) == 0 && std::isfinite(m.thrust)) t.thrust = std::clamp<double>(m.thrust, 0.0, 1.0);
+  if ((m.type_mask & 64) == 0) {
+    // a thrust the message says to use but that is no number: the whole target is refused, like a bad
+    // rate or quaternion (it once fell back to the previous thrust silently)
+    if (!std::isfinite(m.thrust)) {
+      StatCounters::add(stats_.rejected_inputs);
+      return;
+    }
+    t.thrust = std::clamp<double>(m.thrust, 0.0, 1.0);
+  }
   if (fc.set_attitude_target(t) != fc::CommandResult::kAccepted) StatCounters::add(stats_.rejected_inputs);
 }
 
