@@ -647,9 +647,10 @@ int main(int argc, char** argv) {
         sim_s = tick_s;
         launch.note_sim_time(sim_s);
         // the first tick 5 s after touchdown ends the run: it is not answered, so the clock stays at
-        // it until the launcher leaves the lockstep below. (Answered, the clock went on towards the
-        // armed pause_at while the leave was on its way, and where it stopped, 4 ms apart, depended
-        // on which came first: one run of a 100-seed sweep ended at 44.204 s, its twin at 44.200 s.)
+        // it, and is paused there, before the launcher leaves the lockstep below. (Answered, the
+        // clock went on towards the armed pause_at while the leave was on its way, and where it
+        // stopped, 4 ms apart, depended on which came first: one run of a 100-seed sweep ended at
+        // 44.204 s, its twin at 44.200 s.)
         if (landed_s >= 0 && tick_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
         if (!api.done(tick)) fail("the fault injector's done was refused");
       }
@@ -686,6 +687,13 @@ int main(int argc, char** argv) {
         break;
       }
     }
+    // Landed and 5 s on: the clock is held at that tick (unanswered). Pause it there before leaving.
+    // Leaving alone let the end depend on a race between two sockets: the ground-truth recorder,
+    // handling the same tick on its own connection, either still saw this client (answered, and the
+    // clock went on to the armed pause_at 8 ms later) or already saw it gone (left too, and the
+    // empty-lockstep pause held the clock at the tick): seed 10 of a 100-seed sweep ended at 44.4 s
+    // on SLURM and 44.408 s locally.
+    if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) (void)api.pause();
     (void)api.lockstep_leave();
     // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
     // stands)
