@@ -1,5 +1,6 @@
-// Vehicle proxy: MAVLink over TCP with our codec (uavsim/common/mavlink), per the ArduCopter wire
-// behaviour in the team's mavlink/behaviour.md. The only client source that speaks MAVLink.
+// Vehicle proxy: MAVLink over TCP with our codec (uavsim/common/mavlink), per ArduCopter's
+// behaviour on the wire, which the server's vehicles reproduce (docs/mavlink.md). The only client
+// source that speaks MAVLink.
 #include "uavsim/client/vehicle.hpp"
 
 #include <netinet/in.h>

@@ -36,11 +36,11 @@ class FlightController {
   void update(double time_s, const TruthState& truth, const airframe::BatteryState& battery,
               double* motor_cmd);
 
-  // --- commands (ArduCopter semantics; see shared mavlink/behaviour.md) ---
-  CommandResult arm(bool force);     // force skips the pre-arm checks (MAVLink param2 = 21196)
+  // --- commands (ArduCopter semantics, as MAVLink carries them: docs/mavlink.md §4) ---
+  CommandResult arm(bool force);  // force skips the pre-arm checks (MAVLink param2 = 2989 or 21196)
   CommandResult disarm(bool force);  // not forced: only on the ground
   CommandResult set_mode(Mode mode);
-  CommandResult takeoff(double altitude_above_home_m);  // GUIDED and armed, on the ground
+  CommandResult takeoff(double altitude_above_home_m);  // armed, landed, GUIDED/LOITER/ALT_HOLD
   CommandResult set_guided_target(const GuidedTarget& target);  // GUIDED only; velocity targets time out
   CommandResult set_attitude_target(const AttitudeTarget& target);  // GUIDED only
   // Holds a commanded heading (armed only): yaw_enu_rad absolute, or added to the current yaw target when

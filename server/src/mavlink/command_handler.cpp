@@ -1,6 +1,6 @@
 // Commands (COMMAND_LONG, COMMAND_INT, SET_MODE) and guided setpoints, with ArduCopter's semantics
-// (behaviour.md §4-5). Commands are read by the pure command mapper (command_mapper.hpp) and carried out
-// here; they are acked on the link they came from. Setpoints are never acked.
+// (docs/mavlink.md §4-5). Commands are read by the pure command mapper (command_mapper.hpp) and
+// carried out here; they are acked on the link they came from. Setpoints are never acked.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -227,7 +227,7 @@ MappedCommand map_command(const CommandArgs& c) {
 }
 
 std::uint8_t ack_result(const FcRequest& request, fc::CommandResult result) {
-  // ArduPilot answers a refused arm, disarm or take-off with FAILED (behaviour.md §4)
+  // ArduPilot answers a refused arm, disarm or take-off with FAILED (docs/mavlink.md §4)
   const bool failed_unless_accepted = std::holds_alternative<cmd::Arm>(request) ||
                                       std::holds_alternative<cmd::Disarm>(request) ||
                                       std::holds_alternative<cmd::Takeoff>(request);

@@ -1,6 +1,6 @@
 // The pure half of MAVLink commands: COMMAND_LONG, COMMAND_INT and SET_MODE read into a typed
 // request for the flight controller, the gimbal or the link, with every number range-checked on the
-// way (ArduCopter's semantics, behaviour.md §4). No sockets and no state: the endpoint's
+// way (ArduCopter's semantics, docs/mavlink.md §4). No sockets and no state: the endpoint's
 // VehicleLink maps a command here, carries the request out and acks with the result these functions
 // give. MAVLink's conventions (headings "0 = north, clockwise", degrees, SPEED_TYPE numbers,
 // lat/lon degE7) end here: the requests for the flight controller are in its own terms (ENU yaw,

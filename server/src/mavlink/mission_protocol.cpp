@@ -1,8 +1,9 @@
-// The MAVLink mission protocol over the flight controller's AUTO mission (behaviour.md §6): upload
-// (MISSION_COUNT -> MISSION_REQUEST[_INT] per item -> MISSION_ACK), download (MISSION_REQUEST_LIST ->
-// MISSION_COUNT, MISSION_REQUEST[_INT] -> MISSION_ITEM[_INT]), clear, set current, and DroneKit's guided goto
-// (MISSION_ITEM with current = 2). Item 0 is home, as in ArduPilot. Transfers are per client and time out in
-// sim time: an unanswered request is repeated after 1 s, the upload is cancelled after 8 s of silence.
+// The MAVLink mission protocol over the flight controller's AUTO mission (docs/mavlink.md §6.2):
+// upload (MISSION_COUNT -> MISSION_REQUEST[_INT] per item -> MISSION_ACK), download
+// (MISSION_REQUEST_LIST -> MISSION_COUNT, MISSION_REQUEST[_INT] -> MISSION_ITEM[_INT]), clear, set
+// current, and DroneKit's guided goto (MISSION_ITEM with current = 2). Item 0 is home, as in
+// ArduPilot. Transfers are per client and time out in sim time: an unanswered request is repeated
+// after 1 s, the upload is cancelled after 8 s of silence.
 #include <algorithm>
 #include <cmath>
 

@@ -1,5 +1,5 @@
-// One client's mission upload as a state machine (behaviour.md §6): MISSION_COUNT opens it, each
-// MISSION_ITEM[_INT] in sequence is taken and the next one requested, the last one hands the
+// One client's mission upload as a state machine (docs/mavlink.md §6.2): MISSION_COUNT opens it,
+// each MISSION_ITEM[_INT] in sequence is taken and the next one requested, the last one hands the
 // mission to the flight controller; an unanswered request is repeated after 1 s of sim time, the
 // upload is cancelled after 8 s without an item. Pure: events in (with sim time), steps out; the
 // link sends what a step asks for and reads each item (MAVLink -> fc::MissionItem) when the machine

@@ -1,7 +1,8 @@
-// The parameter protocol over the flight controller's live parameter table (behaviour.md §6): values as
-// float casts with the parameter's own param_type (INT8/INT16/INT32/REAL32, as ArduPilot sends them),
-// param_index = the FC's fixed order, unknown names and non-finite values ignored as ArduPilot does; an
-// integer parameter keeps the whole part of a value set (1.7 -> 1), whatever param_type the setter sent.
+// The parameter protocol over the flight controller's live parameter table (docs/mavlink.md §6.1):
+// values as float casts with the parameter's own param_type (INT8/INT16/INT32/REAL32, as ArduPilot
+// sends them), param_index = the FC's fixed order, unknown names and non-finite values ignored as
+// ArduPilot does; an integer parameter keeps the whole part of a value set (1.7 -> 1), whatever
+// param_type the setter sent.
 #include <cmath>
 
 #include "mavlink/vehicle_link.hpp"

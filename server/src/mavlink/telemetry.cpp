@@ -1,11 +1,13 @@
-// Telemetry: the messages the vehicle streams (when, per client: telemetry_schedule.hpp) and sends on request.
-// Every time_boot_ms / time_usec is simulation time since start, as in SITL (behaviour.md §8), and every
-// value comes from the flight controller's estimate, never from ground truth.
+// Telemetry: the messages the vehicle streams (when, per client: telemetry_schedule.hpp) and sends
+// on request. Every time_boot_ms / time_usec is simulation time since start, as in SITL
+// (docs/mavlink.md §8), and every value comes from the flight controller's estimate, never from
+// ground truth.
 //
-// Stream groups follow ArduCopter's REQUEST_DATA_STREAM groups (behaviour.md §4). Default rates per client:
-// EXTENDED_STATUS 2 Hz, POSITION 4 Hz, EXTRA1 4 Hz, EXTRA2 4 Hz, EXTRA3 2 Hz, HEARTBEAT 1 Hz. ArduPilot's own
-// SRx_ defaults are [UNVERIFIED] in behaviour.md; these are what a MAVProxy-driven SITL link carries (MAVProxy
-// requests 4 Hz on connect), so a client that never asks for anything still sees every vehicle message.
+// Stream groups follow ArduCopter's REQUEST_DATA_STREAM groups (docs/mavlink.md §9). Default rates
+// per client: EXTENDED_STATUS 2 Hz, POSITION 4 Hz, EXTRA1 4 Hz, EXTRA2 4 Hz, EXTRA3 2 Hz, HEARTBEAT
+// 1 Hz. ArduPilot sets its rates per serial port (SRn_ parameters); these are about what a
+// MAVProxy-driven SITL link carries (MAVProxy asks for the groups on connect), so a client that
+// never asks still sees every vehicle message.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -97,8 +99,8 @@ msg::Heartbeat VehicleLink::heartbeat() const {
   msg::Heartbeat h;
   h.type = mav_type_;
   h.autopilot = field<std::uint8_t>(MavAutopilot::Ardupilotmega);
-  // CUSTOM_MODE_ENABLED | STABILIZE_ENABLED | MANUAL_INPUT_ENABLED always; GUIDED_ENABLED when the horizontal
-  // position controller runs; SAFETY_ARMED when armed (behaviour.md §1)
+  // CUSTOM_MODE_ENABLED | STABILIZE_ENABLED | MANUAL_INPUT_ENABLED always; GUIDED_ENABLED when the
+  // horizontal position controller runs; SAFETY_ARMED when armed (docs/mavlink.md §1)
   h.base_mode = field<std::uint8_t>(
       {MavModeFlag::CustomModeEnabled, MavModeFlag::StabilizeEnabled, MavModeFlag::ManualInputEnabled});
   const bool ne_control = mode == fc::Mode::kGuided || mode == fc::Mode::kAuto || mode == fc::Mode::kLoiter ||

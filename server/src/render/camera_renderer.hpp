@@ -25,8 +25,8 @@ enum class PixelFormat {
   kGrey8,  // 1 byte per pixel, luma Y = 0.299 R + 0.587 G + 0.114 B (ITU-R BT.601)
 };
 
-// What MuJoCo draws; every effect costs frame rate (DESIGN.md: 640x480 on OSMesa renders at 166 fps
-// with all of these off, 51 fps with shadows and reflections, 27 fps with 4x MSAA), so all default
+// What MuJoCo draws; every effect costs frame rate (MuJoCo's defaults, all of these on, make a
+// 640x480 OSMesa frame about 5-6 times as costly: docs/results/cameras.md), so all default
 // to off.
 struct RenderFlags {
   bool shadows = false;

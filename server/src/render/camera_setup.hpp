@@ -1,7 +1,7 @@
 // Which cameras a world has and how each is rendered (docs/protocol.md "Camera frames"): every named MJCF
 // camera, configured by the world's custom text
 //   <text name="uavsim:camera:CAMNAME" data="width=640 height=480 fps=15 shadows=0 reflections=0 skybox=0 msaa=0"/>
-// (every key optional; defaults 640 x 480 at 15 fps, all effects off: DESIGN.md's frame-rate figures;
+// (every key optional; default 640 x 480 at 15 fps, effects off for speed: docs/results/cameras.md;
 // field conditions: noise=SD brightness=SD latency_ms=MS, all 0 by default),
 // what it gives: modalities=rgb+grey+depth+segmentation (default rgb+grey; depth field conditions
 // depth_noise=M depth_dropout=P depth_max_m=M, all off by default),

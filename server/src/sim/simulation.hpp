@@ -3,8 +3,8 @@
 // integer number of physics steps) the control phases first (camera capture, the API's gate, the queued
 // vehicle tasks in vehicle order, each vehicle's flight controller, what reads the result), then the
 // physics phases (wind, world objects, rotor forces, mj_step, the non-finite-state rule, contacts), so
-// inputs take effect at control-step boundaries in a fixed order, never in arrival order (DESIGN.md:
-// determinism). The same world, seed and inputs give bit-identical trajectories.
+// inputs take effect at control-step boundaries in a fixed order, never in arrival order
+// (docs/architecture.md, "One clock"); same world, seed and inputs: bit-identical trajectories.
 // Parking (physics/world.hpp): a disarmed vehicle with its motors stopped that has stood still on static
 // geometry for kParkAfter_s is parked (held exactly, no contact constraints; its flight controller and
 // sensors run on, seeing a vehicle at rest), as is every vehicle that starts on the ground; it wakes when

@@ -1,4 +1,5 @@
-// The endpoint's protocol behaviour over loopback, against behaviour.md (ArduCopter SITL on the wire).
+// The endpoint's protocol behaviour over loopback, against docs/mavlink.md (ArduCopter SITL on the
+// wire).
 #include <cmath>
 
 #include "test_gcs.hpp"

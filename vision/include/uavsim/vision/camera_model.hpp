@@ -1,9 +1,9 @@
 // Pinhole camera model and camera poses in the world (ENU) frame.
 //
-// Frames (STYLE.md section 2): `cam` is the OpenCV convention (x right, y down, z forward); `enu`
-// is the MuJoCo world (z up); `body` is FLU. Pixel coordinates follow OpenCV: the centre of the
-// top-left pixel is (0, 0), so the optical axis of a centred camera is at ((width - 1) / 2, (height
-// - 1) / 2). All functions are pure and thread-safe.
+// Frames (docs/development.md, "Code conventions"): `cam` is the OpenCV convention (x right, y
+// down, z forward); `enu` is the MuJoCo world (z up); `body` is FLU. Pixel coordinates follow
+// OpenCV: the centre of the top-left pixel is (0, 0), so the optical axis of a centred camera is at
+// ((width - 1) / 2, (height - 1) / 2). All functions are pure and thread-safe.
 #pragma once
 
 #include <Eigen/Core>

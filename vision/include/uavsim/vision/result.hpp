@@ -1,5 +1,5 @@
-// A small expected-like result type for the vision library (STYLE.md section 4: expected runtime
-// failures are values, not exceptions). C++20 has no std::expected yet.
+// An expected-like result type for the vision library: expected runtime failures are values, not
+// exceptions (docs/development.md, "Code conventions"). C++20 has no std::expected yet.
 #pragma once
 
 #include <cassert>
