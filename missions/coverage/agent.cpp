@@ -107,11 +107,13 @@ const char* agent_state_name(AgentState s) {
   return "?";
 }
 
-Agent::Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m)
+Agent::Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m,
+             const FrameFit& frames)
     : config_(config),
       id_(id),
       home_enu_m_(home_enu_m),
       origin_{config.origin_x_m, config.origin_y_m},
+      frames_(frames),
       adb_(id,
            [base = config.max_age_base_s, per_hop = config.max_age_per_hop_s](int hops) {
              return static_cast<int>(1000.0 * (base + per_hop * std::max(hops, 0)));
@@ -313,20 +315,22 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
     if (!records.empty()) {
       record_cursor_ %= records.size();
       auto it = std::next(records.begin(), static_cast<long>(record_cursor_));
-      for (size_t k = 0; k < std::min(records.size(), static_cast<size_t>(kRecordsPerBeacon));
-           ++k) {
+      const size_t window = std::min(
+          records.size(),
+          static_cast<size_t>(std::clamp(frames_.beacon_records, 1, kMaxRecordsPerBeacon)));
+      for (size_t k = 0; k < window; ++k) {
         b.records.push_back(it->second);
         if (++it == records.end()) it = records.begin();
       }
       record_cursor_ += b.records.size();
     }
-    out.broadcast.push_back(encode_beacon(b, origin_));
+    out.broadcast.push_back(encode_beacon(b, origin_, frames_));
   }
   // aggregation messages after the beacon, paced (radio_pacer.hpp): the next copy only once the
   // last one has gone out
   if (aggregate_pacer_.idle()) {
     if (auto m = aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s))
-      aggregate_pacer_.push(encode_aggregate(*m));
+      aggregate_pacer_.push(encode_aggregate(*m, frames_));
   }
   for (Frame& f : aggregate_pacer_.take(dt_s_)) out.broadcast.push_back(std::move(f));
 }

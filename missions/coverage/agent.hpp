@@ -83,8 +83,11 @@ struct AgentOutputs {
 
 class Agent {
  public:
-  // config must validate(); id in [0, kMaxAgents); home is the take-off point (world ENU).
-  Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m);
+  // config must validate(); id in [0, kMaxAgents); home is the take-off point (world ENU); frames:
+  // the radio's frame size (fit_frames() of the channel's largest frame; the default is 802.15.4's
+  // 127 bytes).
+  Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_enu_m,
+        const FrameFit& frames = FrameFit{});
 
   // (inputs at now_s) => (setpoint, frames). Call at a fixed rate (10-20 Hz).
   AgentOutputs step(const AgentInputs& in);
@@ -148,6 +151,7 @@ class Agent {
   int id_;
   Eigen::Vector2d home_enu_m_;
   RadioFrameOrigin origin_;
+  FrameFit frames_;
   AgentsDatabase adb_;
   AreaParts own_;
   AggregationNode aggregation_;

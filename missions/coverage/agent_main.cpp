@@ -104,6 +104,7 @@ struct Flyer {
   int id = 0;
   std::unique_ptr<Vehicle> vehicle;
   std::unique_ptr<RadioLink> radio;
+  FrameFit frames;               // the flock's frames fitted to the radio's largest
   std::unique_ptr<GcsLink> gcs;  // the optimised variant's link to the ground station
   std::unique_ptr<Agent> agent;
   AgentState last_state = AgentState::kTakingOff;
@@ -272,6 +273,14 @@ int main(int argc, char** argv) {
       log(f.id, "radio: " + error);
       return 1;
     }
+    // every frame sized from what the channel carries (127 bytes on the simple channel, 116 on
+    // ns3's lr-wpan)
+    const auto fit = fit_frames(f.radio->max_frame_bytes(), &error);
+    if (!fit) {
+      log(f.id, "radio: " + error);
+      return 1;
+    }
+    f.frames = *fit;
     if (!gcs_ports.empty()) {
       // the vehicle calls the station (its port learns our address from the first packet)
       f.gcs = GcsLink::open(
@@ -300,7 +309,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     const Eigen::Vector2d home = f.vehicle->telemetry().position_enu_m.head<2>();
-    f.agent = std::make_unique<Agent>(config, f.id, home);
+    f.agent = std::make_unique<Agent>(config, f.id, home, f.frames);
     f.reported = AreaParts(config.stripe_count());
     f.sent_to_gcs = AreaParts(config.stripe_count());
     char buf[128];

@@ -18,8 +18,12 @@ namespace uavsim::missions::coverage {
 class RadioLink {
  public:
   virtual ~RadioLink() = default;
-  // Puts a frame (1-127 bytes) on air to every agent in range; false if the radio refused it.
+  // Puts a frame (1 to max_frame_bytes() bytes) on air to every agent in range; false if the
+  // radio refused it.
   virtual bool broadcast(const Frame& frame) = 0;
+  // The largest frame the radio carries (bytes; 127 for 802.15.4 without a MAC header, fewer
+  // with one).
+  virtual size_t max_frame_bytes() const = 0;
   // The frames heard since the last call, in order of arrival.
   virtual std::vector<Frame> take_received() = 0;
   // Frames refused by the radio so far (queue full, ...).

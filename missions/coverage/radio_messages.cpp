@@ -10,6 +10,11 @@ namespace {
 constexpr size_t kBeaconHeaderBytes = 14;
 constexpr size_t kRecordBytes = 14;
 constexpr size_t kAggregateHeaderBytes = 29;
+constexpr size_t kRunHeaderBytes = 2;  // a run's repeat and interval count
+constexpr size_t kIntervalBytes = 4;
+static_assert(kMinFrameBytes == kAggregateHeaderBytes + kRunHeaderBytes + kIntervalBytes);
+static_assert(kMinFrameBytes >= kBeaconHeaderBytes + kRecordBytes);
+static_assert(kBeaconHeaderBytes + kMaxRecordsPerBeacon * kRecordBytes <= kMaxFrameBytes);
 constexpr int kMaxFragments = 255;
 constexpr unsigned kFlagGoingHome = 1;
 constexpr unsigned kFlagLanded = 2;
@@ -154,6 +159,22 @@ bool read_runs(Reader& r, int first, int count,
 
 }  // namespace
 
+std::optional<FrameFit> fit_frames(size_t channel_max_bytes, std::string* error) {
+  if (channel_max_bytes < kMinFrameBytes) {
+    if (error) {
+      *error = "the radio carries at most " + std::to_string(channel_max_bytes) +
+               " bytes a frame; the flock's messages need at least " +
+               std::to_string(kMinFrameBytes);
+    }
+    return std::nullopt;
+  }
+  FrameFit fit;
+  fit.max_frame_bytes = std::min(channel_max_bytes, kMaxFrameBytes);
+  fit.beacon_records = static_cast<int>(std::min(
+      (fit.max_frame_bytes - kBeaconHeaderBytes) / kRecordBytes, size_t{kMaxRecordsPerBeacon}));
+  return fit;
+}
+
 std::optional<MessageType> message_type(const Frame& f) {
   if (f.empty()) return std::nullopt;
   if (f[0] == static_cast<uint8_t>(MessageType::kBeacon)) return MessageType::kBeacon;
@@ -161,7 +182,7 @@ std::optional<MessageType> message_type(const Frame& f) {
   return std::nullopt;
 }
 
-Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin) {
+Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin, const FrameFit& fit) {
   Frame f;
   Writer w{f};
   w.u8(static_cast<unsigned>(MessageType::kBeacon));
@@ -169,7 +190,13 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin) {
   w.u8((b.going_home ? kFlagGoingHome : 0u) | (b.self.landed ? kFlagLanded : 0u) |
        ((b.round % kRounds) << kRoundShift) | (b.homebound ? kFlagHomebound : 0u));
   write_state(w, b.self, origin);
-  const size_t n = std::min(b.records.size(), static_cast<size_t>(kRecordsPerBeacon));
+  // the records asked for, and no more than fit the frame
+  const size_t room =
+      (std::clamp(fit.max_frame_bytes, kMinFrameBytes, kMaxFrameBytes) - kBeaconHeaderBytes) /
+      kRecordBytes;
+  const size_t n =
+      std::min({b.records.size(), room,
+                static_cast<size_t>(std::clamp(fit.beacon_records, 0, kMaxRecordsPerBeacon))});
   w.u8(static_cast<unsigned>(n));
   for (size_t i = 0; i < n; ++i) {
     const AgentRecord& r = b.records[i];
@@ -195,7 +222,7 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
   b.homebound = (flags & kFlagHomebound) != 0;
   read_state(r, b.self, origin);
   const unsigned n = r.u8();
-  if (n > kRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes)
+  if (n > kMaxRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes)
     return std::nullopt;
   if (b.self.id >= kMaxAgents) return std::nullopt;
   for (unsigned i = 0; i < n; ++i) {
@@ -213,8 +240,11 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
   return b;
 }
 
-std::vector<Frame> encode_aggregate(const AggregateMessage& m) {
-  const std::vector<Run> runs = apd_runs(m.apd, (kMaxFrameBytes - kAggregateHeaderBytes - 2) / 4);
+std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& fit) {
+  // frames of [kMinFrameBytes, kMaxFrameBytes] (fit_frames' range), so one interval always fits
+  const size_t max_bytes = std::clamp(fit.max_frame_bytes, kMinFrameBytes, kMaxFrameBytes);
+  const std::vector<Run> runs =
+      apd_runs(m.apd, (max_bytes - kAggregateHeaderBytes - kRunHeaderBytes) / kIntervalBytes);
   // fragments: as many runs as fit the frame after the header
   std::vector<Frame> frames;
   std::vector<std::pair<int, int>> stripe_range;  // first, count of each fragment
@@ -224,8 +254,9 @@ std::vector<Frame> encode_aggregate(const AggregateMessage& m) {
     Writer w{body};
     const int first = runs.empty() ? 0 : runs[i].first;
     int count = 0;
-    while (i < runs.size() &&
-           kAggregateHeaderBytes + body.size() + 2 + 4 * runs[i].dm.size() <= kMaxFrameBytes) {
+    while (i < runs.size() && kAggregateHeaderBytes + body.size() + kRunHeaderBytes +
+                                      kIntervalBytes * runs[i].dm.size() <=
+                                  max_bytes) {
       write_run(w, runs[i]);
       count += runs[i].repeat;
       ++i;

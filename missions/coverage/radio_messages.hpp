@@ -1,7 +1,11 @@
 // The flock's radio messages in 802.15.4 frames of at most 127 bytes (the thesis the project
-// descends from, sections 3.3, 3.4 and 6.2). Little-endian, fixed point:
+// descends from, sections 3.3, 3.4 and 6.2), or fewer where the channel says so: a channel that
+// accounts for the MAC header carries at most 116 (uavsim::client::A2aRadio::max_frame_bytes()),
+// and the encoders fit every frame to the size they are given (FrameFit). Little-endian, fixed
+// point:
 //
-//   beacon (8 per second, section 3.3), 14 + 14 * n bytes, n <= 8:
+//   beacon (8 per second, section 3.3), 14 + 14 * n bytes, n <= 8 and within the frame size (8 in
+//   127 bytes, 7 in 116):
 //     u8 type = 1 | u8 sender | u8 flags | u16 seq | i16 x_dm | i16 y_dm |
 //     u16 heading (2 pi / 65536) | i8 vx (0.1 m/s) | i8 vy | u8 n | n records:
 //       u8 id | u16 seq | i16 x_dm | i16 y_dm | u16 heading | i8 vx | i8 vy | u8 hops | u16 age_ms
@@ -10,7 +14,7 @@
 //   homebound (in Going Home, of whichever round: flying home or landing). A record's hops byte
 //   carries that agent's landed flag in bit 7.
 //   A full ADB of 25 agents does not fit one frame; each beacon carries the next n records of the
-//   ADB in turn (a rotating window), so a full copy crosses every hop in ceil(size / 8) beacons.
+//   ADB in turn (a rotating window), so a full copy crosses every hop in ceil(size / n) beacons.
 //   Algorithm 1 merges record by record, so a partial copy is merged exactly like a full one; the
 //   allowed ages (Algorithm 2) are set to cover the rotation.
 //
@@ -31,6 +35,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -39,10 +44,28 @@
 
 namespace uavsim::missions::coverage {
 
+// The largest frame of the layout: 802.15.4's 127-byte PHY payload.
 inline constexpr size_t kMaxFrameBytes = 127;
-inline constexpr int kRecordsPerBeacon = 8;
+// The most ADB records a beacon carries (8 in a 127-byte frame, as the thesis's flock sent).
+inline constexpr int kMaxRecordsPerBeacon = 8;
+// The smallest frame the flock can talk in: an aggregation fragment's header (29 bytes) and one
+// stripe's run of one interval (6). A beacon with one record (28 bytes) fits too.
+inline constexpr size_t kMinFrameBytes = 35;
 
 using Frame = std::vector<uint8_t>;
+
+// The flock's frames fitted to a channel: the largest frame its encoders write, and the ADB
+// records a beacon carries.
+struct FrameFit {
+  size_t max_frame_bytes = kMaxFrameBytes;
+  int beacon_records = kMaxRecordsPerBeacon;
+};
+
+// The fit for a channel whose frames carry at most channel_max_bytes: up to kMaxFrameBytes of
+// them (the layout is 802.15.4's; a channel allowing more is used up to 127), as many records a
+// beacon as fit, at most kMaxRecordsPerBeacon. Nothing, with the reason in *error, when
+// channel_max_bytes is under kMinFrameBytes.
+std::optional<FrameFit> fit_frames(size_t channel_max_bytes, std::string* error);
 
 enum class MessageType : uint8_t { kBeacon = 1, kAggregate = 2 };
 
@@ -54,7 +77,7 @@ struct Beacon {
   bool going_home = false;
   uint8_t round = 0;                 // [0, kRounds)
   bool homebound = false;            // the sender is in Going Home (flying home or landing)
-  std::vector<AgentRecord> records;  // at most kRecordsPerBeacon
+  std::vector<AgentRecord> records;  // at most FrameFit::beacon_records
 };
 
 // Positions are sent relative to (origin_x_m, origin_y_m).
@@ -63,11 +86,16 @@ struct RadioFrameOrigin {
   double y_m = 0.0;
 };
 
-Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin);
+// The beacon with its first fit.beacon_records records (the rest are not sent), at most
+// fit.max_frame_bytes long. fit comes from fit_frames().
+Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin, const FrameFit& fit);
+// A beacon of any fit (up to kMaxFrameBytes); nothing when the frame is malformed.
 std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& origin);
 
-// One message as one or more frames (each <= kMaxFrameBytes).
-std::vector<Frame> encode_aggregate(const AggregateMessage& m);
+// One message as one or more frames, each at most fit.max_frame_bytes long (at most
+// (fit.max_frame_bytes - 31) / 4 intervals a stripe are sent: 24 in 127 bytes, 21 in 116; the
+// rest dropped, so a message claims less, never more). fit comes from fit_frames().
+std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& fit);
 
 // The first byte of a frame, if it is one of ours.
 std::optional<MessageType> message_type(const Frame& f);

@@ -30,6 +30,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -86,6 +87,8 @@ struct Options {
   double radio_range_m = 150.0;
   double line_spacing_m = WorldSpec{}.line_spacing_m;
   double radio_loss = 0.0;
+  // the server's radio channel (--radio-backend): simple (closed form) or ns3 (ns-3's 802.15.4)
+  std::string radio_backend = "simple";
   std::vector<std::pair<double, int>> kills;  // (sim time, agent)
   int per_process = 1;
   double budget_s = 3000.0;
@@ -117,7 +120,9 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --kill A@T          kill agent A at sim time T (repeatable; e.g. the leader: 0@60)
   --radio-range M     radio range (default 150 m)
   --line-spacing M    distance between neighbours on the take-off line (3-100, default 7 m)
-  --radio-loss P      probability that a frame heard in range is lost (0-1, default 0)
+  --radio-loss P      probability that a frame heard in range is lost (0-1, default 0; simple only)
+  --radio-backend B   the radio channel: simple (default: closed form) or ns3 (ns-3's 802.15.4:
+                      CSMA-CA, SINR; 116-byte frames, which the agents fit their messages to)
   --per-process K     agents per coverage-agent process (default 1)
   --budget S          sim-time limit (default 3000)
   --wall-limit S      wall-clock safety bound (default 3600)
@@ -224,6 +229,9 @@ int main(int argc, char** argv) {
       o.line_spacing_m = v;
     } else if (a == "--radio-loss" && number(val, 0, 1, &v)) {
       o.radio_loss = v;
+    } else if (a == "--radio-backend" &&
+               (std::strcmp(val, "simple") == 0 || std::strcmp(val, "ns3") == 0)) {
+      o.radio_backend = val;
     } else if (a == "--gcs-cut" && number(val, 0, 1e6, &v)) {
       o.gcs_cut_s = v;
     } else if (a == "--gcs-loss" && number(val, 0, 1, &v)) {
@@ -357,6 +365,8 @@ int main(int argc, char** argv) {
   double first_takeoff_s = -1, last_touchdown_s = -1, sim_s = 0;
   Json summary;
   std::vector<Json> vehicles_end;
+  // the radio channel's counters at the end, summed over vehicles and links (radio_stats)
+  Json radio_end = Json::object();
   std::vector<Json> gcs_links;
   std::map<int, int> station_port;  // vehicle -> the ground station's UDP port for its link
   RecoveryMeter recovery(stripes, config.width_y_m,
@@ -502,8 +512,8 @@ int main(int argc, char** argv) {
     }
   });
   // cameras only for the video: the world's overview camera, which the agents never see
-  std::vector<std::string> server_args{"--seed", std::to_string(o.seed), "--models-dir",
-                                       o.models_dir};
+  std::vector<std::string> server_args{"--seed",     std::to_string(o.seed), "--models-dir",
+                                       o.models_dir, "--radio-backend",      o.radio_backend};
   if (o.record.empty()) {
     server_args.push_back("--no-cameras");
   } else {
@@ -616,9 +626,10 @@ int main(int argc, char** argv) {
         char buf[256];
         std::snprintf(buf, sizeof buf,
                       "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                      "radio range %.0f m loss %.2f, seed %llu%s",
-                      o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob, o.radio_range_m,
-                      o.radio_loss, static_cast<unsigned long long>(o.seed),
+                      "radio %s range %.0f m loss %.2f, seed %llu%s",
+                      o.agents, o.length_x_m, o.width_y_m, stripes, o.failure_prob,
+                      o.radio_backend.c_str(), o.radio_range_m, o.radio_loss,
+                      static_cast<unsigned long long>(o.seed),
                       o.gcs ? ", with a ground station" : "");
         say(buf);
       }
@@ -637,6 +648,21 @@ int main(int argc, char** argv) {
       if (auto v = api.request({{"op", "vehicles"}})) {
         sim_s = v->value("time_s", sim_s);
         for (const Json& x : (*v)["vehicles"]) vehicles_end.push_back(x);
+      }
+      // what the radio channel did: frames sent, refused, delivered, lost
+      if (auto r = api.request({{"op", "radio_stats"}})) {
+        Json totals = {{"backend", r->value("backend", "")},
+                       {"max_frame_bytes", r->value("max_frame_bytes", 0)}};
+        auto sum = [&totals](const Json& rows, std::initializer_list<const char*> fields) {
+          for (const char* f : fields) {
+            uint64_t n = 0;
+            for (const Json& row : rows) n += row.value(f, uint64_t{0});
+            totals[f] = n;
+          }
+        };
+        sum((*r)["vehicles"], {"transmitted", "refused", "channel_access_failures"});
+        sum((*r)["links"], {"sent", "delivered", "lost", "collided", "out_of_range", "no_ack"});
+        radio_end = std::move(totals);
       }
       // what the relay did to each GCS link
       for (int i = 0; o.gcs && i < o.agents; ++i) {
@@ -904,6 +930,18 @@ int main(int argc, char** argv) {
           100.0 * recovery.recovered_fraction(), 100.0 * recovery.lost_at_failures_fraction());
     }
   }
+  if (radio_end.contains("transmitted")) {
+    std::printf(
+        "radio (%s, frames of at most %d bytes): %llu frames sent, %llu refused, %llu "
+        "channel-access "
+        "failures; %llu delivered, %llu lost\n",
+        radio_end["backend"].get<std::string>().c_str(), radio_end["max_frame_bytes"].get<int>(),
+        static_cast<unsigned long long>(radio_end["transmitted"].get<uint64_t>()),
+        static_cast<unsigned long long>(radio_end["refused"].get<uint64_t>()),
+        static_cast<unsigned long long>(radio_end["channel_access_failures"].get<uint64_t>()),
+        static_cast<unsigned long long>(radio_end["delivered"].get<uint64_t>()),
+        static_cast<unsigned long long>(radio_end["lost"].get<uint64_t>()));
+  }
   std::printf("sim time: %.1f s, wall time: %.1f s, speed %.1fx real time\n", sim_s, wall_s(),
               wall_s() > 0 ? sim_s / wall_s() : 0.0);
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
@@ -927,6 +965,8 @@ int main(int argc, char** argv) {
     summary["failure_prob"] = o.failure_prob;
     summary["radio_range_m"] = o.radio_range_m;
     summary["radio_loss"] = o.radio_loss;
+    summary["radio_backend"] = o.radio_backend;
+    summary["radio"] = radio_end;
     summary["line_spacing_m"] = o.line_spacing_m;
     summary["thesis_flocking"] = o.thesis_flocking;
     summary["gcs"] = o.gcs;

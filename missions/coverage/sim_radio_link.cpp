@@ -10,6 +10,7 @@ class SimRadioLink : public RadioLink {
  public:
   explicit SimRadioLink(std::unique_ptr<client::A2aRadio> radio) : radio_(std::move(radio)) {}
   bool broadcast(const Frame& frame) override { return radio_->send(frame).ok(); }
+  size_t max_frame_bytes() const override { return radio_->max_frame_bytes(); }
   std::vector<Frame> take_received() override {
     std::vector<Frame> out;
     for (client::RadioFrame& f : radio_->take_received()) out.push_back(std::move(f.data));

@@ -1,12 +1,19 @@
-// The flock's radio frames: beacons and fragmented aggregation messages within 127 bytes.
+// The flock's radio frames: beacons and fragmented aggregation messages within 127 bytes, or
+// within the channel's smaller frame (116 bytes on the ns3 backend).
 #include "radio_messages.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace uavsim::missions::coverage {
 namespace {
+
+// 802.15.4's whole frame (the simple channel), and lr-wpan's with its MAC header (the ns3 channel)
+const FrameFit k127 = FrameFit{};
+constexpr size_t kNs3FrameBytes = 116;
 
 TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
   const RadioFrameOrigin o{100.0, -50.0};
@@ -14,8 +21,8 @@ TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
   b.self = {3, 65000, 123.45, -40.0, -1.5, 4.9, -0.3, 0, 0};
   b.going_home = true;
   for (int i = 0; i < 9; ++i) b.records.push_back({10 + i, 7, 200.0 + i, 0.0, 3.1, 0, 0, 2, 1500});
-  const Frame f = encode_beacon(b, o);
-  EXPECT_EQ(f.size(), 14u + 14u * kRecordsPerBeacon);  // 126: at most 8 records
+  const Frame f = encode_beacon(b, o, k127);
+  EXPECT_EQ(f.size(), 14u + 14u * kMaxRecordsPerBeacon);  // 126: at most 8 records
   EXPECT_LE(f.size(), kMaxFrameBytes);
   const auto d = decode_beacon(f, o);
   ASSERT_TRUE(d);
@@ -42,7 +49,7 @@ TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
   AgentRecord far{7, 3, 0.0, 0.0, 0.0, 0, 0, 127, 200, true};
   AgentRecord flying{8, 4, 0.0, 0.0, 0.0, 0, 0, 3, 100, false};
   b.records = {far, flying};
-  const auto d = decode_beacon(encode_beacon(b, o), o);
+  const auto d = decode_beacon(encode_beacon(b, o, k127), o);
   ASSERT_TRUE(d);
   EXPECT_FALSE(d->going_home);
   EXPECT_TRUE(d->self.landed);
@@ -55,14 +62,14 @@ TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
   // rounds wrap in 3 bits; the going-home bit stays its own
   b.round = kRounds + 1;
   b.going_home = true;
-  const auto w = decode_beacon(encode_beacon(b, o), o);
+  const auto w = decode_beacon(encode_beacon(b, o, k127), o);
   ASSERT_TRUE(w);
   EXPECT_EQ(w->round, 1);
   EXPECT_TRUE(w->going_home);
   EXPECT_FALSE(w->homebound);
   // homebound is its own bit too: the round and the other flags stay
   b.homebound = true;
-  const auto h = decode_beacon(encode_beacon(b, o), o);
+  const auto h = decode_beacon(encode_beacon(b, o, k127), o);
   ASSERT_TRUE(h);
   EXPECT_TRUE(h->homebound);
   EXPECT_EQ(h->round, 1);
@@ -73,11 +80,11 @@ TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
 TEST(RadioMessages, MalformedBeaconsAreRejected) {
   Beacon b;
   b.self.id = 1;
-  Frame f = encode_beacon(b, {});
+  Frame f = encode_beacon(b, {}, k127);
   f.push_back(0);  // length disagrees with the count
   EXPECT_FALSE(decode_beacon(f, {}));
   EXPECT_FALSE(decode_beacon(Frame{1, 2, 3}, {}));
-  f = encode_beacon(b, {});
+  f = encode_beacon(b, {}, k127);
   f[1] = 200;  // id beyond kMaxAgents
   EXPECT_FALSE(decode_beacon(f, {}));
 }
@@ -93,7 +100,7 @@ TEST(RadioMessages, ACompactMapIsOneFrame) {
   m.apd = AreaParts(108);
   for (int s = 0; s < 108; ++s) m.apd.add(s, {0.0, 187.5});  // one pass of a 25-agent flock
   for (int s = 0; s < 50; ++s) m.apd.add(s, {300.0, 487.5});
-  const auto frames = encode_aggregate(m);
+  const auto frames = encode_aggregate(m, k127);
   ASSERT_EQ(frames.size(), 1u);  // two runs: 29 + 2 * 2 + 3 * 4 = 45 bytes
   EXPECT_EQ(frames[0].size(), 45u);
   AggregateReassembler r(108);
@@ -113,7 +120,7 @@ TEST(RadioMessages, AFragmentedMapIsReassembledInAnyOrderAndRoundedInwards) {
   m.apd = AreaParts(100);
   // a different interval list in every stripe: no runs, many fragments
   for (int s = 0; s < 100; ++s) m.apd.add(s, {s * 0.21, 50.0 + s * 0.333});
-  const auto frames = encode_aggregate(m);
+  const auto frames = encode_aggregate(m, k127);
   ASSERT_GT(frames.size(), 3u);
   for (const Frame& f : frames) EXPECT_LE(f.size(), kMaxFrameBytes);
   AggregateReassembler r(100);
@@ -147,7 +154,7 @@ TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
   m.apd = AreaParts(108);
   for (int s = 0; s < 108; ++s)
     for (int band = 0; band < 16; ++band) m.apd.add(s, {37.0 * band + 0.1 * s, 37.0 * band + 20.0});
-  const auto frames = encode_aggregate(m);
+  const auto frames = encode_aggregate(m, k127);
   ASSERT_EQ(frames.size(), 108u);
   AggregateReassembler r(108);
   std::optional<AggregateMessage> d;
@@ -160,11 +167,156 @@ TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
   ASSERT_EQ(d->apd.stripe(107).size(), 16u);
 }
 
+// The frame size comes from the channel: 127 bytes carry 8 records a beacon (14 + 8 * 14 = 126),
+// 116 carry 7 (112); a channel allowing more than 802.15.4's 127 is used up to 127; one too small
+// for a fragment of one interval (29 + 2 + 4 = 35 bytes) is refused with the reason.
+TEST(RadioMessages, TheFrameFitFollowsTheChannel) {
+  std::string error;
+  const auto full = fit_frames(127, &error);
+  ASSERT_TRUE(full) << error;
+  EXPECT_EQ(full->max_frame_bytes, 127u);
+  EXPECT_EQ(full->beacon_records, 8);
+  EXPECT_EQ(full->max_frame_bytes, k127.max_frame_bytes);  // the default is the simple channel's
+  EXPECT_EQ(full->beacon_records, k127.beacon_records);
+  const auto ns3 = fit_frames(kNs3FrameBytes, &error);
+  ASSERT_TRUE(ns3) << error;
+  EXPECT_EQ(ns3->max_frame_bytes, 116u);
+  EXPECT_EQ(ns3->beacon_records, 7);
+  const auto large = fit_frames(2304, &error);
+  ASSERT_TRUE(large) << error;
+  EXPECT_EQ(large->max_frame_bytes, 127u);
+  EXPECT_EQ(large->beacon_records, 8);
+  const auto smallest = fit_frames(kMinFrameBytes, &error);
+  ASSERT_TRUE(smallest) << error;
+  EXPECT_EQ(smallest->beacon_records, 1);
+  for (size_t bytes : {size_t{0}, size_t{1}, size_t{28}, kMinFrameBytes - 1}) {
+    error.clear();
+    EXPECT_FALSE(fit_frames(bytes, &error)) << bytes;
+    EXPECT_NE(error.find("at most " + std::to_string(bytes) + " bytes"), std::string::npos)
+        << error;
+    EXPECT_NE(error.find("at least 35"), std::string::npos) << error;
+  }
+}
+
+// A beacon over a full ADB (25 agents) at each size: as many records as fit, the frame within the
+// size, and every field of them back as sent, in order.
+TEST(RadioMessages, BeaconsFitTheChannelsFrameAndRoundTrip) {
+  const RadioFrameOrigin o{10.0, 20.0};
+  Beacon b;
+  b.self = {2, 77, 50.0, 60.0, 0.5, 3.0, -1.0, 0, 0};
+  b.round = 3;
+  for (int i = 0; i < 25; ++i)
+    b.records.push_back({i, static_cast<uint16_t>(100 + i), 10.0 + i, 20.0 - i, 0.25 * i, 0.1 * i,
+                         -0.1 * i, i % 5, 40 * i, i % 2 == 0});
+  for (size_t bytes : {kMinFrameBytes, kNs3FrameBytes, kMaxFrameBytes}) {
+    SCOPED_TRACE(bytes);
+    const FrameFit fit = *fit_frames(bytes, nullptr);
+    const Frame f = encode_beacon(b, o, fit);
+    EXPECT_LE(f.size(), bytes);
+    EXPECT_EQ(f.size(), 14u + 14u * static_cast<size_t>(fit.beacon_records));
+    // as many as fit: one more would not
+    if (fit.beacon_records < kMaxRecordsPerBeacon) {
+      EXPECT_GT(f.size() + 14u, bytes);
+    }
+    const auto d = decode_beacon(f, o);
+    ASSERT_TRUE(d);
+    EXPECT_EQ(d->self.id, 2);
+    EXPECT_EQ(d->round, 3);
+    ASSERT_EQ(d->records.size(), static_cast<size_t>(fit.beacon_records));
+    for (size_t i = 0; i < d->records.size(); ++i) {
+      const AgentRecord& sent = b.records[i];
+      const AgentRecord& got = d->records[i];
+      EXPECT_EQ(got.id, sent.id);
+      EXPECT_EQ(got.seq, sent.seq);
+      EXPECT_NEAR(got.x_m, sent.x_m, 0.051);
+      EXPECT_NEAR(got.y_m, sent.y_m, 0.051);
+      EXPECT_NEAR(got.heading_rad, sent.heading_rad, 1e-4);
+      EXPECT_NEAR(got.vx_m_s, sent.vx_m_s, 0.051);
+      EXPECT_NEAR(got.vy_m_s, sent.vy_m_s, 0.051);
+      EXPECT_EQ(got.distance_hops, sent.distance_hops);
+      EXPECT_EQ(got.age_ms, sent.age_ms);
+      EXPECT_EQ(got.landed, sent.landed);
+    }
+  }
+  // a fit asking for more records than its frame holds still writes no more than fit
+  const Frame over = encode_beacon(b, o, FrameFit{kNs3FrameBytes, kMaxRecordsPerBeacon});
+  EXPECT_LE(over.size(), kNs3FrameBytes);
+}
+
+// Maps on the 0.1 m grid (rounding inwards changes nothing): at 116 and at 127 bytes every fragment
+// is within the size, the reassembled map is the map sent (nothing cut), and the fragments use the
+// room (116 bytes need at least as many fragments as 127).
+TEST(RadioMessages, AggregationFragmentsFitTheChannelsFrameAndNothingIsCut) {
+  // ragged: a different list in every stripe; dense: 20 intervals a stripe (under the 21 that one
+  // fragment holds at 116 bytes), the same in runs of 3 stripes
+  AggregateMessage ragged, dense;
+  ragged.sender = dense.sender = 3;
+  ragged.apd = AreaParts(100);
+  for (int s = 0; s < 100; ++s)
+    for (int band = 0; band < 1 + s % 9; ++band)
+      ragged.apd.add(s, {(300.0 * band + s) / 10.0, 30.0 * band + 12.5});
+  dense.apd = AreaParts(60);
+  for (int s = 0; s < 60; ++s)
+    for (int band = 0; band < 20; ++band)
+      dense.apd.add(s, {(200.0 * band + s / 3) / 10.0, 20.0 * band + 10.0});
+  for (const AggregateMessage* m : {&ragged, &dense}) {
+    size_t fragments[2] = {0, 0};
+    size_t longest[2] = {0, 0};
+    int k = 0;
+    for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes}) {
+      SCOPED_TRACE(bytes);
+      const auto frames = encode_aggregate(*m, *fit_frames(bytes, nullptr));
+      fragments[k] = frames.size();
+      AggregateReassembler r(m->apd.stripe_count());
+      std::optional<AggregateMessage> d;
+      for (const Frame& f : frames) {
+        EXPECT_LE(f.size(), bytes);
+        longest[k] = std::max(longest[k], f.size());
+        EXPECT_FALSE(d);
+        d = r.add(f);
+      }
+      ASSERT_TRUE(d);
+      EXPECT_EQ(d->apd, m->apd);
+      ++k;
+    }
+    EXPECT_GE(fragments[0], fragments[1]);
+    // the ragged map's small runs fill a fragment to the end (the dense map's 82-byte runs go one
+    // to a fragment at either size)
+    if (m == &ragged) {
+      EXPECT_GT(longest[1], kNs3FrameBytes);
+      EXPECT_GT(fragments[0], fragments[1]);
+    }
+  }
+}
+
+// More intervals in a stripe than a fragment holds (30: 24 fit 127 bytes, 21 fit 116): the extra
+// ones are dropped, so the map claims less, never more, and no frame is over the size.
+TEST(RadioMessages, AStripeOverAFragmentsIntervalsIsSentShortNeverOver) {
+  AggregateMessage m;
+  m.apd = AreaParts(4);
+  for (int s = 0; s < 4; ++s)
+    for (int band = 0; band < 30; ++band) m.apd.add(s, {10.0 * band, 10.0 * band + 5.0});
+  for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes}) {
+    SCOPED_TRACE(bytes);
+    const auto frames = encode_aggregate(m, *fit_frames(bytes, nullptr));
+    AggregateReassembler r(4);
+    std::optional<AggregateMessage> d;
+    for (const Frame& f : frames) {
+      EXPECT_LE(f.size(), bytes);
+      d = r.add(f);
+    }
+    ASSERT_TRUE(d);
+    const size_t fit = (bytes - 31) / 4;
+    for (int s = 0; s < 4; ++s) EXPECT_EQ(d->apd.stripe(s).size(), fit);
+    EXPECT_LT(d->apd.covered_fraction(300.0), m.apd.covered_fraction(300.0));
+  }
+}
+
 TEST(RadioMessages, MalformedFragmentsAreIgnored) {
   AggregateMessage m;
   m.apd = AreaParts(10);
   m.apd.add(0, {0, 5});
-  Frame f = encode_aggregate(m)[0];
+  Frame f = encode_aggregate(m, k127)[0];
   AggregateReassembler r(5);  // fewer stripes than the frame claims
   EXPECT_FALSE(r.add(f));
   AggregateReassembler ok(10);

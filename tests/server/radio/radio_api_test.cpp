@@ -4,7 +4,9 @@
 
 #include <limits>
 #include <memory>
+#include <set>
 #include <thread>
+#include <vector>
 
 #include "api/radio_ops.hpp"
 #include "api_fixture.hpp"
@@ -301,13 +303,18 @@ TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
 TEST(RadioApi, AGcsLinkAimsOnlyAtTheClientsOwnAddressUnlessRemoteTargetsAreAllowed) {
   RadioServer held(radio::Backend::kSimple, /*allow_remote_gcs=*/false);
   TestClient c(held.port());
-  constexpr int kTargetPort = 14550;  // a ground station's (nothing listens: no datagram is sent here)
-  const Json elsewhere = c.request(
-      {{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_host", "127.0.0.2"}, {"gcs_target_port", kTargetPort}});
+  constexpr int kTargetPort =
+      14550;  // a ground station's (nothing listens: no datagram is sent here)
+  const Json elsewhere = c.request({{"op", "gcs_link_open"},
+                                    {"vehicle", 0},
+                                    {"gcs_target_host", "127.0.0.2"},
+                                    {"gcs_target_port", kTargetPort}});
   EXPECT_EQ(error_code(elsewhere), "forbidden") << elsewhere;
-  EXPECT_NE(elsewhere["error"].value("message", "").find("127.0.0.1"), std::string::npos) << elsewhere;
+  EXPECT_NE(elsewhere["error"].value("message", "").find("127.0.0.1"), std::string::npos)
+      << elsewhere;
   // aimed at the client, with or without its address given
-  EXPECT_TRUE(c.request({{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_port", kTargetPort}})["ok"]);
+  EXPECT_TRUE(
+      c.request({{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_port", kTargetPort}})["ok"]);
   EXPECT_TRUE(c.request({{"op", "gcs_link_open"},
                          {"vehicle", 1},
                          {"gcs_target_host", "127.0.0.1"},
@@ -315,8 +322,10 @@ TEST(RadioApi, AGcsLinkAimsOnlyAtTheClientsOwnAddressUnlessRemoteTargetsAreAllow
 
   RadioServer open;  // allowed
   TestClient d(open.port());
-  const Json r = d.request(
-      {{"op", "gcs_link_open"}, {"vehicle", 0}, {"gcs_target_host", "127.0.0.2"}, {"gcs_target_port", kTargetPort}});
+  const Json r = d.request({{"op", "gcs_link_open"},
+                            {"vehicle", 0},
+                            {"gcs_target_host", "127.0.0.2"},
+                            {"gcs_target_port", kTargetPort}});
   EXPECT_TRUE(r["ok"]) << r;
 }
 
@@ -453,6 +462,68 @@ TEST(RadioApi, OnNs3ASaturatedChannelShowsChannelAccessFailuresInTheStats) {
   }
   EXPECT_GT(failures, 0u) << stats;
   EXPECT_EQ(failures + transmitted, 120u) << stats;
+}
+
+// Two lockstep clients, one a vehicle's program each, both broadcast in the same ticks (ns-3 draws
+// CSMA-CA backoffs for the frames that contend): whichever client's sends and done reach the server
+// first, the frames go to ns-3 in the same order and every delivery is the same, field by field.
+TEST(RadioApi, OnNs3TheOrderOfLockstepClientsRequestsDoesNotMatter) {
+  if (!radio::find_ns3_helper()) GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh)";
+  constexpr double kPeriod_s = 0.02;
+  constexpr int kSendingTicks = 10;  // then 5 quiet ticks: every frame is delivered in lockstep
+  constexpr int kTicks = 15;
+  // [to, from, seq, time, sent_time, data] of every delivery, in the order the server streams them
+  auto deliveries = [&](bool vehicle1_first) {
+    RadioServer server(radio::Backend::kNs3);
+    TestClient watch(server.port());
+    EXPECT_TRUE(watch.request({{"op", "radio_subscribe"}})["ok"]);
+    TestClient program[2] = {TestClient(server.port()), TestClient(server.port())};
+    for (TestClient& c : program)
+      EXPECT_TRUE(c.request({{"op", "lockstep_join"}, {"period_s", kPeriod_s}})["ok"]);
+    EXPECT_TRUE(watch.request({{"op", "resume"}})["ok"]);
+    for (int tick = 0; tick < kTicks; ++tick) {
+      Json ticks[2];
+      for (int v = 0; v < 2; ++v) {
+        ticks[v] = program[v].next_event("tick");
+        EXPECT_FALSE(ticks[v].is_null()) << tick;
+      }
+      for (int k = 0; k < 2; ++k) {
+        const int v = vehicle1_first ? 1 - k : k;
+        if (tick < kSendingTicks) {
+          // two frames each, of different lengths: they contend with the other vehicle's
+          for (int n = 0; n < 2; ++n) {
+            const std::vector<uint8_t> data(static_cast<size_t>(30 + 40 * n + v),
+                                            static_cast<uint8_t>(tick));
+            EXPECT_TRUE(
+                program[v].request(send_op(v, "broadcast", common::base64_encode(data)))["ok"]);
+          }
+        }
+        EXPECT_TRUE(program[v].request({{"op", "done"}, {"tick", ticks[v]["tick"]}})["ok"]);
+      }
+    }
+    for (TestClient& c : program) EXPECT_TRUE(c.request({{"op", "lockstep_leave"}})["ok"]);
+    EXPECT_TRUE(watch.request({{"op", "pause"}})["ok"]);
+    const Json stats = watch.request({{"op", "radio_stats"}});
+    size_t delivered = 0;
+    for (const Json& l : stats["result"]["links"]) delivered += l["delivered"].get<size_t>();
+    std::vector<Json> out;
+    for (size_t k = 0; k < delivered; ++k) {
+      const Json e = watch.next_event("radio");
+      if (e.is_null()) break;
+      out.push_back(
+          Json::array({e["to"], e["from"], e["seq"], e["time"], e["sent_time"], e["data_b64"]}));
+    }
+    return out;
+  };
+  const std::vector<Json> first = deliveries(false);
+  const std::vector<Json> reversed = deliveries(true);
+  // both vehicles' frames got through, most of them (two radios 10 m apart)
+  ASSERT_GE(first.size(), 2u * kSendingTicks);
+  std::set<int> senders;
+  for (const Json& d : first) senders.insert(d[1].get<int>());
+  EXPECT_EQ(senders.size(), 2u);
+  ASSERT_EQ(first.size(), reversed.size());
+  for (size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i], reversed[i]) << i;
 }
 
 }  // namespace

@@ -1,0 +1,44 @@
+// The coverage flock on the ns3 radio backend (ns-3's 802.15.4 in the uavsim-ns3-radio helper):
+// the scenario of coverage_run_test (five quads over 150 x 100 m, seed 1) with CSMA-CA, SINR
+// reception and frames of at most 116 bytes. The agents size their beacons (7 records, not 8) and
+// aggregation fragments from the channel's frame size, so the radio refuses none of their frames;
+// the mission completes. 10-20 s of wall time.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "../support/launcher_run.hpp"
+
+namespace {
+
+using Json = nlohmann::json;
+
+// sim-time bound of a run: the mission takes ~180 s on either backend
+constexpr double kBudget_s = 900.0;
+constexpr double kFullCoverage = 0.999;
+
+TEST(CoverageNs3, FiveQuadsCoverTheRectangleAndLandOnNs3) {
+  std::string out;
+  const Json r = uavsim::tests::run_launcher(
+      std::string(COVERAGE_RUN) + " --agents 5 --area 150x100 --seed 1 --quiet --budget " +
+          std::to_string(kBudget_s) + " --wall-limit 300",
+      "--radio-backend ns3", &out);
+  ASSERT_TRUE(r.is_object()) << out;
+  EXPECT_EQ(r["radio_backend"], "ns3") << out;
+  // the channel was ns-3's with 116-byte frames, and it refused none of the agents' frames
+  const Json& radio = r["radio"];
+  EXPECT_EQ(radio["backend"], "ns3") << radio.dump();
+  EXPECT_EQ(radio["max_frame_bytes"], 116) << radio.dump();
+  EXPECT_EQ(radio["refused"], 0) << radio.dump();
+  EXPECT_GT(radio["transmitted"].get<uint64_t>(), 1000u) << radio.dump();
+  EXPECT_GT(radio["delivered"].get<uint64_t>(), 1000u) << radio.dump();
+  // the mission: everything covered, everyone landed, nobody lost
+  EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
+  EXPECT_EQ(r["failed"].get<int>(), 0) << out;
+  EXPECT_EQ(r["landed"].get<int>(), 5) << out;
+  EXPECT_LT(r["mission_time_s"].get<double>(), kBudget_s) << out;
+  EXPECT_TRUE(r["success"].get<bool>()) << out;
+}
+
+}  // namespace
