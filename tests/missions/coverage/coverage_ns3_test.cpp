@@ -8,21 +8,16 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "../support/launcher_run.hpp"
+#include "five_quads_run.hpp"
 
 namespace {
 
 using Json = nlohmann::json;
-
-// sim-time bound of a run: the mission takes ~180 s on either backend
-constexpr double kBudget_s = 900.0;
-constexpr double kFullCoverage = 0.999;
+using uavsim::tests::kBudget_s;
+using uavsim::tests::kFullCoverage;
 
 Json run_on_ns3(const std::string& extra, std::string* output) {
-  return uavsim::tests::run_launcher(std::string(COVERAGE_RUN) +
-                                         " --agents 5 --area 150x100 --quiet --budget " +
-                                         std::to_string(kBudget_s) + " --wall-limit 300",
-                                     "--radio-backend ns3 " + extra, output);
+  return uavsim::tests::run_five_quads("--radio-backend ns3 " + extra, output);
 }
 
 TEST(CoverageNs3, FiveQuadsCoverTheRectangleAndLandOnNs3) {

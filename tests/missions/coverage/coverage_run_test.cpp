@@ -12,21 +12,16 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "../support/launcher_run.hpp"
+#include "five_quads_run.hpp"
 
 namespace {
 
 using Json = nlohmann::json;
-
-// sim-time bound of a run: the fault-free mission takes ~210 s, one with a failure ~300 s
-constexpr double kBudget_s = 900.0;
-constexpr double kFullCoverage = 0.999;
+using uavsim::tests::kBudget_s;
+using uavsim::tests::kFullCoverage;
 
 Json run_flock(const std::string& extra, std::string* output) {
-  return uavsim::tests::run_launcher(std::string(COVERAGE_RUN) +
-                                         " --agents 5 --area 150x100 --seed 1 --quiet --budget " +
-                                         std::to_string(kBudget_s) + " --wall-limit 300",
-                                     extra, output);
+  return uavsim::tests::run_five_quads(extra, output);
 }
 
 void expect_every_survivor_landed(const Json& r, const std::string& out) {
