@@ -82,6 +82,10 @@ class LandingFsm {
   FsmOutputs climb_away(const FsmInputs& in, const EstimatedTruck& truck, const TruckRelative& rel,
                         const std::string& why, bool give_up);
   bool seen_since(const FsmInputs& in, double since_s) const;
+  // in the blind last metres: the skids' height above the deck from where the marker left the
+  // image (marker_lost_height_m) less the barometric descent since, not the barometer's absolute
+  // altitude (its drift is tenths of a metre)
+  double blind_height_m(const FsmInputs& in) const;
   // the Approach while the FC's estimate settles after a step: no descent on it and no correction
   // towards the marker from it (FsmInputs::estimate_settling)
   FsmOutputs approach_while_settling(const FsmInputs& in, double h);

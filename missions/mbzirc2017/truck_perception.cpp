@@ -54,7 +54,7 @@ std::optional<Eigen::Vector2d> TruckPerception::on_frame(
   if (!p) return std::nullopt;
   last_.deck_enu_m = p->head<2>();
   // placed from a position estimate that was still settling after a step: in neither frame
-  if (stamp_us * 1e-6 < use_frames_from_s_) {
+  if (stamp_us < use_frames_from_us_) {
     last_.kind = FrameOutcome::Kind::kSettling;
     return std::nullopt;
   }
@@ -78,10 +78,10 @@ void TruckPerception::on_estimate_step() {
   if (!pre_step_filter_ && filter_.initialised()) pre_step_filter_ = filter_;
   filter_.reset();
   last_seen_s_ = -1e18;
-  use_frames_from_s_ = std::numeric_limits<double>::infinity();
+  use_frames_from_us_ = std::numeric_limits<int64_t>::max();
 }
 
-void TruckPerception::on_estimate_settled(double now_s) { use_frames_from_s_ = now_s; }
+void TruckPerception::on_estimate_settled(double now_s) { use_frames_from_us_ = to_us(now_s); }
 
 TruckKnowledge TruckPerception::knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const {
   TruckKnowledge k;

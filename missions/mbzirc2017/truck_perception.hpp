@@ -81,7 +81,7 @@ class TruckPerception {
   // the track from before a step of the UAV's estimate, while the new one starts; and the frames'
   // earliest stamp the new one takes (infinite while the estimate settles)
   std::optional<vision::TrackKalman> pre_step_filter_;
-  double use_frames_from_s_ = -std::numeric_limits<double>::infinity();
+  int64_t use_frames_from_us_ = std::numeric_limits<int64_t>::min();
   FrameOutcome last_;
   double last_seen_s_ = -1e18;
   int detections_ = 0;
