@@ -290,10 +290,9 @@ int main(int argc, char** argv) {
         landed_s = loop.now();
         const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
         char buf[160];
-        std::snprintf(
-            buf, sizeof(buf),
-            "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m",
-            off.x(), off.y());
+        std::snprintf(buf, sizeof(buf),
+                      "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m", off.x(),
+                      off.y());
         log(buf);
       }
       if (loop.now() - landed_s > kLinger_s && !uav.telemetry().armed) break;
