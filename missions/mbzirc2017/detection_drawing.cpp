@@ -19,6 +19,7 @@ cv::Scalar colour_of(FrameOutcome::Kind kind) {
     case FrameOutcome::Kind::kRejected:
       return {0, 140, 255};
     case FrameOutcome::Kind::kOffTheDeck:
+    case FrameOutcome::Kind::kSettling:
     case FrameOutcome::Kind::kNoMarker:
       break;
   }

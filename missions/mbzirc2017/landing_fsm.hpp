@@ -24,6 +24,10 @@ struct TruckKnowledge {
   bool initialised = false;  // the Kalman filter has started (two points)
   Eigen::Vector2d position_enu_m = Eigen::Vector2d::Zero();  // the marker, extrapolated to now
   Eigen::Vector2d velocity_enu_m_s = Eigen::Vector2d::Zero();
+  // the track was made before a step of the UAV's own position estimate and a new one has not
+  // started yet (TruckPerception::on_estimate_step): the velocity, heading and yaw rate hold, the
+  // position is up to the step's size off
+  bool position_stale = false;
   double heading_enu_rad = 0.0;  // the truck's forward direction (the track's, by its way)
   double yaw_rate_rad_s = 0.0;   // its turning rate on the track's curve (positive left)
   double last_seen_s = -std::numeric_limits<double>::infinity();  // stamp of the newest sighting
@@ -78,9 +82,16 @@ class LandingFsm {
   FsmOutputs climb_away(const FsmInputs& in, const EstimatedTruck& truck, const TruckRelative& rel,
                         const std::string& why, bool give_up);
   bool seen_since(const FsmInputs& in, double since_s) const;
+  // in the blind last metres: the skids' height above the deck from where the marker left the
+  // image (marker_lost_height_m) less the barometric descent since, not the barometer's absolute
+  // altitude (its drift is tenths of a metre)
+  double blind_height_m(const FsmInputs& in) const;
   // the Approach while the FC's estimate settles after a step: no descent on it and no correction
   // towards the marker from it (FsmInputs::estimate_settling)
   FsmOutputs approach_while_settling(const FsmInputs& in, double h);
+  // the Approach after a step, settled, until the truck's track is made again from new sightings
+  // (TruckKnowledge::position_stale): no descent, no correction towards the old track's marker
+  FsmOutputs approach_while_rebuilding(const FsmInputs& in, double h);
 
   MissionConfig config_;
   Funnel funnel_;
@@ -101,6 +112,7 @@ class LandingFsm {
   bool ready_for_open_loop_ = false;  // at the last sighting: centred and matched in the deck box
   bool climb_away_ = false;
   bool settling_reported_ = false;
+  std::optional<double> rebuilding_since_s_;
   double open_loop_start_z_m_ = 0.0;  // the estimate's altitude as the blind last metres began
   bool give_up_after_climb_ = false;
   int climb_aways_ = 0;

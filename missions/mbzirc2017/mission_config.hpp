@@ -96,6 +96,12 @@ struct MissionConfig {
   // below this the motors go off, the deck nearer than any way out; above it the UAV climbs over
   // the cab
   double drop_height_m = 0.45;
+  // blind, this far below the deck's top by the blind height without a touchdown: the deck is not
+  // under the skids (the propellers, 0.44 m above them, reach the deck's underside at about 0.5 m)
+  double deck_missed_m = 0.15;
+  // blind, the correction towards the aim point is at most this fast relative to the truck: half
+  // the matched speed, so the relative motion stays within what the readiness checked
+  double open_loop_correction_m_s = 0.25;
   double abort_climb_m_s = 1.5;          // the climb-away
   double abort_retreat_m_s = 1.0;        // away from the cab, relative to the truck
   double abort_clear_height_m = 2.5;     // skids above the deck where a climb-away ends

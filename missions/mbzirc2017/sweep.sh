@@ -56,6 +56,9 @@ def part(j):  # where on the eight: the touchdown's part, else where the approac
 def cab_contact(j):
     return any("truck/cab" in c for c in j["crashes"])
 
+def truck_contact(j):  # any part of the truck but the deck from above (the launcher's count)
+    return j.get("truck_contacts", 0) > 0 or cab_contact(j)
+
 print("| seed | speed [km/h] | start [s] | part of the eight | landed on the deck | take-off to touchdown [s] | relative speed [m/s] | from the marker centre [m] | cab clearance min [m] | skids to deck edge min [m] | climb-aways | crash | wall [s] |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for s in sorted(rows):
@@ -75,14 +78,15 @@ def summary(label, js):
     ts = [j["mission_time_s"] for j in ok]
     cab = [j["min_cab_clearance_m"] for j in js if j.get("min_cab_clearance_m") is not None]
     edge = [j["min_deck_edge_margin_m"] for j in ok if j.get("min_deck_edge_margin_m") is not None]
-    return "| %s | %d | %d (%.0f %%) | %d | %d | %s | %s | %s |" % (
+    return "| %s | %d | %d (%.0f %%) | %d | %d | %d | %s | %s | %s |" % (
         label, len(js), len(ok), 100.0 * len(ok) / len(js) if js else 0.0,
-        sum(1 for j in js if cab_contact(j)), sum(1 for j in js if j["crashes"]),
+        sum(1 for j in js if truck_contact(j)), sum(1 for j in js if cab_contact(j)),
+        sum(1 for j in js if j["crashes"]),
         f(med(ts), "%.1f"), f(min(cab) if cab else None), f(min(edge) if edge else None))
 
 print()
-print("| runs | n | landed and stayed | cab contacts | crashes | median take-off to touchdown [s] | cab clearance min [m] | skids to deck edge min [m] |")
-print("|---|---|---|---|---|---|---|---|")
+print("| runs | n | landed and stayed | truck contacts | cab contacts | crashes | median take-off to touchdown [s] | cab clearance min [m] | skids to deck edge min [m] |")
+print("|---|---|---|---|---|---|---|---|---|")
 allj = list(rows.values())
 print(summary("all", allj))
 for lo, hi in [(5, 8.75), (8.75, 12.5), (12.5, 16.25), (16.25, 20.01)]:
@@ -102,9 +106,10 @@ ok = [j for j in allj if j["success"]]
 ts = sorted(j["mission_time_s"] for j in ok)
 print()
 if ts:
-    print("%d/%d landed on the deck (%.0f %%); take-off to touchdown min %.1f, median %.1f, max %.1f s; %d crash(es), %d cab contact(s)"
+    print("%d/%d landed on the deck (%.0f %%); take-off to touchdown min %.1f, median %.1f, max %.1f s; %d crash(es), %d truck contact(s), %d with the cab"
           % (len(ok), len(rows), 100.0 * len(ok) / len(rows), ts[0], med(ts), ts[-1],
-             sum(1 for j in allj if j["crashes"]), sum(1 for j in allj if cab_contact(j))))
+             sum(1 for j in allj if j["crashes"]), sum(1 for j in allj if truck_contact(j)),
+             sum(1 for j in allj if cab_contact(j))))
 else:
     print("no landing in %d runs; %d crash(es)" % (len(rows), sum(1 for j in allj if j["crashes"])))
 print("the thesis's competition run (section 7.1): one landing, 140 s")

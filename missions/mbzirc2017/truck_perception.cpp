@@ -20,6 +20,8 @@ const char* frame_outcome_name(FrameOutcome::Kind kind) {
       return "rejected";
     case FrameOutcome::Kind::kAccepted:
       return "accepted";
+    case FrameOutcome::Kind::kSettling:
+      return "estimate settling";
   }
   return "?";
 }
@@ -51,6 +53,11 @@ std::optional<Eigen::Vector2d> TruckPerception::on_frame(
       vision::marker_position_enu(*d, intrinsics, pose, config_.deck_height_m);
   if (!p) return std::nullopt;
   last_.deck_enu_m = p->head<2>();
+  // placed from a position estimate that was still settling after a step: in neither frame
+  if (stamp_us < use_frames_from_us_) {
+    last_.kind = FrameOutcome::Kind::kSettling;
+    return std::nullopt;
+  }
   const vision::MeasurementResult r = filter_.add_measurement(stamp_us, p->head<2>());
   if (r == vision::MeasurementResult::kRejected) {
     last_.kind = FrameOutcome::Kind::kRejected;
@@ -60,15 +67,30 @@ std::optional<Eigen::Vector2d> TruckPerception::on_frame(
   last_.kind = FrameOutcome::Kind::kAccepted;
   ++detections_;
   last_seen_s_ = std::max(last_seen_s_, stamp_us * 1e-6);
+  // the new track has started: the one from before the step is done with
+  if (filter_.initialised()) pre_step_filter_.reset();
   return p->head<2>();
 }
+
+void TruckPerception::on_estimate_step() {
+  // a second step before the new track started: the oldest track's velocity still holds, and what
+  // the new one took since the first is in yet another frame
+  if (!pre_step_filter_ && filter_.initialised()) pre_step_filter_ = filter_;
+  filter_.reset();
+  last_seen_s_ = -1e18;
+  use_frames_from_us_ = std::numeric_limits<int64_t>::max();
+}
+
+void TruckPerception::on_estimate_settled(double now_s) { use_frames_from_us_ = to_us(now_s); }
 
 TruckKnowledge TruckPerception::knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const {
   TruckKnowledge k;
   k.last_seen_s = last_seen_s_;
-  const std::optional<vision::TrackEstimate> e = filter_.estimate_at(to_us(now_s));
+  const vision::TrackKalman& filter = pre_step_filter_ ? *pre_step_filter_ : filter_;
+  const std::optional<vision::TrackEstimate> e = filter.estimate_at(to_us(now_s));
   if (!e) return k;
   k.initialised = true;
+  k.position_stale = pre_step_filter_.has_value();
   k.position_enu_m = e->position_enu_m;
   k.velocity_enu_m_s = e->velocity_enu_m_s;
   // the truck drives forward along the track: its heading is the tangent by the sign of its way,
@@ -76,8 +98,8 @@ TruckKnowledge TruckPerception::knowledge(double now_s, const Eigen::Vector2d& u
   const Eigen::Vector2d tangent = track_.tangent_enu(e->s_m) * (e->v_s_m_s < 0.0 ? -1.0 : 1.0);
   k.heading_enu_rad = std::atan2(tangent.y(), tangent.x());
   k.yaw_rate_rad_s = e->v_s_m_s * track_.curvature_1_m(e->s_m);
-  if (const auto i = filter_.intercept(to_us(now_s), uav_xy_enu_m, config_.cruise_speed_m_s,
-                                       kInterceptHorizon_s)) {
+  if (const auto i = filter.intercept(to_us(now_s), uav_xy_enu_m, config_.cruise_speed_m_s,
+                                      kInterceptHorizon_s)) {
     k.interception_enu_m = i->point_enu_m;
     k.interception_time_to_go_s = i->time_to_go_s;
   }

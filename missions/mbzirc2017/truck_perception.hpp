@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <optional>
 
@@ -22,10 +23,11 @@ namespace uavsim::missions::mbzirc2017 {
 // What one frame gave: the detector's best candidate, and what became of it.
 struct FrameOutcome {
   enum class Kind {
-    kNoMarker,     // the detector found nothing
-    kOffTheDeck,   // a marker in the image whose ray never meets the deck plane (camera above it?)
-    kRejected,     // placed on the deck, but the filter's gate refused it (far from the track)
-    kAccepted,     // placed on the deck and fed to the filter
+    kNoMarker,    // the detector found nothing
+    kOffTheDeck,  // a marker in the image whose ray never meets the deck plane (camera above it?)
+    kRejected,    // placed on the deck, but the filter's gate refused it (far from the track)
+    kAccepted,    // placed on the deck and fed to the filter
+    kSettling,    // taken while the UAV's own position estimate settled after a step: not used
   };
   Kind kind = Kind::kNoMarker;
   std::optional<vision::MarkerDetection> detection;
@@ -49,7 +51,21 @@ class TruckPerception {
                                           int64_t stamp_us, const vision::CameraPose& pose);
 
   // What is known at now_s (the filter extrapolated; the interception from uav_xy at cruise speed).
+  // While the track is being made again after a step (below), the track from before it, marked
+  // position_stale: its velocity holds, its position does not.
   TruckKnowledge knowledge(double now_s, const Eigen::Vector2d& uav_xy_enu_m) const;
+
+  // The UAV's own position estimate stepped (estimate_monitor.hpp). Every marker position is the
+  // UAV's position plus what the camera saw, so the track made before the step is in the old
+  // frame: against the position after it, it puts the truck up to the step's size off (issue 36's
+  // seed 172: ~2 m, a blind descent onto the cab's corner). The track is set aside (its velocity
+  // still serves), and frames are not used until on_estimate_settled().
+  void on_estimate_step();
+  // The estimate has settled at now_s: the track is made again from frames taken from then on.
+  void on_estimate_settled(double now_s);
+  // Whether the track is being made again after a step (from the step until the new track has
+  // started).
+  bool rebuilding() const { return pre_step_filter_.has_value(); }
 
   // What the last on_frame() call saw (for a video log's drawings).
   const FrameOutcome& last_outcome() const { return last_; }
@@ -62,6 +78,10 @@ class TruckPerception {
   vision::MarkerDetector detector_;
   vision::EightTrack track_;
   vision::TrackKalman filter_;
+  // the track from before a step of the UAV's estimate, while the new one starts; and the frames'
+  // earliest stamp the new one takes (infinite while the estimate settles)
+  std::optional<vision::TrackKalman> pre_step_filter_;
+  int64_t use_frames_from_us_ = std::numeric_limits<int64_t>::min();
   FrameOutcome last_;
   double last_seen_s_ = -1e18;
   int detections_ = 0;

@@ -103,10 +103,25 @@ int main(int argc, char** argv) {
   double vehicle_clock_offset_s = std::numeric_limits<double>::infinity();
   // steps in the FC's own position estimate (a GPS jump blended in), told from the UAV's motion
   EstimateMonitor estimate_monitor;
+  int estimate_steps = 0;
+  bool estimate_settling = false;
+  // the camera's view of the truck, placed by that estimate (declared here: a step restarts its
+  // track)
+  const MissionConfig config;
+  TruckPerception perception(config);
   uav.on_telemetry([&](const Telemetry& t) {
     if (!t.has_local_position) return;
     estimate_monitor.add(t.vehicle_time_s, t.position_enu_m.head<2>(),
                          t.velocity_enu_m_s.head<2>());
+    // a step: the truck's track, made in the estimate's old frame, is set aside; settled: it is
+    // made again from the frames taken from now on
+    if (estimate_monitor.jumps() > estimate_steps) {
+      estimate_steps = estimate_monitor.jumps();
+      perception.on_estimate_step();
+    }
+    if (estimate_settling && !estimate_monitor.settling())
+      perception.on_estimate_settled(loop.now());
+    estimate_settling = estimate_monitor.settling();
     vehicle_clock_offset_s = std::min(vehicle_clock_offset_s, loop.now() - t.vehicle_time_s);
     pose = {t.vehicle_time_s + vehicle_clock_offset_s, t.position_enu_m, t.velocity_enu_m_s,
             enu_yaw_from_ned(t.yaw_rad)};
@@ -114,8 +129,6 @@ int main(int argc, char** argv) {
 
   // the camera: the newest frame waits for the vision computer (older ones are skipped, as a
   // pipeline that always takes the latest image)
-  const MissionConfig config;
-  TruckPerception perception(config);
   struct Pending {
     cv::Mat grey;
     uavsim::vision::PinholeIntrinsics intrinsics;
@@ -277,10 +290,9 @@ int main(int argc, char** argv) {
         landed_s = loop.now();
         const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
         char buf[160];
-        std::snprintf(
-            buf, sizeof(buf),
-            "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m",
-            off.x(), off.y());
+        std::snprintf(buf, sizeof(buf),
+                      "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m", off.x(),
+                      off.y());
         log(buf);
       }
       if (loop.now() - landed_s > kLinger_s && !uav.telemetry().armed) break;

@@ -307,7 +307,8 @@ class BlindDescent : public ::testing::Test {
   // over the marker 1.0 m above the deck, matched; seen once, then not (too close): the open loop
   void SetUp() override {
     ASSERT_TRUE(h.reach_approach());
-    h.in.position_enu_m = Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s, 0, deck_z() + 1.0);
+    h.in.position_enu_m =
+        Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s, 0, deck_z() + start_height_m());
     h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
     h.see_truck();
     h.step();
@@ -319,6 +320,8 @@ class BlindDescent : public ::testing::Test {
     ASSERT_GT(open_loop_z_, 0.0);
   }
   double deck_z() const { return h.config.skid_depth_m + h.config.deck_height_m; }
+  // the skids' height above the deck by the UAV's altitude as the marker leaves the image
+  virtual double start_height_m() const { return 1.0; }
   // the blind height the FSM counts: where the marker left the image less the descent since
   double blind_height_m() const {
     return h.config.marker_lost_height_m - (open_loop_z_ - h.in.position_enu_m.z());
@@ -389,6 +392,102 @@ TEST(LandingFsm, EstimateStepAboveTheFloorHoldsAndFollowsTheTruck) {
   h.in.estimate_settling = false;
   h.see_truck();
   EXPECT_LT(h.step().velocity_enu_m_s.z(), 0.0);
+}
+
+// Issue 36's seed 148: the barometer's altitude 0.4 m above the truth as the marker left the
+// image. The floor's rule (below it only in the deck box and matched) held on that altitude, so it
+// never held in the blind last metres. Blind, the height is where the marker left the image less
+// the barometric descent since.
+class BlindDescentBarometerHigh : public BlindDescent {
+ protected:
+  double start_height_m() const override { return 1.4; }
+};
+
+TEST_F(BlindDescentBarometerHigh, BelowTheFloorByTheBlindHeightUnmatchedClimbsAway) {
+  const double floor_m = h.config.cab_top_above_deck_m + h.config.cab_vertical_margin_m;
+  descend_to(floor_m - 0.05);
+  // the barometer still says above the floor
+  ASSERT_GT(h.fsm.height_above_deck_m(h.in.position_enu_m.z()), floor_m);
+  ASSERT_EQ(h.fsm.climb_aways(), 0);
+  // drifting back against the truck at 0.7 m/s (matched: at most 0.5 m/s)
+  h.in.velocity_enu_m_s.x() = h.truck_speed - 0.7;
+  const FsmOutputs out = h.step();
+  EXPECT_TRUE(h.fsm.climbing_away());
+  EXPECT_NE(out.note.find("unmatched"), std::string::npos) << out.note;
+  EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
+}
+
+// Blind and sunk below the deck's top without a touchdown: no deck under the skids, whatever the
+// estimate says. The climb-away, then Go To Centre (not the 8 s of blind descent it had before).
+TEST_F(BlindDescent, BelowTheDecksTopWithoutATouchdownClimbsAwayAndGivesUp) {
+  descend_to(0.0);
+  ASSERT_EQ(h.fsm.climb_aways(), 0);
+  FsmOutputs out;
+  for (int i = 0; i < 20 && !h.fsm.climbing_away(); ++i) out = h.step();
+  ASSERT_TRUE(h.fsm.climbing_away());
+  EXPECT_NE(out.note.find("below the deck's top without a touchdown"), std::string::npos)
+      << out.note;
+  // within a step of the margin: 0.6 m/s * 0.05 s = 3 cm
+  EXPECT_LT(blind_height_m(), -h.config.deck_missed_m + 0.05);
+  EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
+  // clear of the truck: Go To Centre, not a new approach
+  EXPECT_TRUE(h.run_until(LandingState::kGoToCentre, 10.0, false));
+}
+
+// Blind, 0.4 m ahead of the marker (and aiming 0.25 m behind it): the correction is gentle, not the
+// 0.65 m/s backwards that the PID alone asks for.
+TEST_F(BlindDescent, CorrectsGentlyWhenBlind) {
+  h.in.position_enu_m.x() += 0.4;
+  const FsmOutputs out = h.step();
+  ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+  ASSERT_LT(out.velocity_enu_m_s.z(), 0.0);  // still the blind descent
+  const Eigen::Vector2d relative =
+      out.velocity_enu_m_s.head<2>() - Eigen::Vector2d(h.truck_speed, 0);
+  EXPECT_LE(relative.norm(), h.config.open_loop_correction_m_s + 1e-9);
+  EXPECT_LT(relative.x(), 0.0);  // back towards the aim point
+}
+
+// Issue 36's seed 172: after a step, settled, the truck's track is being made again (the old one
+// is stale: up to the step's size off). Low over the deck and seeing the marker, the FSM neither
+// descends nor corrects towards the stale marker: it follows the truck's velocity and climbs (at
+// the climb-away's rate below the floor); the new track's sightings give the funnel back. No new
+// track for 8 s: Go To Centre.
+TEST(LandingFsm, StaleTrackAfterAStepClimbsFollowingTheTruckUntilANewTrackIsMade) {
+  FsmHarness h;
+  ASSERT_TRUE(h.reach_approach());
+  const double deck_z = h.config.skid_depth_m + h.config.deck_height_m;
+  // 0.5 m above the deck, 0.3 m ahead of the stale marker, fresh sightings, "matched"
+  h.in.position_enu_m =
+      Eigen::Vector3d(h.truck_x + h.truck_speed * kStep_s + 0.3, 0.1, deck_z + 0.5);
+  h.in.velocity_enu_m_s = Eigen::Vector3d(h.truck_speed, 0, 0);
+  h.see_truck();
+  h.in.truck.position_stale = true;
+  FsmOutputs out = h.step();
+  ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
+  EXPECT_NE(out.note.find("made again from new sightings"), std::string::npos) << out.note;
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.x(), h.truck_speed);
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.y(), 0.0);
+  EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.z(), h.config.abort_climb_m_s);
+  // above the floor: climbs on at the lost marker's rate, never descends
+  for (int i = 0; i < 20; ++i) {
+    h.see_truck();
+    out = h.step();
+    ASSERT_GT(out.velocity_enu_m_s.z(), 0.0);
+    EXPECT_DOUBLE_EQ(out.velocity_enu_m_s.x(), h.truck_speed);
+  }
+  EXPECT_EQ(h.fsm.state(), LandingState::kApproach);
+  EXPECT_EQ(h.fsm.climb_aways(), 0);
+  // the new track: the funnel again (centred at 1.5 m: descending)
+  h.in.truck.position_stale = false;
+  h.in.position_enu_m.x() = h.truck_x + h.truck_speed * kStep_s;
+  h.in.position_enu_m.y() = 0.0;
+  h.see_truck();
+  EXPECT_LT(h.step().velocity_enu_m_s.z(), 0.0);
+
+  // stale again and never made again: Go To Centre after the give-up time
+  h.in.truck.position_stale = true;
+  EXPECT_FALSE(h.run_until(LandingState::kGoToCentre, h.config.lost_give_up_s - 0.5, true));
+  EXPECT_TRUE(h.run_until(LandingState::kGoToCentre, 1.0, true));
 }
 
 }  // namespace
