@@ -527,6 +527,7 @@ int run_server(const Options& given_options) {
     api::GcsTargetPolicy gcs_targets{options.allow_remote_gcs,
                                      [api = api_server.get()](uint64_t conn) { return api->peer_address(conn); }};
     radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays, std::move(gcs_targets));
+    radio_ops->set_shm_transport(&api_server->shm_transport());
     api_server->add_group(radio_ops.get());
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);
