@@ -1,5 +1,6 @@
 #include "uavsim/common/shm_ring.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -128,6 +129,12 @@ std::optional<RingError> RingWriter::write(RecordType type,
   head_ += need;
   head_of(header_).store(head_, std::memory_order_release);
   return std::nullopt;
+}
+
+std::size_t RingWriter::waiting_bytes() const {
+  const uint64_t tail = tail_of(header_).load(std::memory_order_acquire);
+  const uint64_t consumed = tail >= tail_seen_ && tail <= head_ ? tail : tail_seen_;
+  return static_cast<std::size_t>(head_ - consumed);
 }
 
 bool RingWriter::take_wakeup() {

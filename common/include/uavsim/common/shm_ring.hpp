@@ -79,8 +79,9 @@ class RingWriter {
                                  std::string* why);
   // After a write: true if the reader should be woken now (it had cleared its flag). Sets the flag.
   bool take_wakeup();
-  // Bytes written and not yet consumed (by the reader's tail as last seen).
-  std::size_t waiting_bytes() const { return static_cast<std::size_t>(head_ - tail_seen_); }
+  // Bytes written and not yet consumed (a reader position out of range counts as none consumed
+  // since the last write; the next write reports it).
+  std::size_t waiting_bytes() const;
   std::size_t capacity() const { return capacity_; }
 
  private:
