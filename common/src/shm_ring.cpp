@@ -40,8 +40,9 @@ void get(const uint8_t* data, std::size_t capacity, uint64_t pos, uint8_t* dst, 
 
 template <typename T>
 void append(std::vector<uint8_t>* out, T value) {
-  const auto* p = reinterpret_cast<const uint8_t*>(&value);
-  out->insert(out->end(), p, p + sizeof(T));
+  const std::size_t at = out->size();
+  out->resize(at + sizeof(T));
+  std::memcpy(out->data() + at, &value, sizeof(T));
 }
 
 // a bounds-checked reader of a payload

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "loop_services.hpp"
+#include "sim_channel.hpp"
 #include "sim_harness.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/geodesy.hpp"
