@@ -71,8 +71,10 @@ LoopConfig LoopConfig::from_env() {
   const char* env = std::getenv("UAVSIM_LOCKSTEP");
   if (env == nullptr || *env == '\0') return c;
   const char* transport = std::getenv("UAVSIM_API_TRANSPORT");
-  const auto tcp_only = transport != nullptr && std::string(transport) == "tcp" ? LoopConfig::Transport::kTcp
-                                                                              : LoopConfig::Transport::kAuto;
+  const std::string transport_name = transport != nullptr ? transport : "";
+  const auto chosen = transport_name == "tcp"   ? LoopConfig::Transport::kTcp
+                      : transport_name == "shm" ? LoopConfig::Transport::kShm
+                                                : LoopConfig::Transport::kAuto;
   std::string spec = env;
   double period = c.lockstep_period_s;
   // a period or port that is not a whole number in range leaves the port invalid: create() reports it
@@ -89,7 +91,7 @@ LoopConfig LoopConfig::from_env() {
     return c;
   }
   c = lockstep(spec.substr(0, colon), port, period);
-  c.lockstep_transport = tcp_only;
+  c.lockstep_transport = chosen;
   return c;
 }
 
@@ -503,13 +505,21 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
   const auto ops = h.find("ops");
   const bool offered = ops != h.end() && ops->is_array() &&
                        std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
-  if (use_shm && offered && ShmStream::peer_is_local(*fd)) {
+  const bool local = ShmStream::peer_is_local(*fd);
+  if (config.lockstep_transport == LoopConfig::Transport::kShm && (!offered || !local)) {
+    return R::fail(Error::kUnsupported, std::string("lockstep: shared memory required (UAVSIM_API_TRANSPORT=shm), but ") +
+                                            (local ? "the server does not offer it" : "the server is not on this machine"));
+  }
+  if (use_shm && offered && local) {
     std::optional<Json> reply;
     if (!api.request({{"op", "lockstep_shm"}, {"ring_bytes", ShmStream::kRingBytes}},
                      [&reply](const Json& j) { reply = j; })) {
       return R::fail(Error::kIo, "lockstep: cannot send to the simulator");
     }
     if (auto r = read_api_until([&] { return reply.has_value(); }, "waiting for the shared-memory offer"); !r) return r;
+    if (reply->value("ok", false) != true && config.lockstep_transport == LoopConfig::Transport::kShm) {
+      return R::fail(Error::kDenied, "lockstep: shared memory required, the server refused: " + reply_error_text(*reply));
+    }
     if (reply->value("ok", false) == true) {
       // the server writes everything after this reply into the ring
       auto ring = ShmStream::open(reply->value("result", Json::object()));
@@ -570,7 +580,7 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
     const bool use_shm = config.lockstep_transport != LoopConfig::Transport::kTcp;
     bool shm_unusable = false;
     auto joined = impl->connect_and_join(use_shm, &shm_unusable);
-    if (!joined && shm_unusable) {
+    if (!joined && shm_unusable && config.lockstep_transport == LoopConfig::Transport::kAuto) {
       std::fprintf(stderr, "uavsim client: %s; lockstep over TCP\n", joined.message().c_str());
       impl->api.close();
       joined = impl->connect_and_join(false, &shm_unusable);

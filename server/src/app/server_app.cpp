@@ -639,6 +639,10 @@ int run_server(const Options& given_options) {
       }
       extra = "MAVLink frames: " + std::to_string(sent) + " sent, " + std::to_string(received) + " received";
     }
+    if (api_server && api_server->shm_transport().activated_total() > 0) {
+      if (!extra.empty()) extra += "; ";
+      extra += "sim API connections on shared memory: " + std::to_string(api_server->shm_transport().activated_total());
+    }
     reporter.print_summary(std::cout, extra);
   }
   if (demo) {
