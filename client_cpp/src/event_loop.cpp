@@ -23,14 +23,13 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <thread>
 #include <unordered_map>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "loop_services.hpp"
 #include "net.hpp"
@@ -387,9 +386,14 @@ void EventLoop::Impl::resume_api() {
   update_api_interest();
   std::string why;
   switch (api.resume_input(&why)) {
-    case SimChannel::ReadResult::kOk: return;
-    case SimChannel::ReadResult::kClosed: lose_clock("the simulator closed the connection"); return;
-    case SimChannel::ReadResult::kError: lose_clock(why); return;
+    case SimChannel::ReadResult::kOk:
+      return;
+    case SimChannel::ReadResult::kClosed:
+      lose_clock("the simulator closed the connection");
+      return;
+    case SimChannel::ReadResult::kError:
+      lose_clock(why);
+      return;
   }
 }
 
@@ -469,7 +473,8 @@ void EventLoop::Impl::on_unrouted(const Json& j) {
   }
 }
 
-Result<void> EventLoop::Impl::read_api_until(const std::function<bool()>& done, const std::string& what) {
+Result<void> EventLoop::Impl::read_api_until(const std::function<bool()>& done,
+                                             const std::string& what) {
   const double wall = config.lockstep_wall_timeout_s;
   const int ms = static_cast<int>(std::min(wall, 3600.0) * 1000.0);
   while (!done()) {
@@ -478,10 +483,14 @@ Result<void> EventLoop::Impl::read_api_until(const std::function<bool()>& done, 
     do {
       n = ::poll(&p, 1, ms);
     } while (n < 0 && errno == EINTR);
-    if (n == 0) return Result<void>::fail(Error::kTimeout, "lockstep: " + what + ": nothing for " + std::to_string(wall) + " s");
-    if (n < 0) return Result<void>::fail(Error::kIo, "lockstep: " + what + ": " + std::strerror(errno));
+    if (n == 0)
+      return Result<void>::fail(
+          Error::kTimeout, "lockstep: " + what + ": nothing for " + std::to_string(wall) + " s");
+    if (n < 0)
+      return Result<void>::fail(Error::kIo, "lockstep: " + what + ": " + std::strerror(errno));
     on_api_readable();
-    if (!alive) return Result<void>::fail(Error::kConnectionLost, "lockstep: " + what + ": " + dead_reason);
+    if (!alive)
+      return Result<void>::fail(Error::kConnectionLost, "lockstep: " + what + ": " + dead_reason);
   }
   return {};
 }
@@ -494,7 +503,9 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
   api.open(*fd, wall, [this](const Json& j) { on_unrouted(j); });
   std::string buf;
   auto hello = net::read_line(*fd, buf, wall);
-  if (!hello) return R(Failure{hello.code(), "lockstep: no hello from the simulator API: " + hello.message()});
+  if (!hello)
+    return R(
+        Failure{hello.code(), "lockstep: no hello from the simulator API: " + hello.message()});
   const Json h = Json::parse(*hello, nullptr, false);
   if (!h.is_object() || h.value("hello", std::string()) != "uavsim") {
     return R::fail(Error::kProtocol, "lockstep: not a uavsim simulator API: " + *hello);
@@ -507,8 +518,10 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
                        std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
   const bool local = ShmStream::peer_is_local(*fd);
   if (config.lockstep_transport == LoopConfig::Transport::kShm && (!offered || !local)) {
-    return R::fail(Error::kUnsupported, std::string("lockstep: shared memory required (UAVSIM_API_TRANSPORT=shm), but ") +
-                                            (local ? "the server does not offer it" : "the server is not on this machine"));
+    return R::fail(
+        Error::kUnsupported,
+        std::string("lockstep: shared memory required (UAVSIM_API_TRANSPORT=shm), but ") +
+            (local ? "the server does not offer it" : "the server is not on this machine"));
   }
   if (use_shm && offered && local) {
     std::optional<Json> reply;
@@ -516,9 +529,14 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
                      [&reply](const Json& j) { reply = j; })) {
       return R::fail(Error::kIo, "lockstep: cannot send to the simulator");
     }
-    if (auto r = read_api_until([&] { return reply.has_value(); }, "waiting for the shared-memory offer"); !r) return r;
-    if (reply->value("ok", false) != true && config.lockstep_transport == LoopConfig::Transport::kShm) {
-      return R::fail(Error::kDenied, "lockstep: shared memory required, the server refused: " + reply_error_text(*reply));
+    if (auto r = read_api_until([&] { return reply.has_value(); },
+                                "waiting for the shared-memory offer");
+        !r)
+      return r;
+    if (reply->value("ok", false) != true &&
+        config.lockstep_transport == LoopConfig::Transport::kShm) {
+      return R::fail(Error::kDenied, "lockstep: shared memory required, the server refused: " +
+                                         reply_error_text(*reply));
     }
     if (reply->value("ok", false) == true) {
       // the server writes everything after this reply into the ring
@@ -536,8 +554,10 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
                    [&join](const Json& j) { join = j; })) {
     return R::fail(Error::kIo, "lockstep: cannot send the join");
   }
-  if (auto r = read_api_until([&] { return join.has_value(); }, "waiting for the join's reply"); !r) return r;
-  if ((*join)["ok"] != true) return R::fail(Error::kDenied, "lockstep: join refused: " + join->dump());
+  if (auto r = read_api_until([&] { return join.has_value(); }, "waiting for the join's reply"); !r)
+    return r;
+  if ((*join)["ok"] != true)
+    return R::fail(Error::kDenied, "lockstep: join refused: " + join->dump());
   const Json result = join->value("result", Json::object());
   period_s = result.value("period_s", config.lockstep_period_s);
   sim_now = std::max(0.0, result.value("first_tick_time", 0.0) - period_s);

@@ -48,7 +48,8 @@ struct A2aRadio::Impl {
     if (!data.is_string()) return;
     auto bytes = common::base64_decode(data.get_ref<const std::string&>());
     if (!bytes) return;
-    take_frame(from.is_number_integer() ? from.get<int>() : -1, broadcast.is_boolean() ? broadcast.get<bool>() : true,
+    take_frame(from.is_number_integer() ? from.get<int>() : -1,
+               broadcast.is_boolean() ? broadcast.get<bool>() : true,
                time.is_number() ? time.get<double>() : 0.0, std::move(*bytes));
   }
 
@@ -73,7 +74,8 @@ struct A2aRadio::Impl {
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
-  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel()) channel->remove_event_sink(impl_->radio_sink_id);
+  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel())
+    channel->remove_event_sink(impl_->radio_sink_id);
   unsubscribe_lockstep_events(impl_->loop, impl_->sink_id, {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
 
@@ -129,7 +131,8 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   // subscription, as the event sink is
   SimChannel* channel = LoopServices(loop).sim_channel();
   if (channel == nullptr) return R::fail(Error::kConnectionLost, "radio: no simulator connection");
-  s->radio_sink_id = channel->add_radio_sink([s](const common::shm::RadioFrame& f) { s->on_frame(f); });
+  s->radio_sink_id =
+      channel->add_radio_sink([s](const common::shm::RadioFrame& f) { s->on_frame(f); });
   Json result;
   auto id = subscribe_lockstep_events(
       loop, "radio_batch", [s](const Json& e) { s->on_batch(e); },

@@ -36,14 +36,18 @@ R ShmStream::open(const nlohmann::json& offer) {
   const auto bytes = offer.find("ring_bytes");
   const auto version = offer.find("version");
   if (token == offer.end() || !token->is_string() || !is_token(token->get<std::string>())) {
-    return R::fail(Error::kProtocol, "shared-memory stream: the offer's token is not 32 hex digits");
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the offer's token is not 32 hex digits");
   }
-  if (version == offer.end() || !version->is_number_unsigned() || version->get<std::uint64_t>() != shm::kVersion) {
-    return R::fail(Error::kProtocol, "shared-memory stream: the server offers another version of the ring");
+  if (version == offer.end() || !version->is_number_unsigned() ||
+      version->get<std::uint64_t>() != shm::kVersion) {
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the server offers another version of the ring");
   }
   if (bytes == offer.end() || !bytes->is_number_unsigned() ||
       shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>())) == 0) {
-    return R::fail(Error::kProtocol, "shared-memory stream: the offer's ring_bytes is out of range");
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the offer's ring_bytes is out of range");
   }
   const std::string t = token->get<std::string>();
   const std::string name = "/uavsim-" + t;
@@ -52,24 +56,30 @@ R ShmStream::open(const nlohmann::json& offer) {
 
   // the region: this user's, private to it, of the size announced
   const int fd = shm_open(name.c_str(), O_RDWR | O_CLOEXEC, 0);
-  if (fd < 0) return R::fail(Error::kIo, "shared-memory stream: shm_open " + name + ": " + std::strerror(errno));
+  if (fd < 0)
+    return R::fail(Error::kIo,
+                   "shared-memory stream: shm_open " + name + ": " + std::strerror(errno));
   struct stat st {};
   if (fstat(fd, &st) != 0 || st.st_uid != geteuid() || (st.st_mode & 0777) != 0600 ||
       static_cast<std::size_t>(st.st_size) != size) {
     close(fd);
-    return R::fail(Error::kProtocol, "shared-memory stream: " + name + " is not this user's private region of " +
+    return R::fail(Error::kProtocol, "shared-memory stream: " + name +
+                                         " is not this user's private region of " +
                                          std::to_string(size) + " bytes");
   }
   void* region = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
   const int map_errno = errno;
   close(fd);
   shm_unlink(name.c_str());  // mapped: the name is no longer needed
-  if (region == MAP_FAILED) return R::fail(Error::kIo, std::string("shared-memory stream: mmap: ") + std::strerror(map_errno));
+  if (region == MAP_FAILED)
+    return R::fail(Error::kIo,
+                   std::string("shared-memory stream: mmap: ") + std::strerror(map_errno));
 
   // the wake FIFO: read end, non-blocking (the server holds the only write end)
   const int fifo_fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   struct stat fst {};
-  const bool fifo_ok = fifo_fd >= 0 && fstat(fifo_fd, &fst) == 0 && S_ISFIFO(fst.st_mode) && fst.st_uid == geteuid();
+  const bool fifo_ok =
+      fifo_fd >= 0 && fstat(fifo_fd, &fst) == 0 && S_ISFIFO(fst.st_mode) && fst.st_uid == geteuid();
   const std::string fifo_error = fifo_fd < 0 ? std::strerror(errno) : "not this user's FIFO";
   unlink(fifo.c_str());
   if (!fifo_ok) {

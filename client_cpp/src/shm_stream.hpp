@@ -1,16 +1,16 @@
 // The client's end of the sim API's shared-memory stream (docs/protocol.md, "Shared-memory stream";
-// the ring itself: common/shm_ring.hpp). For a lockstep loop on the server's machine, everything the
-// server sends the connection arrives through a ring in shared memory, with a FIFO as the wake-up the
-// event loop waits on; requests still go on TCP. SimChannel reads it in place of the socket.
+// the ring itself: common/shm_ring.hpp). For a lockstep loop on the server's machine, everything
+// the server sends the connection arrives through a ring in shared memory, with a FIFO as the
+// wake-up the event loop waits on; requests still go on TCP. SimChannel reads it in place of the
+// socket.
 //
 // Library internal; loop thread only.
 #pragma once
 
 #include <cstddef>
 #include <memory>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "uavsim/client/result.hpp"
 #include "uavsim/common/shm_ring.hpp"

@@ -135,7 +135,8 @@ SimChannel::ReadResult SimChannel::read_ring(std::string* why) {
   std::string error;
   while (ring_ && !stream_.held()) {
     const auto status = ring_->next(&record_, &error);
-    if (status == shm::RingReader::Status::kEmpty) return closed ? ReadResult::kClosed : ReadResult::kOk;
+    if (status == shm::RingReader::Status::kEmpty)
+      return closed ? ReadResult::kClosed : ReadResult::kOk;
     if (status == shm::RingReader::Status::kCorrupt) {
       if (why != nullptr) *why = "shared-memory stream: " + error;
       return ReadResult::kError;

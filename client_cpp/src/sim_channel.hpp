@@ -25,10 +25,9 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
-
-#include <nlohmann/json.hpp>
 
 #include "api_stream.hpp"
 #include "shm_stream.hpp"
@@ -68,8 +67,9 @@ class SimChannel {
   bool is_open() const { return fd_ >= 0; }
   // The descriptor to wait on for input: the socket, or the shared-memory stream's wake-up.
   int fd() const { return ring_ ? ring_->wake_fd() : fd_; }
-  // From now on input comes from this shared-memory stream, not the socket (requests still go on the
-  // socket). Call once the reply that offered it has been read: nothing follows it on the socket.
+  // From now on input comes from this shared-memory stream, not the socket (requests still go on
+  // the socket). Call once the reply that offered it has been read: nothing follows it on the
+  // socket.
   void use_ring(std::unique_ptr<ShmStream> ring) { ring_ = std::move(ring); }
   bool on_ring() const { return ring_ != nullptr; }
 

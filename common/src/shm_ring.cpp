@@ -17,7 +17,9 @@ using std::uint8_t;
 
 std::atomic_ref<uint64_t> head_of(RingHeader* h) { return std::atomic_ref<uint64_t>(h->head); }
 std::atomic_ref<uint64_t> tail_of(RingHeader* h) { return std::atomic_ref<uint64_t>(h->tail); }
-std::atomic_ref<uint32_t> wake_of(RingHeader* h) { return std::atomic_ref<uint32_t>(h->wake_pending); }
+std::atomic_ref<uint32_t> wake_of(RingHeader* h) {
+  return std::atomic_ref<uint32_t>(h->wake_pending);
+}
 
 constexpr std::size_t padded(std::size_t n) { return (n + 7) & ~std::size_t{7}; }
 
@@ -107,8 +109,8 @@ std::optional<RingError> RingWriter::write(RecordType type,
   // the reader's tail: between what it had consumed before and what was written
   const uint64_t tail = tail_of(header_).load(std::memory_order_acquire);
   if (tail < tail_seen_ || tail > head_) {
-    *why = "the reader's position " + std::to_string(tail) + " is outside [" + std::to_string(tail_seen_) +
-           ", " + std::to_string(head_) + "]";
+    *why = "the reader's position " + std::to_string(tail) + " is outside [" +
+           std::to_string(tail_seen_) + ", " + std::to_string(head_) + "]";
     return RingError::kCorrupt;
   }
   tail_seen_ = tail;
@@ -146,7 +148,8 @@ bool RingWriter::take_wakeup() {
 // ---------------------------------------------------------------------------------------------------
 // reader
 
-std::optional<RingReader> RingReader::attach(void* region, std::size_t region_size, std::string* why) {
+std::optional<RingReader> RingReader::attach(void* region, std::size_t region_size,
+                                             std::string* why) {
   if (region == nullptr || region_size < kHeaderBytes) {
     *why = "the region is smaller than the ring's header";
     return std::nullopt;
@@ -157,16 +160,19 @@ std::optional<RingReader> RingReader::attach(void* region, std::size_t region_si
     return std::nullopt;
   }
   if (header->version != kVersion) {
-    *why = "ring version " + std::to_string(header->version) + ", this client reads " + std::to_string(kVersion);
+    *why = "ring version " + std::to_string(header->version) + ", this client reads " +
+           std::to_string(kVersion);
     return std::nullopt;
   }
   const uint64_t capacity = header->capacity;
-  if (region_bytes(static_cast<std::size_t>(capacity)) == 0 || region_bytes(static_cast<std::size_t>(capacity)) > region_size) {
+  if (region_bytes(static_cast<std::size_t>(capacity)) == 0 ||
+      region_bytes(static_cast<std::size_t>(capacity)) > region_size) {
     *why = "the ring's capacity " + std::to_string(capacity) + " does not fit its region of " +
            std::to_string(region_size) + " bytes";
     return std::nullopt;
   }
-  RingReader reader(header, static_cast<uint8_t*>(region) + kHeaderBytes, static_cast<std::size_t>(capacity));
+  RingReader reader(header, static_cast<uint8_t*>(region) + kHeaderBytes,
+                    static_cast<std::size_t>(capacity));
   reader.tail_ = tail_of(header).load(std::memory_order_acquire);
   return reader;
 }
@@ -176,7 +182,8 @@ RingReader::Status RingReader::next(Record* out, std::string* why) {
   if (head == tail_) return Status::kEmpty;
   const uint64_t waiting = head - tail_;
   if (head < tail_ || waiting > capacity_ || waiting < kRecordHeaderBytes || waiting % 8 != 0) {
-    *why = "the writer's position " + std::to_string(head) + " is inconsistent with the reader's " + std::to_string(tail_);
+    *why = "the writer's position " + std::to_string(head) + " is inconsistent with the reader's " +
+           std::to_string(tail_);
     return Status::kCorrupt;
   }
   uint8_t frame[kRecordHeaderBytes];
@@ -190,13 +197,15 @@ RingReader::Status RingReader::next(Record* out, std::string* why) {
     *why = "a record of version " + std::to_string(version);
     return Status::kCorrupt;
   }
-  if (type != static_cast<uint16_t>(RecordType::kStream) && type != static_cast<uint16_t>(RecordType::kTick)) {
+  if (type != static_cast<uint16_t>(RecordType::kStream) &&
+      type != static_cast<uint16_t>(RecordType::kTick)) {
     *why = "a record of unknown type " + std::to_string(type);
     return Status::kCorrupt;
   }
   const std::size_t need = kRecordHeaderBytes + padded(length);
   if (need > waiting) {
-    *why = "a record of " + std::to_string(length) + " bytes where " + std::to_string(waiting) + " were written";
+    *why = "a record of " + std::to_string(length) + " bytes where " + std::to_string(waiting) +
+           " were written";
     return Status::kCorrupt;
   }
   out->type = static_cast<RecordType>(type);
@@ -213,7 +222,8 @@ void RingReader::arm() { wake_of(header_).store(0, std::memory_order_seq_cst); }
 // tick records
 
 void encode_radio_frame(uint32_t to, uint32_t from, uint64_t seq, bool broadcast, double time_s,
-                        double sent_time_s, std::span<const uint8_t> data, std::vector<uint8_t>* out) {
+                        double sent_time_s, std::span<const uint8_t> data,
+                        std::vector<uint8_t>* out) {
   assert(!data.empty() && data.size() <= kMaxRadioFrameBytes);
   append(out, to);
   append(out, from);
@@ -247,20 +257,22 @@ std::optional<TickRecord> decode_tick(std::span<const uint8_t> payload, std::str
   }
   // each frame takes at least its fixed part and one byte: a count past that is a lie
   if (count > kMaxRadioFramesPerTick || count > c.left() / (kFrameFixedBytes + 1)) {
-    *why = "a tick record announcing " + std::to_string(count) + " radio frames in " + std::to_string(c.left()) + " bytes";
+    *why = "a tick record announcing " + std::to_string(count) + " radio frames in " +
+           std::to_string(c.left()) + " bytes";
     return std::nullopt;
   }
   r.frames.resize(count);
   for (RadioFrame& f : r.frames) {
     uint8_t broadcast = 0;
     uint16_t length = 0;
-    if (!c.take(&f.to) || !c.take(&f.from) || !c.take(&f.seq) || !c.take(&broadcast) || !c.take(&f.time_s) ||
-        !c.take(&f.sent_time_s) || !c.take(&length)) {
+    if (!c.take(&f.to) || !c.take(&f.from) || !c.take(&f.seq) || !c.take(&broadcast) ||
+        !c.take(&f.time_s) || !c.take(&f.sent_time_s) || !c.take(&length)) {
       *why = "a radio frame cut short";
       return std::nullopt;
     }
-    if (f.to >= kMaxVehicleIndex || f.from >= kMaxVehicleIndex || broadcast > 1 || !std::isfinite(f.time_s) ||
-        !std::isfinite(f.sent_time_s) || length == 0 || length > kMaxRadioFrameBytes) {
+    if (f.to >= kMaxVehicleIndex || f.from >= kMaxVehicleIndex || broadcast > 1 ||
+        !std::isfinite(f.time_s) || !std::isfinite(f.sent_time_s) || length == 0 ||
+        length > kMaxRadioFrameBytes) {
       *why = "a radio frame with a field out of range";
       return std::nullopt;
     }

@@ -2,20 +2,20 @@
 // server in process: the op's ranges, a client that breaks its ring and one killed while it holds a
 // tick are dropped and the server goes on with the others, as on TCP. (Runs on both transports:
 // system_test.cpp's ClientDeterminism.SharedMemoryAndTcpGiveTheSameRun.)
+#include "shm_stream.hpp"
+
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
-
 #include <string>
 
 #include "loop_services.hpp"
 #include "net.hpp"
-#include "shm_stream.hpp"
 #include "sim_channel.hpp"
 #include "sim_harness.hpp"
 #include "uavsim/client/event_loop.hpp"
@@ -113,7 +113,8 @@ TEST(SharedMemoryStream, TheOpChecksItsRangesAndIsOfferedOnce) {
   common::shm::RingReader::Record rec;
   ASSERT_TRUE(c.next(&rec));
   ASSERT_EQ(rec.type, common::shm::RecordType::kStream);
-  const Json again = Json::parse(std::string(rec.payload.begin(), rec.payload.end()), nullptr, false);
+  const Json again =
+      Json::parse(std::string(rec.payload.begin(), rec.payload.end()), nullptr, false);
   EXPECT_EQ(again["id"], 7);
   EXPECT_EQ(again["error"]["code"], "bad_state") << again;
 }
@@ -132,7 +133,9 @@ TEST(SharedMemoryStream, AClientThatBreaksItsRingIsDroppedAndTheOthersTickOn) {
   hostile.send({{"op", "lockstep_join"}, {"period_s", 0.02}});
   ApiClient api(server.api_port());
   // (bounded: the join is served at the server's next gate)
-  for (int i = 0; i < 1000 && api.request({{"op", "status"}})["result"]["lockstep_clients"] != 2; ++i) usleep(1000);
+  for (int i = 0; i < 1000 && api.request({{"op", "status"}})["result"]["lockstep_clients"] != 2;
+       ++i)
+    usleep(1000);
   ASSERT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 2);
   ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
   // its first tick, as a binary record
@@ -175,7 +178,8 @@ TEST(SharedMemoryStream, AClientKilledHoldingItsTickIsDroppedAndTheClockGoesOn) 
   }
   close(to_child[0]);
   close(from_child[1]);
-  SimServer server;  // (its lockstep timeout is 30 s: only the disconnect can free the clock in time)
+  SimServer
+      server;  // (its lockstep timeout is 30 s: only the disconnect can free the clock in time)
   ApiClient api(server.api_port());
   const int port = server.api_port();
   ASSERT_EQ(write(to_child[1], &port, sizeof(port)), static_cast<ssize_t>(sizeof(port)));

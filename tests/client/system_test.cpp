@@ -564,7 +564,8 @@ TEST(ClientDeterminism, SharedMemoryAndTcpGiveTheSameRun) {
     EXPECT_EQ(first_difference(tcp.resumed_at, shm.resumed_at), -1) << "pipelined " << pipelined;
     EXPECT_EQ(first_difference(tcp.truth, shm.truth), -1) << "pipelined " << pipelined;
     const long tel = first_difference(tcp.telemetry, shm.telemetry);
-    EXPECT_EQ(tel, -1) << "pipelined " << pipelined << ": the client's telemetry differs at tick " << tel;
+    EXPECT_EQ(tel, -1) << "pipelined " << pipelined << ": the client's telemetry differs at tick "
+                       << tel;
     EXPECT_EQ(tcp.telemetry.size(), shm.telemetry.size());
   }
 }

@@ -1,5 +1,6 @@
 // The shared-memory stream's ring and tick records (common/shm_ring.hpp) on plain memory: records
-// round-trip across the wrap, a full ring refuses, and each side refuses what the other may not write.
+// round-trip across the wrap, a full ring refuses, and each side refuses what the other may not
+// write.
 #include "uavsim/common/shm_ring.hpp"
 
 #include <gtest/gtest.h>
@@ -22,8 +23,8 @@ struct Region {
   RingHeader* header() { return static_cast<RingHeader*>(data()); }
 };
 
-std::optional<RingError> write_bytes(RingWriter& w, RecordType type, const std::vector<std::uint8_t>& bytes,
-                                     std::string* why) {
+std::optional<RingError> write_bytes(RingWriter& w, RecordType type,
+                                     const std::vector<std::uint8_t>& bytes, std::string* why) {
   const std::span<const std::uint8_t> part(bytes);
   return w.write(type, std::span<const std::span<const std::uint8_t>>(&part, 1), why);
 }
@@ -53,8 +54,11 @@ TEST(ShmRing, RecordsRoundTripInOrderAcrossTheWrap) {
   // split across the end
   RingReader::Record rec;
   for (int k = 0; k < 300; ++k) {
-    const auto bytes = pattern(1000 + static_cast<std::size_t>(k % 5), static_cast<std::uint8_t>(k));
-    ASSERT_EQ(write_bytes(w, k % 2 ? RecordType::kTick : RecordType::kStream, bytes, &why), std::nullopt) << k;
+    const auto bytes =
+        pattern(1000 + static_cast<std::size_t>(k % 5), static_cast<std::uint8_t>(k));
+    ASSERT_EQ(write_bytes(w, k % 2 ? RecordType::kTick : RecordType::kStream, bytes, &why),
+              std::nullopt)
+        << k;
     ASSERT_EQ(reader->next(&rec, &why), RingReader::Status::kRecord) << k << why;
     EXPECT_EQ(rec.type, k % 2 ? RecordType::kTick : RecordType::kStream);
     EXPECT_EQ(rec.payload, bytes) << k;
@@ -71,7 +75,8 @@ TEST(ShmRing, AFullRingRefusesUntilTheReaderTakesARecord) {
   ASSERT_TRUE(reader);
   // 8-byte frame + 4088 bytes = 4 KiB a record: 16 fill the ring
   const auto bytes = pattern(4088, 1);
-  for (int k = 0; k < 16; ++k) ASSERT_EQ(write_bytes(w, RecordType::kStream, bytes, &why), std::nullopt) << k;
+  for (int k = 0; k < 16; ++k)
+    ASSERT_EQ(write_bytes(w, RecordType::kStream, bytes, &why), std::nullopt) << k;
   EXPECT_EQ(write_bytes(w, RecordType::kStream, bytes, &why), RingError::kFull);
   RingReader::Record rec;
   ASSERT_EQ(reader->next(&rec, &why), RingReader::Status::kRecord);
@@ -144,11 +149,14 @@ TEST(ShmRing, TheReaderRefusesEveryBrokenRecordField) {
   EXPECT_EQ(broken([](Region&, std::uint8_t* f) { f[4] = 9; }), RingReader::Status::kCorrupt);
   EXPECT_EQ(broken([](Region&, std::uint8_t* f) { f[6] = 2; }), RingReader::Status::kCorrupt);
   // a head more than a ring ahead, or not on a record boundary
-  EXPECT_EQ(broken([](Region& r, std::uint8_t*) { r.header()->head = kCapacity + 8; }), RingReader::Status::kCorrupt);
-  EXPECT_EQ(broken([](Region& r, std::uint8_t*) { r.header()->head = 5; }), RingReader::Status::kCorrupt);
+  EXPECT_EQ(broken([](Region& r, std::uint8_t*) { r.header()->head = kCapacity + 8; }),
+            RingReader::Status::kCorrupt);
+  EXPECT_EQ(broken([](Region& r, std::uint8_t*) { r.header()->head = 5; }),
+            RingReader::Status::kCorrupt);
 }
 
-std::vector<std::uint8_t> tick_record(std::uint32_t frames, std::int64_t tick = 3, double time_s = 0.06) {
+std::vector<std::uint8_t> tick_record(std::uint32_t frames, std::int64_t tick = 3,
+                                      double time_s = 0.06) {
   std::vector<std::uint8_t> out = encode_tick_head(tick, time_s, frames);
   for (std::uint32_t k = 0; k < frames; ++k) {
     encode_radio_frame(k + 1, k, 100 + k, k % 2 == 0, 0.05 + k, 0.04 + k, pattern(10 + k, 3), &out);

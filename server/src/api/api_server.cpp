@@ -6,9 +6,9 @@
 #include <limits>
 
 #include "api/request_fields.hpp"
-#include "uavsim/common/shm_ring.hpp"
 #include "api/vehicle_arg.hpp"
 #include "sim/checked_number.hpp"
+#include "uavsim/common/shm_ring.hpp"
 
 namespace uavsim::server::api {
 
@@ -368,7 +368,8 @@ void ApiServer::announce_ticks() {
     for (OpGroup* g : groups_) g->before_tick(conn, send_fn_);
     const int64_t tick = lockstep_.begin_tick(conn, now);
     // on a shared-memory stream: one binary record with the tick's radio frames
-    if (!shm_->send_tick(conn, tick, now)) send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
+    if (!shm_->send_tick(conn, tick, now))
+      send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
   }
 }
 
@@ -622,17 +623,23 @@ void ApiServer::op_lockstep_shm(uint64_t conn, const Json& request, OpReply* rep
   }
   const std::string peer = server_->peer_address(conn);
   if (peer.rfind("127.", 0) != 0) {
-    return reply->fail(ApiError::kNotAvailable, "the shared-memory stream is for clients on the server's machine; "
-                                                "this one connects from " + peer);
+    return reply->fail(ApiError::kNotAvailable,
+                       "the shared-memory stream is for clients on the server's machine; "
+                       "this one connects from " +
+                           peer);
   }
-  if (shm_->attached(conn)) return reply->fail(ApiError::kBadState, "this connection is on the shared-memory stream already");
+  if (shm_->attached(conn))
+    return reply->fail(ApiError::kBadState,
+                       "this connection is on the shared-memory stream already");
   if (step_reply_ && step_reply_->first == conn) {
     return reply->fail(ApiError::kBusy, "a step request of this connection is in progress");
   }
   const auto bytes = number_field(request, "ring_bytes");
-  const auto ring_bytes = bytes ? sim::checked_integer<uint64_t>(*bytes) : std::optional<uint64_t>(ShmTransport::kDefaultRingBytes);
+  const auto ring_bytes = bytes ? sim::checked_integer<uint64_t>(*bytes)
+                                : std::optional<uint64_t>(ShmTransport::kDefaultRingBytes);
   if (!ring_bytes || common::shm::region_bytes(static_cast<size_t>(*ring_bytes)) == 0) {
-    return reply->fail(ApiError::kBadField, "\"ring_bytes\" must be a power of two in [65536, 268435456]");
+    return reply->fail(ApiError::kBadField,
+                       "\"ring_bytes\" must be a power of two in [65536, 268435456]");
   }
   std::string why;
   const auto offer = shm_->offer(conn, static_cast<size_t>(*ring_bytes), &why);

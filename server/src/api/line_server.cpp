@@ -107,7 +107,7 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
       if (c.diversion->write(data)) return true;
       mark_overloaded(c);
     } else if (pending + data.size() > limits_.max_pending_bytes ||
-        total_pending_ + data.size() > limits_.max_total_pending_bytes) {
+               total_pending_ + data.size() > limits_.max_total_pending_bytes) {
       mark_overloaded(c);
     } else {
       c.out += data;

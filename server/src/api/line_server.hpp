@@ -50,8 +50,8 @@ class LineServer {
   LineServer& operator=(const LineServer&) = delete;
 
   // Where a connection's output goes instead of its socket (the sim API's shared-memory stream,
-  // api/shm_transport.hpp). write() gets whole messages in order, with the output lock held (it must
-  // not block); false closes the connection as overloaded.
+  // api/shm_transport.hpp). write() gets whole messages in order, with the output lock held (it
+  // must not block); false closes the connection as overloaded.
   class Diversion {
    public:
     virtual ~Diversion() = default;

@@ -402,11 +402,13 @@ nlohmann::json compact_frame(const radio::Delivery& d, const std::string& data_b
 }  // namespace
 
 void RadioOps::send_held(uint64_t conn, const Send& send) {
-  // frames held as such (a connection that has left lockstep on a shared-memory stream) go as a line
+  // frames held as such (a connection that has left lockstep on a shared-memory stream) go as a
+  // line
   if (const auto b = held_binary_.find(conn); b != held_binary_.end()) {
     Json& batch = held_[conn];
     if (batch.is_null()) batch = Json::array();
-    for (const radio::Delivery& d : b->second) batch.push_back(compact_frame(d, common::base64_encode(d.data)));
+    for (const radio::Delivery& d : b->second)
+      batch.push_back(compact_frame(d, common::base64_encode(d.data)));
     held_binary_.erase(b);
   }
   const auto it = held_.find(conn);

@@ -93,7 +93,8 @@ class RadioOps : public OpGroup {
   ShmTransport* shm_ = nullptr;
   void send_held(uint64_t conn, const Send& send);
   // adds the deliveries to held_ or held_binary_ (batch subscribers) or sends a radio event each
-  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send, const InLockstep& in_lockstep);
+  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,
+                        const InLockstep& in_lockstep);
 };
 
 }  // namespace uavsim::server::api

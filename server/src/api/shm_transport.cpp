@@ -45,8 +45,8 @@ std::optional<std::string> random_token() {
 // One connection's ring: the mapping, the wake FIFO's write end, the writer.
 class ShmTransport::Ring : public LineServer::Diversion {
  public:
-  Ring(uint64_t conn, std::string token, void* region, std::size_t region_size, std::size_t capacity,
-       int fifo_fd, std::shared_ptr<std::atomic<bool>> held)
+  Ring(uint64_t conn, std::string token, void* region, std::size_t region_size,
+       std::size_t capacity, int fifo_fd, std::shared_ptr<std::atomic<bool>> held)
       : conn_(conn),
         token_(std::move(token)),
         region_(region),
@@ -62,12 +62,15 @@ class ShmTransport::Ring : public LineServer::Diversion {
   }
 
   static std::string shm_name(const std::string& token) { return "/uavsim-" + token; }
-  static std::string fifo_path(const std::string& token) { return "/dev/shm/uavsim-" + token + ".wake"; }
+  static std::string fifo_path(const std::string& token) {
+    return "/dev/shm/uavsim-" + token + ".wake";
+  }
 
   // LineServer::Diversion: a stream record with these bytes (whole messages)
   bool write(const std::string& data) override {
     const std::span<const uint8_t> part(reinterpret_cast<const uint8_t*>(data.data()), data.size());
-    return write_record(shm::RecordType::kStream, std::span<const std::span<const uint8_t>>(&part, 1));
+    return write_record(shm::RecordType::kStream,
+                        std::span<const std::span<const uint8_t>>(&part, 1));
   }
 
   std::size_t pending_bytes() const override {
@@ -84,11 +87,14 @@ class ShmTransport::Ring : public LineServer::Diversion {
       if (error) {
         // said once: the connection is closed as overloaded
         failed_ = true;
-        const char* what = *error == shm::RingError::kCorrupt ? "the client broke its shared-memory ring"
-                           : *error == shm::RingError::kFull  ? "the client's shared-memory ring is full (it does not read)"
-                                                              : "a message larger than the client's shared-memory ring";
-        std::fprintf(stderr, "sim API: connection %llu dropped: %s%s%s\n", static_cast<unsigned long long>(conn_),
-                     what, why.empty() ? "" : ": ", why.c_str());
+        const char* what = *error == shm::RingError::kCorrupt
+                               ? "the client broke its shared-memory ring"
+                           : *error == shm::RingError::kFull
+                               ? "the client's shared-memory ring is full (it does not read)"
+                               : "a message larger than the client's shared-memory ring";
+        std::fprintf(stderr, "sim API: connection %llu dropped: %s%s%s\n",
+                     static_cast<unsigned long long>(conn_), what, why.empty() ? "" : ": ",
+                     why.c_str());
         return false;
       }
       if (!writer_.take_wakeup()) return true;  // its reader has a wake-up coming
@@ -96,7 +102,8 @@ class ShmTransport::Ring : public LineServer::Diversion {
     // wake it now, or at the end of the gate pass
     if (held_->load()) {
       deferred_.store(true);
-      if (held_->load() || !deferred_.exchange(false)) return true;  // (released meanwhile: wake here)
+      if (held_->load() || !deferred_.exchange(false))
+        return true;  // (released meanwhile: wake here)
     }
     wake();
     return true;
@@ -145,7 +152,8 @@ ShmTransport::ShmTransport(LineServer& server) : server_(server) {}
 
 ShmTransport::~ShmTransport() = default;
 
-std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t ring_bytes, std::string* why) {
+std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t ring_bytes,
+                                                  std::string* why) {
   const std::size_t region_size = shm::region_bytes(ring_bytes);
   const auto token = random_token();
   if (region_size == 0 || !token) {
@@ -167,13 +175,15 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
   close(fd);
   if (region == MAP_FAILED) {
     shm_unlink(name.c_str());
-    *why = "mapping " + std::to_string(region_size) + " bytes of shared memory: " + std::strerror(map_errno);
+    *why = "mapping " + std::to_string(region_size) +
+           " bytes of shared memory: " + std::strerror(map_errno);
     return std::nullopt;
   }
   // the wake-up FIFO: opened read-write, so the open does not wait for the client
   const std::string fifo = Ring::fifo_path(*token);
   int fifo_fd = -1;
-  if (mkfifo(fifo.c_str(), 0600) == 0) fifo_fd = open(fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (mkfifo(fifo.c_str(), 0600) == 0)
+    fifo_fd = open(fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fifo_fd < 0) {
     *why = "FIFO " + fifo + ": " + std::strerror(errno);
     unlink(fifo.c_str());
@@ -181,7 +191,8 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     shm_unlink(name.c_str());
     return std::nullopt;
   }
-  offered_[conn] = std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, held_);
+  offered_[conn] =
+      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, held_);
   return nlohmann::json{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
 }
 
@@ -209,7 +220,8 @@ void ShmTransport::set_tick_radio(uint64_t conn, std::vector<radio::Delivery> fr
   if (pending.empty()) {
     pending = std::move(frames);
   } else {
-    pending.insert(pending.end(), std::make_move_iterator(frames.begin()), std::make_move_iterator(frames.end()));
+    pending.insert(pending.end(), std::make_move_iterator(frames.begin()),
+                   std::make_move_iterator(frames.end()));
   }
 }
 
@@ -226,10 +238,11 @@ bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
   frames.swap(ring->tick_radio);
   std::vector<uint8_t> body;
   for (const radio::Delivery& d : frames) {
-    shm::encode_radio_frame(static_cast<uint32_t>(d.to), static_cast<uint32_t>(d.from), d.seq, d.broadcast,
-                            d.time_s, d.queued_s, d.data, &body);
+    shm::encode_radio_frame(static_cast<uint32_t>(d.to), static_cast<uint32_t>(d.from), d.seq,
+                            d.broadcast, d.time_s, d.queued_s, d.data, &body);
   }
-  const std::vector<uint8_t> head = shm::encode_tick_head(tick, time_s, static_cast<uint32_t>(frames.size()));
+  const std::vector<uint8_t> head =
+      shm::encode_tick_head(tick, time_s, static_cast<uint32_t>(frames.size()));
   const std::span<const uint8_t> parts[] = {head, body};
   if (!ring->write_record(shm::RecordType::kTick, parts)) server_.close_overloaded(conn);
   return true;

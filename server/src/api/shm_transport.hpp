@@ -1,25 +1,26 @@
-// The sim API's shared-memory stream (docs/protocol.md, "Shared-memory stream"): for a client on the
-// server's machine, everything the server sends a connection goes into a ring in shared memory
-// (common/shm_ring.hpp) instead of its TCP socket, written by the thread that sends it (no hop through
-// the I/O thread), with one wake-up per gate pass at most; a lockstep tick travels as one binary record
-// with the radio frames for it (no JSON, no base64).
+// The sim API's shared-memory stream (docs/protocol.md, "Shared-memory stream"): for a client on
+// the server's machine, everything the server sends a connection goes into a ring in shared memory
+// (common/shm_ring.hpp) instead of its TCP socket, written by the thread that sends it (no hop
+// through the I/O thread), with one wake-up per gate pass at most; a lockstep tick travels as one
+// binary record with the radio frames for it (no JSON, no base64).
 //
-// Negotiation (op lockstep_shm, ApiServer): the server creates, 0600 and O_EXCL, a shared-memory object
-// /dev/shm/uavsim-TOKEN and a FIFO /dev/shm/uavsim-TOKEN.wake (TOKEN: 128 random bits in hex; the API is
-// TCP, so no descriptor can be passed), replies with TOKEN on TCP, and diverts the connection's output
-// to the ring from the next message on. The client maps both and unlinks the names; the server unlinks
-// them too when the connection ends (whichever comes first). The FIFO is the wake-up the client's event
-// loop can wait on beside its other descriptors (a futex could not be); the server holds its only write
-// end, so the client sees a hang-up when the connection ends or the server dies.
+// Negotiation (op lockstep_shm, ApiServer): the server creates, 0600 and O_EXCL, a shared-memory
+// object /dev/shm/uavsim-TOKEN and a FIFO /dev/shm/uavsim-TOKEN.wake (TOKEN: 128 random bits in
+// hex; the API is TCP, so no descriptor can be passed), replies with TOKEN on TCP, and diverts the
+// connection's output to the ring from the next message on. The client maps both and unlinks the
+// names; the server unlinks them too when the connection ends (whichever comes first). The FIFO is
+// the wake-up the client's event loop can wait on beside its other descriptors (a futex could not
+// be); the server holds its only write end, so the client sees a hang-up when the connection ends
+// or the server dies.
 //
 // The client's requests, `done` included, stay on TCP: a request sent between a tick and its `done`
 // must run before the `done` (the lockstep contract, point 3), and one ordered channel keeps that
 // without a second sequencing scheme; the server's side of TCP is one read per request batch, which
 // the I/O thread does anyway.
 //
-// A client that stops reading (the ring full), or writes into the ring what the protocol forbids (its
-// read position outside what was written), is dropped: its connection is closed as overloaded with a
-// message on stderr naming it, it leaves lockstep, and the server goes on.
+// A client that stops reading (the ring full), or writes into the ring what the protocol forbids
+// (its read position outside what was written), is dropped: its connection is closed as overloaded
+// with a message on stderr naming it, it leaves lockstep, and the server goes on.
 //
 // Thread contract: offer, activate, attached, set_tick_radio, send_tick, release_wakeups and
 // on_disconnect on the loop thread; the rings' writes (LineServer::Diversion) from any thread that
@@ -31,11 +32,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "api/line_server.hpp"
 #include "radio/radio_channel.hpp"
@@ -53,16 +53,17 @@ class ShmTransport {
   ShmTransport(const ShmTransport&) = delete;
   ShmTransport& operator=(const ShmTransport&) = delete;
 
-  // Creates conn's ring (ring_bytes: a power of two in [64 KiB, 256 MiB], checked by the caller) and
-  // returns what the client needs to map it ({token, ring_bytes, version}); nullopt with *why when
-  // the system refuses (no /dev/shm, out of memory). Output still goes to TCP until activate().
+  // Creates conn's ring (ring_bytes: a power of two in [64 KiB, 256 MiB], checked by the caller)
+  // and returns what the client needs to map it ({token, ring_bytes, version}); nullopt with *why
+  // when the system refuses (no /dev/shm, out of memory). Output still goes to TCP until
+  // activate().
   std::optional<nlohmann::json> offer(uint64_t conn, std::size_t ring_bytes, std::string* why);
   // From now on conn's output goes to its offered ring. Call right after sending the offer's reply.
   void activate(uint64_t conn);
   // Whether conn's output goes to a ring.
   bool attached(uint64_t conn) const;
-  // The radio frames that arrived for conn since its last tick, for the tick record send_tick writes
-  // next (RadioOps, at before_tick).
+  // The radio frames that arrived for conn since its last tick, for the tick record send_tick
+  // writes next (RadioOps, at before_tick).
   void set_tick_radio(uint64_t conn, std::vector<radio::Delivery> frames);
   // Writes conn's tick as one record with the radio frames given for it. False (nothing written) if
   // conn is not on a ring; a ring that cannot take it drops the connection (see above).

@@ -641,7 +641,8 @@ int run_server(const Options& given_options) {
     }
     if (api_server && api_server->shm_transport().activated_total() > 0) {
       if (!extra.empty()) extra += "; ";
-      extra += "sim API connections on shared memory: " + std::to_string(api_server->shm_transport().activated_total());
+      extra += "sim API connections on shared memory: " +
+               std::to_string(api_server->shm_transport().activated_total());
     }
     reporter.print_summary(std::cout, extra);
   }

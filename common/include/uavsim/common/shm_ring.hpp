@@ -9,10 +9,10 @@
 // may wrap around the end of the data. Numbers are in the host's byte order: both ends run on the
 // same machine by construction.
 //
-// Neither side trusts what the other can write. The writer keeps its own head and capacity and reads
-// only the consumer's tail, which must lie between the tail it saw last and its head; the reader
-// checks the header, head, every length, type and version. Anything else is kCorrupt: the peer is
-// broken or hostile and the stream is over.
+// Neither side trusts what the other can write. The writer keeps its own head and capacity and
+// reads only the consumer's tail, which must lie between the tail it saw last and its head; the
+// reader checks the header, head, every length, type and version. Anything else is kCorrupt: the
+// peer is broken or hostile and the stream is over.
 #pragma once
 
 #include <atomic>
@@ -53,8 +53,10 @@ struct RingHeader {
   alignas(64) std::uint32_t wake_pending;
 };
 static_assert(sizeof(RingHeader) <= kHeaderBytes);
-static_assert(std::atomic_ref<std::uint64_t>::is_always_lock_free, "the ring's counters are shared between processes");
-static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free, "the ring's wake flag is shared between processes");
+static_assert(std::atomic_ref<std::uint64_t>::is_always_lock_free,
+              "the ring's counters are shared between processes");
+static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free,
+              "the ring's wake flag is shared between processes");
 
 // Bytes a region of this capacity takes, or 0 if the capacity is not a power of two in
 // [kMinCapacity, kMaxCapacity].
@@ -75,7 +77,8 @@ class RingWriter {
 
   // Appends one record made of the concatenated parts. nullopt when written; otherwise nothing is
   // written and the error is returned (kCorrupt with *why).
-  std::optional<RingError> write(RecordType type, std::span<const std::span<const std::uint8_t>> parts,
+  std::optional<RingError> write(RecordType type,
+                                 std::span<const std::span<const std::uint8_t>> parts,
                                  std::string* why);
   // After a write: true if the reader should be woken now (it had cleared its flag). Sets the flag.
   bool take_wakeup();
@@ -150,7 +153,8 @@ void encode_radio_frame(std::uint32_t to, std::uint32_t from, std::uint64_t seq,
                         double time_s, double sent_time_s, std::span<const std::uint8_t> data,
                         std::vector<std::uint8_t>* out);
 // The head of a tick record (tick, time, frame count), written before its frames.
-std::vector<std::uint8_t> encode_tick_head(std::int64_t tick, double time_s, std::uint32_t frame_count);
+std::vector<std::uint8_t> encode_tick_head(std::int64_t tick, double time_s,
+                                           std::uint32_t frame_count);
 // Parses a tick record's payload. nullopt with *why for anything out of range: a count or length
 // past the payload's end or its limits, a time that is not finite, a vehicle index past
 // kMaxVehicleIndex, bytes left over.
