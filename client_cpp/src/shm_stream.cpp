@@ -50,8 +50,8 @@ R ShmStream::open(const nlohmann::json& offer) {
                    "shared-memory stream: the offer's ring_bytes is out of range");
   }
   const std::string t = token->get<std::string>();
-  const std::string name = "/uavsim-" + t;
-  const std::string fifo = "/dev/shm/uavsim-" + t + ".wake";
+  const std::string name = shm::object_name(t);
+  const std::string fifo = shm::fifo_path(t);
   const std::size_t size = shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>()));
 
   // the region: this user's, private to it, of the size announced

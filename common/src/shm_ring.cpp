@@ -77,6 +77,20 @@ constexpr std::size_t kFrameFixedBytes = 4 + 4 + 8 + 1 + 8 + 8 + 2;
 
 }  // namespace
 
+// (appended, not "literal" + token: GCC 12 warns a false -Wrestrict on that)
+std::string object_name(const std::string& token) {
+  std::string name = "/uavsim-";
+  name += token;
+  return name;
+}
+
+std::string fifo_path(const std::string& token) {
+  std::string path = "/dev/shm/uavsim-";
+  path += token;
+  path += ".wake";
+  return path;
+}
+
 std::size_t region_bytes(std::size_t capacity) {
   if (!power_of_two(capacity) || capacity < kMinCapacity || capacity > kMaxCapacity) return 0;
   return kHeaderBytes + capacity;

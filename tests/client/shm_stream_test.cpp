@@ -48,7 +48,7 @@ class RawShmClient {
   }
   // takes the offered stream: a mapping of its own (to break it with) and the reader
   bool take_stream(const Json& offer) {
-    const std::string name = "/uavsim-" + offer.value("token", std::string());
+    const std::string name = common::shm::object_name(offer.value("token", std::string()));
     size_ = common::shm::region_bytes(offer.value("ring_bytes", std::size_t{0}));
     const int fd = shm_open(name.c_str(), O_RDWR, 0);
     if (fd < 0 || size_ == 0) return false;
@@ -106,7 +106,7 @@ TEST(SharedMemoryStream, TheOpChecksItsRangesAndIsOfferedOnce) {
   EXPECT_EQ(offer["result"]["ring_bytes"], 65536);
   ASSERT_TRUE(c.take_stream(offer["result"]));
   // the names are gone once mapped: nobody else opens them
-  const std::string name = "/uavsim-" + offer["result"]["token"].get<std::string>();
+  const std::string name = common::shm::object_name(offer["result"]["token"].get<std::string>());
   EXPECT_LT(shm_open(name.c_str(), O_RDWR, 0), 0);
   // a second offer is refused, its reply on the stream
   c.send({{"op", "lockstep_shm"}, {"id", 7}});

@@ -61,11 +61,6 @@ class ShmTransport::Ring : public LineServer::Diversion {
     close(fifo_fd_);  // the client's FIFO sees the hang-up
   }
 
-  static std::string shm_name(const std::string& token) { return "/uavsim-" + token; }
-  static std::string fifo_path(const std::string& token) {
-    return "/dev/shm/uavsim-" + token + ".wake";
-  }
-
   // LineServer::Diversion: a stream record with these bytes (whole messages)
   bool write(const std::string& data) override {
     const std::span<const uint8_t> part(reinterpret_cast<const uint8_t*>(data.data()), data.size());
@@ -116,8 +111,8 @@ class ShmTransport::Ring : public LineServer::Diversion {
   void unlink_names() {
     if (unlinked_) return;
     unlinked_ = true;
-    shm_unlink(shm_name(token_).c_str());
-    unlink(fifo_path(token_).c_str());
+    shm_unlink(shm::object_name(token_).c_str());
+    unlink(shm::fifo_path(token_).c_str());
   }
 
   bool failed() const {
@@ -161,7 +156,7 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     return std::nullopt;
   }
   // the region: created here (never an object someone else made), 0600, sized, mapped
-  const std::string name = Ring::shm_name(*token);
+  const std::string name = shm::object_name(*token);
   const int fd = shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
   if (fd < 0) {
     *why = "shm_open " + name + ": " + std::strerror(errno);
@@ -180,7 +175,7 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     return std::nullopt;
   }
   // the wake-up FIFO: opened read-write, so the open does not wait for the client
-  const std::string fifo = Ring::fifo_path(*token);
+  const std::string fifo = shm::fifo_path(*token);
   int fifo_fd = -1;
   if (mkfifo(fifo.c_str(), 0600) == 0)
     fifo_fd = open(fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);

@@ -58,6 +58,11 @@ static_assert(std::atomic_ref<std::uint64_t>::is_always_lock_free,
 static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free,
               "the ring's wake flag is shared between processes");
 
+// The names a stream's token gives (docs/protocol.md): the shared-memory object "/uavsim-TOKEN"
+// (for shm_open) and its wake-up FIFO "/dev/shm/uavsim-TOKEN.wake".
+std::string object_name(const std::string& token);
+std::string fifo_path(const std::string& token);
+
 // Bytes a region of this capacity takes, or 0 if the capacity is not a power of two in
 // [kMinCapacity, kMaxCapacity].
 std::size_t region_bytes(std::size_t capacity);
