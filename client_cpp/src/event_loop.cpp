@@ -13,22 +13,23 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <thread>
 #include <unordered_map>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "loop_services.hpp"
 #include "net.hpp"
@@ -68,6 +69,11 @@ LoopConfig LoopConfig::from_env() {
   LoopConfig c;
   const char* env = std::getenv("UAVSIM_LOCKSTEP");
   if (env == nullptr || *env == '\0') return c;
+  const char* transport = std::getenv("UAVSIM_API_TRANSPORT");
+  const std::string transport_name = transport != nullptr ? transport : "";
+  const auto chosen = transport_name == "tcp"   ? LoopConfig::Transport::kTcp
+                      : transport_name == "shm" ? LoopConfig::Transport::kShm
+                                                : LoopConfig::Transport::kAuto;
   std::string spec = env;
   double period = c.lockstep_period_s;
   // a period or port that is not a whole number in range leaves the port invalid: create() reports it
@@ -84,6 +90,7 @@ LoopConfig LoopConfig::from_env() {
     return c;
   }
   c = lockstep(spec.substr(0, colon), port, period);
+  c.lockstep_transport = chosen;
   return c;
 }
 
@@ -177,6 +184,12 @@ struct EventLoop::Impl {
   std::uint32_t api_interest() const { return api_held ? 0u : (EPOLLIN | EPOLLRDHUP); }
   void update_api_interest();  // epfd's interest in the lockstep connection := api_interest()
   void lose_clock(const std::string& why);
+  // create(): connects the lockstep connection, on the shared-memory stream if use_shm and the
+  // server is on this machine and offers it, and joins (the first tick handled). *shm_unusable when
+  // the offered stream could not be opened: the connection is unusable, connect again without it.
+  Result<void> connect_and_join(bool use_shm, bool* shm_unusable);
+  // create(): reads the lockstep connection (wall timeout each wait) until done() or a failure
+  Result<void> read_api_until(const std::function<bool()>& done, const std::string& what);
 };
 
 EventLoop::Impl::~Impl() {
@@ -371,7 +384,17 @@ void EventLoop::Impl::hold_api() {
 void EventLoop::Impl::resume_api() {
   api_held = false;
   update_api_interest();
-  api.resume_input();
+  std::string why;
+  switch (api.resume_input(&why)) {
+    case SimChannel::ReadResult::kOk:
+      return;
+    case SimChannel::ReadResult::kClosed:
+      lose_clock("the simulator closed the connection");
+      return;
+    case SimChannel::ReadResult::kError:
+      lose_clock(why);
+      return;
+  }
 }
 
 void EventLoop::Impl::send_done() {
@@ -450,6 +473,97 @@ void EventLoop::Impl::on_unrouted(const Json& j) {
   }
 }
 
+Result<void> EventLoop::Impl::read_api_until(const std::function<bool()>& done,
+                                             const std::string& what) {
+  const double wall = config.lockstep_wall_timeout_s;
+  const int ms = static_cast<int>(std::min(wall, 3600.0) * 1000.0);
+  while (!done()) {
+    pollfd p{api.fd(), POLLIN, 0};
+    int n;
+    do {
+      n = ::poll(&p, 1, ms);
+    } while (n < 0 && errno == EINTR);
+    if (n == 0)
+      return Result<void>::fail(
+          Error::kTimeout, "lockstep: " + what + ": nothing for " + std::to_string(wall) + " s");
+    if (n < 0)
+      return Result<void>::fail(Error::kIo, "lockstep: " + what + ": " + std::strerror(errno));
+    on_api_readable();
+    if (!alive)
+      return Result<void>::fail(Error::kConnectionLost, "lockstep: " + what + ": " + dead_reason);
+  }
+  return {};
+}
+
+Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable) {
+  using R = Result<void>;
+  const double wall = config.lockstep_wall_timeout_s;
+  auto fd = net::tcp_connect(config.lockstep_host, config.lockstep_port, wall);
+  if (!fd) return R(Failure{fd.code(), "lockstep: simulator API: " + fd.message()});
+  api.open(*fd, wall, [this](const Json& j) { on_unrouted(j); });
+  std::string buf;
+  auto hello = net::read_line(*fd, buf, wall);
+  if (!hello)
+    return R(
+        Failure{hello.code(), "lockstep: no hello from the simulator API: " + hello.message()});
+  const Json h = Json::parse(*hello, nullptr, false);
+  if (!h.is_object() || h.value("hello", std::string()) != "uavsim") {
+    return R::fail(Error::kProtocol, "lockstep: not a uavsim simulator API: " + *hello);
+  }
+  if (!buf.empty()) api.feed(buf.data(), buf.size());
+  // the shared-memory stream: for a server on this machine that serves it; a server that does not
+  // (an older one, a remote one) answers with an error and the connection goes on over TCP
+  const auto ops = h.find("ops");
+  const bool offered = ops != h.end() && ops->is_array() &&
+                       std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
+  const bool local = ShmStream::peer_is_local(*fd);
+  if (config.lockstep_transport == LoopConfig::Transport::kShm && (!offered || !local)) {
+    return R::fail(
+        Error::kUnsupported,
+        std::string("lockstep: shared memory required (UAVSIM_API_TRANSPORT=shm), but ") +
+            (local ? "the server does not offer it" : "the server is not on this machine"));
+  }
+  if (use_shm && offered && local) {
+    std::optional<Json> reply;
+    if (!api.request({{"op", "lockstep_shm"}, {"ring_bytes", ShmStream::kRingBytes}},
+                     [&reply](const Json& j) { reply = j; })) {
+      return R::fail(Error::kIo, "lockstep: cannot send to the simulator");
+    }
+    if (auto r = read_api_until([&] { return reply.has_value(); },
+                                "waiting for the shared-memory offer");
+        !r)
+      return r;
+    if (reply->value("ok", false) != true &&
+        config.lockstep_transport == LoopConfig::Transport::kShm) {
+      return R::fail(Error::kDenied, "lockstep: shared memory required, the server refused: " +
+                                         reply_error_text(*reply));
+    }
+    if (reply->value("ok", false) == true) {
+      // the server writes everything after this reply into the ring
+      auto ring = ShmStream::open(reply->value("result", Json::object()));
+      if (!ring) {
+        *shm_unusable = true;
+        return R(ring.error());
+      }
+      api.use_ring(std::move(*ring));
+    }
+  }
+  // the join's reply, then the first tick
+  std::optional<Json> join;
+  if (!api.request({{"op", "lockstep_join"}, {"period_s", config.lockstep_period_s}},
+                   [&join](const Json& j) { join = j; })) {
+    return R::fail(Error::kIo, "lockstep: cannot send the join");
+  }
+  if (auto r = read_api_until([&] { return join.has_value(); }, "waiting for the join's reply"); !r)
+    return r;
+  if ((*join)["ok"] != true)
+    return R::fail(Error::kDenied, "lockstep: join refused: " + join->dump());
+  const Json result = join->value("result", Json::object());
+  period_s = result.value("period_s", config.lockstep_period_s);
+  sim_now = std::max(0.0, result.value("first_tick_time", 0.0) - period_s);
+  return read_api_until([this] { return tick_outstanding; }, "waiting for the first tick");
+}
+
 // ---------------------------------------------------------------- EventLoop
 
 EventLoop::EventLoop(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -481,42 +595,21 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
       return R::fail(Error::kInvalidArgument, "lockstep: no valid port (UAVSIM_LOCKSTEP=host:port[/period_s])");
     }
     if (!(config.lockstep_period_s > 0.0)) return R::fail(Error::kInvalidArgument, "lockstep: period must be > 0");
-    const double wall = config.lockstep_wall_timeout_s;
-    auto fd = net::tcp_connect(config.lockstep_host, config.lockstep_port, wall);
-    if (!fd) return R(Failure{fd.code(), "lockstep: simulator API: " + fd.message()});
-    Impl* raw = impl.get();
-    impl->api.open(*fd, wall, [raw](const Json& j) { raw->on_unrouted(j); });
-    std::string buf;
-    auto hello = net::read_line(*fd, buf, wall);
-    if (!hello) return R(Failure{hello.code(), "lockstep: no hello from the simulator API: " + hello.message()});
-    const Json h = Json::parse(*hello, nullptr, false);
-    if (!h.is_object() || h.value("hello", std::string()) != "uavsim") {
-      return R::fail(Error::kProtocol, "lockstep: not a uavsim simulator API: " + *hello);
+    // the shared-memory stream unless the environment says TCP; if the server offered one this
+    // process cannot open, again on TCP
+    const bool use_shm = config.lockstep_transport != LoopConfig::Transport::kTcp;
+    bool shm_unusable = false;
+    auto joined = impl->connect_and_join(use_shm, &shm_unusable);
+    if (!joined && shm_unusable && config.lockstep_transport == LoopConfig::Transport::kAuto) {
+      std::fprintf(stderr, "uavsim client: %s; lockstep over TCP\n", joined.message().c_str());
+      impl->api.close();
+      joined = impl->connect_and_join(false, &shm_unusable);
     }
-    const Json join = {{"op", "lockstep_join"}, {"id", "join"}, {"period_s", config.lockstep_period_s}};
-    if (!impl->api.send_now(join.dump())) return R::fail(Error::kIo, "lockstep: cannot send the join");
-    // the join's reply, then the first tick
-    bool joined = false;
-    while (!impl->tick_outstanding) {
-      auto line = net::read_line(*fd, buf, wall);
-      if (!line) return R(Failure{line.code(), "lockstep: waiting for the first tick: " + line.message()});
-      const Json j = Json::parse(*line, nullptr, false);
-      if (!j.is_object()) continue;
-      if (!joined && j.contains("ok") && j.value("id", Json()) == "join") {
-        if (j["ok"] != true) return R::fail(Error::kDenied, "lockstep: join refused: " + j.dump());
-        impl->period_s = j["result"].value("period_s", config.lockstep_period_s);
-        impl->sim_now = std::max(0.0, j["result"].value("first_tick_time", 0.0) - impl->period_s);
-        joined = true;
-        continue;
-      }
-      impl->on_unrouted(j);  // (no module has a sink or a request yet)
-      if (!impl->alive) return R::fail(Error::kConnectionLost, "lockstep: " + impl->dead_reason);
-    }
-    if (!buf.empty()) impl->api.feed(buf.data(), buf.size());
+    if (!joined) return R(joined.error());
     epoll_event ev{};
     ev.events = impl->api_interest();  // pipelined: held at the first tick
-    ev.data.fd = *fd;
-    epoll_ctl(impl->epfd, EPOLL_CTL_ADD, *fd, &ev);
+    ev.data.fd = impl->api.fd();
+    epoll_ctl(impl->epfd, EPOLL_CTL_ADD, impl->api.fd(), &ev);
   }
   return std::unique_ptr<EventLoop>(new EventLoop(std::move(impl)));
 }

@@ -20,6 +20,7 @@ struct A2aRadio::Impl {
   EventLoop& loop;
   int vehicle;
   std::uint64_t sink_id = 0;
+  std::uint64_t radio_sink_id = 0;  // the tick records' frames (shared-memory stream)
   std::size_t max_frame_bytes = kRadioMaxFrameBytes;  // the channel's, from the subscription
   std::vector<RadioFrame> inbox;
   RadioCounters counters;
@@ -46,12 +47,25 @@ struct A2aRadio::Impl {
   void take(const Json& from, const Json& broadcast, const Json& time, const Json& data) {
     if (!data.is_string()) return;
     auto bytes = common::base64_decode(data.get_ref<const std::string&>());
-    if (!bytes || bytes->empty() || bytes->size() > kRadioMaxFrameBytes) return;
+    if (!bytes) return;
+    take_frame(from.is_number_integer() ? from.get<int>() : -1,
+               broadcast.is_boolean() ? broadcast.get<bool>() : true,
+               time.is_number() ? time.get<double>() : 0.0, std::move(*bytes));
+  }
+
+  // A tick record's frame (its fields checked by the record's decoder), this vehicle's only.
+  void on_frame(const common::shm::RadioFrame& f) {
+    if (f.to != static_cast<std::uint32_t>(vehicle)) return;
+    take_frame(static_cast<int>(f.from), f.broadcast, f.time_s, f.data);
+  }
+
+  void take_frame(int from, bool broadcast, double time_s, std::vector<std::uint8_t> bytes) {
+    if (bytes.empty() || bytes.size() > kRadioMaxFrameBytes) return;
     RadioFrame f;
-    f.time_s = time.is_number() ? time.get<double>() : 0.0;
-    f.from = from.is_number_integer() ? from.get<int>() : -1;
-    f.broadcast = broadcast.is_boolean() ? broadcast.get<bool>() : true;
-    f.data = std::move(*bytes);
+    f.time_s = time_s;
+    f.from = from;
+    f.broadcast = broadcast;
+    f.data = std::move(bytes);
     inbox.push_back(std::move(f));
     ++counters.received;
   }
@@ -60,6 +74,8 @@ struct A2aRadio::Impl {
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
+  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel())
+    channel->remove_event_sink(impl_->radio_sink_id);
   unsubscribe_lockstep_events(impl_->loop, impl_->sink_id, {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
 
@@ -111,12 +127,21 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   Impl* s = impl.get();
   // batched: one line a gate for the connection, not one a frame (a flock's broadcasts fan out to
   // every neighbour, and a line each was most of an agent's parsing)
+  // on the shared-memory stream the frames come with the tick, raw; the sink is in place before the
+  // subscription, as the event sink is
+  SimChannel* channel = LoopServices(loop).sim_channel();
+  if (channel == nullptr) return R::fail(Error::kConnectionLost, "radio: no simulator connection");
+  s->radio_sink_id =
+      channel->add_radio_sink([s](const common::shm::RadioFrame& f) { s->on_frame(f); });
   Json result;
   auto id = subscribe_lockstep_events(
       loop, "radio_batch", [s](const Json& e) { s->on_batch(e); },
       {{"op", "radio_subscribe"}, {"vehicle", vehicle}, {"batch", true}}, timeout_s, "radio",
       "radio of vehicle " + std::to_string(vehicle), &result);
-  if (!id) return R(id.error());
+  if (!id) {
+    channel->remove_event_sink(s->radio_sink_id);
+    return R(id.error());
+  }
   // the channel's frame size (a server without the field: 802.15.4's whole 127 bytes)
   if (auto it = result.find("max_frame_bytes"); it != result.end() && it->is_number_unsigned() &&
                                                 it->get<std::uint64_t>() >= 1 &&

@@ -52,6 +52,7 @@ void SimChannel::close() {
   watched_by_ = nullptr;
   ::close(fd_);
   fd_ = -1;
+  ring_.reset();
   outputs_held_ = false;
   held_.clear();
   reply_handlers_.clear();
@@ -93,6 +94,7 @@ bool SimChannel::release_outputs() {
 }
 
 SimChannel::ReadResult SimChannel::read_available(std::string* why) {
+  if (ring_) return read_ring(why);
   char buf[65536];
   while (fd_ >= 0 && !stream_.held()) {
     const ssize_t n = ::recv(fd_, buf, sizeof(buf), MSG_DONTWAIT);
@@ -117,8 +119,54 @@ void SimChannel::feed(const char* data, std::size_t size) {
   stream_.feed(data, size, [this](const Json& j, std::string_view payload) { route(j, payload); });
 }
 
-void SimChannel::resume_input() {
+SimChannel::ReadResult SimChannel::resume_input(std::string* why) {
   stream_.resume([this](const Json& j, std::string_view payload) { route(j, payload); });
+  if (stream_.error()) {
+    if (why != nullptr) *why = *stream_.error();
+    return ReadResult::kError;
+  }
+  // (a socket stays readable while bytes wait; the ring's wake-up was taken already)
+  return ring_ && !stream_.held() ? read_ring(why) : ReadResult::kOk;
+}
+
+SimChannel::ReadResult SimChannel::read_ring(std::string* why) {
+  namespace shm = common::shm;
+  const bool closed = ring_->drain_wakeups();
+  std::string error;
+  while (ring_ && !stream_.held()) {
+    const auto status = ring_->next(&record_, &error);
+    if (status == shm::RingReader::Status::kEmpty)
+      return closed ? ReadResult::kClosed : ReadResult::kOk;
+    if (status == shm::RingReader::Status::kCorrupt) {
+      if (why != nullptr) *why = "shared-memory stream: " + error;
+      return ReadResult::kError;
+    }
+    if (record_.type == shm::RecordType::kStream) {
+      feed(reinterpret_cast<const char*>(record_.payload.data()), record_.payload.size());
+      if (stream_.error()) {
+        if (why != nullptr) *why = *stream_.error();
+        return ReadResult::kError;
+      }
+    } else if (!route_tick(record_.payload, &error)) {
+      if (why != nullptr) *why = "shared-memory stream: " + error;
+      return ReadResult::kError;
+    }
+  }
+  return ReadResult::kOk;  // held (or closed by a handler): the rest waits
+}
+
+bool SimChannel::route_tick(const std::vector<std::uint8_t>& payload, std::string* why) {
+  // the frames that arrived since the last tick, then the tick: as radio_batch and tick on TCP
+  auto tick = common::shm::decode_tick(payload, why);
+  if (!tick) return false;
+  if (!tick->frames.empty()) {
+    const auto sinks = radio_sinks_;  // a sink may remove itself
+    for (const auto& frame : tick->frames) {
+      for (const auto& [id, sink] : sinks) sink(frame);
+    }
+  }
+  route(Json{{"event", "tick"}, {"tick", tick->tick}, {"time", tick->time_s}}, std::string_view());
+  return true;
 }
 
 void SimChannel::on_io(std::uint32_t what) {
@@ -138,7 +186,14 @@ std::uint64_t SimChannel::add_event_sink(const std::string& event, EventSink sin
   return id;
 }
 
+std::uint64_t SimChannel::add_radio_sink(RadioSink sink) {
+  const std::uint64_t id = next_event_sink_++;
+  radio_sinks_.emplace(id, std::move(sink));
+  return id;
+}
+
 void SimChannel::remove_event_sink(std::uint64_t id) {
+  if (radio_sinks_.erase(id) > 0) return;
   for (auto it = event_sinks_.begin(); it != event_sinks_.end(); ++it) {
     if (it->second.first == id) {
       event_sinks_.erase(it);

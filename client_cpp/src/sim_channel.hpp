@@ -13,6 +13,10 @@
 // So a module subscribes, is answered and is fed the same way on either clock; the clock only
 // decides when the bytes are read.
 //
+// On the server's machine the lockstep loop's connection may read from the shared-memory stream
+// (use_ring, shm_stream.hpp) instead of its socket: the same messages in the same order, but a tick
+// and its radio frames as one binary record, handed to the radio sinks and as a tick message.
+//
 // SimConnection (include/uavsim/client/sim_connection.hpp) is the blocking, public counterpart for
 // launchers and tests. Library internal; loop thread only.
 #pragma once
@@ -21,12 +25,12 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 
-#include <nlohmann/json.hpp>
-
 #include "api_stream.hpp"
+#include "shm_stream.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/result.hpp"
 
@@ -38,6 +42,9 @@ class SimChannel {
   using ReplyHandler = std::function<void(const Json& reply)>;
   using EventSink = std::function<void(const Json& event)>;
   using FrameSink = std::function<void(const Json& header, std::string_view bytes)>;
+  // a received radio frame of a tick record (shared-memory stream); on TCP they come as radio_batch
+  // events to the event sinks
+  using RadioSink = std::function<void(const common::shm::RadioFrame& frame)>;
   // a message no sink or reply handler takes (the lockstep loop's tick, lockstep_dropped, reset and
   // the replies to `done`)
   using Unrouted = std::function<void(const Json& message)>;
@@ -58,7 +65,13 @@ class SimChannel {
   // handlers are dropped unanswered. Sinks stay registered.
   void close();
   bool is_open() const { return fd_ >= 0; }
-  int fd() const { return fd_; }
+  // The descriptor to wait on for input: the socket, or the shared-memory stream's wake-up.
+  int fd() const { return ring_ ? ring_->wake_fd() : fd_; }
+  // From now on input comes from this shared-memory stream, not the socket (requests still go on
+  // the socket). Call once the reply that offered it has been read: nothing follows it on the
+  // socket.
+  void use_ring(std::unique_ptr<ShmStream> ring) { ring_ = std::move(ring); }
+  bool on_ring() const { return ring_ != nullptr; }
 
   // ---- sending
   // Sends request (an object with "op") with the next id; on_reply gets the whole reply when it is
@@ -84,7 +97,9 @@ class SimChannel {
   void feed(const char* data, std::size_t size);
   // From inside a handler: the messages after this one stay unread (buffered) until resume_input().
   void hold_input() { stream_.hold(); }
-  void resume_input();
+  // Routes what was held, and on a shared-memory stream what waits in the ring (which has no
+  // readiness of its own to report it): the ring's failure as read_available's.
+  ReadResult resume_input(std::string* why);
 
   // ---- routing
   // Frames of this camera go to sink. False (nothing changed) when the camera already has one.
@@ -92,11 +107,16 @@ class SimChannel {
   void remove_frame_sink(const std::string& camera);
   // Events named `event` go to sink (every sink of that name sees each one). Returns the sink's id.
   std::uint64_t add_event_sink(const std::string& event, EventSink sink);
-  void remove_event_sink(std::uint64_t id);  // nothing if there is none
+  // Radio frames of tick records go to sink. Returns the sink's id (remove_event_sink removes it).
+  std::uint64_t add_radio_sink(RadioSink sink);
+  void remove_event_sink(std::uint64_t id);  // nothing if there is none (an event or radio sink)
 
  private:
   void route(const Json& message, std::string_view payload);
   void on_io(std::uint32_t what);
+  // the shared-memory stream's records, until it is empty or the input is held
+  ReadResult read_ring(std::string* why);
+  bool route_tick(const std::vector<std::uint8_t>& payload, std::string* why);
 
   int fd_ = -1;
   double send_timeout_s_ = 10.0;
@@ -109,6 +129,9 @@ class SimChannel {
   std::uint64_t next_request_id_ = 1;
   std::map<std::string, FrameSink> frame_sinks_;
   std::multimap<std::string, std::pair<std::uint64_t, EventSink>> event_sinks_;
+  std::map<std::uint64_t, RadioSink> radio_sinks_;
+  std::unique_ptr<ShmStream> ring_;
+  common::shm::RingReader::Record record_;  // reused: its buffer keeps its capacity
   std::uint64_t next_event_sink_ = 1;
 };
 

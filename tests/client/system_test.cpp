@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "loop_services.hpp"
+#include "sim_channel.hpp"
 #include "sim_harness.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/geodesy.hpp"
@@ -425,6 +426,7 @@ struct FlightRecord {
   std::vector<std::string> telemetry;  // the client's telemetry cache at every tick, in hex floats
   std::vector<double> resumed_at;      // the loop clock when each blocking call returned
   bool seq_checked = false;
+  bool on_shared_memory = false;  // the loop's messages came through the shared-memory stream
 };
 
 std::string telemetry_line(double now, const Telemetry& t) {
@@ -445,13 +447,17 @@ std::string telemetry_line(double now, const Telemetry& t) {
 // pipelined: the loop's one-tick compute latency (EventLoop::set_lockstep_pipelined). The simulation
 // then steps on while the program works on a tick, so ground truth read on a second connection
 // would be read at a timing-dependent sim time: only the program's own view is recorded.
-FlightRecord fly_scripted(bool pipelined = false) {
+FlightRecord fly_scripted(bool pipelined = false,
+                          LoopConfig::Transport transport = LoopConfig::Transport::kAuto) {
   FlightRecord rec;
   SimServer server;
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  LoopConfig config = LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02);
+  config.lockstep_transport = transport;
+  auto l = EventLoop::create(config);
   EXPECT_TRUE(l) << l.message();
   if (!l) return rec;
   EventLoop& loop = **l;
+  rec.on_shared_memory = uavsim::client::LoopServices(loop).sim_channel()->on_ring();
   ApiClient api(server.api_port());
   api.request({{"op", "resume"}});
   Vehicle uav(loop);
@@ -543,6 +549,25 @@ TEST(ClientDeterminism, PipelinedSameMissionSameTrajectoryOneTickLater) {
     EXPECT_GE(a.resumed_at[k], plain.resumed_at[k] + 0.02 - 1e-9) << "blocking call " << k;
   }
   EXPECT_NE(first_difference(a.telemetry, plain.telemetry), -1);  // the latency shows
+}
+
+// The shared-memory stream against TCP (docs/protocol.md, "Shared-memory stream"): the same script
+// on either transport is the same run to the bit, plain and pipelined (the ring read past a held
+// tick), and the loop on loopback picks the shared memory unless told TCP.
+TEST(ClientDeterminism, SharedMemoryAndTcpGiveTheSameRun) {
+  for (const bool pipelined : {false, true}) {
+    const FlightRecord tcp = fly_scripted(pipelined, LoopConfig::Transport::kTcp);
+    const FlightRecord shm = fly_scripted(pipelined, LoopConfig::Transport::kAuto);
+    EXPECT_FALSE(tcp.on_shared_memory);
+    EXPECT_TRUE(shm.on_shared_memory);
+    ASSERT_GT(tcp.telemetry.size(), 100u);
+    EXPECT_EQ(first_difference(tcp.resumed_at, shm.resumed_at), -1) << "pipelined " << pipelined;
+    EXPECT_EQ(first_difference(tcp.truth, shm.truth), -1) << "pipelined " << pipelined;
+    const long tel = first_difference(tcp.telemetry, shm.telemetry);
+    EXPECT_EQ(tel, -1) << "pipelined " << pipelined << ": the client's telemetry differs at tick "
+                       << tel;
+    EXPECT_EQ(tcp.telemetry.size(), shm.telemetry.size());
+  }
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
 #include "sim/checked_number.hpp"
+#include "uavsim/common/shm_ring.hpp"
 
 namespace uavsim::server::api {
 
@@ -108,6 +109,7 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
                                           "the server's connection or reply-queue limit was reached; this "
                                           "connection is closed (read replies as they come, or connect later)"));
   server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb);
+  shm_ = std::make_unique<ShmTransport>(*server_);
 }
 
 ApiServer::~ApiServer() { shutdown(); }
@@ -209,21 +211,29 @@ void ApiServer::reply_in_order(uint64_t conn, Json reply) {
 
 namespace {
 
-// Holds the line server's wake-ups for one pass of the gate (LineServer::hold_wakeups): what the
-// pass sends a connection leaves in one write. Released before the gate waits, and on leaving it.
+// Holds the line server's and the shared-memory rings' wake-ups for one pass of the gate
+// (LineServer::hold_wakeups): what the pass sends a connection leaves in one write, or wakes its
+// ring's reader once. Released before the gate waits, and on leaving it.
 class WakeupHold {
  public:
-  explicit WakeupHold(LineServer& server) : server_(&server) { server.hold_wakeups(); }
+  WakeupHold(LineServer& server, ShmTransport& shm) : server_(&server), shm_(&shm) {
+    server.hold_wakeups();
+    shm.hold_wakeups();
+  }
   ~WakeupHold() { release(); }
   WakeupHold(const WakeupHold&) = delete;
   WakeupHold& operator=(const WakeupHold&) = delete;
   void release() {
-    if (server_ != nullptr) server_->release_wakeups();
+    if (server_ != nullptr) {
+      server_->release_wakeups();
+      shm_->release_wakeups();
+    }
     server_ = nullptr;
   }
 
  private:
   LineServer* server_;
+  ShmTransport* shm_;
 };
 
 }  // namespace
@@ -241,7 +251,7 @@ void ApiServer::on_gate() {
   for (;;) {
     // a pass of the gate is progress, though the clock is held (the watchdog tells it from a hang)
     sim_.schedule().activity().beat();
-    WakeupHold hold(*server_);
+    WakeupHold hold(*server_, *shm_);
     // events before requests, so that a subscription's backlog and its stream neither overlap nor skip
     forward_events();
     drain();
@@ -322,6 +332,7 @@ void ApiServer::drain() {
         lockstep_left(lockstep_.leave(r.conn, sim_.time_s()));
         event_subscribers_.erase(r.conn);
         for (OpGroup* g : groups_) g->on_disconnect(r.conn);
+        shm_->on_disconnect(r.conn);
         // every request of the connection has been answered: the socket may go once that is written
         server_->close_when_sent(r.conn);
         break;
@@ -356,7 +367,9 @@ void ApiServer::announce_ticks() {
     // what else is due at this tick (the frames) reaches the client before the tick (docs/protocol.md)
     for (OpGroup* g : groups_) g->before_tick(conn, send_fn_);
     const int64_t tick = lockstep_.begin_tick(conn, now);
-    send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
+    // on a shared-memory stream: one binary record with the tick's radio frames
+    if (!shm_->send_tick(conn, tick, now))
+      send(conn, Json{{"event", "tick"}, {"tick", tick}, {"time", now}});
   }
 }
 
@@ -419,6 +432,7 @@ void ApiServer::register_own_ops() {
   add("lockstep_join", "lockstep", &ApiServer::op_lockstep_join);
   add("lockstep_leave", "lockstep", &ApiServer::op_lockstep_leave);
   add("done", "lockstep", &ApiServer::op_done);
+  add("lockstep_shm", "lockstep", &ApiServer::op_lockstep_shm);
   // answered by the transport on the I/O thread (--api-token-file), before any request is queued
   ops_.add({"auth", "connection", nullptr, {}, OpThread::kIo});
 }
@@ -600,6 +614,41 @@ void ApiServer::op_done(uint64_t conn, const Json& request, OpReply* reply) {
   }
   const int64_t done_tick = lockstep_.take_done(conn, busy, std::move(wait));
   reply->result = {{"tick", done_tick}, {"mavlink_seq_checked", seq_waiter_ != nullptr}};
+}
+
+void ApiServer::op_lockstep_shm(uint64_t conn, const Json& request, OpReply* reply) {
+  // only for a client on this machine, once, and not behind a step's reply (which must come on TCP)
+  if (!config_.shm) {
+    return reply->fail(ApiError::kNotAvailable, "this server serves no shared-memory stream");
+  }
+  const std::string peer = server_->peer_address(conn);
+  if (peer.rfind("127.", 0) != 0) {
+    return reply->fail(ApiError::kNotAvailable,
+                       "the shared-memory stream is for clients on the server's machine; "
+                       "this one connects from " +
+                           peer);
+  }
+  if (shm_->attached(conn))
+    return reply->fail(ApiError::kBadState,
+                       "this connection is on the shared-memory stream already");
+  if (step_reply_ && step_reply_->first == conn) {
+    return reply->fail(ApiError::kBusy, "a step request of this connection is in progress");
+  }
+  const auto bytes = number_field(request, "ring_bytes");
+  const auto ring_bytes = bytes ? sim::checked_integer<uint64_t>(*bytes)
+                                : std::optional<uint64_t>(ShmTransport::kDefaultRingBytes);
+  if (!ring_bytes || common::shm::region_bytes(static_cast<size_t>(*ring_bytes)) == 0) {
+    return reply->fail(ApiError::kBadField,
+                       "\"ring_bytes\" must be a power of two in [65536, 268435456]");
+  }
+  std::string why;
+  const auto offer = shm_->offer(conn, static_cast<size_t>(*ring_bytes), &why);
+  if (!offer) return reply->fail(ApiError::kNotAvailable, "no shared-memory stream: " + why);
+  // the reply is the last message on TCP; everything after it goes to the ring
+  const Json id = request.contains("id") ? request["id"] : Json(nullptr);
+  send(conn, Json{{"id", id}, {"ok", true}, {"result", *offer}});
+  shm_->activate(conn);
+  reply->deferred = true;
 }
 
 }  // namespace uavsim::server::api

@@ -23,17 +23,17 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
 #include "api/lockstep_coordinator.hpp"
 #include "api/op_table.hpp"
+#include "api/shm_transport.hpp"
 #include "api/vehicle_ops.hpp"
 #include "objects/world_objects.hpp"
 #include "sim/runner.hpp"
@@ -77,6 +77,8 @@ struct ApiConfig {
   // A shared secret: a connection must send it ({"op":"auth","token":...}, or a "token" field in its
   // first request) before any other op is served. Unset: no authentication.
   std::optional<std::string> token;
+  // Serve the shared-memory stream (op lockstep_shm) to clients connecting from loopback.
+  bool shm = true;
 };
 
 class ApiServer {
@@ -112,6 +114,9 @@ class ApiServer {
   uint16_t port() const { return server_->port(); }
   // Connections open now. Thread-safe.
   size_t connection_count() const { return connections_.load(); }
+  // The connections' shared-memory streams (op lockstep_shm): RadioOps hands it the radio frames of
+  // a tick record. Valid for the server's life.
+  ShmTransport& shm_transport() { return *shm_; }
 
   // The control gate for Runner::add_gate (queued-tasks phase): runs queued requests and holds the clock while
   // paused or while a lockstep client has not finished its tick. Loop thread only.
@@ -164,6 +169,7 @@ class ApiServer {
   void op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply);
   void op_lockstep_leave(uint64_t conn, const Json& request, OpReply* reply);
   void op_done(uint64_t conn, const Json& request, OpReply* reply);
+  void op_lockstep_shm(uint64_t conn, const Json& request, OpReply* reply);
   void forward_events();
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
@@ -180,6 +186,7 @@ class ApiServer {
   LockstepCoordinator::SeqProcessed seq_processed_;  // seq_waiter_'s, or null without one
   std::function<bool()> stop_check_;
   std::unique_ptr<LineServer> server_;
+  std::unique_ptr<ShmTransport> shm_;  // after server_: its rings are written through it
   // every op, registered before start() and read-only afterwards (the I/O thread looks names up)
   OpTable ops_;
   std::vector<OpGroup*> groups_;  // their hooks; set before start()

@@ -102,8 +102,12 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
     if (c.overloaded) return false;
     // past its own cap or the global budget: the overload line instead, then the connection goes
     const size_t pending = c.out.size() + c.unsent;
-    if (pending + data.size() > limits_.max_pending_bytes ||
-        total_pending_ + data.size() > limits_.max_total_pending_bytes) {
+    if (c.diversion) {
+      // the diversion wakes its own reader; the I/O thread only if the connection is to close
+      if (c.diversion->write(data)) return true;
+      mark_overloaded(c);
+    } else if (pending + data.size() > limits_.max_pending_bytes ||
+               total_pending_ + data.size() > limits_.max_total_pending_bytes) {
       mark_overloaded(c);
     } else {
       c.out += data;
@@ -123,6 +127,24 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
 void LineServer::release_wakeups() {
   wakeups_held_.store(false);
   if (wake_deferred_.exchange(false)) wake();
+}
+
+bool LineServer::divert(uint64_t conn, std::shared_ptr<Diversion> diversion) {
+  std::lock_guard<std::mutex> lock(out_mutex_);
+  auto it = conns_.find(conn);
+  if (it == conns_.end() || it->second.overloaded) return false;
+  it->second.diversion = std::move(diversion);
+  return true;
+}
+
+void LineServer::close_overloaded(uint64_t conn) {
+  {
+    std::lock_guard<std::mutex> lock(out_mutex_);
+    auto it = conns_.find(conn);
+    if (it == conns_.end()) return;
+    mark_overloaded(it->second);
+  }
+  wake();
 }
 
 void LineServer::close_when_sent(uint64_t conn) {
@@ -145,7 +167,9 @@ bool LineServer::finished(const Conn& c) {
 size_t LineServer::pending_bytes(uint64_t conn) {
   std::lock_guard<std::mutex> lock(out_mutex_);
   auto it = conns_.find(conn);
-  return it == conns_.end() ? 0 : it->second.out.size() + it->second.unsent;
+  if (it == conns_.end()) return 0;
+  const Conn& c = it->second;
+  return c.out.size() + c.unsent + (c.diversion ? c.diversion->pending_bytes() : 0);
 }
 
 void LineServer::accept_all() {

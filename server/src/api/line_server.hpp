@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -48,6 +49,16 @@ class LineServer {
   LineServer(const LineServer&) = delete;
   LineServer& operator=(const LineServer&) = delete;
 
+  // Where a connection's output goes instead of its socket (the sim API's shared-memory stream,
+  // api/shm_transport.hpp). write() gets whole messages in order, with the output lock held (it
+  // must not block); false closes the connection as overloaded.
+  class Diversion {
+   public:
+    virtual ~Diversion() = default;
+    virtual bool write(const std::string& data) = 0;
+    virtual size_t pending_bytes() const = 0;  // written and not yet taken by the peer
+  };
+
   void start();  // starts the I/O thread. Call once.
   void stop();   // Thread-safe (not from a callback): stops the I/O thread and closes the sockets.
   uint16_t port() const { return port_; }
@@ -57,6 +68,12 @@ class LineServer {
   bool send(uint64_t conn, const std::string& data);
   // Closes a connection once everything queued for it has been written (after its EOF). Thread-safe.
   void close_when_sent(uint64_t conn);
+  // From now on send() hands conn's output to diversion (what is queued already still goes to the
+  // socket); the socket is still read. False if conn is gone. Thread-safe.
+  bool divert(uint64_t conn, std::shared_ptr<Diversion> diversion);
+  // Closes conn as overloaded (the overload line, then the socket), as when its output passes its
+  // cap: for a diversion that failed outside send(). Thread-safe.
+  void close_overloaded(uint64_t conn);
   // While held, send() queues without waking the I/O thread; release_wakeups() wakes it once if
   // anything was queued meanwhile. The sim API holds them for one pass of its gate, so a connection's
   // messages of that pass (replies, radio batch, tick) leave in one write and reach the client as
@@ -75,6 +92,7 @@ class LineServer {
     int fd = -1;
     std::string in;
     std::string peer;         // the peer's IPv4 address
+    std::shared_ptr<Diversion> diversion;  // divert(); guarded by out_mutex_
     bool discarding = false;  // skipping the rest of an over-long line
     std::string out;          // guarded by out_mutex_
     // being written, I/O thread only: whole batches are swapped out of `out` and written from an offset,

@@ -373,17 +373,44 @@ void RadioOps::on_gate(const Send& send, const InLockstep& in_lockstep) {
   // every lockstep client has sent its own (deterministic draws)
   radio_.advance(false);
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
-  if (!arrived.empty() && !subscriptions_.empty()) queue_deliveries(arrived, send);
+  if (!arrived.empty() && !subscriptions_.empty()) queue_deliveries(arrived, send, in_lockstep);
   // what is held for a connection that has left lockstep (or never joined) goes now
+  for (auto it = held_binary_.begin(); it != held_binary_.end();) {
+    const uint64_t conn = (it++)->first;
+    if (!in_lockstep(conn)) send_held(conn, send);
+  }
   for (auto it = held_.begin(); it != held_.end();) {
     const uint64_t conn = (it++)->first;
     if (!in_lockstep(conn)) send_held(conn, send);
   }
 }
 
-void RadioOps::before_tick(uint64_t conn, const Send& send) { send_held(conn, send); }
+void RadioOps::before_tick(uint64_t conn, const Send& send) {
+  // a shared-memory stream's frames go in the tick's record, which the server writes next
+  if (const auto it = held_binary_.find(conn); it != held_binary_.end() && shm_ != nullptr) {
+    shm_->set_tick_radio(conn, std::move(it->second));
+    held_binary_.erase(it);
+  }
+  send_held(conn, send);
+}
+
+namespace {
+// [to, from, seq, broadcast, time, sent_time, data_b64]: a radio event's fields, keys once
+nlohmann::json compact_frame(const radio::Delivery& d, const std::string& data_b64) {
+  return nlohmann::json::array({d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, data_b64});
+}
+}  // namespace
 
 void RadioOps::send_held(uint64_t conn, const Send& send) {
+  // frames held as such (a connection that has left lockstep on a shared-memory stream) go as a
+  // line
+  if (const auto b = held_binary_.find(conn); b != held_binary_.end()) {
+    Json& batch = held_[conn];
+    if (batch.is_null()) batch = Json::array();
+    for (const radio::Delivery& d : b->second)
+      batch.push_back(compact_frame(d, common::base64_encode(d.data)));
+    held_binary_.erase(b);
+  }
   const auto it = held_.find(conn);
   if (it == held_.end()) return;
   Json frames = std::move(it->second);
@@ -391,7 +418,8 @@ void RadioOps::send_held(uint64_t conn, const Send& send) {
   send(conn, Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
 }
 
-void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send) {
+void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,
+                                const InLockstep& in_lockstep) {
   // a broadcast is one delivery per receiver with the same bytes: encoded once per frame
   std::map<std::pair<size_t, uint64_t>, std::string> encoded;  // (from, seq) -> base64
   auto data_b64 = [&](const radio::Delivery& d) -> const std::string& {
@@ -404,12 +432,12 @@ void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, con
     Json compact;
     for (const auto& [conn, sub] : subscriptions_) {
       if (sub.vehicles.count(d.to) == 0) continue;
+      if (sub.batch && shm_ != nullptr && in_lockstep(conn) && shm_->attached(conn)) {
+        held_binary_[conn].push_back(d);  // no base64: the tick record carries the bytes
+        continue;
+      }
       if (sub.batch) {
-        // [to, from, seq, broadcast, time, sent_time, data_b64]: the event's fields, keys once
-        if (compact.is_null()) {
-          compact = Json::array(
-              {d.to, d.from, d.seq, d.broadcast, d.time_s, d.queued_s, data_b64(d)});
-        }
+        if (compact.is_null()) compact = compact_frame(d, data_b64(d));
         Json& batch = held_[conn];
         if (batch.is_null()) batch = Json::array();
         batch.push_back(compact);
@@ -433,6 +461,7 @@ void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, con
 void RadioOps::on_disconnect(uint64_t conn) {
   subscriptions_.erase(conn);
   held_.erase(conn);
+  held_binary_.erase(conn);
 }
 
 }  // namespace uavsim::server::api

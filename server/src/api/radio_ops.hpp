@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "api/op_table.hpp"
+#include "api/shm_transport.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
 #include "sim/simulation.hpp"
@@ -46,7 +47,13 @@ class RadioOps : public OpGroup {
   void on_gate(const Send& send, const InLockstep& in_lockstep) override;
   // The radio_batch a lockstep connection's frames wait in goes out before its tick.
   void before_tick(uint64_t conn, const Send& send) override;
-  void on_reset() override { held_.clear(); }
+  void on_reset() override {
+    held_.clear();
+    held_binary_.clear();
+  }
+  // A lockstep batch subscriber on a shared-memory stream gets its frames in its tick's binary
+  // record (ShmTransport::set_tick_radio) instead of a radio_batch line. Null: never. Before start.
+  void set_shm_transport(ShmTransport* shm) { shm_ = shm; }
   void on_disconnect(uint64_t conn) override;
 
  private:
@@ -81,9 +88,13 @@ class RadioOps : public OpGroup {
   // each; a lockstep connection's wait here for its tick (it cannot act on them before: one line and
   // one wake-up a tick instead of one a gate)
   std::map<uint64_t, Json> held_;
+  // the same for a lockstep connection on a shared-memory stream, as the frames themselves
+  std::map<uint64_t, std::vector<radio::Delivery>> held_binary_;
+  ShmTransport* shm_ = nullptr;
   void send_held(uint64_t conn, const Send& send);
-  // adds the deliveries to held_ (batch subscribers) or sends a radio event each
-  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send);
+  // adds the deliveries to held_ or held_binary_ (batch subscribers) or sends a radio event each
+  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,
+                        const InLockstep& in_lockstep);
 };
 
 }  // namespace uavsim::server::api

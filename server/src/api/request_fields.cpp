@@ -67,6 +67,7 @@ constexpr FieldSpec kCoreOpFields[] = {
     {"lockstep_empty", FieldType::kBoolean},
     {"fps", FieldType::kNumber, 0, 1e6},
     {"quality", FieldType::kNumber, 1, 100},
+    {"ring_bytes", FieldType::kNumber, 65536, 268435456},
 };
 
 // "[0, 3600]" with the bounds as a person writes them

@@ -527,6 +527,7 @@ int run_server(const Options& given_options) {
     api::GcsTargetPolicy gcs_targets{options.allow_remote_gcs,
                                      [api = api_server.get()](uint64_t conn) { return api->peer_address(conn); }};
     radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays, std::move(gcs_targets));
+    radio_ops->set_shm_transport(&api_server->shm_transport());
     api_server->add_group(radio_ops.get());
     // onboard sensors: the landing-pad microswitches (sensor_* ops)
     sensor_ops = std::make_unique<api::SensorOps>(s);
@@ -637,6 +638,11 @@ int run_server(const Options& given_options) {
         received += st.frames_received;
       }
       extra = "MAVLink frames: " + std::to_string(sent) + " sent, " + std::to_string(received) + " received";
+    }
+    if (api_server && api_server->shm_transport().activated_total() > 0) {
+      if (!extra.empty()) extra += "; ";
+      extra += "sim API connections on shared memory: " +
+               std::to_string(api_server->shm_transport().activated_total());
     }
     reporter.print_summary(std::cout, extra);
   }

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "five_quads_run.hpp"
@@ -269,6 +270,36 @@ TEST(CoverageRun, SameSeedGivesTheSameWholeSummaryToTheByte) {
   const double end_s = r[0]["sim_time_s"].get<double>();
   EXPECT_NEAR(end_s, std::round(end_s), 1e-6) << out[0];
   EXPECT_GT(end_s, r[0]["last_touchdown_s"].get<double>()) << out[0];
+  EXPECT_EQ(whole_summary(r[0]), whole_summary(r[1])) << out[0] << out[1];
+}
+
+// The agents' lockstep over the shared-memory stream (UAVSIM_API_TRANSPORT=shm: an agent that
+// cannot use it fails) and over TCP: the same seeded run, to the byte, summary and event log
+// (docs/protocol.md, "Shared-memory stream"), with radio loss so that the radio's draws are in it.
+TEST(CoverageRun, SharedMemoryAndTcpGiveTheSameRunToTheByte) {
+  std::string out[2];
+  Json r[2];
+  std::string events[2];
+  const char* transports[2] = {"tcp", "shm"};
+  for (int k = 0; k < 2; ++k) {
+    const std::string dir = ::testing::TempDir() + "coverage_transport_" +
+                            std::to_string(getpid()) + "_" + transports[k];
+    r[k] = uavsim::tests::run_launcher(
+        std::string("UAVSIM_API_TRANSPORT=") + transports[k] + " " + COVERAGE_RUN +
+            " --agents 3 --area 60x40 --seed 5 --quiet --budget 600 --wall-limit 300",
+        "--radio-loss 0.1 --no-record --run-dir " + dir, &out[k]);
+    ASSERT_TRUE(r[k].is_object()) << out[k];
+    // the flight's events; not the MAVLink clients' connects and leaves, whose ports differ in any
+    // two runs and whose leaving is seen at the step where the server notices an exited agent's
+    // socket
+    std::istringstream log(uavsim::tests::take_file(dir + "/events.jsonl"));
+    for (std::string line; std::getline(log, line);) {
+      if (line.find("\"event\":\"client_") == std::string::npos) events[k] += line + "\n";
+    }
+  }
+  EXPECT_TRUE(r[1]["success"].get<bool>()) << out[1];
+  EXPECT_FALSE(events[0].empty());
+  EXPECT_EQ(events[0], events[1]);
   EXPECT_EQ(whole_summary(r[0]), whole_summary(r[1])) << out[0] << out[1];
 }
 

@@ -47,8 +47,17 @@ struct LoopConfig {
   double lockstep_period_s = 0.01;
   // wall seconds the server may take to answer the join or to send the next tick before the loop gives up
   double lockstep_wall_timeout_s = 60.0;
+  // lockstep only: how the simulator's messages reach the loop. kAuto: through shared memory when
+  // the server is on this machine and offers it (docs/protocol.md, "Shared-memory stream"), else
+  // TCP; kTcp: always TCP (UAVSIM_API_TRANSPORT=tcp); kShm: the shared memory or a failure to
+  // create the loop (UAVSIM_API_TRANSPORT=shm). Missions are the same on either; the two for
+  // comparisons and tests.
+  enum class Transport { kAuto, kTcp, kShm };
+  Transport lockstep_transport = Transport::kAuto;
 
-  // The host clock, unless UAVSIM_LOCKSTEP=host:port[/period_s] is set (e.g. "127.0.0.1:5700/0.02").
+  // The host clock, unless UAVSIM_LOCKSTEP=host:port[/period_s] is set (e.g.
+  // "127.0.0.1:5700/0.02"); UAVSIM_API_TRANSPORT=tcp or shm sets lockstep_transport to kTcp or
+  // kShm.
   static LoopConfig from_env();
   static LoopConfig host();
   static LoopConfig lockstep(const std::string& host, int port, double period_s = 0.01);

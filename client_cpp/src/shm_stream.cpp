@@ -1,0 +1,135 @@
+#include "shm_stream.hpp"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace uavsim::client {
+
+namespace {
+
+namespace shm = common::shm;
+using R = Result<std::unique_ptr<ShmStream>>;
+
+constexpr std::size_t kTokenChars = 32;  // 128 bits in hex
+
+bool is_token(const std::string& t) {
+  if (t.size() != kTokenChars) return false;
+  for (char c : t) {
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+R ShmStream::open(const nlohmann::json& offer) {
+  // the offer's fields, each in range, before anything is opened or mapped
+  const auto token = offer.find("token");
+  const auto bytes = offer.find("ring_bytes");
+  const auto version = offer.find("version");
+  if (token == offer.end() || !token->is_string() || !is_token(token->get<std::string>())) {
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the offer's token is not 32 hex digits");
+  }
+  if (version == offer.end() || !version->is_number_unsigned() ||
+      version->get<std::uint64_t>() != shm::kVersion) {
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the server offers another version of the ring");
+  }
+  if (bytes == offer.end() || !bytes->is_number_unsigned() ||
+      shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>())) == 0) {
+    return R::fail(Error::kProtocol,
+                   "shared-memory stream: the offer's ring_bytes is out of range");
+  }
+  const std::string t = token->get<std::string>();
+  const std::string name = shm::object_name(t);
+  const std::string fifo = shm::fifo_path(t);
+  const std::size_t size = shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>()));
+
+  // the region: this user's, private to it, of the size announced
+  const int fd = shm_open(name.c_str(), O_RDWR | O_CLOEXEC, 0);
+  if (fd < 0)
+    return R::fail(Error::kIo,
+                   "shared-memory stream: shm_open " + name + ": " + std::strerror(errno));
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || st.st_uid != geteuid() || (st.st_mode & 0777) != 0600 ||
+      static_cast<std::size_t>(st.st_size) != size) {
+    close(fd);
+    return R::fail(Error::kProtocol, "shared-memory stream: " + name +
+                                         " is not this user's private region of " +
+                                         std::to_string(size) + " bytes");
+  }
+  void* region = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  const int map_errno = errno;
+  close(fd);
+  shm_unlink(name.c_str());  // mapped: the name is no longer needed
+  if (region == MAP_FAILED)
+    return R::fail(Error::kIo,
+                   std::string("shared-memory stream: mmap: ") + std::strerror(map_errno));
+
+  // the wake FIFO: read end, non-blocking (the server holds the only write end)
+  const int fifo_fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  struct stat fst {};
+  const bool fifo_ok =
+      fifo_fd >= 0 && fstat(fifo_fd, &fst) == 0 && S_ISFIFO(fst.st_mode) && fst.st_uid == geteuid();
+  const std::string fifo_error = fifo_fd < 0 ? std::strerror(errno) : "not this user's FIFO";
+  unlink(fifo.c_str());
+  if (!fifo_ok) {
+    if (fifo_fd >= 0) close(fifo_fd);
+    munmap(region, size);
+    return R::fail(Error::kIo, "shared-memory stream: " + fifo + ": " + fifo_error);
+  }
+  std::string why;
+  auto reader = shm::RingReader::attach(region, size, &why);
+  if (!reader) {
+    close(fifo_fd);
+    munmap(region, size);
+    return R::fail(Error::kProtocol, "shared-memory stream: " + why);
+  }
+  return std::unique_ptr<ShmStream>(new ShmStream(region, size, fifo_fd, *reader));
+}
+
+ShmStream::~ShmStream() {
+  munmap(region_, size_);
+  close(fifo_fd_);
+}
+
+bool ShmStream::drain_wakeups() {
+  char buf[64];
+  bool closed = false;
+  for (;;) {
+    const ssize_t n = ::read(fifo_fd_, buf, sizeof(buf));
+    if (n > 0) continue;
+    if (n == 0) closed = true;  // no writer left: the server closed the stream
+    if (n < 0 && errno == EINTR) continue;
+    break;
+  }
+  // cleared after the bytes are read: a record written from here on wakes the loop again
+  reader_.arm();
+  return closed;
+}
+
+bool ShmStream::peer_is_local(int socket_fd) {
+  sockaddr_storage addr{};
+  socklen_t len = sizeof(addr);
+  if (getpeername(socket_fd, reinterpret_cast<sockaddr*>(&addr), &len) != 0) return false;
+  if (addr.ss_family == AF_INET) {
+    const auto* in = reinterpret_cast<const sockaddr_in*>(&addr);
+    return (ntohl(in->sin_addr.s_addr) >> 24) == 127;
+  }
+  if (addr.ss_family == AF_INET6) {
+    const auto* in6 = reinterpret_cast<const sockaddr_in6*>(&addr);
+    return IN6_IS_ADDR_LOOPBACK(&in6->sin6_addr);
+  }
+  return false;
+}
+
+}  // namespace uavsim::client

@@ -1,0 +1,260 @@
+#include "api/shm_transport.hpp"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/random.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <span>
+
+#include "uavsim/common/shm_ring.hpp"
+
+namespace uavsim::server::api {
+
+namespace {
+
+namespace shm = common::shm;
+
+// 128 random bits in hex: the objects' names cannot be guessed (they are 0600 besides)
+std::optional<std::string> random_token() {
+  unsigned char bytes[16];
+  size_t got = 0;
+  while (got < sizeof(bytes)) {
+    const ssize_t n = getrandom(bytes + got, sizeof(bytes) - got, 0);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return std::nullopt;
+    }
+    got += static_cast<size_t>(n);
+  }
+  static const char kHex[] = "0123456789abcdef";
+  std::string token;
+  for (unsigned char b : bytes) {
+    token += kHex[b >> 4];
+    token += kHex[b & 15];
+  }
+  return token;
+}
+
+}  // namespace
+
+// One connection's ring: the mapping, the wake FIFO's write end, the writer.
+class ShmTransport::Ring : public LineServer::Diversion {
+ public:
+  Ring(uint64_t conn, std::string token, void* region, std::size_t region_size,
+       std::size_t capacity, int fifo_fd, std::shared_ptr<std::atomic<bool>> held)
+      : conn_(conn),
+        token_(std::move(token)),
+        region_(region),
+        region_size_(region_size),
+        fifo_fd_(fifo_fd),
+        held_(std::move(held)),
+        writer_(region, capacity) {}
+
+  ~Ring() override {
+    unlink_names();
+    munmap(region_, region_size_);
+    close(fifo_fd_);  // the client's FIFO sees the hang-up
+  }
+
+  // LineServer::Diversion: a stream record with these bytes (whole messages)
+  bool write(const std::string& data) override {
+    const std::span<const uint8_t> part(reinterpret_cast<const uint8_t*>(data.data()), data.size());
+    return write_record(shm::RecordType::kStream,
+                        std::span<const std::span<const uint8_t>>(&part, 1));
+  }
+
+  std::size_t pending_bytes() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return writer_.waiting_bytes();
+  }
+
+  bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (failed_) return false;
+      std::string why;
+      const auto error = writer_.write(type, parts, &why);
+      if (error) {
+        // said once: the connection is closed as overloaded
+        failed_ = true;
+        const char* what = *error == shm::RingError::kCorrupt
+                               ? "the client broke its shared-memory ring"
+                           : *error == shm::RingError::kFull
+                               ? "the client's shared-memory ring is full (it does not read)"
+                               : "a message larger than the client's shared-memory ring";
+        std::fprintf(stderr, "sim API: connection %llu dropped: %s%s%s\n",
+                     static_cast<unsigned long long>(conn_), what, why.empty() ? "" : ": ",
+                     why.c_str());
+        return false;
+      }
+      if (!writer_.take_wakeup()) return true;  // its reader has a wake-up coming
+    }
+    // wake it now, or at the end of the gate pass
+    if (held_->load()) {
+      deferred_.store(true);
+      if (held_->load() || !deferred_.exchange(false))
+        return true;  // (released meanwhile: wake here)
+    }
+    wake();
+    return true;
+  }
+
+  void wake_if_deferred() {
+    if (deferred_.exchange(false)) wake();
+  }
+
+  void unlink_names() {
+    if (unlinked_) return;
+    unlinked_ = true;
+    shm_unlink(shm::object_name(token_).c_str());
+    unlink(shm::fifo_path(token_).c_str());
+  }
+
+  bool failed() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return failed_;
+  }
+
+  std::vector<radio::Delivery> tick_radio;  // loop thread: the frames for the next tick record
+
+ private:
+  void wake() {
+    const char b = 1;
+    // the flag allows one byte in flight: a full FIFO means the client wrote its own flag, and its
+    // wake-up is there anyway
+    [[maybe_unused]] const ssize_t n = ::write(fifo_fd_, &b, 1);
+  }
+
+  const uint64_t conn_;
+  const std::string token_;
+  void* const region_;
+  const std::size_t region_size_;
+  const int fifo_fd_;
+  std::shared_ptr<std::atomic<bool>> held_;
+  mutable std::mutex mutex_;  // guards writer_ and failed_
+  shm::RingWriter writer_;
+  bool failed_ = false;
+  std::atomic<bool> deferred_{false};
+  bool unlinked_ = false;  // loop thread (and the destructor)
+};
+
+ShmTransport::ShmTransport(LineServer& server) : server_(server) {}
+
+ShmTransport::~ShmTransport() = default;
+
+std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t ring_bytes,
+                                                  std::string* why) {
+  const std::size_t region_size = shm::region_bytes(ring_bytes);
+  const auto token = random_token();
+  if (region_size == 0 || !token) {
+    *why = region_size == 0 ? "bad ring size" : std::string("getrandom: ") + std::strerror(errno);
+    return std::nullopt;
+  }
+  // the region: created here (never an object someone else made), 0600, sized, mapped
+  const std::string name = shm::object_name(*token);
+  const int fd = shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    *why = "shm_open " + name + ": " + std::strerror(errno);
+    return std::nullopt;
+  }
+  void* region = MAP_FAILED;
+  if (ftruncate(fd, static_cast<off_t>(region_size)) == 0) {
+    region = mmap(nullptr, region_size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  }
+  const int map_errno = errno;
+  close(fd);
+  if (region == MAP_FAILED) {
+    shm_unlink(name.c_str());
+    *why = "mapping " + std::to_string(region_size) +
+           " bytes of shared memory: " + std::strerror(map_errno);
+    return std::nullopt;
+  }
+  // the wake-up FIFO: opened read-write, so the open does not wait for the client
+  const std::string fifo = shm::fifo_path(*token);
+  int fifo_fd = -1;
+  if (mkfifo(fifo.c_str(), 0600) == 0)
+    fifo_fd = open(fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fifo_fd < 0) {
+    *why = "FIFO " + fifo + ": " + std::strerror(errno);
+    unlink(fifo.c_str());
+    munmap(region, region_size);
+    shm_unlink(name.c_str());
+    return std::nullopt;
+  }
+  offered_[conn] =
+      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, held_);
+  return nlohmann::json{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
+}
+
+void ShmTransport::activate(uint64_t conn) {
+  auto it = offered_.find(conn);
+  if (it == offered_.end()) return;
+  std::shared_ptr<Ring> ring = std::move(it->second);
+  offered_.erase(it);
+  if (!server_.divert(conn, ring)) return;  // it closed meanwhile
+  std::lock_guard<std::mutex> lock(mutex_);
+  rings_[conn] = std::move(ring);
+  activated_total_.fetch_add(1);
+}
+
+bool ShmTransport::attached(uint64_t conn) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return rings_.count(conn) > 0;
+}
+
+void ShmTransport::set_tick_radio(uint64_t conn, std::vector<radio::Delivery> frames) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto it = rings_.find(conn);
+  if (it == rings_.end()) return;
+  auto& pending = it->second->tick_radio;
+  if (pending.empty()) {
+    pending = std::move(frames);
+  } else {
+    pending.insert(pending.end(), std::make_move_iterator(frames.begin()),
+                   std::make_move_iterator(frames.end()));
+  }
+}
+
+bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
+  std::shared_ptr<Ring> ring;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = rings_.find(conn);
+    if (it == rings_.end()) return false;
+    ring = it->second;
+  }
+  // (tick, time, frame count), then each frame: one record, one wake-up
+  std::vector<radio::Delivery> frames;
+  frames.swap(ring->tick_radio);
+  std::vector<uint8_t> body;
+  for (const radio::Delivery& d : frames) {
+    shm::encode_radio_frame(static_cast<uint32_t>(d.to), static_cast<uint32_t>(d.from), d.seq,
+                            d.broadcast, d.time_s, d.queued_s, d.data, &body);
+  }
+  const std::vector<uint8_t> head =
+      shm::encode_tick_head(tick, time_s, static_cast<uint32_t>(frames.size()));
+  const std::span<const uint8_t> parts[] = {head, body};
+  if (!ring->write_record(shm::RecordType::kTick, parts)) server_.close_overloaded(conn);
+  return true;
+}
+
+void ShmTransport::hold_wakeups() { held_->store(true); }
+
+void ShmTransport::release_wakeups() {
+  held_->store(false);
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [conn, ring] : rings_) ring->wake_if_deferred();
+}
+
+void ShmTransport::on_disconnect(uint64_t conn) {
+  offered_.erase(conn);
+  std::lock_guard<std::mutex> lock(mutex_);
+  rings_.erase(conn);  // the LineServer lets go of its share when it closes the socket
+}
+
+}  // namespace uavsim::server::api

@@ -1,0 +1,88 @@
+// The sim API's shared-memory stream (docs/protocol.md, "Shared-memory stream"): for a client on
+// the server's machine, everything the server sends a connection goes into a ring in shared memory
+// (common/shm_ring.hpp) instead of its TCP socket, written by the thread that sends it (no hop
+// through the I/O thread), with one wake-up per gate pass at most; a lockstep tick travels as one
+// binary record with the radio frames for it (no JSON, no base64).
+//
+// Negotiation (op lockstep_shm, ApiServer): the server creates, 0600 and O_EXCL, a shared-memory
+// object /dev/shm/uavsim-TOKEN and a FIFO /dev/shm/uavsim-TOKEN.wake (TOKEN: 128 random bits in
+// hex; the API is TCP, so no descriptor can be passed), replies with TOKEN on TCP, and diverts the
+// connection's output to the ring from the next message on. The client maps both and unlinks the
+// names; the server unlinks them too when the connection ends (whichever comes first). The FIFO is
+// the wake-up the client's event loop can wait on beside its other descriptors (a futex could not
+// be); the server holds its only write end, so the client sees a hang-up when the connection ends
+// or the server dies.
+//
+// The client's requests, `done` included, stay on TCP: a request sent between a tick and its `done`
+// must run before the `done` (the lockstep contract, point 3), and one ordered channel keeps that
+// without a second sequencing scheme; the server's side of TCP is one read per request batch, which
+// the I/O thread does anyway.
+//
+// A client that stops reading (the ring full), or writes into the ring what the protocol forbids
+// (its read position outside what was written), is dropped: its connection is closed as overloaded
+// with a message on stderr naming it, it leaves lockstep, and the server goes on.
+//
+// Thread contract: offer, activate, attached, set_tick_radio, send_tick, release_wakeups and
+// on_disconnect on the loop thread; the rings' writes (LineServer::Diversion) from any thread that
+// sends, serialised by each ring's mutex.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "api/line_server.hpp"
+#include "radio/radio_channel.hpp"
+
+namespace uavsim::server::api {
+
+class ShmTransport {
+ public:
+  // The ring a client gets when it names none: a tick's radio and events many times over, and a
+  // dozen 640 x 480 colour frames.
+  static constexpr std::size_t kDefaultRingBytes = std::size_t{16} << 20;
+
+  explicit ShmTransport(LineServer& server);
+  ~ShmTransport();
+  ShmTransport(const ShmTransport&) = delete;
+  ShmTransport& operator=(const ShmTransport&) = delete;
+
+  // Creates conn's ring (ring_bytes: a power of two in [64 KiB, 256 MiB], checked by the caller)
+  // and returns what the client needs to map it ({token, ring_bytes, version}); nullopt with *why
+  // when the system refuses (no /dev/shm, out of memory). Output still goes to TCP until
+  // activate().
+  std::optional<nlohmann::json> offer(uint64_t conn, std::size_t ring_bytes, std::string* why);
+  // From now on conn's output goes to its offered ring. Call right after sending the offer's reply.
+  void activate(uint64_t conn);
+  // Whether conn's output goes to a ring.
+  bool attached(uint64_t conn) const;
+  // The radio frames that arrived for conn since its last tick, for the tick record send_tick
+  // writes next (RadioOps, at before_tick).
+  void set_tick_radio(uint64_t conn, std::vector<radio::Delivery> frames);
+  // Writes conn's tick as one record with the radio frames given for it. False (nothing written) if
+  // conn is not on a ring; a ring that cannot take it drops the connection (see above).
+  bool send_tick(uint64_t conn, int64_t tick, double time_s);
+  // While held, the rings' wake-ups wait for release_wakeups(): a gate pass wakes each client once.
+  void hold_wakeups();
+  void release_wakeups();
+  void on_disconnect(uint64_t conn);
+  // Connections that have used a ring since the start (for the server's exit line and tests).
+  uint64_t activated_total() const { return activated_total_.load(); }
+
+ private:
+  class Ring;
+  LineServer& server_;
+  std::shared_ptr<std::atomic<bool>> held_ = std::make_shared<std::atomic<bool>>(false);
+  mutable std::mutex mutex_;  // guards rings_ (release_wakeups may race a send on another thread)
+  std::map<uint64_t, std::shared_ptr<Ring>> rings_;
+  std::map<uint64_t, std::shared_ptr<Ring>> offered_;  // loop thread only
+  std::atomic<uint64_t> activated_total_{0};
+};
+
+}  // namespace uavsim::server::api

@@ -1,0 +1,208 @@
+// The sim API's shared-memory stream (docs/protocol.md, "Shared-memory stream") against the real
+// server in process: the op's ranges, a client that breaks its ring and one killed while it holds a
+// tick are dropped and the server goes on with the others, as on TCP. (Runs on both transports:
+// system_test.cpp's ClientDeterminism.SharedMemoryAndTcpGiveTheSameRun.)
+#include "shm_stream.hpp"
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <string>
+
+#include "loop_services.hpp"
+#include "net.hpp"
+#include "sim_channel.hpp"
+#include "sim_harness.hpp"
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/common/shm_ring.hpp"
+
+namespace uavsim::client::testing {
+namespace {
+
+// A client that speaks the wire itself: request lines on TCP, its input from the ring it maps.
+class RawShmClient {
+ public:
+  explicit RawShmClient(int port) {
+    auto fd = net::tcp_connect("127.0.0.1", port, 10.0);
+    EXPECT_TRUE(fd) << fd.message();
+    if (!fd) return;
+    fd_ = *fd;
+    std::string buf;
+    EXPECT_TRUE(net::read_line(fd_, buf, 10.0));  // the hello
+    EXPECT_TRUE(buf.empty());
+  }
+  ~RawShmClient() {
+    if (region_ != nullptr) munmap(region_, size_);
+    if (fd_ >= 0) close(fd_);
+  }
+  // a request and its reply on TCP (before the stream is taken)
+  Json tcp_request(const Json& request) {
+    if (!net::send_all(fd_, request.dump() + "\n", 10.0)) return Json();
+    auto line = net::read_line(fd_, tcp_buf_, 10.0);
+    return line ? Json::parse(*line, nullptr, false) : Json();
+  }
+  // takes the offered stream: a mapping of its own (to break it with) and the reader
+  bool take_stream(const Json& offer) {
+    const std::string name = common::shm::object_name(offer.value("token", std::string()));
+    size_ = common::shm::region_bytes(offer.value("ring_bytes", std::size_t{0}));
+    const int fd = shm_open(name.c_str(), O_RDWR, 0);
+    if (fd < 0 || size_ == 0) return false;
+    region_ = mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    close(fd);
+    auto s = ShmStream::open(offer);
+    EXPECT_TRUE(s) << s.message();
+    if (!s || region_ == MAP_FAILED) return false;
+    stream_ = std::move(*s);
+    return true;
+  }
+  void send(const Json& request) { EXPECT_TRUE(net::send_all(fd_, request.dump() + "\n", 10.0)); }
+  // the next record of the ring (waits on its wake-up, 10 s); false when the stream ended or broke
+  bool next(common::shm::RingReader::Record* rec) {
+    for (int waits = 0; waits < 2; ++waits) {
+      stream_->drain_wakeups();
+      std::string why;
+      const auto status = stream_->next(rec, &why);
+      if (status == common::shm::RingReader::Status::kRecord) return true;
+      if (status == common::shm::RingReader::Status::kCorrupt) return false;
+      pollfd p{stream_->wake_fd(), POLLIN, 0};
+      if (poll(&p, 1, 10000) <= 0) return false;
+    }
+    return false;
+  }
+  // the ring's wake-up hangs up: the server has let go of the stream (the connection is closed)
+  bool hung_up() {
+    pollfd p{stream_->wake_fd(), POLLIN, 0};
+    for (int i = 0; i < 100 && poll(&p, 1, 100) >= 0; ++i) {
+      if (p.revents & POLLHUP) return true;
+      stream_->drain_wakeups();
+    }
+    return false;
+  }
+  common::shm::RingHeader* header() { return static_cast<common::shm::RingHeader*>(region_); }
+
+ private:
+  int fd_ = -1;
+  std::string tcp_buf_;
+  void* region_ = nullptr;
+  std::size_t size_ = 0;
+  std::unique_ptr<ShmStream> stream_;
+};
+
+TEST(SharedMemoryStream, TheOpChecksItsRangesAndIsOfferedOnce) {
+  SimServer server;
+  RawShmClient c(server.api_port());
+  for (const Json bad : {Json(1000), Json(65537), Json(-65536), Json(1u << 29), Json("big")}) {
+    const Json r = c.tcp_request({{"op", "lockstep_shm"}, {"ring_bytes", bad}});
+    EXPECT_EQ(r["ok"], false) << bad;
+    EXPECT_EQ(r["error"]["code"], "bad_field") << r;
+  }
+  const Json offer = c.tcp_request({{"op", "lockstep_shm"}, {"ring_bytes", 65536}});
+  ASSERT_EQ(offer["ok"], true) << offer;
+  EXPECT_EQ(offer["result"]["ring_bytes"], 65536);
+  ASSERT_TRUE(c.take_stream(offer["result"]));
+  // the names are gone once mapped: nobody else opens them
+  const std::string name = common::shm::object_name(offer["result"]["token"].get<std::string>());
+  EXPECT_LT(shm_open(name.c_str(), O_RDWR, 0), 0);
+  // a second offer is refused, its reply on the stream
+  c.send({{"op", "lockstep_shm"}, {"id", 7}});
+  common::shm::RingReader::Record rec;
+  ASSERT_TRUE(c.next(&rec));
+  ASSERT_EQ(rec.type, common::shm::RecordType::kStream);
+  const Json again =
+      Json::parse(std::string(rec.payload.begin(), rec.payload.end()), nullptr, false);
+  EXPECT_EQ(again["id"], 7);
+  EXPECT_EQ(again["error"]["code"], "bad_state") << again;
+}
+
+// A client that moves its ring's read position past what the server wrote is dropped at the
+// server's next write (here the reply to its `done`); the other lockstep client ticks on.
+TEST(SharedMemoryStream, AClientThatBreaksItsRingIsDroppedAndTheOthersTickOn) {
+  SimServer server;
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  ASSERT_TRUE(l) << l.message();
+  ASSERT_TRUE(LoopServices(**l).sim_channel()->on_ring());
+  RawShmClient hostile(server.api_port());
+  const Json offer = hostile.tcp_request({{"op", "lockstep_shm"}});
+  ASSERT_EQ(offer["ok"], true) << offer;
+  ASSERT_TRUE(hostile.take_stream(offer["result"]));
+  hostile.send({{"op", "lockstep_join"}, {"period_s", 0.02}});
+  ApiClient api(server.api_port());
+  // (bounded: the join is served at the server's next gate)
+  for (int i = 0; i < 1000 && api.request({{"op", "status"}})["result"]["lockstep_clients"] != 2;
+       ++i)
+    usleep(1000);
+  ASSERT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 2);
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  // its first tick, as a binary record
+  common::shm::RingReader::Record rec;
+  bool ticked = false;
+  while (!ticked && hostile.next(&rec)) ticked = rec.type == common::shm::RecordType::kTick;
+  ASSERT_TRUE(ticked);
+  std::string why;
+  const auto tick = common::shm::decode_tick(rec.payload, &why);
+  ASSERT_TRUE(tick) << why;
+  // garbage where its read position is, then done
+  hostile.header()->tail += 1u << 20;
+  hostile.send({{"op", "done"}, {"tick", tick->tick}});
+  EXPECT_TRUE(hostile.hung_up());
+  // the server dropped it and goes on with the good client
+  EventLoop& loop = **l;
+  const double before = loop.now();
+  ASSERT_TRUE(loop.run_for(1.0));
+  EXPECT_GE(loop.now(), before + 1.0 - 1e-9);
+  EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 1);
+}
+
+// A lockstep client on the shared-memory stream, killed (SIGKILL) while it holds a tick: its
+// connection closes, it leaves the lockstep, and the clock goes on, with no lockstep timeout. The
+// client is forked before the server starts (no threads to copy).
+TEST(SharedMemoryStream, AClientKilledHoldingItsTickIsDroppedAndTheClockGoesOn) {
+  int to_child[2], from_child[2];
+  ASSERT_EQ(pipe(to_child), 0);
+  ASSERT_EQ(pipe(from_child), 0);
+  const pid_t child = fork();
+  if (child == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
+    int port = 0;
+    if (read(to_child[0], &port, sizeof(port)) != sizeof(port)) _exit(2);
+    auto loop = EventLoop::create(LoopConfig::lockstep("127.0.0.1", port, 0.02));
+    const char joined = loop && LoopServices(**loop).sim_channel()->on_ring() ? 'r' : 't';
+    (void)!write(from_child[1], &joined, 1);
+    pause();  // holds its first tick until killed
+    _exit(0);
+  }
+  close(to_child[0]);
+  close(from_child[1]);
+  SimServer
+      server;  // (its lockstep timeout is 30 s: only the disconnect can free the clock in time)
+  ApiClient api(server.api_port());
+  const int port = server.api_port();
+  ASSERT_EQ(write(to_child[1], &port, sizeof(port)), static_cast<ssize_t>(sizeof(port)));
+  char joined = 0;
+  ASSERT_EQ(read(from_child[0], &joined, 1), 1);
+  EXPECT_EQ(joined, 'r');
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  // held at its first tick
+  const double held = api.request({{"op", "status"}})["result"]["time_s"];
+  EXPECT_EQ(api.request({{"op", "status"}})["result"]["time_s"], held);
+  ASSERT_EQ(kill(child, SIGKILL), 0);
+  ASSERT_EQ(waitpid(child, nullptr, 0), child);
+  // bounded poll: the bound only turns a hang into a failure (well under the 30 s timeout)
+  double t = held;
+  for (int i = 0; i < 2000 && t <= held + 0.1; ++i) {
+    t = api.request({{"op", "status"}})["result"]["time_s"];
+    usleep(5000);
+  }
+  EXPECT_GT(t, held + 0.1);
+  EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 0);
+  close(to_child[1]);
+  close(from_child[0]);
+}
+
+}  // namespace
+}  // namespace uavsim::client::testing
