@@ -113,6 +113,10 @@ class Daemons:
 
 
 class SweepOnDaemons(unittest.TestCase):
+    # a summary that differs is shown whole: the one difference seen so far (a run's server ended by a
+    # signal instead of exiting normally, once, under load 17) could not be traced from a cut diff
+    maxDiff = None
+
     def setUp(self):
         if os.geteuid() != 0:
             raise unittest.SkipTest("the daemons are started as root here")
