@@ -661,8 +661,12 @@ int main(int argc, char** argv) {
           launch.note_sim_time(sim_s);
           // the program exits 3 s after its landing and the clock holds then (pause_at): go on to
           // the 5 s on the deck, where the next armed pause holds it again
+          // (never the budget's own pause: this poll runs on wall time, so a resume there made the
+          // end depend on whether a poll fell between that pause and the budget check below: a run
+          // with a 40 s budget that landed at 38.6 s ended at 40 s or, resumed, at 41.9 s)
           if (landed_s >= 0 && s->value("paused", false) &&
-              sim_s < landed_s + kStayOnDeck_s - kPauseSlack_s)
+              sim_s < landed_s + kStayOnDeck_s - kPauseSlack_s &&
+              sim_s < o.start_time_s + o.budget_s - kPauseSlack_s)
             (void)api.resume();
         }
       }
