@@ -207,6 +207,9 @@ std::map<std::string, OpProbe> op_probes() {
   p["lockstep_join"] = {with({{"period_s", 0.1}}, "lockstep_join"),
                         {"period_s", "timeout_s", "from_s"}};
   p["lockstep_leave"] = {with({}, "lockstep_leave"), {}};
+  // (no hostile number is a power of two in the ring's range: each is refused, and the connection
+  // stays on TCP for the next probe)
+  p["lockstep_shm"] = {with({}, "lockstep_shm"), {"ring_bytes"}};
   p["done"] = {with({{"tick", 0}}, "done"), {"tick", "busy_until"}};
   p["vehicles"] = {with({}, "vehicles"), {}};
   p["truck"] = {with({}, "truck"), {}};
