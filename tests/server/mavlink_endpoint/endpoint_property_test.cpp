@@ -67,7 +67,8 @@ class PropertyTest : public EndpointTest {
  protected:
   // GUIDED, armed, at 3 m: the state in which most inputs take effect
   void fly(TestGcs& g) {
-    if (!sim_->fc(0).armed()) wait_gps_ready(g);  // SYS_STATUS reports the pre-arm checks while disarmed
+    if (!sim_->fc(0).armed())
+      wait_gps_ready(g);  // SYS_STATUS reports the pre-arm checks while disarmed
     ASSERT_EQ(command(g, 176, {1, 4}), kAccepted);
     if (!sim_->fc(0).armed()) {
       ASSERT_EQ(command(g, 400, {1}), kAccepted);
@@ -127,6 +128,38 @@ class PropertyTest : public EndpointTest {
         g, [&] { return answers() >= before + burst.size(); }, kAnswerWithinSimS))
         << what << ": " << answers() - before << " answers to " << burst.size() << " messages";
     ASSERT_TRUE(finite_state(sim_->truth(0))) << what;
+  }
+
+  // one setpoint field of message Msg, with a type mask that makes the controller use it
+  template <class Msg>
+  struct SetpointField {
+    const char* name;
+    float Msg::*field;
+    std::uint16_t mask;
+  };
+
+  // each field fed every hostile float: non-finite ones are counted as rejected, none makes the
+  // state non-finite, and the vehicle comes back to its hold point after each field
+  template <class Msg>
+  void setpoint_barrage(TestGcs& g, const std::string& what,
+                        const std::vector<SetpointField<Msg>>& fields,
+                        const std::function<Msg(std::uint16_t)>& base) {
+    for (const SetpointField<Msg>& f : fields) {
+      for (const float v : kHostileFloats) {
+        const auto rejected = server_->stats(0).rejected_inputs;
+        Msg sp = base(f.mask);
+        sp.*(f.field) = v;
+        g.send(sp);
+        sync_client(g);
+        step_for(0.1);
+        ASSERT_TRUE(finite_state(sim_->truth(0))) << what << " " << f.name << " = " << v;
+        if (!std::isfinite(v)) {
+          EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 1)
+              << what << " " << f.name << " = " << v;
+        }
+      }
+      ASSERT_NO_FATAL_FAILURE(hold_at(g, kTakeoffAltM)) << "after " << what << " " << f.name;
+    }
   }
 
   static constexpr double kPi = 3.14159265358979323846;
@@ -207,63 +240,42 @@ TEST_F(PropertyTest, SetpointFieldsRejectNonFiniteValuesAndSurviveExtremes) {
   // each field with a type mask that makes the controller use it (bits: ignore x,y,z | vx,vy,vz |
   // ax,ay,az | force | yaw | yaw rate)
   constexpr std::uint16_t kPos = 0x0DF8, kVel = 0x0DC7, kAcc = 0x0C3F, kYawRate = 0x05C7;
-  struct LocalField {
-    const char* name;
-    float msg::SetPositionTargetLocalNed::*field;
-    std::uint16_t mask;
-  };
-  const std::vector<LocalField> local = {
-      {"x", &msg::SetPositionTargetLocalNed::x, kPos},
-      {"y", &msg::SetPositionTargetLocalNed::y, kPos},
-      {"z", &msg::SetPositionTargetLocalNed::z, kPos},
-      {"vx", &msg::SetPositionTargetLocalNed::vx, kVel},
-      {"vy", &msg::SetPositionTargetLocalNed::vy, kVel},
-      {"vz", &msg::SetPositionTargetLocalNed::vz, kVel},
-      {"afx", &msg::SetPositionTargetLocalNed::afx, kAcc},
-      {"afy", &msg::SetPositionTargetLocalNed::afy, kAcc},
-      {"afz", &msg::SetPositionTargetLocalNed::afz, kAcc},
-      {"yaw", &msg::SetPositionTargetLocalNed::yaw, static_cast<std::uint16_t>(kPos & ~0x0400)},
-      {"yaw_rate", &msg::SetPositionTargetLocalNed::yaw_rate, kYawRate}};
-  for (const LocalField& f : local) {
-    for (const float v : kHostileFloats) {
-      const auto rejected = server_->stats(0).rejected_inputs;
-      msg::SetPositionTargetLocalNed sp;
-      sp.target_system = 1;
-      sp.coordinate_frame = 1;
-      sp.type_mask = f.mask;
-      sp.z = -static_cast<float>(kTakeoffAltM);
-      sp.*(f.field) = v;
-      g->send(sp);
-      sync_client(*g);
-      step_for(0.1);
-      ASSERT_TRUE(finite_state(sim_->truth(0))) << "local " << f.name << " = " << v;
-      if (non_finite(v)) {
-        EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 1)
-            << "local " << f.name << " = " << v;
-      }
-    }
-    ASSERT_NO_FATAL_FAILURE(hold_at(*g, kTakeoffAltM)) << "after local " << f.name;
-  }
+  constexpr std::uint16_t kPosYaw = kPos & ~0x0400;
+  using Local = msg::SetPositionTargetLocalNed;
+  using Global = msg::SetPositionTargetGlobalInt;
+  const std::vector<SetpointField<Local>> local = {{"x", &Local::x, kPos},
+                                                   {"y", &Local::y, kPos},
+                                                   {"z", &Local::z, kPos},
+                                                   {"vx", &Local::vx, kVel},
+                                                   {"vy", &Local::vy, kVel},
+                                                   {"vz", &Local::vz, kVel},
+                                                   {"afx", &Local::afx, kAcc},
+                                                   {"afy", &Local::afy, kAcc},
+                                                   {"afz", &Local::afz, kAcc},
+                                                   {"yaw", &Local::yaw, kPosYaw},
+                                                   {"yaw_rate", &Local::yaw_rate, kYawRate}};
+  ASSERT_NO_FATAL_FAILURE(setpoint_barrage<Local>(*g, "local", local, [](std::uint16_t mask) {
+    Local sp;
+    sp.target_system = 1;
+    sp.coordinate_frame = 1;
+    sp.type_mask = mask;
+    sp.z = -static_cast<float>(kTakeoffAltM);
+    return sp;
+  }));
 
-  struct GlobalField {
-    const char* name;
-    float msg::SetPositionTargetGlobalInt::*field;
-    std::uint16_t mask;
-  };
-  const std::vector<GlobalField> global = {
-      {"alt", &msg::SetPositionTargetGlobalInt::alt, kPos},
-      {"vx", &msg::SetPositionTargetGlobalInt::vx, kVel},
-      {"vy", &msg::SetPositionTargetGlobalInt::vy, kVel},
-      {"vz", &msg::SetPositionTargetGlobalInt::vz, kVel},
-      {"afx", &msg::SetPositionTargetGlobalInt::afx, kAcc},
-      {"afy", &msg::SetPositionTargetGlobalInt::afy, kAcc},
-      {"afz", &msg::SetPositionTargetGlobalInt::afz, kAcc},
-      {"yaw", &msg::SetPositionTargetGlobalInt::yaw, static_cast<std::uint16_t>(kPos & ~0x0400)},
-      {"yaw_rate", &msg::SetPositionTargetGlobalInt::yaw_rate, kYawRate}};
+  const std::vector<SetpointField<Global>> global = {{"alt", &Global::alt, kPos},
+                                                     {"vx", &Global::vx, kVel},
+                                                     {"vy", &Global::vy, kVel},
+                                                     {"vz", &Global::vz, kVel},
+                                                     {"afx", &Global::afx, kAcc},
+                                                     {"afy", &Global::afy, kAcc},
+                                                     {"afz", &Global::afz, kAcc},
+                                                     {"yaw", &Global::yaw, kPosYaw},
+                                                     {"yaw_rate", &Global::yaw_rate, kYawRate}};
   const auto home = g->last<msg::GlobalPositionInt>();
   ASSERT_TRUE(home);
   const auto global_base = [&](std::uint16_t mask) {
-    msg::SetPositionTargetGlobalInt sp;
+    Global sp;
     sp.target_system = 1;
     sp.coordinate_frame = 6;  // GLOBAL_RELATIVE_ALT_INT
     sp.type_mask = mask;
@@ -272,22 +284,7 @@ TEST_F(PropertyTest, SetpointFieldsRejectNonFiniteValuesAndSurviveExtremes) {
     sp.alt = static_cast<float>(kTakeoffAltM);
     return sp;
   };
-  for (const GlobalField& f : global) {
-    for (const float v : kHostileFloats) {
-      const auto rejected = server_->stats(0).rejected_inputs;
-      msg::SetPositionTargetGlobalInt sp = global_base(f.mask);
-      sp.*(f.field) = v;
-      g->send(sp);
-      sync_client(*g);
-      step_for(0.1);
-      ASSERT_TRUE(finite_state(sim_->truth(0))) << "global " << f.name << " = " << v;
-      if (non_finite(v)) {
-        EXPECT_EQ(server_->stats(0).rejected_inputs, rejected + 1)
-            << "global " << f.name << " = " << v;
-      }
-    }
-    ASSERT_NO_FATAL_FAILURE(hold_at(*g, kTakeoffAltM)) << "after global " << f.name;
-  }
+  ASSERT_NO_FATAL_FAILURE(setpoint_barrage<Global>(*g, "global", global, global_base));
   for (const std::int32_t v : kHostileInt32) {
     for (int field = 0; field < 2; ++field) {
       msg::SetPositionTargetGlobalInt sp = global_base(kPos);
