@@ -26,7 +26,10 @@ constexpr std::size_t padded(std::size_t n) { return (n + 7) & ~std::size_t{7}; 
 bool power_of_two(std::size_t n) { return n != 0 && (n & (n - 1)) == 0; }
 
 // copies into / out of the ring at a byte position, wrapping at the end
+// (n == 0 returns first: an empty part, e.g. a tick without radio frames, may come as a null span, and
+// memcpy's pointers must not be null even for no bytes)
 void put(uint8_t* data, std::size_t capacity, uint64_t pos, const uint8_t* src, std::size_t n) {
+  if (n == 0) return;
   const std::size_t at = static_cast<std::size_t>(pos & (capacity - 1));
   const std::size_t first = std::min(n, capacity - at);
   std::memcpy(data + at, src, first);
@@ -34,6 +37,7 @@ void put(uint8_t* data, std::size_t capacity, uint64_t pos, const uint8_t* src, 
 }
 
 void get(const uint8_t* data, std::size_t capacity, uint64_t pos, uint8_t* dst, std::size_t n) {
+  if (n == 0) return;
   const std::size_t at = static_cast<std::size_t>(pos & (capacity - 1));
   const std::size_t first = std::min(n, capacity - at);
   std::memcpy(dst, data + at, first);
