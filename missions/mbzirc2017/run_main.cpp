@@ -416,6 +416,10 @@ int main(int argc, char** argv) {
 
   // the ground truth the summary is scored from
   double takeoff_s = -1.0, landed_s = -1.0, relative_speed_m_s = -1.0, marker_distance_m = -1.0;
+  // the run's scored end: landed, and sim time t is 5 s after the touchdown (to a pause's slack)
+  const auto on_deck_long_enough = [&](double t) {
+    return landed_s >= 0 && t >= landed_s + kStayOnDeck_s - kPauseSlack_s;
+  };
   double end_sim_s = 0.0;
   bool stayed_on_deck = false;
   std::vector<std::string> crashes, states;
@@ -651,7 +655,7 @@ int main(int argc, char** argv) {
         // clock went on towards the armed pause_at while the leave was on its way, and where it
         // stopped, 4 ms apart, depended on which came first: one run of a 100-seed sweep ended at
         // 44.204 s, its twin at 44.200 s.)
-        if (landed_s >= 0 && tick_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
+        if (on_deck_long_enough(tick_s)) break;
         if (!api.done(tick)) fail("the fault injector's done was refused");
       }
       if (launch.wall_s() - last_status_wall_s > 0.5) {
@@ -671,7 +675,7 @@ int main(int argc, char** argv) {
         }
       }
       // scored: still on the deck 5 s after touchdown
-      if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) break;
+      if (on_deck_long_enough(sim_s)) break;
       if (launch.programs_done() && landed_s < 0) break;
       if (uavsim::launch::interrupted()) break;
       if (sim_s >= o.start_time_s + o.budget_s - kPauseSlack_s) {
@@ -697,7 +701,7 @@ int main(int argc, char** argv) {
     // clock went on to the armed pause_at 8 ms later) or already saw it gone (left too, and the
     // empty-lockstep pause held the clock at the tick): seed 10 of a 100-seed sweep ended at 44.4 s
     // on SLURM and 44.408 s locally.
-    if (landed_s >= 0 && sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s) (void)api.pause();
+    if (on_deck_long_enough(sim_s)) (void)api.pause();
     (void)api.lockstep_leave();
     // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
     // stands)
@@ -728,7 +732,7 @@ int main(int argc, char** argv) {
       }
     }
     stayed_on_deck =
-        stayed_on_deck && landed_s >= 0 && end_sim_s >= landed_s + kStayOnDeck_s - kPauseSlack_s;
+        stayed_on_deck && on_deck_long_enough(end_sim_s);
   }
   launch.stop_all(60.0);
   if (world != o.world) std::remove(world.c_str());
