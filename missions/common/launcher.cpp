@@ -447,8 +447,9 @@ struct Launcher::Impl {
   // the interruption, once noticed: how many ends were noticed before it, and the sim time then
   std::optional<std::size_t> ends_before_interrupt;
   double interrupt_sim_time_s = -1.0;
-  // the first run record that could not be written (the launcher's ground truth, or the server's
-  // event log or a tlog as it says), with the sim time then: records_error()
+  // the first run record that could not be written (the launcher's ground truth, the server's event
+  // log, a tlog or the video as it says, a program's vision log as it says), with the sim time
+  // then: records_error()
   std::string records_error;
 
   void note_records_error(const std::string& why) {
@@ -462,12 +463,17 @@ struct Launcher::Impl {
     std::fflush(stdout);
   }
   void read_child(Child& c) {
-    // the server says once when one of its logs cannot be written on (a full disk)
-    static const std::regex log_stops(R"(uavsim-server: the (event log|tlog) stops here: (.*))");
+    // the server says once when one of its records cannot be written on (a full disk): its event
+    // log, a tlog or the video; a mission program the same of its vision log
+    static const std::regex server_log_stops(
+        R"(uavsim-server: the (event log|tlog|video) stops here: (.*))");
+    static const std::regex vision_log_stops(R"(: the (vision log) stops here: (.*))");
     for (const std::string& l : c.read_lines()) {
       say("[" + c.name + "] " + l);
       std::smatch m;
-      if (&c == server && std::regex_search(l, m, log_stops)) note_records_error(m[2].str());
+      if (std::regex_search(l, m, &c == server ? server_log_stops : vision_log_stops)) {
+        note_records_error(m[2].str());
+      }
       for (auto& cb : line_callbacks) cb(c.name, l);
     }
   }

@@ -138,7 +138,8 @@ int main(int argc, char** argv) {
   std::optional<Pending> pending;
   std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
   if (!video_log.empty()) {
-    auto opened = uavsim::vision::VideoLogWriter::open(video_log);
+    auto opened = uavsim::vision::VideoLogWriter::open(
+        video_log, uavsim::vision::write_error_said_by(vehicle));
     if (!opened) {
       log("--video-log " + video_log + ": " + uavsim::vision::to_string(opened.error()));
       return 1;

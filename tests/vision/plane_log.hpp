@@ -45,7 +45,7 @@ inline VideoLogFrame plane_frame(int i) {
 
 // frames plane_frame(0..count-1), or the same without planes (a colour-only log)
 inline bool write_plane_log(const std::filesystem::path& path, int count, bool with_planes = true) {
-  auto writer = VideoLogWriter::open(path, {90, 64});
+  auto writer = VideoLogWriter::open(path, {90, 64, nullptr});
   if (!writer) return false;
   for (int i = 0; i < count; ++i) {
     VideoLogFrame f = plane_frame(i);

@@ -1,17 +1,23 @@
 #include "uavsim/vision/video_log.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <vector>
 
 #include "uavsim/vision/synthetic_scene.hpp"
 
@@ -53,7 +59,7 @@ std::vector<Overlay> frame_overlays(int i) {
 TEST_F(VideoLogTest, RoundTripKeepsFramesStampsOverlaysAndText) {
   constexpr int kFrames = 12;
   {
-    auto writer = VideoLogWriter::open(dir_ / "a.vlog", {90, 64});
+    auto writer = VideoLogWriter::open(dir_ / "a.vlog", {90, 64, nullptr});
     ASSERT_TRUE(writer.ok());
     for (int i = 0; i < kFrames; ++i) {
       VideoLogFrame f{1'000'000 + 142'857LL * i, frame_image(i), frame_overlays(i),
@@ -84,7 +90,7 @@ TEST_F(VideoLogTest, RoundTripKeepsFramesStampsOverlaysAndText) {
 }
 
 TEST_F(VideoLogTest, FullQueueDropsAndCountsInsteadOfBlocking) {
-  auto writer = VideoLogWriter::open(dir_ / "b.vlog", {95, 2});
+  auto writer = VideoLogWriter::open(dir_ / "b.vlog", {95, 2, nullptr});
   ASSERT_TRUE(writer.ok());
   // 1280x960 noise is slow to encode: submitting 100 back to back must overflow a 2-frame queue
   cv::Mat big(960, 1280, CV_8UC3);
@@ -117,6 +123,72 @@ TEST_F(VideoLogTest, TruncatedLogReadsUpToLastWholeFrame) {
   ASSERT_TRUE(reader.ok());
   EXPECT_EQ((*reader)->frame_count(), 4u);
   EXPECT_TRUE((*reader)->read(3).ok());
+}
+
+// Byte offsets where the VLOG's records end, following the size prefixes from the 16-byte header
+// (little-endian u32 per record); the last is where the chain stops.
+std::vector<uint64_t> record_ends(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<uint64_t> ends;
+  uint64_t pos = 16;
+  while (pos + 4 <= bytes.size()) {
+    uint32_t n = 0;
+    for (int i = 0; i < 4; ++i)
+      n |= static_cast<uint32_t>(static_cast<uint8_t>(bytes[pos + i])) << (8 * i);
+    if (pos + 4 + n > bytes.size()) break;
+    pos += 4 + n;
+    ends.push_back(pos);
+  }
+  return ends;
+}
+
+// A disk that fills mid-log (this process's file size limit, RLIMIT_FSIZE, with SIGXFSZ ignored so
+// a write past it fails with EFBIG as one on a full disk fails with ENOSPC): the log ends on its
+// last whole frame, the failure is said once naming the file, later frames are dropped and close()
+// says the log is incomplete.
+TEST_F(VideoLogTest, ADiskFullMidLogEndsOnAWholeFrameAndIsSaidOnce) {
+  constexpr rlim_t kLimitBytes = 48 * 1024;  // a few 320x240 JPEG frames
+  constexpr int kFrames = 20;
+  const fs::path path = dir_ / "full.vlog";
+  std::vector<std::string> said;
+  std::mutex said_mutex;
+  VideoLogWriterOptions options;
+  options.queue_capacity = kFrames;  // no drop for a full queue: every drop is the disk's
+  options.on_write_error = [&](const std::string& why) {
+    std::lock_guard lock(said_mutex);
+    said.push_back(why);
+  };
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  const rlimit limited{std::min(kLimitBytes, old.rlim_cur), old.rlim_max};
+  const auto old_handler = signal(SIGXFSZ, SIG_IGN);
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limited), 0);
+  auto writer = VideoLogWriter::open(path, options);
+  bool closed_ok = true;
+  if (writer.ok()) {
+    for (int i = 0; i < kFrames; ++i) (*writer)->submit({i * 100'000LL, frame_image(i), {}, "x"});
+    closed_ok = (*writer)->close().ok();
+  }
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &old), 0);  // before any assertion can return early
+  signal(SIGXFSZ, old_handler);
+  ASSERT_TRUE(writer.ok());
+  EXPECT_FALSE(closed_ok);
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_EQ(said[0], path.string() + ": File too large");
+  EXPECT_EQ((*writer)->write_error(), said[0]);
+  const uint64_t written = (*writer)->frames_written();
+  EXPECT_GE(written, 1u);
+  EXPECT_LT(written, static_cast<uint64_t>(kFrames));
+  EXPECT_EQ(written + (*writer)->frames_dropped(), static_cast<uint64_t>(kFrames));
+  // no torn frame: the records chain to the file's last byte, and each one reads back
+  const std::vector<uint64_t> ends = record_ends(path);
+  ASSERT_EQ(ends.size(), written);
+  EXPECT_EQ(ends.back(), fs::file_size(path));
+  auto reader = VideoLogReader::open(path);
+  ASSERT_TRUE(reader.ok());
+  ASSERT_EQ((*reader)->frame_count(), written);
+  for (size_t i = 0; i < written; ++i) EXPECT_TRUE((*reader)->read(i).ok()) << i;
 }
 
 // a camera's depth and segmentation beside the image come back bit for bit (NaN included)

@@ -8,11 +8,14 @@
 #include <cstring>
 #include <deque>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <thread>
+
+#include "uavsim/common/record_file.hpp"
 
 namespace uavsim::vision {
 
@@ -239,7 +242,8 @@ bool Overlay::operator==(const Overlay& other) const {
 
 struct VideoLogWriter::Impl {
   VideoLogWriterOptions options;
-  std::ofstream file;
+  // whole records with one write(2) each: a full disk or a kill leaves the log on a whole frame
+  common::RecordFile file;  // the worker's, after open()
   std::mutex mutex;
   std::condition_variable cv;
   std::deque<VideoLogFrame> queue;  // guarded by mutex
@@ -248,7 +252,19 @@ struct VideoLogWriter::Impl {
   std::atomic<uint64_t> written{0};
   std::atomic<uint64_t> dropped{0};
   std::atomic<bool> write_failed{false};
+  std::string write_error;  // guarded by mutex
   std::thread worker;
+
+  // the first record the file refused: said once, and the later frames are dropped
+  void refused() {
+    write_failed = true;
+    {
+      std::lock_guard lock(mutex);
+      if (!write_error.empty()) return;
+      write_error = file.error();
+    }
+    if (options.on_write_error) options.on_write_error(file.error());
+  }
 
   void run() {
     std::string record;
@@ -290,19 +306,31 @@ struct VideoLogWriter::Impl {
         write_failed = true;
         continue;
       }
-      std::string size_prefix;
-      put_u32(&size_prefix, static_cast<uint32_t>(record.size()));
-      file.write(size_prefix.data(), size_prefix.size());
-      file.write(record.data(), record.size());
-      file.flush();  // whole records on disk, so a crash leaves a readable log
-      if (!file) {
-        write_failed = true;
-      } else {
+      if (!file.error().empty()) {  // the disk refused an earlier record
+        ++dropped;
+        continue;
+      }
+      std::string framed;
+      put_u32(&framed, static_cast<uint32_t>(record.size()));
+      framed += record;
+      if (file.write(framed)) {
         ++written;
+      } else {
+        ++dropped;  // this frame is not in the log
+        refused();
       }
     }
   }
 };
+
+VideoLogWriterOptions write_error_said_by(const std::string& program) {
+  VideoLogWriterOptions options;
+  options.on_write_error = [program](const std::string& why) {
+    std::printf("%s: the vision log stops here: %s\n", program.c_str(), why.c_str());
+    std::fflush(stdout);
+  };
+  return options;
+}
 
 VideoLogWriter::VideoLogWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
@@ -313,14 +341,11 @@ Result<std::unique_ptr<VideoLogWriter>, VideoLogError> VideoLogWriter::open(
   auto impl = std::make_unique<Impl>();
   impl->options = options;
   impl->options.queue_capacity = std::max<size_t>(options.queue_capacity, 1);
-  impl->file.open(path, std::ios::binary | std::ios::trunc);
-  if (!impl->file) return VideoLogError::kOpenFailed;
+  if (!impl->file.open(path.string(), nullptr)) return VideoLogError::kOpenFailed;
   std::string header(kMagic, sizeof(kMagic));
   put_u32(&header, kVersion);
   put_u32(&header, kFourccMjpg);
-  impl->file.write(header.data(), header.size());
-  impl->file.flush();
-  if (!impl->file) return VideoLogError::kOpenFailed;
+  if (!impl->file.write(header)) return VideoLogError::kOpenFailed;
   Impl* raw = impl.get();
   impl->worker = std::thread([raw] { raw->run(); });
   return std::unique_ptr<VideoLogWriter>(new VideoLogWriter(std::move(impl)));
@@ -371,12 +396,16 @@ Status<VideoLogError> VideoLogWriter::close() {
   impl_->cv.notify_all();
   if (impl_->worker.joinable()) impl_->worker.join();
   impl_->file.close();
-  if (impl_->write_failed || impl_->file.fail()) return VideoLogError::kWriteFailed;
+  if (impl_->write_failed) return VideoLogError::kWriteFailed;
   return std::monostate{};
 }
 
 uint64_t VideoLogWriter::frames_written() const { return impl_->written; }
 uint64_t VideoLogWriter::frames_dropped() const { return impl_->dropped; }
+std::string VideoLogWriter::write_error() const {
+  std::lock_guard lock(impl_->mutex);
+  return impl_->write_error;
+}
 
 // --- reader ---
 

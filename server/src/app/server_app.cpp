@@ -444,6 +444,10 @@ int run_server(const Options& given_options) {
             if (frames->cameras()[i].vehicle >= 0 && i != *cam) ro.tiles.push_back(static_cast<int>(i));
           }
         }
+        // said once, like a tlog the disk refuses; the mission launchers end the run on it
+        ro.on_write_error = [](const std::string& why) {
+          std::fprintf(stderr, "uavsim-server: the video stops here: %s\n", why.c_str());
+        };
         recorder = std::make_unique<render::VideoRecorder>(*frames, static_cast<int>(*cam), *options.record_path,
                                                            std::move(ro));
       } catch (const std::exception& e) {

@@ -1,14 +1,17 @@
 #include "render/video_recorder.hpp"
 
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <opencv2/imgproc.hpp>
-#include <optional>
 #include <opencv2/videoio.hpp>
+#include <optional>
 #include <stdexcept>
 
 namespace uavsim::server::render {
@@ -101,9 +104,10 @@ void false_colour_segmentation(const uint8_t* segmentation, int width_px, int he
   }
 }
 
-VideoRecorder::VideoRecorder(const FrameService& service, int camera, int every, const std::string& path,
-                             bool lossless)
-    : VideoRecorder(service, camera, path, RecorderOptions{every, lossless, {}, nullptr, {}}) {}
+VideoRecorder::VideoRecorder(const FrameService& service, int camera, int every,
+                             const std::string& path, bool lossless)
+    : VideoRecorder(service, camera, path,
+                    RecorderOptions{every, lossless, {}, nullptr, {}, nullptr}) {}
 
 VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std::string& path,
                              RecorderOptions options)
@@ -192,12 +196,34 @@ void VideoRecorder::finish() {
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
   if (pipe_ != nullptr) {
-    pclose(pipe_);
+    // the encoder's own end: one that fails writing the file's tail (a full disk) exits non-zero
+    const int status = pclose(pipe_);
     pipe_ = nullptr;
+    if (status != 0) {
+      encoder_failed(path_ + ": the encoder (ffmpeg) " +
+                     (WIFEXITED(status) ? "exited with code " + std::to_string(WEXITSTATUS(status))
+                                        : std::string("ended abnormally")));
+    }
   }
   if (cv_writer_) cv_writer_->writer.release();
+  // an encoder that could write the frames but not the file's index (MP4 keeps it at the end: a
+  // disk that fills then) may still exit 0, leaving a file no player opens
+  if (!options_.sink && stats().frames_written > 0 && stats().write_error.empty() &&
+      !cv::VideoCapture(path_, cv::CAP_FFMPEG).isOpened()) {
+    encoder_failed(path_ +
+                   ": the finished video cannot be opened (the encoder could not complete it)");
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   finished_ = true;
+}
+
+void VideoRecorder::encoder_failed(const std::string& why) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!stats_.write_error.empty()) return;
+    stats_.write_error = why;
+  }
+  if (options_.on_write_error) options_.on_write_error(why);
 }
 
 RecorderStats VideoRecorder::stats() const {
@@ -339,10 +365,22 @@ void VideoRecorder::writer_main() {
     }
     cv_.notify_all();  // room for a lossless deliver
     bool ok = true;
-    if (options_.sink) {
+    bool encoder_dead = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      encoder_dead = !stats_.write_error.empty();
+    }
+    if (encoder_dead) {
+      ok = false;  // a dead encoder's pipe would refuse each frame again
+    } else if (options_.sink) {
       options_.sink(*frame, width_, height_);
     } else if (pipe_ != nullptr) {
       ok = std::fwrite(frame->data(), 1, frame->size(), pipe_) == frame->size();
+      if (!ok) {
+        const int err = errno;
+        encoder_failed(path_ + ": the encoder (ffmpeg) stopped taking frames after " +
+                       std::to_string(stats().frames_written) + ": " + std::strerror(err));
+      }
     } else {
       const cv::Mat rgb(height_, width_, CV_8UC3, const_cast<char*>(frame->data()));
       cv::Mat bgr;

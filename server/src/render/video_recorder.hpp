@@ -51,6 +51,9 @@ struct RecorderOptions {
   // (false_colour_depth from max(near plane, 1 m) to the camera's depth_max_m, else min(far plane,
   // 100 m); false_colour_segmentation), so one camera may have several tiles
   std::vector<Encoding> tile_modalities;
+  // called once, on the recorder's thread, when the encoder stops taking frames (it exited: a full
+  // disk, a file it cannot write) with "PATH: why"; later frames are dropped (counted)
+  std::function<void(const std::string& why)> on_write_error;
 };
 
 // A depth image (float32 metres, NaN invalid) as RGB8: log-scaled from near_m (red) to far_m (blue) on
@@ -65,6 +68,7 @@ void false_colour_segmentation(const uint8_t* segmentation, int width_px, int he
 struct RecorderStats {
   uint64_t frames_written = 0;
   uint64_t frames_dropped = 0;  // dropped by the renderer (behind) or by the recorder's own queue
+  std::string write_error;      // "" while the encoder takes every frame, else the first failure
 };
 
 class VideoRecorder : public FrameConsumer {
@@ -109,6 +113,7 @@ class VideoRecorder : public FrameConsumer {
     std::shared_ptr<const std::string> main;
   };
   void writer_main();
+  void encoder_failed(const std::string& why);             // recorder's thread, or finish()
   void enqueue(std::shared_ptr<const std::string> image);  // render thread
   void flush_pending();                                    // render thread: composes and enqueues
   std::function<OverlayInfo()> overlay_source_;

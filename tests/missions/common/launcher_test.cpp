@@ -191,6 +191,23 @@ TEST(Launcher, NamesHowEachProgramEndedWithTheSimTimeAndKeepsItInTheSummary) {
   EXPECT_EQ(f["programs"][1]["exit_code"], 3);
 }
 
+// A mission program whose vision log the disk refuses says so in one line; the launcher takes it as
+// the run's first lost record, with the sim time. A program that only echoes the server's words is
+// not the server: its line is not a lost record.
+TEST(Launcher, AProgramsVisionLogThatStopsIsALostRecord) {
+  Launcher launch("test", true);
+  launch.note_sim_time(3.0);
+  ASSERT_TRUE(
+      launch.spawn("impostor", {"/bin/sh", "-c", "echo 'uavsim-server: the tlog stops here: x'"}));
+  while (!launch.programs_done() && launch.wall_s() < kWallLimit_s) launch.pump(kPumpMs);
+  EXPECT_EQ(launch.records_error(), "");
+  ASSERT_TRUE(launch.spawn(
+      "uav0",
+      {"/bin/sh", "-c", "echo 'uav0: the vision log stops here: /r/uav0.vlog: File too large'"}));
+  while (!launch.programs_done() && launch.wall_s() < kWallLimit_s) launch.pump(kPumpMs);
+  EXPECT_EQ(launch.records_error(), "/r/uav0.vlog: File too large at sim t=3.00 s");
+}
+
 TEST(Launcher, TheSummaryIsRewrittenEveryPeriodOfSimTime) {
   const std::string summary = ::testing::TempDir() + "periodic_summary.json";
   Launcher launch("test", true);

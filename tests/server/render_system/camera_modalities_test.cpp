@@ -388,9 +388,10 @@ TEST(FalseColour, RecorderTilesDepthAndSegmentation) {
     if (scene.cameras[i].config.camera == "above") above = static_cast<int>(i);
   }
   auto ignore = [](const std::string&, int, int) {};
-  EXPECT_THROW(VideoRecorder(*scene.frames, above, "",
-                             RecorderOptions{1, false, {plain}, ignore, {Encoding::kDepth}}),
-               std::invalid_argument);
+  EXPECT_THROW(
+      VideoRecorder(*scene.frames, above, "",
+                    RecorderOptions{1, false, {plain}, ignore, {Encoding::kDepth}, nullptr}),
+      std::invalid_argument);
   auto recorder = std::make_unique<VideoRecorder>(*scene.frames, plain, "", std::move(ro));
   scene.frames->add_consumer(recorder.get());
   scene.capture_at(0.0);

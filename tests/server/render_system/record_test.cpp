@@ -1,10 +1,12 @@
 // uavsim-server --record: a short run as fast as possible writes a readable MP4 of the overview camera
 // with one frame per 1/15 s of sim time.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <sys/wait.h>
+#include <fstream>
+#include <iterator>
 #include <opencv2/videoio.hpp>
 #include <string>
 
@@ -47,6 +49,36 @@ TEST(Record, FollowCameraRecordsTheDemoFlight) {
   while (video.read(img)) ++frames;
   EXPECT_GE(frames, 44);
   EXPECT_LE(frames, 46);
+}
+
+// A disk that fills under the recording (the server's file size limit, which ffmpeg inherits, with
+// SIGXFSZ ignored so a write past it fails with EFBIG as on a full disk): the server says once that
+// the video stops there, naming the file, and the run goes on to its end. (ffmpeg's MP4 muxer
+// buffers 32 KiB and, at 8 KiB, fails only on the file's tail, then exits 0: the server finds the
+// video unreadable.)
+TEST(Record, ADiskFullUnderTheVideoIsSaidOnceAndTheRunGoesOn) {
+  const std::string dir = ::testing::TempDir();
+  const std::string out = dir + "uavsim_record_full.mp4", err = dir + "uavsim_record_full.err",
+                    log = dir + "uavsim_record_full.out";
+  std::remove(out.c_str());
+  const std::string cmd = "trap '' XFSZ; prlimit --fsize=8192 " + std::string(UAVSIM_SERVER_BIN) +
+                          " " + UAVSIM_MODELS_DIR +
+                          "/worlds/mbzirc2020.xml --duration 5 --rate 0 --record " + out +
+                          " --api-port -1 --mavlink-port -1 > " + log + " 2> " + err;
+  const int status = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << ": " << cmd;
+  std::ifstream in(err);
+  int said = 0;
+  std::string text;
+  for (std::string line; std::getline(in, line);) {
+    text += line + "\n";
+    if (line.rfind("uavsim-server: the video stops here: " + out + ": ", 0) == 0) ++said;
+  }
+  EXPECT_EQ(said, 1) << text;
+  std::ifstream out_log(log);
+  const std::string summary((std::istreambuf_iterator<char>(out_log)),
+                            std::istreambuf_iterator<char>());
+  EXPECT_NE(summary.find("ran 5.000 s of sim time"), std::string::npos) << summary;
 }
 
 TEST(Record, UnknownVehicleToFollowIsAUsageError) {

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -91,7 +92,16 @@ struct VideoLogRecord {
 struct VideoLogWriterOptions {
   int jpeg_quality = 90;
   size_t queue_capacity = 16;  // frames waiting for the encoder; more are dropped
+  // Called once, on the writer's thread, when the first record cannot be written (a full disk):
+  // with "PATH: strerror". The log then ends on the records written before it (no torn frame) and
+  // later frames are dropped; a program says so where its user looks (the mission launchers treat
+  // "the vision log stops here: ..." as a lost run record).
+  std::function<void(const std::string& why)> on_write_error;
 };
+
+// Options whose on_write_error prints "PROGRAM: the vision log stops here: WHY" on stdout, the line
+// the mission launchers watch for (a run whose records are being lost ends as a harness failure).
+VideoLogWriterOptions write_error_said_by(const std::string& program);
 
 // Writes a VLOG file on its own thread: submit() copies the frame into a bounded queue and returns
 // at once; a worker encodes (JPEG) and writes. A full queue drops the frame and counts it, so a
@@ -116,6 +126,8 @@ class VideoLogWriter {
 
   uint64_t frames_written() const;  // Thread-safe.
   uint64_t frames_dropped() const;  // Thread-safe.
+  // "" until a record could not be written, then "PATH: strerror". Thread-safe.
+  std::string write_error() const;
 
  private:
   struct Impl;
