@@ -1,6 +1,6 @@
-// The reactor of an EventLoop (event_loop.hpp): epoll over the watched descriptors, a timerfd on the
-// host clock, posted tasks through an eventfd; and the public EventLoop API. The lockstep clock's
-// protocol is in lockstep_clock.cpp, the loop's state in event_loop_impl.hpp.
+// The reactor of an EventLoop (event_loop.hpp): epoll over the watched descriptors, a timerfd on
+// the host clock, posted tasks through an eventfd; and the public EventLoop API. The lockstep
+// clock's protocol is in lockstep_clock.cpp, the loop's state in event_loop_impl.hpp.
 #include "uavsim/client/event_loop.hpp"
 
 #include <sys/epoll.h>
@@ -138,7 +138,8 @@ bool EventLoop::Impl::run_due_timers() {
     if (best->second.period > 0.0) {
       Timer& tm = best->second;
       tm.deadline += tm.period;
-      if (tm.deadline <= t + kEps) tm.deadline += std::ceil((t - tm.deadline) / tm.period + kEps) * tm.period;
+      if (tm.deadline <= t + kEps)
+        tm.deadline += std::ceil((t - tm.deadline) / tm.period + kEps) * tm.period;
       if (tm.deadline <= t + kEps) tm.deadline = t + tm.period;
     } else {
       timers.erase(best);
@@ -184,8 +185,8 @@ bool EventLoop::Impl::iterate(bool may_block, double wake_at) {
     const int ms = static_cast<int>(std::min(config.lockstep_wall_timeout_s, 3600.0) * 1000.0);
     got = dispatch(ms);
     if (!got && !tick_outstanding) {
-      lose_clock("no tick from the simulator for " + std::to_string(config.lockstep_wall_timeout_s) +
-                 " s of wall time");
+      lose_clock("no tick from the simulator for " +
+                 std::to_string(config.lockstep_wall_timeout_s) + " s of wall time");
     }
   }
   // what is due now runs before the caller looks at the clock (a tick's timers belong to that tick)
@@ -210,7 +211,8 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
   if (config.clock == LoopConfig::Clock::kLockstep) impl->links_epfd = epoll_create1(EPOLL_CLOEXEC);
   if (impl->epfd < 0 || impl->timerfd < 0 || impl->wakefd < 0 ||
       (config.clock == LoopConfig::Clock::kLockstep && impl->links_epfd < 0)) {
-    return Result<std::unique_ptr<EventLoop>>::fail(Error::kIo, std::string("event loop: ") + std::strerror(errno));
+    return Result<std::unique_ptr<EventLoop>>::fail(
+        Error::kIo, std::string("event loop: ") + std::strerror(errno));
   }
   for (int fd : {impl->timerfd, impl->wakefd}) {
     epoll_event ev{};
@@ -222,9 +224,11 @@ Result<std::unique_ptr<EventLoop>> EventLoop::create(const LoopConfig& config) {
   if (config.clock == LoopConfig::Clock::kLockstep) {
     using R = Result<std::unique_ptr<EventLoop>>;
     if (config.lockstep_port <= 0 || config.lockstep_port > 65535) {
-      return R::fail(Error::kInvalidArgument, "lockstep: no valid port (UAVSIM_LOCKSTEP=host:port[/period_s])");
+      return R::fail(Error::kInvalidArgument,
+                     "lockstep: no valid port (UAVSIM_LOCKSTEP=host:port[/period_s])");
     }
-    if (!(config.lockstep_period_s > 0.0)) return R::fail(Error::kInvalidArgument, "lockstep: period must be > 0");
+    if (!(config.lockstep_period_s > 0.0))
+      return R::fail(Error::kInvalidArgument, "lockstep: period must be > 0");
     // the shared-memory stream unless the environment says TCP; if the server offered one this
     // process cannot open, again on TCP
     const bool use_shm = config.lockstep_transport != LoopConfig::Transport::kTcp;
@@ -251,7 +255,8 @@ bool EventLoop::clock_alive() const { return impl_->alive; }
 TimerId EventLoop::call_after(double delay_s, Task fn) {
   assert_in_loop_thread();
   const TimerId id = impl_->next_timer_id++;
-  impl_->timers[id] = Impl::Timer{now() + std::max(0.0, delay_s), 0.0, std::make_shared<Task>(std::move(fn))};
+  impl_->timers[id] =
+      Impl::Timer{now() + std::max(0.0, delay_s), 0.0, std::make_shared<Task>(std::move(fn))};
   return id;
 }
 
@@ -259,7 +264,8 @@ TimerId EventLoop::call_every(double period_s, Task fn) {
   assert_in_loop_thread();
   const TimerId id = impl_->next_timer_id++;
   period_s = std::max(period_s, 1e-6);
-  impl_->timers[id] = Impl::Timer{now() + period_s, period_s, std::make_shared<Task>(std::move(fn))};
+  impl_->timers[id] =
+      Impl::Timer{now() + period_s, period_s, std::make_shared<Task>(std::move(fn))};
   return id;
 }
 
@@ -268,7 +274,8 @@ bool EventLoop::cancel(TimerId id) {
   return impl_->timers.erase(id) > 0;
 }
 
-Result<void> EventLoop::watch_fd(int fd, std::uint32_t events, std::function<void(std::uint32_t)> fn) {
+Result<void> EventLoop::watch_fd(int fd, std::uint32_t events,
+                                 std::function<void(std::uint32_t)> fn) {
   assert_in_loop_thread();
   epoll_event ev{};
   ev.events = impl_->main_interest(events);
@@ -284,14 +291,16 @@ Result<void> EventLoop::watch_fd(int fd, std::uint32_t events, std::function<voi
       return Result<void>::fail(Error::kIo, std::string("epoll_ctl ADD: ") + std::strerror(err));
     }
   }
-  impl_->watches[fd] = Impl::Watch{events, std::make_shared<std::function<void(std::uint32_t)>>(std::move(fn))};
+  impl_->watches[fd] =
+      Impl::Watch{events, std::make_shared<std::function<void(std::uint32_t)>>(std::move(fn))};
   return {};
 }
 
 Result<void> EventLoop::modify_fd(int fd, std::uint32_t events) {
   assert_in_loop_thread();
   auto it = impl_->watches.find(fd);
-  if (it == impl_->watches.end()) return Result<void>::fail(Error::kInvalidArgument, "modify_fd: not watched");
+  if (it == impl_->watches.end())
+    return Result<void>::fail(Error::kInvalidArgument, "modify_fd: not watched");
   if (it->second.events == events) return {};
   epoll_event ev{};
   ev.events = impl_->main_interest(events);
@@ -346,26 +355,29 @@ Result<void> EventLoop::run_for(double duration_s) {
   const double deadline = now() + std::max(0.0, duration_s);
   while (now() < deadline - kEps || (is_lockstep() && impl_->alive && !impl_->tick_outstanding)) {
     if (is_lockstep() && !impl_->alive) {
-      return Result<void>::fail(Error::kConnectionLost, "lockstep clock lost: " + impl_->dead_reason);
+      return Result<void>::fail(Error::kConnectionLost,
+                                "lockstep clock lost: " + impl_->dead_reason);
     }
     impl_->iterate(true, deadline);
   }
   return {};
 }
 
-Result<void> EventLoop::run_until(const std::function<bool()>& pred, double timeout_s, const std::string& what) {
+Result<void> EventLoop::run_until(const std::function<bool()>& pred, double timeout_s,
+                                  const std::string& what) {
   assert_in_loop_thread();
   if (pred()) return {};
   const double start = now();
   const double deadline = start + std::max(0.0, timeout_s);
   for (;;) {
     if (is_lockstep() && !impl_->alive) {
-      return Result<void>::fail(Error::kConnectionLost,
-                                "lockstep clock lost while waiting for " + what + ": " + impl_->dead_reason);
+      return Result<void>::fail(Error::kConnectionLost, "lockstep clock lost while waiting for " +
+                                                            what + ": " + impl_->dead_reason);
     }
     impl_->iterate(true, deadline);
-    // lockstep: the caller resumes at a tick (the simulation held), never between two, so what it does next
-    // happens at a defined sim time; data that arrived in between is in the caches by then
+    // lockstep: the caller resumes at a tick (the simulation held), never between two, so what it
+    // does next happens at a defined sim time; data that arrived in between is in the caches by
+    // then
     if (is_lockstep() && impl_->alive && !impl_->tick_outstanding) continue;
     if (pred()) return {};
     if (now() >= deadline - kEps) {
@@ -389,7 +401,8 @@ void EventLoop::run_busy(double duration_s, const std::function<void()>& fn) {
   }
   // the busy section starts at a tick: the current one, or the next
   if (!impl_->tick_outstanding) {
-    (void)run_until([this] { return impl_->tick_outstanding || !impl_->alive; }, kInf, "the next tick");
+    (void)run_until([this] { return impl_->tick_outstanding || !impl_->alive; }, kInf,
+                    "the next tick");
     if (!impl_->alive) {
       fn();
       return;
@@ -416,7 +429,8 @@ void EventLoop::assert_in_loop_thread() const {
   std::ostringstream os;
   os << std::this_thread::get_id();
   std::fprintf(stderr,
-               "uavsim client: EventLoop used from thread %s, not from its loop thread (use EventLoop::post)\n",
+               "uavsim client: EventLoop used from thread %s, not from its loop thread (use "
+               "EventLoop::post)\n",
                os.str().c_str());
   std::abort();
 }

@@ -68,13 +68,14 @@ struct EventLoop::Impl {
   std::int64_t tick = -1;
   bool tick_outstanding = false;
   std::optional<double> pending_busy_until;
-  // from the server's replies to `done`: does it wait for the MAVLink seqs named there (api::SeqWaiter)?
+  // from the server's replies to `done`: does it wait for the MAVLink seqs named there
+  // (api::SeqWaiter)?
   std::optional<bool> mavlink_seq_checked;
   std::map<std::uint64_t, SeqSource> seq_sources;
   std::uint64_t next_seq_source = 1;
-  // pipelined lockstep (EventLoop::set_lockstep_pipelined): `done` of the current tick already sent;
-  // outputs held until the next tick (requests on the lockstep connection in the SimChannel, each
-  // Vehicle link's MAVLink in its own buffer, sent by its flusher)
+  // pipelined lockstep (EventLoop::set_lockstep_pipelined): `done` of the current tick already
+  // sent; outputs held until the next tick (requests on the lockstep connection in the SimChannel,
+  // each Vehicle link's MAVLink in its own buffer, sent by its flusher)
   bool pipelined = false;
   bool done_sent = false;
   bool outputs_held = false;
@@ -86,9 +87,9 @@ struct EventLoop::Impl {
 
   ~Impl();
   double now() const;
-  // Handles what is ready, runs posted tasks and due timers; under lockstep answers the tick when nothing
-  // is left to do at this time. With may_block, then waits for something to happen (at most until
-  // wake_at on the loop clock, if finite). Returns false when nothing happened.
+  // Handles what is ready, runs posted tasks and due timers; under lockstep answers the tick when
+  // nothing is left to do at this time. With may_block, then waits for something to happen (at most
+  // until wake_at on the loop clock, if finite). Returns false when nothing happened.
   bool iterate(bool may_block, double wake_at);
   bool dispatch(int timeout_ms);
   bool run_posted();

@@ -1,6 +1,6 @@
 // The lockstep clock of an EventLoop (docs/protocol.md, "Lockstep contract"): joining the simulator
-// (over TCP or its shared-memory stream), taking its ticks, answering `done` with the MAVLink seqs of
-// the vehicle links, and the pipelined mode's held outputs. The reactor in event_loop.cpp calls
+// (over TCP or its shared-memory stream), taking its ticks, answering `done` with the MAVLink seqs
+// of the vehicle links, and the pipelined mode's held outputs. The reactor in event_loop.cpp calls
 // these; none of it runs on the host clock.
 #include <poll.h>
 #include <sys/epoll.h>
@@ -102,9 +102,14 @@ void EventLoop::Impl::on_api_readable() {
   if (api_held) return;
   std::string why;
   switch (api.read_available(&why)) {
-    case SimChannel::ReadResult::kOk: return;
-    case SimChannel::ReadResult::kClosed: lose_clock("the simulator closed the connection"); return;
-    case SimChannel::ReadResult::kError: lose_clock(why); return;
+    case SimChannel::ReadResult::kOk:
+      return;
+    case SimChannel::ReadResult::kClosed:
+      lose_clock("the simulator closed the connection");
+      return;
+    case SimChannel::ReadResult::kError:
+      lose_clock(why);
+      return;
   }
 }
 
@@ -126,7 +131,8 @@ void EventLoop::Impl::on_unrouted(const Json& j) {
     } else if (ev == "lockstep_dropped") {
       lose_clock("the simulator dropped this client: " + j.value("reason", std::string("?")));
     } else if (ev == "reset") {
-      std::fprintf(stderr, "uavsim client: the simulation was reset (seed %s)\n", j.value("seed", Json()).dump().c_str());
+      std::fprintf(stderr, "uavsim client: the simulation was reset (seed %s)\n",
+                   j.value("seed", Json()).dump().c_str());
     }
     return;
   }
@@ -137,7 +143,8 @@ void EventLoop::Impl::on_unrouted(const Json& j) {
   if (j.contains("ok") && j["ok"] == false) {
     const Json e = j.value("error", Json::object());
     std::fprintf(stderr, "uavsim client: lockstep request refused: %s: %s\n",
-                 e.value("code", std::string("?")).c_str(), e.value("message", std::string("?")).c_str());
+                 e.value("code", std::string("?")).c_str(),
+                 e.value("message", std::string("?")).c_str());
   }
 }
 

@@ -29,7 +29,8 @@ LoopConfig LoopConfig::from_env() {
                                                 : LoopConfig::Transport::kAuto;
   std::string spec = env;
   double period = c.lockstep_period_s;
-  // a period or port that is not a whole number in range leaves the port invalid: create() reports it
+  // a period or port that is not a whole number in range leaves the port invalid: create() reports
+  // it
   bool ok = true;
   if (const auto slash = spec.find('/'); slash != std::string::npos) {
     ok = common::parse_double(spec.c_str() + slash + 1, 1e-4, 10.0, &period);
@@ -37,7 +38,8 @@ LoopConfig LoopConfig::from_env() {
   }
   const auto colon = spec.rfind(':');
   int port = -1;
-  if (colon == std::string::npos || !ok || !common::parse_integer(spec.c_str() + colon + 1, 1, 65535, &port)) {
+  if (colon == std::string::npos || !ok ||
+      !common::parse_integer(spec.c_str() + colon + 1, 1, 65535, &port)) {
     c.clock = Clock::kLockstep;
     c.lockstep_port = -1;  // reported by create()
     return c;

@@ -7,10 +7,10 @@
 #include <sstream>
 #include <string>
 
+#include "test_util.hpp"
 #include "uavsim/common/mavlink/generated/enum_names.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/generated/messages.hpp"
-#include "test_util.hpp"
 
 namespace uavsim::common::mavlink {
 namespace {
