@@ -96,6 +96,8 @@ struct EventLoop::Impl {
   bool run_due_timers();
   void arm_timerfd(double wake_at);
   void on_api_readable();
+  // a read of the lockstep connection: a close or an error loses the clock
+  void after_read(SimChannel::ReadResult r, const std::string& why);
   // lockstep: handles what has arrived on the watched descriptors, at the clock of the tick now
   // ending
   void read_links();

@@ -53,16 +53,7 @@ void EventLoop::Impl::resume_api() {
   api_held = false;
   update_api_interest();
   std::string why;
-  switch (api.resume_input(&why)) {
-    case SimChannel::ReadResult::kOk:
-      return;
-    case SimChannel::ReadResult::kClosed:
-      lose_clock("the simulator closed the connection");
-      return;
-    case SimChannel::ReadResult::kError:
-      lose_clock(why);
-      return;
-  }
+  after_read(api.resume_input(&why), why);
 }
 
 void EventLoop::Impl::send_done() {
@@ -101,7 +92,11 @@ void EventLoop::Impl::lose_clock(const std::string& why) {
 void EventLoop::Impl::on_api_readable() {
   if (api_held) return;
   std::string why;
-  switch (api.read_available(&why)) {
+  after_read(api.read_available(&why), why);
+}
+
+void EventLoop::Impl::after_read(SimChannel::ReadResult r, const std::string& why) {
+  switch (r) {
     case SimChannel::ReadResult::kOk:
       return;
     case SimChannel::ReadResult::kClosed:
