@@ -100,6 +100,10 @@ Result<void> CommandSender::send(mav::MavCmd command, const Params& params) {
   return send(static_cast<std::uint16_t>(mav::to_underlying(command)), params);
 }
 
+void CommandSender::send_async(mav::MavCmd command, const Params& params, Done done) {
+  send_async(static_cast<std::uint16_t>(mav::to_underlying(command)), params, std::move(done));
+}
+
 void CommandSender::transmit(std::uint16_t command) {
   const Pending& p = pending_.at(command);
   msg::CommandLong c;

@@ -39,6 +39,7 @@ class CommandSender {
   // refusal (kDenied, kFailed, ... with the MAV_RESULT), kTimeout after the last attempt,
   // kConnectionLost, kNotConnected, or kCancelled when a command with the same id replaces it.
   void send_async(std::uint16_t command, const Params& params, Done done);
+  void send_async(common::mavlink::MavCmd command, const Params& params, Done done);
   // The same command, waiting on the loop for its outcome; also kConnectionLost when the lockstep
   // clock is lost meanwhile.
   Result<void> send(std::uint16_t command, const Params& params);

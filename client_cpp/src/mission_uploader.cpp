@@ -24,6 +24,10 @@ constexpr int kCountAttempts = 3;
 constexpr double kCountResendS = 1.5;
 constexpr std::uint8_t kMissionTypeMission = to_underlying(mav::MavMissionType::Mission);
 
+constexpr std::uint16_t command_id(mav::MavCmd c) {
+  return static_cast<std::uint16_t>(to_underlying(c));
+}
+
 msg::MissionItemInt to_wire(const MissionItem& it, std::uint16_t seq, const MavPort& port) {
   msg::MissionItemInt m;
   m.target_system = port.target_sysid();
@@ -41,6 +45,34 @@ msg::MissionItemInt to_wire(const MissionItem& it, std::uint16_t seq, const MavP
 }
 
 }  // namespace
+
+// MissionItem (vehicle.hpp): the items a mission is made of
+
+MissionItem MissionItem::takeoff(double rel_alt_m) {
+  MissionItem m;
+  m.command = command_id(mav::MavCmd::NavTakeoff);
+  m.alt_m = static_cast<float>(rel_alt_m);
+  return m;
+}
+MissionItem MissionItem::waypoint(double lat_deg, double lon_deg, double rel_alt_m, double hold_s) {
+  MissionItem m;
+  m.command = command_id(mav::MavCmd::NavWaypoint);
+  m.param1 = static_cast<float>(hold_s);
+  m.lat_deg = lat_deg;
+  m.lon_deg = lon_deg;
+  m.alt_m = static_cast<float>(rel_alt_m);
+  return m;
+}
+MissionItem MissionItem::land() {
+  MissionItem m;
+  m.command = command_id(mav::MavCmd::NavLand);
+  return m;
+}
+MissionItem MissionItem::rtl() {
+  MissionItem m;
+  m.command = command_id(mav::MavCmd::NavReturnToLaunch);
+  return m;
+}
 
 MissionUploader::MissionUploader(EventLoop& loop, MavPort& port) : loop_(loop), port_(port) {
   const auto request = [this](const mav::Frame& f) { on_request(f); };

@@ -48,19 +48,10 @@ static_assert(
     static_cast<std::uint32_t>(FlightMode::kLand) == to_underlying(mav::CopterMode::Land) &&
     static_cast<std::uint32_t>(FlightMode::kTurtle) == to_underlying(mav::CopterMode::Turtle));
 
-constexpr std::uint16_t mav_command(MavCmd c) {
-  return static_cast<std::uint16_t>(to_underlying(c));
-}
-
 Params set_mode_params(FlightMode mode) {
-  const auto custom = static_cast<float>(static_cast<std::uint32_t>(mode));
-  return {static_cast<float>(to_underlying(mav::MavModeFlag::CustomModeEnabled)),
-          custom,
-          0,
-          0,
-          0,
-          0,
-          0};
+  // param1: the mode flags (custom mode), param2: the custom mode
+  const auto flags = static_cast<float>(to_underlying(mav::MavModeFlag::CustomModeEnabled));
+  return {flags, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0};
 }
 Params arm_params(bool arm, bool force) {
   const float magic = !force ? 0.0f : arm ? kForceArmMagic : kForceDisarmMagic;
@@ -82,34 +73,7 @@ const char* mode_name(FlightMode m) {
   return name.empty() ? "UNKNOWN" : name.data();  // the generated names are string literals
 }
 
-MissionItem MissionItem::takeoff(double rel_alt_m) {
-  MissionItem m;
-  m.command = mav_command(MavCmd::NavTakeoff);
-  m.alt_m = static_cast<float>(rel_alt_m);
-  return m;
-}
-MissionItem MissionItem::waypoint(double lat_deg, double lon_deg, double rel_alt_m, double hold_s) {
-  MissionItem m;
-  m.command = mav_command(MavCmd::NavWaypoint);
-  m.param1 = static_cast<float>(hold_s);
-  m.lat_deg = lat_deg;
-  m.lon_deg = lon_deg;
-  m.alt_m = static_cast<float>(rel_alt_m);
-  return m;
-}
-MissionItem MissionItem::land() {
-  MissionItem m;
-  m.command = mav_command(MavCmd::NavLand);
-  return m;
-}
-MissionItem MissionItem::rtl() {
-  MissionItem m;
-  m.command = mav_command(MavCmd::NavReturnToLaunch);
-  return m;
-}
-
-// ----------------------------------------------------------------------------------------------------
-// Impl
+// ------------------------------------------------------------------------------------------ Impl
 
 struct Vehicle::Impl {
   EventLoop& loop;
@@ -155,7 +119,7 @@ struct Vehicle::Impl {
     tm().custom_mode = static_cast<std::uint32_t>(mode);
   }
 
-  // waits on the loop for pred, or the link's loss (kConnectionLost, "<what>: the link was lost")
+  // waits on the loop for pred; kConnectionLost when the link is lost meanwhile
   Result<void> wait_on_link(const std::function<bool()>& pred, double timeout_s,
                             const std::string& what) {
     auto w = loop.run_until([&] { return !link.is_open() || pred(); }, timeout_s, what);
@@ -173,8 +137,7 @@ struct Vehicle::Impl {
   }
 };
 
-// ----------------------------------------------------------------------------------------------------
-// Vehicle
+// --------------------------------------------------------------------------------------- Vehicle
 
 Vehicle::Vehicle(EventLoop& loop, VehicleConfig config)
     : impl_(std::make_unique<Impl>(loop, std::move(config))) {
@@ -312,7 +275,7 @@ void Vehicle::command_long_async(std::uint16_t command, const std::array<float, 
 void Vehicle::set_mode_async(FlightMode mode, std::function<void(Result<void>)> done) {
   Impl& s = *impl_;
   if (mode != FlightMode::kGuided) s.setpoints.cancel();
-  s.commands.send_async(mav_command(MavCmd::DoSetMode), set_mode_params(mode),
+  s.commands.send_async(MavCmd::DoSetMode, set_mode_params(mode),
                         [&s, mode, done = std::move(done)](Result<void> r) {
                           if (r) s.note_mode(mode);
                           if (done) done(r);
@@ -321,7 +284,7 @@ void Vehicle::set_mode_async(FlightMode mode, std::function<void(Result<void>)> 
 
 void Vehicle::arm_async(std::function<void(Result<void>)> done) {
   Impl& s = *impl_;
-  s.commands.send_async(mav_command(MavCmd::ComponentArmDisarm), arm_params(true, false),
+  s.commands.send_async(MavCmd::ComponentArmDisarm, arm_params(true, false),
                         [&s, done = std::move(done)](Result<void> r) {
                           if (r) s.tm().armed = true;
                           if (done) done(r);
@@ -336,13 +299,12 @@ void Vehicle::takeoff_async(double rel_alt_m, std::function<void(Result<void>)> 
     return;
   }
   s.setpoints.cancel();
-  s.commands.send_async(mav_command(MavCmd::NavTakeoff), takeoff_params(rel_alt_m),
-                        std::move(done));
+  s.commands.send_async(MavCmd::NavTakeoff, takeoff_params(rel_alt_m), std::move(done));
 }
 
 void Vehicle::land_async(std::function<void(Result<void>)> done) {
   impl_->setpoints.cancel();
-  impl_->commands.send_async(mav_command(MavCmd::NavLand), {}, std::move(done));
+  impl_->commands.send_async(MavCmd::NavLand, {}, std::move(done));
 }
 
 Result<void> Vehicle::land(bool wait, double timeout_s) {
