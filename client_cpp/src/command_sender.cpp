@@ -75,6 +75,7 @@ void CommandSender::send_async(std::uint16_t command, const Params& params, Done
   Pending& p = pending_[command];
   p.params = params;
   p.done = std::move(done);
+  p.serial = next_serial_++;
   transmit(command);
 }
 
@@ -83,13 +84,15 @@ Result<void> CommandSender::send(std::uint16_t command, const Params& params) {
   if (auto r = port_.need_open(); !r) return r;
   // shared with the done: a done already posted when the wait gives up still has it
   auto outcome = std::make_shared<std::optional<Result<void>>>();
+  const std::uint64_t serial = next_serial_;
   send_async(command, params, [outcome](Result<void> r) { *outcome = std::move(r); });
   // the retry machine always ends the command: the wait needs no deadline of its own
   auto w = loop_.run_until([&] { return outcome->has_value(); },
                            std::numeric_limits<double>::infinity(), "COMMAND_ACK");
   if (outcome->has_value()) return **outcome;
-  // the loop cannot wait any more (the lockstep clock is lost): the command is abandoned
-  if (auto it = pending_.find(command); it != pending_.end()) {
+  // the loop cannot wait any more (the lockstep clock is lost): the command is abandoned (unless
+  // a newer one with the same id has replaced it meanwhile)
+  if (auto it = pending_.find(command); it != pending_.end() && it->second.serial == serial) {
     if (it->second.retry != 0) loop_.cancel(it->second.retry);
     pending_.erase(it);
   }

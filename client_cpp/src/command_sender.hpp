@@ -56,6 +56,7 @@ class CommandSender {
     int attempt = 0;
     TimerId retry = 0;
     Done done;
+    std::uint64_t serial = 0;  // which send_async() made it
   };
   void transmit(std::uint16_t command);
   void arm_retry(std::uint16_t command);
@@ -69,6 +70,7 @@ class CommandSender {
   MavPort& port_;
   const VehicleConfig& config_;
   std::map<std::uint16_t, Pending> pending_;
+  std::uint64_t next_serial_ = 1;
 };
 
 }  // namespace uavsim::client
