@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generates the uavsim MAVLink message structs, id table and enums from the dialect XML.
+"""Generates the uavsim MAVLink message structs, id table, enums and enum names from the dialect XML.
 
 Usage (from the repository root):
   python3 common/generator/mavgen.py --xml <definitions>/ardupilotmega.xml \
@@ -166,9 +166,10 @@ def pascal(name):
     return out
 
 
-def enumerator_names(en):
-    """Drops the enum's own name prefix from each entry (MAV_CMD_NAV_TAKEOFF -> NavTakeoff); keeps a word
-    more when the rest would start with a digit, and the full name when that would collide."""
+def short_names(en):
+    """Each entry without the enum's own name prefix, in the XML's spelling (MAV_CMD_NAV_TAKEOFF -> NAV_TAKEOFF,
+    MAV_MISSION_ACCEPTED of MAV_MISSION_RESULT -> ACCEPTED); keeps a word more when the rest would start with a
+    digit, and the full name when that would collide."""
     enum_words = en.name.split('_')
     names = []
     for entry, _ in en.entries:
@@ -178,9 +179,16 @@ def enumerator_names(en):
             common += 1
         while common > 0 and (words[common][:1].isdigit()):
             common -= 1
-        names.append(pascal('_'.join(words[common:])))
-    if len(set(names)) != len(names) or any(n[:1].isdigit() for n in names):
-        names = [pascal(e) for e, _ in en.entries]
+        names.append('_'.join(words[common:]))
+    idents = [pascal(n) for n in names]
+    if len(set(idents)) != len(idents) or any(n[:1].isdigit() for n in idents):
+        names = [e for e, _ in en.entries]
+    return names
+
+
+def enumerator_names(en):
+    """The C++ enumerators: the short names in PascalCase (MAV_CMD_NAV_TAKEOFF -> NavTakeoff)."""
+    names = [pascal(n) for n in short_names(en)]
     if len(set(names)) != len(names):
         raise SystemExit(f'enum {en.name}: enumerator names collide')
     return names
@@ -233,6 +241,37 @@ def write_enums(inc_dir, xml_path, enums):
         lines.append('')
     lines.append('}  // namespace uavsim::common::mavlink')
     write(os.path.join(inc_dir, 'enums.hpp'), lines)
+
+
+def write_enum_names(inc_dir, src_dir, xml_path, enums):
+    """enum_name(E) for every enum: the short name of a value (the one programs print: "NAV_TAKEOFF",
+    "DENIED"), so no client writes these tables by hand. Where two entries share a value, the first in
+    the XML names it."""
+    listed = [enums[n] for n in sorted(enums) if enums[n].entries]
+    hpp = [header_banner(xml_path), '#pragma once', '', '#include <string_view>', '',
+           '#include "uavsim/common/mavlink/generated/enums.hpp"', '',
+           'namespace uavsim::common::mavlink {', '',
+           '// The entry name of a value without the enum\'s prefix, as the dialect spells it (MavCmd::NavTakeoff',
+           '// -> "NAV_TAKEOFF", MavResult::Denied -> "DENIED"); empty for a number that is no entry. The names',
+           '// are string literals, so data() is null-terminated. Thread-safe.']
+    for en in listed:
+        hpp.append(f'std::string_view enum_name({pascal(en.name)} value);')
+    hpp += ['', '}  // namespace uavsim::common::mavlink']
+    write(os.path.join(inc_dir, 'enum_names.hpp'), hpp)
+    cpp = [header_banner(xml_path), '#include "uavsim/common/mavlink/generated/enum_names.hpp"', '',
+           'namespace uavsim::common::mavlink {', '']
+    for en in listed:
+        t = pascal(en.name)
+        cpp += [f'std::string_view enum_name({t} value) {{', '  switch (value) {']
+        seen = set()
+        for ident, short, (_, value) in zip(enumerator_names(en), short_names(en), en.entries):
+            if value in seen:
+                continue
+            seen.add(value)
+            cpp.append(f'    case {t}::{ident}: return "{short}";')
+        cpp += ['  }', '  return {};', '}', '']
+    cpp.append('}  // namespace uavsim::common::mavlink')
+    write(os.path.join(src_dir, 'enum_names.cpp'), cpp)
 
 
 def write_table(inc_dir, src_dir, xml_path, messages):
@@ -373,6 +412,7 @@ def main():
     os.makedirs(inc_dir, exist_ok=True)
     os.makedirs(src_dir, exist_ok=True)
     write_enums(inc_dir, args.xml, enums)
+    write_enum_names(inc_dir, src_dir, args.xml, enums)
     write_table(inc_dir, src_dir, args.xml, messages)
     write_messages(inc_dir, src_dir, args.xml, selected)
     print(f'{len(messages)} messages in the table, {len(selected)} structs, '

@@ -7,9 +7,10 @@
 #include <sstream>
 #include <string>
 
+#include "test_util.hpp"
+#include "uavsim/common/mavlink/generated/enum_names.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/generated/messages.hpp"
-#include "test_util.hpp"
 
 namespace uavsim::common::mavlink {
 namespace {
@@ -109,6 +110,19 @@ TEST(Enums, ValuesMatchTheDialect) {
   EXPECT_EQ(to_underlying(PositionTargetTypemask::YawRateIgnore), 2048u);
   EXPECT_EQ(to_underlying(CopterMode::Guided), 4u);
   EXPECT_EQ(to_underlying(MavSysStatusSensor::Sensor3dGyro), 1u);
+}
+
+TEST(EnumNames, AreTheDialectsEntryNamesWithoutTheEnumPrefix) {
+  EXPECT_EQ(enum_name(MavCmd::NavTakeoff), "NAV_TAKEOFF");
+  EXPECT_EQ(enum_name(MavCmd::ComponentArmDisarm), "COMPONENT_ARM_DISARM");
+  EXPECT_EQ(enum_name(MavResult::TemporarilyRejected), "TEMPORARILY_REJECTED");
+  // MAV_MISSION_RESULT's entries are MAV_MISSION_*: the common words go
+  EXPECT_EQ(enum_name(MavMissionResult::OperationCancelled), "OPERATION_CANCELLED");
+  EXPECT_EQ(enum_name(CopterMode::GuidedNogps), "GUIDED_NOGPS");
+  EXPECT_EQ(enum_name(MavModeFlag::SafetyArmed), "SAFETY_ARMED");
+  // a number that is no entry has no name
+  EXPECT_EQ(enum_name(static_cast<MavCmd>(65000)), "");
+  EXPECT_EQ(enum_name(static_cast<CopterMode>(8)), "");
 }
 
 }  // namespace
