@@ -18,7 +18,8 @@ constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost
 constexpr double kSameBalloon_m = 1.5;    // a new track this close to the target is the target
 constexpr double kPoppedExclusion_m = 2.5;
 constexpr double kArenaMargin_m = 0.5;
-constexpr double kMaxPierceClimb_m = 1.5;  // a balloon seen further above or below is a bad estimate
+// a balloon seen further above or below is a bad estimate
+constexpr double kMaxPierceClimb_m = 1.5;
 // The heading setpoint turns at most this fast. The flight controller's mixer keeps yaw torque
 // before collective thrust (ArduCopter keeps some thrust headroom first): a setpoint that jumps by
 // 90-180 deg saturates it and the vehicle sinks. Field seed 20 (two UAVs): backing off past a
@@ -270,7 +271,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       }
       return out;
     } else if (c == GcsCommand::kStart && state_ == VehicleState::kPreflight) {
-      enter(VehicleState::kTakeOff, out, fmt("GCS start (ground at z=%.2f m)", raw.position_enu_m.z()));
+      enter(VehicleState::kTakeOff, out,
+            fmt("GCS start (ground at z=%.2f m)", raw.position_enu_m.z()));
       out.action = VehicleOutputs::Action::kArmAndTakeOff;
       out.takeoff_altitude_m = config_.takeoff_altitude_m;
       return out;
@@ -472,9 +474,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       // the blades ride just above the balloon's centre as the camera sees it: the balloon's height
       // and ours come from the same estimate, so its bias (a metre of GPS / baro error in the
       // field) cancels; the rules' heights would not (the pole top is 0.28 m below the centre)
-      const double blade_z =
-          std::clamp(b.z() + config_.pierce_blade_above_centre_m,
-                     p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
+      const double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
+                                        p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
       double speed = config_.pierce_speed_near_m_s;
       if (seen) {
         coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
@@ -502,9 +503,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       // 0.43 m after the blades pass the centre, and the pole top is only 0.36 m under the blades
       // (field seed 10, one UAV: the hull on the pole 0.27 s after the pop, the balloon's height
       // seen 0.2 m low)
-      const double exit_climb_m_s = along_m > -config_.pierce_exit_climb_from_m
-                                        ? config_.pierce_exit_climb_m_s
-                                        : 0.0;
+      const double exit_climb_m_s =
+          along_m > -config_.pierce_exit_climb_from_m ? config_.pierce_exit_climb_m_s : 0.0;
       out.action = VehicleOutputs::Action::kVelocity;
       out.velocity_enu_m_s = {coast_dir_.x() * speed, coast_dir_.y() * speed,
                               std::clamp(kGainZ_1_s * (blade_z - p.z()) + exit_climb_m_s,
@@ -567,8 +567,8 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
       // by (there: hold the heading). Field seed 8: holding the pierce's heading all the way back
       // left a balloon the blades had passed 0.7 m beside 40 deg out of view, and it was reported
       // popped.
-      out.yaw_enu_rad = to_b.norm() > kBackOffFaceBalloon_m ? std::atan2(to_b.y(), to_b.x())
-                                                            : in.yaw_enu_rad;
+      out.yaw_enu_rad =
+          to_b.norm() > kBackOffFaceBalloon_m ? std::atan2(to_b.y(), to_b.x()) : in.yaw_enu_rad;
       const bool back =
           (pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m;
       if (back && pierce_reached_ && !pierce_through_ && !seen_again_) {
@@ -611,10 +611,9 @@ VehicleOutputs VehicleFsm::decide(const VehicleInputs& raw) {
         const Eigen::Vector3d spot(landing_spot_enu_m_.x(), landing_spot_enu_m_.y(), transit_z);
         const double d = (spot.head<2>() - p.head<2>()).norm();
         out.action = VehicleOutputs::Action::kVelocity;
-        out.velocity_enu_m_s =
-            toward(p, spot,
-                   std::min(config_.transit_speed_m_s,
-                            std::sqrt(2.0 * kLandingApproachDecel_m_s2 * d)));
+        out.velocity_enu_m_s = toward(
+            p, spot,
+            std::min(config_.transit_speed_m_s, std::sqrt(2.0 * kLandingApproachDecel_m_s2 * d)));
         out.yaw_enu_rad = in.yaw_enu_rad;
         if (d < 0.5 && in.velocity_enu_m_s.head<2>().norm() < kLandingStillSpeed_m_s) {
           land_phase_ = 2;

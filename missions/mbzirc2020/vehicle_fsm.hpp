@@ -129,11 +129,12 @@ class VehicleFsm {
   bool armed_seen_ = false;
   bool take_over_ = false;
   bool other_side_done_ = false;
-  bool retask_ = false;  // the GCS's ReTask arrived
-  bool cross_ = false;   // scanning the other half from the middle (re-tasked)
+  bool retask_ = false;     // the GCS's ReTask arrived
+  bool cross_ = false;      // scanning the other half from the middle (re-tasked)
   bool look_home_ = false;  // taken over, both halves scanned: the own half from beyond the middle
   int popped_ = 0;
-  double ground_z_m_ = 0.0;  // the estimator's height on the ground before take-off, less rest height
+  double ground_z_m_ =
+      0.0;  // the estimator's height on the ground before take-off, less rest height
   std::vector<Eigen::Vector2d> popped_at_;
 
   std::vector<ScanWaypoint> scan_;
@@ -151,7 +152,7 @@ class VehicleFsm {
   bool pierce_reached_ = false;
   bool pierce_level_camera_ = false;
   bool seen_again_ = false;
-  bool pierce_through_ = false;   // the pierce ended with the blades past the balloon, unseen
+  bool pierce_through_ = false;      // the pierce ended with the blades past the balloon, unseen
   double look_back_since_s_ = -1.0;  // back on the line, looking for the balloon since then
 
   // landing: climb, transit, skids along the wind, descend, motors off
