@@ -166,6 +166,22 @@ void log_first_sighting(const uavsim::mission::ProgramLoop& program, const Eigen
   program.log(buf);
 }
 
+// the vision computer on a frame: vision_latency_s of detached time, the simulation going on
+// meanwhile; the first sighting is logged. True when the frame was black (the camera blinded or
+// failed: the ground is never this dark)
+bool look_at(EventLoop& loop, const MissionConfig& config, const Pending& frame,
+             TruckPerception& perception, int reported_detections,
+             const uavsim::mission::ProgramLoop& program) {
+  std::optional<Eigen::Vector2d> seen;
+  bool dark = false;
+  loop.run_busy(config.vision_latency_s, [&] {
+    seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
+    dark = cv::mean(frame.grey)[0] < kDarkFrameMean;
+  });
+  if (seen && reported_detections == 0) log_first_sighting(program, *seen, frame.stamp_us);
+  return dark;
+}
+
 void log_touchdown(const uavsim::mission::ProgramLoop& program, const FsmInputs& in) {
   const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
   char buf[160];
@@ -272,16 +288,9 @@ int main(int argc, char** argv) {
       return 1;
     }
     if (pending) {
-      // the vision computer works on the frame for vision_latency_s; the simulation goes on
-      Pending frame = std::move(*pending);
+      const Pending frame = std::move(*pending);
       pending.reset();
-      std::optional<Eigen::Vector2d> seen;
-      loop.run_busy(config.vision_latency_s, [&] {
-        seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
-        // a black frame: the camera blinded or failed (the ground is never this dark)
-        camera_dark = cv::mean(frame.grey)[0] < kDarkFrameMean;
-      });
-      if (seen && reported_detections == 0) log_first_sighting(*program, *seen, frame.stamp_us);
+      camera_dark = look_at(loop, config, frame, perception, reported_detections, *program);
       reported_detections = perception.detections();
       if (vlog) {
         DrawingContext context;
