@@ -128,6 +128,22 @@ class Agent {
   void take_picture(const AgentInputs& in, AgentOutputs& out);
   void broadcast(const AgentInputs& in, AgentOutputs& out);
   void run_state(const AgentInputs& in, AgentOutputs& out);
+  // run_state's first step in any state: a recall, the going-home broadcast, a change of leader
+  void change_role(bool lead, AgentOutputs& out);
+  // one handler per state: what the state commands this step, and the transition out of it
+  void on_taking_off(const AgentInputs& in, bool lead, AgentOutputs& out);
+  void on_querying(const AgentInputs& in, AgentOutputs& out);
+  void on_deploying(const AgentInputs& in, AgentOutputs& out);
+  void on_running(const AgentInputs& in, AgentOutputs& out);
+  void on_waiting(const AgentInputs& in, AgentOutputs& out);
+  void on_non_leader(const AgentInputs& in, AgentOutputs& out);
+  void on_going_home(const AgentInputs& in, bool lead, AgentOutputs& out);
+  // Running after a loss deep inside the line: hold, then back to before the loss
+  void run_rewind(const AgentInputs& in, AgentOutputs& out);
+  // Going Home with the landing sent: Landed on the ground, Failed if disarmed still descending
+  void watch_landing(const AgentInputs& in, AgentOutputs& out);
+  // Going Home in its layer: towards home, braking, away from the agents in the same layer
+  Eigen::Vector2d home_velocity(const AgentInputs& in, double home_dist) const;
   void start_query(AgentOutputs& out);
   // Running: a record of the line aged out; rewind if its strip lies deep inside the line
   void start_rewind(const AgentInputs& in, const AgentRecord& lost);

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "station_link.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
+#include "uavsim/mission/station.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::coverage;
@@ -97,25 +99,13 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
 
   // a link per UAV, each learning its UAV's address from the first packet (the UAVs call the GCS)
-  const int n = static_cast<int>(uavs);
-  std::string error;
-  const std::vector<std::unique_ptr<GcsLink>> links =
-      open_station_links(n, station_link_config(kGcsId), &error);
-  if (links.empty()) {
-    std::fprintf(stderr, "coverage-gcs: %s\n", error.c_str());
-    return 1;
-  }
-  for (size_t i = 0; i < links.size(); ++i)
-    std::printf("gcs: uav%zu link on udp:127.0.0.1:%u\n", i, links[i]->local_port());
-  std::fflush(stdout);
-
-  auto created = EventLoop::create();
-  if (!created) {
-    std::fprintf(stderr, "coverage-gcs: event loop: %s\n", created.message().c_str());
-    return 1;
-  }
-  EventLoop& loop = **created;
-  auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
+  std::optional<uavsim::mission::Station> gcs = uavsim::mission::start_station(
+      "coverage-gcs", static_cast<int>(uavs), station_link_config(kGcsId));
+  if (!gcs) return 1;
+  const std::vector<std::unique_ptr<GcsLink>>& links = gcs->links;
+  uavsim::mission::ProgramLoop& program = *gcs->program;
+  EventLoop& loop = program.loop();
+  auto now_us = [&program] { return program.now_us(); };
 
   // the links are read at the steps only (not as datagrams arrive), so that what is heard at a
   // step does not depend on the host's timing

@@ -107,104 +107,16 @@ FsmOutputs LandingFsm::step(const FsmInputs& in) {
   FsmOutputs out;
   step_dt_s_ = last_step_s_ < 0 ? 0.0 : in.now_s - last_step_s_;
   last_step_s_ = in.now_s;
-  switch (state_) {
-    case LandingState::kStart: {
-      // take off (retried while the vehicle is not armed), then Go To Centre near the altitude
-      if (!in.armed && (!takeoff_sent_ || in.now_s - takeoff_sent_s_ > kTakeoffRetry_s)) {
-        takeoff_sent_ = true;
-        takeoff_sent_s_ = in.now_s;
-        out.action = FsmOutputs::Action::kArmAndTakeOff;
-        out.takeoff_altitude_m = config_.cruise_altitude_m;
-        out.note = fmt("take-off to %.1f m", config_.cruise_altitude_m);
-        return out;
-      }
-      if (in.armed &&
-          in.position_enu_m.z() > config_.cruise_altitude_m - kReachedAltitudeMargin_m) {
-        enter(LandingState::kGoToCentre, in.now_s, &out, "");
-      }
-      return out;
-    }
-    case LandingState::kGoToCentre: {
-      if (in.truck.initialised && seen_since(in, entered_s_)) {
-        enter(LandingState::kIntercept, in.now_s, &out,
-              fmt("truck seen at (%.1f, %.1f), filter initialised", in.truck.position_enu_m.x(),
-                  in.truck.position_enu_m.y()));
-        break;
-      }
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s,
-                                    config_.cruise_altitude_m);
-      return out;
-    }
-    default:
-      break;
+  if (state_ == LandingState::kStart) {
+    on_start(in, out);
+    return out;
   }
-
-  switch (state_) {
-    case LandingState::kIntercept: {
-      if (!in.truck.initialised || !in.truck.interception_enu_m) {
-        enter(LandingState::kGoToCentre, in.now_s, &out, "no track of the truck");
-        out.action = FsmOutputs::Action::kVelocity;
-        out.velocity_enu_m_s = fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s,
-                                      config_.cruise_altitude_m);
-        return out;
-      }
-      const Eigen::Vector2d point = *in.truck.interception_enu_m;
-      const double distance = (point - in.position_enu_m.head<2>()).norm();
-      // in view already (caught up from behind, where the meeting point keeps moving ahead): wait
-      if (seen_since(in, entered_s_)) {
-        enter(LandingState::kWaitUntilVisible, in.now_s, &out, "truck in view on the way");
-        break;
-      }
-      // there, or about to meet the truck (from behind, the meeting point moves on as the UAV
-      // slows)
-      if (distance < config_.arrive_radius_m ||
-          in.truck.interception_time_to_go_s < config_.arrive_time_s) {
-        enter(LandingState::kWaitUntilVisible, in.now_s, &out,
-              fmt("on the interception point (%.1f, %.1f)", point.x(), point.y()));
-        break;
-      }
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = fly_to(in, point, config_.cruise_speed_m_s, config_.cruise_altitude_m);
-      return out;
-    }
-    default:
-      break;
-  }
-
-  switch (state_) {
-    case LandingState::kWaitUntilVisible: {
-      if (seen_since(in, entered_s_)) {
-        misses_ = 0;
-        enter(LandingState::kApproach, in.now_s, &out, "marker in view");
-        break;
-      }
-      if (in.now_s - entered_s_ > config_.search_timeout_s) {
-        ++misses_;
-        if (misses_ == 1) {
-          enter(LandingState::kIntercept, in.now_s, &out, "not seen in 12 s (first miss)");
-        } else {
-          misses_ = 0;
-          enter(LandingState::kGoToCentre, in.now_s, &out, "not seen in 12 s (second miss)");
-        }
-        out.action = FsmOutputs::Action::kVelocity;
-        out.velocity_enu_m_s =
-            Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
-        return out;
-      }
-      // move at half the truck's speed along its way: the smallest speed difference when it comes
-      const Eigen::Vector2d v = in.truck.initialised
-                                    ? Eigen::Vector2d(0.5 * in.truck.velocity_enu_m_s)
-                                    : Eigen::Vector2d::Zero();
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s =
-          Eigen::Vector3d(v.x(), v.y(), hold_altitude_m_s(in, config_.cruise_altitude_m));
-      return out;
-    }
-    default:
-      break;
-  }
-
+  // one handler per state; each returns true when it has commanded the step. One that hands over
+  // returns false, and the next state in the seed's order acts in the same step (Go To Centre ->
+  // Intercept -> Wait Until Visible)
+  if (state_ == LandingState::kGoToCentre && on_go_to_centre(in, out)) return out;
+  if (state_ == LandingState::kIntercept && on_intercept(in, out)) return out;
+  if (state_ == LandingState::kWaitUntilVisible && on_wait_until_visible(in, out)) return out;
   if (state_ == LandingState::kApproach && out.note.empty()) return approach(in);
   if (state_ == LandingState::kLanded) {
     // keep the motors off: repeat the force disarm while telemetry still says armed
@@ -212,7 +124,7 @@ FsmOutputs LandingFsm::step(const FsmInputs& in) {
     return out;
   }
   // a transition happened above: the new state acts from the next step; hold meanwhile
-  if (out.action == FsmOutputs::Action::kNone && state_ != LandingState::kStart) {
+  if (out.action == FsmOutputs::Action::kNone) {
     out.action = FsmOutputs::Action::kVelocity;
     const Eigen::Vector2d v = in.truck.initialised && state_ == LandingState::kApproach
                                   ? in.truck.velocity_enu_m_s
@@ -220,6 +132,89 @@ FsmOutputs LandingFsm::step(const FsmInputs& in) {
     out.velocity_enu_m_s = Eigen::Vector3d(v.x(), v.y(), 0.0);
   }
   return out;
+}
+
+void LandingFsm::on_start(const FsmInputs& in, FsmOutputs& out) {
+  // take off (retried while the vehicle is not armed), then Go To Centre near the altitude
+  if (!in.armed && (!takeoff_sent_ || in.now_s - takeoff_sent_s_ > kTakeoffRetry_s)) {
+    takeoff_sent_ = true;
+    takeoff_sent_s_ = in.now_s;
+    out.action = FsmOutputs::Action::kArmAndTakeOff;
+    out.takeoff_altitude_m = config_.cruise_altitude_m;
+    out.note = fmt("take-off to %.1f m", config_.cruise_altitude_m);
+    return;
+  }
+  if (in.armed && in.position_enu_m.z() > config_.cruise_altitude_m - kReachedAltitudeMargin_m) {
+    enter(LandingState::kGoToCentre, in.now_s, &out, "");
+  }
+}
+
+bool LandingFsm::on_go_to_centre(const FsmInputs& in, FsmOutputs& out) {
+  if (in.truck.initialised && seen_since(in, entered_s_)) {
+    enter(LandingState::kIntercept, in.now_s, &out,
+          fmt("truck seen at (%.1f, %.1f), filter initialised", in.truck.position_enu_m.x(),
+              in.truck.position_enu_m.y()));
+    return false;
+  }
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s =
+      fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s, config_.cruise_altitude_m);
+  return true;
+}
+
+bool LandingFsm::on_intercept(const FsmInputs& in, FsmOutputs& out) {
+  if (!in.truck.initialised || !in.truck.interception_enu_m) {
+    enter(LandingState::kGoToCentre, in.now_s, &out, "no track of the truck");
+    out.action = FsmOutputs::Action::kVelocity;
+    out.velocity_enu_m_s =
+        fly_to(in, config_.arena_centre_enu_m, config_.cruise_speed_m_s, config_.cruise_altitude_m);
+    return true;
+  }
+  const Eigen::Vector2d point = *in.truck.interception_enu_m;
+  const double distance = (point - in.position_enu_m.head<2>()).norm();
+  // in view already (caught up from behind, where the meeting point keeps moving ahead): wait
+  if (seen_since(in, entered_s_)) {
+    enter(LandingState::kWaitUntilVisible, in.now_s, &out, "truck in view on the way");
+    return false;
+  }
+  // there, or about to meet the truck (from behind, the meeting point moves on as the UAV
+  // slows)
+  if (distance < config_.arrive_radius_m ||
+      in.truck.interception_time_to_go_s < config_.arrive_time_s) {
+    enter(LandingState::kWaitUntilVisible, in.now_s, &out,
+          fmt("on the interception point (%.1f, %.1f)", point.x(), point.y()));
+    return false;
+  }
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s = fly_to(in, point, config_.cruise_speed_m_s, config_.cruise_altitude_m);
+  return true;
+}
+
+bool LandingFsm::on_wait_until_visible(const FsmInputs& in, FsmOutputs& out) {
+  if (seen_since(in, entered_s_)) {
+    misses_ = 0;
+    enter(LandingState::kApproach, in.now_s, &out, "marker in view");
+    return false;
+  }
+  if (in.now_s - entered_s_ > config_.search_timeout_s) {
+    ++misses_;
+    if (misses_ == 1) {
+      enter(LandingState::kIntercept, in.now_s, &out, "not seen in 12 s (first miss)");
+    } else {
+      misses_ = 0;
+      enter(LandingState::kGoToCentre, in.now_s, &out, "not seen in 12 s (second miss)");
+    }
+    out.action = FsmOutputs::Action::kVelocity;
+    out.velocity_enu_m_s = Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
+    return true;
+  }
+  // move at half the truck's speed along its way: the smallest speed difference when it comes
+  const Eigen::Vector2d v = in.truck.initialised ? Eigen::Vector2d(0.5 * in.truck.velocity_enu_m_s)
+                                                 : Eigen::Vector2d::Zero();
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s =
+      Eigen::Vector3d(v.x(), v.y(), hold_altitude_m_s(in, config_.cruise_altitude_m));
+  return true;
 }
 
 FsmOutputs LandingFsm::climb_away(const FsmInputs& in, const EstimatedTruck& truck,
@@ -337,46 +332,72 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   settling_reported_ = false;
   if (in.truck.position_stale) return approach_while_rebuilding(in, h);
   rebuilding_since_s_.reset();
-  const bool seen = in.now_s - in.truck.last_seen_s <= config_.lost_after_s;
-  const bool fresh = in.now_s - in.truck.last_seen_s <= config_.fresh_sighting_s;
 
   // the UAV in the truck's frame, from its own estimate, and what the clearance envelope says
-  EstimatedTruck truck;
-  truck.marker_enu_m = in.truck.position_enu_m;
-  truck.velocity_enu_m_s = in.truck.velocity_enu_m_s;
-  truck.heading_enu_rad = in.truck.heading_enu_rad;
-  truck.yaw_rate_rad_s = in.truck.yaw_rate_rad_s;
-  const TruckRelative rel = to_truck_frame(truck, config_, in.position_enu_m, in.velocity_enu_m_s);
-  const EnvelopeCheck check = envelope_.check(rel);
+  ApproachView view;
+  view.h = h;
+  view.truck.marker_enu_m = in.truck.position_enu_m;
+  view.truck.velocity_enu_m_s = in.truck.velocity_enu_m_s;
+  view.truck.heading_enu_rad = in.truck.heading_enu_rad;
+  view.truck.yaw_rate_rad_s = in.truck.yaw_rate_rad_s;
+  view.rel = to_truck_frame(view.truck, config_, in.position_enu_m, in.velocity_enu_m_s);
+  view.check = envelope_.check(view.rel);
+  if (climb_away_ && !end_climb_away(in, view, out)) return out;
 
+  // horizontal, then vertical; a vertical rule that ends the approach (a climb-away, Go To
+  // Centre) leaves its command in out and no rate
+  const bool fresh = in.now_s - in.truck.last_seen_s <= config_.fresh_sighting_s;
+  const bool blind_low = !fresh && h <= config_.open_loop_height_m;
+  const Eigen::Vector2d v_xy = approach_velocity_xy(in, blind_low);
+  std::optional<double> vz;
+  if (fresh) {
+    vz = descent_in_sight_m_s(in, view, out);
+  } else if (open_loop_since_s_ || (blind_low && !in.camera_dark)) {
+    vz = descent_blind_m_s(in, view, out);
+  } else if (!view.check.above_floor) {
+    // lost below the cab's top and not because it is too close (the camera dark): no blind landing
+    out = climb_away(in, view.truck, view.rel, fmt("marker lost at %.2f m with the camera dark", h),
+                     false);
+  } else if (in.now_s - in.truck.last_seen_s <= config_.lost_after_s && !in.camera_dark) {
+    // a stale sighting up here: hold, no descent on it, until seen again or lost
+    vz = 0.0;
+  } else {
+    vz = climb_when_lost_m_s(in, h, out);
+  }
+  if (!vz) return out;
+  out.action = FsmOutputs::Action::kVelocity;
+  out.velocity_enu_m_s = Eigen::Vector3d(v_xy.x(), v_xy.y(), *vz);
+  return out;
+}
+
+bool LandingFsm::end_climb_away(const FsmInputs& in, const ApproachView& view, FsmOutputs& out) {
   // the climb-away: up and away from the cab along the truck's way until clear of the truck, then
   // a new approach (or Go To Centre after an open-loop descent that found no deck)
-  if (climb_away_) {
-    if (h < config_.abort_clear_height_m) {
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s =
-          enu_velocity_for(truck, in.position_enu_m, envelope_.abort_velocity_m_s(rel.position_m));
-      return out;
-    }
-    climb_away_ = false;
-    if (give_up_after_climb_) {
-      enter(LandingState::kGoToCentre, in.now_s, &out, "clear of the truck after the climb-away");
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s = Eigen::Vector3d(0, 0, config_.climb_m_s);
-      return out;
-    }
-    pid_x_.reset();
-    pid_y_.reset();
-    lost_since_s_.reset();
-    open_loop_since_s_.reset();
-    open_loop_reported_ = false;
-    out.note = fmt("clear of the truck at %.1f m: approaching again", h);
+  if (view.h < config_.abort_clear_height_m) {
+    out.action = FsmOutputs::Action::kVelocity;
+    out.velocity_enu_m_s = enu_velocity_for(view.truck, in.position_enu_m,
+                                            envelope_.abort_velocity_m_s(view.rel.position_m));
+    return false;
   }
+  climb_away_ = false;
+  if (give_up_after_climb_) {
+    enter(LandingState::kGoToCentre, in.now_s, &out, "clear of the truck after the climb-away");
+    out.action = FsmOutputs::Action::kVelocity;
+    out.velocity_enu_m_s = Eigen::Vector3d(0, 0, config_.climb_m_s);
+    return false;
+  }
+  pid_x_.reset();
+  pid_y_.reset();
+  lost_since_s_.reset();
+  open_loop_since_s_.reset();
+  open_loop_reported_ = false;
+  out.note = fmt("clear of the truck at %.1f m: approaching again", view.h);
+  return true;
+}
 
-  // horizontal: the truck's velocity (feed-forward from the filter) + PID on the offset to the
-  // marker (blind, on a point behind it, away from the cab)
-  const Eigen::Vector2d offset = in.truck.position_enu_m - in.position_enu_m.head<2>();
-  const bool blind_low = !fresh && h <= config_.open_loop_height_m;
+Eigen::Vector2d LandingFsm::approach_velocity_xy(const FsmInputs& in, bool blind_low) {
+  // the truck's velocity (feed-forward from the filter) + PID on the offset to the marker (blind,
+  // on a point behind it, away from the cab)
   const Eigen::Vector2d target =
       in.truck.position_enu_m -
       (blind_low ? config_.open_loop_aim_back_m : 0.0) *
@@ -387,111 +408,118 @@ FsmOutputs LandingFsm::approach(const FsmInputs& in) {
   // 148: 0.39 m ahead of the marker plus the aim back asked for 0.64 m/s backwards, and the UAV
   // went 0.9 m/s)
   if (blind_low) correction = clamp_norm(correction, config_.open_loop_correction_m_s);
-  const Eigen::Vector2d v_xy =
-      clamp_norm(in.truck.velocity_enu_m_s + correction, config_.approach_max_speed_m_s);
+  return clamp_norm(in.truck.velocity_enu_m_s + correction, config_.approach_max_speed_m_s);
+}
 
-  // vertical: descend inside the funnel, climb outside it or when the marker is lost up high; in
-  // the last decimetres the marker no longer fits the image: open-loop descent, at most 8 s. The
-  // envelope bounds all of it: below the cab's top only in the deck box and matched, open loop
-  // only from centred and matched, otherwise the climb-away.
-  double vz = 0.0;
-  if (fresh) {
-    lost_since_s_.reset();
-    open_loop_since_s_.reset();
-    if (!check.safe()) {
-      return climb_away(in, truck, rel,
-                        fmt("%.2f m above the deck, (%+.2f, %+.2f) m from the centre", h,
-                            rel.position_m.x(), rel.position_m.y()) +
-                            fmt(" at %.2f m/s relative: outside the deck box or unmatched",
-                                rel.velocity_m_s.head<2>().norm()),
-                        false);
-    }
-    // the readiness for the blind last metres, from fresh sightings near where the marker leaves
-    // the image
-    ready_for_open_loop_ =
-        check.ready_for_open_loop() && h <= config_.open_loop_height_m + kOpenLoopReadyBand_m;
-    if (funnel_.contains(h, offset.norm())) {
-      vz = -funnel_.descent_rate_m_s(h);
-      outside_reported_ = false;
-    } else {
-      vz = config_.climb_m_s;
-      if (!outside_reported_) {
-        outside_reported_ = true;
-        out.note = fmt("outside the funnel (%.2f m off at %.1f m): climbing", offset.norm(), h);
-      }
-    }
-    // not below the commit height unless centred and matched, nor below the floor unless cleared
-    if (!check.ready_for_open_loop()) {
-      vz = std::max(vz, config_.floor_approach_gain_1_s * (config_.commit_height_m - h));
-    }
-    vz = envelope_.limit_vertical_m_s(rel, vz);
-  } else if (open_loop_since_s_ || (blind_low && !in.camera_dark)) {
-    // the marker left the image low down (too close to see, the camera still working): the blind
-    // last metres, only from centred and matched
-    if (!open_loop_since_s_) {
-      if (!ready_for_open_loop_) {
-        return climb_away(
-            in, truck, rel,
-            fmt("marker lost at %.2f m, %.2f m from the centre at %.2f m/s relative: not centred "
-                "and matched",
-                h, rel.position_m.head<2>().norm(), rel.velocity_m_s.head<2>().norm()),
-            false);
-      }
-      open_loop_since_s_ = in.now_s;
-      open_loop_start_z_m_ = in.position_enu_m.z();
-    }
-    if (!open_loop_reported_) {
-      open_loop_reported_ = true;
-      out.note = fmt("marker too close to see at %.2f m: open-loop descent", h);
-    }
-    // blind, the height is where the marker left the image less the barometric descent since,
-    // where the barometer's absolute altitude is lower (issue 36's seed 148: its drift said 0.36 m
-    // more than the truth, so the floor's rule never held and the UAV, drifting back at 0.9 m/s,
-    // sank off the deck's rear edge)
-    const double h_blind = blind_height_m(in);
-    TruckRelative rel_blind = rel;
-    rel_blind.position_m.z() = std::min(h, h_blind);
-    if (!envelope_.check(rel_blind).safe()) {
-      return climb_away(in, truck, rel_blind,
-                        fmt("open loop at %.2f m left the deck box (%+.2f, %+.2f) or unmatched",
-                            rel_blind.position_m.z(), rel.position_m.x(), rel.position_m.y()) +
-                            fmt(" at %.2f m/s relative", rel.velocity_m_s.head<2>().norm()),
-                        false);
-    }
-    // sunk below the deck's top without a touchdown: no deck under the skids, wherever the
-    // estimate puts it
-    if (h_blind < -config_.deck_missed_m) {
-      return climb_away(in, truck, rel_blind,
-                        fmt("open loop %.2f m below the deck's top without a touchdown", -h_blind),
-                        true);
-    }
-    if (in.now_s - *open_loop_since_s_ > config_.open_loop_timeout_s) {
-      return climb_away(in, truck, rel_blind, "no touchdown after 8 s of open-loop descent", true);
-    }
-    vz = envelope_.limit_vertical_m_s(rel_blind, -config_.open_loop_descent_m_s);
-  } else if (!check.above_floor) {
-    // lost below the cab's top and not because it is too close (the camera dark): no blind landing
-    return climb_away(in, truck, rel, fmt("marker lost at %.2f m with the camera dark", h), false);
-  } else if (seen && !in.camera_dark) {
-    // a stale sighting up here: hold, no descent on it, until seen again or lost
-    vz = 0.0;
-  } else {
-    if (!lost_since_s_) {
-      lost_since_s_ = in.now_s;
-      out.note = fmt("marker lost at %.1f m: climbing, following the filter", h);
-    }
-    if (in.now_s - *lost_since_s_ > config_.lost_give_up_s) {
-      enter(LandingState::kGoToCentre, in.now_s, &out, "marker lost for 8 s");
-      out.action = FsmOutputs::Action::kVelocity;
-      out.velocity_enu_m_s =
-          Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
-      return out;
-    }
-    vz = in.position_enu_m.z() < config_.cruise_altitude_m ? config_.climb_m_s : 0.0;
+// vertical: descend inside the funnel, climb outside it or when the marker is lost up high; in the
+// last decimetres the marker no longer fits the image: open-loop descent, at most 8 s. The envelope
+// bounds all of it: below the cab's top only in the deck box and matched, open loop only from
+// centred and matched, otherwise the climb-away.
+std::optional<double> LandingFsm::descent_in_sight_m_s(const FsmInputs& in,
+                                                       const ApproachView& view, FsmOutputs& out) {
+  const double h = view.h;
+  const TruckRelative& rel = view.rel;
+  lost_since_s_.reset();
+  open_loop_since_s_.reset();
+  if (!view.check.safe()) {
+    out = climb_away(in, view.truck, rel,
+                     fmt("%.2f m above the deck, (%+.2f, %+.2f) m from the centre", h,
+                         rel.position_m.x(), rel.position_m.y()) +
+                         fmt(" at %.2f m/s relative: outside the deck box or unmatched",
+                             rel.velocity_m_s.head<2>().norm()),
+                     false);
+    return std::nullopt;
   }
-  out.action = FsmOutputs::Action::kVelocity;
-  out.velocity_enu_m_s = Eigen::Vector3d(v_xy.x(), v_xy.y(), vz);
-  return out;
+  // the readiness for the blind last metres, from fresh sightings near where the marker leaves
+  // the image
+  ready_for_open_loop_ =
+      view.check.ready_for_open_loop() && h <= config_.open_loop_height_m + kOpenLoopReadyBand_m;
+  const double offset_m = (in.truck.position_enu_m - in.position_enu_m.head<2>()).norm();
+  double vz = 0.0;
+  if (funnel_.contains(h, offset_m)) {
+    vz = -funnel_.descent_rate_m_s(h);
+    outside_reported_ = false;
+  } else {
+    vz = config_.climb_m_s;
+    if (!outside_reported_) {
+      outside_reported_ = true;
+      out.note = fmt("outside the funnel (%.2f m off at %.1f m): climbing", offset_m, h);
+    }
+  }
+  // not below the commit height unless centred and matched, nor below the floor unless cleared
+  if (!view.check.ready_for_open_loop()) {
+    vz = std::max(vz, config_.floor_approach_gain_1_s * (config_.commit_height_m - h));
+  }
+  return envelope_.limit_vertical_m_s(rel, vz);
+}
+
+std::optional<double> LandingFsm::descent_blind_m_s(const FsmInputs& in, const ApproachView& view,
+                                                    FsmOutputs& out) {
+  // the marker left the image low down (too close to see, the camera still working): the blind
+  // last metres, only from centred and matched
+  const double h = view.h;
+  const TruckRelative& rel = view.rel;
+  if (!open_loop_since_s_) {
+    if (!ready_for_open_loop_) {
+      out = climb_away(
+          in, view.truck, rel,
+          fmt("marker lost at %.2f m, %.2f m from the centre at %.2f m/s relative: not centred "
+              "and matched",
+              h, rel.position_m.head<2>().norm(), rel.velocity_m_s.head<2>().norm()),
+          false);
+      return std::nullopt;
+    }
+    open_loop_since_s_ = in.now_s;
+    open_loop_start_z_m_ = in.position_enu_m.z();
+  }
+  if (!open_loop_reported_) {
+    open_loop_reported_ = true;
+    out.note = fmt("marker too close to see at %.2f m: open-loop descent", h);
+  }
+  // blind, the height is where the marker left the image less the barometric descent since,
+  // where the barometer's absolute altitude is lower (issue 36's seed 148: its drift said 0.36 m
+  // more than the truth, so the floor's rule never held and the UAV, drifting back at 0.9 m/s,
+  // sank off the deck's rear edge)
+  const double h_blind = blind_height_m(in);
+  TruckRelative rel_blind = rel;
+  rel_blind.position_m.z() = std::min(h, h_blind);
+  if (!envelope_.check(rel_blind).safe()) {
+    out = climb_away(in, view.truck, rel_blind,
+                     fmt("open loop at %.2f m left the deck box (%+.2f, %+.2f) or unmatched",
+                         rel_blind.position_m.z(), rel.position_m.x(), rel.position_m.y()) +
+                         fmt(" at %.2f m/s relative", rel.velocity_m_s.head<2>().norm()),
+                     false);
+    return std::nullopt;
+  }
+  // sunk below the deck's top without a touchdown: no deck under the skids, wherever the
+  // estimate puts it
+  if (h_blind < -config_.deck_missed_m) {
+    out = climb_away(in, view.truck, rel_blind,
+                     fmt("open loop %.2f m below the deck's top without a touchdown", -h_blind),
+                     true);
+    return std::nullopt;
+  }
+  if (in.now_s - *open_loop_since_s_ > config_.open_loop_timeout_s) {
+    out =
+        climb_away(in, view.truck, rel_blind, "no touchdown after 8 s of open-loop descent", true);
+    return std::nullopt;
+  }
+  return envelope_.limit_vertical_m_s(rel_blind, -config_.open_loop_descent_m_s);
+}
+
+std::optional<double> LandingFsm::climb_when_lost_m_s(const FsmInputs& in, double h,
+                                                      FsmOutputs& out) {
+  if (!lost_since_s_) {
+    lost_since_s_ = in.now_s;
+    out.note = fmt("marker lost at %.1f m: climbing, following the filter", h);
+  }
+  if (in.now_s - *lost_since_s_ > config_.lost_give_up_s) {
+    enter(LandingState::kGoToCentre, in.now_s, &out, "marker lost for 8 s");
+    out.action = FsmOutputs::Action::kVelocity;
+    out.velocity_enu_m_s = Eigen::Vector3d(0, 0, hold_altitude_m_s(in, config_.cruise_altitude_m));
+    return std::nullopt;
+  }
+  return in.position_enu_m.z() < config_.cruise_altitude_m ? config_.climb_m_s : 0.0;
 }
 
 }  // namespace uavsim::missions::mbzirc2017

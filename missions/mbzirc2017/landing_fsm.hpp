@@ -77,7 +77,32 @@ class LandingFsm {
   Eigen::Vector3d fly_to(const FsmInputs& in, const Eigen::Vector2d& target_enu_m, double speed_m_s,
                          double altitude_m) const;
   double hold_altitude_m_s(const FsmInputs& in, double altitude_m) const;
+  // one handler per state before the Approach; each returns true when it has commanded the step,
+  // false when it has handed over to the next state (which then acts in the same step)
+  void on_start(const FsmInputs& in, FsmOutputs& out);
+  bool on_go_to_centre(const FsmInputs& in, FsmOutputs& out);
+  bool on_intercept(const FsmInputs& in, FsmOutputs& out);
+  bool on_wait_until_visible(const FsmInputs& in, FsmOutputs& out);
   FsmOutputs approach(const FsmInputs& in);
+  // the Approach's view of the truck this step: the skids' height above the deck, the truck as
+  // estimated, the UAV in its frame and what the clearance envelope says of it
+  struct ApproachView {
+    double h = 0.0;
+    EstimatedTruck truck;
+    TruckRelative rel;
+    EnvelopeCheck check;
+  };
+  // a climb-away under way: true once clear of the truck (a new approach goes on in this step)
+  bool end_climb_away(const FsmInputs& in, const ApproachView& view, FsmOutputs& out);
+  // the Approach's horizontal velocity: the truck's plus the PID's correction towards the marker
+  Eigen::Vector2d approach_velocity_xy(const FsmInputs& in, bool blind_low);
+  // the Approach's climb rate with the marker in sight, in the blind last metres, or lost; nullopt
+  // when the rule ended the approach (a climb-away, Go To Centre), its command then in out
+  std::optional<double> descent_in_sight_m_s(const FsmInputs& in, const ApproachView& view,
+                                             FsmOutputs& out);
+  std::optional<double> descent_blind_m_s(const FsmInputs& in, const ApproachView& view,
+                                          FsmOutputs& out);
+  std::optional<double> climb_when_lost_m_s(const FsmInputs& in, double h, FsmOutputs& out);
   // begins the climb-away (then Go To Centre if give_up, else a new approach) and commands it
   FsmOutputs climb_away(const FsmInputs& in, const EstimatedTruck& truck, const TruckRelative& rel,
                         const std::string& why, bool give_up);

@@ -49,6 +49,7 @@
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
+#include "uavsim/launch/run_options.hpp"
 #include "uavsim/vision/eight_track.hpp"
 
 namespace {
@@ -82,9 +83,7 @@ constexpr double kBlackoutTo_s = 100.0;
 constexpr double kBlackoutMin_s = 0.5;
 constexpr double kBlackoutMax_s = 4.0;
 
-struct Options {
-  uint64_t seed = 1;
-  std::string world;
+struct Options : uavsim::launch::RunOptions {
   double truck_speed_kmh = 0.0;  // 0: the world's (15 km/h)
   double start_time_s = 0.0;     // the UAV starts at this sim time (480: the 5 km/h phase)
   bool slow_phase = false;       // --phase slow
@@ -93,23 +92,13 @@ struct Options {
   bool random_start_phase = false;  // --start-phase random
   bool random_truck_speed = false;  // --truck-speed-kmh random
   int random_blackouts = 0;
-  std::string record;
-  std::string json_path;
-  std::string events_path;               // the sim's event log, one JSON line per event
-  std::string realism;                   // --realism for the server (empty: the world's)
-  std::string wind;                      // --wind for the server
-  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
-  bool no_record = false;                // --no-record: no video
-  std::string record_camera = "follow";  // the server's --record-camera
-  std::string record_layout = "tiled";   // the server's --record-layout: the UAV's camera beside
-  double truth_hz = 10.0;
-  bool quiet = false;
+  bool no_record = false;  // --no-record: no video
   bool blackout_first_pass = false;
   bool lose_in_approach = false;
   bool lose_low_off_centre = false;
   double budget_s = 300.0;  // sim seconds after the UAV's start
   double wall_limit_s = 1200.0;
-  std::string server, uav;
+  std::string uav;
 };
 
 int usage() {
@@ -246,6 +235,656 @@ std::optional<std::pair<double, std::string>> state_change(const std::string& li
   return std::make_pair(std::stod(m[1]), m[2].str());
 }
 
+// the command line into o; false: not usable (usage)
+bool parse_options(int argc, char** argv, Options* o) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    const char* v = nullptr;
+    if (a == "--quiet") {
+      o->quiet = true;
+    } else if (a == "--blackout-first-pass") {
+      o->blackout_first_pass = true;
+    } else if (a == "--lose-in-approach") {
+      o->lose_in_approach = true;
+    } else if (a == "--lose-low-off-centre") {
+      o->lose_low_off_centre = true;
+    } else if (a == "--no-record") {
+      o->no_record = true;
+    } else if (a == "--no-run-dir") {
+      o->run_dir = "none";
+    } else if (a == "--help" || a == "-h") {
+      return false;
+    } else if ((v = next()) == nullptr) {
+      return false;
+    } else if (a == "--seed") {
+      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o->seed)) return false;
+    } else if (a == "--truck-speed-kmh") {
+      if (std::string(v) == "random") {
+        o->random_truck_speed = true;
+      } else if (!parse_double(v, 0.0, kMaxKmh, &o->truck_speed_kmh)) {
+        return false;
+      }
+    } else if (a == "--phase") {
+      if (std::string(v) == "slow") {
+        o->start_time_s = 480.0;
+        o->slow_phase = true;
+      } else if (std::string(v) != "fast") {
+        return false;
+      }
+    } else if (a == "--start-phase") {
+      double f = 0.0;
+      if (std::string(v) == "random") {
+        o->random_start_phase = true;
+      } else if (parse_double(v, 0.0, 1.0, &f)) {
+        o->start_phase = f;
+      } else {
+        return false;
+      }
+    } else if (a == "--random-blackouts") {
+      if (!parse_integer<int>(v, 0, kMaxBlackouts, &o->random_blackouts)) return false;
+    } else if (a == "--start-time") {
+      if (!parse_double(v, 0.0, kMaxStart_s, &o->start_time_s)) return false;
+    } else if (a == "--record") {
+      o->record = v;
+    } else if (a == "--json") {
+      o->json_path = v;
+    } else if (a == "--run-dir") {
+      o->run_dir = v;
+    } else if (a == "--record-camera") {
+      o->record_camera = v;
+    } else if (a == "--record-layout") {
+      o->record_layout = v;
+    } else if (a == "--truth-hz") {
+      if (!parse_double(v, 0.01, 1000.0, &o->truth_hz)) return false;
+    } else if (a == "--events") {
+      o->events_path = v;
+    } else if (a == "--realism") {
+      o->realism = v;
+    } else if (a == "--wind") {
+      o->wind = v;
+    } else if (a == "--budget") {
+      if (!parse_double(v, 1.0, 36000.0, &o->budget_s)) return false;
+    } else if (a == "--wall-limit") {
+      if (!parse_double(v, 1.0, 86400.0, &o->wall_limit_s)) return false;
+    } else if (a == "--world") {
+      o->world = v;
+    } else if (a == "--server") {
+      o->server = v;
+    } else if (a == "--uav") {
+      o->uav = v;
+    } else {
+      return false;
+    }
+  }
+  return true;
+}
+
+// One run: the server and the UAV program on the lockstep, the launcher's own lockstep client
+// (near misses and faults at every tick), the score from ground truth. Its steps in main's order.
+class LandingRun {
+ public:
+  LandingRun(Launcher& launch, Options& o) : launch_(launch), o_(o) {}
+
+  // the truck's schedule, where on the eight the UAV starts, the faults' times, the near-miss
+  // shapes and the world file; 0, or the exit code after saying why
+  int prepare();
+  // the server, on ephemeral ports
+  void start_server();
+  // the clock held at t = 0 (the truck alone driven to the start time), the UAV program and the
+  // launcher on the lockstep, then the clock let go
+  void set_up();
+  // the program, the events and the ticks until the end
+  void follow();
+  // the clock held at the end, the events written, the score
+  void finish();
+  // the rewritten world removed (after the server has stopped)
+  void clean_up() const;
+
+  bool failed() const { return failed_; }
+  bool success() const;
+  void print_summary(bool success) const;
+  Json summary_json(bool success) const;
+
+ private:
+  void fail(const std::string& why) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
+    failed_ = true;
+  }
+  // the run's scored end: landed, and sim time t is 5 s after the touchdown (to a pause's slack)
+  bool on_deck_long_enough(double t) const {
+    return landed_s_ >= 0 && t >= landed_s_ + kStayOnDeck_s - kPauseSlack_s;
+  }
+  void on_uav_line(const std::string& line);
+  void on_sim_event(const Json& e);
+  // the fault injector's tick: the near misses, then the faults due
+  void on_tick(double tick_s);
+  void track_near_miss(double tick_s);
+  void inject_faults(double tick_s);
+  void blackout(double tick_s, double duration_s, const std::string& why);
+  // the wall-time status poll: the sim time, and the clock resumed towards the 5 s on the deck
+  void poll_status();
+  // the loop's end, after a pass
+  bool run_over();
+  void score();
+  double mission_s() const {
+    return landed_s_ >= 0 && takeoff_s_ >= 0 ? landed_s_ - takeoff_s_ : -1.0;
+  }
+  double truck_kmh() const { return o_.slow_phase ? schedule_.speed2_kmh : schedule_.speed1_kmh; }
+
+  Launcher& launch_;
+  Options& o_;
+  bool failed_ = false;
+  TruckSchedule schedule_;
+  std::optional<uavsim::vision::EightTrack> track_;
+  std::string world_;
+  // the random blackouts: (time, duration), in time order
+  std::vector<std::pair<double, double>> blackouts_;
+  size_t next_blackout_ = 0;
+  // the near misses, from the models the simulator collides
+  std::optional<uavsim::missions::mbzirc2017::NearMissTracker> near_miss_;
+  std::string part_at_approach_, part_at_touchdown_;  // where on the eight
+  std::optional<double> approach_s_;                  // the first Approach's time (program output)
+  double truck_s_m_ = 0.0;                            // the truck's arc length at the latest tick
+  std::map<double, double> truck_s_by_tick_m_;  // ... and at the ticks of the last kTruckHistory_s
+  double truck_yaw_rad_ = 0.0;                  // at the latest tick
+  int climb_aways_ = 0;
+  int estimate_steps_ = 0;  // the program's "position estimate stepped" (a GPS jump it noticed)
+  // the ground truth the summary is scored from
+  double takeoff_s_ = -1.0, landed_s_ = -1.0, relative_speed_m_s_ = -1.0;
+  double marker_distance_m_ = -1.0;
+  double end_sim_s_ = 0.0;
+  bool stayed_on_deck_ = false;
+  std::vector<std::string> crashes_, states_;
+  std::string vision_log_;  // the UAV program's video log, in the run directory
+  double first_blackout_s_ = -1.0, approach_blackout_s_ = -1.0;  // when the faults were injected
+  double lose_low_at_s_ = -1.0;
+  std::string uav_state_;  // the program's state, as of its output stamped before the latest tick
+  double glitch_clear_s_ = -1.0;  // when --lose-low-off-centre's GPS offset ends (-1: none)
+  std::vector<std::pair<std::int64_t, double>> ticks_;  // the fault injector's ticks (number, time)
+  std::vector<std::pair<double, std::string>>
+      pending_states_;  // from the UAV's output, not yet acted on
+  double sim_s_ = 0.0, last_status_wall_s_ = 0.0;
+};
+
+int LandingRun::prepare() {
+  // where on the eight the UAV starts: a fraction of a lap at the speed of its phase
+  if (o_.random_truck_speed) {
+    o_.truck_speed_kmh = kMinRuleKmh + (kMaxRuleKmh - kMinRuleKmh) * seeded_uniform(o_.seed, 100);
+  }
+  if (std::string why; !read_truck_schedule(o_.world, &schedule_, &why)) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
+    return 2;
+  }
+  if (o_.truck_speed_kmh > 0.0) schedule_.speed1_kmh = o_.truck_speed_kmh;
+  track_.emplace(schedule_.track);
+  if (o_.random_start_phase) o_.start_phase = seeded_uniform(o_.seed, 0);
+  if (o_.start_phase) {
+    const double kmh = truck_kmh();
+    o_.start_time_s = (o_.slow_phase ? schedule_.switch_s : 0.0) +
+                      *o_.start_phase * track_->length_m() / (kmh / 3.6);
+    if (!o_.slow_phase && o_.start_time_s > schedule_.switch_s) {
+      std::fprintf(stderr, "mbzirc2017-run: a lap at %.1f km/h is longer than the first phase\n",
+                   kmh);
+      return 2;
+    }
+  }
+  for (int k = 0; k < o_.random_blackouts; ++k) {
+    blackouts_.emplace_back(
+        o_.start_time_s + kBlackoutFrom_s +
+            (kBlackoutTo_s - kBlackoutFrom_s) * seeded_uniform(o_.seed, 1 + 2 * k),
+        kBlackoutMin_s + (kBlackoutMax_s - kBlackoutMin_s) * seeded_uniform(o_.seed, 2 + 2 * k));
+  }
+  std::sort(blackouts_.begin(), blackouts_.end());
+  try {
+    const std::string models = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path;
+    near_miss_.emplace(
+        uavsim::missions::mbzirc2017::load_truck_shape(models + "/objects/truck.xml"),
+        uavsim::missions::mbzirc2017::load_vehicle_shape(models + "/vehicles/hexa.xml"));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mbzirc2017-run: %s\n", e.what());
+    return 2;
+  }
+  world_ = o_.world;
+  if (o_.truck_speed_kmh > 0.0) {
+    world_ = world_with_speed(o_.world, o_.truck_speed_kmh, o_.seed);
+    if (world_.empty()) {
+      fail("cannot write a world with the truck at " + std::to_string(o_.truck_speed_kmh) +
+           " km/h");
+      return 4;
+    }
+  }
+  sim_s_ = o_.start_time_s;
+  return 0;
+}
+
+void LandingRun::start_server() {
+  uavsim::launch::RunOptions server = o_;
+  server.world = world_;  // the truck's speed written into it, if asked
+  if (auto started = uavsim::launch::start_run_server(launch_, server, {}); !started) {
+    fail(started.message());
+  } else if (launch_.mavlink_port("uav0") == 0) {
+    fail("the server did not start (no MAVLink port for uav0)");
+  }
+}
+
+void LandingRun::on_uav_line(const std::string& line) {
+  if (line.find("climb-away:") != std::string::npos) ++climb_aways_;
+  if (line.find("position estimate stepped") != std::string::npos) ++estimate_steps_;
+  if (auto s = state_change(line)) {
+    if (s->second == "Approach" && !approach_s_) approach_s_ = s->first;
+    states_.push_back(s->second);
+    pending_states_.push_back(*s);
+  }
+}
+
+void LandingRun::set_up() {
+  SimConnection& api = launch_.api();
+  // 1. hold the clock, start from t = 0 with this seed; the truck alone drives to the start time
+  if (!api.pause() || !api.reset(o_.seed) || !api.subscribe_events()) {
+    fail("the server refused the setup requests (pause, reset, subscribe_events)");
+  } else if (o_.start_time_s > 0.0 &&
+             !api.step_for(o_.start_time_s, std::max(60.0, o_.start_time_s))) {
+    fail("the server did not run to the start time");
+  } else if (!api.request({{"op", "pause_at"},
+                           {"time_s", o_.start_time_s + o_.budget_s},
+                           {"lockstep_empty", true}})) {
+    // the clock stops by itself at the end (budget spent, the program gone, or 5 s on the deck):
+    // the end of the run is the same every run
+    fail("the server refused pause_at");
+  }
+  launch_.on_line([this](const std::string& child, const std::string& line) {
+    if (child == "uav0") on_uav_line(line);
+  });
+  // 2. the UAV program (and the fault injector) on the lockstep clock, then let the clock go
+  if (!failed_) {
+    std::vector<std::string> argv{o_.uav, "--mavlink",
+                                  "tcp:127.0.0.1:" + std::to_string(launch_.mavlink_port("uav0"))};
+    if (!o_.run_dir.empty()) {
+      // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
+      vision_log_ = o_.run_dir + "/uav0_vision.vlog";
+      argv.insert(argv.end(), {"--video-log", vision_log_});
+    }
+    auto u = launch_.spawn("uav0", argv, {launch_.lockstep_env(kLockstepPeriod_s)});
+    if (!u) fail(u.message());
+  }
+  if (!failed_) {
+    api.on_message("tick", [this](const SimMessage& m) {
+      ticks_.emplace_back(m.json.value("tick", std::int64_t{0}), m.json.value("time", 0.0));
+    });
+    if (!api.lockstep_join(kLockstepPeriod_s, 120.0))
+      fail("the launcher could not join the lockstep");
+  }
+  if (!failed_) {
+    if (auto w = launch_.wait_lockstep_clients(2, 120.0); !w) {
+      fail("the UAV program did not join the lockstep");
+    } else if (!api.resume()) {
+      fail("resume refused");
+    } else {
+      launch_.say("mbzirc2017-run: seed " + std::to_string(o_.seed) +
+                  ", UAV starts at t=" + std::to_string(static_cast<int>(o_.start_time_s)) +
+                  " s, budget " + std::to_string(static_cast<int>(o_.budget_s)) + " s sim");
+    }
+  }
+}
+
+void LandingRun::on_sim_event(const Json& e) {
+  const std::string type = e.value("type", ""), vehicle = e.value("vehicle_name", "");
+  const std::string detail = e.value("detail", "");
+  const double t = e.value("time", 0.0);
+  if (type == "takeoff" && takeoff_s_ < 0) takeoff_s_ = t;
+  if (type == "crash") crashes_.push_back(vehicle + " at " + std::to_string(t) + " s: " + detail);
+  if (type == "landed_on_target" && landed_s_ < 0) {
+    landed_s_ = t;
+    part_at_touchdown_ = uavsim::missions::mbzirc2017::eight_part(*track_, truck_s_m_);
+    // the clock is then still short of t + 5 s (a few ms of wall time at full speed)
+    const auto r = launch_.api().request({{"op", "pause_at"}, {"time_s", t + kStayOnDeck_s}});
+    if (r && r->value("time_s", 0.0) > t + kStayOnDeck_s) {
+      launch_.say("mbzirc2017-run: the end-of-run pause came late (the run's end may vary)");
+    }
+    std::smatch mm;
+    static const std::regex re(
+        R"(relative speed ([0-9.]+) m/s, ([0-9.]+) m from the marker centre)");
+    if (std::regex_search(detail, mm, re)) {
+      relative_speed_m_s_ = std::stod(mm[1]);
+      marker_distance_m_ = std::stod(mm[2]);
+    }
+  }
+  if (type == "crash" || type == "takeoff" || type == "touchdown" || type == "landed_on_target" ||
+      type == "disarmed") {
+    char buf[320];
+    std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), vehicle.c_str(),
+                  detail.c_str());
+    launch_.say(buf);
+  }
+}
+
+void LandingRun::blackout(double tick_s, double duration_s, const std::string& why) {
+  if (!launch_.api().request(
+          {{"op", "camera_blackout"}, {"camera", "uav0_down"}, {"duration_s", duration_s}})) {
+    fail("camera_blackout refused");
+  }
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "[fault] t=%.2f camera uav0_down black for %.1f s (%s)", tick_s,
+                duration_s, why.c_str());
+  launch_.say(buf);
+}
+
+// the near misses from the ground truth at the tick (the clock holds until done)
+void LandingRun::track_near_miss(double tick_s) {
+  SimConnection& api = launch_.api();
+  const auto v = api.request({{"op", "vehicles"}});
+  const auto t = api.truck();
+  if (!v || !t) return;
+  for (const Json& veh : v->value("vehicles", Json::array())) {
+    if (veh.value("name", "") != "uav0") continue;
+    for (const Json& k : t->value("trucks", Json::array())) {
+      const auto p = veh.value("position_enu_m", std::vector<double>{});
+      const auto q = veh.value("q_enu_body", std::vector<double>{});
+      const auto tp = k.value("position_enu_m", std::vector<double>{});
+      if (p.size() != 3 || q.size() != 4 || tp.size() != 3) continue;
+      near_miss_->add(Eigen::Vector3d(p[0], p[1], p[2]),
+                      Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized(),
+                      Eigen::Vector3d(tp[0], tp[1], tp[2]), k.value("yaw_rad", 0.0));
+      truck_s_m_ = k.value("s_m", 0.0);
+      truck_yaw_rad_ = k.value("yaw_rad", 0.0);
+      // the part of the eight at the approach's own tick: the program's line stamped with it may
+      // come in before or after that tick is handled here (the two processes get the tick at
+      // once), so it is looked up in the recent ticks, not taken from the tick it meets
+      truck_s_by_tick_m_[tick_s] = truck_s_m_;
+      truck_s_by_tick_m_.erase(truck_s_by_tick_m_.begin(),
+                               truck_s_by_tick_m_.lower_bound(tick_s - kTruckHistory_s));
+      if (approach_s_ && part_at_approach_.empty()) {
+        const auto at = truck_s_by_tick_m_.upper_bound(*approach_s_ + 1e-9);
+        if (at != truck_s_by_tick_m_.begin()) {
+          part_at_approach_ =
+              uavsim::missions::mbzirc2017::eight_part(*track_, std::prev(at)->second);
+        }
+      }
+    }
+  }
+}
+
+void LandingRun::inject_faults(double tick_s) {
+  SimConnection& api = launch_.api();
+  // the random blackouts due by this tick
+  for (; next_blackout_ < blackouts_.size() && blackouts_[next_blackout_].first <= tick_s;
+       ++next_blackout_) {
+    blackout(tick_s, blackouts_[next_blackout_].second, "random");
+  }
+  // the marker lost low and off the centre: GPS 1 m towards the truck's rear, camera black
+  if (const auto rel = near_miss_->latest();
+      o_.lose_low_off_centre && lose_low_at_s_ < 0 && uav_state_ == "Approach" && rel &&
+      rel->skid_height_m <= kLoseLowHeight_m && rel->p_truck_m.head<2>().norm() <= kOverTheDeck_m) {
+    lose_low_at_s_ = tick_s;
+    const Eigen::Vector2d back =
+        -kLoseLowGlitch_m * Eigen::Vector2d(std::cos(truck_yaw_rad_), std::sin(truck_yaw_rad_));
+    if (!api.request({{"op", "gps_glitch"},
+                      {"vehicle", "uav0"},
+                      {"offset_enu_m", {back.x(), back.y(), 0.0}}})) {
+      fail("gps_glitch refused");
+    }
+    glitch_clear_s_ = tick_s + kLoseLowBlackout_s;
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "[fault] t=%.2f GPS of uav0 off by (%+.2f, %+.2f) m for %.0f s, at %.2f m "
+                  "above the deck",
+                  tick_s, back.x(), back.y(), kLoseLowBlackout_s, rel->skid_height_m);
+    launch_.say(buf);
+    blackout(tick_s, kLoseLowBlackout_s, "low, off the centre");
+  }
+  if (glitch_clear_s_ >= 0.0 && tick_s >= glitch_clear_s_) {
+    glitch_clear_s_ = -1.0;
+    if (!api.request(
+            {{"op", "gps_glitch"}, {"vehicle", "uav0"}, {"offset_enu_m", {0.0, 0.0, 0.0}}})) {
+      fail("gps_glitch refused");
+    }
+    launch_.say("[fault] GPS of uav0 back");
+  }
+  // the program's state changes stamped before the tick: the blackouts they trigger
+  for (auto it = pending_states_.begin(); it != pending_states_.end();) {
+    if (it->first >= tick_s - 1e-9) {
+      ++it;
+      continue;
+    }
+    const std::string state = it->second;
+    it = pending_states_.erase(it);
+    uav_state_ = state;
+    double duration = 0.0;
+    if (o_.blackout_first_pass && state == "Intercept" && first_blackout_s_ < 0) {
+      duration = kFirstPassBlackout_s;
+      first_blackout_s_ = tick_s;
+    } else if (o_.lose_in_approach && state == "Approach" && approach_blackout_s_ < 0) {
+      duration = kApproachBlackout_s;
+      approach_blackout_s_ = tick_s;
+    }
+    if (duration > 0.0) blackout(tick_s, duration, state);
+  }
+}
+
+void LandingRun::on_tick(double tick_s) {
+  track_near_miss(tick_s);
+  inject_faults(tick_s);
+  sim_s_ = tick_s;
+  launch_.note_sim_time(sim_s_);
+}
+
+void LandingRun::poll_status() {
+  if (launch_.wall_s() - last_status_wall_s_ <= 0.5) return;
+  last_status_wall_s_ = launch_.wall_s();
+  SimConnection& api = launch_.api();
+  if (const auto s = api.status(); s) {
+    sim_s_ = s->value("time_s", sim_s_);
+    launch_.note_sim_time(sim_s_);
+    // the program exits 3 s after its landing and the clock holds then (pause_at): go on to the
+    // 5 s on the deck, where the next armed pause holds it again (never the budget's own pause:
+    // this poll runs on wall time, so a resume there made the end depend on whether a poll fell
+    // between that pause and the budget check below: a run with a 40 s budget that landed at
+    // 38.6 s ended at 40 s or, resumed, at 41.9 s)
+    if (landed_s_ >= 0 && s->value("paused", false) &&
+        sim_s_ < landed_s_ + kStayOnDeck_s - kPauseSlack_s &&
+        sim_s_ < o_.start_time_s + o_.budget_s - kPauseSlack_s)
+      (void)api.resume();
+  }
+}
+
+bool LandingRun::run_over() {
+  // scored: still on the deck 5 s after touchdown
+  if (on_deck_long_enough(sim_s_)) return true;
+  if (launch_.programs_done() && landed_s_ < 0) return true;
+  if (uavsim::launch::interrupted()) return true;
+  if (sim_s_ >= o_.start_time_s + o_.budget_s - kPauseSlack_s) {
+    launch_.say("mbzirc2017-run: sim-time budget spent");
+    return true;
+  }
+  std::string failure;
+  if (uavsim::launch::run_must_end(launch_, "mbzirc2017-run", o_.wall_limit_s, &failure)) {
+    if (!failure.empty()) fail(failure);
+    return true;
+  }
+  return false;
+}
+
+// 3. follow the program and the event stream until it has landed (and 5 s more), it gave up, or
+// the budget is spent
+void LandingRun::follow() {
+  SimConnection& api = launch_.api();
+  while (!failed_) {
+    launch_.pump(ticks_.empty() ? 50 : 0);
+    for (const SimMessage& m : api.take_messages()) {
+      if (m.kind() == "sim_event") on_sim_event(m.json);
+    }
+    // the fault injector: at each tick, act on the program's state changes stamped before it
+    // (requests below may read further ticks into ticks_: they wait for the next pass)
+    const std::vector<std::pair<std::int64_t, double>> due = std::move(ticks_);
+    ticks_.clear();
+    for (const auto& [tick, tick_s] : due) {
+      on_tick(tick_s);
+      // the first tick 5 s after touchdown ends the run: it is not answered, so the clock stays
+      // at it, and is paused there, before the launcher leaves the lockstep below. (Answered, the
+      // clock went on towards the armed pause_at while the leave was on its way, and where it
+      // stopped, 4 ms apart, depended on which came first: one run of a 100-seed sweep ended at
+      // 44.204 s, its twin at 44.200 s.)
+      if (on_deck_long_enough(tick_s)) break;
+      if (!api.done(tick)) fail("the fault injector's done was refused");
+    }
+    poll_status();
+    if (run_over()) break;
+  }
+}
+
+void LandingRun::finish() {
+  SimConnection& api = launch_.api();
+  // Landed and 5 s on: the clock is held at that tick (unanswered). Pause it there before leaving.
+  // Leaving alone let the end depend on a race between two sockets: the ground-truth recorder,
+  // handling the same tick on its own connection, either still saw this client (answered, and the
+  // clock went on to the armed pause_at 8 ms later) or already saw it gone (left too, and the
+  // empty-lockstep pause held the clock at the tick): seed 10 of a 100-seed sweep ended at 44.4 s
+  // on SLURM and 44.408 s locally.
+  if (on_deck_long_enough(sim_s_)) (void)api.pause();
+  (void)api.lockstep_leave();
+  // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
+  // stands)
+  for (const double until_s = launch_.wall_s() + 10.0;
+       !failed_ && !uavsim::launch::interrupted() && launch_.wall_s() < until_s; launch_.pump(10)) {
+    const auto st = api.status();
+    if (!st || st->value("paused", false)) break;
+  }
+  if (!o_.events_path.empty()) {
+    if (const auto ev = api.request({{"op", "events"}}); ev) {
+      std::ofstream f(o_.events_path);
+      for (const Json& e : ev->at("events")) f << e.dump() << "\n";
+    }
+  }
+  score();
+}
+
+// 4. score from ground truth
+void LandingRun::score() {
+  SimConnection& api = launch_.api();
+  if (const auto t = api.truck(); t) {
+    end_sim_s_ = t->value("time_s", 0.0);
+    for (const Json& truck : t->at("trucks")) {
+      for (const Json& c : truck.value("carried_vehicles", Json::array()))
+        stayed_on_deck_ = stayed_on_deck_ || c == 0;
+    }
+  }
+  for (const SimMessage& m : api.take_messages()) {
+    if (m.kind() == "sim_event" && m.json.value("type", "") == "crash") {
+      crashes_.push_back(m.json.value("vehicle_name", "") + ": " + m.json.value("detail", ""));
+    }
+  }
+  stayed_on_deck_ = stayed_on_deck_ && on_deck_long_enough(end_sim_s_);
+}
+
+void LandingRun::clean_up() const {
+  if (world_ != o_.world) std::remove(world_.c_str());
+}
+
+bool LandingRun::success() const {
+  return !failed_ && !uavsim::launch::interrupted() && landed_s_ >= 0 && stayed_on_deck_ &&
+         crashes_.empty();
+}
+
+int truck_contacts(const std::vector<std::string>& crashes) {
+  int n = 0;  // crashes into any truck part (the deck is never a crash)
+  for (const std::string& c : crashes) n += c.find("truck/") != std::string::npos;
+  return n;
+}
+
+void LandingRun::print_summary(bool success) const {
+  const bool landed = landed_s_ >= 0;
+  std::printf("==== MBZIRC 2017 landing on the moving truck, seed %llu ====\n",
+              static_cast<unsigned long long>(o_.seed));
+  std::printf(
+      "landed on the deck: %s%s\n", landed ? "yes" : "no",
+      landed ? (stayed_on_deck_ ? " (still on it 5 s later)" : " (NOT on it 5 s later)") : "");
+  if (mission_s() >= 0) {
+    std::printf("take-off to touchdown: %.1f s sim (take-off t=%.1f s, touchdown t=%.1f s)\n",
+                mission_s(), takeoff_s_, landed_s_);
+    std::printf("relative speed at touchdown: %.2f m/s; distance from the marker centre: %.2f m\n",
+                relative_speed_m_s_, marker_distance_m_);
+  } else {
+    std::printf("take-off to touchdown: n/a\n");
+  }
+  // the near misses (ground truth at every tick) and where on the eight
+  const std::optional<double> cab_clearance = near_miss_->min_clearance_m("cab");
+  const std::optional<double> deck_margin = near_miss_->min_deck_edge_margin_m();
+  std::printf(
+      "start: t=%.1f s%s; truck at %.1f km/h; approach began on the %s, touchdown on the %s\n",
+      o_.start_time_s,
+      o_.start_phase ? (" (" + std::to_string(*o_.start_phase) + " of a lap)").c_str() : "",
+      truck_kmh(), part_at_approach_.empty() ? "-" : part_at_approach_.c_str(),
+      part_at_touchdown_.empty() ? "-" : part_at_touchdown_.c_str());
+  std::printf(
+      "near misses: cab clearance min %s m; skids to the deck's edges min %s m; %d climb-away(s); "
+      "%d step(s) of the position estimate noticed\n",
+      cab_clearance ? std::to_string(*cab_clearance).c_str() : "-",
+      deck_margin ? std::to_string(*deck_margin).c_str() : "-", climb_aways_, estimate_steps_);
+  std::printf("crashes: %s\n", crashes_.empty() ? "none" : "");
+  for (const std::string& c : crashes_) std::printf("  %s\n", c.c_str());
+  std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s_, launch_.wall_s());
+  std::printf("video: %s\n", o_.record.empty() ? "none" : o_.record.c_str());
+  if (!vision_log_.empty()) {
+    std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", vision_log_.c_str(),
+                vision_log_.c_str());
+  }
+  if (!o_.run_dir.empty()) {
+    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n",
+                o_.run_dir.c_str(), static_cast<unsigned long long>(launch_.truth_rows()),
+                o_.run_dir.c_str());
+  }
+  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
+              uavsim::launch::interrupted() ? " (interrupted)" : "");
+  std::fflush(stdout);
+}
+
+Json LandingRun::summary_json(bool success) const {
+  const std::optional<double> cab_clearance = near_miss_->min_clearance_m("cab");
+  const std::optional<double> deck_margin = near_miss_->min_deck_edge_margin_m();
+  Json summary;
+  summary["mission"] = "mbzirc2017";
+  summary["run_dir"] = o_.run_dir;
+  summary["video"] = o_.record;
+  summary["vision_log"] = vision_log_;
+  summary["seed"] = o_.seed;
+  summary["truck_speed_kmh"] = truck_kmh();
+  summary["start_time_s"] = o_.start_time_s;
+  summary["start_phase"] = o_.start_phase ? Json(*o_.start_phase) : Json(nullptr);
+  summary["eight_part_at_approach"] =
+      part_at_approach_.empty() ? Json(nullptr) : Json(part_at_approach_);
+  summary["eight_part_at_touchdown"] =
+      part_at_touchdown_.empty() ? Json(nullptr) : Json(part_at_touchdown_);
+  Json clearance = Json::object();
+  for (const auto& [part, m] : near_miss_->min_clearance_m()) clearance[part] = m;
+  summary["min_clearance_m"] = clearance;
+  summary["min_cab_clearance_m"] = cab_clearance ? Json(*cab_clearance) : Json(nullptr);
+  summary["min_deck_edge_margin_m"] = deck_margin ? Json(*deck_margin) : Json(nullptr);
+  summary["truck_contacts"] = truck_contacts(crashes_);
+  summary["climb_aways"] = climb_aways_;
+  summary["estimate_steps"] = estimate_steps_;
+  Json random_blackouts = Json::array();
+  for (const auto& [at_s, duration_s] : blackouts_)
+    random_blackouts.push_back({{"at_s", at_s}, {"duration_s", duration_s}});
+  summary["random_blackouts"] = random_blackouts;
+  summary["landed"] = landed_s_ >= 0;
+  summary["stayed_on_deck"] = stayed_on_deck_;
+  summary["takeoff_time_s"] = takeoff_s_;
+  summary["touchdown_time_s"] = landed_s_;
+  summary["mission_time_s"] = mission_s();
+  summary["relative_speed_m_s"] = relative_speed_m_s_;
+  summary["marker_distance_m"] = marker_distance_m_;
+  summary["crashes"] = crashes_;
+  summary["states"] = states_;
+  summary["blackout_first_pass_at_s"] = first_blackout_s_;
+  summary["blackout_approach_at_s"] = approach_blackout_s_;
+  summary["lose_low_off_centre_at_s"] = lose_low_at_s_;
+  summary["sim_time_s"] = end_sim_s_;
+  summary["wall_time_s"] = launch_.wall_s();
+  summary["success"] = success;
+  return summary;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -254,582 +893,28 @@ int main(int argc, char** argv) {
   o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2017.xml";
   o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2017-uav");
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    const char* v = nullptr;
-    if (a == "--quiet") {
-      o.quiet = true;
-    } else if (a == "--blackout-first-pass") {
-      o.blackout_first_pass = true;
-    } else if (a == "--lose-in-approach") {
-      o.lose_in_approach = true;
-    } else if (a == "--lose-low-off-centre") {
-      o.lose_low_off_centre = true;
-    } else if (a == "--no-record") {
-      o.no_record = true;
-    } else if (a == "--no-run-dir") {
-      o.run_dir = "none";
-    } else if (a == "--help" || a == "-h") {
-      return usage();
-    } else if ((v = next()) == nullptr) {
-      return usage();
-    } else if (a == "--seed") {
-      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
-    } else if (a == "--truck-speed-kmh") {
-      if (std::string(v) == "random") {
-        o.random_truck_speed = true;
-      } else if (!parse_double(v, 0.0, kMaxKmh, &o.truck_speed_kmh)) {
-        return usage();
-      }
-    } else if (a == "--phase") {
-      if (std::string(v) == "slow") {
-        o.start_time_s = 480.0;
-        o.slow_phase = true;
-      } else if (std::string(v) != "fast") {
-        return usage();
-      }
-    } else if (a == "--start-phase") {
-      double f = 0.0;
-      if (std::string(v) == "random") {
-        o.random_start_phase = true;
-      } else if (parse_double(v, 0.0, 1.0, &f)) {
-        o.start_phase = f;
-      } else {
-        return usage();
-      }
-    } else if (a == "--random-blackouts") {
-      if (!parse_integer<int>(v, 0, kMaxBlackouts, &o.random_blackouts)) return usage();
-    } else if (a == "--start-time") {
-      if (!parse_double(v, 0.0, kMaxStart_s, &o.start_time_s)) return usage();
-    } else if (a == "--record") {
-      o.record = v;
-    } else if (a == "--json") {
-      o.json_path = v;
-    } else if (a == "--run-dir") {
-      o.run_dir = v;
-    } else if (a == "--record-camera") {
-      o.record_camera = v;
-    } else if (a == "--record-layout") {
-      o.record_layout = v;
-    } else if (a == "--truth-hz") {
-      if (!parse_double(v, 0.01, 1000.0, &o.truth_hz)) return usage();
-    } else if (a == "--events") {
-      o.events_path = v;
-    } else if (a == "--realism") {
-      o.realism = v;
-    } else if (a == "--wind") {
-      o.wind = v;
-    } else if (a == "--budget") {
-      if (!parse_double(v, 1.0, 36000.0, &o.budget_s)) return usage();
-    } else if (a == "--wall-limit") {
-      if (!parse_double(v, 1.0, 86400.0, &o.wall_limit_s)) return usage();
-    } else if (a == "--world") {
-      o.world = v;
-    } else if (a == "--server") {
-      o.server = v;
-    } else if (a == "--uav") {
-      o.uav = v;
-    } else {
-      return usage();
-    }
-  }
-
-  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2017", o.seed, o.run_dir,
-                                                           o.record, o.json_path, !o.no_record);
-      !files) {
-    std::fprintf(stderr, "mbzirc2017-run: %s\n", files.message().c_str());
-    return 2;
-  } else {
-    o.run_dir = files->dir;
-    o.record = files->video;
-    o.json_path = files->summary;
-  }
+  if (!parse_options(argc, argv, &o)) return usage();
+  if (!uavsim::launch::resolve_run_files("mbzirc2017", &o, !o.no_record)) return 2;
   uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2017-run", o.quiet);
   launch.keep_summary(o.json_path,
                       {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
-  int harness_error = 0;
-  auto fail = [&](const std::string& why) {
-    std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
-    harness_error = 4;
-  };
-  // where on the eight the UAV starts: a fraction of a lap at the speed of its phase
-  if (o.random_truck_speed) {
-    o.truck_speed_kmh = kMinRuleKmh + (kMaxRuleKmh - kMinRuleKmh) * seeded_uniform(o.seed, 100);
-  }
-  TruckSchedule schedule;
-  if (std::string why; !read_truck_schedule(o.world, &schedule, &why)) {
-    std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
-    return 2;
-  }
-  if (o.truck_speed_kmh > 0.0) schedule.speed1_kmh = o.truck_speed_kmh;
-  const uavsim::vision::EightTrack track(schedule.track);
-  if (o.random_start_phase) o.start_phase = seeded_uniform(o.seed, 0);
-  if (o.start_phase) {
-    const double kmh = o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh;
-    o.start_time_s =
-        (o.slow_phase ? schedule.switch_s : 0.0) + *o.start_phase * track.length_m() / (kmh / 3.6);
-    if (!o.slow_phase && o.start_time_s > schedule.switch_s) {
-      std::fprintf(stderr, "mbzirc2017-run: a lap at %.1f km/h is longer than the first phase\n",
-                   kmh);
-      return 2;
-    }
-  }
-  // the random blackouts: (time, duration), in time order
-  std::vector<std::pair<double, double>> blackouts;
-  for (int k = 0; k < o.random_blackouts; ++k) {
-    blackouts.emplace_back(
-        o.start_time_s + kBlackoutFrom_s +
-            (kBlackoutTo_s - kBlackoutFrom_s) * seeded_uniform(o.seed, 1 + 2 * k),
-        kBlackoutMin_s + (kBlackoutMax_s - kBlackoutMin_s) * seeded_uniform(o.seed, 2 + 2 * k));
-  }
-  std::sort(blackouts.begin(), blackouts.end());
-  size_t next_blackout = 0;
-  // the near misses, from the models the simulator collides
-  std::optional<uavsim::missions::mbzirc2017::NearMissTracker> near_miss;
-  try {
-    near_miss.emplace(
-        uavsim::missions::mbzirc2017::load_truck_shape(
-            uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/objects/truck.xml"),
-        uavsim::missions::mbzirc2017::load_vehicle_shape(
-            uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/vehicles/hexa.xml"));
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "mbzirc2017-run: %s\n", e.what());
-    return 2;
-  }
-  std::string part_at_approach, part_at_touchdown;  // where on the eight
-  std::optional<double> approach_s;                 // the first Approach's time (program output)
-  double truck_s_m = 0.0;                           // the truck's arc length at the latest tick
-  std::map<double, double> truck_s_by_tick_m;  // ... and at the ticks of the last kTruckHistory_s
-  int climb_aways = 0;
-  int estimate_steps = 0;  // the program's "position estimate stepped" (a GPS jump it noticed)
-
-  std::string world = o.world;
-  if (o.truck_speed_kmh > 0.0) {
-    world = world_with_speed(o.world, o.truck_speed_kmh, o.seed);
-    if (world.empty()) {
-      fail("cannot write a world with the truck at " + std::to_string(o.truck_speed_kmh) + " km/h");
-      return 4;
-    }
-  }
-
-  // the ground truth the summary is scored from
-  double takeoff_s = -1.0, landed_s = -1.0, relative_speed_m_s = -1.0, marker_distance_m = -1.0;
-  // the run's scored end: landed, and sim time t is 5 s after the touchdown (to a pause's slack)
-  const auto on_deck_long_enough = [&](double t) {
-    return landed_s >= 0 && t >= landed_s + kStayOnDeck_s - kPauseSlack_s;
-  };
-  double end_sim_s = 0.0;
-  bool stayed_on_deck = false;
-  std::vector<std::string> crashes, states;
-  std::string vision_log;  // the UAV program's video log, in the run directory
-  double first_blackout_s = -1.0, approach_blackout_s = -1.0;  // when the faults were injected
-  double lose_low_at_s = -1.0;
-  std::string uav_state;  // the program's state, as of its output stamped before the latest tick
-  double glitch_clear_s = -1.0;  // when --lose-low-off-centre's GPS offset ends (-1: none)
-
-  uavsim::launch::ServerSpec spec;
-  spec.path = o.server;
-  spec.world = world;
-  spec.extra_args = {"--seed", std::to_string(o.seed)};
-  if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(),
-                           {"--record", o.record, "--record-camera", o.record_camera,
-                            "--record-layout", o.record_layout});
-  }
-  if (!o.run_dir.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
-    launch.record_truth(o.run_dir, o.truth_hz);
-  }
-  if (!o.realism.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--realism", o.realism});
-  if (!o.wind.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--wind", o.wind});
-  if (auto started = launch.start_server(spec); !started) {
-    fail(started.message());
-  } else if (launch.mavlink_port("uav0") == 0) {
-    fail("the server did not start (no MAVLink port for uav0)");
-  }
+  LandingRun run(launch, o);
+  if (const int code = run.prepare(); code != 0) return code;
+  run.start_server();
   // the launcher always joins the lockstep: it scores the near misses at every tick (and injects
   // the faults there)
-  std::vector<std::pair<std::int64_t, double>> ticks;  // the fault injector's ticks (number, time)
-  std::vector<std::pair<double, std::string>>
-      pending_states;  // from the UAV's output, not yet acted on
-  if (!harness_error) {
-    SimConnection& api = launch.api();
-    // 1. hold the clock, start from t = 0 with this seed; the truck alone drives to the start time
-    if (!api.pause() || !api.reset(o.seed) || !api.subscribe_events()) {
-      fail("the server refused the setup requests (pause, reset, subscribe_events)");
-    } else if (o.start_time_s > 0.0 &&
-               !api.step_for(o.start_time_s, std::max(60.0, o.start_time_s))) {
-      fail("the server did not run to the start time");
-    } else if (!api.request({{"op", "pause_at"},
-                             {"time_s", o.start_time_s + o.budget_s},
-                             {"lockstep_empty", true}})) {
-      // the clock stops by itself at the end (budget spent, the program gone, or 5 s on the deck):
-      // the end of the run is the same every run
-      fail("the server refused pause_at");
-    }
-    launch.on_line([&](const std::string& child, const std::string& line) {
-      if (child != "uav0") return;
-      if (line.find("climb-away:") != std::string::npos) ++climb_aways;
-      if (line.find("position estimate stepped") != std::string::npos) ++estimate_steps;
-      if (auto s = state_change(line)) {
-        if (s->second == "Approach" && !approach_s) approach_s = s->first;
-        states.push_back(s->second);
-        pending_states.push_back(*s);
-      }
-    });
-    // 2. the UAV program (and the fault injector) on the lockstep clock, then let the clock go
-    if (!harness_error) {
-      std::vector<std::string> argv{o.uav, "--mavlink",
-                                    "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port("uav0"))};
-      if (!o.run_dir.empty()) {
-        // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
-        vision_log = o.run_dir + "/uav0_vision.vlog";
-        argv.insert(argv.end(), {"--video-log", vision_log});
-      }
-      auto u = launch.spawn("uav0", argv, {launch.lockstep_env(kLockstepPeriod_s)});
-      if (!u) fail(u.message());
-    }
-    if (!harness_error) {
-      api.on_message("tick", [&](const SimMessage& m) {
-        ticks.emplace_back(m.json.value("tick", std::int64_t{0}), m.json.value("time", 0.0));
-      });
-      if (!api.lockstep_join(kLockstepPeriod_s, 120.0))
-        fail("the launcher could not join the lockstep");
-    }
-    if (!harness_error) {
-      if (auto w = launch.wait_lockstep_clients(2, 120.0); !w) {
-        fail("the UAV program did not join the lockstep");
-      } else if (!api.resume()) {
-        fail("resume refused");
-      } else {
-        launch.say("mbzirc2017-run: seed " + std::to_string(o.seed) +
-                   ", UAV starts at t=" + std::to_string(static_cast<int>(o.start_time_s)) +
-                   " s, budget " + std::to_string(static_cast<int>(o.budget_s)) + " s sim");
-      }
-    }
-
-    // 3. follow the program and the event stream until it has landed (and 5 s more), it gave up, or
-    // the budget is spent
-    double sim_s = o.start_time_s, last_status_wall_s = 0.0;
-    double truck_yaw_rad = 0.0;  // at the latest tick
-    auto blackout = [&](double tick_s, double duration_s, const std::string& why) {
-      if (!api.request(
-              {{"op", "camera_blackout"}, {"camera", "uav0_down"}, {"duration_s", duration_s}})) {
-        fail("camera_blackout refused");
-      }
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), "[fault] t=%.2f camera uav0_down black for %.1f s (%s)",
-                    tick_s, duration_s, why.c_str());
-      launch.say(buf);
-    };
-    while (!harness_error) {
-      launch.pump(ticks.empty() ? 50 : 0);
-      for (const SimMessage& m : api.take_messages()) {
-        if (m.kind() != "sim_event") continue;
-        const Json& e = m.json;
-        const std::string type = e.value("type", ""), vehicle = e.value("vehicle_name", "");
-        const std::string detail = e.value("detail", "");
-        const double t = e.value("time", 0.0);
-        if (type == "takeoff" && takeoff_s < 0) takeoff_s = t;
-        if (type == "crash")
-          crashes.push_back(vehicle + " at " + std::to_string(t) + " s: " + detail);
-        if (type == "landed_on_target" && landed_s < 0) {
-          landed_s = t;
-          part_at_touchdown = uavsim::missions::mbzirc2017::eight_part(track, truck_s_m);
-          // the clock is then still short of t + 5 s (a few ms of wall time at full speed)
-          const auto r = api.request({{"op", "pause_at"}, {"time_s", t + kStayOnDeck_s}});
-          if (r && r->value("time_s", 0.0) > t + kStayOnDeck_s) {
-            launch.say("mbzirc2017-run: the end-of-run pause came late (the run's end may vary)");
-          }
-          std::smatch mm;
-          static const std::regex re(
-              R"(relative speed ([0-9.]+) m/s, ([0-9.]+) m from the marker centre)");
-          if (std::regex_search(detail, mm, re)) {
-            relative_speed_m_s = std::stod(mm[1]);
-            marker_distance_m = std::stod(mm[2]);
-          }
-        }
-        if (type == "crash" || type == "takeoff" || type == "touchdown" ||
-            type == "landed_on_target" || type == "disarmed") {
-          char buf[320];
-          std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(),
-                        vehicle.c_str(), detail.c_str());
-          launch.say(buf);
-        }
-      }
-      // the fault injector: at each tick, act on the program's state changes stamped before it
-      // (requests below may read further ticks into `ticks`: they wait for the next pass)
-      const std::vector<std::pair<std::int64_t, double>> due = std::move(ticks);
-      ticks.clear();
-      for (const auto& [tick, tick_s] : due) {
-        // the near misses from the ground truth at the tick (the clock holds until done)
-        if (const auto v = api.request({{"op", "vehicles"}}), t = api.truck(); v && t) {
-          for (const Json& veh : v->value("vehicles", Json::array())) {
-            if (veh.value("name", "") != "uav0") continue;
-            for (const Json& k : t->value("trucks", Json::array())) {
-              const auto p = veh.value("position_enu_m", std::vector<double>{});
-              const auto q = veh.value("q_enu_body", std::vector<double>{});
-              const auto tp = k.value("position_enu_m", std::vector<double>{});
-              if (p.size() != 3 || q.size() != 4 || tp.size() != 3) continue;
-              near_miss->add(Eigen::Vector3d(p[0], p[1], p[2]),
-                             Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized(),
-                             Eigen::Vector3d(tp[0], tp[1], tp[2]), k.value("yaw_rad", 0.0));
-              truck_s_m = k.value("s_m", 0.0);
-              truck_yaw_rad = k.value("yaw_rad", 0.0);
-              // the part of the eight at the approach's own tick: the program's line stamped with
-              // it may come in before or after that tick is handled here (the two processes get the
-              // tick at once), so it is looked up in the recent ticks, not taken from the tick it
-              // meets
-              truck_s_by_tick_m[tick_s] = truck_s_m;
-              truck_s_by_tick_m.erase(truck_s_by_tick_m.begin(),
-                                      truck_s_by_tick_m.lower_bound(tick_s - kTruckHistory_s));
-              if (approach_s && part_at_approach.empty()) {
-                const auto at = truck_s_by_tick_m.upper_bound(*approach_s + 1e-9);
-                if (at != truck_s_by_tick_m.begin()) {
-                  part_at_approach =
-                      uavsim::missions::mbzirc2017::eight_part(track, std::prev(at)->second);
-                }
-              }
-            }
-          }
-        }
-        // the random blackouts due by this tick
-        for (; next_blackout < blackouts.size() && blackouts[next_blackout].first <= tick_s;
-             ++next_blackout) {
-          blackout(tick_s, blackouts[next_blackout].second, "random");
-        }
-        // the marker lost low and off the centre: GPS 1 m towards the truck's rear, camera black
-        if (const auto rel = near_miss->latest();
-            o.lose_low_off_centre && lose_low_at_s < 0 && uav_state == "Approach" && rel &&
-            rel->skid_height_m <= kLoseLowHeight_m &&
-            rel->p_truck_m.head<2>().norm() <= kOverTheDeck_m) {
-          lose_low_at_s = tick_s;
-          const Eigen::Vector2d back =
-              -kLoseLowGlitch_m * Eigen::Vector2d(std::cos(truck_yaw_rad), std::sin(truck_yaw_rad));
-          if (!api.request({{"op", "gps_glitch"},
-                            {"vehicle", "uav0"},
-                            {"offset_enu_m", {back.x(), back.y(), 0.0}}})) {
-            fail("gps_glitch refused");
-          }
-          glitch_clear_s = tick_s + kLoseLowBlackout_s;
-          char buf[200];
-          std::snprintf(buf, sizeof(buf),
-                        "[fault] t=%.2f GPS of uav0 off by (%+.2f, %+.2f) m for %.0f s, at %.2f m "
-                        "above the deck",
-                        tick_s, back.x(), back.y(), kLoseLowBlackout_s, rel->skid_height_m);
-          launch.say(buf);
-          blackout(tick_s, kLoseLowBlackout_s, "low, off the centre");
-        }
-        if (glitch_clear_s >= 0.0 && tick_s >= glitch_clear_s) {
-          glitch_clear_s = -1.0;
-          if (!api.request(
-                  {{"op", "gps_glitch"}, {"vehicle", "uav0"}, {"offset_enu_m", {0.0, 0.0, 0.0}}})) {
-            fail("gps_glitch refused");
-          }
-          launch.say("[fault] GPS of uav0 back");
-        }
-        for (auto it = pending_states.begin(); it != pending_states.end();) {
-          if (it->first >= tick_s - 1e-9) {
-            ++it;
-            continue;
-          }
-          const std::string state = it->second;
-          it = pending_states.erase(it);
-          uav_state = state;
-          double duration = 0.0;
-          if (o.blackout_first_pass && state == "Intercept" && first_blackout_s < 0) {
-            duration = kFirstPassBlackout_s;
-            first_blackout_s = tick_s;
-          } else if (o.lose_in_approach && state == "Approach" && approach_blackout_s < 0) {
-            duration = kApproachBlackout_s;
-            approach_blackout_s = tick_s;
-          }
-          if (duration > 0.0) blackout(tick_s, duration, state);
-        }
-        sim_s = tick_s;
-        launch.note_sim_time(sim_s);
-        // the first tick 5 s after touchdown ends the run: it is not answered, so the clock stays at
-        // it, and is paused there, before the launcher leaves the lockstep below. (Answered, the
-        // clock went on towards the armed pause_at while the leave was on its way, and where it
-        // stopped, 4 ms apart, depended on which came first: one run of a 100-seed sweep ended at
-        // 44.204 s, its twin at 44.200 s.)
-        if (on_deck_long_enough(tick_s)) break;
-        if (!api.done(tick)) fail("the fault injector's done was refused");
-      }
-      if (launch.wall_s() - last_status_wall_s > 0.5) {
-        last_status_wall_s = launch.wall_s();
-        if (const auto s = api.status(); s) {
-          sim_s = s->value("time_s", sim_s);
-          launch.note_sim_time(sim_s);
-          // the program exits 3 s after its landing and the clock holds then (pause_at): go on to
-          // the 5 s on the deck, where the next armed pause holds it again
-          // (never the budget's own pause: this poll runs on wall time, so a resume there made the
-          // end depend on whether a poll fell between that pause and the budget check below: a run
-          // with a 40 s budget that landed at 38.6 s ended at 40 s or, resumed, at 41.9 s)
-          if (landed_s >= 0 && s->value("paused", false) &&
-              sim_s < landed_s + kStayOnDeck_s - kPauseSlack_s &&
-              sim_s < o.start_time_s + o.budget_s - kPauseSlack_s)
-            (void)api.resume();
-        }
-      }
-      // scored: still on the deck 5 s after touchdown
-      if (on_deck_long_enough(sim_s)) break;
-      if (launch.programs_done() && landed_s < 0) break;
-      if (uavsim::launch::interrupted()) break;
-      if (sim_s >= o.start_time_s + o.budget_s - kPauseSlack_s) {
-        launch.say("mbzirc2017-run: sim-time budget spent");
-        break;
-      }
-      if (launch.wall_s() > o.wall_limit_s) {
-        launch.say("mbzirc2017-run: wall-clock limit reached");
-        break;
-      }
-      if (launch.server_exited()) {
-        fail(launch.server_end());
-        break;
-      }
-      if (!launch.records_error().empty()) {
-        fail("the run's records cannot be written: " + launch.records_error());
-        break;
-      }
-    }
-    // Landed and 5 s on: the clock is held at that tick (unanswered). Pause it there before leaving.
-    // Leaving alone let the end depend on a race between two sockets: the ground-truth recorder,
-    // handling the same tick on its own connection, either still saw this client (answered, and the
-    // clock went on to the armed pause_at 8 ms later) or already saw it gone (left too, and the
-    // empty-lockstep pause held the clock at the tick): seed 10 of a 100-seed sweep ended at 44.4 s
-    // on SLURM and 44.408 s locally.
-    if (on_deck_long_enough(sim_s)) (void)api.pause();
-    (void)api.lockstep_leave();
-    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
-    // stands)
-    for (const double until_s = launch.wall_s() + 10.0;
-         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
-         launch.pump(10)) {
-      const auto st = api.status();
-      if (!st || st->value("paused", false)) break;
-    }
-    if (!o.events_path.empty()) {
-      if (const auto ev = api.request({{"op", "events"}}); ev) {
-        std::ofstream f(o.events_path);
-        for (const Json& e : ev->at("events")) f << e.dump() << "\n";
-      }
-    }
-
-    // 4. score from ground truth
-    if (const auto t = api.truck(); t) {
-      end_sim_s = t->value("time_s", 0.0);
-      for (const Json& truck : t->at("trucks")) {
-        for (const Json& c : truck.value("carried_vehicles", Json::array()))
-          stayed_on_deck = stayed_on_deck || c == 0;
-      }
-    }
-    for (const SimMessage& m : api.take_messages()) {
-      if (m.kind() == "sim_event" && m.json.value("type", "") == "crash") {
-        crashes.push_back(m.json.value("vehicle_name", "") + ": " + m.json.value("detail", ""));
-      }
-    }
-    stayed_on_deck =
-        stayed_on_deck && on_deck_long_enough(end_sim_s);
+  if (!run.failed()) {
+    run.set_up();
+    run.follow();
+    run.finish();
   }
   launch.stop_all(60.0);
-  if (world != o.world) std::remove(world.c_str());
-
-  const bool landed = landed_s >= 0;
-  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && landed &&
-                       stayed_on_deck && crashes.empty();
-  const double mission_s = landed && takeoff_s >= 0 ? landed_s - takeoff_s : -1.0;
-  std::printf("==== MBZIRC 2017 landing on the moving truck, seed %llu ====\n",
-              static_cast<unsigned long long>(o.seed));
-  std::printf(
-      "landed on the deck: %s%s\n", landed ? "yes" : "no",
-      landed ? (stayed_on_deck ? " (still on it 5 s later)" : " (NOT on it 5 s later)") : "");
-  if (mission_s >= 0) {
-    std::printf("take-off to touchdown: %.1f s sim (take-off t=%.1f s, touchdown t=%.1f s)\n",
-                mission_s, takeoff_s, landed_s);
-    std::printf("relative speed at touchdown: %.2f m/s; distance from the marker centre: %.2f m\n",
-                relative_speed_m_s, marker_distance_m);
-  } else {
-    std::printf("take-off to touchdown: n/a\n");
-  }
-  // the near misses (ground truth at every tick) and where on the eight
-  const std::optional<double> cab_clearance = near_miss->min_clearance_m("cab");
-  const std::optional<double> deck_margin = near_miss->min_deck_edge_margin_m();
-  int truck_contacts = 0;  // crashes into any truck part (the deck is never a crash)
-  for (const std::string& c : crashes) truck_contacts += c.find("truck/") != std::string::npos;
-  std::printf(
-      "start: t=%.1f s%s; truck at %.1f km/h; approach began on the %s, touchdown on the %s\n",
-      o.start_time_s,
-      o.start_phase ? (" (" + std::to_string(*o.start_phase) + " of a lap)").c_str() : "",
-      o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh,
-      part_at_approach.empty() ? "-" : part_at_approach.c_str(),
-      part_at_touchdown.empty() ? "-" : part_at_touchdown.c_str());
-  std::printf(
-      "near misses: cab clearance min %s m; skids to the deck's edges min %s m; %d climb-away(s); "
-      "%d step(s) of the position estimate noticed\n",
-      cab_clearance ? std::to_string(*cab_clearance).c_str() : "-",
-      deck_margin ? std::to_string(*deck_margin).c_str() : "-", climb_aways, estimate_steps);
-  std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
-  for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
-  std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
-  std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
-  if (!vision_log.empty()) {
-    std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", vision_log.c_str(),
-                vision_log.c_str());
-  }
-  if (!o.run_dir.empty()) {
-    std::printf("run directory: %s (%llu ground-truth rows; plots: scripts/plot_run.py %s)\n",
-                o.run_dir.c_str(), static_cast<unsigned long long>(launch.truth_rows()),
-                o.run_dir.c_str());
-  }
-  std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
-              uavsim::launch::interrupted() ? " (interrupted)" : "");
-  std::fflush(stdout);
-
-  if (!o.json_path.empty()) {
-    Json summary;
-    summary["mission"] = "mbzirc2017";
-    summary["run_dir"] = o.run_dir;
-    summary["video"] = o.record;
-    summary["vision_log"] = vision_log;
-    summary["seed"] = o.seed;
-    summary["truck_speed_kmh"] = o.slow_phase ? schedule.speed2_kmh : schedule.speed1_kmh;
-    summary["start_time_s"] = o.start_time_s;
-    summary["start_phase"] = o.start_phase ? Json(*o.start_phase) : Json(nullptr);
-    summary["eight_part_at_approach"] =
-        part_at_approach.empty() ? Json(nullptr) : Json(part_at_approach);
-    summary["eight_part_at_touchdown"] =
-        part_at_touchdown.empty() ? Json(nullptr) : Json(part_at_touchdown);
-    Json clearance = Json::object();
-    for (const auto& [part, m] : near_miss->min_clearance_m()) clearance[part] = m;
-    summary["min_clearance_m"] = clearance;
-    summary["min_cab_clearance_m"] = cab_clearance ? Json(*cab_clearance) : Json(nullptr);
-    summary["min_deck_edge_margin_m"] = deck_margin ? Json(*deck_margin) : Json(nullptr);
-    summary["truck_contacts"] = truck_contacts;
-    summary["climb_aways"] = climb_aways;
-    summary["estimate_steps"] = estimate_steps;
-    Json random_blackouts = Json::array();
-    for (const auto& [at_s, duration_s] : blackouts)
-      random_blackouts.push_back({{"at_s", at_s}, {"duration_s", duration_s}});
-    summary["random_blackouts"] = random_blackouts;
-    summary["landed"] = landed;
-    summary["stayed_on_deck"] = stayed_on_deck;
-    summary["takeoff_time_s"] = takeoff_s;
-    summary["touchdown_time_s"] = landed_s;
-    summary["mission_time_s"] = mission_s;
-    summary["relative_speed_m_s"] = relative_speed_m_s;
-    summary["marker_distance_m"] = marker_distance_m;
-    summary["crashes"] = crashes;
-    summary["states"] = states;
-    summary["blackout_first_pass_at_s"] = first_blackout_s;
-    summary["blackout_approach_at_s"] = approach_blackout_s;
-    summary["lose_low_off_centre_at_s"] = lose_low_at_s;
-    summary["sim_time_s"] = end_sim_s;
-    summary["wall_time_s"] = launch.wall_s();
-    summary["success"] = success;
-    if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
-  }
-  return uavsim::launch::run_exit_code(harness_error != 0, success);
+  run.clean_up();
+  const bool success = run.success();
+  run.print_summary(success);
+  bool harness_failed = run.failed();
+  if (!o.json_path.empty() && !launch.write_summary(o.json_path, run.summary_json(success)))
+    harness_failed = true;
+  return uavsim::launch::run_exit_code(harness_failed, success);
 }

@@ -28,9 +28,12 @@
 #include "uavsim/client/geodesy.hpp"
 #include "uavsim/client/switches.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/mission/camera_frames.hpp"
+#include "uavsim/mission/program.hpp"
 #include "uavsim/vision/video_log.hpp"
 
 using namespace uavsim::client;
+using uavsim::mission::TimedPose;
 using namespace uavsim::missions::mbzirc2017;
 
 namespace {
@@ -49,54 +52,161 @@ int usage() {
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Options {
   std::string mavlink, vehicle = "uav0", camera, video_log;
+};
+
+// the command line; nullopt: not usable (usage)
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options o;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--mavlink") {
-      mavlink = argv[i + 1];
+      o.mavlink = argv[i + 1];
     } else if (a == "--vehicle") {
-      vehicle = argv[i + 1];
+      o.vehicle = argv[i + 1];
     } else if (a == "--camera") {
-      camera = argv[i + 1];
+      o.camera = argv[i + 1];
     } else if (a == "--video-log") {
-      video_log = argv[i + 1];
+      o.video_log = argv[i + 1];
     } else {
-      return usage();
+      return std::nullopt;
     }
   }
-  if (mavlink.empty() || argc % 2 == 0) return usage();
-  if (camera.empty()) camera = vehicle + "_down";
+  if (o.mavlink.empty() || argc % 2 == 0) return std::nullopt;
+  if (o.camera.empty()) o.camera = o.vehicle + "_down";
+  return o;
+}
 
-  auto created = EventLoop::create();
-  if (!created) {
-    std::fprintf(stderr, "%s: event loop: %s\n", vehicle.c_str(), created.message().c_str());
-    return 1;
+// a camera frame waiting for the vision computer, with where the camera was when it was taken
+struct Pending {
+  cv::Mat grey;
+  uavsim::vision::PinholeIntrinsics intrinsics;
+  int64_t stamp_us = 0;
+  uavsim::vision::CameraPose pose;
+};
+
+Pending pending_frame(const CameraFrame& f, const TimedPose& pose,
+                      const TruckPerception& perception) {
+  Pending p;
+  p.grey = f.image;
+  p.intrinsics = uavsim::mission::intrinsics_of(f);
+  p.stamp_us = f.stamp_us;
+  // where the vehicle was when the image was taken: the latest telemetry moved to the stamp
+  p.pose = perception.camera_pose(pose.position_at(f.stamp_s), pose.yaw_enu_rad);
+  return p;
+}
+
+// the FSM's inputs: telemetry, the pad switches, the camera's state and the truck as the camera
+// pipeline knows it
+FsmInputs fsm_inputs(double now_s, const Telemetry& t, const TimedPose& pose, bool switch_closed,
+                     bool camera_dark, bool estimate_settling, const TruckPerception& perception) {
+  FsmInputs in;
+  in.now_s = now_s;
+  in.armed = t.armed;
+  // the position now: the latest one moved on by its velocity (it is up to a telemetry period
+  // old, more after a frame's processing; at the truck's speed that would put the UAV ahead of
+  // it)
+  in.position_enu_m = t.position_enu_m;
+  if (pose.time_s >= 0) {
+    in.position_enu_m +=
+        t.velocity_enu_m_s * std::clamp(in.now_s - pose.time_s, 0.0, kMaxExtrapolation_s);
   }
-  EventLoop& loop = **created;
-  auto log = [&](const std::string& s) {
-    std::printf("%s t=%.2f %s\n", vehicle.c_str(), loop.now(), s.c_str());
-    std::fflush(stdout);
-  };
+  in.velocity_enu_m_s = t.velocity_enu_m_s;
+  in.switch_closed = switch_closed;
+  in.camera_dark = camera_dark;
+  in.estimate_settling = estimate_settling;
+  in.truck = perception.knowledge(in.now_s, in.position_enu_m.head<2>());
+  return in;
+}
 
-  VehicleConfig vc;
-  vc.telemetry_rate_hz = 20.0;
-  vc.sim_vehicle = vehicle;
-  Vehicle uav(loop, vc);
-  if (auto r = uav.connect(mavlink, 30); !r) {
-    log("connect: " + r.message());
-    return 1;
+// the FSM's note, a log line for each of its lines
+void log_note(const uavsim::mission::ProgramLoop& program, const std::string& note) {
+  for (size_t from = 0; from < note.size();) {
+    const size_t nl = std::min(note.find('\n', from), note.size());
+    program.log(note.substr(from, nl - from));
+    from = nl + 1;
   }
+}
 
-  // the latest position with the time it was taken, to place each camera frame
-  struct Pose {
-    double time_s = -1.0;
-    Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-    double yaw_enu_rad = 0.0;
-  } pose;
+// the FSM's action: a take-off, a velocity setpoint (heading held), the motors off
+void fly(Vehicle& uav, const FsmOutputs& out, double yaw_hold,
+         const uavsim::mission::ProgramLoop& program) {
+  switch (out.action) {
+    case FsmOutputs::Action::kNone:
+      break;
+    case FsmOutputs::Action::kArmAndTakeOff:
+      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
+        program.log("take-off: " + r.message());
+      break;
+    case FsmOutputs::Action::kVelocity:
+      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, yaw_hold); !r)
+        program.log("velocity: " + r.message());
+      break;
+    case FsmOutputs::Action::kForceDisarm:
+      // all motors off at once, in flight if need be (MAV_CMD_COMPONENT_ARM_DISARM, 21196)
+      if (auto r = uav.disarm(true); !r) program.log("force disarm: " + r.message());
+      break;
+  }
+}
+
+void log_interception(const uavsim::mission::ProgramLoop& program, const TruckKnowledge& truck) {
+  char buf[128];
+  std::snprintf(buf, sizeof(buf), "interception point (%.1f, %.1f), %.1f s to go",
+                truck.interception_enu_m->x(), truck.interception_enu_m->y(),
+                truck.interception_time_to_go_s);
+  program.log(buf);
+}
+
+void log_first_sighting(const uavsim::mission::ProgramLoop& program, const Eigen::Vector2d& seen,
+                        int64_t stamp_us) {
+  char buf[128];
+  std::snprintf(buf, sizeof(buf), "first sighting: marker at (%.1f, %.1f) in the image of t=%.2f",
+                seen.x(), seen.y(), stamp_us * 1e-6);
+  program.log(buf);
+}
+
+// the vision computer on a frame: vision_latency_s of detached time, the simulation going on
+// meanwhile; the first sighting is logged. True when the frame was black (the camera blinded or
+// failed: the ground is never this dark)
+bool look_at(EventLoop& loop, const MissionConfig& config, const Pending& frame,
+             TruckPerception& perception, int reported_detections,
+             const uavsim::mission::ProgramLoop& program) {
+  std::optional<Eigen::Vector2d> seen;
+  bool dark = false;
+  loop.run_busy(config.vision_latency_s, [&] {
+    seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
+    dark = cv::mean(frame.grey)[0] < kDarkFrameMean;
+  });
+  if (seen && reported_detections == 0) log_first_sighting(program, *seen, frame.stamp_us);
+  return dark;
+}
+
+void log_touchdown(const uavsim::mission::ProgramLoop& program, const FsmInputs& in) {
+  const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m",
+                off.x(), off.y());
+  program.log(buf);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<Options> o = parse_options(argc, argv);
+  if (!o) return usage();
+  const std::string& vehicle = o->vehicle;
+
+  auto program = uavsim::mission::ProgramLoop::create(vehicle);
+  if (!program) return 1;
+  EventLoop& loop = program->loop();
+  auto log = [&](const std::string& s) { program->log(s); };
+  const std::unique_ptr<Vehicle> link =
+      uavsim::mission::connect_vehicle(*program, vehicle, o->mavlink);
+  if (!link) return 1;
+  Vehicle& uav = *link;
+
+  TimedPose pose;
   // the position's own time (time_boot_ms) on the loop clock: the smallest arrival delay seen is
   // the clock offset (a position arrives up to a telemetry period after it was taken; at 4 m/s a 50
   // ms error would put every marker 0.2 m off)
@@ -129,45 +239,26 @@ int main(int argc, char** argv) {
 
   // the camera: the newest frame waits for the vision computer (older ones are skipped, as a
   // pipeline that always takes the latest image)
-  struct Pending {
-    cv::Mat grey;
-    uavsim::vision::PinholeIntrinsics intrinsics;
-    int64_t stamp_us = 0;
-    uavsim::vision::CameraPose pose;
-  };
   std::optional<Pending> pending;
   std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
-  if (!video_log.empty()) {
+  if (!o->video_log.empty()) {
     auto opened = uavsim::vision::VideoLogWriter::open(
-        video_log, uavsim::vision::write_error_said_by(vehicle));
+        o->video_log, uavsim::vision::write_error_said_by(o->vehicle));
     if (!opened) {
-      log("--video-log " + video_log + ": " + uavsim::vision::to_string(opened.error()));
+      log("--video-log " + o->video_log + ": " + uavsim::vision::to_string(opened.error()));
       return 1;
     }
     vlog = std::move(*opened);
   }
   CameraConfig cc;
-  cc.camera = camera;
+  cc.camera = o->camera;
   cc.format = CameraFormat::kGrey;
   auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
     if (pose.time_s < 0 || f.image.empty()) return;
-    Pending p;
-    p.grey = f.image;
-    p.intrinsics.fx_px = f.intrinsics.fx;
-    p.intrinsics.fy_px = f.intrinsics.fy;
-    p.intrinsics.cx_px = f.intrinsics.cx;
-    p.intrinsics.cy_px = f.intrinsics.cy;
-    p.intrinsics.width_px = f.image.cols;
-    p.intrinsics.height_px = f.image.rows;
-    p.stamp_us = f.stamp_us;
-    // where the vehicle was when the image was taken: the latest telemetry moved to the stamp
-    const Eigen::Vector3d at =
-        pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
-    p.pose = perception.camera_pose(at, pose.yaw_enu_rad);
-    pending = std::move(p);
+    pending = pending_frame(f, pose, perception);
   });
   if (!sub) {
-    log("camera " + camera + ": " + sub.message());
+    log("camera " + o->camera + ": " + sub.message());
     return 1;
   }
 
@@ -198,22 +289,9 @@ int main(int argc, char** argv) {
       return 1;
     }
     if (pending) {
-      // the vision computer works on the frame for vision_latency_s; the simulation goes on
-      Pending frame = std::move(*pending);
+      const Pending frame = std::move(*pending);
       pending.reset();
-      std::optional<Eigen::Vector2d> seen;
-      loop.run_busy(config.vision_latency_s, [&] {
-        seen = perception.on_frame(frame.grey, frame.intrinsics, frame.stamp_us, frame.pose);
-        // a black frame: the camera blinded or failed (the ground is never this dark)
-        camera_dark = cv::mean(frame.grey)[0] < kDarkFrameMean;
-      });
-      if (seen && reported_detections == 0) {
-        char buf[128];
-        std::snprintf(buf, sizeof(buf),
-                      "first sighting: marker at (%.1f, %.1f) in the image of t=%.2f", seen->x(),
-                      seen->y(), frame.stamp_us * 1e-6);
-        log(buf);
-      }
+      camera_dark = look_at(loop, config, frame, perception, reported_detections, *program);
       reported_detections = perception.detections();
       if (vlog) {
         DrawingContext context;
@@ -233,68 +311,21 @@ int main(int argc, char** argv) {
     if (loop.now() - last_step_s < kStep_s - 1e-9 && !switch_closed) continue;
     last_step_s = loop.now();
 
-    const Telemetry& t = uav.telemetry();
-    FsmInputs in;
-    in.now_s = loop.now();
-    in.armed = t.armed;
-    // the position now: the latest one moved on by its velocity (it is up to a telemetry period
-    // old, more after a frame's processing; at the truck's speed that would put the UAV ahead of
-    // it)
-    in.position_enu_m = t.position_enu_m;
-    if (pose.time_s >= 0) {
-      in.position_enu_m +=
-          t.velocity_enu_m_s * std::clamp(in.now_s - pose.time_s, 0.0, kMaxExtrapolation_s);
-    }
-    in.velocity_enu_m_s = t.velocity_enu_m_s;
-    in.switch_closed = switch_closed;
-    in.camera_dark = camera_dark;
-    in.estimate_settling = estimate_monitor.settling();
-    in.truck = perception.knowledge(in.now_s, in.position_enu_m.head<2>());
+    const FsmInputs in = fsm_inputs(loop.now(), uav.telemetry(), pose, switch_closed, camera_dark,
+                                    estimate_monitor.settling(), perception);
     const LandingState before = fsm.state();
     const FsmOutputs out = fsm.step(in);
-    for (size_t from = 0; from < out.note.size();) {
-      const size_t nl = std::min(out.note.find('\n', from), out.note.size());
-      log(out.note.substr(from, nl - from));
-      from = nl + 1;
-    }
+    log_note(*program, out.note);
     if (fsm.state() == LandingState::kIntercept && before != LandingState::kIntercept &&
         in.truck.interception_enu_m) {
-      char buf[128];
-      std::snprintf(buf, sizeof(buf), "interception point (%.1f, %.1f), %.1f s to go",
-                    in.truck.interception_enu_m->x(), in.truck.interception_enu_m->y(),
-                    in.truck.interception_time_to_go_s);
-      log(buf);
+      log_interception(*program, in.truck);
     }
-
-    switch (out.action) {
-      case FsmOutputs::Action::kNone:
-        break;
-      case FsmOutputs::Action::kArmAndTakeOff: {
-        auto r = uav.set_mode(FlightMode::kGuided);
-        if (r) r = uav.arm();
-        if (r) r = uav.takeoff(out.takeoff_altitude_m, false);
-        if (!r) log("take-off: " + r.message());
-        break;
-      }
-      case FsmOutputs::Action::kVelocity:
-        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, yaw_hold); !r)
-          log("velocity: " + r.message());
-        break;
-      case FsmOutputs::Action::kForceDisarm:
-        // all motors off at once, in flight if need be (MAV_CMD_COMPONENT_ARM_DISARM, 21196)
-        if (auto r = uav.disarm(true); !r) log("force disarm: " + r.message());
-        break;
-    }
+    fly(uav, out, yaw_hold, *program);
     if (fsm.state() == LandingState::kLanded) {
       if (!touchdown_reported) {
         touchdown_reported = true;
         landed_s = loop.now();
-        const Eigen::Vector2d off = in.truck.position_enu_m - in.position_enu_m.head<2>();
-        char buf[160];
-        std::snprintf(buf, sizeof(buf),
-                      "touchdown: motors off; the marker estimated at (%+.2f, %+.2f) m", off.x(),
-                      off.y());
-        log(buf);
+        log_touchdown(*program, in);
       }
       if (loop.now() - landed_s > kLinger_s && !uav.telemetry().armed) break;
     }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
 #include "uavsim/common/parse_number.hpp"
+#include "uavsim/mission/station.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::mbzirc2020;
@@ -39,24 +41,13 @@ int main(int argc, char** argv) {
   }
 
   // a link per UAV, each learning its UAV's address from the first packet (the UAVs call the GCS)
-  std::string error;
-  const std::vector<std::unique_ptr<GcsLink>> links =
-      open_station_links(uav_count, GcsLinkConfig{kGcsId}, &error);
-  if (links.empty()) {
-    std::fprintf(stderr, "gcs: %s\n", error.c_str());
-    return 1;
-  }
-  for (size_t i = 0; i < links.size(); ++i)
-    std::printf("gcs: uav%zu link on udp:127.0.0.1:%u\n", i, links[i]->local_port());
-  std::fflush(stdout);
-
-  auto created = EventLoop::create();
-  if (!created) {
-    std::fprintf(stderr, "gcs: event loop: %s\n", created.message().c_str());
-    return 1;
-  }
-  EventLoop& loop = **created;
-  auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
+  std::optional<uavsim::mission::Station> station =
+      uavsim::mission::start_station("gcs", uav_count, GcsLinkConfig{kGcsId});
+  if (!station) return 1;
+  const std::vector<std::unique_ptr<GcsLink>>& links = station->links;
+  uavsim::mission::ProgramLoop& program = *station->program;
+  EventLoop& loop = program.loop();
+  auto now_us = [&program] { return program.now_us(); };
   for (auto& l : links) {
     GcsLink* p = l.get();
     (void)loop.watch_fd(p->fd(), EventLoop::kReadable,

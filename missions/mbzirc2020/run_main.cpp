@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -26,6 +27,7 @@
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
+#include "uavsim/launch/run_options.hpp"
 
 namespace {
 
@@ -34,27 +36,15 @@ using uavsim::client::SimConnection;
 using uavsim::client::SimMessage;
 using uavsim::launch::Launcher;
 
-struct Options {
-  uint64_t seed = 1;
-  std::string world;
-  std::string record;  // empty: no video
+struct Options : uavsim::launch::RunOptions {
   double budget_s = 400.0;
   double wall_limit_s = 1800.0;
   std::string kill;            // vehicle to kill right after its take-off
   double gcs_loss = 0.0;       // the GCS link relay's loss probability, both vehicles
   double gcs_latency_s = 0.0;  // and its one-way latency
-  std::string json_path;
-  std::string events_path;  // the sim's event log, one JSON line per event
-  std::string realism;      // --realism for the server (empty: the world's)
-  std::string wind;         // --wind for the server
   std::string camera_size = "384x216";
   double camera_fps = 15;
-  std::string run_dir = "auto";          // --run-dir: video, summary, events, logs, ground truth
-  std::string record_camera = "follow";  // the server's --record-camera
-  std::string record_layout = "tiled";   // the server's --record-layout: the UAVs' cameras beside
-  double truth_hz = 10.0;
-  bool quiet = false;
-  std::string server, uav, gcs;
+  std::string uav, gcs;
 };
 
 using uavsim::common::parse_double;
@@ -91,337 +81,325 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options o;
-  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
-  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2020.xml";
-  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
-  o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
-  o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
-  bool record = true;
+// the command line into o; false: not usable (usage)
+bool parse_options(int argc, char** argv, Options* o, bool* record) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
     const char* v = nullptr;
     bool ok = true;  // a number's text was whole and in range
     if (a == "--no-record")
-      record = false;
+      *record = false;
     else if (a == "--no-run-dir")
-      o.run_dir = "none";
+      o->run_dir = "none";
     else if (a == "--quiet")
-      o.quiet = true;
+      o->quiet = true;
     else if (a == "--help" || a == "-h")
-      return usage();
+      return false;
     else if ((v = next()) == nullptr)
-      return usage();
+      return false;
     else if (a == "--seed") {
-      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o.seed)) return usage();
+      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o->seed)) return false;
     } else if (a == "--world")
-      o.world = v;
+      o->world = v;
     else if (a == "--record")
-      o.record = v;
+      o->record = v;
     else if (a == "--budget")
-      ok = parse_double(v, 1.0, 36000.0, &o.budget_s);
+      ok = parse_double(v, 1.0, 36000.0, &o->budget_s);
     else if (a == "--wall-limit")
-      ok = parse_double(v, 1.0, 1e6, &o.wall_limit_s);
+      ok = parse_double(v, 1.0, 1e6, &o->wall_limit_s);
     else if (a == "--kill")
-      o.kill = v;
+      o->kill = v;
     else if (a == "--gcs-loss")
-      ok = parse_double(v, 0.0, 1.0, &o.gcs_loss);
+      ok = parse_double(v, 0.0, 1.0, &o->gcs_loss);
     else if (a == "--gcs-latency")
-      ok = parse_double(v, 0.0, 60.0, &o.gcs_latency_s);
+      ok = parse_double(v, 0.0, 60.0, &o->gcs_latency_s);
     else if (a == "--json")
-      o.json_path = v;
+      o->json_path = v;
     else if (a == "--run-dir")
-      o.run_dir = v;
+      o->run_dir = v;
     else if (a == "--record-camera")
-      o.record_camera = v;
+      o->record_camera = v;
     else if (a == "--record-layout")
-      o.record_layout = v;
+      o->record_layout = v;
     else if (a == "--truth-hz")
-      ok = parse_double(v, 0.01, 1000.0, &o.truth_hz);
+      ok = parse_double(v, 0.01, 1000.0, &o->truth_hz);
     else if (a == "--events")
-      o.events_path = v;
+      o->events_path = v;
     else if (a == "--realism")
-      o.realism = v;
+      o->realism = v;
     else if (a == "--wind")
-      o.wind = v;
+      o->wind = v;
     else if (a == "--camera-size")
-      o.camera_size = v;
+      o->camera_size = v;
     else if (a == "--camera-fps")
-      ok = parse_double(v, 0.1, 1000.0, &o.camera_fps);
+      ok = parse_double(v, 0.1, 1000.0, &o->camera_fps);
     else if (a == "--server")
-      o.server = v;
+      o->server = v;
     else if (a == "--uav")
-      o.uav = v;
+      o->uav = v;
     else if (a == "--gcs")
-      o.gcs = v;
+      o->gcs = v;
     else
-      return usage();
-    if (!ok) return usage();
+      return false;
+    if (!ok) return false;
   }
-  if (const auto files = uavsim::launch::resolve_run_files("mbzirc2020", o.seed, o.run_dir,
-                                                           o.record, o.json_path, record);
-      !files) {
-    std::fprintf(stderr, "mbzirc2020-run: %s\n", files.message().c_str());
-    return 2;
-  } else {
-    o.run_dir = files->dir;
-    o.record = files->video;
-    o.json_path = files->summary;
-  }
-  const size_t x = o.camera_size.find('x');
-  if (x == std::string::npos) return usage();
-  const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
-                               ",height=" + o.camera_size.substr(x + 1) +
-                               ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
-  uavsim::launch::catch_interrupts();
-  Launcher launch("mbzirc2020-run", o.quiet);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
-  int harness_error = 0;
-  auto fail = [&](const std::string& why) {
-    std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
-    harness_error = 4;
-  };
+  return true;
+}
 
-  // 1. the server, on ephemeral ports, as fast as possible
-  uavsim::launch::ServerSpec spec;
-  spec.path = o.server;
-  spec.world = o.world;
-  spec.extra_args = {"--seed",   std::to_string(o.seed),  "--camera", "uav0_front:" + cam_opts,
-                     "--camera", "uav1_front:" + cam_opts};
-  if (!o.record.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(),
-                           {"--record", o.record, "--record-camera", o.record_camera,
-                            "--record-layout", o.record_layout});
+// the harness's failures: said on stderr; the run then ends with kExitHarness
+struct Harness {
+  bool failed = false;
+  void fail(const std::string& why) {
+    std::fprintf(stderr, "mbzirc2020-run: %s\n", why.c_str());
+    failed = true;
   }
-  if (!o.run_dir.empty()) {
-    spec.extra_args.insert(spec.extra_args.end(), {"--log-dir", o.run_dir});
-    launch.record_truth(o.run_dir, o.truth_hz);
-  }
-  if (!o.realism.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--realism", o.realism});
-  if (!o.wind.empty()) spec.extra_args.insert(spec.extra_args.end(), {"--wind", o.wind});
+};
+
+// what the run learns from the event stream and the ground truth, for the score and the summary
+struct Run {
   std::set<std::string> killed;
-  Json summary;
-  int popped = 0, balloons_total = 0;
   std::vector<std::string> crashes;
   std::vector<std::string> vision_logs;  // the UAV programs' video logs, in the run directory
   bool collision = false;
   double first_armed_s = -1, last_pop_s = -1, end_sim_s = 0;
+  int popped = 0, balloons_total = 0;
+  Json summary;
+};
 
-  if (auto started = launch.start_server(spec); !started) {
-    fail("the server did not start: " + started.message());
-  } else if (launch.mavlink_port("uav0") == 0 || launch.mavlink_port("uav1") == 0) {
-    fail("the server did not start (no API / MAVLink ports)");
-  } else {
-    SimConnection& api = launch.api();
-    // 2. hold the clock and start from t = 0 with this seed, so every run of a seed starts alike
-    (void)api.pause();
-    (void)api.reset(o.seed);
-    (void)api.subscribe_events();
-    // the clock stops by itself when the last program leaves the lockstep or the budget is spent,
-    // so the end of the run (its sim time, the score) is the same every run
-    (void)api.request({{"op", "pause_at"}, {"time_s", o.budget_s}, {"lockstep_empty", true}});
-    const std::string lockstep = launch.lockstep_env(0.05);
+// the ground station's failover (a UAV out, the other taking its side over) is the mission's, not
+// the server's: told to the video's overlay ("gcs t=3.65 uav1 failed: out of the mission" =>
+// uav1's line "failed: out of the mission")
+void overlay_failover(SimConnection& api, const std::string& line) {
+  static const std::regex failover_re(
+      R"(^gcs t=\S+ (uav\d+) (.*(out of the mission|takes over).*)$)");
+  std::smatch m;
+  if (std::regex_search(line, m, failover_re)) {
+    (void)api.request(
+        {{"op", "overlay_note"}, {"text", m[2].str().substr(0, 80)}, {"vehicle", m[1].str()}});
+  }
+}
 
-    // 3. the ground station; its link ports, then the server's GCS link relay in front of each
-    // (seed 6.3)
-    std::map<int, int> gcs_port;
-    const std::regex gcs_re(R"(gcs: uav(\d+) link on udp:[0-9.]+:(\d+))");
-    launch.on_line([&](const std::string& child, const std::string& l) {
-      std::smatch m;
-      if (child == "gcs" && std::regex_search(l, m, gcs_re)) {
-        gcs_port[std::stoi(m[1])] = std::stoi(m[2]);
-      }
-      // the ground station's failover (a UAV out, the other taking its side over) is the
-      // mission's, not the server's: told to the video's overlay
-      // ("gcs t=3.65 uav1 failed: out of the mission" => uav1's line "failed: out of the mission")
-      static const std::regex failover_re(
-          R"(^gcs t=\S+ (uav\d+) (.*(out of the mission|takes over).*)$)");
-      if (!o.record.empty() && child == "gcs" && std::regex_search(l, m, failover_re)) {
-        (void)api.request(
-            {{"op", "overlay_note"}, {"text", m[2].str().substr(0, 80)}, {"vehicle", m[1].str()}});
-      }
-    });
-    if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {
-      fail("cannot start " + o.gcs);
+// 3. the ground station; its link ports (uav index -> port), read from its output
+std::map<int, int> start_ground_station(Launcher& launch, const Options& o,
+                                        const std::string& lockstep, Harness& h) {
+  // the map outlives this call: the launcher keeps the callback for the whole run
+  auto gcs_port = std::make_shared<std::map<int, int>>();
+  const std::regex gcs_re(R"(gcs: uav(\d+) link on udp:[0-9.]+:(\d+))");
+  launch.on_line([&launch, &o, gcs_port, gcs_re](const std::string& child, const std::string& l) {
+    std::smatch m;
+    if (child == "gcs" && std::regex_search(l, m, gcs_re)) {
+      (*gcs_port)[std::stoi(m[1])] = std::stoi(m[2]);
     }
-    while (!harness_error && gcs_port.size() < 2 && launch.wall_s() < 60 &&
-           !launch.programs_done() && !uavsim::launch::interrupted()) {
-      launch.pump(200);
-    }
-    if (!harness_error && gcs_port.size() < 2) fail("the ground station did not start");
-    for (int i = 0; i < 2 && !harness_error; ++i) {
-      const auto r = api.request({{"op", "gcs_link_open"},
-                                  {"vehicle", i},
-                                  {"gcs_target_host", "127.0.0.1"},
-                                  {"gcs_target_port", gcs_port[i]}});
-      if (!r) {
-        fail("gcs_link_open: " + r.message());
-        break;
-      }
-      const int uav_port = r->value("uav_port", 0);
-      if (o.gcs_loss > 0.0 || o.gcs_latency_s > 0.0) {
-        // impaired from t = 0, before the UAV program sends anything
-        const auto ir = api.request({{"op", "gcs_link_impair"},
-                                     {"vehicle", i},
-                                     {"loss", o.gcs_loss},
-                                     {"latency_s", o.gcs_latency_s}});
-        if (!ir) {
-          fail("gcs_link_impair: " + ir.message());
-          break;
-        }
-      }
-      // 4. the UAV programs
-      const std::string name = "uav" + std::to_string(i);
-      std::vector<std::string> argv{o.uav,
-                                    "--index",
-                                    std::to_string(i),
-                                    "--mavlink",
-                                    "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)),
-                                    "--gcs",
-                                    "127.0.0.1:" + std::to_string(uav_port)};
-      if (!o.run_dir.empty()) {
-        // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
-        vision_logs.push_back(o.run_dir + "/" + name + "_vision.vlog");
-        argv.insert(argv.end(), {"--video-log", vision_logs.back()});
-      }
-      if (!launch.spawn(name, argv, {lockstep})) {
-        fail("cannot start " + o.uav);
-      }
-    }
-    // 5. once all three have joined the lockstep, let the clock go
-    if (!harness_error && !launch.wait_lockstep_clients(3, 120.0)) {
-      fail("the mission programs did not join the lockstep");
-    }
-    if (!harness_error) {
-      (void)api.resume();
-      launch.say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " +
-                 std::to_string(static_cast<int>(o.budget_s)) + " s sim" +
-                 (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
-    }
+    if (!o.record.empty() && child == "gcs") overlay_failover(launch.api(), l);
+  });
+  if (auto g = launch.spawn("gcs", {o.gcs, "--uavs", "2"}, {lockstep}); !g) {
+    h.fail("cannot start " + o.gcs);
+  }
+  while (!h.failed && gcs_port->size() < 2 && launch.wall_s() < 60 && !launch.programs_done() &&
+         !uavsim::launch::interrupted()) {
+    launch.pump(200);
+  }
+  if (!h.failed && gcs_port->size() < 2) h.fail("the ground station did not start");
+  return *gcs_port;
+}
 
-    // 6. follow the programs and the event stream until they finish or the budget is spent
-    double last_status_wall_s = launch.wall_s();
-    double sim_s = 0;
-    while (!harness_error) {
-      launch.pump(200);
-      for (const SimMessage& m : api.take_messages()) {
-        if (m.kind() != "sim_event") continue;
-        const Json& e = m.json;
-        const std::string type = e.value("type", ""), veh = e.value("vehicle_name", "");
-        const double t = e.value("time", 0.0);
-        const std::string detail = e.value("detail", "");
-        if (type == "takeoff" && first_armed_s < 0)
-          first_armed_s = t;  // the GCS start: first take-off
-        if (type == "balloon_popped") last_pop_s = t;
-        if (type == "vehicle_killed") killed.insert(veh);
-        if (type == "crash" && !killed.count(veh)) {
-          crashes.push_back(veh + " at " + std::to_string(t) + " s: " + detail);
-          collision = collision || detail.find("collision") != std::string::npos;
-        }
-        if (type == "balloon_popped" || type == "crash" || type == "vehicle_killed" ||
-            type == "takeoff" || type == "touchdown") {
-          char buf[256];
-          std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), veh.c_str(),
-                        detail.c_str());
-          launch.say(buf);
-        }
-        if (type == "takeoff" && veh == o.kill && !killed.count(veh)) {
-          (void)api.request({{"op", "kill_vehicle"},
-                             {"vehicle", veh},
-                             {"reason", "Competition Day 2 malfunction"}});
-          killed.insert(veh);
-        }
-      }
-      const bool all_done = launch.programs_done();
-      if (launch.wall_s() - last_status_wall_s > 0.5 || all_done) {
-        last_status_wall_s = launch.wall_s();
-        if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
-        launch.note_sim_time(sim_s);
-      }
-      if (all_done || uavsim::launch::interrupted()) break;
-      if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
-        launch.say("mbzirc2020-run: sim-time budget spent");
-        break;
-      }
-      if (launch.wall_s() > o.wall_limit_s) {
-        launch.say("mbzirc2020-run: wall-clock limit reached");
-        break;
-      }
-      if (launch.server_exited()) {
-        fail(launch.server_end());
-        break;
-      }
-      if (!launch.records_error().empty()) {
-        fail("the run's records cannot be written: " + launch.records_error());
-        break;
-      }
-    }
-
-    // the clock holds by itself at the end (pause_at): score once it does (interrupted: as it
-    // stands)
-    for (const double until_s = launch.wall_s() + 10.0;
-         !harness_error && !uavsim::launch::interrupted() && launch.wall_s() < until_s;
-         launch.pump(10)) {
-      const auto st = api.status();
-      if (!st || st->value("paused", false)) break;
-    }
-    // 7. score from ground truth
-    if (const auto b = api.request({{"op", "balloons"}}); b) {
-      end_sim_s = b->value("time_s", 0.0);
-      for (const Json& x : b->at("balloons")) {
-        ++balloons_total;
-        if (x.value("popped", false)) {
-          ++popped;
-          last_pop_s = std::max(last_pop_s, x.value("popped_time_s", 0.0));
-        }
-      }
-      summary["balloons"] = b->at("balloons");
-    }
-    if (!o.events_path.empty()) {
-      if (const auto ev = api.request({{"op", "events"}}); ev) {
-        std::ofstream f(o.events_path);
-        for (const Json& e : ev->at("events")) f << e.dump() << "\n";
-      }
-    }
-    // the relay's counters: what the impairment did to each GCS link
-    summary["gcs_links"] = Json::array();
-    for (int i = 0; i < 2; ++i) {
-      if (const auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}); g) {
-        summary["gcs_links"].push_back(*g);
-      }
+// the server's GCS link relay in front of the station's port for UAV i (seed 6.3), impaired as
+// asked; the port the UAV program is to send to, 0 after a failure
+int open_gcs_link(SimConnection& api, const Options& o, int i, int gcs_port, Harness& h) {
+  const auto r = api.request({{"op", "gcs_link_open"},
+                              {"vehicle", i},
+                              {"gcs_target_host", "127.0.0.1"},
+                              {"gcs_target_port", gcs_port}});
+  if (!r) {
+    h.fail("gcs_link_open: " + r.message());
+    return 0;
+  }
+  if (o.gcs_loss > 0.0 || o.gcs_latency_s > 0.0) {
+    // impaired from t = 0, before the UAV program sends anything
+    const auto ir = api.request({{"op", "gcs_link_impair"},
+                                 {"vehicle", i},
+                                 {"loss", o.gcs_loss},
+                                 {"latency_s", o.gcs_latency_s}});
+    if (!ir) {
+      h.fail("gcs_link_impair: " + ir.message());
+      return 0;
     }
   }
+  return r->value("uav_port", 0);
+}
 
-  // 8. stop everything we started: the programs, then the server (it finishes the video)
-  launch.stop_all(60.0);
+// 3.-5. the ground station, the GCS links and the UAV programs; the clock goes once all three have
+// joined the lockstep
+void start_programs(Launcher& launch, const Options& o, Run& run, Harness& h) {
+  SimConnection& api = launch.api();
+  const std::string lockstep = launch.lockstep_env(0.05);
+  std::map<int, int> gcs_port = start_ground_station(launch, o, lockstep, h);
+  for (int i = 0; i < 2 && !h.failed; ++i) {
+    const int uav_port = open_gcs_link(api, o, i, gcs_port[i], h);
+    if (h.failed) break;
+    // 4. the UAV programs
+    const std::string name = "uav" + std::to_string(i);
+    std::vector<std::string> argv{o.uav,
+                                  "--index",
+                                  std::to_string(i),
+                                  "--mavlink",
+                                  "tcp:127.0.0.1:" + std::to_string(launch.mavlink_port(name)),
+                                  "--gcs",
+                                  "127.0.0.1:" + std::to_string(uav_port)};
+    if (!o.run_dir.empty()) {
+      // what its vision saw, frame by frame (uavsim-videolog-export makes an MP4 of it)
+      run.vision_logs.push_back(o.run_dir + "/" + name + "_vision.vlog");
+      argv.insert(argv.end(), {"--video-log", run.vision_logs.back()});
+    }
+    if (!launch.spawn(name, argv, {lockstep})) {
+      h.fail("cannot start " + o.uav);
+    }
+  }
+  // 5. once all three have joined the lockstep, let the clock go
+  if (!h.failed && !launch.wait_lockstep_clients(3, 120.0)) {
+    h.fail("the mission programs did not join the lockstep");
+  }
+  if (!h.failed) {
+    (void)api.resume();
+    launch.say("mbzirc2020-run: seed " + std::to_string(o.seed) + ", budget " +
+               std::to_string(static_cast<int>(o.budget_s)) + " s sim" +
+               (o.kill.empty() ? "" : ", killing " + o.kill + " after its take-off"));
+  }
+}
 
-  const bool success = harness_error == 0 && !uavsim::launch::interrupted() && balloons_total > 0 &&
-                       popped == balloons_total && crashes.empty();
-  const double mission_s =
-      (first_armed_s >= 0 && last_pop_s >= 0) ? last_pop_s - first_armed_s : -1;
+// one sim event: noted for the score, printed, and --kill's kill at the take-off
+void on_sim_event(const Json& e, Launcher& launch, const Options& o, Run& run) {
+  const std::string type = e.value("type", ""), veh = e.value("vehicle_name", "");
+  const double t = e.value("time", 0.0);
+  const std::string detail = e.value("detail", "");
+  if (type == "takeoff" && run.first_armed_s < 0)
+    run.first_armed_s = t;  // the GCS start: first take-off
+  if (type == "balloon_popped") run.last_pop_s = t;
+  if (type == "vehicle_killed") run.killed.insert(veh);
+  if (type == "crash" && !run.killed.count(veh)) {
+    run.crashes.push_back(veh + " at " + std::to_string(t) + " s: " + detail);
+    run.collision = run.collision || detail.find("collision") != std::string::npos;
+  }
+  if (type == "balloon_popped" || type == "crash" || type == "vehicle_killed" ||
+      type == "takeoff" || type == "touchdown") {
+    char buf[256];
+    std::snprintf(buf, sizeof(buf), "[event] t=%.2f %s %s %s", t, type.c_str(), veh.c_str(),
+                  detail.c_str());
+    launch.say(buf);
+  }
+  if (type == "takeoff" && veh == o.kill && !run.killed.count(veh)) {
+    (void)launch.api().request(
+        {{"op", "kill_vehicle"}, {"vehicle", veh}, {"reason", "Competition Day 2 malfunction"}});
+    run.killed.insert(veh);
+  }
+}
+
+// 6. follow the programs and the event stream until they finish or the budget is spent
+void follow(Launcher& launch, const Options& o, Run& run, Harness& h) {
+  SimConnection& api = launch.api();
+  double last_status_wall_s = launch.wall_s();
+  double sim_s = 0;
+  while (!h.failed) {
+    launch.pump(200);
+    for (const SimMessage& m : api.take_messages()) {
+      if (m.kind() == "sim_event") on_sim_event(m.json, launch, o, run);
+    }
+    const bool all_done = launch.programs_done();
+    if (launch.wall_s() - last_status_wall_s > 0.5 || all_done) {
+      last_status_wall_s = launch.wall_s();
+      if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
+      launch.note_sim_time(sim_s);
+    }
+    if (all_done || uavsim::launch::interrupted()) break;
+    if (sim_s >= o.budget_s - 0.01) {  // pause_at holds within a physics step of the budget
+      launch.say("mbzirc2020-run: sim-time budget spent");
+      break;
+    }
+    std::string failure;
+    if (uavsim::launch::run_must_end(launch, "mbzirc2020-run", o.wall_limit_s, &failure)) {
+      if (!failure.empty()) h.fail(failure);
+      break;
+    }
+  }
+}
+
+// 7. score from ground truth, once the clock holds by itself at the end (pause_at; interrupted:
+// as it stands)
+void score(Launcher& launch, const Options& o, Run& run, const Harness& h) {
+  SimConnection& api = launch.api();
+  for (const double until_s = launch.wall_s() + 10.0;
+       !h.failed && !uavsim::launch::interrupted() && launch.wall_s() < until_s; launch.pump(10)) {
+    const auto st = api.status();
+    if (!st || st->value("paused", false)) break;
+  }
+  if (const auto b = api.request({{"op", "balloons"}}); b) {
+    run.end_sim_s = b->value("time_s", 0.0);
+    for (const Json& x : b->at("balloons")) {
+      ++run.balloons_total;
+      if (x.value("popped", false)) {
+        ++run.popped;
+        run.last_pop_s = std::max(run.last_pop_s, x.value("popped_time_s", 0.0));
+      }
+    }
+    run.summary["balloons"] = b->at("balloons");
+  }
+  if (!o.events_path.empty()) {
+    if (const auto ev = api.request({{"op", "events"}}); ev) {
+      std::ofstream f(o.events_path);
+      for (const Json& e : ev->at("events")) f << e.dump() << "\n";
+    }
+  }
+  // the relay's counters: what the impairment did to each GCS link
+  run.summary["gcs_links"] = Json::array();
+  for (int i = 0; i < 2; ++i) {
+    if (const auto g = api.request({{"op", "gcs_link_stats"}, {"vehicle", i}}); g) {
+      run.summary["gcs_links"].push_back(*g);
+    }
+  }
+}
+
+// 2.-7. the mission on a started server: the clock held at t = 0 with this seed, the programs,
+// the run followed, the score
+void run_mission(Launcher& launch, const Options& o, Run& run, Harness& h) {
+  SimConnection& api = launch.api();
+  // hold the clock and start from t = 0 with this seed, so every run of a seed starts alike
+  (void)api.pause();
+  (void)api.reset(o.seed);
+  (void)api.subscribe_events();
+  // the clock stops by itself when the last program leaves the lockstep or the budget is spent,
+  // so the end of the run (its sim time, the score) is the same every run
+  (void)api.request({{"op", "pause_at"}, {"time_s", o.budget_s}, {"lockstep_empty", true}});
+  start_programs(launch, o, run, h);
+  follow(launch, o, run, h);
+  score(launch, o, run, h);
+}
+
+double mission_time_s(const Run& run) {
+  return (run.first_armed_s >= 0 && run.last_pop_s >= 0) ? run.last_pop_s - run.first_armed_s : -1;
+}
+
+void print_summary(const Options& o, const Run& run, const Launcher& launch, bool success) {
+  const double mission_s = mission_time_s(run);
   std::printf("==== MBZIRC 2020 balloons, seed %llu%s ====\n",
               static_cast<unsigned long long>(o.seed),
               o.kill.empty() ? "" : (" (" + o.kill + " killed after take-off)").c_str());
-  std::printf("balloons popped: %d/%d\n", popped, balloons_total);
+  std::printf("balloons popped: %d/%d\n", run.popped, run.balloons_total);
   if (mission_s >= 0) {
     std::printf("mission time: %.1f s sim (first take-off at t=%.1f s, last balloon at t=%.1f s)\n",
-                mission_s, first_armed_s, last_pop_s);
+                mission_s, run.first_armed_s, run.last_pop_s);
   } else {
     std::printf("mission time: n/a\n");
   }
-  std::printf("collisions between UAVs: %s\n", collision ? "yes" : "none");
-  std::printf("crashes: %s\n", crashes.empty() ? "none" : "");
-  for (const std::string& c : crashes) std::printf("  %s\n", c.c_str());
-  if (!killed.empty())
-    std::printf("killed on purpose: %s\n", *killed.begin() == "" ? "?" : killed.begin()->c_str());
-  std::printf("sim time: %.1f s, wall time: %.1f s\n", end_sim_s, launch.wall_s());
+  std::printf("collisions between UAVs: %s\n", run.collision ? "yes" : "none");
+  std::printf("crashes: %s\n", run.crashes.empty() ? "none" : "");
+  for (const std::string& c : run.crashes) std::printf("  %s\n", c.c_str());
+  if (!run.killed.empty())
+    std::printf("killed on purpose: %s\n",
+                *run.killed.begin() == "" ? "?" : run.killed.begin()->c_str());
+  std::printf("sim time: %.1f s, wall time: %.1f s\n", run.end_sim_s, launch.wall_s());
   std::printf("video: %s\n", o.record.empty() ? "none" : o.record.c_str());
-  for (const std::string& v : vision_logs) {
+  for (const std::string& v : run.vision_logs) {
     std::printf("vision log: %s (uavsim-videolog-export %s --mp4 FILE)\n", v.c_str(), v.c_str());
   }
   if (!o.run_dir.empty()) {
@@ -432,25 +410,73 @@ int main(int argc, char** argv) {
   std::printf("RESULT: %s%s\n", success ? "SUCCESS" : "FAILURE",
               uavsim::launch::interrupted() ? " (interrupted)" : "");
   std::fflush(stdout);
+}
 
-  if (!o.json_path.empty()) {
-    summary["mission"] = "mbzirc2020";
-    summary["run_dir"] = o.run_dir;
-    summary["seed"] = o.seed;
-    summary["popped"] = popped;
-    summary["total"] = balloons_total;
-    summary["mission_time_s"] = mission_s;
-    summary["start_time_s"] = first_armed_s;
-    summary["last_pop_time_s"] = last_pop_s;
-    summary["collision"] = collision;
-    summary["crashes"] = crashes;
-    summary["killed"] = std::vector<std::string>(killed.begin(), killed.end());
-    summary["sim_time_s"] = end_sim_s;
-    summary["wall_time_s"] = launch.wall_s();
-    summary["video"] = o.record;
-    summary["vision_logs"] = vision_logs;
-    summary["success"] = success;
-    if (!launch.write_summary(o.json_path, summary)) harness_error = 4;
+Json summary_json(const Options& o, const Run& run, const Launcher& launch, bool success) {
+  Json summary = run.summary;
+  summary["mission"] = "mbzirc2020";
+  summary["run_dir"] = o.run_dir;
+  summary["seed"] = o.seed;
+  summary["popped"] = run.popped;
+  summary["total"] = run.balloons_total;
+  summary["mission_time_s"] = mission_time_s(run);
+  summary["start_time_s"] = run.first_armed_s;
+  summary["last_pop_time_s"] = run.last_pop_s;
+  summary["collision"] = run.collision;
+  summary["crashes"] = run.crashes;
+  summary["killed"] = std::vector<std::string>(run.killed.begin(), run.killed.end());
+  summary["sim_time_s"] = run.end_sim_s;
+  summary["wall_time_s"] = launch.wall_s();
+  summary["video"] = o.record;
+  summary["vision_logs"] = run.vision_logs;
+  summary["success"] = success;
+  return summary;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
+  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2020.xml";
+  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
+  o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
+  o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
+  bool record = true;
+  if (!parse_options(argc, argv, &o, &record)) return usage();
+  if (!uavsim::launch::resolve_run_files("mbzirc2020", &o, record)) return 2;
+  const size_t x = o.camera_size.find('x');
+  if (x == std::string::npos) return usage();
+  const std::string cam_opts = "width=" + o.camera_size.substr(0, x) +
+                               ",height=" + o.camera_size.substr(x + 1) +
+                               ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
+  uavsim::launch::catch_interrupts();
+  Launcher launch("mbzirc2020-run", o.quiet);
+  launch.keep_summary(o.json_path,
+                      {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  Harness h;
+  Run run;
+
+  // 1. the server, on ephemeral ports, as fast as possible; then the mission on it
+  const std::vector<std::string> cameras{"--camera", "uav0_front:" + cam_opts, "--camera",
+                                         "uav1_front:" + cam_opts};
+  if (auto started = uavsim::launch::start_run_server(launch, o, cameras); !started) {
+    h.fail("the server did not start: " + started.message());
+  } else if (launch.mavlink_port("uav0") == 0 || launch.mavlink_port("uav1") == 0) {
+    h.fail("the server did not start (no API / MAVLink ports)");
+  } else {
+    run_mission(launch, o, run, h);
   }
-  return uavsim::launch::run_exit_code(harness_error != 0, success);
+
+  // 8. stop everything we started: the programs, then the server (it finishes the video)
+  launch.stop_all(60.0);
+
+  const bool success = !h.failed && !uavsim::launch::interrupted() && run.balloons_total > 0 &&
+                       run.popped == run.balloons_total && run.crashes.empty();
+  print_summary(o, run, launch, success);
+  bool harness_failed = h.failed;
+  if (!o.json_path.empty() &&
+      !launch.write_summary(o.json_path, summary_json(o, run, launch, success)))
+    harness_failed = true;
+  return uavsim::launch::run_exit_code(harness_failed, success);
 }

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "balloon_perception.hpp"
@@ -23,10 +24,13 @@
 #include "uavsim/client/gcs_link.hpp"
 #include "uavsim/client/vehicle.hpp"
 #include "uavsim/common/parse_number.hpp"
+#include "uavsim/mission/camera_frames.hpp"
+#include "uavsim/mission/program.hpp"
 #include "uavsim/vision/video_log.hpp"
 #include "vehicle_fsm.hpp"
 
 using namespace uavsim::client;
+using uavsim::mission::TimedPose;
 using namespace uavsim::missions::mbzirc2020;
 
 namespace {
@@ -43,77 +47,173 @@ int usage() {
   return 2;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Options {
   int index = -1;
-  std::string mavlink, gcs, camera, vehicle, video_log;
+  std::string mavlink, camera, vehicle, video_log;
+  std::string gcs_host;
+  int gcs_port = 0;
+};
+
+// the command line; nullopt: not usable (usage)
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options o;
+  std::string gcs;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--index") {
-      if (!uavsim::common::parse_integer(argv[i + 1], 0, 1, &index)) return usage();
-    }
-    else if (a == "--mavlink")
-      mavlink = argv[i + 1];
-    else if (a == "--gcs")
+      if (!uavsim::common::parse_integer(argv[i + 1], 0, 1, &o.index)) return std::nullopt;
+    } else if (a == "--mavlink") {
+      o.mavlink = argv[i + 1];
+    } else if (a == "--gcs") {
       gcs = argv[i + 1];
-    else if (a == "--camera")
-      camera = argv[i + 1];
-    else if (a == "--vehicle")
-      vehicle = argv[i + 1];
-    else if (a == "--video-log")
-      video_log = argv[i + 1];
-    else
-      return usage();
+    } else if (a == "--camera") {
+      o.camera = argv[i + 1];
+    } else if (a == "--vehicle") {
+      o.vehicle = argv[i + 1];
+    } else if (a == "--video-log") {
+      o.video_log = argv[i + 1];
+    } else {
+      return std::nullopt;
+    }
   }
-  int gcs_port = 0;
   const size_t colon = gcs.rfind(':');
-  if (index < 0 || mavlink.empty() || colon == std::string::npos ||
-      !uavsim::common::parse_integer(gcs.c_str() + colon + 1, 1, 65535, &gcs_port))
-    return usage();
-  if (vehicle.empty()) vehicle = "uav" + std::to_string(index);
-  if (camera.empty()) camera = vehicle + "_front";
-  const std::string me = vehicle;
+  if (o.index < 0 || o.mavlink.empty() || colon == std::string::npos ||
+      !uavsim::common::parse_integer(gcs.c_str() + colon + 1, 1, 65535, &o.gcs_port))
+    return std::nullopt;
+  o.gcs_host = gcs.substr(0, colon);
+  if (o.vehicle.empty()) o.vehicle = "uav" + std::to_string(o.index);
+  if (o.camera.empty()) o.camera = o.vehicle + "_front";
+  return o;
+}
 
-  auto created = EventLoop::create();
-  if (!created) {
-    std::fprintf(stderr, "%s: event loop: %s\n", me.c_str(), created.message().c_str());
-    return 1;
+// what the vision saw in a frame, for the video log: each detection's circle and range, the
+// confirmed balloons
+uavsim::vision::VideoLogFrame vision_log_frame(const CameraFrame& f,
+                                               const BalloonPerception& perception, int seen,
+                                               const std::string& me) {
+  uavsim::vision::VideoLogFrame frame;
+  frame.stamp_us = static_cast<int64_t>(std::llround(f.stamp_s * 1e6));
+  frame.image = f.image;
+  const cv::Scalar magenta(255, 0, 255);  // BGR: stands out on green balloons and grass
+  for (const uavsim::vision::BalloonDetection& d : perception.last_detections()) {
+    const cv::Point2f c(static_cast<float>(d.centre_px.x), static_cast<float>(d.centre_px.y));
+    frame.overlays.push_back(
+        uavsim::vision::Overlay::circle(c, static_cast<float>(d.radius_px) + 2.0f, magenta, 2.0f));
+    char range[32];
+    std::snprintf(range, sizeof(range), "%.1f m", d.range_m);
+    frame.overlays.push_back(uavsim::vision::Overlay::label(
+        c + cv::Point2f(static_cast<float>(d.radius_px) + 4.0f, 0.0f), range, magenta, 0.4f));
   }
-  EventLoop& loop = **created;
-  auto log = [&](const std::string& s) {
-    std::printf("%s t=%.2f %s\n", me.c_str(), loop.now(), s.c_str());
-    std::fflush(stdout);
-  };
+  char text[96];
+  std::snprintf(text, sizeof(text), "%s t=%.2f detections %d confirmed %zu", me.c_str(), f.stamp_s,
+                seen, perception.sightings().size());
+  frame.text = text;
+  return frame;
+}
 
-  VehicleConfig vc;
-  vc.telemetry_rate_hz = 20.0;
-  vc.sim_vehicle = vehicle;
-  Vehicle uav(loop, vc);
-  if (auto r = uav.connect(mavlink, 30); !r) {
-    log("connect: " + r.message());
-    return 1;
+// a camera frame into the perception (placed by the telemetry moved to its stamp), and into the
+// video log if there is one
+void on_camera_frame(const CameraFrame& f, const TimedPose& pose, BalloonPerception& perception,
+                     uavsim::vision::VideoLogWriter* vlog, const std::string& me) {
+  if (pose.time_s < 0) return;
+  const Eigen::Vector3d p = pose.position_at(f.stamp_s);
+  const uavsim::vision::PinholeIntrinsics k = uavsim::mission::intrinsics_of(f);
+  const std::optional<double> pitch_rad = perception.camera_pitch_at(f.stamp_s);
+  if (!pitch_rad) return;  // the gimbal is slewing
+  const int seen = perception.on_frame(f.image, k, f.stamp_s,
+                                       perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
+  // a full queue drops the frame, never waits
+  if (vlog) (void)vlog->submit(vision_log_frame(f, perception, seen, me));
+}
+
+// the FSM's inputs: telemetry, sightings, and the GCS messages received since the last step
+VehicleInputs vehicle_inputs(double now_s, const Telemetry& t, const BalloonPerception& perception,
+                             GcsLink& link) {
+  VehicleInputs in;
+  in.now_s = now_s;
+  in.armed = t.armed;
+  in.on_ground = t.landed == LandedState::kOnGround;
+  in.position_enu_m = t.position_enu_m;
+  in.velocity_enu_m_s = t.velocity_enu_m_s;
+  in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
+  in.roll_rad = t.roll_rad;
+  in.pitch_rad = t.pitch_rad;
+  in.balloons = perception.sightings();
+  for (const GcsMessage& m : link.take_received()) {
+    if (m.topic == kTopicState) {
+      if (auto c = decode_command(m.payload)) in.commands.push_back(*c);
+    } else if (m.topic == kTopicAirspace) {
+      if (auto a = decode_airspace(m.payload)) in.airspace_replies.push_back(*a);
+    }
   }
+  return in;
+}
+
+// the FSM's action: a take-off, a velocity setpoint, the motors off
+void fly(Vehicle& uav, const VehicleOutputs& out, VehicleState state,
+         const uavsim::mission::ProgramLoop& program) {
+  switch (out.action) {
+    case VehicleOutputs::Action::kNone:
+      break;
+    case VehicleOutputs::Action::kArmAndTakeOff:
+      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
+        program.log("take-off failed: " + r.message());
+      break;
+    case VehicleOutputs::Action::kVelocity:
+      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad);
+          !r && state != VehicleState::kFailed) {
+        program.log("velocity: " + r.message());
+      }
+      break;
+    case VehicleOutputs::Action::kDisarm:
+      // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
+      if (auto r = uav.disarm(true); !r) program.log("disarm: " + r.message());
+      break;
+  }
+}
+
+// the STATUS the GCS reads (seed 7.2's topic)
+UavStatus status_of(const VehicleFsm& fsm, bool ready, const Telemetry& t) {
+  UavStatus s;
+  s.state = static_cast<uint8_t>(fsm.state());
+  s.ready = fsm.state() == VehicleState::kPreflight && ready;
+  s.failed = fsm.state() == VehicleState::kFailed;
+  s.landed = fsm.state() == VehicleState::kLanded;
+  s.position_enu_m = t.position_enu_m;
+  s.popped = static_cast<uint8_t>(fsm.popped());
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::optional<Options> o = parse_options(argc, argv);
+  if (!o) return usage();
+  const std::string& me = o->vehicle;
+  const int index = o->index;
+
+  auto program = uavsim::mission::ProgramLoop::create(me);
+  if (!program) return 1;
+  EventLoop& loop = program->loop();
+  auto log = [&](const std::string& s) { program->log(s); };
+  const std::unique_ptr<Vehicle> vehicle =
+      uavsim::mission::connect_vehicle(*program, me, o->mavlink);
+  if (!vehicle) return 1;
+  Vehicle& uav = *vehicle;
 
   // the ground-station link (seed 6.3)
   std::string error;
-  auto link = GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
-                            {"127.0.0.1", 0, gcs.substr(0, colon), static_cast<uint16_t>(gcs_port)},
-                            &error);
+  auto link =
+      GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
+                    {"127.0.0.1", 0, o->gcs_host, static_cast<uint16_t>(o->gcs_port)}, &error);
   if (!link) {
     log("GCS link: " + error);
     return 1;
   }
-  auto now_us = [&] { return static_cast<int64_t>(std::llround(loop.now() * 1e6)); };
-  (void)loop.watch_fd(link->fd(), EventLoop::kReadable, [&](uint32_t) { link->service(now_us()); });
+  (void)loop.watch_fd(link->fd(), EventLoop::kReadable,
+                      [&](uint32_t) { link->service(program->now_us()); });
 
-  // telemetry kept with the loop time it arrived at, to place each camera frame
-  struct Pose {
-    double time_s = -1.0;
-    Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-    double yaw_enu_rad = 0.0;
-  } pose;
+  TimedPose pose;
   uav.on_telemetry([&](const Telemetry& t) {
     if (!t.has_local_position) return;
     pose = {loop.now(), t.position_enu_m, t.velocity_enu_m_s, enu_yaw_from_ned(t.yaw_rad)};
@@ -124,57 +224,23 @@ int main(int argc, char** argv) {
   const MissionConfig config;
   BalloonPerception perception(config);
   std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
-  if (!video_log.empty()) {
-    auto opened =
-        uavsim::vision::VideoLogWriter::open(video_log, uavsim::vision::write_error_said_by(me));
+  if (!o->video_log.empty()) {
+    auto opened = uavsim::vision::VideoLogWriter::open(
+        o->video_log, uavsim::vision::write_error_said_by(me));
     if (!opened) {
-      log("--video-log " + video_log + ": " + uavsim::vision::to_string(opened.error()));
+      log("--video-log " + o->video_log + ": " + uavsim::vision::to_string(opened.error()));
       return 1;
     }
     vlog = std::move(*opened);
   }
   CameraConfig cc;
-  cc.camera = camera;
+  cc.camera = o->camera;
   cc.format = CameraFormat::kBgr;
   auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
-    if (pose.time_s < 0) return;
-    const Eigen::Vector3d p =
-        pose.position_enu_m + pose.velocity_enu_m_s * (f.stamp_s - pose.time_s);
-    uavsim::vision::PinholeIntrinsics k;
-    k.fx_px = f.intrinsics.fx;
-    k.fy_px = f.intrinsics.fy;
-    k.cx_px = f.intrinsics.cx;
-    k.cy_px = f.intrinsics.cy;
-    k.width_px = f.image.cols;
-    k.height_px = f.image.rows;
-    const std::optional<double> pitch_rad = perception.camera_pitch_at(f.stamp_s);
-    if (!pitch_rad) return;  // the gimbal is slewing
-    const int seen = perception.on_frame(f.image, k, f.stamp_s,
-                                         perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
-    if (vlog) {
-      // what the vision saw: each detection's circle and range, the confirmed balloons
-      uavsim::vision::VideoLogFrame frame;
-      frame.stamp_us = static_cast<int64_t>(std::llround(f.stamp_s * 1e6));
-      frame.image = f.image;
-      const cv::Scalar magenta(255, 0, 255);  // BGR: stands out on green balloons and grass
-      for (const uavsim::vision::BalloonDetection& d : perception.last_detections()) {
-        const cv::Point2f c(static_cast<float>(d.centre_px.x), static_cast<float>(d.centre_px.y));
-        frame.overlays.push_back(uavsim::vision::Overlay::circle(
-            c, static_cast<float>(d.radius_px) + 2.0f, magenta, 2.0f));
-        char range[32];
-        std::snprintf(range, sizeof(range), "%.1f m", d.range_m);
-        frame.overlays.push_back(uavsim::vision::Overlay::label(
-            c + cv::Point2f(static_cast<float>(d.radius_px) + 4.0f, 0.0f), range, magenta, 0.4f));
-      }
-      char text[96];
-      std::snprintf(text, sizeof(text), "%s t=%.2f detections %d confirmed %zu", me.c_str(),
-                    f.stamp_s, seen, perception.sightings().size());
-      frame.text = text;
-      (void)vlog->submit(frame);  // a full queue drops the frame, never waits
-    }
+    on_camera_frame(f, pose, perception, vlog.get(), me);
   });
   if (!sub) {
-    log("camera " + camera + ": " + sub.message());
+    log("camera " + o->camera + ": " + sub.message());
     return 1;
   }
 
@@ -210,67 +276,20 @@ int main(int argc, char** argv) {
       log("clock: " + r.message());
       return 1;
     }
-    link->service(now_us());
+    link->service(program->now_us());
 
-    // inputs: telemetry, sightings, GCS messages
+    // inputs: telemetry, sightings, GCS messages; outputs: setpoints and GCS messages
     const Telemetry& t = uav.telemetry();
-    VehicleInputs in;
-    in.now_s = loop.now();
-    in.armed = t.armed;
-    in.on_ground = t.landed == LandedState::kOnGround;
-    in.position_enu_m = t.position_enu_m;
-    in.velocity_enu_m_s = t.velocity_enu_m_s;
-    in.yaw_enu_rad = enu_yaw_from_ned(t.yaw_rad);
-    in.roll_rad = t.roll_rad;
-    in.pitch_rad = t.pitch_rad;
-    in.balloons = perception.sightings();
-    for (const GcsMessage& m : link->take_received()) {
-      if (m.topic == kTopicState) {
-        if (auto c = decode_command(m.payload)) in.commands.push_back(*c);
-      } else if (m.topic == kTopicAirspace) {
-        if (auto a = decode_airspace(m.payload)) in.airspace_replies.push_back(*a);
-      }
-    }
-
-    const VehicleOutputs out = fsm.step(in);
+    const VehicleOutputs out = fsm.step(vehicle_inputs(loop.now(), t, perception, *link));
     if (!out.note.empty()) log(out.note);
     point_camera(out.camera_pitch_rad);
-
-    // outputs: setpoints and GCS messages
-    switch (out.action) {
-      case VehicleOutputs::Action::kNone:
-        break;
-      case VehicleOutputs::Action::kArmAndTakeOff: {
-        auto r = uav.set_mode(FlightMode::kGuided);
-        if (r) r = uav.arm();
-        if (r) r = uav.takeoff(out.takeoff_altitude_m, false);
-        if (!r) log("take-off failed: " + r.message());
-        break;
-      }
-      case VehicleOutputs::Action::kVelocity:
-        if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad);
-            !r && fsm.state() != VehicleState::kFailed) {
-          log("velocity: " + r.message());
-        }
-        break;
-      case VehicleOutputs::Action::kDisarm:
-        // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
-        if (auto r = uav.disarm(true); !r) log("disarm: " + r.message());
-        break;
-    }
+    fly(uav, out, fsm.state(), *program);
     if (out.airspace) link->publish(kTopicAirspace, encode_airspace(*out.airspace));
     if (out.popped_enu_m) link->publish(kTopicPopped, encode_point(*out.popped_enu_m));
     if (fsm.state() != last_state || loop.now() - last_status_s >= kStatusPeriod_s) {
       last_state = fsm.state();
       last_status_s = loop.now();
-      UavStatus s;
-      s.state = static_cast<uint8_t>(fsm.state());
-      s.ready = fsm.state() == VehicleState::kPreflight && uav.ready();
-      s.failed = fsm.state() == VehicleState::kFailed;
-      s.landed = fsm.state() == VehicleState::kLanded;
-      s.position_enu_m = t.position_enu_m;
-      s.popped = static_cast<uint8_t>(fsm.popped());
-      link->publish(kTopicStatus, encode_status(s));
+      link->publish(kTopicStatus, encode_status(status_of(fsm, uav.ready(), t)));
     }
     if (end_s < 0 &&
         (fsm.state() == VehicleState::kLanded || fsm.state() == VehicleState::kFailed)) {

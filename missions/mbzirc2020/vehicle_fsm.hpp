@@ -105,6 +105,37 @@ class VehicleFsm {
     double altitude_m;
   };
   VehicleOutputs decide(const VehicleInputs& in);
+  // decide()'s steps before the state's own: heights above the take-off spot, the GCS's commands
+  // and the motors lost in the air (these two return true when they have settled the step)
+  VehicleInputs above_take_off_spot(const VehicleInputs& raw);
+  bool apply_gcs_commands(const VehicleInputs& raw, VehicleOutputs& out);
+  bool motors_lost(const VehicleInputs& in, VehicleOutputs& out);
+  // one handler per state: what the state commands this step, and the transition out of it
+  void on_take_off(const VehicleInputs& in, VehicleOutputs& out);
+  void on_go_side_center(const VehicleInputs& in, VehicleOutputs& out);
+  void on_go_scan_altitude(const VehicleInputs& in, VehicleOutputs& out);
+  void on_blind_scan(const VehicleInputs& in, VehicleOutputs& out);
+  void on_scans_done(const VehicleInputs& in, VehicleOutputs& out);
+  void on_area_allocation_request(const VehicleInputs& in, VehicleOutputs& out);
+  void on_pierce(const VehicleInputs& in, VehicleOutputs& out);
+  void on_back_off(const VehicleInputs& in, VehicleOutputs& out);
+  void on_land(const VehicleInputs& in, VehicleOutputs& out);
+  // Blind Scan past its last waypoint: the other half (taken over), the own half again from
+  // beyond the middle, Scans Done, or Land
+  void end_of_scan_plan(const VehicleInputs& in, VehicleOutputs& out);
+  // the target's newest sighting (a new track close to it is the same balloon)
+  void follow_target(const VehicleInputs& in);
+  // Pierce's setpoint (blades at the balloon's height, towards it); returns how far the blades
+  // are past its centre along the pierce
+  double steer_pierce(const VehicleInputs& in, VehicleOutputs& out);
+  Eigen::Vector3d back_off_goal(const Eigen::Vector3d& p) const;
+  // Land's phases, and its touchdown rule (which keeps the descent's own state)
+  void land_climb_to_transit(const VehicleInputs& in, VehicleOutputs& out);
+  void land_to_spot(const VehicleInputs& in, VehicleOutputs& out);
+  void land_align_skids(const VehicleInputs& in, VehicleOutputs& out);
+  void land_descend(const VehicleInputs& in, VehicleOutputs& out);
+  bool touched_down(const VehicleInputs& in, double h, bool pause);
+  double landing_transit_altitude_m() const;
   void limit_yaw_rate(const VehicleInputs& in, VehicleOutputs& out);
   void enter(VehicleState s, VehicleOutputs& out, const std::string& why);
   void plan_scan();
@@ -116,7 +147,12 @@ class VehicleFsm {
   Eigen::Vector3d toward(const Eigen::Vector3d& p, const Eigen::Vector3d& target,
                          double max_speed_m_s) const;
   void hover(const VehicleInputs& in, VehicleOutputs& out, double yaw_enu_rad) const;
+  // the transitions that set a state up (its entry actions)
   void start_landing(VehicleOutputs& out, const std::string& why);
+  void start_crossing(VehicleOutputs& out, const std::string& why);  // the other half, re-planned
+  void start_pierce(const VehicleInputs& in, VehicleOutputs& out);
+  // Back Off's end: airspace released, the balloon counted popped if the blades got there
+  void end_back_off(VehicleOutputs& out);
 
   MissionConfig config_;
   int index_;
@@ -129,11 +165,12 @@ class VehicleFsm {
   bool armed_seen_ = false;
   bool take_over_ = false;
   bool other_side_done_ = false;
-  bool retask_ = false;  // the GCS's ReTask arrived
-  bool cross_ = false;   // scanning the other half from the middle (re-tasked)
+  bool retask_ = false;     // the GCS's ReTask arrived
+  bool cross_ = false;      // scanning the other half from the middle (re-tasked)
   bool look_home_ = false;  // taken over, both halves scanned: the own half from beyond the middle
   int popped_ = 0;
-  double ground_z_m_ = 0.0;  // the estimator's height on the ground before take-off, less rest height
+  double ground_z_m_ =
+      0.0;  // the estimator's height on the ground before take-off, less rest height
   std::vector<Eigen::Vector2d> popped_at_;
 
   std::vector<ScanWaypoint> scan_;
@@ -151,11 +188,12 @@ class VehicleFsm {
   bool pierce_reached_ = false;
   bool pierce_level_camera_ = false;
   bool seen_again_ = false;
-  bool pierce_through_ = false;   // the pierce ended with the blades past the balloon, unseen
+  bool pierce_through_ = false;      // the pierce ended with the blades past the balloon, unseen
   double look_back_since_s_ = -1.0;  // back on the line, looking for the balloon since then
 
   // landing: climb, transit, skids along the wind, descend, motors off
-  int land_phase_ = 0;
+  enum class LandPhase { kClimbToTransit, kToSpot, kAlignSkids, kDescend, kMotorsOff };
+  LandPhase land_phase_ = LandPhase::kClimbToTransit;
   double descent_stopped_s_ = -1.0;  // since when the descent has stopped near the ground
   double steady_descent_s_ = -1.0;   // since when it has been a steady ~0.5 m/s descent
   bool steady_descent_ = false;      // a second of it, unbroken, since the last sink

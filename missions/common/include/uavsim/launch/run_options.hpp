@@ -1,0 +1,54 @@
+// The options every mission launcher (mbzirc2017-run, mbzirc2020-run, coverage-run) takes alike,
+// the server they ask for, and the checks that end any run's loop. A launcher's own Options derive
+// from RunOptions and add the mission's.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "uavsim/launch/launcher.hpp"
+
+namespace uavsim::launch {
+
+struct RunOptions {
+  uint64_t seed = 1;
+  std::string world;   // the world file (--world)
+  std::string server;  // the uavsim-server program (--server)
+  // the video (--record; "" none) and how it is filmed: the server's --record-camera and
+  // --record-layout ("" leaves the server's default)
+  std::string record;
+  std::string record_camera = "follow";
+  std::string record_layout = "tiled";
+  std::string run_dir = "auto";  // --run-dir: video, summary, events, logs, ground truth
+  std::string json_path;         // --json: the summary
+  std::string events_path;       // --events: the sim's event log, one JSON line per event
+  std::string realism;           // the server's --realism ("": the world's)
+  std::string wind;              // the server's --wind ("": the world's)
+  double truth_hz = 10.0;        // ground truth rows per second in the run directory
+  bool quiet = false;
+};
+
+// The run files (resolve_run_files) set into o: run_dir, record (the video) and json_path; false
+// after "MISSION-run: why" on stderr when the run directory cannot be used. record false:
+// --no-record. Thread-safe.
+bool resolve_run_files(const std::string& mission, RunOptions* o, bool record);
+
+// The server of a run: o's world, "--seed N", the mission's own arguments, then the video's
+// (--record, --record-camera, --record-layout), the run directory as its --log-dir, --realism and
+// --wind, each where given. Thread-safe.
+ServerSpec run_server_spec(const RunOptions& o, const std::vector<std::string>& mission_args);
+
+// Starts that server, with the ground truth recorded into the run directory if there is one.
+// Owner thread only (launch's).
+Result<void> start_run_server(Launcher& launch, const RunOptions& o,
+                              const std::vector<std::string>& mission_args);
+
+// The checks every launcher's loop makes after its own: true when the run must end now, because
+// the wall-clock limit is reached (said as "NAME: wall-clock limit reached"), the server has
+// exited or the run's records cannot be written (those two are harness failures: *failure says
+// why). Owner thread only (launch's).
+bool run_must_end(Launcher& launch, const std::string& name, double wall_limit_s,
+                  std::string* failure);
+
+}  // namespace uavsim::launch

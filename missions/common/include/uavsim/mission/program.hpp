@@ -1,0 +1,45 @@
+// What every mission program (a vehicle's, a ground station's) sets up first: an event loop on the
+// run's clock (the server's lockstep under UAVSIM_LOCKSTEP, else the wall clock), log lines stamped
+// with the loop's time, "NAME t=12.35 text", which the mission launchers read from stdout, and a
+// vehicle's MAVLink link.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/vehicle.hpp"
+
+namespace uavsim::mission {
+
+// Thread contract: loop thread only (the thread that created it).
+class ProgramLoop {
+ public:
+  // The loop, or nullptr after "NAME: event loop: why" on stderr.
+  static std::unique_ptr<ProgramLoop> create(std::string name);
+
+  client::EventLoop& loop() { return *loop_; }
+  const std::string& name() const { return name_; }
+  // "NAME t=SECONDS line" on stdout, flushed at once: the launcher reads the lines as they come.
+  void log(const std::string& line) const;
+  // The loop's time in whole microseconds (a GcsLink's clock).
+  int64_t now_us() const;
+
+ private:
+  ProgramLoop(std::string name, std::unique_ptr<client::EventLoop> loop)
+      : name_(std::move(name)), loop_(std::move(loop)) {}
+  std::string name_;
+  std::unique_ptr<client::EventLoop> loop_;
+};
+
+// The link to the simulated vehicle `vehicle` over MAVLink at `mavlink` (tcp:HOST:PORT), with the
+// 20 Hz telemetry the missions fly on, connected within 30 s; nullptr after logging "connect: why".
+std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std::string& vehicle,
+                                                 const std::string& mavlink);
+
+// The missions' take-off: GUIDED, armed, climbing to altitude_m above the ground, without waiting
+// for it (the mission's state machine watches the climb). The first refusal's error.
+client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m);
+
+}  // namespace uavsim::mission

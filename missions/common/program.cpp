@@ -1,0 +1,46 @@
+#include "uavsim/mission/program.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace uavsim::mission {
+
+std::unique_ptr<ProgramLoop> ProgramLoop::create(std::string name) {
+  auto created = client::EventLoop::create();
+  if (!created) {
+    std::fprintf(stderr, "%s: event loop: %s\n", name.c_str(), created.message().c_str());
+    return nullptr;
+  }
+  return std::unique_ptr<ProgramLoop>(new ProgramLoop(std::move(name), std::move(*created)));
+}
+
+void ProgramLoop::log(const std::string& line) const {
+  std::printf("%s t=%.2f %s\n", name_.c_str(), loop_->now(), line.c_str());
+  std::fflush(stdout);
+}
+
+int64_t ProgramLoop::now_us() const {
+  return static_cast<int64_t>(std::llround(loop_->now() * 1e6));
+}
+
+std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std::string& vehicle,
+                                                 const std::string& mavlink) {
+  client::VehicleConfig vc;
+  vc.telemetry_rate_hz = 20.0;
+  vc.sim_vehicle = vehicle;
+  auto uav = std::make_unique<client::Vehicle>(program.loop(), vc);
+  if (auto r = uav->connect(mavlink, 30); !r) {
+    program.log("connect: " + r.message());
+    return nullptr;
+  }
+  return uav;
+}
+
+client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m) {
+  auto r = uav.set_mode(client::FlightMode::kGuided);
+  if (r) r = uav.arm();
+  if (r) r = uav.takeoff(altitude_m, false);
+  return r;
+}
+
+}  // namespace uavsim::mission
