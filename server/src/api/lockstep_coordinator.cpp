@@ -43,11 +43,18 @@ std::optional<double> LockstepCoordinator::leave(uint64_t conn, double sim_time_
   if (it == clients_.end()) return std::nullopt;
   const Client c = it->second;
   clients_.erase(it);
-  if (!clients_.empty()) return std::nullopt;
   // the clock cannot pass the client's next tick without it, so that is where it left (a done
   // already sent counts as the tick completed)
-  if (c.awaiting) return c.done_received ? c.tick_time_s + c.period_s : c.tick_time_s;
-  return std::max(sim_time_s, c.next_due_s);
+  const double left_at_s = c.awaiting ? (c.done_received ? c.tick_time_s + c.period_s : c.tick_time_s)
+                                      : std::max(sim_time_s, c.next_due_s);
+  // the latest of the leaving clients' ticks, not the one whose leaving was noticed last: two
+  // programs that end near the same tick are noticed in either order (wall-clock timing), and
+  // the run's end must not depend on it
+  latest_left_at_s_ = std::max(latest_left_at_s_.value_or(left_at_s), left_at_s);
+  if (!clients_.empty()) return std::nullopt;
+  const double last = *latest_left_at_s_;
+  latest_left_at_s_.reset();
+  return last;
 }
 
 bool LockstepCoordinator::joined(uint64_t conn) const { return clients_.count(conn) > 0; }
@@ -164,6 +171,7 @@ bool LockstepCoordinator::waiting_on_seq() const {
 }
 
 void LockstepCoordinator::reset() {
+  latest_left_at_s_.reset();
   for (auto& [conn, c] : clients_) {
     c.awaiting = false;
     c.next_due_s = 0.0;

@@ -46,9 +46,11 @@ class LockstepCoordinator {
   Joined join(uint64_t conn, double period_s, std::optional<double> timeout_s, double sim_time_s);
 
   // conn stops gating the clock (lockstep_leave, a disconnect, a drop). If it was the last client
-  // that gated it, returns the sim time of the tick the clock cannot have passed without it (its
-  // next tick, or the tick it is at; a done already sent counts as that tick completed): the same
-  // in every run, whenever its leaving is noticed. nullopt if conn was not joined or others remain.
+  // that gated it, returns the latest, over the clients that left since the lockstep last had
+  // none, of the tick the clock cannot have passed without that client (its next tick, or the
+  // tick it is at; a done already sent counts as that tick completed): the same in every run,
+  // whenever and in whichever order their leaving is noticed. nullopt if conn was not joined or
+  // others remain.
   std::optional<double> leave(uint64_t conn, double sim_time_s);
 
   bool joined(uint64_t conn) const;
@@ -114,6 +116,9 @@ class LockstepCoordinator {
   double default_timeout_s_;
   WallClock now_s_;
   std::map<uint64_t, Client> clients_;  // the joined connections
+  // leave(): the latest tick of the clients that left while others remained (reset when the last
+  // one leaves, and by reset())
+  std::optional<double> latest_left_at_s_;
   // the connections expire() dropped, until they join again or leave: what check_done tells them
   struct DropRecord {
     double sim_time_s = 0.0;

@@ -195,6 +195,31 @@ TEST_F(Lockstep, TheLastClientLeavesAtTheTickTheClockCannotHavePassed) {
   EXPECT_NEAR(*coordinator_.leave(1, 0.32), 0.4, kTimeEps_s);
 }
 
+// Two clients end near the same tick: one with its done sent (it leaves at its next tick), one
+// without (it leaves at the tick it is at). Whichever disconnect is noticed last, the lockstep is
+// empty at the later of the two, so a launcher's run ends at the same sim time every run (before,
+// the one noticed last decided: 0.3 s or 0.4 s by wall-clock timing).
+TEST_F(Lockstep, TheLockstepEmptiesAtTheLatestLeavingTickWhateverTheOrder) {
+  for (const bool done_one_noticed_last : {false, true}) {
+    SCOPED_TRACE(done_one_noticed_last ? "done client noticed last" : "done client noticed first");
+    coordinator_.reset();
+    coordinator_.join(1, 0.1, std::nullopt, 0.3);
+    coordinator_.join(2, 0.1, std::nullopt, 0.3);
+    EXPECT_EQ(announce(0.3), (std::vector<uint64_t>{1, 2}));
+    done(1);  // client 1 answered tick 0.3 s, then exits; client 2 exits before answering
+    std::optional<double> empty_at_s;
+    if (done_one_noticed_last) {
+      EXPECT_FALSE(coordinator_.leave(2, 0.3));
+      empty_at_s = coordinator_.leave(1, 0.3);
+    } else {
+      EXPECT_FALSE(coordinator_.leave(1, 0.3));
+      empty_at_s = coordinator_.leave(2, 0.3);
+    }
+    ASSERT_TRUE(empty_at_s);
+    EXPECT_NEAR(*empty_at_s, 0.4, kTimeEps_s);
+  }
+}
+
 TEST_F(Lockstep, BusyUntilSkipsTicksUpToTheFirstAtOrAfterIt) {
   // detached timing: done at tick 0 with busy_until 0.35 s, period 0.1 s -> next tick 0.4 s
   join_and_complete_first_tick(1, 0.35);
