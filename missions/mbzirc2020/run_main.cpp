@@ -159,6 +159,8 @@ struct Harness {
 // what the run learns from the event stream and the ground truth, for the score and the summary
 struct Run {
   std::set<std::string> killed;
+  std::set<std::string> took_off;  // the vehicles whose take-off event came
+  double kill_check_s = -1.0;      // --kill: the armed pause at which the kill is decided
   std::vector<std::string> crashes;
   std::vector<std::string> vision_logs;  // the UAV programs' video logs, in the run directory
   bool collision = false;
@@ -268,8 +270,8 @@ void start_programs(Launcher& launch, const Options& o, Run& run, Harness& h) {
   }
 }
 
-// one sim event: noted for the score, printed, and --kill's kill at the take-off
-void on_sim_event(const Json& e, Launcher& launch, const Options& o, Run& run) {
+// one sim event: noted for the score and printed
+void on_sim_event(const Json& e, Launcher& launch, Run& run) {
   const std::string type = e.value("type", ""), veh = e.value("vehicle_name", "");
   const double t = e.value("time", 0.0);
   const std::string detail = e.value("detail", "");
@@ -288,11 +290,40 @@ void on_sim_event(const Json& e, Launcher& launch, const Options& o, Run& run) {
                   detail.c_str());
     launch.say(buf);
   }
-  if (type == "takeoff" && veh == o.kill && !run.killed.count(veh)) {
-    (void)launch.api().request(
-        {{"op", "kill_vehicle"}, {"vehicle", veh}, {"reason", "Competition Day 2 malfunction"}});
-    run.killed.insert(veh);
+  if (type == "takeoff") run.took_off.insert(veh);
+}
+
+// --kill, at a sim time that wall-clock timing cannot move: the clock holds at each check
+// (pause_at, every kKillCheckPeriod_s from kFirstKillCheck_s), and the first check after the
+// vehicle's take-off kills it. (Sent when the launcher read the take-off event, the kill fell a
+// tick or two apart between runs of a seed: the launcher is not a lockstep client.)
+constexpr double kFirstKillCheck_s = 3.0;  // the GCS starts the UAVs at 2.5 s; take-off ~2.8 s
+constexpr double kKillCheckPeriod_s = 0.5;
+constexpr double kLastKillCheck_s = 60.0;  // a vehicle not off the ground by then is not killed
+
+void arm_kill_check(SimConnection& api, Run& run, double at_s) {
+  run.kill_check_s = at_s;
+  (void)api.request({{"op", "pause_at"}, {"time_s", at_s}});
+}
+
+// at a held kill check (the events up to it read): the kill, or the next check; then on
+void kill_at_check(Launcher& launch, const Options& o, Run& run) {
+  SimConnection& api = launch.api();
+  for (const SimMessage& m : api.take_messages()) {
+    if (m.kind() == "sim_event") on_sim_event(m.json, launch, run);
   }
+  if (run.took_off.count(o.kill)) {
+    (void)api.request(
+        {{"op", "kill_vehicle"}, {"vehicle", o.kill}, {"reason", "Competition Day 2 malfunction"}});
+    run.killed.insert(o.kill);
+    run.kill_check_s = -1.0;
+  } else if (run.kill_check_s + kKillCheckPeriod_s <= kLastKillCheck_s) {
+    arm_kill_check(api, run, run.kill_check_s + kKillCheckPeriod_s);
+  } else {
+    launch.say("mbzirc2020-run: " + o.kill + " never took off: not killed");
+    run.kill_check_s = -1.0;
+  }
+  (void)api.resume();
 }
 
 // 6. follow the programs and the event stream until they finish or the budget is spent
@@ -303,12 +334,18 @@ void follow(Launcher& launch, const Options& o, Run& run, Harness& h) {
   while (!h.failed) {
     launch.pump(200);
     for (const SimMessage& m : api.take_messages()) {
-      if (m.kind() == "sim_event") on_sim_event(m.json, launch, o, run);
+      if (m.kind() == "sim_event") on_sim_event(m.json, launch, run);
     }
     const bool all_done = launch.programs_done();
-    if (launch.wall_s() - last_status_wall_s > 0.5 || all_done) {
+    const bool kill_pending = run.kill_check_s >= 0;
+    if (launch.wall_s() - last_status_wall_s > (kill_pending ? 0.05 : 0.5) || all_done) {
       last_status_wall_s = launch.wall_s();
-      if (const auto s = api.status(); s) sim_s = s->value("time_s", 0.0);
+      if (const auto s = api.status(); s) {
+        sim_s = s->value("time_s", 0.0);
+        if (kill_pending && s->value("paused", false) && sim_s >= run.kill_check_s - 0.01) {
+          kill_at_check(launch, o, run);
+        }
+      }
       launch.note_sim_time(sim_s);
     }
     if (all_done || uavsim::launch::interrupted()) break;
@@ -370,6 +407,7 @@ void run_mission(Launcher& launch, const Options& o, Run& run, Harness& h) {
   // the clock stops by itself when the last program leaves the lockstep or the budget is spent,
   // so the end of the run (its sim time, the score) is the same every run
   (void)api.request({{"op", "pause_at"}, {"time_s", o.budget_s}, {"lockstep_empty", true}});
+  if (!o.kill.empty()) arm_kill_check(api, run, kFirstKillCheck_s);
   start_programs(launch, o, run, h);
   follow(launch, o, run, h);
   score(launch, o, run, h);
