@@ -293,6 +293,13 @@ void on_sim_event(const Json& e, Launcher& launch, Run& run) {
   if (type == "takeoff") run.took_off.insert(veh);
 }
 
+// the sim events the API connection has received so far, each through on_sim_event
+void read_sim_events(Launcher& launch, Run& run) {
+  for (const SimMessage& m : launch.api().take_messages()) {
+    if (m.kind() == "sim_event") on_sim_event(m.json, launch, run);
+  }
+}
+
 // --kill, at a sim time that wall-clock timing cannot move: the clock holds at each check
 // (pause_at, every kKillCheckPeriod_s from kFirstKillCheck_s), and the first check after the
 // vehicle's take-off kills it. (Sent when the launcher read the take-off event, the kill fell a
@@ -309,9 +316,7 @@ void arm_kill_check(SimConnection& api, Run& run, double at_s) {
 // at a held kill check (the events up to it read): the kill, or the next check; then on
 void kill_at_check(Launcher& launch, const Options& o, Run& run) {
   SimConnection& api = launch.api();
-  for (const SimMessage& m : api.take_messages()) {
-    if (m.kind() == "sim_event") on_sim_event(m.json, launch, run);
-  }
+  read_sim_events(launch, run);
   if (run.took_off.count(o.kill)) {
     (void)api.request(
         {{"op", "kill_vehicle"}, {"vehicle", o.kill}, {"reason", "Competition Day 2 malfunction"}});
@@ -333,9 +338,7 @@ void follow(Launcher& launch, const Options& o, Run& run, Harness& h) {
   double sim_s = 0;
   while (!h.failed) {
     launch.pump(200);
-    for (const SimMessage& m : api.take_messages()) {
-      if (m.kind() == "sim_event") on_sim_event(m.json, launch, run);
-    }
+    read_sim_events(launch, run);
     const bool all_done = launch.programs_done();
     const bool kill_pending = run.kill_check_s >= 0;
     if (launch.wall_s() - last_status_wall_s > (kill_pending ? 0.05 : 0.5) || all_done) {

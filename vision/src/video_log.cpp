@@ -255,7 +255,7 @@ struct VideoLogWriter::Impl {
   std::string write_error;  // guarded by mutex
   std::thread worker;
 
-  // the first record the file refused: said once, and the later frames are dropped
+  // a record the file refused: the first is said once
   void refused() {
     write_failed = true;
     {
@@ -306,10 +306,7 @@ struct VideoLogWriter::Impl {
         write_failed = true;
         continue;
       }
-      if (!file.error().empty()) {  // the disk refused an earlier record
-        ++dropped;
-        continue;
-      }
+      // after a refusal the file refuses every later record too (RecordFile): each is dropped
       std::string framed;
       put_u32(&framed, static_cast<uint32_t>(record.size()));
       framed += record;

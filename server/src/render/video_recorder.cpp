@@ -208,7 +208,8 @@ void VideoRecorder::finish() {
   if (cv_writer_) cv_writer_->writer.release();
   // an encoder that could write the frames but not the file's index (MP4 keeps it at the end: a
   // disk that fills then) may still exit 0, leaving a file no player opens
-  if (!options_.sink && stats().frames_written > 0 && stats().write_error.empty() &&
+  const RecorderStats so_far = stats();
+  if (!options_.sink && so_far.frames_written > 0 && so_far.write_error.empty() &&
       !cv::VideoCapture(path_, cv::CAP_FFMPEG).isOpened()) {
     encoder_failed(path_ +
                    ": the finished video cannot be opened (the encoder could not complete it)");
