@@ -218,19 +218,25 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
       api.use_ring(std::move(*ring));
     }
   }
-  // the join's reply, then the first tick
+  // the join's reply, then the first tick. The clock before that tick is set while the reply is
+  // read: the tick may come in the same read, right behind the reply, and its time must not be
+  // overwritten afterwards by this earlier one (a loaded machine did so, and the client then ran
+  // one period behind the server's clock)
   std::optional<Json> join;
-  if (!api.request({{"op", "lockstep_join"}, {"period_s", config.lockstep_period_s}},
-                   [&join](const Json& j) { join = j; })) {
+  const auto on_join = [this, &join](const Json& j) {
+    join = j;
+    if (j.value("ok", false) != true) return;
+    const Json result = j.value("result", Json::object());
+    period_s = result.value("period_s", config.lockstep_period_s);
+    sim_now = std::max(0.0, result.value("first_tick_time", 0.0) - period_s);
+  };
+  if (!api.request({{"op", "lockstep_join"}, {"period_s", config.lockstep_period_s}}, on_join)) {
     return R::fail(Error::kIo, "lockstep: cannot send the join");
   }
   if (auto r = read_api_until([&] { return join.has_value(); }, "waiting for the join's reply"); !r)
     return r;
   if ((*join)["ok"] != true)
     return R::fail(Error::kDenied, "lockstep: join refused: " + join->dump());
-  const Json result = join->value("result", Json::object());
-  period_s = result.value("period_s", config.lockstep_period_s);
-  sim_now = std::max(0.0, result.value("first_tick_time", 0.0) - period_s);
   return read_api_until([this] { return tick_outstanding; }, "waiting for the first tick");
 }
 
