@@ -28,13 +28,13 @@ bool has(const std::string& text, const std::string& s) {
   return text.find(s) != std::string::npos;
 }
 
-// the one uavsim_*.deb the fixture made
-fs::path deb_file() {
+// the one PACKAGE_*.deb the fixture made (empty when none)
+fs::path deb_file(const std::string& package = "uavsim") {
   fs::path found;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(UAVSIM_DEB_DIR, ec)) {
     const std::string name = e.path().filename().string();
-    if (name.rfind("uavsim_", 0) == 0 && e.path().extension() == ".deb") found = e.path();
+    if (name.rfind(package + "_", 0) == 0 && e.path().extension() == ".deb") found = e.path();
   }
   return found;
 }
@@ -75,6 +75,8 @@ TEST(DebPackage, HoldsTheInstallUnderUsrWithDependsComputedFromTheBinaries) {
   }
   // nothing outside /usr (no build or source paths leaked into the package)
   for (const std::string& f : files) EXPECT_EQ(f.rfind("/usr/", 0), 0u) << f;
+  // no GPL code: the ns3 radio helper is a package of its own (below)
+  EXPECT_FALSE(holds("/usr/bin/uavsim-ns3-radio"));
 
   // Depends: dpkg-shlibdeps's packages of the linked libraries, with versions
   const std::string depends = run_shell("dpkg-deb -f '" + deb.string() + "' Depends").output;
@@ -82,8 +84,40 @@ TEST(DebPackage, HoldsTheInstallUnderUsrWithDependsComputedFromTheBinaries) {
        {"libc6 (>=", "libstdc++6 (>=", "libmujoco", "libosmesa6", "libopencv-core"}) {
     EXPECT_TRUE(has(depends, lib)) << lib << " not in Depends: " << depends;
   }
+  EXPECT_FALSE(has(depends, "libns3")) << depends;
   const std::string recommends = run_shell("dpkg-deb -f '" + deb.string() + "' Recommends").output;
   EXPECT_TRUE(has(recommends, "ffmpeg")) << recommends;
+}
+
+// ns-3 is GPL-2.0-only: its helper program ships as uavsim-ns3-radio, with the GPL as its copyright
+// file and the program's own source beside it, and depends on this very version of uavsim
+TEST(DebPackage, TheNs3HelperIsAPackageOfItsOwnWithItsLicenceAndSource) {
+#if !UAVSIM_HAS_NS3_HELPER
+  GTEST_SKIP() << "this build has no ns3 radio helper (ns-3 is not installed)";
+#endif
+  const fs::path deb = deb_file("uavsim-ns3-radio");
+  ASSERT_FALSE(deb.empty()) << "no uavsim-ns3-radio_*.deb in " << UAVSIM_DEB_DIR;
+  EXPECT_EQ(
+      deb.filename().string().rfind(std::string("uavsim-ns3-radio_") + UAVSIM_VERSION + "_", 0), 0u)
+      << deb;
+  const std::vector<std::string> files = package_files(deb);
+  auto holds = [&](const std::string& f) {
+    return std::find(files.begin(), files.end(), f) != files.end();
+  };
+  const std::string doc = "/usr/share/doc/uavsim-ns3-radio/";
+  for (const std::string f : {std::string("/usr/bin/uavsim-ns3-radio"), doc + "copyright",
+                              doc + "source/uavsim_ns3_radio.cc", doc + "source/wire.hpp",
+                              doc + "source/CMakeLists.txt", doc + "source/README.md"}) {
+    EXPECT_TRUE(holds(f)) << f;
+  }
+  for (const std::string& f : files) EXPECT_EQ(f.rfind("/usr/", 0), 0u) << f;
+  const std::string copyright =
+      run_shell("dpkg-deb --fsys-tarfile '" + deb.string() + "' | tar -xO ." + doc + "copyright")
+          .output;
+  EXPECT_TRUE(has(copyright, "SPDX-License-Identifier: GPL-2.0-only")) << copyright;
+  const std::string depends = run_shell("dpkg-deb -f '" + deb.string() + "' Depends").output;
+  EXPECT_TRUE(has(depends, std::string("uavsim (= ") + UAVSIM_VERSION + ")")) << depends;
+  EXPECT_TRUE(has(depends, "libns3")) << depends;
 }
 
 TEST(DebPackage, InstallsWithAptRunsAndRemovesCleanly) {
@@ -98,6 +132,9 @@ TEST(DebPackage, InstallsWithAptRunsAndRemovesCleanly) {
   const ShellRun dry = run_shell("apt-get install -s '" + deb.string() + "'");
   if (dry.exit_code != 0) GTEST_SKIP() << "apt cannot install it here: " << dry.output;
 
+  // with the ns3 radio helper's package when this build made one: installed beside uavsim, it gives
+  // the server its ns3 backend, and removing uavsim removes it too (it depends on uavsim)
+  const fs::path ns3_deb = deb_file("uavsim-ns3-radio");
   // install, run, remove: one script under a lock (two checkouts on one machine must not overlap)
   const fs::path work = fs::path(::testing::TempDir()) / "deb";
   fs::remove_all(work);
@@ -107,7 +144,8 @@ export DEBIAN_FRONTEND=noninteractive
 apt="apt-get -o DPkg::Lock::Timeout=300 -y -qq"
 echo "start: $(date +%s.%N)"
 $apt install ')sh" + deb.string() +
-                             R"sh(' >/dev/null
+                             "' " + (ns3_deb.empty() ? "" : "'" + ns3_deb.string() + "'") +
+                             R"sh( >/dev/null
 echo "installed: $(date +%s.%N)"
 trap '$apt remove --purge uavsim >/dev/null' EXIT
 cd ')sh" + work.string() + R"sh('
@@ -115,6 +153,9 @@ echo "which: $(command -v uavsim-server)"
 env -i PATH=/usr/bin:/bin HOME="$PWD" uavsim worlds
 env -i PATH=/usr/bin:/bin HOME="$PWD" uavsim-server mbzirc2020 --fast --duration 0.2 --mavlink-port -1 --api-port -1 --quiet
 echo "server: ok"
+if command -v uavsim-ns3-radio >/dev/null; then
+  env -i PATH=/usr/bin:/bin HOME="$PWD" uavsim-server empty --radio-backend ns3 --fast --duration 0.2 --mavlink-port -1 --api-port 0 --no-cameras --out none
+fi
 env -i PATH=/usr/bin:/bin HOME="$PWD" uavsim run mbzirc2017 --seed 1 --no-record --no-run-dir --budget 240 --wall-limit 600
 echo "result: $(date +%s.%N)"
 )sh";
@@ -132,6 +173,9 @@ echo "result: $(date +%s.%N)"
   EXPECT_TRUE(has(r.output, "# models: /usr/share/uavsim/models (install)")) << r.output;
   EXPECT_TRUE(has(r.output, "server: ok")) << r.output;
   EXPECT_TRUE(has(r.output, "RESULT: SUCCESS")) << r.output;
+  if (!ns3_deb.empty()) {
+    EXPECT_TRUE(has(r.output, "uavsim-server: radio: ns3 backend")) << r.output;
+  }
 
   // removed: the package is gone and so is every file it brought
   EXPECT_NE(
@@ -139,6 +183,10 @@ echo "result: $(date +%s.%N)"
       0);
   for (const std::string& f : package_files(deb))
     EXPECT_FALSE(fs::exists(f)) << f << " left behind";
+  if (!ns3_deb.empty()) {
+    for (const std::string& f : package_files(ns3_deb))
+      EXPECT_FALSE(fs::exists(f)) << f << " left behind";
+  }
   EXPECT_FALSE(fs::exists("/usr/share/uavsim")) << "/usr/share/uavsim left behind";
 }
 
