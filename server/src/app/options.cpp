@@ -57,6 +57,8 @@ simulation:
                       every vehicle at start, after the world's per-vehicle parameters (repeatable)
   --demo              fly vehicle 0 through take-off, three waypoints and landing, print what happened,
                       and exit with 0 if the flight succeeded
+  --hover M           every vehicle arms in GUIDED, takes off to M metres (0.5 to 1000) and holds, with
+                      no client: the floor a mission's wall time is measured against
   --write-world FILE  write the composed MJCF (plain MuJoCo, opens in mujoco-simulate) and exit
   --models-dir DIR    where vehicles/, objects/ and worlds/ live; default: the environment variable
                       UAVSIM_MODELS_DIR, else PREFIX/share/uavsim/models of an install (beside
@@ -425,6 +427,9 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if ((ok = value(&v))) o.defaults_files.push_back(v);
     } else if (a == "--demo") {
       o.demo = true;
+    } else if (a == "--hover") {
+      ok = number({0.5, 1000, false, "metres of altitude"}, &x);
+      if (ok) o.hover_m = x;
     } else if (a == "--write-world") {
       if ((ok = value(&v))) o.write_world_path = v;
     } else if (a == "--models-dir") {

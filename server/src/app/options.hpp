@@ -63,6 +63,7 @@ struct Options {
   double rate = 1.0;                  // real time x rate; 0 = as fast as possible
   double duration_s = 0.0;            // 0 = run until interrupted
   bool demo = false;                  // fly the scripted demo on vehicle 0 and exit
+  std::optional<double> hover_m;  // --hover M: every vehicle takes off to M m and holds, no client
   bool quiet = false;
   bool print_schedule = false;        // print the step schedule before the clock starts
   bool version = false;               // --version: print it and exit

@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cctype>
-#include <cstdlib>
-#include <optional>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +14,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "api/api_server.hpp"
@@ -25,6 +25,8 @@
 #include "app/endpoint_hooks.hpp"
 #include "app/field_setup.hpp"
 #include "app/gimbal_bridge.hpp"
+#include "app/hover_all.hpp"
+#include "app/loop_guard.hpp"
 #include "app/param_file.hpp"
 #include "app/recording.hpp"
 #include "app/run_reporter.hpp"
@@ -37,7 +39,6 @@
 #include "render/frame_service.hpp"
 #include "render/video_recorder.hpp"
 #include "sim/runner.hpp"
-#include "app/loop_guard.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::app {
@@ -554,6 +555,15 @@ int run_server(const Options& given_options) {
     demo = std::make_unique<DemoFlight>(std::cout, options.quiet);
   }
 
+  std::unique_ptr<HoverAll> hover;
+  if (options.hover_m) {
+    hover = std::make_unique<HoverAll>(*options.hover_m, std::cout, options.quiet);
+    if (!options.quiet) {
+      std::cout << "uavsim-server: --hover: every vehicle takes off to " << *options.hover_m
+                << " m and holds\n";
+    }
+  }
+
   // the step schedule (sim/step_schedule.hpp, docs/architecture.md): each component's place in a step,
   // registered here once; inside a phase they run in the order written here, the simulation's own work
   // (sim.*) before or after them as the schedule declares
@@ -576,6 +586,8 @@ int run_server(const Options& given_options) {
   steps.add(sim::Phase::kPostControl, "stop_signal", [&runner] {
     if (g_stop_requested) runner.stop();
   });
+  if (hover)
+    steps.add(sim::Phase::kPostControl, "hover", [&hover, &s] { hover->on_control_step(s); });
   if (demo) {
     steps.add(sim::Phase::kPostControl, "demo", [&runner, &demo, &s] {
       demo->on_control_step(s);

@@ -40,6 +40,25 @@ TEST(ServerCli, BadOptionsSayWhy) {
   EXPECT_TRUE(has(r, "--mavlink-port needs a port")) << r.output;
 }
 
+// --hover: with no client at all, every vehicle takes off and holds (the floor of a mission's wall
+// time); the altitude is range-checked like every number from outside
+TEST(ServerCli, HoverTakesEveryVehicleUpAndHoldsWithNoClient) {
+  ServerRun r = run_server("mbzirc2020" + kWorlds +
+                           " --hover 4 --rate 0 --duration 20 --api-port -1 --mavlink-port -1"
+                           " --out none --no-cameras");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: --hover: every vehicle takes off to 4 m and holds"))
+      << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: --hover: all 2 vehicle(s) at 4 m by t=")) << r.output;
+  EXPECT_TRUE(has(r, "2 vehicle(s), 0 crash(es)")) << r.output;
+  for (const char* bad : {"0.1", "1e308", "nan", "-4", "x"}) {
+    r = run_server(std::string("empty --hover ") + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_TRUE(has(r, "--hover needs metres of altitude from 0.5 to 1000"))
+        << bad << ": " << r.output;
+  }
+}
+
 TEST(ServerCli, VersionPrintsAndExitsZero) {
   const ServerRun r = run_server("--version");
   EXPECT_EQ(r.exit_code, 0);
