@@ -171,7 +171,7 @@ class VehicleFsm {
   int popped_ = 0;
   double ground_z_m_ =
       0.0;  // the estimator's height on the ground before take-off, less rest height
-  std::vector<Eigen::Vector2d> popped_at_;
+  std::vector<Eigen::Vector3d> popped_at_;  // as seen, their centres' heights included (poles)
 
   std::vector<ScanWaypoint> scan_;
   size_t scan_leg_ = 0;

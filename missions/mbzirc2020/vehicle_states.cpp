@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "ground_station.hpp"
 #include "uavsim/client/geodesy.hpp"
 #include "vehicle_fsm.hpp"
 #include "vehicle_fsm_tuning.hpp"
@@ -228,8 +229,12 @@ double VehicleFsm::steer_pierce(const VehicleInputs& in, VehicleOutputs& out) {
   // the blades ride just above the balloon's centre as the camera sees it: the balloon's height
   // and ours come from the same estimate, so its bias (a metre of GPS / baro error in the
   // field) cancels; the rules' heights would not (the pole top is 0.28 m below the centre)
-  const double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
-                                    p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
+  double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
+                              p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
+  for (const Eigen::Vector3d& q : popped_at_) {
+    if (segment_distance(p.head<2>(), b.head<2>(), q.head<2>(), q.head<2>()) < kPoleClearance_m)
+      blade_z = std::max(blade_z, q.z() + config_.backoff_above_centre_m);
+  }
   double speed = config_.pierce_speed_near_m_s;
   if (seen) {
     coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
@@ -325,7 +330,7 @@ void VehicleFsm::end_back_off(VehicleOutputs& out) {
   if (pierce_reached_ && !seen_again_) {
     const Eigen::Vector2d b = target_.position_enu_m.head<2>();
     ++popped_;
-    popped_at_.push_back(b);
+    popped_at_.push_back(target_.position_enu_m);
     out.popped_enu_m = b;
     why += ", balloon gone (" + std::to_string(popped_) + " popped)";
   } else {
