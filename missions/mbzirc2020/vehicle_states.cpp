@@ -157,6 +157,29 @@ void VehicleFsm::follow_target(const VehicleInputs& in) {
   }
 }
 
+std::string VehicleFsm::take_balloon_in_the_way(const VehicleInputs& in) {
+  const Eigen::Vector2d p = in.position_enu_m.head<2>();
+  const Eigen::Vector2d t = target_.position_enu_m.head<2>();
+  const double target_range_m = (t - p).norm();
+  for (const BalloonSighting& b : in.balloons) {
+    const Eigen::Vector2d q = b.position_enu_m.head<2>();
+    if (b.track_id == target_.track_id || in.now_s - b.last_seen_s > kFreshSighting_s ||
+        (q - t).norm() < kSameBalloon_m || (q - p).norm() >= target_range_m ||
+        segment_distance(p, t, q, q) >= kInTheWay_m) {
+      continue;
+    }
+    bool popped = false;
+    for (const Eigen::Vector3d& r : popped_at_)
+      popped = popped || (r.head<2>() - q).norm() < kPoppedExclusion_m;
+    if (popped) continue;
+    target_ = b;
+    closest_blade_m_ = 1e9;
+    return fmt("balloon in the way at (%.1f, %.1f, %.1f): the target now", q.x(), q.y(),
+               b.position_enu_m.z());
+  }
+  return {};
+}
+
 void VehicleFsm::on_area_allocation_request(const VehicleInputs& in, VehicleOutputs& out) {
   const Eigen::Vector3d& p = in.position_enu_m;
   follow_target(in);
@@ -190,6 +213,7 @@ void VehicleFsm::start_pierce(const VehicleInputs& in, VehicleOutputs& out) {
 
 void VehicleFsm::on_pierce(const VehicleInputs& in, VehicleOutputs& out) {
   follow_target(in);
+  if (std::string note = take_balloon_in_the_way(in); !note.empty()) out.note = note;
   const double along_m = steer_pierce(in, out);
   // "this state is maintained for N seconds after the balloon was last detected" (or until the
   // blades are through it)
