@@ -1,7 +1,7 @@
 // Telemetry: the messages the vehicle streams (when, per client: telemetry_schedule.hpp) and sends
 // on request. Every time_boot_ms / time_usec is simulation time since start, as in SITL
 // (docs/mavlink.md §8), and every value comes from the flight controller's estimate, never from
-// ground truth; the gimbal's attitude is what its own device measures (EndpointConfig::gimbal_attitude).
+// ground truth, but for the gimbal's attitude: its device's (EndpointConfig::gimbal_attitude).
 //
 // Stream groups follow ArduCopter's REQUEST_DATA_STREAM groups (docs/mavlink.md §9). Default rates
 // per client: EXTENDED_STATUS 2 Hz, POSITION 4 Hz, EXTRA1 4 Hz, EXTRA2 4 Hz, EXTRA3 2 Hz, HEARTBEAT
