@@ -2,11 +2,13 @@
 // flags as ArduCopter sends them (docs/mavlink.md).
 #include "telemetry_decoder.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
 #include "mav_units.hpp"
+#include "uavsim/common/frames.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/wire.hpp"
 
@@ -55,6 +57,7 @@ TelemetryDecoder::TelemetryDecoder(EventLoop& loop, MavPort& port) : loop_(loop)
   route<msg::HomePosition>(&TelemetryDecoder::apply);
   route<msg::GpsGlobalOrigin>(&TelemetryDecoder::apply);
   route<msg::MountStatus>(&TelemetryDecoder::apply);
+  route<msg::GimbalDeviceAttitudeStatus>(&TelemetryDecoder::apply);
   route<msg::MissionCurrent>(&TelemetryDecoder::apply);
   route<msg::MissionItemReached>(&TelemetryDecoder::apply);
   port_.on_message(msg::Statustext::kId, [this](const mav::Frame& f) {
@@ -197,6 +200,27 @@ void TelemetryDecoder::apply(const msg::MountStatus& m) {
   tm_.gimbal_pitch_deg = m.pointing_a / 100.0;  // cdeg
   tm_.gimbal_roll_deg = m.pointing_b / 100.0;
   tm_.gimbal_yaw_deg = m.pointing_c / 100.0;
+}
+
+void TelemetryDecoder::apply(const msg::GimbalDeviceAttitudeStatus& m) {
+  using Flags = mav::GimbalDeviceFlags;
+  Eigen::Quaterniond q(m.q[0], m.q[1], m.q[2], m.q[3]);
+  if (!(q.norm() > 0.5)) return;  // NaN or no attitude
+  // earth frame: the YAW_IN_EARTH_FRAME flag, or (older devices, neither frame flag) a yaw lock
+  const bool in_vehicle_frame = (m.flags & to_underlying(Flags::YawInVehicleFrame)) != 0;
+  const bool in_earth_frame = (m.flags & to_underlying(Flags::YawInEarthFrame)) != 0 ||
+                              (!in_vehicle_frame && (m.flags & to_underlying(Flags::YawLock)) != 0);
+  if (in_earth_frame) {
+    if (!std::isfinite(m.delta_yaw)) return;  // no way back to the vehicle frame
+    q = Eigen::AngleAxisd(-m.delta_yaw, Eigen::Vector3d::UnitZ()) *
+        q;  // q_earth = q_delta_yaw * q_vehicle
+  }
+  const common::frames::Euler e = common::frames::euler_from_q_ned_frd(q.normalized());
+  tm_.has_gimbal_attitude = true;
+  tm_.gimbal_attitude_time_s = m.time_boot_ms / 1000.0;
+  tm_.gimbal_attitude_roll_rad = e.roll_rad;
+  tm_.gimbal_attitude_pitch_rad = e.pitch_rad;
+  tm_.gimbal_attitude_yaw_rad = e.yaw_rad;
 }
 
 void TelemetryDecoder::apply(const msg::MissionCurrent& m) { tm_.mission_current = m.seq; }

@@ -57,6 +57,7 @@ class TelemetryDecoder {
   void apply(const common::mavlink::msg::HomePosition& m);
   void apply(const common::mavlink::msg::GpsGlobalOrigin& m);
   void apply(const common::mavlink::msg::MountStatus& m);
+  void apply(const common::mavlink::msg::GimbalDeviceAttitudeStatus& m);
   void apply(const common::mavlink::msg::MissionCurrent& m);
   void apply(const common::mavlink::msg::MissionItemReached& m);
   void add_status_text(const common::mavlink::msg::Statustext& m);

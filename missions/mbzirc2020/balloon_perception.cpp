@@ -1,5 +1,6 @@
 #include "balloon_perception.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 
 namespace uavsim::missions::mbzirc2020 {
@@ -11,6 +12,9 @@ constexpr double kMaxBalloonHeight_m = 4.5;
 // a 5 deg step of the field's gimbal (tau 50 ms, 180 deg/s, 1000 deg/s^2) is within 0.1 deg after
 // ~0.25 s; the command reaches it within a tick
 constexpr double kGimbalSettle_s = 0.35;
+// gimbal reports kept for the frames still to come: the camera's latency (60 ms in the field) and a
+// loaded machine's queue are well within
+constexpr double kGimbalReportsKept_s = 1.0;
 
 vision::BalloonTrackerParams tracker_params() {
   vision::BalloonTrackerParams p;
@@ -34,6 +38,33 @@ vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& positio
   return vision::camera_pose_from_vehicle(position_enu_m, q_enu_body,
                                           vision::GimbalAngles{pitch_rad, 0.0, true},
                                           config_.camera_offset_body_m);
+}
+
+vision::CameraPose BalloonPerception::camera_pose(const Eigen::Vector3d& position_enu_m,
+                                                  double yaw_enu_rad,
+                                                  const GimbalReport& gimbal) const {
+  vision::CameraPose pose = camera_pose(position_enu_m, yaw_enu_rad, 0.0);
+  // MAVLink's FRD angles on our FLU mount: pitch up is a negative turn about y, a clockwise yaw a
+  // negative turn about z
+  const Eigen::Quaterniond q_enu_mount =
+      vision::q_enu_body_from_rpy(gimbal.roll_rad, -gimbal.pitch_rad, yaw_enu_rad - gimbal.yaw_rad);
+  pose.R_enu_cam = q_enu_mount.toRotationMatrix() * vision::R_mount_cam();
+  return pose;
+}
+
+void GimbalReports::add(const GimbalReport& report) {
+  if (!reports_.empty() && report.time_s <= reports_.back().time_s) return;
+  reports_.push_back(report);
+  while (reports_.front().time_s < report.time_s - kGimbalReportsKept_s) reports_.pop_front();
+}
+
+std::optional<GimbalReport> GimbalReports::at(double stamp_s, double max_age_s) const {
+  for (auto it = reports_.rbegin(); it != reports_.rend(); ++it) {
+    if (it->time_s > stamp_s) continue;
+    if (it->time_s < stamp_s - max_age_s) return std::nullopt;
+    return *it;
+  }
+  return std::nullopt;
 }
 
 void BalloonPerception::set_camera_pitch(double pitch_rad, double since_s) {

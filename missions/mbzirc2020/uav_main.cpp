@@ -9,6 +9,7 @@
 // ranges, the confirmed balloons' count), vision/'s VLOG (uavsim-videolog-export makes an MP4 of
 // it); written on its own thread, it changes nothing the UAV decides.
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -38,6 +39,14 @@ namespace {
 constexpr double kStep_s = 0.05;         // FSM rate 20 Hz
 constexpr double kStatusPeriod_s = 0.5;  // STATUS to the GCS
 constexpr double kLinger_s = 3.0;        // keep reporting after the end, so the GCS hears it
+// GIMBAL_DEVICE_ATTITUDE_STATUS (285) asked for every 20 ms with MAV_CMD_SET_MESSAGE_INTERVAL
+// (511): the field gimbal's error changes within its 50 ms loop, and EXTRA3's default 2 Hz is far
+// too slow
+constexpr uint16_t kSetMessageInterval = 511;
+constexpr float kGimbalDeviceAttitudeStatus = 285;
+constexpr float kGimbalReportInterval_us = 20000;
+// a frame with no report this close before it is placed with the commanded elevation
+constexpr double kGimbalReportMaxAge_s = 0.1;
 
 int usage() {
   std::fprintf(
@@ -111,17 +120,23 @@ uavsim::vision::VideoLogFrame vision_log_frame(const CameraFrame& f,
   return frame;
 }
 
-// a camera frame into the perception (placed by the telemetry moved to its stamp), and into the
-// video log if there is one
-void on_camera_frame(const CameraFrame& f, const TimedPose& pose, BalloonPerception& perception,
-                     uavsim::vision::VideoLogWriter* vlog, const std::string& me) {
+// a camera frame into the perception (placed by the telemetry moved to its stamp and the gimbal's
+// report of its exposure), and into the video log if there is one. The frames' stamps and the
+// vehicle's time_boot_ms share the sim clock here; on a drone the camera driver's clock would be
+// mapped onto the autopilot's (TIMESYNC).
+void on_camera_frame(const CameraFrame& f, const TimedPose& pose, const GimbalReports& gimbal,
+                     BalloonPerception& perception, uavsim::vision::VideoLogWriter* vlog,
+                     const std::string& me) {
   if (pose.time_s < 0) return;
   const Eigen::Vector3d p = pose.position_at(f.stamp_s);
   const uavsim::vision::PinholeIntrinsics k = uavsim::mission::intrinsics_of(f);
   const std::optional<double> pitch_rad = perception.camera_pitch_at(f.stamp_s);
   if (!pitch_rad) return;  // the gimbal is slewing
-  const int seen = perception.on_frame(f.image, k, f.stamp_s,
-                                       perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
+  const std::optional<GimbalReport> report = gimbal.at(f.stamp_s, kGimbalReportMaxAge_s);
+  const int seen =
+      perception.on_frame(f.image, k, f.stamp_s,
+                          report ? perception.camera_pose(p, pose.yaw_enu_rad, *report)
+                                 : perception.camera_pose(p, pose.yaw_enu_rad, *pitch_rad));
   // a full queue drops the frame, never waits
   if (vlog) (void)vlog->submit(vision_log_frame(f, perception, seen, me));
 }
@@ -214,7 +229,12 @@ int main(int argc, char** argv) {
                       [&](uint32_t) { link->service(program->now_us()); });
 
   TimedPose pose;
+  GimbalReports gimbal_reports;
   uav.on_telemetry([&](const Telemetry& t) {
+    if (t.has_gimbal_attitude) {
+      gimbal_reports.add({t.gimbal_attitude_time_s, t.gimbal_attitude_roll_rad,
+                          t.gimbal_attitude_pitch_rad, t.gimbal_attitude_yaw_rad});
+    }
     if (!t.has_local_position) return;
     pose = {loop.now(), t.position_enu_m, t.velocity_enu_m_s, enu_yaw_from_ned(t.yaw_rad)};
   });
@@ -237,7 +257,7 @@ int main(int argc, char** argv) {
   cc.camera = o->camera;
   cc.format = CameraFormat::kBgr;
   auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
-    on_camera_frame(f, pose, perception, vlog.get(), me);
+    on_camera_frame(f, pose, gimbal_reports, perception, vlog.get(), me);
   });
   if (!sub) {
     log("camera " + o->camera + ": " + sub.message());
@@ -247,6 +267,11 @@ int main(int argc, char** argv) {
   if (auto r = uav.wait_ready(120); !r) {
     log("wait ready: " + r.message());
     return 1;
+  }
+  if (auto r = uav.command_long(kSetMessageInterval, {kGimbalDeviceAttitudeStatus,
+                                                      kGimbalReportInterval_us, 0, 0, 0, 0, 0});
+      !r) {
+    log("gimbal reports: " + r.message() + " (frames placed with the commanded elevation)");
   }
   // the gimbal follows the FSM's wanted elevation; if it refuses, the camera stays level
   bool gimbal_ok = true;

@@ -141,8 +141,8 @@ std::optional<BalloonSighting> VehicleFsm::choose_target(const VehicleInputs& in
     }
     if (!in_own_half(p)) continue;
     bool done = false;
-    for (const Eigen::Vector2d& q : popped_at_)
-      done = done || (q - p.head<2>()).norm() < kPoppedExclusion_m;
+    for (const Eigen::Vector3d& q : popped_at_)
+      done = done || (q.head<2>() - p.head<2>()).norm() < kPoppedExclusion_m;
     if (done) continue;
     const double range = (p.head<2>() - in.position_enu_m.head<2>()).norm();
     if (range < best_range) {

@@ -125,6 +125,8 @@ class VehicleFsm {
   void end_of_scan_plan(const VehicleInputs& in, VehicleOutputs& out);
   // the target's newest sighting (a new track close to it is the same balloon)
   void follow_target(const VehicleInputs& in);
+  // a pierce's target becomes a balloon seen in its way, nearer than the target; returns the note
+  std::string take_balloon_in_the_way(const VehicleInputs& in);
   // Pierce's setpoint (blades at the balloon's height, towards it); returns how far the blades
   // are past its centre along the pierce
   double steer_pierce(const VehicleInputs& in, VehicleOutputs& out);
@@ -171,7 +173,7 @@ class VehicleFsm {
   int popped_ = 0;
   double ground_z_m_ =
       0.0;  // the estimator's height on the ground before take-off, less rest height
-  std::vector<Eigen::Vector2d> popped_at_;
+  std::vector<Eigen::Vector3d> popped_at_;  // as seen, their centres' heights included (poles)
 
   std::vector<ScanWaypoint> scan_;
   size_t scan_leg_ = 0;

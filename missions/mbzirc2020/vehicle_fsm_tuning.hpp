@@ -17,6 +17,18 @@ inline constexpr double kGainZ_1_s = 1.5;        // altitude error -> climb rate
 inline constexpr double kFreshSighting_s = 0.5;  // a sighting older than this is "lost"
 inline constexpr double kSameBalloon_m = 1.5;  // a new track this close to the target is the target
 inline constexpr double kPoppedExclusion_m = 2.5;
+// The poles of the balloons we popped still stand: a pierce whose path ahead passes closer than
+// this to one flies over its top (backoff_above_centre_m over its balloon's centre, as the back off
+// does) until past it. Two-UAV field seed 8: drifting sideways into a pierce of b0 (2.5 m high),
+// the line from here to b0 swung through the pole of b3, popped earlier, whose top is at 2.7 m;
+// the hull hit it at 3.5 m/s. The popped place is our estimate then (GPS drift ~0.5 m since), the
+// hull reaches ~0.4 m out.
+inline constexpr double kPoleClearance_m = 1.5;
+// A balloon seen this close to a pierce's path, nearer than its target, is in the way: the
+// pierce takes it instead (one-UAV field seed 12: a pierce of b3, 36 m away, flew through b0,
+// 10 m in front and straight on the line, at 3 m/s; the hull hit it). The hull reaches ~0.4 m
+// out, the balloon's radius is 0.3 m, and the estimates are a few tenths off.
+inline constexpr double kInTheWay_m = 1.2;
 inline constexpr double kArenaMargin_m = 0.5;
 // a balloon seen further above or below is a bad estimate
 inline constexpr double kMaxPierceClimb_m = 1.5;

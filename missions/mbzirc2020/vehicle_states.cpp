@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "ground_station.hpp"
 #include "uavsim/client/geodesy.hpp"
 #include "vehicle_fsm.hpp"
 #include "vehicle_fsm_tuning.hpp"
@@ -156,6 +157,29 @@ void VehicleFsm::follow_target(const VehicleInputs& in) {
   }
 }
 
+std::string VehicleFsm::take_balloon_in_the_way(const VehicleInputs& in) {
+  const Eigen::Vector2d p = in.position_enu_m.head<2>();
+  const Eigen::Vector2d t = target_.position_enu_m.head<2>();
+  const double target_range_m = (t - p).norm();
+  for (const BalloonSighting& b : in.balloons) {
+    const Eigen::Vector2d q = b.position_enu_m.head<2>();
+    if (b.track_id == target_.track_id || in.now_s - b.last_seen_s > kFreshSighting_s ||
+        (q - t).norm() < kSameBalloon_m || (q - p).norm() >= target_range_m ||
+        segment_distance(p, t, q, q) >= kInTheWay_m) {
+      continue;
+    }
+    bool popped = false;
+    for (const Eigen::Vector3d& r : popped_at_)
+      popped = popped || (r.head<2>() - q).norm() < kPoppedExclusion_m;
+    if (popped) continue;
+    target_ = b;
+    closest_blade_m_ = 1e9;
+    return fmt("balloon in the way at (%.1f, %.1f, %.1f): the target now", q.x(), q.y(),
+               b.position_enu_m.z());
+  }
+  return {};
+}
+
 void VehicleFsm::on_area_allocation_request(const VehicleInputs& in, VehicleOutputs& out) {
   const Eigen::Vector3d& p = in.position_enu_m;
   follow_target(in);
@@ -189,6 +213,7 @@ void VehicleFsm::start_pierce(const VehicleInputs& in, VehicleOutputs& out) {
 
 void VehicleFsm::on_pierce(const VehicleInputs& in, VehicleOutputs& out) {
   follow_target(in);
+  if (std::string note = take_balloon_in_the_way(in); !note.empty()) out.note = note;
   const double along_m = steer_pierce(in, out);
   // "this state is maintained for N seconds after the balloon was last detected" (or until the
   // blades are through it)
@@ -228,8 +253,12 @@ double VehicleFsm::steer_pierce(const VehicleInputs& in, VehicleOutputs& out) {
   // the blades ride just above the balloon's centre as the camera sees it: the balloon's height
   // and ours come from the same estimate, so its bias (a metre of GPS / baro error in the
   // field) cancels; the rules' heights would not (the pole top is 0.28 m below the centre)
-  const double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
-                                    p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
+  double blade_z = std::clamp(b.z() + config_.pierce_blade_above_centre_m,
+                              p.z() - kMaxPierceClimb_m, p.z() + kMaxPierceClimb_m);
+  for (const Eigen::Vector3d& q : popped_at_) {
+    if (segment_distance(p.head<2>(), b.head<2>(), q.head<2>(), q.head<2>()) < kPoleClearance_m)
+      blade_z = std::max(blade_z, q.z() + config_.backoff_above_centre_m);
+  }
   double speed = config_.pierce_speed_near_m_s;
   if (seen) {
     coast_dir_ = (b.head<2>() - p.head<2>()).normalized();
@@ -325,7 +354,7 @@ void VehicleFsm::end_back_off(VehicleOutputs& out) {
   if (pierce_reached_ && !seen_again_) {
     const Eigen::Vector2d b = target_.position_enu_m.head<2>();
     ++popped_;
-    popped_at_.push_back(b);
+    popped_at_.push_back(target_.position_enu_m);
     out.popped_enu_m = b;
     why += ", balloon gone (" + std::to_string(popped_) + " popped)";
   } else {

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <limits>
+
 #include "fake_mav_port.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/wire.hpp"
@@ -123,6 +126,44 @@ TEST_F(TelemetryDecoderTest, HomeOriginGimbalAndMissionProgress) {
   r.seq = 3;
   port_.deliver(r);
   EXPECT_EQ(tm().mission_last_reached, 3);
+}
+
+// GIMBAL_DEVICE_ATTITUDE_STATUS: the camera 6 deg up, 10 deg right of the heading, 2 deg rolled, in
+// the vehicle frame; the same camera on a vehicle heading 30 deg reported in the earth frame
+TEST_F(TelemetryDecoderTest, GimbalDeviceAttitudeInTheVehicleFrame) {
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  const Eigen::Quaterniond q_vehicle = Eigen::AngleAxisd(10 * kDeg, Eigen::Vector3d::UnitZ()) *
+                                       Eigen::AngleAxisd(6 * kDeg, Eigen::Vector3d::UnitY()) *
+                                       Eigen::AngleAxisd(2 * kDeg, Eigen::Vector3d::UnitX());
+  const auto status = [](const Eigen::Quaterniond& q, std::uint16_t flags, float delta_yaw) {
+    msg::GimbalDeviceAttitudeStatus m;
+    m.time_boot_ms = 61234;
+    m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
+           static_cast<float>(q.z())};
+    m.flags = flags;
+    m.delta_yaw = delta_yaw;
+    return m;
+  };
+  const auto expect_camera = [&] {
+    EXPECT_TRUE(tm().has_gimbal_attitude);
+    EXPECT_NEAR(tm().gimbal_attitude_time_s, 61.234, 1e-9);
+    EXPECT_NEAR(tm().gimbal_attitude_roll_rad, 2 * kDeg, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_pitch_rad, 6 * kDeg, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_yaw_rad, 10 * kDeg, 1e-6);
+  };
+  port_.deliver(
+      status(q_vehicle, 4 | 8 | 32, 30 * kDeg));  // ROLL_LOCK | PITCH_LOCK | YAW_IN_VEHICLE_FRAME
+  expect_camera();
+  decoder_.reset();
+  const Eigen::Quaterniond q_earth =
+      Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitZ()) * q_vehicle;
+  port_.deliver(
+      status(q_earth, 4 | 8 | 16 | 64, 30 * kDeg));  // ... | YAW_LOCK | YAW_IN_EARTH_FRAME
+  expect_camera();
+  // an earth-frame report without the heading cannot be turned back: ignored
+  decoder_.reset();
+  port_.deliver(status(q_earth, 4 | 8 | 16 | 64, std::numeric_limits<float>::quiet_NaN()));
+  EXPECT_FALSE(tm().has_gimbal_attitude);
 }
 
 TEST_F(TelemetryDecoderTest, StatusTextsKeepTheLastHundredAndAreNoTelemetryChange) {

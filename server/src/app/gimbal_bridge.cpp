@@ -4,12 +4,14 @@
 #include <cmath>
 
 #include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 
 namespace uavsim::server::app {
 
 namespace {
 constexpr double kDegToRad = common::kPi / 180.0;
 using common::wrap_pi;
+namespace frames = common::frames;
 using common::mavlink::MavMountMode;
 
 // RETRACT and NEUTRAL: level and straight ahead
@@ -17,6 +19,25 @@ bool mount_at_rest(std::uint8_t mount_mode) {
   return common::mavlink::is_one_of<MavMountMode>(mount_mode, {MavMountMode::Retract, MavMountMode::Neutral});
 }
 }  // namespace
+
+std::optional<mavlink::GimbalDeviceAttitude> gimbal_device_attitude(
+    const objects::GimbalSet& gimbals, sim::Simulation& sim, size_t vehicle) {
+  for (const objects::Gimbal& g : gimbals.gimbals()) {
+    if (g.vehicle != static_cast<int>(vehicle)) continue;
+    const fc::TruthState t = sim.world().truth(vehicle);
+    // the camera body's x axis is the optical axis, z up when level (FLU-like): its FRD attitude in
+    // NED, turned back by the vehicle's heading
+    const Eigen::Quaterniond q_ned_cam =
+        frames::q_ned_frd_from_q_enu_flu(objects::GimbalSet::orientation(g, t.q_enu_body));
+    const double heading_rad =
+        frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(t.q_enu_body)).yaw_rad;
+    const frames::Euler e = frames::euler_from_q_ned_frd(
+        Eigen::AngleAxisd(-heading_rad, Eigen::Vector3d::UnitZ()) * q_ned_cam);
+    return mavlink::GimbalDeviceAttitude{e.roll_rad / kDegToRad, e.pitch_rad / kDegToRad,
+                                         e.yaw_rad / kDegToRad};
+  }
+  return std::nullopt;
+}
 
 void apply_gimbal_state(const mavlink::GimbalState& s, double vehicle_yaw_enu_rad, objects::Gimbal* g) {
   if (mount_at_rest(s.mount_mode)) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "mavlink/gimbal_state.hpp"
@@ -18,6 +19,14 @@
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::app {
+
+// What a vehicle's gimbal device measures of its camera (its first gimbal in the world): the
+// orientation the camera body has now, its stabilisation loop's lag included, in the gimbal
+// protocol's vehicle frame (roll and pitch relative to the horizon, yaw relative to the vehicle's
+// heading; a real device has these from its IMU and joint encoders, so they carry no compass
+// error). nullopt: the vehicle has no gimbal. Loop thread.
+std::optional<mavlink::GimbalDeviceAttitude> gimbal_device_attitude(
+    const objects::GimbalSet& gimbals, sim::Simulation& sim, size_t vehicle);
 
 // Points one gimbal as `state` asks, for a vehicle heading (ENU yaw, counter-clockwise from east).
 void apply_gimbal_state(const mavlink::GimbalState& state, double vehicle_yaw_enu_rad, objects::Gimbal* gimbal);

@@ -333,6 +333,12 @@ int run_server(const Options& given_options) {
     endpoint.on_status_text = [&reporter](std::size_t v, int severity, const std::string& text) {
       reporter.on_status_text(v, severity, text);
     };
+    // the gimbal devices report their cameras' measured attitude
+    if (const objects::GimbalSet* gimbals = world_objects.gimbals) {
+      endpoint.gimbal_attitude = [gimbals, &s](std::size_t v) {
+        return gimbal_device_attitude(*gimbals, s, v);
+      };
+    }
     try {
       mavlink_server = std::make_unique<mavlink::MavlinkServer>(s, endpoint);
     } catch (const std::exception& e) {

@@ -62,6 +62,11 @@ struct EndpointConfig {
   // peer as "tcp:ADDR:PORT" or "udp:ADDR:PORT"; a flight-controller status text (MAV_SEVERITY, text).
   std::function<void(std::size_t vehicle, bool connected, const std::string& peer)> on_client;
   std::function<void(std::size_t vehicle, int severity, const std::string& text)> on_status_text;
+  // Optional, called on the loop thread: what a vehicle's simulated gimbal device measures now (its
+  // stabilisation loop's lag included), for GIMBAL_DEVICE_ATTITUDE_STATUS and MOUNT_ORIENTATION.
+  // Null, or nullopt for a vehicle: the commanded pointing is reported, as by a gimbal that follows
+  // at once.
+  std::function<std::optional<GimbalDeviceAttitude>(std::size_t vehicle)> gimbal_attitude;
 };
 
 // Counters of one vehicle's endpoint since start (a snapshot).

@@ -21,4 +21,15 @@ struct GimbalState {
   double stamp_s = -1.0;                 // sim time of the last command; < 0: never commanded
 };
 
+// What a gimbal device measures of its camera (its IMU and joint encoders) and reports in
+// GIMBAL_DEVICE_ATTITUDE_STATUS: the attitude of the camera (FRD, x along the optical axis) in the
+// gimbal protocol's vehicle frame, NED turned by the vehicle's heading. So roll and pitch are
+// relative to the horizon and yaw to the vehicle's heading: a device knows these without a compass
+// (gravity, encoders). Tait-Bryan z-y'-x'' angles, as in ATTITUDE.
+struct GimbalDeviceAttitude {
+  double roll_deg = 0.0;   // positive: rolled to the right
+  double pitch_deg = 0.0;  // positive up
+  double yaw_deg = 0.0;    // relative to the vehicle's heading, positive clockwise
+};
+
 }  // namespace uavsim::server::mavlink

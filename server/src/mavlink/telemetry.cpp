@@ -1,7 +1,7 @@
 // Telemetry: the messages the vehicle streams (when, per client: telemetry_schedule.hpp) and sends
 // on request. Every time_boot_ms / time_usec is simulation time since start, as in SITL
 // (docs/mavlink.md §8), and every value comes from the flight controller's estimate, never from
-// ground truth.
+// ground truth, but for the gimbal's attitude: its device's (EndpointConfig::gimbal_attitude).
 //
 // Stream groups follow ArduCopter's REQUEST_DATA_STREAM groups (docs/mavlink.md §9). Default rates
 // per client: EXTENDED_STATUS 2 Hz, POSITION 4 Hz, EXTRA1 4 Hz, EXTRA2 4 Hz, EXTRA3 2 Hz, HEARTBEAT
@@ -46,6 +46,17 @@ T clamp_to(double v) {
   const double hi = static_cast<double>(std::numeric_limits<T>::max());
   if (!std::isfinite(v)) return 0;
   return static_cast<T>(std::llround(std::clamp(v, lo, hi)));
+}
+
+constexpr double kDegToRad = common::kPi / 180.0;
+
+double wrap_180(double deg) { return std::remainder(deg, 360.0); }
+
+// The attitude of a gimbal that follows its command at once: roll and pitch as commanded (relative
+// to the horizon), yaw relative to the heading (a commanded heading less the vehicle's)
+GimbalDeviceAttitude commanded_attitude(const GimbalState& g, double vehicle_yaw_deg) {
+  return {g.roll_deg, g.pitch_deg,
+          wrap_180(g.yaw_earth_frame ? g.yaw_deg - vehicle_yaw_deg : g.yaw_deg)};
 }
 
 std::uint8_t landed_state_number(fc::LandedState s) {
@@ -408,44 +419,52 @@ bool VehicleLink::send_message_by_id(Link& link, std::uint32_t msgid) {
     }
     case msg::MountOrientation::kId:
     case msg::GimbalDeviceAttitudeStatus::kId: {
-      // the commanded pointing (the simulated gimbal follows it instantly): roll and pitch relative to the
-      // horizon, yaw relative to the body or as a heading, per gimbal_.yaw_earth_frame
+      // the camera's attitude as the gimbal device measures it (the simulated gimbal's, lag
+      // included, where the server has one), roll and pitch relative to the horizon, yaw relative
+      // to the heading; a yaw-locked command reports it in the earth frame, the heading added from
+      // the estimate
       const double vehicle_yaw_deg =
           frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(est.q_enu_body)).yaw_rad * kRadToDeg;
-      const auto wrap_180 = [](double deg) { return std::remainder(deg, 360.0); };
-      const double yaw_body_deg =
-          wrap_180(gimbal_.yaw_earth_frame ? gimbal_.yaw_deg - vehicle_yaw_deg : gimbal_.yaw_deg);
-      const double yaw_north_deg = wrap_180(yaw_body_deg + vehicle_yaw_deg);
+      std::optional<GimbalDeviceAttitude> measured;
+      if (config_.gimbal_attitude) measured = config_.gimbal_attitude(vehicle_);
+      const GimbalDeviceAttitude a =
+          measured.value_or(commanded_attitude(gimbal_, vehicle_yaw_deg));
+      const double yaw_north_deg = wrap_180(a.yaw_deg + vehicle_yaw_deg);
       if (msgid == msg::MountOrientation::kId) {
         msg::MountOrientation m;
         m.time_boot_ms = t_ms;
-        m.roll = static_cast<float>(gimbal_.roll_deg);
-        m.pitch = static_cast<float>(gimbal_.pitch_deg);
-        m.yaw = static_cast<float>(yaw_body_deg);
+        m.roll = static_cast<float>(a.roll_deg);
+        m.pitch = static_cast<float>(a.pitch_deg);
+        m.yaw = static_cast<float>(a.yaw_deg);
         m.yaw_absolute = static_cast<float>(yaw_north_deg);
         send(link, m);
         return true;
       }
-      constexpr double kDegToRad = common::kPi / 180.0;
       using Gimbal = GimbalDeviceFlags;
-      const double q_yaw_deg = gimbal_.yaw_earth_frame ? yaw_north_deg : yaw_body_deg;
+      const double q_yaw_deg = gimbal_.yaw_earth_frame ? yaw_north_deg : a.yaw_deg;
       // FRD attitude of the camera: yaw, then pitch, then roll (ZYX), w x y z
-      const Eigen::Quaterniond q = Eigen::AngleAxisd(q_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                                   Eigen::AngleAxisd(gimbal_.pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
-                                   Eigen::AngleAxisd(gimbal_.roll_deg * kDegToRad, Eigen::Vector3d::UnitX());
+      const Eigen::Quaterniond q =
+          Eigen::AngleAxisd(q_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(a.pitch_deg * kDegToRad, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.roll_deg * kDegToRad, Eigen::Vector3d::UnitX());
       msg::GimbalDeviceAttitudeStatus m;
       m.time_boot_ms = t_ms;
       m.q = {static_cast<float>(q.w()), static_cast<float>(q.x()), static_cast<float>(q.y()),
              static_cast<float>(q.z())};
-      m.angular_velocity_x = 0.0f;
-      m.angular_velocity_y = static_cast<float>(gimbal_.pitch_rate_deg_s * kDegToRad);
-      m.angular_velocity_z = static_cast<float>(gimbal_.yaw_rate_deg_s * kDegToRad);
+      // a measured attitude comes without its rates; the commanded rates otherwise
+      constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+      m.angular_velocity_x = measured ? kUnknown : 0.0f;
+      m.angular_velocity_y =
+          measured ? kUnknown : static_cast<float>(gimbal_.pitch_rate_deg_s * kDegToRad);
+      m.angular_velocity_z =
+          measured ? kUnknown : static_cast<float>(gimbal_.yaw_rate_deg_s * kDegToRad);
       m.flags = gimbal_.yaw_earth_frame
                     ? field<std::uint16_t>({Gimbal::RollLock, Gimbal::PitchLock, Gimbal::YawLock,
                                             Gimbal::YawInEarthFrame})
                     : field<std::uint16_t>({Gimbal::RollLock, Gimbal::PitchLock, Gimbal::YawInVehicleFrame});
-      m.delta_yaw = static_cast<float>(yaw_body_deg * kDegToRad);
-      m.delta_yaw_velocity = std::numeric_limits<float>::quiet_NaN();
+      // the yaw between the two frames (q_earth = q_delta_yaw * q_vehicle): the vehicle's heading
+      m.delta_yaw = static_cast<float>(vehicle_yaw_deg * kDegToRad);
+      m.delta_yaw_velocity = kUnknown;
       m.gimbal_device_id = 1;  // the autopilot reports for its first (non-MAVLink) gimbal
       send(link, m);
       return true;

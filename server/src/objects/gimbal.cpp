@@ -69,6 +69,10 @@ Eigen::Quaterniond GimbalSet::actual(const Gimbal& g, const Eigen::Quaterniond& 
   return (q_enu_body * g.motion.q_body_cam).normalized();
 }
 
+Eigen::Quaterniond GimbalSet::orientation(const Gimbal& g, const Eigen::Quaterniond& q_enu_body) {
+  return g.motion.started ? actual(g, q_enu_body) : pointing(g, heading(q_enu_body));
+}
+
 void GimbalSet::before_step(sim::Simulation& sim) {
   if (!initial_saved_) {
     initial_ = gimbals_;
@@ -94,9 +98,8 @@ void GimbalSet::place(sim::Simulation& sim) const {
 }
 
 void GimbalSet::place(sim::Simulation& sim, const Gimbal& g, const fc::TruthState& t) {
-  const Eigen::Quaterniond q_enu_gimbal =
-      g.motion.started ? actual(g, t.q_enu_body) : pointing(g, heading(t.q_enu_body));
-  physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m, q_enu_gimbal);
+  physics::set_mocap_pose(sim.world(), g.body_id, t.position_enu_m + t.q_enu_body * g.mount_body_m,
+                          orientation(g, t.q_enu_body));
 }
 
 void GimbalSet::schedule_capture_pose(sim::Simulation& sim) {

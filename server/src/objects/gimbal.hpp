@@ -72,10 +72,15 @@ class GimbalSet : public sim::WorldObject {
 
   // The gimbals, for pointing commands (set mode, pitch_rad, yaw_rad). Loop thread only.
   std::vector<Gimbal>& gimbals() { return gimbals_; }
+  const std::vector<Gimbal>& gimbals() const { return gimbals_; }
   // The orientation a gimbal's body takes for a vehicle heading (ENU yaw), from its mode and targets.
   static Eigen::Quaterniond pointing(const Gimbal& gimbal, double vehicle_yaw_rad);
   // The orientation the gimbal body has now (ENU), after its dynamics. Loop thread only.
   static Eigen::Quaterniond actual(const Gimbal& gimbal, const Eigen::Quaterniond& q_enu_body);
+  // The orientation the gimbal body takes on a vehicle of attitude q_enu_body: actual() once its
+  // loop has stepped (with dynamics), else pointing(). What place() gives the body and a camera
+  // sees.
+  static Eigen::Quaterniond orientation(const Gimbal& gimbal, const Eigen::Quaterniond& q_enu_body);
   // The heading (ENU yaw) of a vehicle attitude: where its body x axis points, seen from above.
   static double heading(const Eigen::Quaterniond& q_enu_body);
   const sim::GimbalDynamicsParams& dynamics() const { return dynamics_; }

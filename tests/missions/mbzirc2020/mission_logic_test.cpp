@@ -279,6 +279,94 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
 }
 
+// A balloon seen in the way of a pierce, nearer than its target, becomes the target (one-UAV
+// field seed 12: a pierce of a balloon 36 m away flew through another, 10 m in front on the line).
+TEST(Mbzirc2020VehicleFsm, APierceTakesABalloonInItsWay) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle v;
+  const Eigen::Vector3d far = fly_to_pierce(config, fsm, v);
+  ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+  v.in.balloons[0].last_seen_s = v.in.now_s;
+  v.apply(fsm.step(v.in), 0.05);
+  // halfway, 0.6 m beside the line and 0.3 m higher
+  const Eigen::Vector2d p = v.in.position_enu_m.head<2>();
+  const Eigen::Vector2d along = (far.head<2>() - p).normalized();
+  const Eigen::Vector2d side(-along.y(), along.x());
+  const Eigen::Vector2d mid = p + 0.5 * (far.head<2>() - p) + 0.6 * side;
+  const Eigen::Vector3d near(mid.x(), mid.y(), far.z() + 0.3);
+  // a balloon beside the path (2 m off) is not in the way
+  v.in.balloons = {{2, far, v.in.now_s},
+                   {7, near + Eigen::Vector3d(2.0 * side.x(), 2.0 * side.y(), 0.0), v.in.now_s}};
+  VehicleOutputs out = fsm.step(v.in);
+  EXPECT_EQ(out.note.find("in the way"), std::string::npos);
+  v.in.balloons = {{2, far, v.in.now_s}, {7, near, v.in.now_s}};
+  out = fsm.step(v.in);
+  EXPECT_NE(out.note.find("balloon in the way"), std::string::npos) << out.note;
+  for (int i = 0; i < 20; ++i) {
+    for (BalloonSighting& b : v.in.balloons) b.last_seen_s = v.in.now_s;
+    v.apply(out, 0.05);
+    out = fsm.step(v.in);
+  }
+  ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+  const Eigen::Vector2d to_near = (near.head<2>() - v.in.position_enu_m.head<2>()).normalized();
+  EXPECT_GT(out.velocity_enu_m_s.head<2>().normalized().dot(to_near), 0.999);
+  // the blades go to its height
+  for (int i = 0; i < 40; ++i) {
+    for (BalloonSighting& b : v.in.balloons) b.last_seen_s = v.in.now_s;
+    v.apply(fsm.step(v.in), 0.05);
+  }
+  EXPECT_NEAR(v.in.position_enu_m.z(), near.z() + config.pierce_blade_above_centre_m, 0.1);
+}
+
+// The pole of a balloon we popped still stands: a later pierce whose path passes by it flies over
+// its top (two-UAV field seed 8: the hull into the pole of b3, popped earlier, 8 m in front of b0,
+// whose centre was 0.5 m lower than b3's).
+TEST(Mbzirc2020VehicleFsm, APierceFliesOverThePoleOfABalloonPoppedBefore) {
+  const MissionConfig config;
+  VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+  FakeVehicle v;
+  const Eigen::Vector3d first = fly_to_pierce(config, fsm, v);
+  ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+  for (int i = 0; i < 2000 && fsm.state() == VehicleState::kPierce; ++i) {
+    if ((first.head<2>() - v.in.position_enu_m.head<2>()).norm() > 1.7)
+      v.in.balloons[0].last_seen_s = v.in.now_s;
+    v.apply(fsm.step(v.in), 0.05);
+  }
+  v.in.balloons.clear();
+  for (int i = 0; i < 2000 && fsm.state() == VehicleState::kBackOff; ++i)
+    v.apply(fsm.step(v.in), 0.05);
+  ASSERT_EQ(fsm.popped(), 1);
+  ASSERT_EQ(fsm.state(), VehicleState::kBlindScan);
+
+  // the next balloon 7 m behind the first's pole, 0.5 m lower: its pierce line passes the pole
+  const Eigen::Vector3d second = first + Eigen::Vector3d(0.3, 7.0, -0.5);
+  v.in.balloons = {{3, second, v.in.now_s}};
+  VehicleOutputs out = fsm.step(v.in);
+  ASSERT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);
+  ASSERT_TRUE(out.airspace && *out.airspace);
+  v.in.airspace_replies = {**out.airspace};
+  v.apply(out, 0.05);
+  v.in.balloons[0].last_seen_s = v.in.now_s;
+  v.apply(fsm.step(v.in), 0.05);
+  v.in.airspace_replies.clear();
+  ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+  double min_z_at_pole = 1e9, z_near_second = -1.0;
+  for (int i = 0; i < 2000 && fsm.state() == VehicleState::kPierce; ++i) {
+    const double range = (second.head<2>() - v.in.position_enu_m.head<2>()).norm();
+    if (range > 1.7) v.in.balloons[0].last_seen_s = v.in.now_s;
+    if (range < 2.0 && z_near_second < 0.0) z_near_second = v.in.position_enu_m.z();
+    v.apply(fsm.step(v.in), 0.05);
+    if ((first.head<2>() - v.in.position_enu_m.head<2>()).norm() < 0.8)
+      min_z_at_pole = std::min(min_z_at_pole, v.in.position_enu_m.z());
+  }
+  ASSERT_LT(min_z_at_pole, 100.0);  // it passed the pole
+  // the pole's top is 0.28 m under its balloon's centre; the hull passes well above it
+  EXPECT_GT(min_z_at_pole, first.z() + 0.3);
+  // and the blades are down at the second balloon's height before they reach it
+  EXPECT_NEAR(z_near_second, second.z() + config.pierce_blade_above_centre_m, 0.15);
+}
+
 // A pierce the camera loses short of the balloon (two-UAV field seeds 2 and 5: the balloon seen
 // 0.8-1.1 m from where it was, the blades at the estimate, the balloon untouched) is not reported
 // popped on the way back alone: back on the line the UAV faces where the balloon was for 2.5 s,

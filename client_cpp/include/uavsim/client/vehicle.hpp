@@ -87,6 +87,14 @@ struct Telemetry {
   // gimbal (MOUNT_STATUS), degrees
   bool has_gimbal = false;
   double gimbal_pitch_deg = 0.0, gimbal_roll_deg = 0.0, gimbal_yaw_deg = 0.0;
+  // the camera's attitude as its gimbal device measures it (GIMBAL_DEVICE_ATTITUDE_STATUS), in the
+  // gimbal protocol's vehicle frame: roll and pitch relative to the horizon, yaw relative to the
+  // vehicle's heading (clockwise; a report in the earth frame is turned back by its delta_yaw).
+  // Tait-Bryan z-y'-x'' angles as in ATTITUDE; vehicle time (time_boot_ms) of the report.
+  bool has_gimbal_attitude = false;
+  double gimbal_attitude_time_s = 0.0;
+  double gimbal_attitude_roll_rad = 0.0, gimbal_attitude_pitch_rad = 0.0,
+         gimbal_attitude_yaw_rad = 0.0;
   // mission (MISSION_CURRENT / MISSION_ITEM_REACHED)
   int mission_current = -1;
   int mission_last_reached = -1;
