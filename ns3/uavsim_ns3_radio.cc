@@ -28,6 +28,7 @@
 
 #include "ns3/constant-velocity-mobility-model.h"
 #include "ns3/double.h"
+#include "ns3/lr-wpan-csmaca.h"
 #include "ns3/lr-wpan-mac.h"
 #include "ns3/lr-wpan-net-device.h"
 #include "ns3/lr-wpan-phy.h"
@@ -41,12 +42,17 @@
 #include "ns3/rng-seed-manager.h"
 #include "ns3/simulator.h"
 #include "ns3/single-model-spectrum-channel.h"
+#include "uavsim_ns3_parts.h"
 #include "wire.hpp"
 
 namespace {
 
 using namespace ns3;
 namespace wire = uavsim::ns3wire;
+using uavsim_ns3::address;
+using uavsim_ns3::Frame;
+using uavsim_ns3::index_of;
+using uavsim_ns3::UavsimLinkLoss;
 
 constexpr uint16_t kPanId = 1;
 // 802.15.4 data frame with short addresses and a compressed PAN id: frame control 2, sequence 1,
@@ -56,69 +62,8 @@ constexpr uint32_t kMaxPayloadBytes = 127 - kMacHeaderBytes;
 // a frame's receptions end a propagation delay after its sender's confirm (microseconds at radio
 // ranges); counters are settled this long after the confirm
 constexpr int64_t kSettle_ns = 100000;
-
-// The loss uavsim adds after ns-3's log-distance and shadowing models: the range model (every
-// receiver within range hears the transmit power), the server's transmit power, the extra loss of
-// a blocked path (obstacles, pushed by the server per link) and the receiver sensitivity, which
-// ns-3 3.37 cannot set on lr-wpan's PHY (its own floor is about -106.6 dBm): a signal below it is
-// cut to -1000 dBm (heard by no one, interfering with no one). It records each link's last result
-// so the helper can tell "below sensitivity" from "lost" when it settles a frame's counters.
-class UavsimLinkLoss : public PropagationLossModel {
- public:
-  static TypeId GetTypeId() {
-    static TypeId tid =
-        TypeId("uavsim::UavsimLinkLoss").SetParent<PropagationLossModel>().SetGroupName("uavsim");
-    return tid;
-  }
-  void configure(const wire::Channel& c, uint32_t vehicles) {
-    channel_ = c;
-    vehicles_ = vehicles;
-    extra_db_.assign(static_cast<size_t>(vehicles) * vehicles, 0.0);
-    last_dbm_.assign(static_cast<size_t>(vehicles) * vehicles, -1000.0);
-  }
-  void set_channel(const wire::Channel& c) { channel_ = c; }
-  void set_extra(uint32_t from, uint32_t to, double db) {
-    extra_db_[static_cast<size_t>(from) * vehicles_ + to] = db;
-  }
-  double last_dbm(uint32_t from, uint32_t to) const {
-    return last_dbm_[static_cast<size_t>(from) * vehicles_ + to];
-  }
-
- private:
-  double DoCalcRxPower(double tx_dbm, Ptr<MobilityModel> a, Ptr<MobilityModel> b) const override {
-    const uint32_t from = a->GetObject<Node>()->GetId();
-    const uint32_t to = b->GetObject<Node>()->GetId();
-    const double extra_db = extra_db_[static_cast<size_t>(from) * vehicles_ + to];
-    double rx_dbm = tx_dbm + channel_.tx_power_dbm - extra_db;
-    if (!channel_.log_distance) {
-      // a loss of L dB shrinks the range as the log-distance law would (as the simple backend does)
-      const double range_m =
-          channel_.range_m * std::pow(10.0, -extra_db / (10.0 * channel_.path_loss_exponent));
-      rx_dbm = a->GetDistanceFrom(b) <= range_m ? tx_dbm + channel_.tx_power_dbm : -1000.0;
-    }
-    if (rx_dbm < channel_.sensitivity_dbm) rx_dbm = -1000.0;
-    last_dbm_[static_cast<size_t>(from) * vehicles_ + to] = rx_dbm;
-    return rx_dbm;
-  }
-  int64_t DoAssignStreams(int64_t) override { return 0; }
-
-  wire::Channel channel_;
-  uint32_t vehicles_ = 0;
-  std::vector<double> extra_db_;
-  mutable std::vector<double> last_dbm_;
-};
-
-// A frame handed to a MAC, until its counters are settled.
-struct Frame {
-  uint32_t from = 0;
-  int32_t to = -1;  // -1: broadcast
-  uint64_t seq = 0;
-  int64_t queued_ns = 0;
-  int64_t tx_start_ns = -1;       // first time on air; -1: never
-  int64_t confirmed_ns = -1;      // the MAC's confirm; -1: not yet
-  std::vector<uint8_t> received;  // per vehicle: delivered
-  std::vector<double> rx_dbm;     // per vehicle: at the last transmission's end
-};
+// 802.15.4's default macMinBE (ns-3's too): the random backoff of unslotted CSMA-CA
+constexpr uint8_t kStandardMacMinBE = 3;
 
 class Helper {
  public:
@@ -204,6 +149,7 @@ class Helper {
   void build(uint64_t seed) {
     Simulator::Destroy();
     macs_.clear();
+    csmas_.clear();
     mobility_.clear();
     frames_.clear();
     pending_.assign(vehicles_, {});
@@ -252,12 +198,14 @@ class Helper {
       dev->GetPhy()->TraceConnectWithoutContext("PhyTxEnd",
                                                 MakeBoundCallback(&Helper::on_tx_end, this, i));
       macs_.push_back(mac);
+      csmas_.push_back(dev->GetCsmaCa());
       mobility_.push_back(nodes.Get(i)->GetObject<ConstantVelocityMobilityModel>());
       // the PHY's own mobility: without it the channel applies no loss and no delay
       dev->GetPhy()->SetMobility(mobility_.back());
       stream += dev->AssignStreams(stream);
     }
     shadowing_variable_->SetStream(stream);
+    apply_mac();
   }
 
   // the loss chain, fixed: log-distance, shadowing, ours; with the range model (or no shadowing)
@@ -271,20 +219,17 @@ class Helper {
     const double sigma_db = log ? channel_.shadowing_sigma_db : 0.0;
     shadowing_variable_->SetAttribute("Mean", DoubleValue(0.0));
     shadowing_variable_->SetAttribute("Variance", DoubleValue(sigma_db * sigma_db));
+    apply_mac();
   }
 
-  static Mac16Address address(uint32_t i) {
-    // short addresses 1..N (0xffff is broadcast, 0xfffe "no short address")
-    const uint16_t a = static_cast<uint16_t>(i + 1);
-    const uint8_t b[2] = {static_cast<uint8_t>(a >> 8), static_cast<uint8_t>(a & 0xff)};
-    Mac16Address m;
-    m.CopyFrom(b);
-    return m;
-  }
-  static int64_t index_of(const Mac16Address& m) {
-    uint8_t b[2];
-    m.CopyTo(b);
-    return (static_cast<int64_t>(b[0]) << 8 | b[1]) - 1;
+  void apply_mac() {
+    // TDMA: the server hands each frame over at its sender's slot, which no other sender uses, so
+    // the random backoff (up to 7 x 320 us with the standard's macMinBE 3) would only push the
+    // frame towards the next slot; macMinBE 0 leaves one clear-channel assessment, which still
+    // defers to a frame overrunning its slot (a unicast's retries)
+    for (const Ptr<LrWpanCsmaCa>& csma : csmas_) {
+      csma->SetMacMinBE(channel_.tdma ? 0 : kStandardMacMinBE);
+    }
   }
 
   bool step(wire::Reader& in) {
@@ -317,28 +262,30 @@ class Helper {
       link_loss_->set_extra(from, to, db);
     }
     const auto frames = in.get<uint32_t>();
-    if (!in.ok() || frames > in.left() / 26) return false;
+    if (!in.ok() || frames > in.left() / 34) return false;
     for (uint32_t k = 0; k < frames; ++k) {
       Frame f;
       f.from = in.get<uint32_t>();
       f.to = in.get<int32_t>();
       f.seq = in.get<uint64_t>();
       f.queued_ns = in.get<int64_t>();
+      const auto at_ns = in.get<int64_t>();
       const auto n = in.get<uint16_t>();
       std::vector<uint8_t> data;
       if (!in.ok() || f.from >= vehicles_ || f.to < -1 || f.to >= static_cast<int32_t>(vehicles_) ||
           f.to == static_cast<int32_t>(f.from) || n == 0 || n > kMaxPayloadBytes ||
-          !in.bytes(n, &data)) {
+          (at_ns != -1 && at_ns < t_ns) || !in.bytes(n, &data)) {
         return false;
       }
-      hand(std::move(f), data);
+      hand(std::move(f), data, at_ns);
     }
     settle();
     return in.ok();
   }
 
-  // a frame to its sender's MAC: broadcast, or unicast with ACK and retries
-  void hand(Frame f, const std::vector<uint8_t>& data) {
+  // a frame to its sender's MAC, now (at_ns -1) or at at_ns (its TDMA slot): broadcast, or unicast
+  // with ACK and retries
+  void hand(Frame f, const std::vector<uint8_t>& data, int64_t at_ns) {
     Ptr<Packet> p = Create<Packet>(data.data(), static_cast<uint32_t>(data.size()));
     McpsDataRequestParams params;
     params.m_srcAddrMode = SHORT_ADDR;
@@ -350,11 +297,21 @@ class Helper {
     params.m_txOptions = f.to < 0 ? TX_OPTION_NONE : TX_OPTION_ACK;
     f.received.assign(vehicles_, 0);
     f.rx_dbm.assign(vehicles_, -1000.0);
-    const uint64_t uid = p->GetUid();
     const uint32_t from = f.from;
-    frames_.emplace(uid, std::move(f));
-    pending_[from].push_back(uid);
-    macs_[from]->McpsDataRequest(params, p);
+    // in frames_ from now on: the helper stays busy (stepped every step) until its slot comes
+    frames_.emplace(p->GetUid(), std::move(f));
+    if (at_ns < 0) {
+      request(this, from, params, p);
+    } else {
+      Simulator::Schedule(NanoSeconds(at_ns) - Simulator::Now(), &Helper::request, this, from,
+                          params, p);
+    }
+  }
+
+  static void request(Helper* h, uint32_t from, McpsDataRequestParams params, Ptr<Packet> p) {
+    // the MAC confirms in the order of its requests
+    h->pending_[from].push_back(p->GetUid());
+    h->macs_[from]->McpsDataRequest(params, p);
   }
 
   void counter(uint32_t from, uint32_t to, wire::Counter c) {
@@ -493,6 +450,7 @@ class Helper {
   Ptr<NormalRandomVariable> shadowing_variable_;
   Ptr<UavsimLinkLoss> link_loss_;
   std::vector<Ptr<LrWpanMac>> macs_;
+  std::vector<Ptr<LrWpanCsmaCa>> csmas_;
   std::vector<Ptr<ConstantVelocityMobilityModel>> mobility_;
   std::map<uint64_t, Frame> frames_;               // by packet uid, until settled
   std::vector<std::deque<uint64_t>> pending_;      // per sender: uids awaiting their confirm

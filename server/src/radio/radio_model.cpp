@@ -181,14 +181,14 @@ bool RadioModel::has_due(double now_s) const {
   return !scheduled_.empty() && scheduled_.front().start_s <= now_s + kTimeEps;
 }
 
-double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
-  const double T = config_.period_s;
-  const double D = config_.slot_s;
+double tdma_slot_start_s(const RadioConfig& config, size_t vehicles, size_t vehicle, double t_s) {
+  const double T = config.period_s;
+  const double D = config.slot_s;
   // whole slots in a period; the remainder is wasted (seed 6.2). validate() bounds T / D below a
   // million and guarantees a slot to every vehicle (N D <= T), so the count is a safe integer and the
   // answer lies in this period or the next: no loop over slots or periods
   const auto slots = static_cast<uint64_t>(std::floor(T / D + 1e-9));
-  const auto n = static_cast<uint64_t>(vehicles_);
+  const auto n = static_cast<uint64_t>(vehicles);
   const double period_start = std::floor(t_s / T) * T;
   // the first slot of this period that starts at or after t_s (within kTimeEps)
   const double into_s = std::max(0.0, t_s - kTimeEps - period_start);
@@ -203,6 +203,10 @@ double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
     if (k < slots) return period_start + static_cast<double>(k) * D;
   }
   return period_start + T + static_cast<double>(vehicle) * D;
+}
+
+double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
+  return tdma_slot_start_s(config_, vehicles_, vehicle, t_s);
 }
 
 double RadioModel::uniform() {
