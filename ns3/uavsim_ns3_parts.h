@@ -77,7 +77,10 @@ struct Frame {
   int32_t to = -1;  // -1: broadcast
   uint64_t seq = 0;
   int64_t queued_ns = 0;
+  int64_t request_ns = -1;        // handed to the MAC (now, or at its TDMA slot)
+  int64_t airtime_ns = 0;         // its PPDU on air (PHY header, MAC header, payload)
   int64_t tx_start_ns = -1;       // first time on air; -1: never
+  int64_t tx_end_ns = -1;         // end of its first transmission; -1: not yet
   int64_t confirmed_ns = -1;      // the MAC's confirm; -1: not yet
   std::vector<uint8_t> received;  // per vehicle: delivered
   std::vector<double> rx_dbm;     // per vehicle: at the last transmission's end

@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -64,6 +65,9 @@ constexpr uint32_t kMaxPayloadBytes = 127 - kMacHeaderBytes;
 constexpr int64_t kSettle_ns = 100000;
 // 802.15.4's default macMinBE (ns-3's too): the random backoff of unslotted CSMA-CA
 constexpr uint8_t kStandardMacMinBE = 3;
+// O-QPSK 250 kbit/s: 32 us a byte; the PHY's preamble, delimiter and length take 6 bytes
+constexpr int64_t kByte_ns = 32000;
+constexpr uint32_t kPhyHeaderBytes = 6;
 
 class Helper {
  public:
@@ -297,8 +301,10 @@ class Helper {
     params.m_txOptions = f.to < 0 ? TX_OPTION_NONE : TX_OPTION_ACK;
     f.received.assign(vehicles_, 0);
     f.rx_dbm.assign(vehicles_, -1000.0);
+    f.request_ns = at_ns < 0 ? Simulator::Now().GetNanoSeconds() : at_ns;
+    f.airtime_ns = static_cast<int64_t>(data.size() + kMacHeaderBytes + kPhyHeaderBytes) * kByte_ns;
     const uint32_t from = f.from;
-    // in frames_ from now on: the helper stays busy (stepped every step) until its slot comes
+    // in frames_ from now on: the helper stays busy until the frame is settled
     frames_.emplace(p->GetUid(), std::move(f));
     if (at_ns < 0) {
       request(this, from, params, p);
@@ -341,6 +347,7 @@ class Helper {
     for (uint32_t r = 0; r < h->vehicles_; ++r) {
       if (r != vehicle) it->second.rx_dbm[r] = h->link_loss_->last_dbm(vehicle, r);
     }
+    if (it->second.tx_end_ns < 0) it->second.tx_end_ns = Simulator::Now().GetNanoSeconds();
   }
 
   static void on_indication(Helper* h, uint32_t vehicle, McpsDataIndicationParams params,
@@ -421,11 +428,34 @@ class Helper {
     }
   }
 
+  // The earliest time the helper can have anything to report (a reception, a confirm, a frame to
+  // settle), so the server need not step it before: a frame not yet handed to its MAC (a TDMA slot
+  // to come) or on air ends one airtime after it starts at the earliest, and receptions and the
+  // broadcast's confirm come at its end. A frame in CSMA-CA, waiting for its ACK or being retried
+  // may report at any time: the next step. INT64_MAX: nothing in flight.
+  int64_t quiet_until_ns() const {
+    const int64_t now_ns = Simulator::Now().GetNanoSeconds();
+    int64_t until_ns = std::numeric_limits<int64_t>::max();
+    for (const auto& [uid, f] : frames_) {
+      int64_t at_ns = now_ns;
+      if (f.confirmed_ns >= 0) {
+        at_ns = f.confirmed_ns + kSettle_ns;
+      } else if (f.tx_start_ns >= 0 && f.tx_end_ns < 0) {
+        at_ns = f.tx_start_ns + f.airtime_ns;
+      } else if (f.tx_start_ns < 0 && f.request_ns > now_ns) {
+        at_ns = f.request_ns + f.airtime_ns;
+      }
+      until_ns = std::min(until_ns, at_ns);
+    }
+    return until_ns;
+  }
+
   bool step_done() {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kStepDone));
     w.put(Simulator::Now().GetNanoSeconds());
     w.put<uint8_t>(frames_.empty() ? 0 : 1);
+    w.put(quiet_until_ns());
     auto append = [&w](uint32_t count, const wire::Writer& part) {
       w.put(count);
       const std::vector<uint8_t> m = part.message();

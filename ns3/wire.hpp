@@ -17,7 +17,7 @@
 //           u32 n, n x (u32 from, i32 to, u64 seq, i64 queued_ns, i64 at_ns, u16 bytes, bytes)
 //                                                    -> kStepDone (below)
 //   kQuit                                            -> (none; the helper exits 0)
-//   kStepDone  i64 now_ns, u8 busy,
+//   kStepDone  i64 now_ns, u8 busy, i64 quiet_until_ns,
 //           u32 n, n x Delivery (u32 to, u32 from, u64 seq, u8 broadcast, i64 queued_ns,
 //                                i64 tx_start_ns, i64 rx_ns, u8 lqi, u16 bytes, bytes),
 //           u32 n, n x (u32 from, u64 seq, u8 status: ConfirmStatus),
@@ -26,7 +26,8 @@
 // kStep runs ns-3 to t_ns (Simulator::Stop(t - Now()) + Run()), then sets the positions, the extra
 // losses and hands the frames to the MACs in the order given (at_ns -1: at once; else at at_ns,
 // a TDMA slot's start, within the next step), and reports what happened since the previous
-// kStepDone. busy: frames in flight (the server must keep stepping every step).
+// kStepDone. busy: frames in flight; quiet_until_ns: they report nothing before that time, so
+// the server steps the helper again at the first step at or after it (or when it hands frames).
 #pragma once
 
 #include <poll.h>

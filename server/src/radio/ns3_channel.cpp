@@ -125,6 +125,7 @@ bool Ns3Channel::expect_ready(const std::vector<uint8_t>& request) {
 void Ns3Channel::reset_state() {
   helper_ns_ = 0;
   busy_ = false;
+  quiet_until_ns_ = 0;
   queue_.clear();
   next_seq_.assign(vehicles_, 0);
   queued_.assign(vehicles_, 0);
@@ -240,7 +241,9 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
     if (a.from != b.from) return a.from < b.from;
     return a.seq < b.seq;
   });
-  const bool advance = busy_ && now_ns > helper_ns_;
+  // frames in flight report nothing before quiet_until_ns_ (the helper's bound): no round trip
+  // before it
+  const bool advance = busy_ && now_ns > helper_ns_ && now_ns >= quiet_until_ns_;
   if (failure_.empty() && (!hand.empty() || advance) && now_ns >= helper_ns_ &&
       positions_enu_m.size() == vehicles_) {
     wire::Writer w;
@@ -304,6 +307,7 @@ bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
   if (in.get<uint8_t>() != static_cast<uint8_t>(wire::MessageType::kStepDone)) return false;
   in.get<int64_t>();
   const bool busy = in.get<uint8_t>() != 0;
+  const auto quiet_until_ns = in.get<int64_t>();
   // receptions: they arrive after the processing latency, and never before one step after they
   // were sent (as on the simple backend)
   const auto deliveries = in.get<uint32_t>();
@@ -375,6 +379,7 @@ bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
     }
   }
   busy_ = busy;
+  quiet_until_ns_ = quiet_until_ns;
   return in.ok() && in.left() == 0;
 }
 

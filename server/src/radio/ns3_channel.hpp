@@ -114,8 +114,9 @@ class Ns3Channel : public RadioChannel {
   int fd_ = -1;
   std::string failure_;
   size_t max_payload_bytes_ = 0;
-  int64_t helper_ns_ = 0;  // the helper's clock
-  bool busy_ = false;      // frames in flight in the helper
+  int64_t helper_ns_ = 0;       // the helper's clock
+  bool busy_ = false;           // frames in flight in the helper
+  int64_t quiet_until_ns_ = 0;  // busy: the helper has nothing to report before this time
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Queued> queue_;  // sent, not yet handed to the helper, in (time, from, seq)
   std::vector<uint64_t> next_seq_;
