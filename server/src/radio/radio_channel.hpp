@@ -2,10 +2,9 @@
 // offers the simulation. Two backends implement it:
 //   simple  radio_model.hpp: closed form (range or log-distance with shadowing, seeded loss, TDMA,
 //           optional collisions), in process
-//   ns3     ns3_channel.hpp: ns-3's lr-wpan (CSMA-CA, ACKs and retries, SINR errors) in the
-//   separate
-//           GPL-2.0 program uavsim-ns3-radio (ns3/README.md), stepped in lockstep over a socket
-//           pair
+//   ns3     ns3_channel.hpp: ns-3's lr-wpan (CSMA-CA or the same TDMA, ACKs and retries, SINR
+//           errors) in the separate GPL-2.0 program uavsim-ns3-radio (ns3/README.md), stepped
+//           in lockstep over a socket pair
 // Both are stepped in sim time by one caller (the loop thread) with the vehicles' true positions.
 #pragma once
 
