@@ -6,8 +6,11 @@
 // the helper's lockstep loop (uavsim_ns3_radio.cc).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <map>
 #include <vector>
 
 #include "ns3/mac16-address.h"
@@ -98,6 +101,29 @@ inline int64_t index_of(const ns3::Mac16Address& m) {
   uint8_t b[2];
   m.CopyTo(b);
   return (static_cast<int64_t>(b[0]) << 8 | b[1]) - 1;
+}
+
+// The earliest time the helper can have anything to report on frames (by packet uid, at now_ns: a
+// reception, a confirm, a frame to settle settle_ns after its confirm), so the server need not step
+// it before: a frame not yet handed to its MAC (a TDMA slot to come) or on air ends one airtime
+// after it starts at the earliest, and receptions and a broadcast's confirm come at its end. A
+// frame in CSMA-CA, waiting for its ACK or being retried may report at any time: now. INT64_MAX:
+// nothing in flight.
+inline int64_t quiet_until_ns(const std::map<uint64_t, Frame>& frames, int64_t now_ns,
+                              int64_t settle_ns) {
+  int64_t until_ns = std::numeric_limits<int64_t>::max();
+  for (const auto& [uid, f] : frames) {
+    int64_t at_ns = now_ns;
+    if (f.confirmed_ns >= 0) {
+      at_ns = f.confirmed_ns + settle_ns;
+    } else if (f.tx_start_ns >= 0 && f.tx_end_ns < 0) {
+      at_ns = f.tx_start_ns + f.airtime_ns;
+    } else if (f.tx_start_ns < 0 && f.request_ns > now_ns) {
+      at_ns = f.request_ns + f.airtime_ns;
+    }
+    until_ns = std::min(until_ns, at_ns);
+  }
+  return until_ns;
 }
 
 }  // namespace uavsim_ns3

@@ -20,7 +20,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
-#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -53,6 +52,7 @@ namespace wire = uavsim::ns3wire;
 using uavsim_ns3::address;
 using uavsim_ns3::Frame;
 using uavsim_ns3::index_of;
+using uavsim_ns3::quiet_until_ns;
 using uavsim_ns3::UavsimLinkLoss;
 
 constexpr uint16_t kPanId = 1;
@@ -428,34 +428,12 @@ class Helper {
     }
   }
 
-  // The earliest time the helper can have anything to report (a reception, a confirm, a frame to
-  // settle), so the server need not step it before: a frame not yet handed to its MAC (a TDMA slot
-  // to come) or on air ends one airtime after it starts at the earliest, and receptions and the
-  // broadcast's confirm come at its end. A frame in CSMA-CA, waiting for its ACK or being retried
-  // may report at any time: the next step. INT64_MAX: nothing in flight.
-  int64_t quiet_until_ns() const {
-    const int64_t now_ns = Simulator::Now().GetNanoSeconds();
-    int64_t until_ns = std::numeric_limits<int64_t>::max();
-    for (const auto& [uid, f] : frames_) {
-      int64_t at_ns = now_ns;
-      if (f.confirmed_ns >= 0) {
-        at_ns = f.confirmed_ns + kSettle_ns;
-      } else if (f.tx_start_ns >= 0 && f.tx_end_ns < 0) {
-        at_ns = f.tx_start_ns + f.airtime_ns;
-      } else if (f.tx_start_ns < 0 && f.request_ns > now_ns) {
-        at_ns = f.request_ns + f.airtime_ns;
-      }
-      until_ns = std::min(until_ns, at_ns);
-    }
-    return until_ns;
-  }
-
   bool step_done() {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kStepDone));
     w.put(Simulator::Now().GetNanoSeconds());
     w.put<uint8_t>(frames_.empty() ? 0 : 1);
-    w.put(quiet_until_ns());
+    w.put(quiet_until_ns(frames_, Simulator::Now().GetNanoSeconds(), kSettle_ns));
     auto append = [&w](uint32_t count, const wire::Writer& part) {
       w.put(count);
       const std::vector<uint8_t> m = part.message();
