@@ -82,7 +82,8 @@ struct Channel {
   double reference_loss_db = 40.05;
   double path_loss_exponent = 2.5;
   double shadowing_sigma_db = 0.0;
-  uint8_t tdma = 0;  // 1: frames come at their slots' starts; CSMA-CA without random backoff
+  uint8_t tdma = 0;        // 1: frames come at their slots' starts; CSMA-CA without random backoff
+  uint8_t technology = 0;  // 0: IEEE 802.15.4 (lr-wpan); 1: IEEE 802.11g ad hoc, 6 Mbit/s
 };
 
 inline constexpr uint32_t kMaxMessageBytes = 64u << 20;  // far above any step's traffic
@@ -155,6 +156,7 @@ inline void put_channel(Writer& w, const Channel& c) {
   w.put(c.path_loss_exponent);
   w.put(c.shadowing_sigma_db);
   w.put<uint8_t>(c.tdma);
+  w.put<uint8_t>(c.technology);
 }
 
 inline Channel get_channel(Reader& r) {
@@ -167,6 +169,7 @@ inline Channel get_channel(Reader& r) {
   c.path_loss_exponent = r.get<double>();
   c.shadowing_sigma_db = r.get<double>();
   c.tdma = r.get<uint8_t>();
+  c.technology = r.get<uint8_t>();
   return c;
 }
 

@@ -32,6 +32,7 @@ wire::Channel wire_channel(const RadioConfig& c) {
   w.path_loss_exponent = c.path_loss_exponent;
   w.shadowing_sigma_db = c.shadowing_sigma_db;
   w.tdma = c.tdma ? 1 : 0;
+  w.technology = c.technology == Technology::k80211 ? 1 : 0;
   return w;
 }
 
@@ -40,7 +41,8 @@ bool same_channel(const RadioConfig& a, const RadioConfig& b) {
          a.tx_power_dbm == b.tx_power_dbm && a.sensitivity_dbm == b.sensitivity_dbm &&
          a.reference_loss_db == b.reference_loss_db &&
          a.path_loss_exponent == b.path_loss_exponent &&
-         a.shadowing_sigma_db == b.shadowing_sigma_db && a.tdma == b.tdma;
+         a.shadowing_sigma_db == b.shadowing_sigma_db && a.tdma == b.tdma &&
+         a.technology == b.technology;
 }
 
 }  // namespace
@@ -54,6 +56,9 @@ std::string Ns3Channel::validate_ns3(const RadioConfig& c, size_t vehicles) {
   shared.mac_header_bytes = 0;
   const std::string why = validate(shared, vehicles);
   if (!why.empty()) return why;
+  if (c.tdma && c.technology != Technology::k802154) {
+    return "tdma is the seed's 802.15.4 MAC: not with technology 802.11";
+  }
   if (c.tdma && !(c.slot_s >= min_tdma_slot_s())) {
     return "slot_s must be at least " + std::to_string(min_tdma_slot_s()) +
            " s on the ns3 backend (a 127-byte frame's airtime, one clear-channel assessment and "
@@ -160,6 +165,17 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
     if (!expect_ready(w.message())) {
       if (error != nullptr) *error = failure_;
       return false;
+    }
+    if (config.technology != config_.technology) {
+      // the helper built a fresh world (its clock back at 0) with the other devices: whatever was
+      // waiting or in flight is dropped (its size may not fit the new max_payload_bytes)
+      for (const Queued& q : queue_) --queued_[q.from];
+      queue_.clear();
+      in_flight_.assign(vehicles_, 0);
+      busy_until_s_.assign(vehicles_, 0.0);
+      busy_ = false;
+      helper_ns_ = 0;
+      quiet_until_ns_ = 0;
     }
   }
   config_ = config;

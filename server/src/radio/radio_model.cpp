@@ -58,6 +58,16 @@ std::optional<Propagation> propagation_from_name(const std::string& name) {
   return std::nullopt;
 }
 
+const char* technology_name(Technology t) {
+  return t == Technology::k802154 ? "802.15.4" : "802.11";
+}
+
+std::optional<Technology> technology_from_name(const std::string& name) {
+  if (name == "802.15.4") return Technology::k802154;
+  if (name == "802.11") return Technology::k80211;
+  return std::nullopt;
+}
+
 const char* error_name(Error e) {
   switch (e) {
     case Error::kUnknownVehicle:
@@ -115,9 +125,16 @@ std::string validate(const RadioConfig& c, size_t vehicles) {
   return "";
 }
 
+std::string RadioModel::validate_simple(const RadioConfig& config, size_t vehicles) {
+  if (config.technology != Technology::k802154) {
+    return "technology 802.11 needs the ns3 backend (the simple model is 802.15.4's)";
+  }
+  return validate(config, vehicles);
+}
+
 RadioModel::RadioModel(size_t vehicles, const RadioConfig& config, uint64_t seed, double step_s)
     : vehicles_(vehicles), config_(config), step_s_(step_s), rng_(seed) {
-  const std::string why = validate(config, vehicles);
+  const std::string why = validate_simple(config, vehicles);
   if (!why.empty()) throw std::invalid_argument("radio config: " + why);
   if (!(step_s > 0.0)) throw std::invalid_argument("radio: step_s must be > 0");
   reset(seed);
@@ -137,7 +154,7 @@ void RadioModel::reset(uint64_t seed) {
 }
 
 bool RadioModel::set_config(const RadioConfig& config, std::string* error) {
-  const std::string why = validate(config, vehicles_);
+  const std::string why = validate_simple(config, vehicles_);
   if (!why.empty()) {
     if (error != nullptr) *error = why;
     return false;

@@ -98,6 +98,9 @@ class RadioModel : public RadioChannel {
   // The start of vehicle's first TDMA slot at or after t_s (exact slot arithmetic, seed fig. 6.2).
   double next_slot_start_s(size_t vehicle, double t_s) const;
 
+  // validate(), and the technology this model has (802.15.4).
+  static std::string validate_simple(const RadioConfig& config, size_t vehicles);
+
  private:
   struct Frame {
     size_t from = 0;
