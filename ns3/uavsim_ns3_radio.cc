@@ -28,6 +28,7 @@
 
 #include "ns3/constant-velocity-mobility-model.h"
 #include "ns3/double.h"
+#include "ns3/lr-wpan-csmaca.h"
 #include "ns3/lr-wpan-mac.h"
 #include "ns3/lr-wpan-net-device.h"
 #include "ns3/lr-wpan-phy.h"
@@ -41,88 +42,56 @@
 #include "ns3/rng-seed-manager.h"
 #include "ns3/simulator.h"
 #include "ns3/single-model-spectrum-channel.h"
+#include "uavsim_ns3_ledger.h"
+#include "uavsim_ns3_parts.h"
+#include "uavsim_ns3_wifi.h"
 #include "wire.hpp"
 
 namespace {
 
 using namespace ns3;
 namespace wire = uavsim::ns3wire;
+using uavsim_ns3::address;
+using uavsim_ns3::Frame;
+using uavsim_ns3::FrameLedger;
+using uavsim_ns3::index_of;
+using uavsim_ns3::install_wifi;
+using uavsim_ns3::kWifiProtocol;
+using uavsim_ns3::UavsimLinkLoss;
 
 constexpr uint16_t kPanId = 1;
 // 802.15.4 data frame with short addresses and a compressed PAN id: frame control 2, sequence 1,
 // destination PAN 2, destination 2, source 2, FCS 2
 constexpr uint32_t kMacHeaderBytes = 11;
 constexpr uint32_t kMaxPayloadBytes = 127 - kMacHeaderBytes;
-// a frame's receptions end a propagation delay after its sender's confirm (microseconds at radio
-// ranges); counters are settled this long after the confirm
-constexpr int64_t kSettle_ns = 100000;
-
-// The loss uavsim adds after ns-3's log-distance and shadowing models: the range model (every
-// receiver within range hears the transmit power), the server's transmit power, the extra loss of
-// a blocked path (obstacles, pushed by the server per link) and the receiver sensitivity, which
-// ns-3 3.37 cannot set on lr-wpan's PHY (its own floor is about -106.6 dBm): a signal below it is
-// cut to -1000 dBm (heard by no one, interfering with no one). It records each link's last result
-// so the helper can tell "below sensitivity" from "lost" when it settles a frame's counters.
-class UavsimLinkLoss : public PropagationLossModel {
- public:
-  static TypeId GetTypeId() {
-    static TypeId tid =
-        TypeId("uavsim::UavsimLinkLoss").SetParent<PropagationLossModel>().SetGroupName("uavsim");
-    return tid;
-  }
-  void configure(const wire::Channel& c, uint32_t vehicles) {
-    channel_ = c;
-    vehicles_ = vehicles;
-    extra_db_.assign(static_cast<size_t>(vehicles) * vehicles, 0.0);
-    last_dbm_.assign(static_cast<size_t>(vehicles) * vehicles, -1000.0);
-  }
-  void set_channel(const wire::Channel& c) { channel_ = c; }
-  void set_extra(uint32_t from, uint32_t to, double db) {
-    extra_db_[static_cast<size_t>(from) * vehicles_ + to] = db;
-  }
-  double last_dbm(uint32_t from, uint32_t to) const {
-    return last_dbm_[static_cast<size_t>(from) * vehicles_ + to];
-  }
-
- private:
-  double DoCalcRxPower(double tx_dbm, Ptr<MobilityModel> a, Ptr<MobilityModel> b) const override {
-    const uint32_t from = a->GetObject<Node>()->GetId();
-    const uint32_t to = b->GetObject<Node>()->GetId();
-    const double extra_db = extra_db_[static_cast<size_t>(from) * vehicles_ + to];
-    double rx_dbm = tx_dbm + channel_.tx_power_dbm - extra_db;
-    if (!channel_.log_distance) {
-      // a loss of L dB shrinks the range as the log-distance law would (as the simple backend does)
-      const double range_m =
-          channel_.range_m * std::pow(10.0, -extra_db / (10.0 * channel_.path_loss_exponent));
-      rx_dbm = a->GetDistanceFrom(b) <= range_m ? tx_dbm + channel_.tx_power_dbm : -1000.0;
-    }
-    if (rx_dbm < channel_.sensitivity_dbm) rx_dbm = -1000.0;
-    last_dbm_[static_cast<size_t>(from) * vehicles_ + to] = rx_dbm;
-    return rx_dbm;
-  }
-  int64_t DoAssignStreams(int64_t) override { return 0; }
-
-  wire::Channel channel_;
-  uint32_t vehicles_ = 0;
-  std::vector<double> extra_db_;
-  mutable std::vector<double> last_dbm_;
-};
-
-// A frame handed to a MAC, until its counters are settled.
-struct Frame {
-  uint32_t from = 0;
-  int32_t to = -1;  // -1: broadcast
-  uint64_t seq = 0;
-  int64_t queued_ns = 0;
-  int64_t tx_start_ns = -1;       // first time on air; -1: never
-  int64_t confirmed_ns = -1;      // the MAC's confirm; -1: not yet
-  std::vector<uint8_t> received;  // per vehicle: delivered
-  std::vector<double> rx_dbm;     // per vehicle: at the last transmission's end
-};
+// 802.11 carries up to 2304 bytes; uavsim's radio API, its event stream and wire.hpp carry 127
+constexpr uint32_t kMaxWifiPayloadBytes = wire::kMaxFrameBytes;
+// 802.15.4's default macMinBE (ns-3's too): the random backoff of unslotted CSMA-CA
+constexpr uint8_t kStandardMacMinBE = 3;
+// O-QPSK 250 kbit/s: 32 us a byte; the PHY's preamble, delimiter and length take 6 bytes
+constexpr int64_t kByte_ns = 32000;
+constexpr uint32_t kPhyHeaderBytes = 6;
 
 class Helper {
  public:
-  explicit Helper(int fd) : fd_(fd) {}
+  explicit Helper(int fd) : fd_(fd) {
+    wifi_hooks_.tx_begin = [this](uint32_t v, uint64_t uid) { ledger_.tx_begin(v, uid); };
+    wifi_hooks_.tx_end = [this](uint32_t v, uint64_t uid) {
+      ledger_.tx_end(v, uid);
+      // a broadcast is done once on air (no ACK, no retry)
+      if (ledger_.unconfirmed_broadcast(uid))
+        ledger_.confirm(v, uid, wire::ConfirmStatus::kSuccess);
+    };
+    wifi_hooks_.rx = [this](uint32_t v, const Address& from, Ptr<const Packet> p) {
+      ledger_.deliver(v, uavsim_ns3::wifi_index_of(wifi_, from), p, 255);
+    };
+    wifi_hooks_.done = [this](uint32_t v, uint64_t uid, bool acked, bool retry_limit) {
+      ledger_.confirm(v, uid,
+                      acked         ? wire::ConfirmStatus::kSuccess
+                      : retry_limit ? wire::ConfirmStatus::kNoAck
+                                    : wire::ConfirmStatus::kOther);
+    };
+  }
 
   int run() {
     std::vector<uint8_t> body;
@@ -146,22 +115,25 @@ class Helper {
           }
           vehicles_ = vehicles;
           channel_ = c;
-          build(seed);
+          if (!build(seed)) return error("802.11 traces did not connect");
           sent = ready();
           break;
         }
         case wire::MessageType::kConfig: {
           const wire::Channel c = wire::get_channel(in);
           if (!in.ok() || vehicles_ == 0) return error("malformed config");
+          // another technology is another set of devices: a fresh world (frames in flight dropped)
+          const bool rebuild = c.technology != channel_.technology;
           channel_ = c;
-          apply_channel();
+          if (rebuild && !build(seed_)) return error("802.11 traces did not connect");
+          if (!rebuild) apply_channel();
           sent = ready();
           break;
         }
         case wire::MessageType::kReset: {
           const auto seed = in.get<uint64_t>();
           if (!in.ok() || vehicles_ == 0) return error("malformed reset");
-          build(seed);
+          if (!build(seed)) return error("802.11 traces did not connect");
           sent = ready();
           break;
         }
@@ -195,22 +167,23 @@ class Helper {
   bool ready() {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kReady));
-    w.put(kMaxPayloadBytes);
+    w.put(max_payload());
     return wire::write_all(fd_, w.message()) == wire::IoResult::kOk;
   }
 
-  // a fresh ns-3 world: one node per vehicle on one 802.15.4 channel (pitfall: one ns-3 world per
-  // process, so a reset destroys the old one first and time restarts at 0)
-  void build(uint64_t seed) {
+  bool wifi() const { return channel_.technology == 1; }
+  uint32_t max_payload() const { return wifi() ? kMaxWifiPayloadBytes : kMaxPayloadBytes; }
+
+  // a fresh ns-3 world: one node per vehicle on one 802.15.4 (or 802.11) channel (pitfall: one
+  // ns-3 world per process, so a reset destroys the old one first and time restarts at 0)
+  bool build(uint64_t seed) {
     Simulator::Destroy();
+    seed_ = seed;
+    wifi_.clear();
     macs_.clear();
+    csmas_.clear();
     mobility_.clear();
-    frames_.clear();
     pending_.assign(vehicles_, {});
-    deliveries_ = wire::Writer();
-    confirms_ = wire::Writer();
-    counters_ = wire::Writer();
-    delivery_count_ = confirm_count_ = counter_count_ = 0;
     RngSeedManager::SetSeed(1);
     RngSeedManager::SetRun(seed);
 
@@ -228,16 +201,25 @@ class Helper {
     shadowing_->SetAttribute("Variable", PointerValue(shadowing_variable_));
     link_loss_ = CreateObject<UavsimLinkLoss>();
     link_loss_->configure(channel_, vehicles_);
+    ledger_.reset(vehicles_, link_loss_);
     log_distance_->SetNext(shadowing_);
     shadowing_->SetNext(link_loss_);
     channel_model_->AddPropagationLossModel(log_distance_);
     apply_channel();
     channel_model_->SetPropagationDelayModel(CreateObject<ConstantSpeedPropagationDelayModel>());
+    for (uint32_t i = 0; i < vehicles_; ++i) {
+      mobility_.push_back(nodes.Get(i)->GetObject<ConstantVelocityMobilityModel>());
+    }
+    int64_t stream = 0;
+    if (wifi()) {
+      const bool ok = install_wifi(nodes, log_distance_, &wifi_hooks_, &stream, &wifi_);
+      shadowing_variable_->SetStream(stream);
+      return ok;
+    }
 
     // devices made by hand: LrWpanHelper::Install calls SetNode after Node::AddDevice already did,
     // and in 3.37 that second configuration leaves the channel delivering nothing (every unicast
     // ends in NO_ACK)
-    int64_t stream = 0;
     for (uint32_t i = 0; i < vehicles_; ++i) {
       Ptr<LrWpanNetDevice> dev = CreateObject<LrWpanNetDevice>();
       dev->SetChannel(channel_model_);
@@ -252,12 +234,14 @@ class Helper {
       dev->GetPhy()->TraceConnectWithoutContext("PhyTxEnd",
                                                 MakeBoundCallback(&Helper::on_tx_end, this, i));
       macs_.push_back(mac);
-      mobility_.push_back(nodes.Get(i)->GetObject<ConstantVelocityMobilityModel>());
+      csmas_.push_back(dev->GetCsmaCa());
       // the PHY's own mobility: without it the channel applies no loss and no delay
-      dev->GetPhy()->SetMobility(mobility_.back());
+      dev->GetPhy()->SetMobility(mobility_[i]);
       stream += dev->AssignStreams(stream);
     }
     shadowing_variable_->SetStream(stream);
+    apply_mac();
+    return true;
   }
 
   // the loss chain, fixed: log-distance, shadowing, ours; with the range model (or no shadowing)
@@ -271,20 +255,17 @@ class Helper {
     const double sigma_db = log ? channel_.shadowing_sigma_db : 0.0;
     shadowing_variable_->SetAttribute("Mean", DoubleValue(0.0));
     shadowing_variable_->SetAttribute("Variance", DoubleValue(sigma_db * sigma_db));
+    apply_mac();
   }
 
-  static Mac16Address address(uint32_t i) {
-    // short addresses 1..N (0xffff is broadcast, 0xfffe "no short address")
-    const uint16_t a = static_cast<uint16_t>(i + 1);
-    const uint8_t b[2] = {static_cast<uint8_t>(a >> 8), static_cast<uint8_t>(a & 0xff)};
-    Mac16Address m;
-    m.CopyFrom(b);
-    return m;
-  }
-  static int64_t index_of(const Mac16Address& m) {
-    uint8_t b[2];
-    m.CopyTo(b);
-    return (static_cast<int64_t>(b[0]) << 8 | b[1]) - 1;
+  void apply_mac() {
+    // TDMA: the server hands each frame over at its sender's slot, which no other sender uses, so
+    // the random backoff (up to 7 x 320 us with the standard's macMinBE 3) would only push the
+    // frame towards the next slot; macMinBE 0 leaves one clear-channel assessment, which still
+    // defers to a frame overrunning its slot (a unicast's retries)
+    for (const Ptr<LrWpanCsmaCa>& csma : csmas_) {
+      csma->SetMacMinBE(channel_.tdma ? 0 : kStandardMacMinBE);
+    }
   }
 
   bool step(wire::Reader& in) {
@@ -317,28 +298,30 @@ class Helper {
       link_loss_->set_extra(from, to, db);
     }
     const auto frames = in.get<uint32_t>();
-    if (!in.ok() || frames > in.left() / 26) return false;
+    if (!in.ok() || frames > in.left() / 34) return false;
     for (uint32_t k = 0; k < frames; ++k) {
       Frame f;
       f.from = in.get<uint32_t>();
       f.to = in.get<int32_t>();
       f.seq = in.get<uint64_t>();
       f.queued_ns = in.get<int64_t>();
+      const auto at_ns = in.get<int64_t>();
       const auto n = in.get<uint16_t>();
       std::vector<uint8_t> data;
       if (!in.ok() || f.from >= vehicles_ || f.to < -1 || f.to >= static_cast<int32_t>(vehicles_) ||
-          f.to == static_cast<int32_t>(f.from) || n == 0 || n > kMaxPayloadBytes ||
-          !in.bytes(n, &data)) {
+          f.to == static_cast<int32_t>(f.from) || n == 0 || n > max_payload() ||
+          (at_ns != -1 && at_ns < t_ns) || !in.bytes(n, &data)) {
         return false;
       }
-      hand(std::move(f), data);
+      hand(std::move(f), data, at_ns);
     }
-    settle();
+    ledger_.settle(channel_.sensitivity_dbm);
     return in.ok();
   }
 
-  // a frame to its sender's MAC: broadcast, or unicast with ACK and retries
-  void hand(Frame f, const std::vector<uint8_t>& data) {
+  // a frame to its sender's MAC, now (at_ns -1) or at at_ns (its TDMA slot): broadcast, or unicast
+  // with ACK and retries
+  void hand(Frame f, const std::vector<uint8_t>& data, int64_t at_ns) {
     Ptr<Packet> p = Create<Packet>(data.data(), static_cast<uint32_t>(data.size()));
     McpsDataRequestParams params;
     params.m_srcAddrMode = SHORT_ADDR;
@@ -350,137 +333,61 @@ class Helper {
     params.m_txOptions = f.to < 0 ? TX_OPTION_NONE : TX_OPTION_ACK;
     f.received.assign(vehicles_, 0);
     f.rx_dbm.assign(vehicles_, -1000.0);
-    const uint64_t uid = p->GetUid();
+    f.request_ns = at_ns < 0 ? Simulator::Now().GetNanoSeconds() : at_ns;
+    // 802.11: no airtime bound (quiet_until_ns then steps it every step while in flight)
+    f.airtime_ns =
+        wifi() ? 0
+               : static_cast<int64_t>(data.size() + kMacHeaderBytes + kPhyHeaderBytes) * kByte_ns;
     const uint32_t from = f.from;
-    frames_.emplace(uid, std::move(f));
-    pending_[from].push_back(uid);
-    macs_[from]->McpsDataRequest(params, p);
+    const int32_t to = f.to;
+    // in the ledger from now on: the helper stays busy until the frame is settled
+    ledger_.add(p->GetUid(), std::move(f));
+    if (wifi()) {
+      wifi_[from]->Send(p, to < 0 ? Mac48Address::GetBroadcast() : wifi_[to]->GetAddress(),
+                        kWifiProtocol);
+    } else if (at_ns < 0) {
+      request(this, from, params, p);
+    } else {
+      Simulator::Schedule(NanoSeconds(at_ns) - Simulator::Now(), &Helper::request, this, from,
+                          params, p);
+    }
   }
 
-  void counter(uint32_t from, uint32_t to, wire::Counter c) {
-    counters_.put(from);
-    counters_.put(to);
-    counters_.put(static_cast<uint8_t>(c));
-    ++counter_count_;
+  static void request(Helper* h, uint32_t from, McpsDataRequestParams params, Ptr<Packet> p) {
+    // the MAC confirms in the order of its requests
+    h->pending_[from].push_back(p->GetUid());
+    h->macs_[from]->McpsDataRequest(params, p);
   }
 
   static void on_tx_begin(Helper* h, uint32_t vehicle, Ptr<const Packet> p) {
-    // the data frame's first time on air (ACKs and unknown packets are not ours to count)
-    auto it = h->frames_.find(p->GetUid());
-    if (it == h->frames_.end() || it->second.from != vehicle || it->second.tx_start_ns >= 0) return;
-    Frame& f = it->second;
-    f.tx_start_ns = Simulator::Now().GetNanoSeconds();
-    h->counter(f.from, f.from, wire::Counter::kTransmitted);
-    for (uint32_t r = 0; r < h->vehicles_; ++r) {
-      if (r == f.from || (f.to >= 0 && static_cast<uint32_t>(f.to) != r)) continue;
-      h->counter(f.from, r, wire::Counter::kSent);
-    }
+    h->ledger_.tx_begin(vehicle, p->GetUid());
   }
-
   static void on_tx_end(Helper* h, uint32_t vehicle, Ptr<const Packet> p) {
-    // the channel computed every receiver's power when this transmission started
-    auto it = h->frames_.find(p->GetUid());
-    if (it == h->frames_.end() || it->second.from != vehicle) return;
-    for (uint32_t r = 0; r < h->vehicles_; ++r) {
-      if (r != vehicle) it->second.rx_dbm[r] = h->link_loss_->last_dbm(vehicle, r);
-    }
+    h->ledger_.tx_end(vehicle, p->GetUid());
   }
-
   static void on_indication(Helper* h, uint32_t vehicle, McpsDataIndicationParams params,
                             Ptr<Packet> p) {
-    auto it = h->frames_.find(p->GetUid());
-    if (it == h->frames_.end()) return;
-    Frame& f = it->second;
-    const int64_t from = index_of(params.m_srcAddr);
-    if (from != static_cast<int64_t>(f.from) || f.received[vehicle]) return;  // a retry's copy
-    f.received[vehicle] = 1;
-    h->counter(f.from, vehicle, wire::Counter::kDelivered);
-    std::vector<uint8_t> data(p->GetSize());
-    p->CopyData(data.data(), static_cast<uint32_t>(data.size()));
-    wire::Writer& w = h->deliveries_;
-    w.put(vehicle);
-    w.put(f.from);
-    w.put(f.seq);
-    w.put<uint8_t>(f.to < 0 ? 1 : 0);
-    w.put(f.queued_ns);
-    w.put(f.tx_start_ns);
-    w.put(Simulator::Now().GetNanoSeconds());
-    w.put(params.m_mpduLinkQuality);
-    w.put(static_cast<uint16_t>(data.size()));
-    w.bytes(data.data(), data.size());
-    ++h->delivery_count_;
+    h->ledger_.deliver(vehicle, index_of(params.m_srcAddr), p, params.m_mpduLinkQuality);
   }
-
   static void on_confirm(Helper* h, uint32_t vehicle, McpsDataConfirmParams params) {
     // a MAC confirms its requests in the order they were made
     if (h->pending_[vehicle].empty()) return;
     const uint64_t uid = h->pending_[vehicle].front();
     h->pending_[vehicle].pop_front();
-    Frame& f = h->frames_.at(uid);
-    f.confirmed_ns = Simulator::Now().GetNanoSeconds();
     wire::ConfirmStatus status = wire::ConfirmStatus::kOther;
-    switch (params.m_status) {
-      case IEEE_802_15_4_SUCCESS:
-        status = wire::ConfirmStatus::kSuccess;
-        break;
-      case IEEE_802_15_4_CHANNEL_ACCESS_FAILURE:
-        status = wire::ConfirmStatus::kChannelAccessFailure;
-        h->counter(vehicle, vehicle, wire::Counter::kChannelAccessFailure);
-        break;
-      case IEEE_802_15_4_NO_ACK:
-        status = wire::ConfirmStatus::kNoAck;
-        h->counter(vehicle, static_cast<uint32_t>(f.to), wire::Counter::kNoAck);
-        break;
-      default:
-        break;
+    if (params.m_status == IEEE_802_15_4_SUCCESS) status = wire::ConfirmStatus::kSuccess;
+    if (params.m_status == IEEE_802_15_4_CHANNEL_ACCESS_FAILURE) {
+      status = wire::ConfirmStatus::kChannelAccessFailure;
     }
-    h->confirms_.put(vehicle);
-    h->confirms_.put(f.seq);
-    h->confirms_.put(static_cast<uint8_t>(status));
-    ++h->confirm_count_;
-  }
-
-  // frames confirmed long enough ago that every reception has ended: each intended receiver that
-  // did not get a frame that went on air counts once, below sensitivity or lost (interference,
-  // SINR errors, busy receiving or sending)
-  void settle() {
-    const int64_t now_ns = Simulator::Now().GetNanoSeconds();
-    for (auto it = frames_.begin(); it != frames_.end();) {
-      const Frame& f = it->second;
-      if (f.confirmed_ns < 0 || now_ns < f.confirmed_ns + kSettle_ns) {
-        ++it;
-        continue;
-      }
-      if (f.tx_start_ns >= 0) {
-        for (uint32_t r = 0; r < vehicles_; ++r) {
-          if (r == f.from || f.received[r] || (f.to >= 0 && static_cast<uint32_t>(f.to) != r)) {
-            continue;
-          }
-          const bool heard = f.rx_dbm[r] >= channel_.sensitivity_dbm;
-          counter(f.from, r, heard ? wire::Counter::kLost : wire::Counter::kOutOfRange);
-        }
-      }
-      it = frames_.erase(it);
-    }
+    if (params.m_status == IEEE_802_15_4_NO_ACK) status = wire::ConfirmStatus::kNoAck;
+    h->ledger_.confirm(vehicle, uid, status);
   }
 
   bool step_done() {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kStepDone));
     w.put(Simulator::Now().GetNanoSeconds());
-    w.put<uint8_t>(frames_.empty() ? 0 : 1);
-    auto append = [&w](uint32_t count, const wire::Writer& part) {
-      w.put(count);
-      const std::vector<uint8_t> m = part.message();
-      w.bytes(m.data() + 4, m.size() - 4);
-    };
-    append(delivery_count_, deliveries_);
-    append(confirm_count_, confirms_);
-    append(counter_count_, counters_);
-    deliveries_ = wire::Writer();
-    confirms_ = wire::Writer();
-    counters_ = wire::Writer();
-    delivery_count_ = confirm_count_ = counter_count_ = 0;
+    ledger_.report(w);
     return wire::write_all(fd_, w.message()) == wire::IoResult::kOk;
   }
 
@@ -493,11 +400,13 @@ class Helper {
   Ptr<NormalRandomVariable> shadowing_variable_;
   Ptr<UavsimLinkLoss> link_loss_;
   std::vector<Ptr<LrWpanMac>> macs_;
+  std::vector<Ptr<LrWpanCsmaCa>> csmas_;
+  std::vector<Ptr<WifiNetDevice>> wifi_;  // 802.11: the devices (then no macs_)
+  uavsim_ns3::WifiHooks wifi_hooks_;
+  uint64_t seed_ = 0;
   std::vector<Ptr<ConstantVelocityMobilityModel>> mobility_;
-  std::map<uint64_t, Frame> frames_;               // by packet uid, until settled
-  std::vector<std::deque<uint64_t>> pending_;      // per sender: uids awaiting their confirm
-  wire::Writer deliveries_, confirms_, counters_;  // since the last kStepDone
-  uint32_t delivery_count_ = 0, confirm_count_ = 0, counter_count_ = 0;
+  FrameLedger ledger_;
+  std::vector<std::deque<uint64_t>> pending_;  // per sender: uids awaiting their confirm
 };
 
 }  // namespace

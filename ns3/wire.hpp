@@ -14,18 +14,20 @@
 //   kStep   i64 t_ns, u8 with_kinematics, [vehicles x (3 f64 position_enu_m, 3 f64
 //   velocity_enu_m_s)],
 //           u32 n, n x (u32 from, u32 to, f64 extra_loss_db),
-//           u32 n, n x (u32 from, i32 to, u64 seq, i64 queued_ns, u16 bytes, bytes)
+//           u32 n, n x (u32 from, i32 to, u64 seq, i64 queued_ns, i64 at_ns, u16 bytes, bytes)
 //                                                    -> kStepDone (below)
 //   kQuit                                            -> (none; the helper exits 0)
-//   kStepDone  i64 now_ns, u8 busy,
+//   kStepDone  i64 now_ns, u8 busy, i64 quiet_until_ns,
 //           u32 n, n x Delivery (u32 to, u32 from, u64 seq, u8 broadcast, i64 queued_ns,
 //                                i64 tx_start_ns, i64 rx_ns, u8 lqi, u16 bytes, bytes),
 //           u32 n, n x (u32 from, u64 seq, u8 status: ConfirmStatus),
 //           u32 n, n x (u32 from, u32 to, u8 Counter)   (to = from for a vehicle's own counters)
 //   kError  u16 bytes, text (a request the helper could not carry out; the server ends the run)
 // kStep runs ns-3 to t_ns (Simulator::Stop(t - Now()) + Run()), then sets the positions, the extra
-// losses and hands the frames to the MACs in the order given, and reports what happened since the
-// previous kStepDone. busy: frames in flight (the server must keep stepping every step).
+// losses and hands the frames to the MACs in the order given (at_ns -1: at once; else at at_ns,
+// a TDMA slot's start, within the next step), and reports what happened since the previous
+// kStepDone. busy: frames in flight; quiet_until_ns: they report nothing before that time, so
+// the server steps the helper again at the first step at or after it (or when it hands frames).
 #pragma once
 
 #include <poll.h>
@@ -80,6 +82,8 @@ struct Channel {
   double reference_loss_db = 40.05;
   double path_loss_exponent = 2.5;
   double shadowing_sigma_db = 0.0;
+  uint8_t tdma = 0;        // 1: frames come at their slots' starts; CSMA-CA without random backoff
+  uint8_t technology = 0;  // 0: IEEE 802.15.4 (lr-wpan); 1: IEEE 802.11g ad hoc, 6 Mbit/s
 };
 
 inline constexpr uint32_t kMaxMessageBytes = 64u << 20;  // far above any step's traffic
@@ -151,6 +155,8 @@ inline void put_channel(Writer& w, const Channel& c) {
   w.put(c.reference_loss_db);
   w.put(c.path_loss_exponent);
   w.put(c.shadowing_sigma_db);
+  w.put<uint8_t>(c.tdma);
+  w.put<uint8_t>(c.technology);
 }
 
 inline Channel get_channel(Reader& r) {
@@ -162,6 +168,8 @@ inline Channel get_channel(Reader& r) {
   c.reference_loss_db = r.get<double>();
   c.path_loss_exponent = r.get<double>();
   c.shadowing_sigma_db = r.get<double>();
+  c.tdma = r.get<uint8_t>();
+  c.technology = r.get<uint8_t>();
   return c;
 }
 

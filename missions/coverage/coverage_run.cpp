@@ -265,11 +265,16 @@ void CoverageRun::set_up() {
   // 3. hold the clock at t = 0 with this seed; the radio; the events; the launcher's ticks
   Result<Json> r = api.pause();
   if (r) r = api.reset(o_.seed);
-  if (r)
-    r = api.request({{"op", "radio_config"},
-                     {"model", "range"},
-                     {"range_m", o_.radio_range_m},
-                     {"loss", o_.radio_loss}});
+  Json radio = {{"op", "radio_config"},
+                {"model", "range"},
+                {"range_m", o_.radio_range_m},
+                {"loss", o_.radio_loss}};
+  if (o_.radio_tdma_slot_s > 0) {
+    radio["tdma"] = true;
+    radio["slot_s"] = o_.radio_tdma_slot_s;
+    radio["period_s"] = 1.0;
+  }
+  if (r) r = api.request(radio);
   if (r) r = api.subscribe_events();
   if (r) r = api.lockstep_join(kLauncherTick_s, 120.0);
   if (!r) fail("setting up the run: " + r.message());
@@ -288,10 +293,10 @@ void CoverageRun::set_up() {
     char buf[256];
     std::snprintf(buf, sizeof buf,
                   "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                  "radio %s range %.0f m loss %.2f, seed %llu%s",
+                  "radio %s%s range %.0f m loss %.2f, seed %llu%s",
                   o_.agents, o_.length_x_m, o_.width_y_m, stripes_, o_.failure_prob,
-                  o_.radio_backend.c_str(), o_.radio_range_m, o_.radio_loss,
-                  static_cast<unsigned long long>(o_.seed),
+                  o_.radio_backend.c_str(), o_.radio_tdma_slot_s > 0 ? " tdma" : "",
+                  o_.radio_range_m, o_.radio_loss, static_cast<unsigned long long>(o_.seed),
                   o_.gcs ? ", with a ground station" : "");
     say(buf);
   }
@@ -652,6 +657,7 @@ Json CoverageRun::summary_json(const CoverageScore& s) {
   summary["radio_range_m"] = o_.radio_range_m;
   summary["radio_loss"] = o_.radio_loss;
   summary["radio_backend"] = o_.radio_backend;
+  summary["radio_tdma_slot_s"] = o_.radio_tdma_slot_s;
   summary["radio"] = radio_end_;
   summary["line_spacing_m"] = o_.line_spacing_m;
   summary["thesis_flocking"] = o_.thesis_flocking;

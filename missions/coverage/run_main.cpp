@@ -53,6 +53,8 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --radio-loss P      probability that a frame heard in range is lost (0-1, default 0; simple only)
   --radio-backend B   the radio channel: simple (default: closed form) or ns3 (ns-3's 802.15.4:
                       CSMA-CA, SINR; 116-byte frames, which the agents fit their messages to)
+  --radio-tdma D      the seed's TDMA on either backend: slots of D seconds (0.001-1; at least
+                      4.256 ms on simple, 4.576 ms on ns3) in a 1 s period, slot k vehicle k mod N
   --per-process K     agents per coverage-agent process (default 1)
   --budget S          sim-time limit (default 3000)
   --wall-limit S      wall-clock safety bound (default 3600)

@@ -85,6 +85,9 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
     } else if (a == "--radio-backend" &&
                (std::strcmp(val, "simple") == 0 || std::strcmp(val, "ns3") == 0)) {
       o->radio_backend = val;
+    } else if (a == "--radio-tdma" && number(val, 0.001, 1, &v)) {
+      // the server checks the rest (a slot holds a frame; the vehicles' slots fit in the period)
+      o->radio_tdma_slot_s = v;
     } else if (a == "--gcs-cut" && number(val, 0, 1e6, &v)) {
       o->gcs_cut_s = v;
     } else if (a == "--gcs-loss" && number(val, 0, 1, &v)) {

@@ -28,6 +28,8 @@ struct CoverageRunOptions : launch::RunOptions {
   double radio_loss = 0.0;
   // the server's radio channel (--radio-backend): simple (closed form) or ns3 (ns-3's 802.15.4)
   std::string radio_backend = "simple";
+  // --radio-tdma D: the seed's TDMA with slots of D seconds in a 1 s period (the GPS pulse); 0: off
+  double radio_tdma_slot_s = 0.0;
   std::vector<std::pair<double, int>> kills;  // (sim time, agent)
   int per_process = 1;
   double budget_s = 3000.0;

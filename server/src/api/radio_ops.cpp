@@ -36,6 +36,7 @@ constexpr FieldSpec kConfigFields[] = {{"range_m", FieldType::kNumber},
                                        {"tdma", FieldType::kBoolean},
                                        {"collisions", FieldType::kBoolean},
                                        {"model", FieldType::kString},
+                                       {"technology", FieldType::kString},
                                        {"max_queue_frames", FieldType::kNumber, 1, 1000000},
                                        {"mac_header_bytes", FieldType::kNumber, 0, radio::kMaxMacHeaderBytes},
                                        {"obstacle_loss_db", FieldType::kArray}};
@@ -87,6 +88,7 @@ void RadioOps::register_ops(OpTable& table) {
 RadioOps::Json RadioOps::config_json() const {
   const radio::RadioConfig& c = radio_.model().config();
   return Json{{"backend", radio_.model().backend_name()},
+              {"technology", radio::technology_name(c.technology)},
               {"model", radio::propagation_name(c.propagation)},
               {"range_m", c.range_m},
               {"tx_power_dbm", c.tx_power_dbm},
@@ -128,6 +130,11 @@ void RadioOps::op_config(uint64_t, const Json& request, OpReply* reply) {
     const auto p = radio::propagation_from_name(*name);
     if (!p) return reply->fail(ApiError::kBadField, "\"model\" must be \"range\" or \"log_distance\"");
     c.propagation = *p;
+  }
+  if (const auto name = string_field(request, "technology")) {
+    const auto t = radio::technology_from_name(*name);
+    if (!t) return reply->fail(ApiError::kBadField, "\"technology\" must be \"802.15.4\" or \"802.11\"");
+    c.technology = *t;
   }
   std::optional<size_t> queue_frames, header_bytes;
   if (!whole_field(request, "max_queue_frames", &queue_frames, reply) ||

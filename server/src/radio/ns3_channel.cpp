@@ -1,25 +1,11 @@
 #include "radio/ns3_channel.hpp"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
-#include <filesystem>
 #include <stdexcept>
-#include <thread>
 
 #include "radio/radio_model.hpp"
 #include "wire.hpp"
-
-extern char** environ;
 
 namespace uavsim::server::radio {
 
@@ -30,8 +16,11 @@ namespace wire = uavsim::ns3wire;
 constexpr double kTimeEps = 1e-9;
 constexpr size_t kNs3MacHeaderBytes = 11;    // short addresses, compressed PAN id, FCS
 constexpr double kLrWpanFloorDbm = -106.58;  // lr-wpan 3.37's fixed receiver sensitivity
-constexpr int kHelperFd = 3;                 // the helper's end of the socket pair
 constexpr double kObstacleLossChangeDb = 1e-9;
+// TDMA on lr-wpan: a frame handed to the MAC at its slot's start still takes one clear-channel
+// assessment (8 symbols, 128 us) and the receive-to-transmit turnaround (12 symbols, 192 us) before
+// it goes on air (macMinBE 0: no random backoff), so a slot must hold those and the longest frame
+constexpr double kNs3TdmaAccessS = 128e-6 + 192e-6;
 
 wire::Channel wire_channel(const RadioConfig& c) {
   wire::Channel w;
@@ -42,6 +31,8 @@ wire::Channel wire_channel(const RadioConfig& c) {
   w.reference_loss_db = c.reference_loss_db;
   w.path_loss_exponent = c.path_loss_exponent;
   w.shadowing_sigma_db = c.shadowing_sigma_db;
+  w.tdma = c.tdma ? 1 : 0;
+  w.technology = c.technology == Technology::k80211 ? 1 : 0;
   return w;
 }
 
@@ -50,42 +41,29 @@ bool same_channel(const RadioConfig& a, const RadioConfig& b) {
          a.tx_power_dbm == b.tx_power_dbm && a.sensitivity_dbm == b.sensitivity_dbm &&
          a.reference_loss_db == b.reference_loss_db &&
          a.path_loss_exponent == b.path_loss_exponent &&
-         a.shadowing_sigma_db == b.shadowing_sigma_db;
-}
-
-// the wait status of a helper that is gone, in words
-std::string exit_words(int status) {
-  if (WIFEXITED(status)) return "exited with status " + std::to_string(WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) return "was killed by signal " + std::to_string(WTERMSIG(status));
-  return "stopped";
+         a.shadowing_sigma_db == b.shadowing_sigma_db && a.tdma == b.tdma &&
+         a.technology == b.technology;
 }
 
 }  // namespace
 
-std::optional<std::string> find_ns3_helper() {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (const char* env = std::getenv("UAVSIM_NS3_RADIO"); env != nullptr && *env != '\0') {
-    return std::string(env);
-  }
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const fs::path beside = self.parent_path() / "uavsim-ns3-radio";
-    if (fs::is_regular_file(beside, ec)) return beside.string();
-  }
-#ifdef UAVSIM_NS3_HELPER_PATH
-  if (fs::is_regular_file(UAVSIM_NS3_HELPER_PATH, ec)) return std::string(UAVSIM_NS3_HELPER_PATH);
-#endif
-  return std::nullopt;
-}
+double Ns3Channel::min_tdma_slot_s() { return airtime_s(kMaxFrameBytes) + kNs3TdmaAccessS; }
 
-std::string Ns3Channel::validate_ns3(const RadioConfig& c) {
-  // the rules both backends share (finite numbers, ranges), then what lr-wpan fixes
+std::string Ns3Channel::validate_ns3(const RadioConfig& c, size_t vehicles) {
+  // the rules both backends share (finite numbers, ranges, TDMA's N D <= T), then what lr-wpan
+  // fixes
   RadioConfig shared = c;
   shared.mac_header_bytes = 0;
-  const std::string why = validate(shared, 1);
+  const std::string why = validate(shared, vehicles);
   if (!why.empty()) return why;
-  if (c.tdma) return "tdma is not available on the ns3 backend (lr-wpan runs unslotted CSMA-CA)";
+  if (c.tdma && c.technology != Technology::k802154) {
+    return "tdma is the seed's 802.15.4 MAC: not with technology 802.11";
+  }
+  if (c.tdma && !(c.slot_s >= min_tdma_slot_s())) {
+    return "slot_s must be at least " + std::to_string(min_tdma_slot_s()) +
+           " s on the ns3 backend (a 127-byte frame's airtime, one clear-channel assessment and "
+           "the turnaround to transmit)";
+  }
   if (c.loss_probability != 0.0) {
     return "loss must be 0 on the ns3 backend (ns-3 loses frames by SINR, not by a draw)";
   }
@@ -107,7 +85,7 @@ Ns3Channel::Ns3Channel(size_t vehicles, const RadioConfig& config, uint64_t seed
   // what ns-3 always does, whatever the simple model's defaults say
   config_.mac_header_bytes = kNs3MacHeaderBytes;
   config_.collisions = true;
-  const std::string why = validate_ns3(config_);
+  const std::string why = validate_ns3(config_, vehicles);
   if (!why.empty()) throw std::invalid_argument("radio config (ns3 backend): " + why);
   if (!(step_s > 0.0)) throw std::invalid_argument("radio: step_s must be > 0");
   if (vehicles == 0 || vehicles > wire::kMaxVehicles) {
@@ -134,114 +112,6 @@ Ns3Channel::Ns3Channel(size_t vehicles, const RadioConfig& config, uint64_t seed
   reset_state();
 }
 
-Ns3Channel::~Ns3Channel() {
-  if (fd_ >= 0 && failure_.empty()) {
-    wire::Writer w;
-    w.put(static_cast<uint8_t>(wire::MessageType::kQuit));
-    wire::write_all(fd_, w.message());
-  }
-  if (fd_ >= 0) ::close(fd_);
-  if (pid_ > 0) {
-    // the helper exits when asked or when its socket closes; a hung one is killed after 2 s
-    int status = 0;
-    for (int k = 0; k < 200; ++k) {
-      if (::waitpid(pid_, &status, WNOHANG) != 0) return;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, &status, 0);
-  }
-}
-
-void Ns3Channel::spawn() {
-  if (options_.helper_path.empty()) {
-    throw std::runtime_error(
-        "radio (ns3 backend): no uavsim-ns3-radio program (build with ns-3 installed: "
-        "scripts/install_deps.sh; or set UAVSIM_NS3_RADIO)");
-  }
-  int sv[2];
-  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) {
-    throw std::runtime_error(std::string("radio (ns3 backend): socketpair: ") +
-                             std::strerror(errno));
-  }
-  // the child's end becomes its fd 3 (dup2 clears close-on-exec there; if it already is 3, clear
-  // it)
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (sv[1] == kHelperFd) {
-    ::fcntl(sv[1], F_SETFD, 0);
-  } else {
-    posix_spawn_file_actions_adddup2(&actions, sv[1], kHelperFd);
-  }
-  const std::string fd_text = std::to_string(kHelperFd);
-  std::vector<char*> argv = {const_cast<char*>(options_.helper_path.c_str()),
-                             const_cast<char*>("--fd"), const_cast<char*>(fd_text.c_str()),
-                             nullptr};
-  const int rc =
-      ::posix_spawn(&pid_, options_.helper_path.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  ::close(sv[1]);
-  if (rc != 0) {
-    ::close(sv[0]);
-    pid_ = -1;
-    throw std::runtime_error("radio (ns3 backend): cannot start " + options_.helper_path + ": " +
-                             std::strerror(rc));
-  }
-  fd_ = sv[0];
-}
-
-void Ns3Channel::fail(const std::string& why, bool hung) {
-  if (!failure_.empty()) return;
-  std::string what = why;
-  if (pid_ > 0) {
-    // a helper whose socket closed is exiting: wait (up to 1 s) to say how it ended; a hung one,
-    // or one that does not exit, is ended here
-    int status = 0;
-    pid_t r = 0;
-    for (int k = 0; !hung && r == 0 && k < 100; ++k) {
-      r = ::waitpid(pid_, &status, WNOHANG);
-      if (r == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (r == pid_) {
-      what += " (uavsim-ns3-radio " + exit_words(status) + ")";
-    } else {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, &status, 0);
-      what += " (ended it)";
-    }
-    pid_ = -1;
-  }
-  failure_ = "the ns-3 radio helper failed: " + what;
-  busy_ = false;
-}
-
-bool Ns3Channel::exchange(const std::vector<uint8_t>& request, std::vector<uint8_t>* reply) {
-  if (!failure_.empty()) return false;
-  wire::IoResult r = wire::write_all(fd_, request);
-  if (r != wire::IoResult::kOk) {
-    fail(std::string("sending to it: ") + wire::io_result_name(r));
-    return false;
-  }
-  const int timeout_ms = static_cast<int>(std::lround(options_.reply_timeout_s * 1000.0));
-  r = wire::read_message(fd_, timeout_ms, reply);
-  if (r != wire::IoResult::kOk) {
-    const bool hung = r == wire::IoResult::kTimeout;
-    fail(std::string("waiting for its answer: ") + wire::io_result_name(r) +
-             (hung ? " (" + std::to_string(options_.reply_timeout_s) + " s)" : std::string()),
-         hung);
-    return false;
-  }
-  if (!reply->empty() && (*reply)[0] == static_cast<uint8_t>(wire::MessageType::kError)) {
-    wire::Reader in(reply->data() + 1, reply->size() - 1);
-    const auto n = in.get<uint16_t>();
-    std::vector<uint8_t> text;
-    in.bytes(n, &text);
-    fail("it reported: " + std::string(text.begin(), text.end()));
-    return false;
-  }
-  return true;
-}
-
 bool Ns3Channel::expect_ready(const std::vector<uint8_t>& request) {
   std::vector<uint8_t> reply;
   if (!exchange(request, &reply)) return false;
@@ -260,9 +130,11 @@ bool Ns3Channel::expect_ready(const std::vector<uint8_t>& request) {
 void Ns3Channel::reset_state() {
   helper_ns_ = 0;
   busy_ = false;
+  quiet_until_ns_ = 0;
   queue_.clear();
   next_seq_.assign(vehicles_, 0);
   queued_.assign(vehicles_, 0);
+  busy_until_s_.assign(vehicles_, 0.0);
   in_flight_.assign(vehicles_, 0);
   pushed_loss_db_.assign(vehicles_ * vehicles_, 0.0);
   pending_.clear();
@@ -281,7 +153,7 @@ void Ns3Channel::reset(uint64_t seed) {
 }
 
 bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
-  const std::string why = validate_ns3(config);
+  const std::string why = validate_ns3(config, vehicles_);
   if (!why.empty()) {
     if (error != nullptr) *error = why;
     return false;
@@ -293,6 +165,17 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
     if (!expect_ready(w.message())) {
       if (error != nullptr) *error = failure_;
       return false;
+    }
+    if (config.technology != config_.technology) {
+      // the helper built a fresh world (its clock back at 0) with the other devices: whatever was
+      // waiting or in flight is dropped (its size may not fit the new max_payload_bytes)
+      for (const Queued& q : queue_) --queued_[q.from];
+      queue_.clear();
+      in_flight_.assign(vehicles_, 0);
+      busy_until_s_.assign(vehicles_, 0.0);
+      busy_ = false;
+      helper_ns_ = 0;
+      quiet_until_ns_ = 0;
     }
   }
   config_ = config;
@@ -321,6 +204,14 @@ SendResult Ns3Channel::send(size_t from, int to, const std::vector<uint8_t>& dat
     q.seq = next_seq_[from]++;
     q.queued_ns = to_ns(now_s);
     q.data = data;
+    if (config_.tdma) {
+      // the slot the simple model gives it: the sender's next own slot once its previous frame is
+      // done (radio_model.hpp), so both backends put a frame on air in the same slot
+      const double earliest_s = std::max(now_s, busy_until_s_[from]);
+      const double start_s = tdma_slot_start_s(config_, vehicles_, from, earliest_s);
+      busy_until_s_[from] = start_s + airtime_s(data.size() + kNs3MacHeaderBytes);
+      q.slot_ns = to_ns(start_s);
+    }
     queue_.push_back(std::move(q));
     ++queued_[from];
     r.seq = queue_.back().seq;
@@ -330,6 +221,8 @@ SendResult Ns3Channel::send(size_t from, int to, const std::vector<uint8_t>& dat
 
 bool Ns3Channel::has_due(double now_s) const {
   (void)now_s;
+  // any queued frame, even one waiting for its TDMA slot: step() looks at every queued frame and
+  // must have this step's positions for those it hands over (fetching them is cheap)
   return failure_.empty() && (!queue_.empty() || busy_);
 }
 
@@ -343,9 +236,13 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
   // frames to hand over: those sent by now (with starting_now false, those sent before now: a
   // lockstep client may still send for now), in (time, sender, seq) order: the order ns-3's
   // MACs get them, whatever order the requests came in
+  // TDMA: a frame is handed at the last step before its slot starts, and ns-3 puts it to its MAC
+  // at the slot's start (within the step, from this step's positions and velocities)
   std::vector<Queued> hand;
+  const int64_t step_ns = to_ns(step_s_);
   auto due = [&](const Queued& q) {
-    return starting_now ? q.queued_ns <= now_ns : q.queued_ns < now_ns;
+    const bool sent = starting_now ? q.queued_ns <= now_ns : q.queued_ns < now_ns;
+    return sent && (q.slot_ns < 0 || q.slot_ns < now_ns + step_ns);
   };
   for (auto it = queue_.begin(); it != queue_.end();) {
     if (due(*it)) {
@@ -360,7 +257,9 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
     if (a.from != b.from) return a.from < b.from;
     return a.seq < b.seq;
   });
-  const bool advance = busy_ && now_ns > helper_ns_;
+  // frames in flight report nothing before quiet_until_ns_ (the helper's bound): no round trip
+  // before it
+  const bool advance = busy_ && now_ns > helper_ns_ && now_ns >= quiet_until_ns_;
   if (failure_.empty() && (!hand.empty() || advance) && now_ns >= helper_ns_ &&
       positions_enu_m.size() == vehicles_) {
     wire::Writer w;
@@ -402,6 +301,7 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
       w.put(static_cast<int32_t>(q.to));
       w.put(q.seq);
       w.put(q.queued_ns);
+      w.put(q.slot_ns < 0 ? int64_t{-1} : std::max(q.slot_ns, now_ns));
       w.put(static_cast<uint16_t>(q.data.size()));
       w.bytes(q.data.data(), q.data.size());
       --queued_[q.from];
@@ -423,6 +323,7 @@ bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
   if (in.get<uint8_t>() != static_cast<uint8_t>(wire::MessageType::kStepDone)) return false;
   in.get<int64_t>();
   const bool busy = in.get<uint8_t>() != 0;
+  const auto quiet_until_ns = in.get<int64_t>();
   // receptions: they arrive after the processing latency, and never before one step after they
   // were sent (as on the simple backend)
   const auto deliveries = in.get<uint32_t>();
@@ -494,6 +395,7 @@ bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
     }
   }
   busy_ = busy;
+  quiet_until_ns_ = quiet_until_ns;
   return in.ok() && in.left() == 0;
 }
 

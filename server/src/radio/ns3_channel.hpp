@@ -15,7 +15,11 @@
 // Model: the channel's loss is log-distance (reference_loss_db, path_loss_exponent) with gaussian
 // shadowing per (transmission, receiver), or the range model; tx_power_dbm and sensitivity_dbm
 // are applied by the helper (a signal below sensitivity neither decodes nor interferes). loss,
-// collisions (always modelled), tdma and mac_header_bytes (always 11) are not settings here.
+// collisions (always modelled) and mac_header_bytes (always 11) are not settings here.
+// TDMA (tdma, slot_s, period_s, as on the simple backend): the server gives each frame the slot
+// the simple model would (tdma_slot_start_s) and hands it over at the last step before that slot;
+// the helper puts it to the sender's MAC at the slot's start, with CSMA-CA's random backoff off
+// (macMinBE 0) so it goes on air one clear-channel assessment and one turnaround later (320 us).
 // Deliveries arrive at max(end of reception + latency_s, queued + one step), like the simple model.
 #pragma once
 
@@ -76,8 +80,11 @@ class Ns3Channel : public RadioChannel {
   // The helper's process id (tests end it to check the failure path).
   pid_t helper_pid() const { return pid_; }
 
-  // Why config is unusable on this backend ("" if usable).
-  static std::string validate_ns3(const RadioConfig& config);
+  // Why config is unusable on this backend for vehicles vehicles ("" if usable).
+  static std::string validate_ns3(const RadioConfig& config, size_t vehicles);
+  // The shortest TDMA slot on this backend: a 127-byte PSDU's airtime plus the clear-channel
+  // assessment and turnaround the MAC takes before it (4.576 ms).
+  static double min_tdma_slot_s();
 
  private:
   struct Queued {
@@ -85,6 +92,7 @@ class Ns3Channel : public RadioChannel {
     int to = kBroadcast;
     uint64_t seq = 0;
     int64_t queued_ns = 0;
+    int64_t slot_ns = -1;  // TDMA: the start of its slot; -1: handed at once
     std::vector<uint8_t> data;
   };
 
@@ -106,12 +114,14 @@ class Ns3Channel : public RadioChannel {
   int fd_ = -1;
   std::string failure_;
   size_t max_payload_bytes_ = 0;
-  int64_t helper_ns_ = 0;  // the helper's clock
-  bool busy_ = false;      // frames in flight in the helper
+  int64_t helper_ns_ = 0;       // the helper's clock
+  bool busy_ = false;           // frames in flight in the helper
+  int64_t quiet_until_ns_ = 0;  // busy: the helper has nothing to report before this time
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Queued> queue_;  // sent, not yet handed to the helper, in (time, from, seq)
   std::vector<uint64_t> next_seq_;
   std::vector<size_t> queued_;          // per sender: in queue_
+  std::vector<double> busy_until_s_;    // per sender, TDMA: end of its last frame's slot use
   std::vector<size_t> in_flight_;       // per sender: handed, not yet confirmed
   std::vector<double> pushed_loss_db_;  // from * N + to: the obstacle loss the helper has
   std::vector<Delivery> pending_;       // received, not yet arrived (latency, one-step floor)

@@ -2,10 +2,9 @@
 // offers the simulation. Two backends implement it:
 //   simple  radio_model.hpp: closed form (range or log-distance with shadowing, seeded loss, TDMA,
 //           optional collisions), in process
-//   ns3     ns3_channel.hpp: ns-3's lr-wpan (CSMA-CA, ACKs and retries, SINR errors) in the
-//   separate
-//           GPL-2.0 program uavsim-ns3-radio (ns3/README.md), stepped in lockstep over a socket
-//           pair
+//   ns3     ns3_channel.hpp: ns-3's lr-wpan (CSMA-CA or the same TDMA, ACKs and retries, SINR
+//           errors) in the separate GPL-2.0 program uavsim-ns3-radio (ns3/README.md), stepped
+//           in lockstep over a socket pair
 // Both are stepped in sim time by one caller (the loop thread) with the vehicles' true positions.
 #pragma once
 
@@ -40,7 +39,14 @@ enum class Propagation {
 const char* propagation_name(Propagation p);
 std::optional<Propagation> propagation_from_name(const std::string& name);
 
+// The radio's technology: the seed's IEEE 802.15.4 (both backends), or IEEE 802.11g ad hoc at a
+// fixed 6 Mbit/s (the ns3 backend only: ns-3's wifi module).
+enum class Technology { k802154, k80211 };
+const char* technology_name(Technology t);  // "802.15.4", "802.11"
+std::optional<Technology> technology_from_name(const std::string& name);
+
 struct RadioConfig {
+  Technology technology = Technology::k802154;
   Propagation propagation = Propagation::kRange;
   double range_m = 100.0;
   // log-distance path loss with log-normal shadowing (Rappaport, Wireless Communications, eq. 4.69)

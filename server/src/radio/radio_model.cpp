@@ -58,6 +58,16 @@ std::optional<Propagation> propagation_from_name(const std::string& name) {
   return std::nullopt;
 }
 
+const char* technology_name(Technology t) {
+  return t == Technology::k802154 ? "802.15.4" : "802.11";
+}
+
+std::optional<Technology> technology_from_name(const std::string& name) {
+  if (name == "802.15.4") return Technology::k802154;
+  if (name == "802.11") return Technology::k80211;
+  return std::nullopt;
+}
+
 const char* error_name(Error e) {
   switch (e) {
     case Error::kUnknownVehicle:
@@ -115,9 +125,16 @@ std::string validate(const RadioConfig& c, size_t vehicles) {
   return "";
 }
 
+std::string RadioModel::validate_simple(const RadioConfig& config, size_t vehicles) {
+  if (config.technology != Technology::k802154) {
+    return "technology 802.11 needs the ns3 backend (the simple model is 802.15.4's)";
+  }
+  return validate(config, vehicles);
+}
+
 RadioModel::RadioModel(size_t vehicles, const RadioConfig& config, uint64_t seed, double step_s)
     : vehicles_(vehicles), config_(config), step_s_(step_s), rng_(seed) {
-  const std::string why = validate(config, vehicles);
+  const std::string why = validate_simple(config, vehicles);
   if (!why.empty()) throw std::invalid_argument("radio config: " + why);
   if (!(step_s > 0.0)) throw std::invalid_argument("radio: step_s must be > 0");
   reset(seed);
@@ -137,7 +154,7 @@ void RadioModel::reset(uint64_t seed) {
 }
 
 bool RadioModel::set_config(const RadioConfig& config, std::string* error) {
-  const std::string why = validate(config, vehicles_);
+  const std::string why = validate_simple(config, vehicles_);
   if (!why.empty()) {
     if (error != nullptr) *error = why;
     return false;
@@ -181,14 +198,14 @@ bool RadioModel::has_due(double now_s) const {
   return !scheduled_.empty() && scheduled_.front().start_s <= now_s + kTimeEps;
 }
 
-double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
-  const double T = config_.period_s;
-  const double D = config_.slot_s;
+double tdma_slot_start_s(const RadioConfig& config, size_t vehicles, size_t vehicle, double t_s) {
+  const double T = config.period_s;
+  const double D = config.slot_s;
   // whole slots in a period; the remainder is wasted (seed 6.2). validate() bounds T / D below a
   // million and guarantees a slot to every vehicle (N D <= T), so the count is a safe integer and the
   // answer lies in this period or the next: no loop over slots or periods
   const auto slots = static_cast<uint64_t>(std::floor(T / D + 1e-9));
-  const auto n = static_cast<uint64_t>(vehicles_);
+  const auto n = static_cast<uint64_t>(vehicles);
   const double period_start = std::floor(t_s / T) * T;
   // the first slot of this period that starts at or after t_s (within kTimeEps)
   const double into_s = std::max(0.0, t_s - kTimeEps - period_start);
@@ -203,6 +220,10 @@ double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
     if (k < slots) return period_start + static_cast<double>(k) * D;
   }
   return period_start + T + static_cast<double>(vehicle) * D;
+}
+
+double RadioModel::next_slot_start_s(size_t vehicle, double t_s) const {
+  return tdma_slot_start_s(config_, vehicles_, vehicle, t_s);
 }
 
 double RadioModel::uniform() {

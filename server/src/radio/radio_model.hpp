@@ -50,6 +50,11 @@ inline constexpr double kMaxPeriodS = 3600.0;  // TDMA period T
 // Why a config is unusable for vehicles vehicles ("" if usable); names the field.
 std::string validate(const RadioConfig& config, size_t vehicles);
 
+// The start of vehicle's first TDMA slot at or after t_s with config's slot_s and period_s shared
+// by vehicles vehicles (exact slot arithmetic, seed fig. 6.2; config as validate() accepts it).
+// Both backends schedule with it, so a frame starts in the same slot on either.
+double tdma_slot_start_s(const RadioConfig& config, size_t vehicles, size_t vehicle, double t_s);
+
 class RadioModel : public RadioChannel {
  public:
   // step_s: the caller's step (the physics step), the least latency. Throws std::invalid_argument
@@ -92,6 +97,9 @@ class RadioModel : public RadioChannel {
 
   // The start of vehicle's first TDMA slot at or after t_s (exact slot arithmetic, seed fig. 6.2).
   double next_slot_start_s(size_t vehicle, double t_s) const;
+
+  // validate(), and the technology this model has (802.15.4).
+  static std::string validate_simple(const RadioConfig& config, size_t vehicles);
 
  private:
   struct Frame {

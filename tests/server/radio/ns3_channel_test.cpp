@@ -16,56 +16,12 @@
 #include <tuple>
 #include <vector>
 
+#include "ns3_test_support.hpp"
 #include "radio/radio_model.hpp"
 #include "radio/sim_radio.hpp"
 
 namespace uavsim::server::radio {
 namespace {
-
-constexpr double kStep_s = 0.001;  // 1 kHz physics
-
-BackendOptions backend(Backend b, double timeout_s = 30.0) {
-  BackendOptions o;
-  o.backend = b;
-  o.ns3.helper_path = UAVSIM_NS3_HELPER_PATH;
-  o.ns3.reply_timeout_s = timeout_s;
-  return o;
-}
-
-// the simple model's collisions on, as close to ns-3's physics as it gets; ns-3's channel is
-// configured from the same fields (mac_header_bytes and collisions are fixed there)
-RadioConfig config_for(Backend b, RadioConfig c = {}) {
-  c.mac_header_bytes = 11;
-  c.collisions = true;
-  (void)b;
-  return c;
-}
-
-std::unique_ptr<RadioChannel> channel(Backend b, size_t n, const RadioConfig& c,
-                                      uint64_t seed = 1) {
-  return make_channel(backend(b), n, config_for(b, c), seed, kStep_s);
-}
-
-// Steps ch at 1 kHz from 0 to end_s, calling on_step(t) before each step (to send frames).
-std::vector<Delivery> run(RadioChannel& ch, const std::vector<Eigen::Vector3d>& pos, double end_s,
-                          const std::function<void(double)>& on_step) {
-  std::vector<Delivery> out;
-  const auto steps = static_cast<int64_t>(std::llround(end_s / kStep_s));
-  for (int64_t k = 0; k <= steps; ++k) {
-    const double t = static_cast<double>(k) * kStep_s;
-    on_step(t);
-    ch.step(t, pos, &out);
-  }
-  return out;
-}
-
-bool every_ms(double t, int period_ms) { return std::llround(t / kStep_s) % period_ms == 0; }
-
-std::vector<uint8_t> frame(size_t n, uint8_t fill = 0x5A) { return std::vector<uint8_t>(n, fill); }
-
-double share(const std::vector<Delivery>& out, size_t sent) {
-  return sent == 0 ? 0.0 : static_cast<double>(out.size()) / static_cast<double>(sent);
-}
 
 TEST(Ns3Radio, FramesCarry116BytesWithShortAddresses) {
   // 127-byte PSDU - 11 bytes of header and FCS = 116 (lr-wpan refuses 117 and 118 with short
@@ -148,22 +104,11 @@ TEST(Ns3Radio, HalfDeliveryDistanceMatchesTheSimpleModel) {
       << "simple " << simple_m << " m, ns3 " << ns3_m << " m";
 }
 
-// 10 mutually audible senders broadcast one frame each in the same step, every 100 ms; the share
-// of (frame, receiver) pairs delivered
+// the share of (frame, receiver) pairs of ten_senders_burst delivered
 double contention_share(Backend b, uint64_t seed, std::vector<Delivery>* out_all = nullptr) {
-  constexpr size_t kN = 10;
-  constexpr int kRounds = 20;
-  std::vector<Eigen::Vector3d> pos;
-  for (size_t i = 0; i < kN; ++i) pos.emplace_back(5.0 * (i % 4), 5.0 * (i / 4), 10.0);
-  auto ch = channel(b, kN, {}, seed);
-  int rounds = 0;
-  const auto out = run(*ch, pos, kRounds * 0.1 + 0.1, [&](double t) {
-    if (rounds >= kRounds || !every_ms(t, 100)) return;
-    ++rounds;
-    for (size_t i = 0; i < kN; ++i) ch->send(i, kBroadcast, frame(50, static_cast<uint8_t>(i)), t);
-  });
-  if (out_all != nullptr) *out_all = out;
-  return share(out, kRounds * kN * (kN - 1));
+  const Burst burst = ten_senders_burst(b, seed, {});
+  if (out_all != nullptr) *out_all = burst.out;
+  return burst.share;
 }
 
 TEST(Ns3Radio, CsmaCaDeliversMostOfABurstTheSimpleModelLosesToCollisions) {
@@ -359,8 +304,9 @@ TEST(Ns3Radio, ConfigsNs3CannotModelAreRefusedByName) {
   RadioConfig c = ch->config();
   std::string why;
   c.tdma = true;
+  c.slot_s = 0.0045;  // holds a 127-byte frame (4.256 ms), not the CCA and turnaround before it
   EXPECT_FALSE(ch->set_config(c, &why));
-  EXPECT_NE(why.find("tdma"), std::string::npos);
+  EXPECT_NE(why.find("slot_s"), std::string::npos);
   c = ch->config();
   c.loss_probability = 0.2;
   EXPECT_FALSE(ch->set_config(c, &why));

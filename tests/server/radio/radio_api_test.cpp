@@ -443,7 +443,9 @@ TEST(RadioApi, OnNs3ASaturatedChannelShowsChannelAccessFailuresInTheStats) {
   ASSERT_TRUE(cfg["ok"]) << cfg;
   EXPECT_EQ(cfg["result"]["backend"], "ns3");
   EXPECT_EQ(cfg["result"]["max_frame_bytes"], 116);
-  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"tdma", true}})), "bad_field");
+  // TDMA slots on ns3 must hold the MAC's clear-channel assessment and turnaround too (4.576 ms)
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"tdma", true}, {"slot_s", 0.0045}})),
+            "bad_field");
   const std::string full = common::base64_encode(std::vector<uint8_t>(116, 7));
   for (int k = 0; k < 60; ++k) {
     ASSERT_TRUE(c.request(send_op(0, "broadcast", full))["ok"]);
