@@ -1,11 +1,7 @@
 #include "mavlink/endpoint.hpp"
 
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <netinet/in.h>
-#include <netinet/tcp.h>
-#include <sys/epoll.h>
-#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -18,12 +14,13 @@
 #include <span>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <unordered_map>
 
 #include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/tlog.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "net/event_loop.hpp"
+#include "net/tcp_acceptor.hpp"
 #include "uavsim/common/tcp_socket.hpp"
 
 namespace uavsim::server::mavlink {
@@ -44,20 +41,11 @@ struct InEvent {
 constexpr std::size_t kReadChunk = 64 * 1024;
 constexpr std::size_t kMaxReadPerWake = 256 * 1024;  // fairness between clients
 
-// a descriptor held in reserve for accepting (and closing) a connection when the process has none left
-int open_spare_fd() { return ::open("/dev/null", O_RDONLY | O_CLOEXEC); }
-
-std::string address_text(const sockaddr_in& sa) {
-  char ip[INET_ADDRSTRLEN] = {};
-  inet_ntop(AF_INET, &sa.sin_addr, ip, sizeof(ip));
-  return std::string(ip) + ":" + std::to_string(ntohs(sa.sin_port));
-}
+using net::address_text;
 
 sockaddr_in ipv4_address(const std::string& host, int port, const std::string& what) {
   sockaddr_in sa{};
-  sa.sin_family = AF_INET;
-  sa.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (inet_pton(AF_INET, host.c_str(), &sa.sin_addr) != 1) {
+  if (!net::ipv4_address(host, port, &sa)) {
     throw std::runtime_error("mavlink endpoint: " + what + ": not an IPv4 address: '" + host + "'");
   }
   return sa;
@@ -73,7 +61,7 @@ struct MavlinkServer::Core {
     std::unique_ptr<VehicleLink> link;  // loop thread only
     StatCounters stats;
     SigningKeyCell signing;  // set by the link, read by the I/O thread
-    int listen_fd = -1;
+    std::unique_ptr<net::TcpAcceptor> acceptor;  // null without TCP; lives as long as the Core
     std::uint16_t port = 0;
     std::vector<std::uint16_t> udp_ports;  // local port of each UDP link
     std::mutex inbox_mutex;
@@ -92,25 +80,23 @@ struct MavlinkServer::Core {
     ParserStats parser_seen;
     std::uint64_t signing_generation = 0;  // of the vehicle's SigningKeyCell the parser is configured with
     std::shared_ptr<Outbox> outbox;
-    std::vector<std::uint8_t> write_buf;
-    std::size_t write_off = 0;
-    bool want_out = false;
+    std::string datagrams;   // a UDP link's frames being sent
+    bool want_out = false;   // watched for EPOLLOUT: bytes are stuck in the socket
     std::string peer;        // "tcp:ADDR:PORT" / "udp:ADDR:PORT"; empty while a udpin link has no peer
     bool udp = false;        // a UDP link: one datagram per frame, never closed by its peer
   };
 
   sim::Simulation& sim;
   EndpointConfig config;
-  std::vector<std::unique_ptr<Vehicle>> vehicles;
-  int epoll_fd = -1;
-  int wake_fd = -1;
-  int spare_fd = -1;  // see accept_clients(); I/O thread only once it runs
+  std::unique_ptr<net::EventLoop> own_loop;  // without a shared loop
+  net::EventLoop& loop;                      // the I/O thread
+  net::FdReserve fd_reserve;                 // every vehicle's acceptor's, on the I/O thread
+  std::vector<std::unique_ptr<Vehicle>> vehicles;  // after the loop: their acceptors go first
+  net::Waker* waker = nullptr;               // flush_all(); set before the loop serves this endpoint
   std::atomic<bool> stop{false};
-  std::atomic<bool> wake_pending{false};
   std::atomic<std::uint64_t> wakeups{0};
   std::mutex seq_listener_mutex;  // the I/O thread runs from construction: set_seq_listener races it
   std::function<void()> seq_listener;
-  std::thread io_thread;
   std::unordered_map<int, std::unique_ptr<Client>> clients;  // by fd; I/O thread only
   std::uint64_t next_client_id = 1;                          // I/O thread only
   std::weak_ptr<Core> self;
@@ -120,32 +106,50 @@ struct MavlinkServer::Core {
   std::uint64_t flush_requested = 0;  // guarded by flush_mutex
   std::uint64_t flush_done = 0;       // guarded by flush_mutex
 
-  Core(sim::Simulation& s, const EndpointConfig& c) : sim(s), config(c) {}
+  Core(sim::Simulation& s, const EndpointConfig& c, net::EventLoop* shared_loop)
+      : sim(s),
+        config(c),
+        own_loop(shared_loop == nullptr ? std::make_unique<net::EventLoop>() : nullptr),
+        loop(shared_loop == nullptr ? *own_loop : *shared_loop) {}
   ~Core() {
     shutdown();
   }
 
-  // startup: one listening socket per vehicle (throws on failure)
+  // startup: one listening socket per vehicle and the UDP links (throws on failure), then the I/O
+  // thread serves them
   void open(std::shared_ptr<Core> shared) {
     self = shared;
-    epoll_fd = epoll_create1(EPOLL_CLOEXEC);
-    wake_fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-    if (epoll_fd < 0 || wake_fd < 0) throw std::runtime_error("mavlink endpoint: epoll/eventfd failed");
-    add_fd(wake_fd, EPOLLIN, tag_wake());
-    spare_fd = open_spare_fd();
     for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
       auto v = std::make_unique<Vehicle>();
       v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats, v->signing);
       if (config.base_port >= 0) {
         const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
-        v->listen_fd = listen_on(config.bind_address, port, &v->port);
-        add_fd(v->listen_fd, EPOLLIN, tag_listen(i));
+        // "--bind" in the address error: the option a user would fix
+        if (sockaddr_in sa{}; !net::ipv4_address(config.bind_address, port, &sa)) {
+          throw std::runtime_error("mavlink endpoint: --bind: not an IPv4 address: '" + config.bind_address + "'");
+        }
+        v->acceptor = std::make_unique<net::TcpAcceptor>(
+            loop, fd_reserve, config.bind_address, port, 64, "mavlink endpoint",
+            [this, i](int fd, const sockaddr_in& peer) { add_client(i, fd, peer); });
+        v->port = v->acceptor->port();
       }
       vehicles.push_back(std::move(v));
       if (i < config.udp.size()) {
         for (const UdpEndpoint& u : config.udp[i]) open_udp(i, u);
       }
     }
+    loop.call([this] {
+      waker = &loop.make_waker([this] { on_wake(); });
+      for (auto& [fd, c] : clients) watch_client(fd);
+      for (auto& v : vehicles) {
+        if (v->acceptor) v->acceptor->start();
+      }
+    });
+    if (own_loop) own_loop->start();
+  }
+
+  void watch_client(int fd) {
+    loop.watch(fd, EPOLLIN | EPOLLRDHUP, [this, fd](std::uint32_t events) { on_client_events(fd, events); });
   }
 
   // a UDP link: udpclient sockets are connected to their ground station and start streaming at once;
@@ -173,8 +177,7 @@ struct MavlinkServer::Core {
     c->id = next_client_id++;
     c->udp = true;
     c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
-    add_fd(fd, EPOLLIN, tag_client(fd));
-    Client& client = *c;
+    Client& client = *c;  // watched once the loop serves this endpoint (open())
     clients[fd] = std::move(c);
     if (!u.listen) latch_udp(client, "udp:" + u.host + ":" + std::to_string(u.port));
   }
@@ -193,48 +196,10 @@ struct MavlinkServer::Core {
     push_event(c.vehicle, std::move(ev));
   }
 
-  // epoll tags: 0 = wake, 1..N = listening socket of vehicle tag-1, otherwise a client fd + 2^32
-  static std::uint64_t tag_wake() { return 0; }
-  static std::uint64_t tag_listen(std::size_t vehicle) { return vehicle + 1; }
-  static std::uint64_t tag_client(int fd) { return (std::uint64_t{1} << 32) + static_cast<std::uint32_t>(fd); }
-
-  void add_fd(int fd, std::uint32_t events, std::uint64_t tag) {
-    epoll_event ev{};
-    ev.events = events;
-    ev.data.u64 = tag;
-    epoll_ctl(epoll_fd, EPOLL_CTL_ADD, fd, &ev);
-  }
-
-  static int listen_on(const std::string& address, int port, std::uint16_t* bound_port) {
-    const std::string where = address + ":" + std::to_string(port);
-    const int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (fd < 0) throw std::runtime_error("mavlink endpoint: socket() failed for " + where);
-    const int one = 1;
-    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
-    sockaddr_in sa{};
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons(static_cast<std::uint16_t>(port));
-    if (inet_pton(AF_INET, address.c_str(), &sa.sin_addr) != 1) {
-      close(fd);
-      throw std::runtime_error("mavlink endpoint: --bind: not an IPv4 address: '" + address + "'");
-    }
-    if (bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof(sa)) != 0 || listen(fd, 64) != 0) {
-      const std::string err = std::strerror(errno);
-      close(fd);
-      throw std::runtime_error("mavlink endpoint: cannot listen on " + where + ": " + err);
-    }
-    socklen_t len = sizeof(sa);
-    getsockname(fd, reinterpret_cast<sockaddr*>(&sa), &len);
-    *bound_port = ntohs(sa.sin_port);
-    return fd;
-  }
-
   // --- loop thread -> I/O thread ---
   void wake() {
     wakeups.fetch_add(1, std::memory_order_relaxed);
-    if (wake_pending.exchange(true, std::memory_order_seq_cst)) return;  // one write until it is read
-    const std::uint64_t one = 1;
-    [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
+    waker->wake();  // one eventfd write until the I/O thread has served it
   }
 
   // a new flush generation, one wake-up, then wait until the I/O thread has flushed it
@@ -350,82 +315,48 @@ struct MavlinkServer::Core {
   }
 
   // --- I/O thread ---
-  void run() {
-    std::vector<epoll_event> events(256);
-    while (!stop.load()) {
-      const int n = epoll_wait(epoll_fd, events.data(), static_cast<int>(events.size()), 200);
-      if (n < 0 && errno != EINTR) break;
-      for (int k = 0; k < n; ++k) {
-        const std::uint64_t tag = events[k].data.u64;
-        if (tag == tag_wake()) {
-          std::uint64_t count = 0;
-          [[maybe_unused]] const auto r = read(wake_fd, &count, sizeof(count));
-          wake_pending.store(false, std::memory_order_seq_cst);
-          // every flush request made before this wake-up is covered by the flush that follows
-          std::uint64_t generation = 0;
-          {
-            std::lock_guard lock(flush_mutex);
-            generation = flush_requested;
-          }
-          flush_all();
-          publish_flushed(generation);
-        } else if (tag <= vehicles.size()) {
-          accept_clients(static_cast<std::size_t>(tag - 1));
-        } else {
-          const int fd = static_cast<int>(tag & 0xffffffffu);
-          auto it = clients.find(fd);
-          if (it == clients.end()) continue;
-          Client& c = *it->second;
-          bool alive = true;
-          if (events[k].events & (EPOLLIN | EPOLLERR | EPOLLHUP | EPOLLRDHUP)) alive = read_client(c);
-          if (alive && (events[k].events & EPOLLOUT)) alive = flush_client(c);
-          if (!alive) close_client(fd);
-        }
-      }
+  void on_wake() {
+    if (stop.load()) return;
+    // every flush request made before this wake-up is covered by the flush that follows
+    std::uint64_t generation = 0;
+    {
+      std::lock_guard lock(flush_mutex);
+      generation = flush_requested;
     }
+    flush_all();
+    publish_flushed(generation);
   }
 
-  void accept_clients(std::size_t vehicle) {
+  void on_client_events(int fd, std::uint32_t events) {
+    auto it = clients.find(fd);
+    if (it == clients.end()) return;
+    Client& c = *it->second;
+    bool alive = true;
+    if (events & (EPOLLIN | EPOLLERR | EPOLLHUP | EPOLLRDHUP)) alive = read_client(c);
+    if (alive && (events & EPOLLOUT)) alive = flush_client(c);
+    if (!alive) close_client(fd);
+  }
+
+  // a TCP connection accepted on vehicle's port
+  void add_client(std::size_t vehicle, int fd, const sockaddr_in& peer) {
     Vehicle& v = *vehicles[vehicle];
-    for (;;) {
-      sockaddr_in peer{};
-      socklen_t peer_len = sizeof(peer);
-      const int fd = accept4(v.listen_fd, reinterpret_cast<sockaddr*>(&peer), &peer_len, SOCK_NONBLOCK | SOCK_CLOEXEC);
-      if (fd < 0) {
-        if ((errno == EMFILE || errno == ENFILE) && spare_fd >= 0) {
-          // out of descriptors: the waiting connection would keep the (level-triggered) listener readable
-          // and this thread spinning; give up the spare to accept it, close it at once, take the spare back.
-          // accept reports EMFILE before it looks at the queue, so an empty queue shows only here: stop then
-          close(spare_fd);
-          const int doomed = accept(v.listen_fd, nullptr, nullptr);
-          if (doomed >= 0) close(doomed);
-          spare_fd = open_spare_fd();
-          if (doomed < 0) return;
-          StatCounters::add(v.stats.fd_exhausted_accepts);
-          continue;
-        }
-        // EAGAIN, or a transient error (ECONNABORTED; EMFILE with the spare lost): try at the next event
-        if (spare_fd < 0) spare_fd = open_spare_fd();
-        return;
-      }
-      (void)common::configure_accepted_tcp(fd);  // no Nagle delay; keepalive drops vanished peers
-      auto c = std::make_unique<Client>();
-      c->fd = fd;
-      c->vehicle = vehicle;
-      c->id = next_client_id++;
-      c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
-      c->peer = "tcp:" + address_text(peer);
-      add_fd(fd, EPOLLIN | EPOLLRDHUP, tag_client(fd));
-      StatCounters::add(v.stats.clients_accepted);
-      StatCounters::add(v.stats.clients_now);
-      InEvent ev;
-      ev.kind = InEvent::Kind::kConnect;
-      ev.client = c->id;
-      ev.outbox = c->outbox;
-      ev.peer = c->peer;
-      clients[fd] = std::move(c);
-      push_event(vehicle, std::move(ev));
-    }
+    (void)common::configure_accepted_tcp(fd);  // no Nagle delay; keepalive drops vanished peers
+    auto c = std::make_unique<Client>();
+    c->fd = fd;
+    c->vehicle = vehicle;
+    c->id = next_client_id++;
+    c->outbox = std::make_shared<Outbox>(config.client_buffer_bytes);
+    c->peer = "tcp:" + address_text(peer);
+    watch_client(fd);
+    StatCounters::add(v.stats.clients_accepted);
+    StatCounters::add(v.stats.clients_now);
+    InEvent ev;
+    ev.kind = InEvent::Kind::kConnect;
+    ev.client = c->id;
+    ev.outbox = c->outbox;
+    ev.peer = c->peer;
+    clients[fd] = std::move(c);
+    push_event(vehicle, std::move(ev));
   }
 
   // false when the client is gone
@@ -514,7 +445,7 @@ struct MavlinkServer::Core {
   void flush_all() {
     std::vector<int> dead;
     for (auto& [fd, c] : clients) {
-      if (!c->outbox->pending() && c->write_off >= c->write_buf.size()) continue;
+      if (!c->outbox->buffer().has_queued() && !c->want_out) continue;
       if (!flush_client(*c)) dead.push_back(fd);
     }
     for (int fd : dead) close_client(fd);
@@ -523,45 +454,25 @@ struct MavlinkServer::Core {
   // writes what it can without blocking; false when the client is gone
   bool flush_client(Client& c) {
     Vehicle& v = *vehicles[c.vehicle];
+    net::WriteBuffer& out = c.outbox->buffer();
     if (v.link_down.load(std::memory_order_relaxed)) {
       // a dropped link: what the vehicle sends meanwhile is lost
-      std::vector<std::uint8_t> lost;
-      while (c.outbox->pending()) {
-        lost.clear();
-        c.outbox->take(lost);
-        if (lost.empty()) break;
-      }
+      out.take_queued(c.datagrams);
+      c.datagrams.clear();
       return true;
     }
     if (c.udp) {
       flush_datagrams(c);
       return true;
     }
-    for (;;) {
-      if (c.write_off >= c.write_buf.size()) {
-        c.write_buf.clear();
-        c.write_off = 0;
-        if (!c.outbox->pending()) break;
-        c.outbox->take(c.write_buf);
-        if (c.write_buf.empty()) break;
-      }
-      const ssize_t n = send(c.fd, c.write_buf.data() + c.write_off, c.write_buf.size() - c.write_off,
-                             MSG_NOSIGNAL | MSG_DONTWAIT);
-      if (n < 0) {
-        if (errno == EAGAIN || errno == EWOULDBLOCK) break;
-        if (errno == EINTR) continue;
-        return false;
-      }
-      c.write_off += static_cast<std::size_t>(n);
-      StatCounters::add(v.stats.bytes_sent, static_cast<std::uint64_t>(n));
-    }
+    std::size_t written = 0;
+    const net::WriteBuffer::Write result = out.write_to(c.fd, &written);
+    StatCounters::add(v.stats.bytes_sent, written);
+    if (result == net::WriteBuffer::Write::kFailed) return false;
     // ask for EPOLLOUT only while bytes are stuck in the socket
-    const bool stuck = c.write_off < c.write_buf.size();
+    const bool stuck = result == net::WriteBuffer::Write::kBlocked;
     if (stuck != c.want_out) {
-      epoll_event ev{};
-      ev.events = EPOLLIN | EPOLLRDHUP | (stuck ? EPOLLOUT : 0u);
-      ev.data.u64 = tag_client(c.fd);
-      epoll_ctl(epoll_fd, EPOLL_CTL_MOD, c.fd, &ev);
+      loop.change(c.fd, EPOLLIN | EPOLLRDHUP | (stuck ? EPOLLOUT : 0u));
       c.want_out = stuck;
     }
     return true;
@@ -570,10 +481,10 @@ struct MavlinkServer::Core {
   // a UDP link sends one datagram per frame, as ArduPilot does; what the socket refuses is lost
   void flush_datagrams(Client& c) {
     Vehicle& v = *vehicles[c.vehicle];
-    while (c.outbox->pending()) {
-      c.write_buf.clear();
-      c.outbox->take(c.write_buf);
-      std::span<const std::uint8_t> rest(c.write_buf);
+    while (c.outbox->buffer().has_queued()) {
+      c.outbox->buffer().take_queued(c.datagrams);
+      std::span<const std::uint8_t> rest(reinterpret_cast<const std::uint8_t*>(c.datagrams.data()),
+                                         c.datagrams.size());
       while (!rest.empty()) {
         const std::size_t len = std::min(frame_length(rest), rest.size());
         if (len == 0) break;  // not a frame start: the outbox only holds whole frames, so never
@@ -584,14 +495,14 @@ struct MavlinkServer::Core {
         rest = rest.subspan(len);
       }
     }
-    c.write_buf.clear();
+    c.datagrams.clear();
   }
 
   void close_client(int fd) {
     auto it = clients.find(fd);
     if (it == clients.end()) return;
     Client& c = *it->second;
-    epoll_ctl(epoll_fd, EPOLL_CTL_DEL, fd, nullptr);
+    loop.unwatch(fd);
     close(fd);
     c.outbox->close();
     Vehicle& v = *vehicles[c.vehicle];
@@ -610,32 +521,29 @@ struct MavlinkServer::Core {
     push_event(vehicle, std::move(ev));
   }
 
+  // stops serving: no handler of this endpoint runs after it, every socket is closed (the shared
+  // loop, if any, goes on for its other users). Idempotent.
   void shutdown() {
-    stop.store(true);
-    if (wake_fd >= 0) {
-      const std::uint64_t one = 1;
-      [[maybe_unused]] const auto n = write(wake_fd, &one, sizeof(one));
-    }
+    if (stop.exchange(true)) return;
     flush_cv.notify_all();
-    if (io_thread.joinable()) io_thread.join();
-    for (auto& [fd, c] : clients) {
-      c->outbox->close();
-      close(fd);
-    }
-    clients.clear();
-    for (auto& v : vehicles) {
-      if (v->listen_fd >= 0) close(v->listen_fd);
-      v->listen_fd = -1;
-    }
-    if (epoll_fd >= 0) close(epoll_fd);
-    if (wake_fd >= 0) close(wake_fd);
-    if (spare_fd >= 0) close(spare_fd);
-    epoll_fd = wake_fd = spare_fd = -1;
+    if (own_loop) own_loop->stop();
+    loop.call([this] {
+      if (waker != nullptr) loop.disable(*waker);
+      for (auto& [fd, c] : clients) {
+        loop.unwatch(fd);
+        c->outbox->close();
+        close(fd);
+      }
+      clients.clear();
+      for (auto& v : vehicles) {
+        if (v->acceptor) v->acceptor->stop();
+      }
+    });
   }
 };
 
-MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config)
-    : core_(std::make_shared<Core>(sim, config)) {
+MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config, net::EventLoop* io_loop)
+    : core_(std::make_shared<Core>(sim, config, io_loop)) {
   core_->open(core_);
   // sim_vehicle.py --auto-sysid: vehicle i is system i + 1
   if (config.auto_sysid) {
@@ -643,8 +551,6 @@ MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config)
       sim.post(i, [i](fc::FlightController& fc) { fc.set_param("SYSID_THISMAV", static_cast<double>(i + 1)); });
     }
   }
-  Core* core = core_.get();
-  core_->io_thread = std::thread([core] { core->run(); });
 }
 
 MavlinkServer::~MavlinkServer() { core_->shutdown(); }
@@ -665,7 +571,10 @@ std::uint16_t MavlinkServer::udp_port(std::size_t vehicle, std::size_t k) const 
   return core_->vehicles.at(vehicle)->udp_ports.at(k);
 }
 EndpointStats MavlinkServer::stats(std::size_t vehicle) const {
-  return core_->vehicles.at(vehicle)->stats.snapshot();
+  const Core::Vehicle& v = *core_->vehicles.at(vehicle);
+  EndpointStats s = v.stats.snapshot();
+  if (v.acceptor) s.fd_exhausted_accepts = v.acceptor->exhausted_accepts();
+  return s;
 }
 std::size_t MavlinkServer::client_count(std::size_t vehicle) const {
   return static_cast<std::size_t>(core_->vehicles.at(vehicle)->stats.clients_now.load());

@@ -2,8 +2,9 @@
 //
 // Vehicle i listens on TCP base_port + 10 i (ArduPilot SITL's -I convention), several clients at once, and
 // may have UDP links beside (ArduPilot's udpclient/udpin: a ground station on a UDP port). Threads:
-//   * one network I/O thread (epoll, non-blocking sockets) for every endpoint: accepts, reads and parses
-//     frames, writes queued bytes. It never touches a flight controller.
+//   * one network I/O thread for every endpoint, the server's event loop (net/event_loop.hpp; its own, or
+//     one shared with the sim API): accepts, reads and parses frames, writes queued bytes. It never
+//     touches a flight controller.
 //   * the simulation loop thread: incoming frames are queued per vehicle and handled in a task posted with
 //     Simulation::post() (so commands take effect at control boundaries in vehicle order); the replies and
 //     all telemetry are encoded there (telemetry from a control observer, scheduled in sim time) into
@@ -23,6 +24,10 @@
 #include "uavsim/common/geodesy.hpp"
 #include "mavlink/gimbal_state.hpp"
 #include "sim/simulation.hpp"
+
+namespace uavsim::server::net {
+class EventLoop;
+}
 
 namespace uavsim::server::mavlink {
 
@@ -95,13 +100,14 @@ struct EndpointStats {
 
 class MavlinkServer {
  public:
-  // Opens one listening socket per vehicle of sim (and its UDP links), starts the I/O thread; schedule()
-  // registers its control-step work (queued messages handled, telemetry produced).
+  // Opens one listening socket per vehicle of sim (and its UDP links) and serves them on io_loop if given
+  // (it must outlive the server; its owner starts it), else on an I/O thread of its own, started here;
+  // schedule() registers its control-step work (queued messages handled, telemetry produced).
   // Throws std::runtime_error naming the address and port when a socket cannot be bound (startup error).
   // Call on the loop thread (or before the loop runs); sim must outlive the server's use of the loop.
-  MavlinkServer(sim::Simulation& sim, const EndpointConfig& config);
-  // Stops the I/O thread and closes every socket; queued tasks and the observer become no-ops. Loop thread
-  // or after the loop stopped.
+  MavlinkServer(sim::Simulation& sim, const EndpointConfig& config, net::EventLoop* io_loop = nullptr);
+  // Stops serving (its own I/O thread, if it has one) and closes every socket; queued tasks and the
+  // observer become no-ops. Loop thread or after the loop stopped.
   ~MavlinkServer();
   MavlinkServer(const MavlinkServer&) = delete;
   MavlinkServer& operator=(const MavlinkServer&) = delete;
