@@ -79,6 +79,9 @@ struct ApiConfig {
   std::optional<std::string> token;
   // Serve the shared-memory stream (op lockstep_shm) to clients connecting from loopback.
   bool shm = true;
+  // The server's network I/O loop, shared with the MAVLink endpoints (it must outlive this server; its
+  // owner starts it). Null: the API's socket I/O runs on a loop of its own.
+  net::EventLoop* io_loop = nullptr;
 };
 
 class ApiServer {
