@@ -88,7 +88,7 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
     if (c.overloaded) return false;
     // past its own cap or the global budget: the overload line instead, then the connection goes
     if (c.diversion) {
-      // the diversion wakes its own reader; the loop thread only if the connection is to close
+      // the diversion wakes its own reader; the I/O thread only if the connection is to close
       if (c.diversion->write(data)) return true;
       mark_overloaded(c);
     } else if (total_pending_ + data.size() > limits_.max_total_pending_bytes ||

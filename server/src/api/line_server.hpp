@@ -1,6 +1,6 @@
 // A TCP server for newline-delimited messages on the server's event loop (net/event_loop.hpp): its
-// own loop thread, or one shared with the MAVLink endpoints. Lines arrive through callbacks on the
-// loop thread; replies are queued from any thread with send().
+// own I/O thread, or one shared with the MAVLink endpoints. Lines arrive through callbacks on the
+// I/O thread; replies are queued from any thread with send().
 // A line longer than max_line_bytes is reported once and skipped up to its newline; the connection
 // stays open. Knows nothing of JSON or the simulation.
 //
@@ -40,7 +40,7 @@ class LineServer {
   };
 
   // Binds and listens on bind_address:port (port 0: an ephemeral port). Throws std::runtime_error
-  // naming the address and port if that fails (a startup error). Callbacks run on the loop thread:
+  // naming the address and port if that fails (a startup error). Callbacks run on the I/O thread:
   // loop's if given (it must outlive this server; its owner starts it), else a loop of its own.
   struct Limits {
     size_t max_line_bytes = 1u << 20;
@@ -65,7 +65,7 @@ class LineServer {
     virtual size_t pending_bytes() const = 0;  // written and not yet taken by the peer
   };
 
-  // Starts accepting (and its own loop thread, if it has one). Call once.
+  // Starts accepting (and its own I/O thread, if it has one). Call once.
   void start();
   // Closes every socket; no callback runs after it returns. Thread-safe (not from a callback).
   void stop();
@@ -85,7 +85,7 @@ class LineServer {
   // While held, send() queues without waking the I/O thread; release_wakeups() wakes it once if
   // anything was queued meanwhile. The sim API holds them for one pass of its gate, so a connection's
   // messages of that pass (replies, radio batch, tick) leave in one write and reach the client as
-  // one wake-up instead of one each. Never hold across a wait. Loop thread (one holder at a time).
+  // one wake-up instead of one each. Never hold across a wait. I/O thread (one holder at a time).
   void hold_wakeups() { wakeups_held_.store(true); }
   void release_wakeups();
   // Accepts that failed for want of file descriptors. Thread-safe.
@@ -104,8 +104,8 @@ class LineServer {
     std::shared_ptr<Diversion> diversion;  // divert(); guarded by out_mutex_
     bool discarding = false;  // skipping the rest of an over-long line
     net::WriteBuffer out;     // bounded by max_pending_bytes
-    std::uint32_t interest = 0;    // the epoll events watched; loop thread only
-    bool read_closed = false;      // EOF seen, on_disconnect called; loop thread only
+    std::uint32_t interest = 0;    // the epoll events watched; I/O thread only
+    bool read_closed = false;      // EOF seen, on_disconnect called; I/O thread only
     bool close_requested = false;  // close_when_sent(); guarded by out_mutex_
     bool overloaded = false;       // overload line queued, closing; guarded by out_mutex_
     double overloaded_at_s = 0.0;
@@ -123,7 +123,7 @@ class LineServer {
   void close_conn(uint64_t id);
   void mark_overloaded(Conn& c);          // out_mutex_ held
   bool finished(const Conn& c);           // takes out_mutex_ itself: closing and all written (or too late)
-  void teardown();                        // loop thread: every socket closed, callbacks off
+  void teardown();                        // I/O thread: every socket closed, callbacks off
 
   Callbacks callbacks_;
   Limits limits_;
@@ -136,13 +136,13 @@ class LineServer {
   std::atomic<net::Waker*> waker_{nullptr};  // output queued, a close requested: serve_all()
   std::size_t tick_ = 0;
   std::atomic<int> overloaded_conns_{0};  // the tick checks their grace period while any
-  // sends queue without waking the loop thread while held (hold_wakeups)
+  // sends queue without waking the I/O thread while held (hold_wakeups)
   std::atomic<bool> wakeups_held_{false};
   std::atomic<bool> wake_deferred_{false};  // a send() while held: release_wakeups() wakes
   uint16_t port_ = 0;
   std::atomic<bool> stopped_{false};
   mutable std::mutex out_mutex_;       // guards conns_ membership and the Conn fields marked so
-  std::map<uint64_t, Conn> conns_;     // membership changes on the loop thread only
+  std::map<uint64_t, Conn> conns_;     // membership changes on the I/O thread only
   uint64_t next_id_ = 1;
 };
 

@@ -100,7 +100,7 @@ std::size_t EventLoop::add_tick(std::function<void()> fn) {
 
 void EventLoop::call(const std::function<void()>& fn) {
   std::unique_lock lock(calls_mutex_);
-  if (!running_ || in_loop_thread()) {
+  if (!running_ || in_io_thread()) {
     lock.unlock();
     fn();
     return;

@@ -16,7 +16,7 @@ namespace uavsim::server::net {
 // One spare descriptor (/dev/null) held back for the moment accept() fails with EMFILE/ENFILE: the
 // waiting connection would keep the level-triggered listener readable and the loop spinning, so the
 // spare is given up to accept it, the connection is closed at once and the spare is taken back. One
-// reserve serves every acceptor of a loop (they accept one at a time on its thread). Loop thread
+// reserve serves every acceptor of a loop (they accept one at a time on its thread). I/O thread
 // only.
 class FdReserve {
  public:
@@ -51,12 +51,12 @@ class TcpAcceptor {
   // bind address 'ADDR' (an IPv4 address)" (startup errors). Any thread.
   TcpAcceptor(EventLoop& loop, FdReserve& reserve, const std::string& address, int port,
               int backlog, const std::string& what, OnAccept on_accept);
-  // Stops watching and closes the listening socket. Loop thread, or when the loop does not run.
+  // Stops watching and closes the listening socket. I/O thread, or when the loop does not run.
   ~TcpAcceptor();
 
-  // Watches for connections: on_accept runs on the loop thread. Loop thread or before it starts.
+  // Watches for connections: on_accept runs on the I/O thread. I/O thread or before it starts.
   void start();
-  // Stops watching: on_accept is not called again. Loop thread, or when the loop does not run.
+  // Stops watching: on_accept is not called again. I/O thread, or when the loop does not run.
   void stop();
   TcpAcceptor(const TcpAcceptor&) = delete;
   TcpAcceptor& operator=(const TcpAcceptor&) = delete;

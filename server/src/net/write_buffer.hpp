@@ -1,4 +1,4 @@
-// The outgoing bytes of one connection: queued whole by any thread, written by the loop thread as
+// The outgoing bytes of one connection: queued whole by any thread, written by the I/O thread as
 // far as the socket takes them, with a bound on what may wait. What happens to a connection that
 // reaches the bound is its owner's policy: the MAVLink endpoint drops the frame
 // (mavlink/outbox.hpp), the sim API sends an overload line and closes (api/line_server.hpp).
@@ -31,10 +31,10 @@ class WriteBuffer {
   // Writes to the stream socket fd until everything queued is written or the socket is full
   // (non-blocking, no SIGPIPE); the bytes are swapped out in batches, so the lock is not held
   // during the system call and a large batch is never moved on a partial write. Adds the bytes
-  // written to *written. Loop thread (one writer).
+  // written to *written. I/O thread (one writer).
   Write write_to(int fd, std::size_t* written);
   // Moves the queued bytes into out (for datagram sockets, which send them in their own pieces).
-  // Loop thread.
+  // I/O thread.
   void take_queued(std::string& out);
 
   // Bytes queued or taken and not yet written. Thread-safe.

@@ -20,12 +20,12 @@ TEST(EventLoop, AReadableDescriptorRunsItsHandlerOnTheLoopThread) {
     char byte = 0;
     ASSERT_EQ(read(pair[0], &byte, 1), 1);  // level-triggered: read it, or the handler runs again
     EXPECT_TRUE(events & EPOLLIN);
-    on_loop.set_value(loop.in_loop_thread());
+    on_loop.set_value(loop.in_io_thread());
   });
   loop.start();
   ASSERT_EQ(write(pair[1], "x", 1), 1);
   EXPECT_TRUE(on_loop.get_future().get());
-  EXPECT_FALSE(loop.in_loop_thread());
+  EXPECT_FALSE(loop.in_io_thread());
   loop.stop();
   close(pair[0]);
   close(pair[1]);
@@ -33,7 +33,7 @@ TEST(EventLoop, AReadableDescriptorRunsItsHandlerOnTheLoopThread) {
 
 TEST(EventLoop, WakeUpsBeforeTheLoopGetsToThemAreServedOnce) {
   EventLoop loop;
-  int served = 0;  // loop thread
+  int served = 0;  // I/O thread
   Waker& waker = loop.make_waker([&] { ++served; });
   for (int k = 0; k < 3; ++k) waker.wake();
   loop.start();
@@ -84,7 +84,7 @@ TEST(EventLoop, AnUnwatchedDescriptorsPendingEventIsSkipped) {
   ASSERT_EQ(write(first[1], "x", 1), 1);
   ASSERT_EQ(write(second[1], "x", 1), 1);
   EventLoop loop;
-  int handled = 0;  // loop thread
+  int handled = 0;  // I/O thread
   int reused = -1;
   bool reused_called = false;
   auto closer = [&](int mine, int other) {

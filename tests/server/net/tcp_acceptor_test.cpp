@@ -81,7 +81,7 @@ TEST(TcpAcceptor, ABadAddressOrABusyPortIsAStartupErrorNamingIt) {
 TEST(TcpAcceptor, AConnectionWithNoDescriptorLeftIsClosedOnTheReserve) {
   EventLoop loop;
   FdReserve reserve;
-  int accepted = 0;  // loop thread
+  int accepted = 0;  // I/O thread
   TcpAcceptor acceptor(loop, reserve, "127.0.0.1", 0, 16, "test", [&](int fd, const sockaddr_in&) {
     ++accepted;
     close(fd);
