@@ -1,8 +1,7 @@
 // One reactor thread for the server's sockets, the network I/O thread (muduo's EventLoop; not the
 // simulation's loop thread): level-triggered epoll, an eventfd to wake it from other threads, and
-// calls run on it on request. The MAVLink endpoints and
-// the sim API's line server register their descriptors with the same loop (docs/architecture.md,
-// "Network I/O").
+// calls run on it on request. The MAVLink endpoints and the sim API's line server register their
+// descriptors with the same loop (docs/architecture.md, "Network I/O").
 //
 // Threads: handlers, wakers' callbacks and ticks run on the I/O thread. Registration (watch,
 // change, unwatch) is I/O thread only, or before start(); from elsewhere wrap it in call().
