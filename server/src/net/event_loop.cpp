@@ -153,7 +153,6 @@ void EventLoop::run() {
   while (!stop_.load()) {
     const int n = epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), kTickMs);
     if (n < 0 && errno != EINTR) break;
-    passes_.fetch_add(1, std::memory_order_relaxed);
     for (int k = 0; k < n && !stop_.load(std::memory_order_relaxed); ++k) {
       const std::uint64_t tag = events[k].data.u64;
       if (tag == kWakeTag) {

@@ -86,8 +86,6 @@ class EventLoop {
 
   // True on the I/O thread. Thread-safe.
   bool in_io_thread() const { return std::this_thread::get_id() == loop_thread_id_.load(); }
-  // Loop passes so far (each wait that returned). For tests. Thread-safe.
-  std::uint64_t passes() const { return passes_.load(std::memory_order_relaxed); }
 
   static constexpr int kTickMs = 200;
 
@@ -108,7 +106,6 @@ class EventLoop {
   std::atomic<bool> stop_{false};
   std::thread thread_;
   std::atomic<std::thread::id> loop_thread_id_{};
-  std::atomic<std::uint64_t> passes_{0};
   std::unordered_map<int, Entry> entries_;  // by fd; I/O thread
   std::uint32_t next_generation_ = 1;
   std::vector<std::unique_ptr<Waker>> wakers_;  // I/O thread

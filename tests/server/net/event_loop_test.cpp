@@ -5,8 +5,11 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <future>
 #include <thread>
+#include <vector>
 
 namespace uavsim::server::net {
 namespace {
@@ -59,6 +62,36 @@ TEST(EventLoop, AWakeUpFromAnotherThreadIsServedBeforeALaterCall) {
   int seen = -1;
   loop.call([&] { seen = served; });
   EXPECT_EQ(seen, 60);
+}
+
+// producers on several threads queue work and wake; the loop must see every item without any later
+// wake-up to rescue a lost one (the future would time out)
+TEST(EventLoop, NoWakeUpIsLostUnderContention) {
+  constexpr int kThreads = 4;
+  constexpr int kItemsPerThread = 20000;
+  EventLoop loop;
+  std::atomic<int> queued{0};
+  int drained = 0;  // I/O thread
+  std::promise<void> all;
+  Waker* waker = nullptr;
+  waker = &loop.make_waker([&] {
+    const int now = queued.load();
+    if (drained < now && now == kThreads * kItemsPerThread) all.set_value();
+    drained = now;
+  });
+  loop.start();
+  std::vector<std::thread> producers;
+  for (int t = 0; t < kThreads; ++t) {
+    producers.emplace_back([&] {
+      for (int k = 0; k < kItemsPerThread; ++k) {
+        queued.fetch_add(1);
+        waker->wake();
+      }
+    });
+  }
+  for (auto& p : producers) p.join();
+  EXPECT_EQ(all.get_future().wait_for(std::chrono::seconds(30)), std::future_status::ready);
+  loop.stop();
 }
 
 TEST(EventLoop, CallRunsInlineWhenTheLoopIsNotRunning) {
