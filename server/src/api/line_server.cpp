@@ -13,7 +13,8 @@ namespace uavsim::server::api {
 
 namespace {
 
-constexpr double kOverloadGrace_s = 5.0;  // an overloaded peer that reads nothing is closed after this
+constexpr double kOverloadGrace_s =
+    5.0;  // an overloaded peer that reads nothing is closed after this
 
 double steady_now_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -21,8 +22,8 @@ double steady_now_s() {
 
 }  // namespace
 
-LineServer::LineServer(const std::string& bind_address, uint16_t port, Limits limits, Callbacks callbacks,
-                       net::EventLoop* loop)
+LineServer::LineServer(const std::string& bind_address, uint16_t port, Limits limits,
+                       Callbacks callbacks, net::EventLoop* loop)
     : callbacks_(std::move(callbacks)),
       limits_(std::move(limits)),
       max_line_bytes_(limits_.max_line_bytes),
@@ -197,7 +198,8 @@ LineServer::ReadResult LineServer::read_conn(uint64_t id, Conn& c) {
       return ReadResult::kEof;
     }
     if (n < 0) {
-      return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? ReadResult::kOpen : ReadResult::kFailed;
+      return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR ? ReadResult::kOpen
+                                                                       : ReadResult::kFailed;
     }
     size_t start = 0;
     for (size_t i = 0; i < static_cast<size_t>(n); ++i) {
@@ -240,7 +242,8 @@ void LineServer::watch_for(Conn& c) {
   bool reading = false;
   {
     std::lock_guard<std::mutex> lock(out_mutex_);
-    // no EPOLLIN after EOF (it would stay readable) or once overloaded (its requests are not served)
+    // no EPOLLIN after EOF (it would stay readable) or once overloaded (its requests are not
+    // served)
     reading = !c.read_closed && !c.overloaded;
   }
   const std::uint32_t want = (reading ? EPOLLIN : 0u) | (c.out.unwritten() > 0 ? EPOLLOUT : 0u);
@@ -267,7 +270,8 @@ void LineServer::on_events(uint64_t id, std::uint32_t events) {
       if (callbacks_.on_disconnect) callbacks_.on_disconnect(id);
     }
   }
-  if (ok && (events & (EPOLLHUP | EPOLLERR)) && c->read_closed) ok = false;  // nobody left to write to
+  if (ok && (events & (EPOLLHUP | EPOLLERR)) && c->read_closed)
+    ok = false;  // nobody left to write to
   // the replies to what was just read go out now, not a loop pass later
   if (ok) ok = write_conn(*c);
   if (!ok || finished(*c)) return close_conn(id);

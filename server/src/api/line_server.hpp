@@ -6,14 +6,14 @@
 //
 // Limits: at most max_connections at once (one more is sent the overload line and closed); a
 // connection's unsent output is capped at max_pending_bytes, all connections' together at
-// max_total_pending_bytes: a connection that would pass either is sent the overload line, reads nothing
-// more and is closed once that is written (or after kOverloadGrace_s if it does not read). When the
-// process is out of file descriptors, the acceptor's reserve descriptor accepts and closes the waiting
-// connection, so the listener never spins (net/tcp_acceptor.hpp).
+// max_total_pending_bytes: a connection that would pass either is sent the overload line, reads
+// nothing more and is closed once that is written (or after kOverloadGrace_s if it does not read).
+// When the process is out of file descriptors, the acceptor's reserve descriptor accepts and closes
+// the waiting connection, so the listener never spins (net/tcp_acceptor.hpp).
 //
-// A peer that shuts down its sending side (EOF) has its last line delivered and on_disconnect called,
-// but keeps receiving until the owner calls close_when_sent(): replies to its last requests still
-// reach it.
+// A peer that shuts down its sending side (EOF) has its last line delivered and on_disconnect
+// called, but keeps receiving until the owner calls close_when_sent(): replies to its last requests
+// still reach it.
 #pragma once
 
 #include <atomic>
@@ -71,10 +71,11 @@ class LineServer {
   void stop();
   uint16_t port() const { return port_; }
 
-  // Queues data for a connection. Thread-safe. False if the connection is gone or overloaded (the data
-  // is dropped and the connection closed after the overload line).
+  // Queues data for a connection. Thread-safe. False if the connection is gone or overloaded (the
+  // data is dropped and the connection closed after the overload line).
   bool send(uint64_t conn, const std::string& data);
-  // Closes a connection once everything queued for it has been written (after its EOF). Thread-safe.
+  // Closes a connection once everything queued for it has been written (after its EOF).
+  // Thread-safe.
   void close_when_sent(uint64_t conn);
   // From now on send() hands conn's output to diversion (what is queued already still goes to the
   // socket); the socket is still read. False if conn is gone. Thread-safe.
@@ -83,9 +84,10 @@ class LineServer {
   // cap: for a diversion that failed outside send(). Thread-safe.
   void close_overloaded(uint64_t conn);
   // While held, send() queues without waking the I/O thread; release_wakeups() wakes it once if
-  // anything was queued meanwhile. The sim API holds them for one pass of its gate, so a connection's
-  // messages of that pass (replies, radio batch, tick) leave in one write and reach the client as
-  // one wake-up instead of one each. Never hold across a wait. I/O thread (one holder at a time).
+  // anything was queued meanwhile. The sim API holds them for one pass of its gate, so a
+  // connection's messages of that pass (replies, radio batch, tick) leave in one write and reach
+  // the client as one wake-up instead of one each. Never hold across a wait. I/O thread (one holder
+  // at a time).
   void hold_wakeups() { wakeups_held_.store(true); }
   void release_wakeups();
   // Accepts that failed for want of file descriptors. Thread-safe.
@@ -100,14 +102,14 @@ class LineServer {
     explicit Conn(int socket, size_t limit_bytes) : fd(socket), out(limit_bytes) {}
     int fd = -1;
     std::string in;
-    std::string peer;         // the peer's IPv4 address
+    std::string peer;                      // the peer's IPv4 address
     std::shared_ptr<Diversion> diversion;  // divert(); guarded by out_mutex_
-    bool discarding = false;  // skipping the rest of an over-long line
-    net::WriteBuffer out;     // bounded by max_pending_bytes
-    std::uint32_t interest = 0;    // the epoll events watched; I/O thread only
-    bool read_closed = false;      // EOF seen, on_disconnect called; I/O thread only
-    bool close_requested = false;  // close_when_sent(); guarded by out_mutex_
-    bool overloaded = false;       // overload line queued, closing; guarded by out_mutex_
+    bool discarding = false;               // skipping the rest of an over-long line
+    net::WriteBuffer out;                  // bounded by max_pending_bytes
+    std::uint32_t interest = 0;            // the epoll events watched; I/O thread only
+    bool read_closed = false;              // EOF seen, on_disconnect called; I/O thread only
+    bool close_requested = false;          // close_when_sent(); guarded by out_mutex_
+    bool overloaded = false;               // overload line queued, closing; guarded by out_mutex_
     double overloaded_at_s = 0.0;
   };
   enum class ReadResult { kOpen, kEof, kFailed };
@@ -116,24 +118,24 @@ class LineServer {
   }
   void on_accept(int fd, const std::string& peer);
   void on_events(uint64_t id, std::uint32_t events);
-  void serve_all();                       // writes every connection, closes the finished ones
+  void serve_all();  // writes every connection, closes the finished ones
   ReadResult read_conn(uint64_t id, Conn& c);
-  bool write_conn(Conn& c);               // false: failed; takes out_mutex_ itself
-  void watch_for(Conn& c);                // reading while open, writing while output waits
+  bool write_conn(Conn& c);  // false: failed; takes out_mutex_ itself
+  void watch_for(Conn& c);   // reading while open, writing while output waits
   void close_conn(uint64_t id);
-  void mark_overloaded(Conn& c);          // out_mutex_ held
-  bool finished(const Conn& c);           // takes out_mutex_ itself: closing and all written (or too late)
-  void teardown();                        // I/O thread: every socket closed, callbacks off
+  void mark_overloaded(Conn& c);  // out_mutex_ held
+  bool finished(const Conn& c);   // takes out_mutex_ itself: closing and all written (or too late)
+  void teardown();                // I/O thread: every socket closed, callbacks off
 
   Callbacks callbacks_;
   Limits limits_;
   size_t max_line_bytes_;
-  size_t total_pending_ = 0;           // sum of every Conn's unwritten output; guarded by out_mutex_
+  size_t total_pending_ = 0;  // sum of every Conn's unwritten output; guarded by out_mutex_
   std::unique_ptr<net::EventLoop> own_loop_;  // without a shared loop
   net::EventLoop& loop_;
   net::FdReserve fd_reserve_;
   std::unique_ptr<net::TcpAcceptor> acceptor_;  // lives as long as the server (its counter)
-  std::atomic<net::Waker*> waker_{nullptr};  // output queued, a close requested: serve_all()
+  std::atomic<net::Waker*> waker_{nullptr};     // output queued, a close requested: serve_all()
   std::size_t tick_ = 0;
   std::atomic<int> overloaded_conns_{0};  // the tick checks their grace period while any
   // sends queue without waking the I/O thread while held (hold_wakeups)
@@ -141,8 +143,8 @@ class LineServer {
   std::atomic<bool> wake_deferred_{false};  // a send() while held: release_wakeups() wakes
   uint16_t port_ = 0;
   std::atomic<bool> stopped_{false};
-  mutable std::mutex out_mutex_;       // guards conns_ membership and the Conn fields marked so
-  std::map<uint64_t, Conn> conns_;     // membership changes on the I/O thread only
+  mutable std::mutex out_mutex_;    // guards conns_ membership and the Conn fields marked so
+  std::map<uint64_t, Conn> conns_;  // membership changes on the I/O thread only
   uint64_t next_id_ = 1;
 };
 

@@ -16,11 +16,11 @@
 #include <string>
 #include <unordered_map>
 
-#include "uavsim/common/mavlink/parser.hpp"
 #include "mavlink/tlog.hpp"
 #include "mavlink/vehicle_link.hpp"
 #include "net/event_loop.hpp"
 #include "net/tcp_acceptor.hpp"
+#include "uavsim/common/mavlink/parser.hpp"
 #include "uavsim/common/tcp_socket.hpp"
 
 namespace uavsim::server::mavlink {
@@ -51,26 +51,26 @@ sockaddr_in ipv4_address(const std::string& host, int port, const std::string& w
   return sa;
 }
 
-
 }  // namespace
 
-// Shared by the server object, the I/O thread, the control observer and the posted tasks; the observer and
-// tasks hold it weakly so they become no-ops once the server is gone.
+// Shared by the server object, the I/O thread, the control observer and the posted tasks; the
+// observer and tasks hold it weakly so they become no-ops once the server is gone.
 struct MavlinkServer::Core {
   struct Vehicle {
     std::unique_ptr<VehicleLink> link;  // loop thread only
     StatCounters stats;
-    SigningKeyCell signing;  // set by the link, read by the I/O thread
+    SigningKeyCell signing;                      // set by the link, read by the I/O thread
     std::unique_ptr<net::TcpAcceptor> acceptor;  // null without TCP; lives as long as the Core
     std::uint16_t port = 0;
     std::vector<std::uint16_t> udp_ports;  // local port of each UDP link
     std::mutex inbox_mutex;
-    std::vector<InEvent> inbox;  // guarded by inbox_mutex
+    std::vector<InEvent> inbox;    // guarded by inbox_mutex
     std::size_t inbox_frames = 0;  // guarded by inbox_mutex
     bool task_posted = false;      // guarded by inbox_mutex
     std::atomic<bool> link_down{false};
     mutable std::mutex seq_mutex;
-    std::unordered_map<std::uint64_t, std::uint8_t> last_seq;  // client id -> last handled seq; seq_mutex
+    std::unordered_map<std::uint64_t, std::uint8_t>
+        last_seq;  // client id -> last handled seq; seq_mutex
   };
   struct Client {  // I/O thread only
     int fd = -1;
@@ -78,24 +78,26 @@ struct MavlinkServer::Core {
     std::uint64_t id = 0;
     Parser parser;
     ParserStats parser_seen;
-    std::uint64_t signing_generation = 0;  // of the vehicle's SigningKeyCell the parser is configured with
+    std::uint64_t signing_generation =
+        0;  // of the vehicle's SigningKeyCell the parser is configured with
     std::shared_ptr<Outbox> outbox;
-    std::string datagrams;   // a UDP link's frames being sent
-    bool want_out = false;   // watched for EPOLLOUT: bytes are stuck in the socket
-    std::string peer;        // "tcp:ADDR:PORT" / "udp:ADDR:PORT"; empty while a udpin link has no peer
-    bool udp = false;        // a UDP link: one datagram per frame, never closed by its peer
+    std::string datagrams;  // a UDP link's frames being sent
+    bool want_out = false;  // watched for EPOLLOUT: bytes are stuck in the socket
+    std::string peer;  // "tcp:ADDR:PORT" / "udp:ADDR:PORT"; empty while a udpin link has no peer
+    bool udp = false;  // a UDP link: one datagram per frame, never closed by its peer
   };
 
   sim::Simulation& sim;
   EndpointConfig config;
-  std::unique_ptr<net::EventLoop> own_loop;  // without a shared loop
-  net::EventLoop& loop;                      // the I/O thread
-  net::FdReserve fd_reserve;                 // every vehicle's acceptor's, on the I/O thread
+  std::unique_ptr<net::EventLoop> own_loop;        // without a shared loop
+  net::EventLoop& loop;                            // the I/O thread
+  net::FdReserve fd_reserve;                       // every vehicle's acceptor's, on the I/O thread
   std::vector<std::unique_ptr<Vehicle>> vehicles;  // after the loop: their acceptors go first
-  net::Waker* waker = nullptr;               // flush_all(); set before the loop serves this endpoint
+  net::Waker* waker = nullptr;  // flush_all(); set before the loop serves this endpoint
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> wakeups{0};
-  std::mutex seq_listener_mutex;  // the I/O thread runs from construction: set_seq_listener races it
+  std::mutex
+      seq_listener_mutex;  // the I/O thread runs from construction: set_seq_listener races it
   std::function<void()> seq_listener;
   std::unordered_map<int, std::unique_ptr<Client>> clients;  // by fd; I/O thread only
   std::uint64_t next_client_id = 1;                          // I/O thread only
@@ -111,9 +113,7 @@ struct MavlinkServer::Core {
         config(c),
         own_loop(shared_loop == nullptr ? std::make_unique<net::EventLoop>() : nullptr),
         loop(shared_loop == nullptr ? *own_loop : *shared_loop) {}
-  ~Core() {
-    shutdown();
-  }
+  ~Core() { shutdown(); }
 
   // startup: one listening socket per vehicle and the UDP links (throws on failure), then the I/O
   // thread serves them
@@ -123,10 +123,12 @@ struct MavlinkServer::Core {
       auto v = std::make_unique<Vehicle>();
       v->link = std::make_unique<VehicleLink>(sim, i, config, v->stats, v->signing);
       if (config.base_port >= 0) {
-        const int port = config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
+        const int port =
+            config.base_port == 0 ? 0 : config.base_port + config.port_stride * static_cast<int>(i);
         // "--bind" in the address error: the option a user would fix
         if (sockaddr_in sa{}; !net::ipv4_address(config.bind_address, port, &sa)) {
-          throw std::runtime_error("mavlink endpoint: --bind: not an IPv4 address: '" + config.bind_address + "'");
+          throw std::runtime_error("mavlink endpoint: --bind: not an IPv4 address: '" +
+                                   config.bind_address + "'");
         }
         v->acceptor = std::make_unique<net::TcpAcceptor>(
             loop, fd_reserve, config.bind_address, port, 64, "mavlink endpoint",
@@ -149,13 +151,15 @@ struct MavlinkServer::Core {
   }
 
   void watch_client(int fd) {
-    loop.watch(fd, EPOLLIN | EPOLLRDHUP, [this, fd](std::uint32_t events) { on_client_events(fd, events); });
+    loop.watch(fd, EPOLLIN | EPOLLRDHUP,
+               [this, fd](std::uint32_t events) { on_client_events(fd, events); });
   }
 
-  // a UDP link: udpclient sockets are connected to their ground station and start streaming at once;
-  // udpin sockets wait for a peer (read_client latches onto the first one)
+  // a UDP link: udpclient sockets are connected to their ground station and start streaming at
+  // once; udpin sockets wait for a peer (read_client latches onto the first one)
   void open_udp(std::size_t vehicle, const UdpEndpoint& u) {
-    const std::string url = std::string(u.listen ? "udpin:" : "udp:") + u.host + ":" + std::to_string(u.port);
+    const std::string url =
+        std::string(u.listen ? "udpin:" : "udp:") + u.host + ":" + std::to_string(u.port);
     sockaddr_in sa = ipv4_address(u.host, u.port, url);
     const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (fd < 0) throw std::runtime_error("mavlink endpoint: socket() failed for " + url);
@@ -164,8 +168,9 @@ struct MavlinkServer::Core {
     if (rc != 0) {
       const std::string err = std::strerror(errno);
       close(fd);
-      throw std::runtime_error("mavlink endpoint: cannot " + std::string(u.listen ? "listen on " : "send to ") + url +
-                               ": " + err);
+      throw std::runtime_error("mavlink endpoint: cannot " +
+                               std::string(u.listen ? "listen on " : "send to ") + url + ": " +
+                               err);
     }
     sockaddr_in local{};
     socklen_t len = sizeof(local);
@@ -214,11 +219,13 @@ struct MavlinkServer::Core {
     const auto deadline = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
                                                    std::chrono::duration<double>(timeout_s));
     std::unique_lock lock(flush_mutex);
-    return flush_cv.wait_until(lock, deadline, [&] { return flush_done >= generation || stop.load(); }) &&
-           flush_done >= generation;
+    return flush_cv.wait_until(lock, deadline, [&] {
+      return flush_done >= generation || stop.load();
+    }) && flush_done >= generation;
   }
 
-  // I/O thread: the bytes queued before request `generation` are on the wire (or stuck in a full socket)
+  // I/O thread: the bytes queued before request `generation` are on the wire (or stuck in a full
+  // socket)
   void publish_flushed(std::uint64_t generation) {
     {
       std::lock_guard lock(flush_mutex);
@@ -252,9 +259,10 @@ struct MavlinkServer::Core {
     }
   }
 
-  // a world reset drops every queued vehicle task, this endpoint's inbox drains among them: a vehicle
-  // whose drain was posted would keep task_posted set and never be served again (no heartbeat for a
-  // client that connected around the reset). Loop thread, after the tasks were cleared.
+  // a world reset drops every queued vehicle task, this endpoint's inbox drains among them: a
+  // vehicle whose drain was posted would keep task_posted set and never be served again (no
+  // heartbeat for a client that connected around the reset). Loop thread, after the tasks were
+  // cleared.
   void after_reset() {
     for (std::size_t vehicle = 0; vehicle < vehicles.size(); ++vehicle) {
       Vehicle& v = *vehicles[vehicle];
@@ -302,9 +310,9 @@ struct MavlinkServer::Core {
     wake();
   }
 
-  // the control observer: telemetry of every vehicle, then one wake-up for the I/O thread if any of it
-  // queued a frame (most control steps send nothing: streams run at a few to 50 Hz, control at 400 Hz,
-  // and an eventfd write per step was 6 % of the loop thread)
+  // the control observer: telemetry of every vehicle, then one wake-up for the I/O thread if any of
+  // it queued a frame (most control steps send nothing: streams run at a few to 50 Hz, control at
+  // 400 Hz, and an eventfd write per step was 6 % of the loop thread)
   void on_control_step() {
     bool any = false;
     for (auto& v : vehicles) {
@@ -378,13 +386,15 @@ struct MavlinkServer::Core {
     while (total < kMaxReadPerWake) {
       sockaddr_in from{};
       socklen_t from_len = sizeof(from);
-      const ssize_t n = recvfrom(c.fd, buf, sizeof(buf), 0, reinterpret_cast<sockaddr*>(&from), &from_len);
+      const ssize_t n =
+          recvfrom(c.fd, buf, sizeof(buf), 0, reinterpret_cast<sockaddr*>(&from), &from_len);
       if (c.udp) {
-        // datagrams: an empty one is not an end; ICMP port-unreachable (no ground station listening yet)
-        // and other errors leave the link as it is
+        // datagrams: an empty one is not an end; ICMP port-unreachable (no ground station listening
+        // yet) and other errors leave the link as it is
         if (n < 0) return true;
         if (c.peer.empty()) {
-          // a udpin link answers its first peer: connect to it, so that only it is heard from now on
+          // a udpin link answers its first peer: connect to it, so that only it is heard from now
+          // on
           if (connect(c.fd, reinterpret_cast<sockaddr*>(&from), from_len) != 0) continue;
           latch_udp(c, "udp:" + address_text(from));
         }
@@ -393,11 +403,13 @@ struct MavlinkServer::Core {
         if (n < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
       }
       total += static_cast<std::size_t>(n);
-      if (v.link_down.load(std::memory_order_relaxed)) continue;  // a dropped link: the bytes are lost
+      if (v.link_down.load(std::memory_order_relaxed))
+        continue;  // a dropped link: the bytes are lost
       StatCounters::add(v.stats.bytes_received, static_cast<std::uint64_t>(n));
-      // a new signing key (SETUP_SIGNING handled since the last read): the parser checks signatures and
-      // replays; which unsigned frames pass is decided below, per message
-      if (const std::uint64_t generation = v.signing.generation(); generation != c.signing_generation) {
+      // a new signing key (SETUP_SIGNING handled since the last read): the parser checks signatures
+      // and replays; which unsigned frames pass is decided below, per message
+      if (const std::uint64_t generation = v.signing.generation();
+          generation != c.signing_generation) {
         c.signing_generation = generation;
         ParserConfig pc;
         pc.signing_key = v.signing.get();
@@ -542,13 +554,16 @@ struct MavlinkServer::Core {
   }
 };
 
-MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config, net::EventLoop* io_loop)
+MavlinkServer::MavlinkServer(sim::Simulation& sim, const EndpointConfig& config,
+                             net::EventLoop* io_loop)
     : core_(std::make_shared<Core>(sim, config, io_loop)) {
   core_->open(core_);
   // sim_vehicle.py --auto-sysid: vehicle i is system i + 1
   if (config.auto_sysid) {
     for (std::size_t i = 0; i < sim.vehicle_count(); ++i) {
-      sim.post(i, [i](fc::FlightController& fc) { fc.set_param("SYSID_THISMAV", static_cast<double>(i + 1)); });
+      sim.post(i, [i](fc::FlightController& fc) {
+        fc.set_param("SYSID_THISMAV", static_cast<double>(i + 1));
+      });
     }
   }
 }
@@ -566,7 +581,9 @@ void MavlinkServer::schedule(sim::StepSchedule& steps) {
 }
 
 std::size_t MavlinkServer::vehicle_count() const { return core_->vehicles.size(); }
-std::uint16_t MavlinkServer::port(std::size_t vehicle) const { return core_->vehicles.at(vehicle)->port; }
+std::uint16_t MavlinkServer::port(std::size_t vehicle) const {
+  return core_->vehicles.at(vehicle)->port;
+}
 std::uint16_t MavlinkServer::udp_port(std::size_t vehicle, std::size_t k) const {
   return core_->vehicles.at(vehicle)->udp_ports.at(k);
 }
@@ -597,7 +614,9 @@ bool MavlinkServer::link_down(std::size_t vehicle) const {
 
 bool MavlinkServer::flush_queued(double timeout_s) { return core_->flush_queued(timeout_s); }
 
-std::uint64_t MavlinkServer::io_wakeups() const { return core_->wakeups.load(std::memory_order_relaxed); }
+std::uint64_t MavlinkServer::io_wakeups() const {
+  return core_->wakeups.load(std::memory_order_relaxed);
+}
 
 void MavlinkServer::set_seq_listener(std::function<void()> listener) {
   std::lock_guard lock(core_->seq_listener_mutex);

@@ -1,8 +1,8 @@
-// A bounded byte queue from the loop thread (which encodes replies and telemetry) to the network I/O
-// thread (which writes them to one client's socket). A client that does not read costs only its own
-// frames: when the queue is full, whole frames are dropped and counted, the writer never blocks. The
-// bytes and the bound are the server's common write buffer (net/write_buffer.hpp); dropping the frame
-// is this endpoint's policy at the bound.
+// A bounded byte queue from the loop thread (which encodes replies and telemetry) to the network
+// I/O thread (which writes them to one client's socket). A client that does not read costs only its
+// own frames: when the queue is full, whole frames are dropped and counted, the writer never
+// blocks. The bytes and the bound are the server's common write buffer (net/write_buffer.hpp);
+// dropping the frame is this endpoint's policy at the bound.
 #pragma once
 
 #include <atomic>
