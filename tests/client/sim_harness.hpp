@@ -1,5 +1,5 @@
 // An in-process uavsim server for client tests: world + objects + MAVLink endpoints + sim API on ephemeral
-// loopback ports, its Runner on a thread of its own as fast as possible, started paused so that a lockstep
+// loopback ports, sharing one network I/O loop as in uavsim-server, its Runner on a thread of its own as fast as possible, started paused so that a lockstep
 // client joins at t = 0 (then resume()): every run of a test starts from the same state.
 // ApiClient: a blocking client (SimConnection) for ground truth (`vehicles`) and fault injection.
 #pragma once
@@ -24,6 +24,7 @@
 #include "api/api_server.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "mavlink/endpoint.hpp"
+#include "net/event_loop.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "sim/runner.hpp"
@@ -45,16 +46,18 @@ class SimServer {
     sim_ = std::make_unique<s::sim::Simulation>(
         s::physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/" + world, o), s::sim::SimConfig{});
     objects_ = s::objects::add_world_objects(*sim_);
+    io_loop_.start();
     s::mavlink::EndpointConfig ec;
     ec.base_port = 0;
     if (!vehicle0_udp.empty()) ec.udp = {std::move(vehicle0_udp)};
-    mavlink_ = std::make_unique<s::mavlink::MavlinkServer>(*sim_, ec);
+    mavlink_ = std::make_unique<s::mavlink::MavlinkServer>(*sim_, ec, &io_loop_);
     mavlink_->schedule(sim_->schedule());
     runner_ = std::make_unique<s::sim::Runner>(*sim_, 0.0);
     s::api::ApiConfig ac;
     ac.port = 0;
     ac.start_paused = start_paused;
     ac.lockstep_timeout_s = 30.0;
+    ac.io_loop = &io_loop_;
     api_ = std::make_unique<s::api::ApiServer>(*sim_, runner_.get(), objects_, ac);
     hooks_ = std::make_unique<EndpointHooks>(*mavlink_);
     api_->set_link_control(hooks_.get());
@@ -84,6 +87,7 @@ class SimServer {
   // the endpoint's hooks as uavsim-server wires them: commands sent before `done` take effect at that
   // tick, and telemetry queued before a tick reaches the client before the tick
   using EndpointHooks = uavsim::server::app::EndpointHooks;
+  uavsim::server::net::EventLoop io_loop_;  // first: outlives the servers it serves
   std::unique_ptr<uavsim::server::sim::Simulation> sim_;
   uavsim::server::objects::ObjectSet objects_;
   std::unique_ptr<uavsim::server::mavlink::MavlinkServer> mavlink_;

@@ -108,7 +108,7 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
   limits.overload_line = dump(error_reply(nullptr, ApiError::kOverloaded,
                                           "the server's connection or reply-queue limit was reached; this "
                                           "connection is closed (read replies as they come, or connect later)"));
-  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb);
+  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb, config_.io_loop);
   shm_ = std::make_unique<ShmTransport>(*server_);
 }
 

@@ -8,7 +8,8 @@
 // and the groups added with add_group (radio, sensors, overlay). The hello's op list, the unknown_op
 // check and the dispatch all read that table.
 //
-// Threads: socket I/O runs on the LineServer's thread; every request that touches the simulation is
+// Threads: socket I/O runs on the LineServer's I/O thread (shared with the MAVLink endpoints in
+// uavsim-server); every request that touches the simulation is
 // queued and executed on the loop thread inside the control gate (gate(), registered with
 // Runner::add_gate in the step schedule's queued-tasks phase), before the control step, in arrival order. The gate is also where pause,
 // single-stepping and lockstep hold the clock, so the loop thread keeps serving requests while held.
@@ -79,6 +80,9 @@ struct ApiConfig {
   std::optional<std::string> token;
   // Serve the shared-memory stream (op lockstep_shm) to clients connecting from loopback.
   bool shm = true;
+  // The server's network I/O loop, shared with the MAVLink endpoints (it must outlive this server; its
+  // owner starts it). Null: the API's socket I/O runs on a loop of its own.
+  net::EventLoop* io_loop = nullptr;
 };
 
 class ApiServer {

@@ -31,6 +31,7 @@
 #include "app/recording.hpp"
 #include "app/run_reporter.hpp"
 #include "mavlink/endpoint.hpp"
+#include "net/event_loop.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/object_bodies.hpp"
 #include "physics/world.hpp"
@@ -311,6 +312,11 @@ int run_server(const Options& given_options) {
     }
   }
 
+  // one network I/O thread for the MAVLink endpoints and the sim API (docs/architecture.md, "Network
+  // I/O"); declared first, so it outlives both servers
+  net::EventLoop io_loop;
+  io_loop.start();
+
   // MAVLink endpoints: vehicle i on base + 10 i
   std::unique_ptr<mavlink::MavlinkServer> mavlink_server;
   mavlink::EndpointConfig endpoint;
@@ -340,7 +346,7 @@ int run_server(const Options& given_options) {
       };
     }
     try {
-      mavlink_server = std::make_unique<mavlink::MavlinkServer>(s, endpoint);
+      mavlink_server = std::make_unique<mavlink::MavlinkServer>(s, endpoint, &io_loop);
     } catch (const std::exception& e) {
       std::cerr << "uavsim-server: " << with_port_hint(e.what(), "--mavlink-port") << "\n";
       return 1;
@@ -499,6 +505,7 @@ int run_server(const Options& given_options) {
     api_config.bind_address = options.api_bind_address;
     api_config.lockstep_timeout_s = options.lockstep_timeout_s;
     api_config.token = options.api_token;
+    api_config.io_loop = &io_loop;
     try {
       api_server = std::make_unique<api::ApiServer>(s, &runner, world_objects, api_config);
     } catch (const std::exception& e) {
