@@ -260,8 +260,8 @@ std::uint8_t execute(const FcRequest& request, fc::FlightController& fc,
             }
             Eigen::Vector3d pos = fc.estimate().position_enu_m;
             if (r.lat_lon) {
-              const Eigen::Vector3d xy = frames::enu_from_ned(ned_from_geodetic(
-                  origin, {r.lat_lon->lat_deg, r.lat_lon->lon_deg, origin.alt_m}));
+              const Eigen::Vector3d xy = common::enu_from_geodetic(
+                  origin, {r.lat_lon->lat_deg, r.lat_lon->lon_deg, origin.alt_m});
               pos.x() = xy.x();
               pos.y() = xy.y();
             }
