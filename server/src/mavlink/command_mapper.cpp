@@ -5,6 +5,7 @@
 #include "mavlink/input_limits.hpp"
 #include "uavsim/common/angles.hpp"
 #include "uavsim/common/frames.hpp"
+#include "uavsim/common/mavlink/force_arm.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 
 namespace uavsim::server::mavlink {
@@ -87,8 +88,8 @@ MappedCommand map_command(const CommandArgs& c) {
   switch (static_cast<MavCmd>(c.command)) {
     case MavCmd::ComponentArmDisarm: {
       if (p[0] == 1.0)
-        return to_fc(cmd::Arm{p[1] == 2989.0 || p[1] == 21196.0});  // both magic values force
-      if (p[0] == 0.0) return to_fc(cmd::Disarm{p[1] == 21196.0});
+        return to_fc(cmd::Arm{p[1] == kForceArmMagic || p[1] == kForceArmDisarmMagic});
+      if (p[0] == 0.0) return to_fc(cmd::Disarm{p[1] == kForceArmDisarmMagic});
       return answer(kUnsupported);
     }
     case MavCmd::DoSetMode: {  // also the SET_MODE message; needs CUSTOM_MODE_ENABLED
