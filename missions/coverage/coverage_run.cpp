@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "uavsim/client/sim_connection.hpp"
+#include "uavsim/common/fmt.hpp"
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/launch/run_options.hpp"
 
@@ -23,18 +24,13 @@ using client::SimConnection;
 using client::SimMessage;
 using Json = nlohmann::json;
 using WallClock = std::chrono::steady_clock;
+using common::fmt;
 
 constexpr double kLauncherTick_s = 1.0;    // the launcher's lockstep period (sampling, kills)
 constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (thesis 4.3)
 constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
 constexpr double kFullCoverage = 1.0 - 1e-3;
 constexpr int kStationId = 255;
-
-std::string fmt(const char* f, double a) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, a);
-  return buf;
-}
 
 }  // namespace
 
