@@ -38,6 +38,7 @@
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
 #include "render/gl_context.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace {
 
@@ -91,7 +92,7 @@ constexpr int kMaxCameras = 16;
 std::string camera_ring() {
   std::string xml;
   for (int c = 4; c < kMaxCameras; ++c) {
-    const double a = 2.0 * 3.14159265358979 * (c - 4) / (kMaxCameras - 4);
+    const double a = 2.0 * uavsim::common::kPi * (c - 4) / (kMaxCameras - 4);
     xml += "<camera name=\"cam" + std::to_string(c) + "\" pos=\"" +
            std::to_string(9.0 * std::cos(a)) + " " + std::to_string(9.0 * std::sin(a)) + " " +
            std::to_string(2.0 + (c % 4)) + "\" mode=\"targetbody\" target=\"quad\"/>\n";

@@ -17,6 +17,7 @@
 #include "physics/world.hpp"
 #include "render/camera_renderer.hpp"
 #include "sim/simulation.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/balloon_detector.hpp"
 #include "uavsim/vision/eight_track.hpp"
 #include "uavsim/vision/marker_detector.hpp"
@@ -26,10 +27,11 @@
 namespace {
 
 using namespace uavsim::vision;
+using uavsim::common::kPi;
 
 // 60 deg horizontal field of view at any size
 PinholeIntrinsics camera(int width, int height) {
-  const double f = 0.5 * width / std::tan(M_PI / 6);
+  const double f = 0.5 * width / std::tan(kPi / 6);
   return PinholeIntrinsics::from_fovy(width, height, 2.0 * std::atan(0.5 * height / f));
 }
 
@@ -50,7 +52,7 @@ BENCHMARK_CAPTURE(BM_BalloonDetect, 640x480, 640, 480)->Unit(benchmark::kMillise
 void BM_MarkerDetect(benchmark::State& state, int width, int height) {
   const auto k = camera(width, height);
   const CameraPose pose = camera_pose_from_vehicle({0, 0, 10}, q_enu_body_from_rpy(0.1, -0.05, 0.4),
-                                                   {-M_PI / 2, 0.0, false});
+                                                   {-kPi / 2, 0.0, false});
   cv::Mat image = synthetic::sand_background(k, 1);
   synthetic::render_marker(k, pose, LandingMarkerGeometry{}, {1.0, -0.5}, 0.3, 1.2, &image);
   synthetic::add_noise(4.0, 3, &image);
@@ -138,7 +140,7 @@ void BM_MarkerDetectRendered(benchmark::State& state, int width, int height) {
         const Eigen::Quaterniond tilt = q_enu_body_from_rpy(0.06, -0.08, 0.3);
         server::physics::set_mocap_pose(sim.world(), sim.world().body_id("uav0_gimbal"),
                                         deck + Eigen::Vector3d(1.0, -1.1, 10.0),
-                                        tilt * look(0.0, -M_PI / 2));
+                                        tilt * look(0.0, -kPi / 2));
       });
   MarkerDetector detector;
   if (!detector.detect(frame.bgr)) state.SkipWithError("no marker in the rendered frame");

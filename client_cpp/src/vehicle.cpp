@@ -23,6 +23,7 @@
 #include "mission_uploader.hpp"
 #include "param_client.hpp"
 #include "telemetry_decoder.hpp"
+#include "uavsim/common/mavlink/force_arm.hpp"
 #include "uavsim/common/mavlink/generated/enum_names.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 
@@ -36,9 +37,6 @@ using Params = CommandSender::Params;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// COMPONENT_ARM_DISARM param2: ArduPilot's magic numbers that skip the pre-arm / in-flight checks
-constexpr float kForceArmMagic = 2989.0f;
-constexpr float kForceDisarmMagic = 21196.0f;
 // take-off with wait: done within this of the target altitude
 constexpr double kTakeoffAltitudeToleranceM = 0.5;
 
@@ -54,7 +52,7 @@ Params set_mode_params(FlightMode mode) {
   return {flags, static_cast<float>(static_cast<std::uint32_t>(mode)), 0, 0, 0, 0, 0};
 }
 Params arm_params(bool arm, bool force) {
-  const float magic = !force ? 0.0f : arm ? kForceArmMagic : kForceDisarmMagic;
+  const float magic = !force ? 0.0f : arm ? mav::kForceArmMagic : mav::kForceArmDisarmMagic;
   return {arm ? 1.0f : 0.0f, magic, 0, 0, 0, 0, 0};
 }
 Params takeoff_params(double rel_alt_m) {

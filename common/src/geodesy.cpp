@@ -1,7 +1,9 @@
 #include "uavsim/common/geodesy.hpp"
-#include "uavsim/common/angles.hpp"
 
 #include <cmath>
+
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 
 namespace uavsim::common {
 
@@ -33,6 +35,14 @@ Geodetic geodetic_from_ned(const GeodeticOrigin& origin, const Eigen::Vector3d& 
   g.lon_deg = origin.lon_deg + e / (kEarthRadiusM * std::cos(lat0)) / kDegToRad;
   g.alt_m = origin.alt_m - ned_m.z();
   return g;
+}
+
+Eigen::Vector3d enu_from_geodetic(const GeodeticOrigin& origin, const Geodetic& point) {
+  return frames::enu_from_ned(ned_from_geodetic(origin, point));
+}
+
+Geodetic geodetic_from_enu(const GeodeticOrigin& origin, const Eigen::Vector3d& enu_m) {
+  return geodetic_from_ned(origin, frames::ned_from_enu(enu_m));
 }
 
 }  // namespace uavsim::common

@@ -28,6 +28,10 @@ PinholeIntrinsics PinholeIntrinsics::from_fovy_deg(int width_px, int height_px, 
   return centred(width_px, height_px, 0.5 * height_px / std::tan(0.5 * fovy_deg * kPi / 180.0));
 }
 
+double PinholeIntrinsics::fovy_deg_of(int height_px, double fy_px) {
+  return 2.0 * std::atan(0.5 * height_px / fy_px) * 180.0 / kPi;
+}
+
 Eigen::Vector2d PinholeIntrinsics::project(const Eigen::Vector3d& p_cam_m) const {
   return {fx_px * p_cam_m.x() / p_cam_m.z() + cx_px, fy_px * p_cam_m.y() / p_cam_m.z() + cy_px};
 }

@@ -22,6 +22,7 @@
 #include <regex>
 #include <sstream>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/record_file.hpp"
 
 extern char** environ;
@@ -369,7 +370,7 @@ struct TruthLog {
         if (f == nullptr || p.size() < 3 || vel.size() < 3 || q.size() < 4) continue;
         // ZYX Euler angles of q_enu_body (yaw from east, counter-clockwise)
         const double w = q[0], x = q[1], y = q[2], z = q[3];
-        constexpr double kDeg = 180.0 / 3.14159265358979323846;
+        constexpr double kDeg = 180.0 / common::kPi;
         const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * kDeg;
         const double pitch = std::asin(std::clamp(2 * (w * y - z * x), -1.0, 1.0)) * kDeg;
         const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * kDeg;
@@ -401,7 +402,7 @@ struct TruthLog {
           char line[256];
           std::snprintf(line, sizeof(line), "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f\n", t, p[0],
                         p[1], p[2], vel[0], vel[1], vel[2],
-                        k.value("yaw_rad", 0.0) * 180.0 / 3.14159265358979323846);
+                        k.value("yaw_rad", 0.0) * 180.0 / common::kPi);
           f->rows += line;
         }
       }

@@ -3,8 +3,9 @@
 // from those two files only.
 #pragma once
 
-#include <cstdio>
 #include <string>
+
+#include "uavsim/common/fmt.hpp"
 
 namespace uavsim::missions::coverage::agent_tuning {
 
@@ -75,10 +76,6 @@ inline constexpr double kStationMapFresh_s = 5.0;
 // the leader's hover over its home while the others land (it lands last)
 inline constexpr double kLeaderWaitAltitude_m = 3.0;
 
-inline std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
-  char buf[160];
-  std::snprintf(buf, sizeof buf, f, a, b, c);
-  return buf;
-}
+using common::fmt;  // the log lines' numbers
 
 }  // namespace uavsim::missions::coverage::agent_tuning

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::coverage {
 
 // Algorithm 3's constants, table 4.1 (distances in m, speeds in m/s, R2 in deg/s).
@@ -102,7 +104,7 @@ struct CoverageConfig {
   double stripe_height_m() const;
 };
 
-inline constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 
 // Agent ids are 0..kMaxAgents-1 (the radio messages carry id sets as 64-bit masks).
 inline constexpr int kMaxAgents = 64;

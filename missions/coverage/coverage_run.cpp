@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "uavsim/client/sim_connection.hpp"
+#include "uavsim/common/fmt.hpp"
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/launch/run_options.hpp"
 
@@ -23,18 +24,12 @@ using client::SimConnection;
 using client::SimMessage;
 using Json = nlohmann::json;
 using WallClock = std::chrono::steady_clock;
+using common::fmt;
 
 constexpr double kLauncherTick_s = 1.0;    // the launcher's lockstep period (sampling, kills)
 constexpr double kFailurePeriod_s = 10.0;  // failures are drawn every 10 s (thesis 4.3)
 constexpr double kAgentPeriod_s = 0.05;    // the agents' lockstep period (20 Hz)
-constexpr double kFullCoverage = 1.0 - 1e-3;
 constexpr int kStationId = 255;
-
-std::string fmt(const char* f, double a) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, a);
-  return buf;
-}
 
 }  // namespace
 
@@ -487,40 +482,25 @@ void CoverageRun::follow() {
 }
 
 Json CoverageRun::gaps() const {
+  constexpr std::size_t kGapsListed = 20;
   Json gaps = Json::array();
-  const AreaParts held = held_apd();
-  for (int st = 0; st < stripes_; ++st) {
-    double y = 0.0;
-    std::vector<Interval> list = held.stripe(st);
-    list.push_back({config_.width_y_m, config_.width_y_m});
-    for (const Interval& iv : list) {
-      if (iv.start_m - y > kCoverageSlack_m && gaps.size() < 20)
-        gaps.push_back({st, y, std::min(iv.start_m, config_.width_y_m)});
-      y = std::max(y, iv.end_m);
-    }
-  }
+  for (const CoverageGap& g : coverage_gaps(held_apd(), config_.width_y_m, kGapsListed))
+    gaps.push_back({g.stripe, g.from_m, g.to_m});
   return gaps;
 }
 
 CoverageScore CoverageRun::finish() {
   std::filesystem::remove_all(dir_);
   apply_pending(std::numeric_limits<double>::infinity());  // the programs' last lines
-  CoverageScore s;
-  for (const auto& [id, times] : agent_time_in_state_s_) {
-    for (size_t k = 0; k < times.size(); ++k) s.time_in_state_s[k] += times[k];
-  }
-  s.coverage = held_fraction();
+  // each vehicle as ground truth left it, then the tally (run_score.hpp)
+  std::vector<VehicleOutcome> outcomes;
+  Json per_agent = Json::array();
   for (const Json& x : vehicles_end_) {
     const int i = x.value("index", -1);
     const bool dead = killed_.count(i) || crashed_.count(i) || x.value("crashed", false);
     const bool down = x.value("on_ground", false) && !x.value("armed", true);
-    if (!dead) {
-      ++s.survivors;
-      if (down) ++s.landed;
-    }
     const double mah = energy_mah_[i];
-    s.energy_total += mah;
-    s.distance_total += distance_m_[i];
+    outcomes.push_back({dead, down, mah, distance_m_[i]});
     Json entry = {
         {"agent", i},
         {"failed", dead},
@@ -533,19 +513,16 @@ CoverageScore CoverageRun::finish() {
       entry["failed_at_s"] = f->second.first;
       entry["lost_fraction"] = f->second.second;
     }
-    s.per_agent.push_back(std::move(entry));
+    per_agent.push_back(std::move(entry));
   }
-  s.success = !failed_ && !launch::interrupted() && !vehicles_end_.empty() &&
-              s.coverage >= kFullCoverage && s.survivors > 0 && s.landed == s.survivors;
-  s.mission_s = first_takeoff_s_ >= 0 && last_touchdown_s_ >= first_takeoff_s_
-                    ? last_touchdown_s_ - first_takeoff_s_
-                    : -1.0;
-  // the thesis's fig. 4.7 and table 4.2 count "from take-off to landing" (mission_s); the time to
-  // coverage ends where the leader's query found the rectangle covered, before the flight home
-  s.coverage_s = first_takeoff_s_ >= 0 && completed_at_s_ >= first_takeoff_s_
-                     ? completed_at_s_ - first_takeoff_s_
-                     : -1.0;
-  s.failed = static_cast<int>(vehicles_end_.size()) - s.survivors;
+  CoverageScore s;
+  static_cast<RunTally&>(s) =
+      tally_run(outcomes, {first_takeoff_s_, last_touchdown_s_, completed_at_s_}, held_fraction(),
+                !failed_ && !launch::interrupted());
+  s.per_agent = std::move(per_agent);
+  for (const auto& [id, times] : agent_time_in_state_s_) {
+    for (size_t k = 0; k < times.size(); ++k) s.time_in_state_s[k] += times[k];
+  }
   s.gcs_fraction =
       apd_.count(kStationId) ? apd_[kStationId].apd.covered_fraction(config_.width_y_m) : 0.0;
   s.gaps = gaps();

@@ -24,20 +24,17 @@
 #include "coverage_world.hpp"
 #include "recovery_meter.hpp"
 #include "run_options.hpp"
+#include "run_score.hpp"
 #include "uavsim/launch/launcher.hpp"
 
 namespace uavsim::missions::coverage {
 
 // The score at the end, from ground truth and the programs' last reports.
-struct CoverageScore {
+// The counts, totals, times and success are the pure tally of run_score.hpp.
+struct CoverageScore : RunTally {
   using Json = nlohmann::json;
 
-  double coverage = 0.0;
-  int survivors = 0, landed = 0, failed = 0;
-  double energy_total = 0, distance_total = 0;
   Json per_agent = Json::array();
-  bool success = false;
-  double mission_s = -1.0, coverage_s = -1.0;
   double gcs_fraction = 0.0;
   // what the surviving data misses: (stripe, y from, y to), the first few
   Json gaps = Json::array();

@@ -23,10 +23,12 @@
 #include "station_link.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
+#include "uavsim/common/parse_number.hpp"
 #include "uavsim/mission/station.hpp"
 
 using namespace uavsim::client;
 using namespace uavsim::missions::coverage;
+using uavsim::common::parse_double;
 
 namespace {
 
@@ -56,14 +58,6 @@ bool pair_of(const char* s, double* a, double* b) {
   return e != s2 && *e == '\0' && std::isfinite(*a) && std::isfinite(*b);
 }
 
-bool number(const char* s, double lo, double hi, double* out) {
-  char* e = nullptr;
-  const double v = std::strtod(s, &e);
-  if (e == s || *e != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -75,7 +69,7 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h" || i + 1 >= argc) return usage();
     const char* v = argv[++i];
     double x = 0, y = 0;
-    if (a == "--uavs" && number(v, 1, kMaxAgents, &uavs) && uavs == std::floor(uavs)) {
+    if (a == "--uavs" && parse_double(v, 1, kMaxAgents, &uavs) && uavs == std::floor(uavs)) {
     } else if (a == "--area" && pair_of(v, &x, &y)) {
       config.length_x_m = x;
       config.width_y_m = y;
@@ -83,9 +77,9 @@ int main(int argc, char** argv) {
     } else if (a == "--sensor" && pair_of(v, &x, &y)) {
       config.x_sensor_m = x;
       config.y_sensor_m = y;
-    } else if (a == "--map-period" && number(v, 0.05, 3600, &map_period_s)) {
-    } else if (a == "--report-period" && number(v, 0.05, 3600, &report_period_s)) {
-    } else if (a == "--max-time" && number(v, 1, 1e7, &max_time_s)) {
+    } else if (a == "--map-period" && parse_double(v, 0.05, 3600, &map_period_s)) {
+    } else if (a == "--report-period" && parse_double(v, 0.05, 3600, &report_period_s)) {
+    } else if (a == "--max-time" && parse_double(v, 1, 1e7, &max_time_s)) {
     } else {
       return usage();
     }

@@ -7,19 +7,10 @@
 
 #include "agent.hpp"
 #include "uavsim/common/install_paths.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::missions::coverage {
-namespace {
-
-bool number(const char* s, double lo, double hi, double* out) {
-  char* e = nullptr;
-  const double v = std::strtod(s, &e);
-  if (e == s || *e != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
-  *out = v;
-  return true;
-}
-
-}  // namespace
+using common::parse_double;
 
 CoverageRunOptions::CoverageRunOptions() {
   // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
@@ -57,50 +48,50 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
     }
     if (a == "--help" || a == "-h" || i + 1 >= argc) return false;
     const char* val = argv[++i];
-    if (a == "--agents" && number(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
+    if (a == "--agents" && parse_double(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
       o->agents = static_cast<int>(v);
     } else if (a == "--area") {
       const char* x = std::strchr(val, 'x');
-      if (x == nullptr || !number(std::string(val, x).c_str(), 10, 3000, &v) ||
-          !number(x + 1, 10, 3000, &w))
+      if (x == nullptr || !parse_double(std::string(val, x).c_str(), 10, 3000, &v) ||
+          !parse_double(x + 1, 10, 3000, &w))
         return false;
       o->length_x_m = v;
       o->width_y_m = w;
-    } else if (a == "--failure-prob" && number(val, 0, 1, &v)) {
+    } else if (a == "--failure-prob" && parse_double(val, 0, 1, &v)) {
       o->failure_prob = v;
-    } else if (a == "--seed" && number(val, 0, 1e15, &v) && v == std::floor(v)) {
+    } else if (a == "--seed" && parse_double(val, 0, 1e15, &v) && v == std::floor(v)) {
       o->seed = static_cast<uint64_t>(v);
     } else if (a == "--kill") {
       const char* at = std::strchr(val, '@');
-      if (at == nullptr || !number(std::string(val, at).c_str(), 0, kMaxAgents - 1, &v) ||
-          v != std::floor(v) || !number(at + 1, 0, 1e6, &w))
+      if (at == nullptr || !parse_double(std::string(val, at).c_str(), 0, kMaxAgents - 1, &v) ||
+          v != std::floor(v) || !parse_double(at + 1, 0, 1e6, &w))
         return false;
       o->kills.emplace_back(w, static_cast<int>(v));
-    } else if (a == "--radio-range" && number(val, 1, 10000, &v)) {
+    } else if (a == "--radio-range" && parse_double(val, 1, 10000, &v)) {
       o->radio_range_m = v;
-    } else if (a == "--line-spacing" && number(val, 3, 100, &v)) {
+    } else if (a == "--line-spacing" && parse_double(val, 3, 100, &v)) {
       o->line_spacing_m = v;
-    } else if (a == "--radio-loss" && number(val, 0, 1, &v)) {
+    } else if (a == "--radio-loss" && parse_double(val, 0, 1, &v)) {
       o->radio_loss = v;
     } else if (a == "--radio-backend" &&
                (std::strcmp(val, "simple") == 0 || std::strcmp(val, "ns3") == 0)) {
       o->radio_backend = val;
-    } else if (a == "--radio-tdma" && number(val, 0.001, 1, &v)) {
+    } else if (a == "--radio-tdma" && parse_double(val, 0.001, 1, &v)) {
       // the server checks the rest (a slot holds a frame; the vehicles' slots fit in the period)
       o->radio_tdma_slot_s = v;
-    } else if (a == "--gcs-cut" && number(val, 0, 1e6, &v)) {
+    } else if (a == "--gcs-cut" && parse_double(val, 0, 1e6, &v)) {
       o->gcs_cut_s = v;
-    } else if (a == "--gcs-loss" && number(val, 0, 1, &v)) {
+    } else if (a == "--gcs-loss" && parse_double(val, 0, 1, &v)) {
       o->gcs_loss = v;
-    } else if (a == "--per-process" && number(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
+    } else if (a == "--per-process" && parse_double(val, 1, kMaxAgents, &v) && v == std::floor(v)) {
       o->per_process = static_cast<int>(v);
-    } else if (a == "--budget" && number(val, 1, 1e6, &v)) {
+    } else if (a == "--budget" && parse_double(val, 1, 1e6, &v)) {
       o->budget_s = v;
-    } else if (a == "--wall-limit" && number(val, 1, 1e6, &v)) {
+    } else if (a == "--wall-limit" && parse_double(val, 1, 1e6, &v)) {
       o->wall_limit_s = v;
-    } else if (a == "--progress" && number(val, 1, 1e6, &v)) {
+    } else if (a == "--progress" && parse_double(val, 1, 1e6, &v)) {
       o->progress_period_s = v;
-    } else if (a == "--agent-status" && number(val, 0, 3600, &v)) {
+    } else if (a == "--agent-status" && parse_double(val, 0, 3600, &v)) {
       o->agent_status_s = v;
     } else if (a == "--json") {
       o->json_path = val;
@@ -110,7 +101,7 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
       o->record = val;
     } else if (a == "--record-camera") {
       o->record_camera = val;
-    } else if (a == "--truth-hz" && number(val, 0.01, 1000, &v)) {
+    } else if (a == "--truth-hz" && parse_double(val, 0.01, 1000, &v)) {
       o->truth_hz = v;
     } else if (a == "--map" && std::strchr(val, '\'') == nullptr) {
       o->map_png = val;

@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+
+#include "uavsim/common/fmt.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
 
 namespace {
+using common::fmt;
+
 constexpr double kTakeoffRetry_s = 5.0;
 constexpr double kReachedAltitudeMargin_m = 1.0;
 constexpr double kOpenLoopReadyBand_m = 0.5;  // readiness from sightings this far above it
@@ -26,12 +29,6 @@ client::PidGains approach_gains(const MissionConfig& c) {
 Eigen::Vector2d clamp_norm(const Eigen::Vector2d& v, double max) {
   const double n = v.norm();
   return n > max ? Eigen::Vector2d(v * (max / n)) : v;
-}
-
-std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), f, a, b, c);
-  return buf;
 }
 }  // namespace
 

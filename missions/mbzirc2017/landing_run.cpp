@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "uavsim/client/sim_connection.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/install_paths.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
@@ -96,7 +97,7 @@ bool read_truck_schedule(const std::string& world, TruckSchedule* out, std::stri
     out->track.circle_radius_m = (*t)[0];
     out->track.centre_separation_m = (*t)[1];
     out->track.centre_enu_m = Eigen::Vector2d((*t)[2], (*t)[3]);
-    out->track.yaw_rad = (*t)[4] * M_PI / 180.0;
+    out->track.yaw_rad = (*t)[4] * common::kPi / 180.0;
   }
   if (const auto sp = world_numeric(text, "uavsim:truck:speed")) {
     if (sp->size() < 3 || !((*sp)[0] > 0.0) || !((*sp)[1] > 0.0) || (*sp)[0] > kMaxKmh ||

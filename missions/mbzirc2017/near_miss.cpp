@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2017 {
 
 namespace {
@@ -153,7 +155,7 @@ VehicleShape load_vehicle_shape(const std::string& mjcf_path) {
       for (const double z : {-hh, hh}) {
         out.spheres.push_back({pos + Eigen::Vector3d(0, 0, z), 0.0});
         for (int k = 0; k < kRimPoints; ++k) {
-          const double a = 2.0 * M_PI * k / kRimPoints;
+          const double a = 2.0 * common::kPi * k / kRimPoints;
           out.spheres.push_back({pos + Eigen::Vector3d(r * std::cos(a), r * std::sin(a), z), 0.0});
         }
       }

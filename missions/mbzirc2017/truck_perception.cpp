@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2017 {
 
 namespace {
@@ -34,7 +36,7 @@ vision::CameraPose TruckPerception::camera_pose(const Eigen::Vector3d& position_
   // the gimbal cancels roll and pitch: only the heading turns the image; straight down, image top
   // forward (models/worlds/mbzirc2017.xml)
   vision::GimbalAngles down;
-  down.pitch_rad = -0.5 * M_PI;
+  down.pitch_rad = -0.5 * common::kPi;
   down.earth_stabilised = true;
   return vision::camera_pose_from_vehicle(position_enu_m,
                                           vision::q_enu_body_from_rpy(0.0, 0.0, yaw_enu_rad), down,

@@ -43,6 +43,21 @@ TEST(Geodesy, RoundTripsWithinAMillimetre) {
   EXPECT_NEAR((back - p).norm(), 0.0, 1e-6);
 }
 
+TEST(Geodesy, EnuIsNedWithTheAxesSwapped) {
+  const GeodeticOrigin o;
+  // 1e-4 deg north and 10 m up: NED (11.131885, 0, -10) m, ENU (0, 11.131885, 10) m
+  const Geodetic p{o.lat_deg + 1e-4, o.lon_deg, o.alt_m + 10.0};
+  const Eigen::Vector3d enu = enu_from_geodetic(o, p);
+  EXPECT_NEAR(enu.x(), 0.0, 1e-9);
+  EXPECT_NEAR(enu.y(), 11.131885, 1e-5);
+  EXPECT_NEAR(enu.z(), 10.0, 1e-9);
+  EXPECT_EQ(enu, frames::enu_from_ned(ned_from_geodetic(o, p)));
+  const Geodetic back = geodetic_from_enu(o, enu);
+  EXPECT_NEAR(back.lat_deg, p.lat_deg, 1e-12);
+  EXPECT_NEAR(back.lon_deg, p.lon_deg, 1e-12);
+  EXPECT_NEAR(back.alt_m, p.alt_m, 1e-9);
+}
+
 TEST(Frames, EnuNedSwapAxesAndFlipUp) {
   const Eigen::Vector3d enu(1.0, 2.0, 3.0);
   EXPECT_EQ(frames::ned_from_enu(enu), Eigen::Vector3d(2.0, 1.0, -3.0));

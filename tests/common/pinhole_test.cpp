@@ -34,6 +34,16 @@ TEST(Pinhole, DegreeAndRadianFormsAgree) {
   }
 }
 
+TEST(Pinhole, FovyOfAFocalLengthInvertsFromFovy) {
+  // fy = h/2 puts the image edge at 45 deg off the axis: fovy = 2 atan(1) = 90 deg
+  EXPECT_NEAR(PinholeIntrinsics::fovy_deg_of(480, 240.0), 90.0, kExact);
+  for (const double fovy_deg : {10.0, 45.0, 60.0, 90.0, 120.0}) {
+    const PinholeIntrinsics k = PinholeIntrinsics::from_fovy_deg(384, 216, fovy_deg);
+    EXPECT_NEAR(PinholeIntrinsics::fovy_deg_of(k.height_px, k.fy_px), fovy_deg, kExact * 1e2)
+        << fovy_deg;
+  }
+}
+
 TEST(Pinhole, ProjectAndRayAreInverse) {
   const PinholeIntrinsics k = PinholeIntrinsics::from_fovy_deg(640, 480, 60.0);
   // on the axis: the principal point

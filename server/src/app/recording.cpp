@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "uavsim/common/pinhole.hpp"
+
 namespace uavsim::server::app {
 
 // which camera --record films: the named camera, else (overview, follow, top) the world camera
@@ -54,7 +56,7 @@ std::shared_ptr<render::CameraDirector> record_director(const std::string& choic
   } else {
     return nullptr;
   }
-  p.fovy_deg = 2.0 * std::atan(0.5 * cam.height_px / cam.fy_px) * 180.0 / 3.14159265358979323846;
+  p.fovy_deg = common::PinholeIntrinsics::fovy_deg_of(cam.height_px, cam.fy_px);
   p.aspect = static_cast<double>(cam.width_px) / cam.height_px;
   return std::make_shared<render::CameraDirector>(p);
 }

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "airframe/truth_state.hpp"
+
 namespace uavsim::server::fc {
 
 // ArduCopter flight modes, with ArduCopter's custom_mode numbers.
@@ -36,15 +38,9 @@ enum class CommandResult {
   kInvalid,      // out-of-range or non-finite parameter                   (MAV_RESULT_DENIED too)
 };
 
-// Ground truth of a rigid body, the input to the sensor models.
-struct TruthState {
-  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond q_enu_body = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d rate_body_rad_s = Eigen::Vector3d::Zero();
-  Eigen::Vector3d accel_enu_m_s2 = Eigen::Vector3d::Zero();  // kinematic acceleration (no gravity)
-  bool on_ground = true;  // a contact between the vehicle and the ground or a deck
-};
+// Ground truth of a rigid body, the input to the sensor models (defined with the airframe, which
+// physics shares).
+using airframe::TruthState;
 
 // The estimator's output: what the FC (and telemetry) believes.
 struct EstimatedState {

@@ -3,20 +3,17 @@
 #include <algorithm>
 #include <cmath>
 
-namespace uavsim::server::fc {
+#include "fc/angles.hpp"
 
-namespace {
-constexpr double kTwoPi = 6.28318530717958647692;
-}
+namespace uavsim::server::fc {
 
 double Pid::update(double error, double dt_s, const PidGains& gains, bool freeze_i) {
   if (!(dt_s > 0.0)) return last_output_;
   // derivative of the error, low-passed: alpha = dt / (dt + 1/(2 pi fc))
   if (has_last_) {
     const double raw = (error - last_error_) / dt_s;
-    const double alpha = gains.d_cutoff_hz > 0.0
-                             ? dt_s / (dt_s + 1.0 / (kTwoPi * gains.d_cutoff_hz))
-                             : 1.0;
+    const double alpha =
+        gains.d_cutoff_hz > 0.0 ? dt_s / (dt_s + 1.0 / (2.0 * kPi * gains.d_cutoff_hz)) : 1.0;
     derivative_ += alpha * (raw - derivative_);
   }
   last_error_ = error;

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fc/angles.hpp"
 #include "fc/sensors.hpp"
 
 namespace uavsim::server::fc {
 
 namespace {
-constexpr double kTwoPi = 6.28318530717958647692;
 constexpr double kAccErrCutoffHz = 20.0;  // ArduPilot PSC_ACCZ_FLTE default
 constexpr double kVelDCutoffHz = 5.0;     // ArduPilot PSC_VELXY_FLTD default
 }  // namespace
@@ -88,7 +88,7 @@ Eigen::Vector3d PositionController::update(const EstimatedState& est, double acc
   accel_target_enu_m_s2_ = accel;
 
   // acceleration error PID: removes thrust model errors (mass, drag) that the feed-forward misses
-  const double alpha = dt_s > 0.0 ? dt_s / (dt_s + 1.0 / (kTwoPi * kAccErrCutoffHz)) : 0.0;
+  const double alpha = dt_s > 0.0 ? dt_s / (dt_s + 1.0 / (2.0 * kPi * kAccErrCutoffHz)) : 0.0;
   acc_err_z_filt_ += alpha * ((az_t - accel_z_est_m_s2) - acc_err_z_filt_);
   const PidGains gz{p.psc_accz_p, p.psc_accz_i, 0.0, d.accz_imax_m_s2, 0.0};
   // anti-windup upward only: a mixer that raises thrust to keep attitude (on the ground, against the

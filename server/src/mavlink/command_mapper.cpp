@@ -5,6 +5,7 @@
 #include "mavlink/input_limits.hpp"
 #include "uavsim/common/angles.hpp"
 #include "uavsim/common/frames.hpp"
+#include "uavsim/common/mavlink/force_arm.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 
 namespace uavsim::server::mavlink {
@@ -87,8 +88,8 @@ MappedCommand map_command(const CommandArgs& c) {
   switch (static_cast<MavCmd>(c.command)) {
     case MavCmd::ComponentArmDisarm: {
       if (p[0] == 1.0)
-        return to_fc(cmd::Arm{p[1] == 2989.0 || p[1] == 21196.0});  // both magic values force
-      if (p[0] == 0.0) return to_fc(cmd::Disarm{p[1] == 21196.0});
+        return to_fc(cmd::Arm{p[1] == kForceArmMagic || p[1] == kForceArmDisarmMagic});
+      if (p[0] == 0.0) return to_fc(cmd::Disarm{p[1] == kForceArmDisarmMagic});
       return answer(kUnsupported);
     }
     case MavCmd::DoSetMode: {  // also the SET_MODE message; needs CUSTOM_MODE_ENABLED
@@ -260,8 +261,8 @@ std::uint8_t execute(const FcRequest& request, fc::FlightController& fc,
             }
             Eigen::Vector3d pos = fc.estimate().position_enu_m;
             if (r.lat_lon) {
-              const Eigen::Vector3d xy = frames::enu_from_ned(ned_from_geodetic(
-                  origin, {r.lat_lon->lat_deg, r.lat_lon->lon_deg, origin.alt_m}));
+              const Eigen::Vector3d xy = common::enu_from_geodetic(
+                  origin, {r.lat_lon->lat_deg, r.lat_lon->lon_deg, origin.alt_m});
               pos.x() = xy.x();
               pos.y() = xy.y();
             }

@@ -6,13 +6,14 @@
 #include <Eigen/Core>
 
 #include "sim/checked_number.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink::limits {
 
 inline constexpr double kPosition_m = 1e5;      // local setpoints, altitudes: 100 km covers any world
 inline constexpr double kSpeed_m_s = 1000.0;    // far beyond any copter, small enough for the controllers
 inline constexpr double kAccel_m_s2 = 1000.0;
-inline constexpr double kYaw_rad = 4.0 * 3.14159265358979323846;  // headings come as [-pi, pi] or [0, 2pi]
+inline constexpr double kYaw_rad = 4.0 * common::kPi;  // headings come as [-pi, pi] or [0, 2pi]
 inline constexpr double kRate_rad_s = 35.0;     // about 2000 deg/s, a MEMS gyro's full scale
 inline constexpr double kAngle_deg = 360.0;     // CONDITION_YAW angle, gimbal angles
 inline constexpr double kYawRate_deg_s = 2000.0;

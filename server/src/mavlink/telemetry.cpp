@@ -97,11 +97,11 @@ void VehicleLink::handle_timesync(Link& link, const msg::Timesync& m) {
 }
 
 Geodetic VehicleLink::geodetic_of_enu(const Eigen::Vector3d& p_enu) const {
-  return geodetic_from_ned(config_.origin, frames::ned_from_enu(p_enu));
+  return common::geodetic_from_enu(config_.origin, p_enu);
 }
 
 Eigen::Vector3d VehicleLink::enu_of_geodetic(const Geodetic& g) const {
-  return frames::enu_from_ned(ned_from_geodetic(config_.origin, g));
+  return common::enu_from_geodetic(config_.origin, g);
 }
 
 msg::Heartbeat VehicleLink::heartbeat() const {

@@ -300,12 +300,12 @@ double Shard::time_s() const { return d_->time; }
 double Shard::timestep_s() const { return m_->opt.timestep; }
 void Shard::set_timestep_s(double dt_s) { m_->opt.timestep = dt_s; }
 
-fc::TruthState Shard::truth(size_t vehicle) const {
+airframe::TruthState Shard::truth(size_t vehicle) const {
   const VehicleBinding& v = vehicles_[vehicle];
   const mjtNum* q = d_->qpos + v.qpos_adr;
   const mjtNum* dq = d_->qvel + v.dof_adr;
   const mjtNum* ddq = d_->qacc + v.dof_adr;
-  fc::TruthState s;
+  airframe::TruthState s;
   if (parked_[vehicle].on) {
     // held at rest: no velocity, no acceleration (the accelerometer reads 1 g up, as on the ground)
     const double* h = parked_[vehicle].qpos;

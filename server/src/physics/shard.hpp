@@ -29,7 +29,7 @@ class Shard {
   void set_timestep_s(double dt_s);
 
   // World's functions of the same names, for the shard's own vehicles.
-  fc::TruthState truth(size_t vehicle) const;
+  airframe::TruthState truth(size_t vehicle) const;
   void apply_wrench(size_t vehicle, const airframe::Wrench& wrench);
   void set_pose(size_t vehicle, const double pos_enu_m[3], const double quat_wxyz[4]);
   void step();

@@ -85,7 +85,9 @@ void World::set_timestep_s(double dt_s) {
   for (auto& s : shards_) s->set_timestep_s(dt_s);
 }
 
-fc::TruthState World::truth(size_t vehicle) const { return shard_of(vehicle).truth(local(vehicle)); }
+airframe::TruthState World::truth(size_t vehicle) const {
+  return shard_of(vehicle).truth(local(vehicle));
+}
 void World::apply_wrench(size_t vehicle, const airframe::Wrench& wrench) {
   shard_of(vehicle).apply_wrench(local(vehicle), wrench);
 }

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "airframe/airframe.hpp"
-#include "fc/fc_types.hpp"
+#include "airframe/truth_state.hpp"
 #include "physics/world_composer.hpp"
 
 struct mjModel_;
@@ -98,7 +98,7 @@ class World {
   void set_timestep_s(double dt_s);
 
   // Ground truth of a vehicle's free body (position and velocity of the body origin).
-  fc::TruthState truth(size_t vehicle) const;
+  airframe::TruthState truth(size_t vehicle) const;
   // Writes a vehicle's wrench about its body origin into its free joint's qfrc_applied dofs:
   // world-frame force in dofs 0-2, body-frame torque in dofs 3-5.
   void apply_wrench(size_t vehicle, const airframe::Wrench& wrench);

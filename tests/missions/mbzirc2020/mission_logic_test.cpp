@@ -10,12 +10,13 @@
 #include "ground_station.hpp"
 #include "messages.hpp"
 #include "touchdown_gate.hpp"
+#include "uavsim/common/angles.hpp"
 #include "vehicle_fsm.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using common::kPi;
 
 UavStatus status(bool ready, Eigen::Vector3d p = Eigen::Vector3d::Zero()) {
   UavStatus s;

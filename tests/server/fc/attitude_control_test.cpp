@@ -9,12 +9,12 @@
 
 #include <cmath>
 
+#include "fc/angles.hpp"
 #include "fc/params.hpp"
 
 namespace uavsim::server::fc {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 constexpr double kDtS = 0.002;  // the FC's control step (500 Hz)
 constexpr double kTol = 1e-9;

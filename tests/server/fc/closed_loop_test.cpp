@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 
+#include "fc/angles.hpp"
 #include "rigid_body_plant.hpp"
 #include "test_airframes.hpp"
 
@@ -15,7 +16,6 @@ namespace {
 
 using test::Sim;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr uint64_t kSeed = 42;
 // acceptance figures of the brief
 constexpr double kHoldTolM = 0.2;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <set>
 
+#include "fc/angles.hpp"
 #include "fc/flight_controller.hpp"
 #include "test_airframes.hpp"
 
@@ -70,7 +71,7 @@ TEST(Params, DerivedValuesAreSi) {
   ASSERT_TRUE(t.set("WPNAV_SPEED", 750.0));
   EXPECT_DOUBLE_EQ(t.derived().wp_speed_m_s, 7.5);
   ASSERT_TRUE(t.set("ANGLE_MAX", 4500.0));
-  EXPECT_NEAR(t.derived().angle_max_rad, 3.14159265358979 / 4.0, 1e-12);
+  EXPECT_NEAR(t.derived().angle_max_rad, kPi / 4.0, 1e-12);
   // RTL_SPEED 0 means WPNAV_SPEED, as ArduCopter
   EXPECT_DOUBLE_EQ(t.derived().rtl_speed_m_s, 7.5);
 }

@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "fc/angles.hpp"
+
 namespace uavsim::server::fc {
 namespace {
 
@@ -36,7 +38,7 @@ TEST(Pid, DerivativeFilterIsFirstOrderLowPass) {
   const PidGains g{0.0, 0.0, 1.0, 0.0, fc_hz};
   double t = 0.0, out = 0.0;
   pid.update(0.0, dt, g);
-  const double tau = 1.0 / (2.0 * 3.14159265358979 * fc_hz);
+  const double tau = 1.0 / (2.0 * kPi * fc_hz);
   for (int k = 0; k < static_cast<int>(tau / dt); ++k) {
     t += dt;
     out = pid.update(t, dt, g);

@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "fc/angles.hpp"
 #include "fc/params.hpp"
 #include "fc/sensors.hpp"
 
@@ -18,7 +19,7 @@ constexpr double kDtS = 0.002;  // the FC's control step (500 Hz)
 constexpr double kMassKg = 1.5;
 constexpr double kHoverN = kMassKg * kGravityM_S2;  // 1.5 * 9.80665 = 14.71 N
 constexpr double kTol = 1e-9;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+constexpr double kDegToRad = kPi / 180.0;
 
 EstimatedState at(const Eigen::Vector3d& position_enu_m,
                   const Eigen::Vector3d& velocity_enu_m_s = Eigen::Vector3d::Zero()) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "fc/angles.hpp"
+
 namespace uavsim::server::fc {
 namespace {
 
@@ -93,7 +95,7 @@ TEST(Sensors, AccelerometerMeasuresSpecificForce) {
   SensorFrame f;
   TruthState t = hover_truth();
   // rolled 90 degrees about body x: gravity's reaction (up in ENU) appears along body +y... R^T (0,0,g)
-  t.q_enu_body = Eigen::Quaterniond(Eigen::AngleAxisd(3.14159265358979 / 2.0, Eigen::Vector3d::UnitX()));
+  t.q_enu_body = Eigen::Quaterniond(Eigen::AngleAxisd(kPi / 2.0, Eigen::Vector3d::UnitX()));
   t.accel_enu_m_s2 = Eigen::Vector3d(1.0, 0.0, 0.0);
   s.sample(0.0, t, p, &f);
   const Eigen::Vector3d expected =

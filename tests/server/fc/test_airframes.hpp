@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "airframe/airframe.hpp"
+#include "fc/angles.hpp"
 
 namespace uavsim::server::fc::test {
 
@@ -45,7 +46,7 @@ inline airframe::AirframeParams make_hexa() {
   a.mass_kg = 6.8;
   a.inertia_body_kgm2 = Eigen::Vector3d(0.35, 0.35, 0.62).asDiagonal();
   for (int k = 0; k < 6; ++k) {
-    const double ang = (30.0 + 60.0 * k) * 3.14159265358979323846 / 180.0;
+    const double ang = (30.0 + 60.0 * k) * kPi / 180.0;
     airframe::RotorParams rp;
     rp.position_body_m = Eigen::Vector3d(0.45 * std::cos(ang), 0.45 * std::sin(ang), 0.0);
     rp.spin_dir = (k % 2 == 0) ? 1 : -1;

@@ -13,10 +13,12 @@
 #include <vector>
 
 #include "test_gcs.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink::testing {
 namespace {
 
+using common::kPi;
 constexpr int kAccepted = 0;
 constexpr double kTakeoffAltM = 3.0;
 constexpr double kAltTolM = 0.5;
@@ -161,8 +163,6 @@ class PropertyTest : public EndpointTest {
       ASSERT_NO_FATAL_FAILURE(hold_at(g, kTakeoffAltM)) << "after " << what << " " << f.name;
     }
   }
-
-  static constexpr double kPi = 3.14159265358979323846;
 };
 
 TEST_F(PropertyTest, EveryCommandLongParameterGetsAnAckForEveryHostileValue) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "mavlink_endpoint/test_gcs.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink::testing {
 namespace {
@@ -135,7 +136,7 @@ TEST_F(RcTest, SticksExpireAfterRcOverrideTime) {
   // vehicle levels out
   auto tilt_deg = [&] {
     const double cz = (sim_->truth(0).q_enu_body * Eigen::Vector3d::UnitZ()).z();
-    return std::acos(std::clamp(cz, -1.0, 1.0)) * 180.0 / 3.14159265358979;
+    return std::acos(std::clamp(cz, -1.0, 1.0)) * 180.0 / common::kPi;
   };
   rc_for(*g, 0.6, 1500, 1100, 1500);
   EXPECT_GT(tilt_deg(), 10.0);

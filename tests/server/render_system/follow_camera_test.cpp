@@ -18,6 +18,7 @@
 #include "render/overlay.hpp"
 #include "sim/runner.hpp"
 #include "sim/simulation.hpp"
+#include "uavsim/common/pinhole.hpp"
 
 namespace uavsim::server::render {
 namespace {
@@ -88,7 +89,7 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   FrameService frames(s.world().model(), cameras);
   const FrameCamera& cam = frames.cameras()[static_cast<size_t>(overview)];
   *camera_out = cam;
-  params.fovy_deg = 2.0 * std::atan(0.5 * cam.height_px / cam.fy_px) * 180.0 / M_PI;
+  params.fovy_deg = common::PinholeIntrinsics::fovy_deg_of(cam.height_px, cam.fy_px);
   params.aspect = static_cast<double>(cam.width_px) / cam.height_px;
   std::vector<int> bodies;
   for (const auto& v : s.world().vehicles()) bodies.push_back(v.body_id);

@@ -9,6 +9,7 @@
 
 #include "physics/world.hpp"
 #include "sim/simulation.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::sim::testing {
 
@@ -63,6 +64,6 @@ inline double yaw_of(const Eigen::Quaterniond& q) {
   return std::atan2(x.y(), x.x());
 }
 
-inline double wrap_pi(double a) { return std::remainder(a, 2.0 * M_PI); }
+using common::wrap_pi;  // (-pi, pi]
 
 }  // namespace uavsim::server::sim::testing

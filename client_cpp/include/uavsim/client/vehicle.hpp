@@ -83,7 +83,7 @@ struct Telemetry {
   Geodetic home;
   Eigen::Vector3d home_ned_m = Eigen::Vector3d::Zero();
   bool origin_set = false;
-  GeodeticOrigin origin;
+  GeodeticOrigin origin{0.0, 0.0, 0.0, 0.0};  // all zero until origin_set, not the default home
   // gimbal (MOUNT_STATUS), degrees
   bool has_gimbal = false;
   double gimbal_pitch_deg = 0.0, gimbal_roll_deg = 0.0, gimbal_yaw_deg = 0.0;

@@ -1,11 +1,13 @@
-// Local <-> geodetic conversion, the one place it happens (eq. 6.1 of the thesis the project descends
-// from). Pure functions, for the server's endpoint and the client.
+// Local <-> geodetic conversion, the one place it happens (eq. 6.1 of the thesis the project
+// descends from). Pure functions, for the server's endpoint and the client, which names them in
+// uavsim::client.
 //
-// Seed eq. (6.1): the local frame is centred at (lat0, lon0, alt0) and rotated by hdg0 about the vertical:
+// Seed eq. (6.1): the local frame is centred at (lat0, lon0, alt0) and rotated by hdg0 about the
+// vertical:
 //   [x y z]^T = Rz(hdg0) * [ R (lat - lat0),  R (lon - lon0) cos(lat0),  alt0 - alt ]^T,
 //   Rz(h) = [[cos h, sin h, 0], [-sin h, cos h, 0], [0, 0, 1]],  R = 6378100 m (equatorial radius),
-// angles in radians. With hdg0 = 0 the result is north-east-down (the MAVLink local frame). It is a flat-earth
-// approximation, good to a few centimetres within a few kilometres of the origin.
+// angles in radians. With hdg0 = 0 the result is north-east-down (the MAVLink local frame). It is a
+// flat-earth approximation, good to a few centimetres within a few kilometres of the origin.
 #pragma once
 
 #include <Eigen/Core>
@@ -37,5 +39,10 @@ Eigen::Vector3d ned_from_geodetic(const GeodeticOrigin& origin, const Geodetic& 
 
 // xyz2lla, the inverse of ned_from_geodetic(). Thread-safe (pure).
 Geodetic geodetic_from_ned(const GeodeticOrigin& origin, const Eigen::Vector3d& ned_m);
+
+// The same two in the simulator's ENU frame (the NED result through frames::enu_from_ned): with
+// heading 0, x east, y north, z up. Thread-safe (pure).
+Eigen::Vector3d enu_from_geodetic(const GeodeticOrigin& origin, const Geodetic& point);
+Geodetic geodetic_from_enu(const GeodeticOrigin& origin, const Eigen::Vector3d& enu_m);
 
 }  // namespace uavsim::common

@@ -30,6 +30,10 @@ struct PinholeIntrinsics {
   static PinholeIntrinsics from_fovy(int width_px, int height_px, double fovy_rad);
   static PinholeIntrinsics from_fovy_deg(int width_px, int height_px, double fovy_deg);
 
+  // The inverse: the vertical field of view, in degrees, of an image height_px rows high with the
+  // focal length fy_px, fovy = 2 atan((h/2) / fy) (for a camera that frames what another draws).
+  static double fovy_deg_of(int height_px, double fy_px);
+
   // Projects a point in the camera frame to pixels. Precondition: p_cam_m.z() > 0.
   Eigen::Vector2d project(const Eigen::Vector3d& p_cam_m) const;
 
