@@ -12,6 +12,9 @@ namespace {
 constexpr std::size_t kNoLostRotor = kMaxRotors;
 // bisection steps for the degraded mixer's roll/pitch scale: 2^-12 of the demand
 constexpr int kScaleBisections = 12;
+// the share of each rotor's thrust range yaw keeps even when the collective demand needs it all;
+// ArduCopter's MOT_YAW_HEADROOM default is 200 of the 1000 us output range
+constexpr double kYawHeadroom = 0.2;
 }  // namespace
 
 Mixer::Mixer(const airframe::AirframeParams& airframe) { build(airframe, kNoLostRotor); }
@@ -126,15 +129,34 @@ MixerStatus Mixer::mix(const Eigen::Vector3d& torque_body_nm, double thrust_n,
       if (d > 0.0) s = std::min(s, m[j] / d);
     }
   }
-  // 2. yaw scale, beside the roll/pitch already granted
-  double t = 1.0;
+  // 2. yaw scale. t_fit: the most yaw that fits beside roll/pitch at any collective; t_thrust: the
+  // most that fits beside roll/pitch at the demanded collective (clamped into the range roll/pitch
+  // leave); t_reserve: yaw whose per-rotor share stays within kYawHeadroom of the rotor's range.
+  // Yaw gets t_thrust, or up to t_reserve where that is more: beyond its reserve, yaw never takes
+  // the thrust the demand needs (a climb demanded near the ground once sank into it while turning).
+  double t_fit = 1.0;
   for (std::size_t i = 0; i < n_; ++i) {
     for (std::size_t j = 0; j < n_; ++j) {
       const double d = b[j] - b[i];
-      if (d > 0.0) t = std::min(t, (m[j] - s * (a[j] - a[i])) / d);
+      if (d > 0.0) t_fit = std::min(t_fit, (m[j] - s * (a[j] - a[i])) / d);
     }
   }
-  t = std::max(t, 0.0);
+  t_fit = std::max(t_fit, 0.0);
+  double rp_lo = -std::numeric_limits<double>::infinity();
+  double rp_hi = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < n_; ++k) {
+    rp_lo = std::max(rp_lo, -s * a[k]);
+    rp_hi = std::min(rp_hi, m[k] - s * a[k]);
+  }
+  const double f_demand = std::clamp(thrust_n, rp_lo, std::max(rp_lo, rp_hi));
+  double t_thrust = 1.0, t_reserve = 1.0;
+  for (std::size_t k = 0; k < n_; ++k) {
+    const double base = f_demand + s * a[k];
+    if (b[k] > 0.0) t_thrust = std::min(t_thrust, (m[k] - base) / b[k]);
+    if (b[k] < 0.0) t_thrust = std::min(t_thrust, base / -b[k]);
+    if (b[k] != 0.0) t_reserve = std::min(t_reserve, kYawHeadroom * m[k] / std::abs(b[k]));
+  }
+  const double t = std::min(t_fit, std::max(t_thrust, t_reserve));
   // 3. collective thrust into the range left
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();

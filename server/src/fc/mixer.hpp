@@ -2,10 +2,12 @@
 // thrusts to (roll, pitch, yaw torque about the centre of mass, collective thrust); the mixer applies
 // its pseudo-inverse B = A^T (A A^T)^-1 and then desaturates with a fixed priority:
 //   1. roll/pitch torque is kept whole if any collective thrust can carry it, else scaled down;
-//   2. yaw torque is then scaled down as far as needed to fit beside roll/pitch;
-//   3. collective thrust goes last: it is moved (up or down) into the range that fits the torques.
-// So a vehicle near full or zero throttle keeps its attitude and gives up climb rate, as ArduCopter's
-// motors matrix does. Motor command = sqrt(thrust / max_thrust), the inverse of the plant's square law.
+//   2. yaw torque is then scaled down to fit beside roll/pitch and the demanded collective, but
+//      keeps up to a fixed share of each rotor's range (yaw headroom, as ArduCopter's
+//      MOT_YAW_HEADROOM) even where that costs thrust;
+//   3. collective thrust is then moved (up or down) into the range that fits the torques.
+// So a vehicle near full or zero throttle keeps its attitude and gives up a fast turn before climb
+// rate: a turn demanding full yaw torque once took the thrust of a climb and sank the vehicle. Motor command = sqrt(thrust / max_thrust), the inverse of the plant's square law.
 //
 // A degraded mixer leaves one (lost) rotor out. On a hexa with alternating spin the rotor opposite the
 // lost one can then only push yaw one way, so yaw is no longer a controlled axis: roll/pitch come
