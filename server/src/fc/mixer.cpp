@@ -96,7 +96,8 @@ void Mixer::build(const airframe::AirframeParams& airframe, std::size_t lost_rot
                                     std::to_string(lost_rotor) +
                                     ": collective thrust does not raise every live rotor");
       }
-      if (b_thrust_[k] > 0.0) max_live_thrust_n_ = std::min(max_live_thrust_n_, max_thrust_n_[k] / b_thrust_[k]);
+      if (b_thrust_[k] > 0.0)
+        max_live_thrust_n_ = std::min(max_live_thrust_n_, max_thrust_n_[k] / b_thrust_[k]);
       continue;
     }
     // the desaturation below shifts collective thrust along B's thrust column: needs all > 0
@@ -183,9 +184,9 @@ MixerStatus Mixer::mix(const Eigen::Vector3d& torque_body_nm, double thrust_n,
 MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double thrust_n,
                                 double* rotor_thrust_n, double* motor_cmd) const {
   // rotor k: thrust_k = s*rp_k + F*u_k + y*yaw_k with 0 <= thrust_k <= max_k, y the yaw torque
-  // actually given. Thrust first goes into what the live rotors carry at zero torque; then the largest
-  // roll/pitch scale s for which some y keeps every rotor in range (bisection: the feasible y form an
-  // interval that shrinks as s grows); then y is the demand clamped into that interval.
+  // actually given. Thrust first goes into what the live rotors carry at zero torque; then the
+  // largest roll/pitch scale s for which some y keeps every rotor in range (bisection: the feasible
+  // y form an interval that shrinks as s grows); then y is the demand clamped into that interval.
   const double f = std::clamp(thrust_n, 0.0, max_live_thrust_n_);
   std::array<double, kMaxRotors> rp{}, base{};
   for (std::size_t k = 0; k < n_; ++k) {
@@ -199,7 +200,8 @@ MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double th
       const double t0 = s * rp[k] + f * b_thrust_[k];
       const double y = b_yaw_[k];
       if (std::abs(y) < 1e-12) {
-        if (t0 < -1e-9 || t0 > max_thrust_n_[k] + 1e-9) *lo = std::numeric_limits<double>::infinity();
+        if (t0 < -1e-9 || t0 > max_thrust_n_[k] + 1e-9)
+          *lo = std::numeric_limits<double>::infinity();
         continue;
       }
       const double a = -t0 / y;
@@ -228,9 +230,10 @@ MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double th
   MixerStatus status;
   status.roll_pitch_scale = s;
   const double yaw_demand = torque_body_nm.z();
-  status.yaw_scale = std::abs(yaw - yaw_demand) < 1e-12
-                         ? 1.0
-                         : (std::abs(yaw_demand) > 1e-12 ? std::clamp(yaw / yaw_demand, 0.0, 1.0) : 0.0);
+  status.yaw_scale =
+      std::abs(yaw - yaw_demand) < 1e-12
+          ? 1.0
+          : (std::abs(yaw_demand) > 1e-12 ? std::clamp(yaw / yaw_demand, 0.0, 1.0) : 0.0);
   status.thrust_n = f;
   status.limit_thrust_up = thrust_n > f;
   status.limit_thrust_down = thrust_n < f;
