@@ -32,9 +32,9 @@ inline constexpr double kInTheWay_m = 1.2;
 inline constexpr double kArenaMargin_m = 0.5;
 // a balloon seen further above or below is a bad estimate
 inline constexpr double kMaxPierceClimb_m = 1.5;
-// The heading setpoint turns at most this fast. The flight controller's mixer keeps yaw torque
-// before collective thrust (ArduCopter keeps some thrust headroom first): a setpoint that jumps by
-// 90-180 deg saturates it and the vehicle sinks. Field seed 20 (two UAVs): backing off past a
+// The heading setpoint turns at most this fast. The flight controller's mixer kept yaw torque
+// before collective thrust (it now leaves yaw only a headroom, as ArduCopter does): a setpoint that
+// jumped by 90-180 deg saturated it and the vehicle sank. Field seed 20 (two UAVs): backing off past a
 // balloon it had missed by 1.6 m, the heading to the balloon swung through 140 deg in 3 s; the UAV
 // sank from 3.4 m into the ground at 3.1 m/s while commanded to climb.
 inline constexpr double kMaxYawRate_rad_s = 1.0;

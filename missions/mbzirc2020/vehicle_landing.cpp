@@ -78,7 +78,7 @@ void VehicleFsm::land_to_spot(const VehicleInputs& in, VehicleOutputs& out) {
 void VehicleFsm::land_align_skids(const VehicleInputs& in, VehicleOutputs& out) {
   // at the transit altitude over the spot: the hover's lean tells the wind (touchdown_gate),
   // and the heading turns the skids along it here, high up. A turn near the ground
-  // saturated the mixer's collective (it keeps yaw torque first) and the UAV sank at
+  // saturated the mixer's collective (it then kept yaw torque first) and the UAV sank at
   // 2.5 m/s onto the ground, commanded to climb (two-UAV field seed 1, uav0, with the turn
   // made during the descent).
   touchdown_gate_.update(in.now_s, in.velocity_enu_m_s.head<2>(), in.roll_rad, in.pitch_rad,

@@ -12,6 +12,9 @@ namespace {
 constexpr std::size_t kNoLostRotor = kMaxRotors;
 // bisection steps for the degraded mixer's roll/pitch scale: 2^-12 of the demand
 constexpr int kScaleBisections = 12;
+// the share of each rotor's thrust range yaw keeps even when the collective demand needs it all;
+// ArduCopter's MOT_YAW_HEADROOM default is 200 of the 1000 us output range
+constexpr double kYawHeadroom = 0.2;
 }  // namespace
 
 Mixer::Mixer(const airframe::AirframeParams& airframe) { build(airframe, kNoLostRotor); }
@@ -93,7 +96,8 @@ void Mixer::build(const airframe::AirframeParams& airframe, std::size_t lost_rot
                                     std::to_string(lost_rotor) +
                                     ": collective thrust does not raise every live rotor");
       }
-      if (b_thrust_[k] > 0.0) max_live_thrust_n_ = std::min(max_live_thrust_n_, max_thrust_n_[k] / b_thrust_[k]);
+      if (b_thrust_[k] > 0.0)
+        max_live_thrust_n_ = std::min(max_live_thrust_n_, max_thrust_n_[k] / b_thrust_[k]);
       continue;
     }
     // the desaturation below shifts collective thrust along B's thrust column: needs all > 0
@@ -126,15 +130,34 @@ MixerStatus Mixer::mix(const Eigen::Vector3d& torque_body_nm, double thrust_n,
       if (d > 0.0) s = std::min(s, m[j] / d);
     }
   }
-  // 2. yaw scale, beside the roll/pitch already granted
-  double t = 1.0;
+  // 2. yaw scale. t_fit: the most yaw that fits beside roll/pitch at any collective; t_thrust: the
+  // most that fits beside roll/pitch at the demanded collective (clamped into the range roll/pitch
+  // leave); t_reserve: yaw whose per-rotor share stays within kYawHeadroom of the rotor's range.
+  // Yaw gets t_thrust, or up to t_reserve where that is more: beyond its reserve, yaw never takes
+  // the thrust the demand needs (a climb demanded near the ground once sank into it while turning).
+  double t_fit = 1.0;
   for (std::size_t i = 0; i < n_; ++i) {
     for (std::size_t j = 0; j < n_; ++j) {
       const double d = b[j] - b[i];
-      if (d > 0.0) t = std::min(t, (m[j] - s * (a[j] - a[i])) / d);
+      if (d > 0.0) t_fit = std::min(t_fit, (m[j] - s * (a[j] - a[i])) / d);
     }
   }
-  t = std::max(t, 0.0);
+  t_fit = std::max(t_fit, 0.0);
+  double rp_lo = -std::numeric_limits<double>::infinity();
+  double rp_hi = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < n_; ++k) {
+    rp_lo = std::max(rp_lo, -s * a[k]);
+    rp_hi = std::min(rp_hi, m[k] - s * a[k]);
+  }
+  const double f_demand = std::clamp(thrust_n, rp_lo, std::max(rp_lo, rp_hi));
+  double t_thrust = 1.0, t_reserve = 1.0;
+  for (std::size_t k = 0; k < n_; ++k) {
+    const double base = f_demand + s * a[k];
+    if (b[k] > 0.0) t_thrust = std::min(t_thrust, (m[k] - base) / b[k]);
+    if (b[k] < 0.0) t_thrust = std::min(t_thrust, base / -b[k]);
+    if (b[k] != 0.0) t_reserve = std::min(t_reserve, kYawHeadroom * m[k] / std::abs(b[k]));
+  }
+  const double t = std::min(t_fit, std::max(t_thrust, t_reserve));
   // 3. collective thrust into the range left
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();
@@ -161,9 +184,9 @@ MixerStatus Mixer::mix(const Eigen::Vector3d& torque_body_nm, double thrust_n,
 MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double thrust_n,
                                 double* rotor_thrust_n, double* motor_cmd) const {
   // rotor k: thrust_k = s*rp_k + F*u_k + y*yaw_k with 0 <= thrust_k <= max_k, y the yaw torque
-  // actually given. Thrust first goes into what the live rotors carry at zero torque; then the largest
-  // roll/pitch scale s for which some y keeps every rotor in range (bisection: the feasible y form an
-  // interval that shrinks as s grows); then y is the demand clamped into that interval.
+  // actually given. Thrust first goes into what the live rotors carry at zero torque; then the
+  // largest roll/pitch scale s for which some y keeps every rotor in range (bisection: the feasible
+  // y form an interval that shrinks as s grows); then y is the demand clamped into that interval.
   const double f = std::clamp(thrust_n, 0.0, max_live_thrust_n_);
   std::array<double, kMaxRotors> rp{}, base{};
   for (std::size_t k = 0; k < n_; ++k) {
@@ -177,7 +200,8 @@ MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double th
       const double t0 = s * rp[k] + f * b_thrust_[k];
       const double y = b_yaw_[k];
       if (std::abs(y) < 1e-12) {
-        if (t0 < -1e-9 || t0 > max_thrust_n_[k] + 1e-9) *lo = std::numeric_limits<double>::infinity();
+        if (t0 < -1e-9 || t0 > max_thrust_n_[k] + 1e-9)
+          *lo = std::numeric_limits<double>::infinity();
         continue;
       }
       const double a = -t0 / y;
@@ -206,9 +230,10 @@ MixerStatus Mixer::mix_degraded(const Eigen::Vector3d& torque_body_nm, double th
   MixerStatus status;
   status.roll_pitch_scale = s;
   const double yaw_demand = torque_body_nm.z();
-  status.yaw_scale = std::abs(yaw - yaw_demand) < 1e-12
-                         ? 1.0
-                         : (std::abs(yaw_demand) > 1e-12 ? std::clamp(yaw / yaw_demand, 0.0, 1.0) : 0.0);
+  status.yaw_scale =
+      std::abs(yaw - yaw_demand) < 1e-12
+          ? 1.0
+          : (std::abs(yaw_demand) > 1e-12 ? std::clamp(yaw / yaw_demand, 0.0, 1.0) : 0.0);
   status.thrust_n = f;
   status.limit_thrust_up = thrust_n > f;
   status.limit_thrust_down = thrust_n < f;

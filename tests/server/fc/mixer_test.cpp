@@ -56,8 +56,12 @@ void pure_torques_are_recovered(const airframe::AirframeParams& af) {
   }
 }
 
-TEST(Mixer, PureTorquesAreRecoveredThroughAllocationQuad) { pure_torques_are_recovered(test::make_quad()); }
-TEST(Mixer, PureTorquesAreRecoveredThroughAllocationHexa) { pure_torques_are_recovered(test::make_hexa()); }
+TEST(Mixer, PureTorquesAreRecoveredThroughAllocationQuad) {
+  pure_torques_are_recovered(test::make_quad());
+}
+TEST(Mixer, PureTorquesAreRecoveredThroughAllocationHexa) {
+  pure_torques_are_recovered(test::make_hexa());
+}
 
 TEST(Mixer, PositiveRollTorqueRaisesLeftRotors) {
   // FLU body: +x roll torque = right side down... r x F: rotors at +y (left) push +x torque
@@ -66,12 +70,14 @@ TEST(Mixer, PositiveRollTorqueRaisesLeftRotors) {
   std::vector<double> thrust(4), cmd(4);
   m.mix(Eigen::Vector3d(0.2, 0, 0), 10.0, thrust.data(), cmd.data());
   for (int k = 0; k < 4; ++k) {
-    if (af.rotors[k].position_body_m.y() > 0) EXPECT_GT(thrust[k], 2.5);
-    else EXPECT_LT(thrust[k], 2.5);
+    if (af.rotors[k].position_body_m.y() > 0)
+      EXPECT_GT(thrust[k], 2.5);
+    else
+      EXPECT_LT(thrust[k], 2.5);
   }
 }
 
-TEST(Mixer, SaturationKeepsRollPitchThenYawThenGivesUpThrust) {
+TEST(Mixer, SaturationKeepsRollPitchThenYawHeadroomThenGivesUpThrust) {
   const airframe::AirframeParams af = test::make_quad();
   Mixer m(af);
   std::vector<double> thrust(4), cmd(4);
@@ -90,6 +96,46 @@ TEST(Mixer, SaturationKeepsRollPitchThenYawThenGivesUpThrust) {
     EXPECT_GE(thrust[k], 0.0);
     EXPECT_LE(thrust[k], af.rotors[k].max_thrust_n + 1e-12);
   }
+}
+
+TEST(Mixer, FullThrustDemandLeavesYawOnlyItsHeadroom) {
+  // test quad: max thrust per rotor M = 2 * 1.5 * g / 4 = 7.355 N, torque_coef 0.016 m, so a yaw
+  // torque tau moves each rotor by tau / (4 * 0.016) = 15.625 tau (rotors 0, 1 down, 2, 3 up).
+  // Asked: full collective 4 M and tau = 0.2 N m (3.125 N a rotor). Yaw keeps its headroom of 0.2 M
+  // a rotor (scale 0.2 M / 3.125), the collective drops to what is left: rotors 2, 3 at M, rotors
+  // 0, 1 at M - 2 * 0.2 M = 0.6 M, 3.2 M in all, instead of 2 M (hover) had yaw been given its
+  // whole demand.
+  const airframe::AirframeParams af = test::make_quad();
+  Mixer m(af);
+  std::vector<double> thrust(4), cmd(4);
+  const double max_n = af.rotors[0].max_thrust_n;
+  const MixerStatus st =
+      m.mix(Eigen::Vector3d(0.0, 0.0, 0.2), 4.0 * max_n, thrust.data(), cmd.data());
+  EXPECT_NEAR(thrust[0], 0.6 * max_n, 1e-9);
+  EXPECT_NEAR(thrust[1], 0.6 * max_n, 1e-9);
+  EXPECT_NEAR(thrust[2], max_n, 1e-9);
+  EXPECT_NEAR(thrust[3], max_n, 1e-9);
+  EXPECT_NEAR(st.yaw_scale, 0.2 * max_n / (15.625 * 0.2), 1e-9);
+  EXPECT_NEAR(st.thrust_n, 3.2 * max_n, 1e-9);
+  EXPECT_TRUE(st.limit_thrust_up);
+  const Eigen::Vector4d w = wrench_of(m, thrust);
+  EXPECT_NEAR(w[2], 0.2 * max_n * 4.0 * 0.016, 1e-9);
+  EXPECT_NEAR(w[0], 0.0, 1e-9);
+  EXPECT_NEAR(w[1], 0.0, 1e-9);
+}
+
+TEST(Mixer, YawBesideAMidCollectiveIsKeptWhole) {
+  // at hover (each rotor at M / 2) the same 3.125 N a rotor fits: yaw and collective both whole
+  const airframe::AirframeParams af = test::make_quad();
+  Mixer m(af);
+  std::vector<double> thrust(4), cmd(4);
+  const double max_n = af.rotors[0].max_thrust_n;
+  const MixerStatus st =
+      m.mix(Eigen::Vector3d(0.0, 0.0, 0.2), 2.0 * max_n, thrust.data(), cmd.data());
+  EXPECT_DOUBLE_EQ(st.yaw_scale, 1.0);
+  EXPECT_NEAR(thrust[0], 0.5 * max_n - 3.125, 1e-9);
+  EXPECT_NEAR(thrust[2], 0.5 * max_n + 3.125, 1e-9);
+  EXPECT_NEAR(st.thrust_n, 2.0 * max_n, 1e-9);
 }
 
 TEST(Mixer, ZeroThrustDemandIsRaisedToKeepAttitudeTorque) {
@@ -118,7 +164,8 @@ TEST(Mixer, MotorCommandInvertsSquareLaw) {
   std::vector<double> thrust(6), cmd(6);
   m.mix(Eigen::Vector3d(0.5, -0.3, 0.1), 50.0, thrust.data(), cmd.data());
   // plant: thrust = max * speed^2, so speed = cmd must give the thrust back
-  for (int k = 0; k < 6; ++k) EXPECT_NEAR(af.rotors[k].max_thrust_n * cmd[k] * cmd[k], thrust[k], 1e-9);
+  for (int k = 0; k < 6; ++k)
+    EXPECT_NEAR(af.rotors[k].max_thrust_n * cmd[k] * cmd[k], thrust[k], 1e-9);
 }
 
 TEST(Mixer, RejectsUnusableLayouts) {
