@@ -7,6 +7,7 @@
 #include <string>
 
 #include "uavsim/common/angles.hpp"
+#include "uavsim/common/fmt.hpp"
 
 namespace uavsim::missions::mbzirc2020::vehicle_tuning {
 
@@ -68,10 +69,6 @@ inline constexpr double kLandingAlignMax_s = 10.0;
 inline constexpr double kLookBack_s = 2.5;
 inline constexpr double kSeenAgain_m = 2.0;
 
-inline std::string fmt(const char* f, double a = 0, double b = 0, double c = 0) {
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), f, a, b, c);
-  return buf;
-}
+using common::fmt;  // the state machine's log lines
 
 }  // namespace uavsim::missions::mbzirc2020::vehicle_tuning
