@@ -70,8 +70,8 @@ struct Harness {
     for (int k = 0; k < n; ++k) {
       for (int s = 0; s < sim->control_decimation(); ++s) sim->step();
       link->on_control_step();
-      std::vector<std::uint8_t> sent;
-      outbox->take(sent);  // the client "reads" everything
+      std::string sent;
+      outbox->buffer().take_queued(sent);  // the client "reads" everything
     }
   }
 
