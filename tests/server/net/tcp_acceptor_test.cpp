@@ -88,6 +88,13 @@ TEST(TcpAcceptor, AConnectionWithNoDescriptorLeftIsClosedOnTheReserve) {
   });
   acceptor.start();
   loop.start();
+  // one connection while descriptors last: the loop's dispatch runs once before they run out.
+  // (UBSan's vptr check opens a pipe the first time it meets a type — here the handler's shared
+  // control block — and with no descriptor left it reports a valid object as invalid.)
+  const int first = connect_to(acceptor.port());
+  ASSERT_GE(first, 0);
+  EXPECT_TRUE(closed_by_server(first));
+  close(first);
   // the client's socket exists before the process runs out
   const int client = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   ASSERT_GE(client, 0);
@@ -103,7 +110,7 @@ TEST(TcpAcceptor, AConnectionWithNoDescriptorLeftIsClosedOnTheReserve) {
   close(client);
   int seen = -1;
   loop.call([&] { seen = accepted; });
-  EXPECT_EQ(seen, 0);
+  EXPECT_EQ(seen, 1);  // the first connection only
   EXPECT_EQ(acceptor.exhausted_accepts(), 1u);
 
   // descriptors are back: the next connection reaches the owner
@@ -112,7 +119,7 @@ TEST(TcpAcceptor, AConnectionWithNoDescriptorLeftIsClosedOnTheReserve) {
   EXPECT_TRUE(closed_by_server(next));
   close(next);
   loop.call([&] { seen = accepted; });
-  EXPECT_EQ(seen, 1);
+  EXPECT_EQ(seen, 2);
   EXPECT_EQ(acceptor.exhausted_accepts(), 1u);
   loop.stop();
 }
