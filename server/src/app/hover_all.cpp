@@ -12,7 +12,7 @@ void HoverAll::on_control_step(sim::Simulation& sim) {
   if (commanded_.size() != n) {  // the first step, or after a reset
     commanded_.assign(n, false);
     reached_.assign(n, false);
-    commanded_count_ = reached_count_ = 0;
+    reached_count_ = 0;
     all_reported_ = false;
   }
   for (std::size_t i = 0; i < n; ++i) {
@@ -26,7 +26,6 @@ void HoverAll::on_control_step(sim::Simulation& sim) {
         f.takeoff(altitude_m);
       });
       commanded_[i] = true;
-      ++commanded_count_;
     } else if (!reached_[i] && sim.truth(i).position_enu_m.z() > altitude_m_ - kReachedM) {
       reached_[i] = true;
       ++reached_count_;

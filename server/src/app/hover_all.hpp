@@ -22,9 +22,6 @@ class HoverAll {
   // Sends each vehicle's take-off once its pre-arm checks pass; notes when all are up. Post-control
   // phase of the step schedule, loop thread only.
   void on_control_step(sim::Simulation& sim);
-  // vehicles whose take-off was sent / that have climbed to within kReachedM of the altitude
-  std::size_t commanded() const { return commanded_count_; }
-  std::size_t reached() const { return reached_count_; }
 
   // a vehicle counts as up within this of the altitude (the climb's overshoot settles inside it)
   static constexpr double kReachedM = 0.5;
@@ -33,9 +30,8 @@ class HoverAll {
   double altitude_m_;
   std::ostream& out_;
   bool quiet_;
-  std::vector<bool> commanded_;
-  std::vector<bool> reached_;
-  std::size_t commanded_count_ = 0;
+  std::vector<bool> commanded_;  // take-off sent
+  std::vector<bool> reached_;    // climbed to within kReachedM of the altitude
   std::size_t reached_count_ = 0;
   bool all_reported_ = false;
 };
