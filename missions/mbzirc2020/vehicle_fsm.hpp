@@ -190,7 +190,6 @@ class VehicleFsm {
   bool pierce_reached_ = false;
   bool pierce_level_camera_ = false;
   bool seen_again_ = false;
-  bool pierce_through_ = false;      // the pierce ended with the blades past the balloon, unseen
   double look_back_since_s_ = -1.0;  // back on the line, looking for the balloon since then
 
   // landing: climb, transit, skids along the wind, descend, motors off

@@ -223,10 +223,10 @@ void VehicleFsm::on_pierce(const VehicleInputs& in, VehicleOutputs& out) {
   const bool timeout = in.now_s - state_since_s_ > config_.pierce_timeout_s;
   const bool turned = coast_dir_.dot(pierce_dir_) < std::cos(kPierceMaxTurn_rad);
   if (!through && !coasted && !timeout && !turned) return;
-  // the camera cannot tell a pop (it lost the balloon at close range): if the blades got
-  // there, look back at it while backing off; POPPED is reported only if it is not seen again
+  // the camera cannot tell a pop (it lost the balloon at close range, or the blades passed its
+  // estimate unseen, maybe beside it): if the blades got there, look back at it while backing off;
+  // POPPED is reported only if it is not seen again
   pierce_reached_ = closest_blade_m_ < 0.35 || along_m > -0.2;
-  pierce_through_ = through;
   seen_again_ = false;
   look_back_since_s_ = -1.0;
   hold_altitude_m_ =
@@ -317,7 +317,7 @@ void VehicleFsm::on_back_off(const VehicleInputs& in, VehicleOutputs& out) {
       to_b.norm() > kBackOffFaceBalloon_m ? std::atan2(to_b.y(), to_b.x()) : in.yaw_enu_rad;
   const bool back =
       (pierce_start_enu_m_.head<2>() - p.head<2>()).norm() < config_.position_tolerance_m;
-  if (back && pierce_reached_ && !pierce_through_ && !seen_again_) {
+  if (back && pierce_reached_ && !seen_again_) {
     if (look_back_since_s_ < 0.0) look_back_since_s_ = in.now_s;
     if (in.now_s - look_back_since_s_ < kLookBack_s) {
       hover(in, out, std::atan2(to_b.y(), to_b.x()));

@@ -12,6 +12,7 @@
 #include "touchdown_gate.hpp"
 #include "uavsim/common/angles.hpp"
 #include "vehicle_fsm.hpp"
+#include "vehicle_fsm_tuning.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 namespace {
@@ -372,44 +373,58 @@ TEST(Mbzirc2020VehicleFsm, APierceFliesOverThePoleOfABalloonPoppedBefore) {
 // 0.8-1.1 m from where it was, the blades at the estimate, the balloon untouched) is not reported
 // popped on the way back alone: back on the line the UAV faces where the balloon was for 2.5 s,
 // and a sighting within 2 m of it there means it is still there.
-TEST(Mbzirc2020VehicleFsm, ALostPierceLooksBackBeforeReportingAPop) {
-  const MissionConfig config;
-  for (bool still_there : {false, true}) {
-    VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
-    FakeVehicle v;
-    const Eigen::Vector3d balloon = fly_to_pierce(config, fsm, v);
-    ASSERT_EQ(fsm.state(), VehicleState::kPierce);
-    std::string why;
-    for (int i = 0; i < 2000 && fsm.state() == VehicleState::kPierce; ++i) {
-      const double range = (balloon.head<2>() - v.in.position_enu_m.head<2>()).norm();
-      if (range > 1.7) v.in.balloons[0].last_seen_s = v.in.now_s;
-      const VehicleOutputs out = fsm.step(v.in);
-      why = out.note;
-      v.apply(out, 0.05);
+// A pierce whose blades went past the balloon's estimate ("through"), the balloon unseen, may
+// have passed beside it (two-UAV field seed 7, one-UAV seed 3: 0.7 m beside the centre of a 0.3 m
+// balloon, counted popped): it looks back the same way before it reports.
+TEST(Mbzirc2020VehicleFsm, APierceLooksBackBeforeReportingAPop) {
+  constexpr double kStep_s = 0.05;
+  struct Case {
+    double coast_s;  // the pierce's coast once the balloon is out of sight
+    const char* ending;
+  };
+  // the fake vehicle has no momentum: out of sight at 1.7 m, it crawls at the exit climb's height
+  // (docs/results/field_conditions.md) and the coast ends first; a long coast lets it through
+  for (const Case& c : {Case{3.0, "balloon lost, blades reached it"},
+                        Case{30.0, "through the balloon, blades reached it"}})
+    for (bool still_there : {false, true}) {
+      SCOPED_TRACE(std::string(c.ending) + (still_there ? ", still there" : ", gone"));
+      MissionConfig config;
+      config.pierce_coast_s = c.coast_s;
+      VehicleFsm fsm(config, 0, Side::kSouth, {-10, -27});
+      FakeVehicle v;
+      const Eigen::Vector3d balloon = fly_to_pierce(config, fsm, v);
+      ASSERT_EQ(fsm.state(), VehicleState::kPierce);
+      std::string why;
+      for (int i = 0; i < 2000 && fsm.state() == VehicleState::kPierce; ++i) {
+        const double range = (balloon.head<2>() - v.in.position_enu_m.head<2>()).norm();
+        if (range > 1.7) v.in.balloons[0].last_seen_s = v.in.now_s;
+        const VehicleOutputs out = fsm.step(v.in);
+        if (!out.note.empty()) why = out.note;
+        v.apply(out, 0.05);
+      }
+      ASSERT_EQ(fsm.state(), VehicleState::kBackOff);
+      ASSERT_NE(why.find(c.ending), std::string::npos) << why;
+      v.in.balloons.clear();
+      double back_s = -1.0, reported_s = -1.0;
+      for (int i = 0; i < 2000 && fsm.state() == VehicleState::kBackOff; ++i) {
+        const VehicleOutputs out = fsm.step(v.in);
+        if (out.popped_enu_m) reported_s = v.in.now_s;
+        if (back_s < 0.0 && (v.in.position_enu_m.y() + 28.0) < 0.9) back_s = v.in.now_s;
+        // looking back: the balloon, 1.2 m from where it was thought to be, is seen again
+        if (still_there && back_s >= 0.0 && v.in.now_s - back_s > 1.0)
+          v.in.balloons = {{7, balloon + Eigen::Vector3d(1.2, 0.0, 0.1), v.in.now_s}};
+        v.apply(out, 0.05);
+      }
+      EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
+      ASSERT_GE(back_s, 0.0);
+      if (still_there) {
+        EXPECT_LT(reported_s, 0.0);
+        EXPECT_EQ(fsm.popped(), 0);
+      } else {
+        EXPECT_GE(reported_s - back_s, vehicle_tuning::kLookBack_s - 2.0 * kStep_s);
+        EXPECT_EQ(fsm.popped(), 1);
+      }
     }
-    ASSERT_EQ(fsm.state(), VehicleState::kBackOff);
-    ASSERT_NE(why.find("balloon lost, blades reached it"), std::string::npos) << why;
-    v.in.balloons.clear();
-    double back_s = -1.0, reported_s = -1.0;
-    for (int i = 0; i < 2000 && fsm.state() == VehicleState::kBackOff; ++i) {
-      const VehicleOutputs out = fsm.step(v.in);
-      if (out.popped_enu_m) reported_s = v.in.now_s;
-      if (back_s < 0.0 && (v.in.position_enu_m.y() + 28.0) < 0.9) back_s = v.in.now_s;
-      // looking back: the balloon, 1.2 m from where it was thought to be, is seen again
-      if (still_there && back_s >= 0.0 && v.in.now_s - back_s > 1.0)
-        v.in.balloons = {{7, balloon + Eigen::Vector3d(1.2, 0.0, 0.1), v.in.now_s}};
-      v.apply(out, 0.05);
-    }
-    EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
-    ASSERT_GE(back_s, 0.0);
-    if (still_there) {
-      EXPECT_LT(reported_s, 0.0);
-      EXPECT_EQ(fsm.popped(), 0);
-    } else {
-      EXPECT_GE(reported_s - back_s, 2.5 - 0.1);
-      EXPECT_EQ(fsm.popped(), 1);
-    }
-  }
 }
 
 // Flies a south UAV from the start through its two scans (no balloon in sight) to Scans Done.
