@@ -3,10 +3,12 @@
 // the event stream, fault injection, gimbal pointing and the lockstep contract (seed 5.3/6.5: gzuav's
 // Begin-Tick/End-Tick).
 //
-// Ops: every op is an entry of one OpTable (op_table.hpp), registered by its group: this server's clock,
-// event and lockstep ops, VehicleOps (ground truth, faults, gimbals, wind), FrameStream (camera frames)
-// and the groups added with add_group (radio, sensors, overlay). The hello's op list, the unknown_op
-// check and the dispatch all read that table.
+// Ops: every op is an entry of one OpTable (op_table.hpp), registered by its group: ClockOps, EventOps
+// and LockstepOps (the clock, the event stream and the lockstep contract), VehicleOps (ground truth,
+// faults, gimbals, wind), FrameStream (camera frames) and the groups added with add_group (radio,
+// sensors, overlay). The hello's op list, the unknown_op check and the dispatch all read that table;
+// this server is the transport, the dispatch and the gate. The one op it answers itself is auth,
+// which belongs to the transport.
 //
 // Threads: socket I/O runs on the LineServer's I/O thread (shared with the MAVLink endpoints in
 // uavsim-server); every request that touches the simulation is
@@ -30,9 +32,12 @@
 #include <string>
 #include <vector>
 
+#include "api/clock_ops.hpp"
+#include "api/event_ops.hpp"
 #include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
 #include "api/lockstep_coordinator.hpp"
+#include "api/lockstep_ops.hpp"
 #include "api/op_table.hpp"
 #include "api/shm_transport.hpp"
 #include "api/vehicle_ops.hpp"
@@ -41,8 +46,6 @@
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::api {
-
-inline constexpr int kProtocolVersion = 1;
 
 // Implemented by the MAVLink endpoint: has the message with this sequence number, sent by a client on
 // a vehicle's link, been handled (its commands posted to the simulation)? The lockstep contract waits
@@ -139,7 +142,6 @@ class ApiServer {
     Json body;  // the request, or the reply for kReply
   };
 
-
   // I/O thread side
   void enqueue(Request request);
   void send(uint64_t conn, const Json& message);
@@ -148,40 +150,13 @@ class ApiServer {
   void reply_in_order(uint64_t conn, Json reply);
   // Sends a reply to conn, or holds it behind conn's step in progress (replies keep request order).
   void reply(uint64_t conn, const Json& message);
-  // Answers the step in progress (ok at its end, or an `interrupted` error naming by_op when another
-  // clock op ended it early) and then the replies held behind it.
-  void finish_step(const char* by_op = nullptr);
-  // paused: true when a requested step is to run now; once the steps are done, sends the step's reply
-  bool count_down_step();
 
   // loop thread side
   void on_gate();
   void drain();
   void handle(uint64_t conn, const Json& request);
-  // the ops this server serves itself (loop thread): (conn, request) => reply
-  void register_own_ops();
-  void op_status(uint64_t conn, const Json& request, OpReply* reply);
-  void op_pause(uint64_t conn, const Json& request, OpReply* reply);
-  void op_pause_at(uint64_t conn, const Json& request, OpReply* reply);
-  void op_resume(uint64_t conn, const Json& request, OpReply* reply);
-  void op_step(uint64_t conn, const Json& request, OpReply* reply);
-  void op_set_rate(uint64_t conn, const Json& request, OpReply* reply);
-  void op_reset(uint64_t conn, const Json& request, OpReply* reply);
-  void op_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_subscribe_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_unsubscribe_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_leave(uint64_t conn, const Json& request, OpReply* reply);
-  void op_done(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_shm(uint64_t conn, const Json& request, OpReply* reply);
-  void forward_events();
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
-  // a lockstep client stopped gating the clock (leave, drop, disconnect); last_at_s: where the
-  // coordinator says the clock stands without it, if it was the last (arms the lockstep_empty pause)
-  void lockstep_left(std::optional<double> last_at_s);
-
-  Json event_json(const sim::Event& e) const;
 
   sim::Simulation& sim_;
   sim::Runner* runner_;
@@ -197,6 +172,13 @@ class ApiServer {
   // what the groups' hooks are given: send on this server, and whether a connection is in lockstep
   const OpGroup::Send send_fn_ = [this](uint64_t conn, const Json& m) { send(conn, m); };
   const OpGroup::InLockstep in_lockstep_fn_ = [this](uint64_t conn) { return lockstep_.joined(conn); };
+  // loop thread only
+  sim::SteadyWallClock wall_clock_;  // lockstep deadlines
+  LockstepCoordinator lockstep_;     // which connections gate the clock, their ticks
+  // the server's own op groups (built once the transport is): the clock, events, lockstep
+  std::unique_ptr<ClockOps> clock_ops_;
+  std::unique_ptr<EventOps> event_ops_;
+  std::unique_ptr<LockstepOps> lockstep_ops_;
   VehicleOps vehicle_ops_;
   std::unique_ptr<FrameStream> frames_;
 
@@ -208,20 +190,6 @@ class ApiServer {
   bool shutdown_ = false;
   std::atomic<size_t> connections_{0};
   std::set<uint64_t> authenticated_;   // connections that sent the token; I/O thread only
-
-  // loop thread only
-  sim::SteadyWallClock wall_clock_;          // lockstep deadlines
-  LockstepCoordinator lockstep_;             // which connections gate the clock, their ticks
-  std::set<uint64_t> event_subscribers_;     // subscribe_events
-  // the one clock-control path (pause, resume, step, pause_at): the gate holds the clock while paused_
-  bool paused_ = false;
-  std::set<double> pause_at_s_;             // pause_at: hold the clock once sim time reaches each
-  bool pause_when_lockstep_empty_ = false;  // pause_at: hold it when the last lockstep client leaves
-  uint64_t steps_remaining_ = 0;
-  std::optional<std::pair<uint64_t, Json>> step_reply_;  // conn, request id: answered when the steps are done
-  uint64_t steps_requested_ = 0;                        // by the step in progress
-  std::vector<Json> replies_behind_step_;  // to step_reply_'s connection, answered after its step
-  size_t events_forwarded_ = 0;
 };
 
 }  // namespace uavsim::server::api
