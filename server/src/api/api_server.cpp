@@ -11,8 +11,8 @@ namespace {
 
 using Json = nlohmann::json;
 
-constexpr auto kIdleWait = std::chrono::milliseconds(50);   // stop-check polling while held
-constexpr auto kSeqPoll = std::chrono::milliseconds(1);     // MAVLink seq polling while a done waits
+constexpr auto kIdleWait = std::chrono::milliseconds(50);  // stop-check polling while held
+constexpr auto kSeqPoll = std::chrono::milliseconds(1);    // MAVLink seq polling while a done waits
 
 std::string dump(const Json& j) {
   return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
@@ -21,7 +21,8 @@ std::string dump(const Json& j) {
 // compares secrets in time independent of where they differ
 bool same_secret(const std::string& a, const std::string& b) {
   unsigned diff = a.size() == b.size() ? 0u : 1u;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned>(a[i] ^ b[i % (b.empty() ? 1 : b.size())]);
+  for (size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned>(a[i] ^ b[i % (b.empty() ? 1 : b.size())]);
   return diff == 0 && !b.empty();
 }
 
@@ -43,8 +44,8 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     ++connections_;
   };
   cb.on_line = [this](uint64_t conn, std::string line) {
-    // parse on the I/O thread; a malformed request's error is queued behind the requests before it, so
-    // replies keep the order of the requests on the connection
+    // parse on the I/O thread; a malformed request's error is queued behind the requests before it,
+    // so replies keep the order of the requests on the connection
     if (line.find_first_not_of(" \t") == std::string::npos) return;
     ParsedLine parsed = parse_request_line(line);
     if (parsed.error) {
@@ -53,27 +54,31 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     const Json& body = parsed.body;
     const Json& id = parsed.id;
     const std::string op = body["op"].get<std::string>();
-    // --api-token-file: nothing is served before the token (an auth op, or a token field on a request)
+    // --api-token-file: nothing is served before the token (an auth op, or a token field on a
+    // request)
     if (config_.token && !authenticated_.count(conn)) {
       const auto token = string_field(body, "token");
       if (!token || !same_secret(*token, *config_.token)) {
         return reply_in_order(
-            conn, error_reply(id, ApiError::kUnauthorized,
-                              token ? "wrong token" : "this server needs a token first: {\"op\":\"auth\",\"token\":...}"));
+            conn, error_reply(
+                      id, ApiError::kUnauthorized,
+                      token ? "wrong token"
+                            : "this server needs a token first: {\"op\":\"auth\",\"token\":...}"));
       }
       authenticated_.insert(conn);
     }
     const OpSpec* spec = ops_.find(op);
-    if (spec == nullptr) return reply_in_order(conn, error_reply(id, ApiError::kUnknownOp, "unknown op '" + op + "'"));
+    if (spec == nullptr)
+      return reply_in_order(conn, error_reply(id, ApiError::kUnknownOp, "unknown op '" + op + "'"));
     if (spec->thread == OpThread::kIo) {  // auth, the one op answered here
       return reply_in_order(conn, ok_reply(id, {{"authenticated", config_.token.has_value()}}));
     }
     enqueue({Request::Kind::kLine, conn, std::move(parsed.body)});
   };
   cb.on_line_too_long = [this](uint64_t conn) {
-    reply_in_order(conn, error_reply(nullptr, ApiError::kLineTooLong, "request lines are limited to " +
-                                                                  std::to_string(config_.max_line_bytes) +
-                                                                  " bytes"));
+    reply_in_order(conn, error_reply(nullptr, ApiError::kLineTooLong,
+                                     "request lines are limited to " +
+                                         std::to_string(config_.max_line_bytes) + " bytes"));
   };
   cb.on_disconnect = [this](uint64_t conn) {
     authenticated_.erase(conn);
@@ -85,16 +90,19 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
   limits.max_connections = config_.max_connections;
   limits.max_pending_bytes = config_.max_pending_bytes;
   limits.max_total_pending_bytes = config_.max_total_pending_bytes;
-  limits.overload_line = dump(error_reply(nullptr, ApiError::kOverloaded,
-                                          "the server's connection or reply-queue limit was reached; this "
-                                          "connection is closed (read replies as they come, or connect later)"));
-  server_ = std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb, config_.io_loop);
+  limits.overload_line =
+      dump(error_reply(nullptr, ApiError::kOverloaded,
+                       "the server's connection or reply-queue limit was reached; this "
+                       "connection is closed (read replies as they come, or connect later)"));
+  server_ =
+      std::make_unique<LineServer>(config_.bind_address, config_.port, limits, cb, config_.io_loop);
   shm_ = std::make_unique<ShmTransport>(*server_);
 
   // the server's own groups first (the hello lists their ops first), then the vehicles'
-  clock_ops_ = std::make_unique<ClockOps>(sim_, runner_, lockstep_, config_.start_paused, send_fn_, [this] {
-    for (OpGroup* g : groups_) g->on_reset();
-  });
+  clock_ops_ =
+      std::make_unique<ClockOps>(sim_, runner_, lockstep_, config_.start_paused, send_fn_, [this] {
+        for (OpGroup* g : groups_) g->on_reset();
+      });
   event_ops_ = std::make_unique<EventOps>(sim_, send_fn_);
   LockstepOps::Server around;
   around.send = send_fn_;
@@ -104,8 +112,8 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
                        [&](const OpGroup* g) { return g->prepared_before_join(conn); });
   };
   around.seq_checked = [this] { return seq_waiter_ != nullptr; };
-  lockstep_ops_ = std::make_unique<LockstepOps>(sim_, lockstep_, *clock_ops_,
-                                                config_.shm ? shm_.get() : nullptr, std::move(around));
+  lockstep_ops_ = std::make_unique<LockstepOps>(
+      sim_, lockstep_, *clock_ops_, config_.shm ? shm_.get() : nullptr, std::move(around));
   add_group(clock_ops_.get());
   add_group(event_ops_.get());
   add_group(lockstep_ops_.get());
@@ -127,7 +135,9 @@ void ApiServer::set_seq_waiter(SeqWaiter* waiter) {
   seq_waiter_ = waiter;
   seq_processed_ = nullptr;
   if (waiter != nullptr) {
-    seq_processed_ = [waiter](size_t vehicle, uint8_t seq) { return waiter->seq_processed(vehicle, seq); };
+    seq_processed_ = [waiter](size_t vehicle, uint8_t seq) {
+      return waiter->seq_processed(vehicle, seq);
+    };
     waiter->set_progress_listener([this] {
       {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -223,7 +233,8 @@ void ApiServer::on_gate() {
     // a pass of the gate is progress, though the clock is held (the watchdog tells it from a hang)
     sim_.schedule().activity().beat();
     WakeupHold hold(*server_, *shm_);
-    // events before requests, so that a subscription's backlog and its stream neither overlap nor skip
+    // events before requests, so that a subscription's backlog and its stream neither overlap nor
+    // skip
     event_ops_->forward();
     drain();
     event_ops_->forward();
@@ -233,8 +244,9 @@ void ApiServer::on_gate() {
       if (shutdown_) return;
     }
     if (stop_check_ && stop_check_()) {
-      // a stopping loop (or a caller whose gate must never hold, like the fuzz harness) still counts a
-      // paused step down and answers it once done, with the replies held behind it: no reply is lost
+      // a stopping loop (or a caller whose gate must never hold, like the fuzz harness) still
+      // counts a paused step down and answers it once done, with the replies held behind it: no
+      // reply is lost
       if (clock_ops_->paused() && !lockstep_.blocked()) clock_ops_->count_down_step();
       return;
     }
@@ -253,7 +265,8 @@ void ApiServer::on_gate() {
       // drop clients that let their tick time out (wall clock), then wait for the others
       for (const LockstepCoordinator::Dropped& d : lockstep_.expire(sim_.time_s())) {
         clock_ops_->lockstep_left(d.last_left_at_s);
-        send(d.conn, Json{{"event", "lockstep_dropped"}, {"reason", "timeout"}, {"time", sim_.time_s()}});
+        send(d.conn,
+             Json{{"event", "lockstep_dropped"}, {"reason", "timeout"}, {"time", sim_.time_s()}});
       }
       if (!lockstep_.blocked()) continue;
       const double until_deadline_s = std::max(0.0, *lockstep_.deadline_s() - wall_clock_.now_s());
@@ -273,11 +286,12 @@ void ApiServer::on_gate() {
     // that makes none)
     std::unique_lock<std::mutex> lock(mutex_);
     if (queue_.empty() && !shutdown_ && !(waiting_seq && seq_progress_ != seq_progress_seen)) {
-      wake_.wait_until(lock, waiting_seq ? std::min(next_deadline, Clock::now() + kSeqPoll) : next_deadline,
-                       [&] {
-                         return !queue_.empty() || shutdown_ ||
-                                (waiting_seq && seq_progress_ != seq_progress_seen);
-                       });
+      wake_.wait_until(
+          lock, waiting_seq ? std::min(next_deadline, Clock::now() + kSeqPoll) : next_deadline,
+          [&] {
+            return !queue_.empty() || shutdown_ ||
+                   (waiting_seq && seq_progress_ != seq_progress_seen);
+          });
     }
   }
 }
@@ -313,7 +327,8 @@ void ApiServer::announce_ticks() {
   // the MAVLink bytes of the control steps before this tick reach the client before the tick
   if (!due.empty() && seq_waiter_ != nullptr) seq_waiter_->flush_sent();
   for (uint64_t conn : due) {
-    // what else is due at this tick (the frames) reaches the client before the tick (docs/protocol.md)
+    // what else is due at this tick (the frames) reaches the client before the tick
+    // (docs/protocol.md)
     for (OpGroup* g : groups_) g->before_tick(conn, send_fn_);
     const int64_t tick = lockstep_.begin_tick(conn, now);
     // on a shared-memory stream: one binary record with the tick's radio frames
@@ -329,7 +344,8 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);
   const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
   const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
-  if (const auto bad = mistyped_field(request, spec->typed_fields)) return reply_error(conn, id, ApiError::kBadField, *bad);
+  if (const auto bad = mistyped_field(request, spec->typed_fields))
+    return reply_error(conn, id, ApiError::kBadField, *bad);
   OpReply reply;
   // the watchdog names the op a stuck loop is in
   sim::LoopActivity& trail = sim_.schedule().activity();

@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -115,8 +115,9 @@ class OpGroup {
     (void)send;
   }
   // Whether conn has output of the current sim time prepared before it joined lockstep now (camera
-  // frames are captured at the start of a step, before the API's requests): such a connection's first
-  // tick cannot be now, or what is due for it at that tick was prepared without the lockstep promise.
+  // frames are captured at the start of a step, before the API's requests): such a connection's
+  // first tick cannot be now, or what is due for it at that tick was prepared without the lockstep
+  // promise.
   virtual bool prepared_before_join(uint64_t conn) const {
     (void)conn;
     return false;
