@@ -5,9 +5,10 @@
 #include <cmath>
 #include <cstdint>
 
-#include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -228,7 +229,7 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
 }
 
 void VehicleLink::handle_gimbal_pitchyaw(const msg::GimbalManagerSetPitchyaw& m) {
-  constexpr double kRadToDeg = 180.0 / common::kPi;
+  using common::kRadToDeg;
   // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
   const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
   if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "test_gcs.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink::testing {
 namespace {
@@ -71,7 +72,8 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   take_off(*g);
   fc::FlightController& fc = sim_->fc(0);
   // the three inputs that once spun the angle wrap forever, given straight to the controller
-  EXPECT_EQ(fc.set_yaw({M_PI / 2.0 - 1e30 * M_PI / 180.0, false, 0.0}), fc::CommandResult::kAccepted);
+  EXPECT_EQ(fc.set_yaw({common::kPi / 2.0 - 1e30 * common::kPi / 180.0, false, 0.0}),
+            fc::CommandResult::kAccepted);
   step_for(0.5);
   fc::GuidedTarget t;
   t.velocity_enu_m_s = Eigen::Vector3d::Zero();
@@ -80,7 +82,7 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   step_for(0.2);
   fc::MissionItem yaw_item;
   yaw_item.kind = fc::MissionItem::Kind::kConditionYaw;
-  yaw_item.yaw_enu_rad = M_PI / 2.0 - 1e30 * M_PI / 180.0;
+  yaw_item.yaw_enu_rad = common::kPi / 2.0 - 1e30 * common::kPi / 180.0;
   yaw_item.position_valid = false;
   fc.set_mission({fc::MissionItem{}, yaw_item});
   ASSERT_EQ(command(*g, 300, {0, 0}), kAccepted);  // AUTO runs the yaw item
@@ -140,7 +142,8 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
     const fc::TruthState tr = sim_->truth(0);
     max_tilt_rate = std::max(max_tilt_rate, tr.rate_body_rad_s.head<2>().norm());
     const double up = (tr.q_enu_body * Eigen::Vector3d::UnitZ()).z();
-    max_tilt_deg = std::max(max_tilt_deg, std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI);
+    max_tilt_deg =
+        std::max(max_tilt_deg, std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / common::kPi);
     if (sim_->time_s() > end - 1.5) {  // the turn, after a second to reach its rate
       yaw_rate_sum += tr.rate_body_rad_s.z();
       ++samples;
@@ -151,7 +154,7 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
   EXPECT_LT(max_tilt_rate, 3.0);
   EXPECT_NEAR(sim_->truth(0).position_enu_m.z(), z0, 0.5);
   // clockwise seen from above (NED yaw rate > 0) is a negative ENU body rate, at 90 deg/s
-  EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * M_PI / 180.0, 0.15);
+  EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * common::kPi / 180.0, 0.15);
 }
 
 TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
