@@ -74,12 +74,12 @@ class GimbalReportTest : public EndpointTest {
 TEST_F(GimbalReportTest, DuringASlewTheReportedAttitudeLagsTheCommandAndIsTheCamerasOwn) {
   auto g = connect();
   // GIMBAL_DEVICE_ATTITUDE_STATUS every 10 ms; level first (the world's forward gimbal)
-  EXPECT_EQ(command(*g, 511, {285, 10000}), 0);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {285, 10000}), 0);
   ASSERT_TRUE(step_until(
       *g, [&] { return g->count<msg::GimbalDeviceAttitudeStatus>() > 0; }, 1.0));
   // DO_MOUNT_CONTROL, 60 deg down: handled in the next control step, stepped from here on
   msg::CommandLong c;
-  c.command = 205;
+  c.command = cmd_id(MavCmd::DoMountControl);
   c.target_system = 1;
   c.target_component = 1;
   c.param1 = -60.0f;
@@ -116,7 +116,7 @@ TEST_F(GimbalReportTest, DuringASlewTheReportedAttitudeLagsTheCommandAndIsTheCam
     const auto it = seen.find(m.time_boot_ms);
     if (it == seen.end()) continue;  // before the command
     ++checks;
-    EXPECT_EQ(m.flags & 32, 32);  // GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME
+    EXPECT_TRUE(has_flag(m.flags, GimbalDeviceFlags::YawInVehicleFrame));
     worst_deg = std::max(
         worst_deg,
         reported_enu(m, it->second.heading_ned_rad).angularDistance(it->second.camera_enu) /
