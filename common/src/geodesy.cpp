@@ -7,11 +7,6 @@
 
 namespace uavsim::common {
 
-namespace {
-using common::kPi;
-constexpr double kDegToRad = kPi / 180.0;
-}  // namespace
-
 Eigen::Vector3d ned_from_geodetic(const GeodeticOrigin& origin, const Geodetic& point) {
   // unrotated local offsets: R*dlat, R*dlon*cos(lat0), alt0 - alt
   const double lat0 = origin.lat_deg * kDegToRad;

@@ -23,6 +23,7 @@
 #include <sstream>
 
 #include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 #include "uavsim/common/record_file.hpp"
 
 extern char** environ;
@@ -369,11 +370,11 @@ struct TruthLog {
         const auto q = v.value("q_enu_body", std::vector<double>{1, 0, 0, 0});  // w x y z
         if (f == nullptr || p.size() < 3 || vel.size() < 3 || q.size() < 4) continue;
         // ZYX Euler angles of q_enu_body (yaw from east, counter-clockwise)
-        const double w = q[0], x = q[1], y = q[2], z = q[3];
-        constexpr double kDeg = 180.0 / common::kPi;
-        const double roll = std::atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)) * kDeg;
-        const double pitch = std::asin(std::clamp(2 * (w * y - z * x), -1.0, 1.0)) * kDeg;
-        const double yaw = std::atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)) * kDeg;
+        const common::frames::Euler e =
+            common::frames::euler_from_q_enu_flu(Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
+        const double roll = e.roll_rad * common::kRadToDeg;
+        const double pitch = e.pitch_rad * common::kRadToDeg;
+        const double yaw = e.yaw_rad * common::kRadToDeg;
         char line[512];
         std::snprintf(line, sizeof(line),
                       "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.2f,%.2f,%.2f,%.3f,%.1f,%s,%d,%d,%d\n",

@@ -6,6 +6,8 @@
 
 #include <Eigen/Core>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2020 {
 
 // Which long side of the arena a UAV works from (seed 7.2: "S0" goes to a side and "S1" to the
@@ -30,7 +32,7 @@ struct MissionConfig {
   // and a low balloon (2.2-2.4 m in the field) is seen by neither; 5 deg down they see
   // 2.11-2.80 / 2.61-3.30 m, the whole +-0.5 m spread about 2.7 m. Far balloons (a few degrees
   // below the axis) stay well inside.
-  double camera_pitch_rad = -5.0 * 3.14159265358979323846 / 180.0;
+  double camera_pitch_rad = -5.0 * common::kPi / 180.0;
 
   // the estimator's height of the vehicle at rest on flat ground with no baro drift
   double rest_height_m = 0.1;  // measured: 0.09-0.11 m (baro noise) in the ideal world

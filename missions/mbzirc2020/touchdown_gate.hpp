@@ -17,6 +17,8 @@
 #include <Eigen/Core>
 #include <optional>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2020 {
 
 struct TouchdownGateConfig {
@@ -24,7 +26,7 @@ struct TouchdownGateConfig {
   double calm_speed_m_s = 0.25;  // go on once under this ...
   double calm_for_s = 1.0;       // ... for this long
   double wind_tau_s = 3.0;       // low-pass of the lean that estimates the wind
-  double wind_min_tilt_rad = 2.0 * 3.14159265358979323846 / 180.0;  // less: wind unknown
+  double wind_min_tilt_rad = 2.0 * common::kPi / 180.0;  // less: wind unknown
   double max_pause_s = 20.0;  // paused this long in all: descend whatever the wind does
 };
 

@@ -24,6 +24,7 @@
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/gcs_link.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/mission/camera_frames.hpp"
 #include "uavsim/mission/program.hpp"
@@ -279,7 +280,7 @@ int main(int argc, char** argv) {
   auto point_camera = [&](double pitch_rad) {
     if (!gimbal_ok || pitch_rad == gimbal_pitch_rad) return;
     perception.set_camera_pitch(pitch_rad, loop.now());
-    if (auto r = uav.point_gimbal(pitch_rad * 180.0 / 3.14159265358979323846, 0.0); !r) {
+    if (auto r = uav.point_gimbal(pitch_rad * 180.0 / uavsim::common::kPi, 0.0); !r) {
       log("gimbal: " + r.message() + " (keeping it level)");
       gimbal_ok = false;
       perception.set_camera_pitch(0.0, loop.now());

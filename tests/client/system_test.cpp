@@ -13,6 +13,7 @@
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/geodesy.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::client::testing {
 namespace {
@@ -149,7 +150,7 @@ TEST_F(ClientSystemTest, YawAndVelocityWithYawRate) {
   ASSERT_TRUE(r) << r.message();
   const Telemetry& t = uav_->telemetry();
   auto heading_near = [&](double deg) {
-    return std::abs(std::remainder(t.yaw_rad * 180.0 / M_PI - deg, 360.0)) < 3.0;
+    return std::abs(std::remainder(t.yaw_rad * 180.0 / common::kPi - deg, 360.0)) < 3.0;
   };
   r = loop_->run_until([&] { return heading_near(90.0); }, 10.0, "heading 90");
   ASSERT_TRUE(r) << r.message() << " yaw " << t.yaw_rad;
@@ -159,7 +160,7 @@ TEST_F(ClientSystemTest, YawAndVelocityWithYawRate) {
   ASSERT_TRUE(loop_->run_for(2.0));
   ASSERT_TRUE(uav_->stop());
   ASSERT_TRUE(loop_->run_for(1.0));
-  const double heading = t.yaw_rad * 180.0 / M_PI;
+  const double heading = t.yaw_rad * 180.0 / common::kPi;
   EXPECT_LT(heading, 75.0);
   EXPECT_GT(heading, 0.0);
 }

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "fake_mav_port.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/mavlink/generated/enums.hpp"
 #include "uavsim/common/mavlink/wire.hpp"
 
@@ -131,10 +132,10 @@ TEST_F(TelemetryDecoderTest, HomeOriginGimbalAndMissionProgress) {
 // GIMBAL_DEVICE_ATTITUDE_STATUS: the camera 6 deg up, 10 deg right of the heading, 2 deg rolled, in
 // the vehicle frame; the same camera on a vehicle heading 30 deg reported in the earth frame
 TEST_F(TelemetryDecoderTest, GimbalDeviceAttitudeInTheVehicleFrame) {
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
-  const Eigen::Quaterniond q_vehicle = Eigen::AngleAxisd(10 * kDeg, Eigen::Vector3d::UnitZ()) *
-                                       Eigen::AngleAxisd(6 * kDeg, Eigen::Vector3d::UnitY()) *
-                                       Eigen::AngleAxisd(2 * kDeg, Eigen::Vector3d::UnitX());
+  using common::kDegToRad;
+  const Eigen::Quaterniond q_vehicle = Eigen::AngleAxisd(10 * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                                       Eigen::AngleAxisd(6 * kDegToRad, Eigen::Vector3d::UnitY()) *
+                                       Eigen::AngleAxisd(2 * kDegToRad, Eigen::Vector3d::UnitX());
   const auto status = [](const Eigen::Quaterniond& q, std::uint16_t flags, float delta_yaw) {
     msg::GimbalDeviceAttitudeStatus m;
     m.time_boot_ms = 61234;
@@ -147,18 +148,18 @@ TEST_F(TelemetryDecoderTest, GimbalDeviceAttitudeInTheVehicleFrame) {
   const auto expect_camera = [&] {
     EXPECT_TRUE(tm().has_gimbal_attitude);
     EXPECT_NEAR(tm().gimbal_attitude_time_s, 61.234, 1e-9);
-    EXPECT_NEAR(tm().gimbal_attitude_roll_rad, 2 * kDeg, 1e-6);
-    EXPECT_NEAR(tm().gimbal_attitude_pitch_rad, 6 * kDeg, 1e-6);
-    EXPECT_NEAR(tm().gimbal_attitude_yaw_rad, 10 * kDeg, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_roll_rad, 2 * kDegToRad, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_pitch_rad, 6 * kDegToRad, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_yaw_rad, 10 * kDegToRad, 1e-6);
   };
-  port_.deliver(
-      status(q_vehicle, 4 | 8 | 32, 30 * kDeg));  // ROLL_LOCK | PITCH_LOCK | YAW_IN_VEHICLE_FRAME
+  port_.deliver(status(q_vehicle, 4 | 8 | 32,
+                       30 * kDegToRad));  // ROLL_LOCK | PITCH_LOCK | YAW_IN_VEHICLE_FRAME
   expect_camera();
   decoder_.reset();
   const Eigen::Quaterniond q_earth =
-      Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitZ()) * q_vehicle;
+      Eigen::AngleAxisd(30 * kDegToRad, Eigen::Vector3d::UnitZ()) * q_vehicle;
   port_.deliver(
-      status(q_earth, 4 | 8 | 16 | 64, 30 * kDeg));  // ... | YAW_LOCK | YAW_IN_EARTH_FRAME
+      status(q_earth, 4 | 8 | 16 | 64, 30 * kDegToRad));  // ... | YAW_LOCK | YAW_IN_EARTH_FRAME
   expect_camera();
   // an earth-frame report without the heading cannot be turned back: ignored
   decoder_.reset();

@@ -32,5 +32,12 @@ TEST(WrapPi, NonFiniteAnglesGiveZero) {
   EXPECT_EQ(wrap_pi(-std::numeric_limits<double>::infinity()), 0.0);
 }
 
+TEST(Angles, DegreesAndRadiansConvertBothWays) {
+  // 180 deg = pi rad; the two constants are each other's inverse
+  EXPECT_DOUBLE_EQ(180.0 * kDegToRad, kPi);
+  EXPECT_DOUBLE_EQ(kPi * kRadToDeg, 180.0);
+  EXPECT_NEAR(kDegToRad * kRadToDeg, 1.0, 1e-15);
+}
+
 }  // namespace
 }  // namespace uavsim::common

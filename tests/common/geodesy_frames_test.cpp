@@ -90,5 +90,38 @@ TEST(Frames, BodyYawRotatesForwardIntoHeading) {
   EXPECT_NEAR(v.y(), 1.0, 1e-12);
 }
 
+TEST(Frames, ZyxAnglesRecoverTheRotationsTheyWereBuiltFrom) {
+  // q = Rz(yaw) Ry(pitch) Rx(roll) for yaw 2.5, pitch -0.4, roll 0.3 rad: the angles come back
+  constexpr double kTol = 1e-12;
+  const Eigen::Quaterniond q = Eigen::AngleAxisd(2.5, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX());
+  const frames::Euler e = frames::euler_zyx(q);
+  EXPECT_NEAR(e.yaw_rad, 2.5, kTol);
+  EXPECT_NEAR(e.pitch_rad, -0.4, kTol);
+  EXPECT_NEAR(e.roll_rad, 0.3, kTol);
+  // pitch saturates at +-90 deg, not NaN, for a quaternion a little off unit length
+  const Eigen::Quaterniond up(Eigen::AngleAxisd(kPi / 2.0, Eigen::Vector3d::UnitY()));
+  const Eigen::Quaterniond over(up.w() * 1.001, up.x() * 1.001, up.y() * 1.001, up.z() * 1.001);
+  EXPECT_NEAR(frames::euler_zyx(over).pitch_rad, kPi / 2.0, kTol);
+}
+
+TEST(Frames, EnuAttitudeIsYawFromEastCounterClockwiseAndPitchNoseDown) {
+  // the ground-truth records' angles: facing north (ENU yaw +90 deg) with the nose 10 deg up, which
+  // in FLU is a negative rotation about the left axis
+  constexpr double kTol = 1e-12;
+  const Eigen::Quaterniond q_enu_flu =
+      Eigen::AngleAxisd(kPi / 2.0, Eigen::Vector3d::UnitZ()) *
+      Eigen::AngleAxisd(-10.0 * kDegToRad, Eigen::Vector3d::UnitY());
+  const frames::Euler e = frames::euler_from_q_enu_flu(q_enu_flu);
+  EXPECT_NEAR(e.yaw_rad * kRadToDeg, 90.0, 1e-9);
+  EXPECT_NEAR(e.pitch_rad, -10.0 * kDegToRad, kTol);
+  EXPECT_NEAR(e.roll_rad, 0.0, kTol);
+  // the same attitude in MAVLink's terms: yaw 0 (north), pitch +10 deg
+  const frames::Euler m = frames::euler_from_q_ned_frd(frames::q_ned_frd_from_q_enu_flu(q_enu_flu));
+  EXPECT_NEAR(m.yaw_rad, 0.0, 1e-9);
+  EXPECT_NEAR(m.pitch_rad, 10.0 * kDegToRad, 1e-9);
+}
+
 }  // namespace
 }  // namespace uavsim::common

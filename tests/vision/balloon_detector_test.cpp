@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <random>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/synthetic_scene.hpp"
 
 namespace uavsim::vision {
@@ -21,7 +22,7 @@ constexpr double kNoiseSigma = 3.0;
 // 640 x 480, 60 deg horizontal field of view: fx = 320 / tan(30 deg) = 554.3 px
 PinholeIntrinsics test_camera() {
   return PinholeIntrinsics::from_fovy(640, 480,
-                                      2.0 * std::atan(240.0 / (320.0 / std::tan(M_PI / 6))));
+                                      2.0 * std::atan(240.0 / (320.0 / std::tan(common::kPi / 6))));
 }
 
 struct Scene {

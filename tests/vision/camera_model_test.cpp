@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::vision {
 namespace {
 
@@ -12,14 +14,14 @@ constexpr double kTolPx = 1e-9;
 
 TEST(PinholeIntrinsics, FocalLengthFromVerticalFov) {
   // fovy 90 deg on 480 rows: fy = 240 / tan(45 deg) = 240 px; square pixels
-  const auto k = PinholeIntrinsics::from_fovy(640, 480, M_PI / 2);
+  const auto k = PinholeIntrinsics::from_fovy(640, 480, common::kPi / 2);
   EXPECT_NEAR(k.fy_px, 240.0, kTolPx);
   EXPECT_NEAR(k.fx_px, 240.0, kTolPx);
   EXPECT_NEAR(k.cx_px, 319.5, kTolPx);
   EXPECT_NEAR(k.cy_px, 239.5, kTolPx);
   // the top edge of the image (row -0.5) is 45 deg above the axis
   const Eigen::Vector3d top = k.ray_cam({319.5, -0.5});
-  EXPECT_NEAR(std::atan2(-top.y(), top.z()), M_PI / 4, 1e-2);
+  EXPECT_NEAR(std::atan2(-top.y(), top.z()), common::kPi / 4, 1e-2);
 }
 
 TEST(PinholeIntrinsics, ProjectInvertsRay) {
@@ -34,7 +36,7 @@ TEST(CameraPose, DownLookingGimbalAxes) {
   // vehicle level, facing east (yaw 0); gimbal straight down: optical axis = -z_enu, image top =
   // east, image right = south
   const auto pose = camera_pose_from_vehicle({1, 2, 10}, Eigen::Quaterniond::Identity(),
-                                             GimbalAngles{-M_PI / 2, 0.0, true});
+                                             GimbalAngles{-common::kPi / 2, 0.0, true});
   EXPECT_NEAR((pose.R_enu_cam * Eigen::Vector3d::UnitZ() - Eigen::Vector3d(0, 0, -1)).norm(), 0,
               kTolM);
   EXPECT_NEAR((pose.R_enu_cam * -Eigen::Vector3d::UnitY() - Eigen::Vector3d(1, 0, 0)).norm(), 0,
@@ -45,7 +47,7 @@ TEST(CameraPose, DownLookingGimbalAxes) {
 
 TEST(CameraPose, ForwardCameraFollowsYaw) {
   // facing north (yaw 90 deg), gimbal level: optical axis north, image right = east
-  const auto pose = camera_pose_from_vehicle({0, 0, 3}, q_enu_body_from_rpy(0, 0, M_PI / 2),
+  const auto pose = camera_pose_from_vehicle({0, 0, 3}, q_enu_body_from_rpy(0, 0, common::kPi / 2),
                                              GimbalAngles{0.0, 0.0, false});
   EXPECT_NEAR((pose.R_enu_cam * Eigen::Vector3d::UnitZ() - Eigen::Vector3d(0, 1, 0)).norm(), 0,
               kTolM);
@@ -55,11 +57,13 @@ TEST(CameraPose, ForwardCameraFollowsYaw) {
 
 TEST(CameraPose, StabilisedGimbalIgnoresRollAndPitch) {
   const auto q = q_enu_body_from_rpy(0.2, -0.15, 0.7);
-  const auto stabilised = camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-M_PI / 2, 0, true});
+  const auto stabilised =
+      camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-common::kPi / 2, 0, true});
   const auto level = camera_pose_from_vehicle({0, 0, 5}, q_enu_body_from_rpy(0, 0, 0.7),
-                                              GimbalAngles{-M_PI / 2, 0, true});
+                                              GimbalAngles{-common::kPi / 2, 0, true});
   EXPECT_NEAR((stabilised.R_enu_cam - level.R_enu_cam).norm(), 0.0, 1e-12);
-  const auto body_fixed = camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-M_PI / 2, 0, false});
+  const auto body_fixed =
+      camera_pose_from_vehicle({0, 0, 5}, q, GimbalAngles{-common::kPi / 2, 0, false});
   EXPECT_GT((body_fixed.R_enu_cam - level.R_enu_cam).norm(), 0.1);
 }
 

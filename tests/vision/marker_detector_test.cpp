@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/synthetic_scene.hpp"
 
 namespace uavsim::vision {
@@ -19,7 +20,7 @@ constexpr double kDeckHeightM = 1.2;  // truck deck above the ground
 constexpr double kAltitudeM = 10.0;   // UAV above the ground
 constexpr double kNoiseSigma = 4.0;
 
-PinholeIntrinsics down_camera() { return PinholeIntrinsics::from_fovy(640, 480, M_PI / 3); }
+PinholeIntrinsics down_camera() { return PinholeIntrinsics::from_fovy(640, 480, common::kPi / 3); }
 
 struct Trial {
   double worst_error_m = 0.0;
@@ -38,17 +39,17 @@ Trial run_trials(bool earth_stabilised, double max_tilt_rad, int frames, uint64_
   Trial t;
   for (int i = 0; i < frames; ++i) {
     const Eigen::Vector3d uav(20 * unit(rng), 15 * unit(rng), kAltitudeM);
-    const auto q =
-        q_enu_body_from_rpy(max_tilt_rad * unit(rng), max_tilt_rad * unit(rng), M_PI * unit(rng));
-    const CameraPose pose =
-        camera_pose_from_vehicle(uav, q, {-M_PI / 2, 0.0, earth_stabilised}, {0.05, 0.0, -0.1});
+    const auto q = q_enu_body_from_rpy(max_tilt_rad * unit(rng), max_tilt_rad * unit(rng),
+                                       common::kPi * unit(rng));
+    const CameraPose pose = camera_pose_from_vehicle(
+        uav, q, {-common::kPi / 2, 0.0, earth_stabilised}, {0.05, 0.0, -0.1});
     // a marker centre that lands in the inner 60% of the image
     const Eigen::Vector2d px(k.cx_px + 0.3 * k.width_px * unit(rng),
                              k.cy_px + 0.3 * k.height_px * unit(rng));
     const Eigen::Vector3d marker = *pixel_to_plane_enu(k, pose, px, kDeckHeightM);
     cv::Mat image = synthetic::sand_background(k, rng());
-    synthetic::render_marker(k, pose, LandingMarkerGeometry{}, marker.head<2>(), M_PI * unit(rng),
-                             kDeckHeightM, &image);
+    synthetic::render_marker(k, pose, LandingMarkerGeometry{}, marker.head<2>(),
+                             common::kPi * unit(rng), kDeckHeightM, &image);
     synthetic::add_noise(kNoiseSigma, rng(), &image);
     ++t.frames;
     const auto d = detector.detect(image);
@@ -65,7 +66,7 @@ Trial run_trials(bool earth_stabilised, double max_tilt_rad, int frames, uint64_
 
 TEST(MarkerDetector, LocatesMarkerFromTenMetresWithBodyFixedTiltedCamera) {
   // body-fixed gimbal: the UAV's 10 deg roll/pitch tilts the view; the pose accounts for it
-  const Trial t = run_trials(false, 10.0 * M_PI / 180, 40, 2017);
+  const Trial t = run_trials(false, 10.0 * common::kPi / 180, 40, 2017);
   std::printf(
       "[ marker   ] body-fixed, tilt <= 10 deg: %d/%d detected, error mean %.3f m max %.3f m\n",
       t.detected, t.frames, t.sum_error_m / std::max(t.detected, 1), t.worst_error_m);
@@ -74,7 +75,7 @@ TEST(MarkerDetector, LocatesMarkerFromTenMetresWithBodyFixedTiltedCamera) {
 }
 
 TEST(MarkerDetector, LocatesMarkerWithStabilisedGimbal) {
-  const Trial t = run_trials(true, 15.0 * M_PI / 180, 20, 71);
+  const Trial t = run_trials(true, 15.0 * common::kPi / 180, 20, 71);
   std::printf("[ marker   ] stabilised: %d/%d detected, error mean %.3f m max %.3f m\n", t.detected,
               t.frames, t.sum_error_m / std::max(t.detected, 1), t.worst_error_m);
   EXPECT_EQ(t.detected, t.frames);
@@ -85,7 +86,7 @@ TEST(MarkerDetector, RadiusMatchesPinholeScale) {
   // straight down from 10 m to a deck at 1.2 m: r = f * 0.65 / 8.8 = 415.7 * 0.0739 = 30.7 px
   const auto k = down_camera();
   const CameraPose pose = camera_pose_from_vehicle(
-      {0, 0, kAltitudeM}, Eigen::Quaterniond::Identity(), {-M_PI / 2, 0.0, true});
+      {0, 0, kAltitudeM}, Eigen::Quaterniond::Identity(), {-common::kPi / 2, 0.0, true});
   cv::Mat image = synthetic::sand_background(k, 1);
   synthetic::render_marker(k, pose, LandingMarkerGeometry{}, {0, 0}, 0.3, kDeckHeightM, &image);
   MarkerDetector detector;

@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::vision {
 namespace {
 
@@ -26,7 +28,8 @@ struct Truck {
   double s0_m;
   double weave_m = 0.3;
   TrackCoordinates at(double t_s) const {
-    return {track.wrap_s(s0_m + kTruckSpeedM_S * t_s), weave_m * std::sin(2 * M_PI * t_s / 17.0)};
+    return {track.wrap_s(s0_m + kTruckSpeedM_S * t_s),
+            weave_m * std::sin(2 * common::kPi * t_s / 17.0)};
   }
   Eigen::Vector2d position(double t_s) const { return track.point_enu(at(t_s)); }
 };

@@ -8,7 +8,7 @@
 namespace uavsim::server::airframe {
 
 namespace {
-constexpr double kDegToRad = common::kPi / 180.0;
+using common::kDegToRad;
 constexpr double kMinAdvection_m_s = 1.0;  // below this the frozen field passes at walking pace
 constexpr double kVerticalSdRatio =
     0.5;  // sigma_w / sigma_u near the ground (MIL-F-8785C low altitude)

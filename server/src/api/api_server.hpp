@@ -1,18 +1,21 @@
 // The sim socket API (docs/protocol.md): one TCP port, newline-delimited JSON, protocol version 1.
-// Control (status, pause, resume, step, set_rate, reset), ground-truth queries (vehicles, truck, balloons),
-// the event stream, fault injection, gimbal pointing and the lockstep contract (seed 5.3/6.5: gzuav's
-// Begin-Tick/End-Tick).
+// Control (status, pause, resume, step, set_rate, reset), ground-truth queries (vehicles, truck,
+// balloons), the event stream, fault injection, gimbal pointing and the lockstep contract
+// (seed 5.3/6.5: gzuav's Begin-Tick/End-Tick).
 //
-// Ops: every op is an entry of one OpTable (op_table.hpp), registered by its group: this server's clock,
-// event and lockstep ops, VehicleOps (ground truth, faults, gimbals, wind), FrameStream (camera frames)
-// and the groups added with add_group (radio, sensors, overlay). The hello's op list, the unknown_op
-// check and the dispatch all read that table.
+// Ops: every op is an entry of one OpTable (op_table.hpp), registered by its group: ClockOps,
+// EventOps and LockstepOps (the clock, the event stream and the lockstep contract), VehicleOps
+// (ground truth, faults, gimbals, wind), FrameStream (camera frames) and the groups added with
+// add_group (radio, sensors, overlay). The hello's op list, the unknown_op check and the dispatch
+// all read that table; this server is the transport, the dispatch and the gate. The one op it
+// answers itself is auth, which belongs to the transport.
 //
 // Threads: socket I/O runs on the LineServer's I/O thread (shared with the MAVLink endpoints in
 // uavsim-server); every request that touches the simulation is
 // queued and executed on the loop thread inside the control gate (gate(), registered with
-// Runner::add_gate in the step schedule's queued-tasks phase), before the control step, in arrival order. The gate is also where pause,
-// single-stepping and lockstep hold the clock, so the loop thread keeps serving requests while held.
+// Runner::add_gate in the step schedule's queued-tasks phase), before the control step, in arrival
+// order. The gate is also where pause, single-stepping and lockstep hold the clock, so the loop
+// thread keeps serving requests while held.
 #pragma once
 
 #include <atomic>
@@ -30,9 +33,12 @@
 #include <string>
 #include <vector>
 
+#include "api/clock_ops.hpp"
+#include "api/event_ops.hpp"
 #include "api/frame_stream.hpp"
 #include "api/line_server.hpp"
 #include "api/lockstep_coordinator.hpp"
+#include "api/lockstep_ops.hpp"
 #include "api/op_table.hpp"
 #include "api/shm_transport.hpp"
 #include "api/vehicle_ops.hpp"
@@ -42,11 +48,9 @@
 
 namespace uavsim::server::api {
 
-inline constexpr int kProtocolVersion = 1;
-
-// Implemented by the MAVLink endpoint: has the message with this sequence number, sent by a client on
-// a vehicle's link, been handled (its commands posted to the simulation)? The lockstep contract waits
-// for it before a tick ends, so commands sent before "done" take effect at that tick.
+// Implemented by the MAVLink endpoint: has the message with this sequence number, sent by a client
+// on a vehicle's link, been handled (its commands posted to the simulation)? The lockstep contract
+// waits for it before a tick ends, so commands sent before "done" take effect at that tick.
 class SeqWaiter {
  public:
   virtual ~SeqWaiter() = default;
@@ -57,39 +61,43 @@ class SeqWaiter {
   // thread) after handling messages, so a gate waiting for a done's mavlink_seq wakes at once. The
   // default registers nothing: the gate then polls every millisecond.
   virtual void set_progress_listener(std::function<void()> listener) { (void)listener; }
-  // Returns once every MAVLink byte the endpoint has queued for its clients so far (the telemetry and
-  // replies of the control steps before now) has been written to their sockets. Called before a tick is
-  // announced, so a lockstep client has its vehicles' telemetry stamped before the tick when the tick
-  // arrives. The default does nothing (an endpoint that writes synchronously). Loop thread only.
+  // Returns once every MAVLink byte the endpoint has queued for its clients so far (the telemetry
+  // and replies of the control steps before now) has been written to their sockets. Called before a
+  // tick is announced, so a lockstep client has its vehicles' telemetry stamped before the tick
+  // when the tick arrives. The default does nothing (an endpoint that writes synchronously). Loop
+  // thread only.
   virtual void flush_sent() {}
 };
 
 struct ApiConfig {
   std::string bind_address = "127.0.0.1";
-  uint16_t port = 5700;               // 0: an ephemeral port (tests)
-  double lockstep_timeout_s = 10.0;   // wall time a lockstep client may take for a tick before it is dropped
-  size_t max_line_bytes = 1u << 20;   // longer request lines get an error reply and are skipped
-  size_t max_connections = 64;        // one more is sent an "overloaded" error and closed
-  // unsent replies, events and frames per connection / for all together: a connection that would pass
-  // either is sent an "overloaded" error and closed (docs/protocol.md)
+  uint16_t port = 5700;  // 0: an ephemeral port (tests)
+  double lockstep_timeout_s =
+      10.0;  // wall time a lockstep client may take for a tick before it is dropped
+  size_t max_line_bytes = 1u << 20;  // longer request lines get an error reply and are skipped
+  size_t max_connections = 64;       // one more is sent an "overloaded" error and closed
+  // unsent replies, events and frames per connection / for all together: a connection that would
+  // pass either is sent an "overloaded" error and closed (docs/protocol.md)
   size_t max_pending_bytes = 64u << 20;
   size_t max_total_pending_bytes = 256u << 20;
-  bool start_paused = false;          // hold the clock at start until a client sends resume or step
-  // A shared secret: a connection must send it ({"op":"auth","token":...}, or a "token" field in its
-  // first request) before any other op is served. Unset: no authentication.
+  bool start_paused = false;  // hold the clock at start until a client sends resume or step
+  // A shared secret: a connection must send it ({"op":"auth","token":...}, or a "token" field in
+  // its first request) before any other op is served. Unset: no authentication.
   std::optional<std::string> token;
   // Serve the shared-memory stream (op lockstep_shm) to clients connecting from loopback.
   bool shm = true;
-  // The server's network I/O loop, shared with the MAVLink endpoints (it must outlive this server; its
-  // owner starts it). Null: the API's socket I/O runs on a loop of its own.
+  // The server's network I/O loop, shared with the MAVLink endpoints (it must outlive this server;
+  // its owner starts it). Null: the API's socket I/O runs on a loop of its own.
   net::EventLoop* io_loop = nullptr;
 };
 
 class ApiServer {
  public:
-  // runner may be null (set_rate then answers not_available). Binds the port: throws std::runtime_error
-  // naming the address if that fails (a startup error). Construct before the loop starts.
-  ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects, const ApiConfig& config);
+  // runner may be null (set_rate then answers not_available). Binds the port: throws
+  // std::runtime_error naming the address if that fails (a startup error). Construct before the
+  // loop starts.
+  ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectSet objects,
+            const ApiConfig& config);
   ~ApiServer();
   ApiServer(const ApiServer&) = delete;
   ApiServer& operator=(const ApiServer&) = delete;
@@ -97,8 +105,8 @@ class ApiServer {
   // Optional endpoint hooks. Before start().
   void set_link_control(LinkControl* link) { vehicle_ops_.set_link_control(link); }
   void set_seq_waiter(SeqWaiter* waiter);
-  // Camera frames (the FrameStream group's camera_* ops); without one they answer not_available. The
-  // service's capture() runs in the runner's gate before this server's gate. Before start().
+  // Camera frames (the FrameStream group's camera_* ops); without one they answer not_available.
+  // The service's capture() runs in the runner's gate before this server's gate. Before start().
   void set_frame_service(render::FrameService* service);
   // Serves a group's ops (registers them in the op table) and calls its hooks; it must outlive this
   // server. Throws std::logic_error if it registers an op name already served. Before start().
@@ -108,7 +116,8 @@ class ApiServer {
   std::string peer_address(uint64_t conn) const;
   // Every op served, in registration order (the hello's "ops"). After start(). Thread-safe.
   std::vector<std::string> op_names() const { return ops_.names(); }
-  // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before start().
+  // Polled while the gate holds the clock (pause, lockstep); true releases it (e.g. SIGINT). Before
+  // start().
   void set_stop_check(std::function<bool()> check) { stop_check_ = std::move(check); }
 
   // Starts serving connections (the I/O thread). Call once, before or after the loop starts.
@@ -122,8 +131,8 @@ class ApiServer {
   // a tick record. Valid for the server's life.
   ShmTransport& shm_transport() { return *shm_; }
 
-  // The control gate for Runner::add_gate (queued-tasks phase): runs queued requests and holds the clock while
-  // paused or while a lockstep client has not finished its tick. Loop thread only.
+  // The control gate for Runner::add_gate (queued-tasks phase): runs queued requests and holds the
+  // clock while paused or while a lockstep client has not finished its tick. Loop thread only.
   sim::Runner::Gate gate() {
     return [this](double) { on_gate(); };
   }
@@ -139,7 +148,6 @@ class ApiServer {
     Json body;  // the request, or the reply for kReply
   };
 
-
   // I/O thread side
   void enqueue(Request request);
   void send(uint64_t conn, const Json& message);
@@ -148,40 +156,13 @@ class ApiServer {
   void reply_in_order(uint64_t conn, Json reply);
   // Sends a reply to conn, or holds it behind conn's step in progress (replies keep request order).
   void reply(uint64_t conn, const Json& message);
-  // Answers the step in progress (ok at its end, or an `interrupted` error naming by_op when another
-  // clock op ended it early) and then the replies held behind it.
-  void finish_step(const char* by_op = nullptr);
-  // paused: true when a requested step is to run now; once the steps are done, sends the step's reply
-  bool count_down_step();
 
   // loop thread side
   void on_gate();
   void drain();
   void handle(uint64_t conn, const Json& request);
-  // the ops this server serves itself (loop thread): (conn, request) => reply
-  void register_own_ops();
-  void op_status(uint64_t conn, const Json& request, OpReply* reply);
-  void op_pause(uint64_t conn, const Json& request, OpReply* reply);
-  void op_pause_at(uint64_t conn, const Json& request, OpReply* reply);
-  void op_resume(uint64_t conn, const Json& request, OpReply* reply);
-  void op_step(uint64_t conn, const Json& request, OpReply* reply);
-  void op_set_rate(uint64_t conn, const Json& request, OpReply* reply);
-  void op_reset(uint64_t conn, const Json& request, OpReply* reply);
-  void op_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_subscribe_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_unsubscribe_events(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_join(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_leave(uint64_t conn, const Json& request, OpReply* reply);
-  void op_done(uint64_t conn, const Json& request, OpReply* reply);
-  void op_lockstep_shm(uint64_t conn, const Json& request, OpReply* reply);
-  void forward_events();
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
-  // a lockstep client stopped gating the clock (leave, drop, disconnect); last_at_s: where the
-  // coordinator says the clock stands without it, if it was the last (arms the lockstep_empty pause)
-  void lockstep_left(std::optional<double> last_at_s);
-
-  Json event_json(const sim::Event& e) const;
 
   sim::Simulation& sim_;
   sim::Runner* runner_;
@@ -196,32 +177,27 @@ class ApiServer {
   std::vector<OpGroup*> groups_;  // their hooks; set before start()
   // what the groups' hooks are given: send on this server, and whether a connection is in lockstep
   const OpGroup::Send send_fn_ = [this](uint64_t conn, const Json& m) { send(conn, m); };
-  const OpGroup::InLockstep in_lockstep_fn_ = [this](uint64_t conn) { return lockstep_.joined(conn); };
+  const OpGroup::InLockstep in_lockstep_fn_ = [this](uint64_t conn) {
+    return lockstep_.joined(conn);
+  };
+  // loop thread only
+  sim::SteadyWallClock wall_clock_;  // lockstep deadlines
+  LockstepCoordinator lockstep_;     // which connections gate the clock, their ticks
+  // the server's own op groups (built once the transport is): the clock, events, lockstep
+  std::unique_ptr<ClockOps> clock_ops_;
+  std::unique_ptr<EventOps> event_ops_;
+  std::unique_ptr<LockstepOps> lockstep_ops_;
   VehicleOps vehicle_ops_;
   std::unique_ptr<FrameStream> frames_;
 
-  std::mutex mutex_;                 // guards queue_ and shutdown_
+  std::mutex mutex_;  // guards queue_ and shutdown_
   std::condition_variable wake_;
   // counts the SeqWaiter's progress calls (guarded by mutex_): the gate waits for it to change
   uint64_t seq_progress_ = 0;
   std::deque<Request> queue_;
   bool shutdown_ = false;
   std::atomic<size_t> connections_{0};
-  std::set<uint64_t> authenticated_;   // connections that sent the token; I/O thread only
-
-  // loop thread only
-  sim::SteadyWallClock wall_clock_;          // lockstep deadlines
-  LockstepCoordinator lockstep_;             // which connections gate the clock, their ticks
-  std::set<uint64_t> event_subscribers_;     // subscribe_events
-  // the one clock-control path (pause, resume, step, pause_at): the gate holds the clock while paused_
-  bool paused_ = false;
-  std::set<double> pause_at_s_;             // pause_at: hold the clock once sim time reaches each
-  bool pause_when_lockstep_empty_ = false;  // pause_at: hold it when the last lockstep client leaves
-  uint64_t steps_remaining_ = 0;
-  std::optional<std::pair<uint64_t, Json>> step_reply_;  // conn, request id: answered when the steps are done
-  uint64_t steps_requested_ = 0;                        // by the step in progress
-  std::vector<Json> replies_behind_step_;  // to step_reply_'s connection, answered after its step
-  size_t events_forwarded_ = 0;
+  std::set<uint64_t> authenticated_;  // connections that sent the token; I/O thread only
 };
 
 }  // namespace uavsim::server::api

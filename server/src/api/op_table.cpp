@@ -4,6 +4,16 @@
 
 namespace uavsim::server::api {
 
+nlohmann::json ok_reply(const nlohmann::json& id, nlohmann::json result) {
+  return nlohmann::json{{"id", id}, {"ok", true}, {"result", std::move(result)}};
+}
+
+nlohmann::json error_reply(const nlohmann::json& id, ApiError code, const std::string& message) {
+  return nlohmann::json{{"id", id},
+                        {"ok", false},
+                        {"error", {{"code", common::api_error_code(code)}, {"message", message}}}};
+}
+
 void OpTable::add(OpSpec spec) {
   if (const OpSpec* earlier = find(spec.name)) {
     throw std::logic_error("sim API op '" + spec.name + "' registered twice (groups '" +

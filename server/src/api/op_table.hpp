@@ -1,5 +1,5 @@
-// The sim API's ops by name (docs/protocol.md): every op group (the server's clock, event and
-// lockstep ops, VehicleOps, FrameStream, RadioOps, SensorOps, OverlayOps) registers its ops here,
+// The sim API's ops by name (docs/protocol.md): every op group (ClockOps, EventOps, LockstepOps,
+// VehicleOps, FrameStream, RadioOps, SensorOps, OverlayOps) registers its ops here,
 // and the server dispatches requests, lists the ops in its hello and refuses unknown ones from this
 // one table.
 //
@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <functional>
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -39,6 +39,11 @@ struct OpReply {
   }
   bool failed() const { return error.has_value(); }
 };
+
+// The wire form of a reply to the request with this id: {"id", "ok": true, "result"}, and
+// {"id", "ok": false, "error": {"code", "message"}} (docs/protocol.md).
+nlohmann::json ok_reply(const nlohmann::json& id, nlohmann::json result);
+nlohmann::json error_reply(const nlohmann::json& id, ApiError code, const std::string& message);
 
 // Where an op is answered.
 enum class OpThread {
@@ -110,8 +115,9 @@ class OpGroup {
     (void)send;
   }
   // Whether conn has output of the current sim time prepared before it joined lockstep now (camera
-  // frames are captured at the start of a step, before the API's requests): such a connection's first
-  // tick cannot be now, or what is due for it at that tick was prepared without the lockstep promise.
+  // frames are captured at the start of a step, before the API's requests): such a connection's
+  // first tick cannot be now, or what is due for it at that tick was prepared without the lockstep
+  // promise.
   virtual bool prepared_before_join(uint64_t conn) const {
     (void)conn;
     return false;

@@ -9,7 +9,7 @@ namespace uavsim::server::app {
 
 namespace {
 
-constexpr double kDegToRad = common::kPi / 180.0;
+using common::kDegToRad;
 
 // a world numeric with at most max_size finite values (empty if absent)
 std::vector<double> numeric(const physics::World& world, const std::string& name, size_t min_size,

@@ -9,7 +9,7 @@
 namespace uavsim::server::app {
 
 namespace {
-constexpr double kDegToRad = common::kPi / 180.0;
+using common::kDegToRad;
 using common::wrap_pi;
 namespace frames = common::frames;
 using common::mavlink::MavMountMode;

@@ -6,7 +6,9 @@
 
 namespace uavsim::server::fc {
 
+using common::kDegToRad;
 using common::kPi;
+using common::kRadToDeg;
 using common::wrap_pi;  // (-pi, pi], O(1), non-finite -> 0
 
 }  // namespace uavsim::server::fc

@@ -7,8 +7,6 @@ namespace uavsim::server::fc {
 
 namespace {
 
-constexpr double kDegToRad = kPi / 180.0;
-
 // One row of the table: name, field, accepted range. The order of kTable is the MAVLink param_index;
 // append new rows at the end so indices stay stable.
 struct ParamDef {

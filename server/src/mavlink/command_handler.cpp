@@ -5,9 +5,10 @@
 #include <cmath>
 #include <cstdint>
 
-#include "uavsim/common/frames.hpp"
 #include "mavlink/input_limits.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -27,6 +28,12 @@ constexpr std::uint16_t kAccMask = bits(Mask::AxIgnore) | bits(Mask::AyIgnore) |
 constexpr std::uint16_t kForceSet = bits(Mask::ForceSet);
 constexpr std::uint16_t kYawIgnore = bits(Mask::YawIgnore);
 constexpr std::uint16_t kYawRateIgnore = bits(Mask::YawRateIgnore);
+
+// SET_ATTITUDE_TARGET's type_mask: each bit ignores one part of the target
+using AttitudeMask = AttitudeTargetTypemask;
+constexpr bool ignores(std::uint8_t type_mask, AttitudeMask part) {
+  return (type_mask & to_underlying(part)) != 0;
+}
 
 using limits::within;
 
@@ -194,8 +201,7 @@ void VehicleLink::handle_set_position_target_global(const msg::SetPositionTarget
 
 void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc::FlightController& fc) {
   fc::AttitudeTarget t;
-  // type_mask: 1/2/4 ignore body rates, 128 ignores the attitude
-  if ((m.type_mask & 128) == 0) {
+  if (!ignores(m.type_mask, AttitudeMask::AttitudeIgnore)) {
     const Eigen::Quaterniond q_ned_frd(m.q[0], m.q[1], m.q[2], m.q[3]);
     // each component of a unit quaternion is within [-1, 1]; allow slack for unnormalised senders
     const bool sane = (q_ned_frd.coeffs().array().abs() <= 2.0).all();
@@ -205,17 +211,21 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
     }
     t.q_enu_body = frames::q_enu_flu_from_q_ned_frd(q_ned_frd.normalized());
   }
-  if ((m.type_mask & 7) != 7) {
-    const Eigen::Vector3d w_frd((m.type_mask & 1) ? 0.0 : m.body_roll_rate,
-                                (m.type_mask & 2) ? 0.0 : m.body_pitch_rate,
-                                (m.type_mask & 4) ? 0.0 : m.body_yaw_rate);
+  // the body rates unless all three are ignored; an ignored one is zero
+  const bool ignores_roll_rate = ignores(m.type_mask, AttitudeMask::BodyRollRateIgnore);
+  const bool ignores_pitch_rate = ignores(m.type_mask, AttitudeMask::BodyPitchRateIgnore);
+  const bool ignores_yaw_rate = ignores(m.type_mask, AttitudeMask::BodyYawRateIgnore);
+  if (!(ignores_roll_rate && ignores_pitch_rate && ignores_yaw_rate)) {
+    const Eigen::Vector3d w_frd(ignores_roll_rate ? 0.0 : m.body_roll_rate,
+                                ignores_pitch_rate ? 0.0 : m.body_pitch_rate,
+                                ignores_yaw_rate ? 0.0 : m.body_yaw_rate);
     if (!within(w_frd, limits::kRate_rad_s)) {
       StatCounters::add(stats_.rejected_inputs);
       return;
     }
     t.rate_body_rad_s = frames::flu_from_frd(w_frd);
   }
-  if ((m.type_mask & 64) == 0) {
+  if (!ignores(m.type_mask, AttitudeMask::ThrottleIgnore)) {
     // a thrust the message says to use but that is no number: the whole target is refused, like a bad
     // rate or quaternion (it once fell back to the previous thrust silently)
     if (!std::isfinite(m.thrust)) {
@@ -228,7 +238,7 @@ void VehicleLink::handle_set_attitude_target(const msg::SetAttitudeTarget& m, fc
 }
 
 void VehicleLink::handle_gimbal_pitchyaw(const msg::GimbalManagerSetPitchyaw& m) {
-  constexpr double kRadToDeg = 180.0 / common::kPi;
+  using common::kRadToDeg;
   // NaN leaves an angle as it is (MAVLink's convention); anything else must be a sane number
   const auto bad = [](float v, double limit) { return !std::isnan(v) && !limits::within(v, limit); };
   if (bad(m.pitch, limits::kYaw_rad) || bad(m.yaw, limits::kYaw_rad) || bad(m.pitch_rate, limits::kRate_rad_s) ||

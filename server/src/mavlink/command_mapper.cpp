@@ -22,7 +22,7 @@ constexpr std::uint8_t kDenied = to_underlying(MavResult::Denied);
 constexpr std::uint8_t kUnsupported = to_underlying(MavResult::Unsupported);
 constexpr std::uint8_t kFailed = to_underlying(MavResult::Failed);
 
-constexpr double kDegToRad = common::kPi / 180.0;
+using common::kDegToRad;
 
 // MAVLink message ids are 24 bits
 constexpr std::uint32_t kMaxMsgId = 0xFFFFFF;

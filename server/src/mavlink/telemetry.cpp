@@ -13,8 +13,9 @@
 #include <limits>
 
 #include "airframe/airframe.hpp"
-#include "uavsim/common/frames.hpp"
 #include "mavlink/vehicle_link.hpp"
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/frames.hpp"
 
 namespace uavsim::server::mavlink {
 
@@ -22,7 +23,7 @@ namespace frames = ::uavsim::common::frames;
 
 namespace {
 
-constexpr double kRadToDeg = 180.0 / common::kPi;
+using common::kRadToDeg;
 
 // an enumerator (or an or of bitmask enumerators) as a message field of type T holds it
 template <class T, class E>
@@ -48,7 +49,7 @@ T clamp_to(double v) {
   return static_cast<T>(std::llround(std::clamp(v, lo, hi)));
 }
 
-constexpr double kDegToRad = common::kPi / 180.0;
+using common::kDegToRad;
 
 double wrap_180(double deg) { return std::remainder(deg, 360.0); }
 

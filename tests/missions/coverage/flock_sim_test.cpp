@@ -11,6 +11,7 @@
 #include <random>
 
 #include "agent.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::missions::coverage {
 namespace {
@@ -198,7 +199,7 @@ FlockRun fly(const FlockScenario& s) {
       sv.velocity_enu_m_s += (cmd - sv.velocity_enu_m_s) * (kDt_s / kLag_s);
       run.distance_m += sv.velocity_enu_m_s.head<2>().norm() * kDt_s;
       sv.position_enu_m += sv.velocity_enu_m_s * kDt_s;
-      sv.yaw_rad = std::remainder(sv.yaw_rad + sv.yaw_rate_rad_s * kDt_s, 2.0 * M_PI);
+      sv.yaw_rad = std::remainder(sv.yaw_rad + sv.yaw_rate_rad_s * kDt_s, 2.0 * common::kPi);
       if (sv.position_enu_m.z() <= 0.0) {
         sv.position_enu_m.z() = 0.0;
         sv.velocity_enu_m_s.setZero();

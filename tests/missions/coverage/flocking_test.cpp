@@ -5,13 +5,15 @@
 
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::coverage {
 namespace {
 
 constexpr double kTol = 1e-9;
 
 TEST(Flocking, AngleDiffAndSaturate) {
-  EXPECT_NEAR(angle_diff(3.0, -3.0), 6.0 - 2.0 * M_PI, kTol);  // 6 rad wraps to -0.283
+  EXPECT_NEAR(angle_diff(3.0, -3.0), 6.0 - 2.0 * common::kPi, kTol);  // 6 rad wraps to -0.283
   EXPECT_NEAR(angle_diff(0.1, 0.3), -0.2, kTol);
   EXPECT_EQ(saturate(5.0, 2.0), 2.0);
   EXPECT_EQ(saturate(-5.0, 2.0), -2.0);
@@ -137,9 +139,9 @@ TEST(Flocking, AxesFollowTheLeadersHeading) {
   FlockController c{FlockGains{}};
   FlockInputs in;
   in.local_enu_m = {0.0, 0.0};
-  in.local_heading_rad = M_PI;
+  in.local_heading_rad = common::kPi;
   in.leader_enu_m = {-5.0, 10.0};
-  in.leader_heading_rad = M_PI;  // flying -x: parallel = -x, ortho = -y
+  in.leader_heading_rad = common::kPi;  // flying -x: parallel = -x, ortho = -y
   in.others_enu_m = {in.leader_enu_m};
   const FlockOutputs out = c.step(in);
   // diff (-5, 10): parallelDiff = 5, orthoDiff = -10

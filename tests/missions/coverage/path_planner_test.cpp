@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::coverage {
 namespace {
 
@@ -58,7 +60,7 @@ TEST(PathPlanner, HighSideAndDirectionFromTheNearerEnd) {
   EXPECT_FALSE(p->low_side);
   // frontier 100; leader y = 100 - (0 + 5 - 2) = 97
   EXPECT_DOUBLE_EQ(p->points_enu_m.front().y(), 97.0);
-  EXPECT_NEAR(p->heading_rad, M_PI, 1e-12);
+  EXPECT_NEAR(p->heading_rad, common::kPi, 1e-12);
   EXPECT_GT(p->points_enu_m.front().x(), p->points_enu_m.back().x());
   // low side from the same place would start at y = 40 + 30 + 3 = 73: farther than 97 from 95?
   // |73 - 95| = 22 > |97 - 95| = 2: the high side is the nearer one

@@ -10,6 +10,7 @@
 
 #include "apd_report.hpp"
 #include "coverage_world.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::missions::coverage {
 namespace {
@@ -80,7 +81,7 @@ TEST(CoverageWorld, OverviewCameraSeesTheRectangleAndTheTakeOffLine) {
       3);
   EXPECT_NE(xml.find(R"(xyaxes="1 0 0 0 1 0" fovy="45")", at), std::string::npos);
   // 640 x 480 at fovy 45 deg: f = 240 / tan(22.5 deg) = 579.4 px; x east, y south in the image
-  const double f_px = 240.0 / std::tan(22.5 * M_PI / 180.0);
+  const double f_px = 240.0 / std::tan(22.5 * common::kPi / 180.0);
   for (const double z : {0.0, 20.0, 30.0}) {
     for (const auto& [x, y] : std::vector<std::pair<double, double>>{
              {0, 0}, {150, 0}, {0, 100}, {150, 100}, {-10, 0}, {-10, 40}}) {

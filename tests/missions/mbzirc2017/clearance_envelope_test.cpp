@@ -11,6 +11,8 @@
 
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2017 {
 namespace {
 
@@ -41,7 +43,7 @@ TEST(ClearanceEnvelope, TruckFrameFollowsTheHeadingAndTheTurn) {
   EstimatedTruck t;
   t.marker_enu_m = Eigen::Vector2d(10.0, 5.0);
   t.velocity_enu_m_s = Eigen::Vector2d(0.0, 4.0);
-  t.heading_enu_rad = 0.5 * M_PI;
+  t.heading_enu_rad = 0.5 * common::kPi;
   t.yaw_rate_rad_s = 0.2;
   // body origin: deck 1.5 + skids 0.362 + 1.0
   const Eigen::Vector3d p(10.0, 6.0, 1.5 + 0.362 + 1.0);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/synthetic_scene.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
@@ -18,7 +19,7 @@ namespace {
 constexpr double kAltitudeM = 8.0;
 
 vision::PinholeIntrinsics down_camera() {
-  return vision::PinholeIntrinsics::from_fovy(640, 480, M_PI / 3);
+  return vision::PinholeIntrinsics::from_fovy(640, 480, common::kPi / 3);
 }
 
 const vision::Overlay* first_of(const vision::VideoLogFrame& f, vision::Overlay::Kind kind) {

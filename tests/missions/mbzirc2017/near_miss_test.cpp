@@ -7,6 +7,8 @@
 #include <cmath>
 #include <fstream>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::missions::mbzirc2017 {
 namespace {
 
@@ -57,7 +59,7 @@ TEST(NearMiss, BoxDistanceIsSigned) {
 TEST(NearMiss, CentredOnTheDeck) {
   NearMissTracker t(load_truck_shape(kModels + "/objects/truck.xml"),
                     load_vehicle_shape(kModels + "/vehicles/hexa.xml"));
-  const double yaw = M_PI / 4;
+  const double yaw = common::kPi / 4;
   const Eigen::Vector3d truck(10, 20, 0);
   const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
   t.add(truck + Eigen::Vector3d(0, 0, 1.862), q, truck, yaw);

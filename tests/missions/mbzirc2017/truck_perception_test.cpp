@@ -12,6 +12,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/synthetic_scene.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
@@ -39,7 +40,8 @@ class TrackAcrossAStep : public ::testing::Test {
     const Eigen::Vector3d truth(m.x() - 0.5, m.y() + 0.3, kAltitudeM);
     const Eigen::Vector3d estimate =
         truth + Eigen::Vector3d(estimate_error_m.x(), estimate_error_m.y(), 0.0);
-    const vision::PinholeIntrinsics k = vision::PinholeIntrinsics::from_fovy(640, 480, M_PI / 3);
+    const vision::PinholeIntrinsics k =
+        vision::PinholeIntrinsics::from_fovy(640, 480, common::kPi / 3);
     cv::Mat image = vision::synthetic::sand_background(k, 11);
     vision::synthetic::render_marker(k, perception.camera_pose(truth, 0.0),
                                      vision::LandingMarkerGeometry{}, m, 0.0, config.deck_height_m,

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "mission_config.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/frames.hpp"
 #include "uavsim/vision/camera_model.hpp"
 #include "uavsim/vision/synthetic_scene.hpp"
@@ -21,17 +22,17 @@ namespace uavsim::missions::mbzirc2020 {
 namespace {
 
 namespace frames = common::frames;
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+using common::kDegToRad;
 
 struct Seed14AtSixtySeconds {
   // ground truth (truth_uav0.csv, summary.json) and the field's errors
   Eigen::Vector3d vehicle_enu_m{35.80, -14.48, 2.83};
-  double heading_rad = 34.3 * kDeg;
-  double camera_elevation_rad = 6.0 * kDeg;  // commanded: 0 (level)
+  double heading_rad = 34.3 * kDegToRad;
+  double camera_elevation_rad = 6.0 * kDegToRad;  // commanded: 0 (level)
   double camera_yaw_rad = 0.0;               // the loop's yaw lag, relative to the heading (ENU)
   Eigen::Vector3d balloon_enu_m{39.86, -12.59, 3.14};
   Eigen::Vector3d gps_bias_m{0.4, 0.3, -0.5};
-  double compass_offset_rad = 4.5 * kDeg;
+  double compass_offset_rad = 4.5 * kDegToRad;
   // what the program has: telemetry
   Eigen::Vector3d telemetry_enu_m() const { return vehicle_enu_m + gps_bias_m; }
   double telemetry_yaw_rad() const { return heading_rad + compass_offset_rad; }
@@ -57,7 +58,7 @@ struct Seed14AtSixtySeconds {
 
 // The forward camera of models/worlds/mbzirc2020_field.xml (384 x 216, 22 deg vertical).
 vision::PinholeIntrinsics front_camera() {
-  return vision::PinholeIntrinsics::from_fovy(384, 216, 22.0 * kDeg);
+  return vision::PinholeIntrinsics::from_fovy(384, 216, 22.0 * kDegToRad);
 }
 
 cv::Mat render(const vision::PinholeIntrinsics& k, const vision::CameraPose& camera,
@@ -115,7 +116,7 @@ TEST(Mbzirc2020BalloonPerception, PlacesTheBalloonWithTheGimbalsReportedAttitude
 TEST(Mbzirc2020BalloonPerception, TheReportedAttitudeCarriesTheGimbalsYawAndRoll) {
   // the loop's yaw lag too (a turn): 3 deg left of the heading
   Seed14AtSixtySeconds c;
-  c.camera_yaw_rad = 3.0 * kDeg;
+  c.camera_yaw_rad = 3.0 * kDegToRad;
   const auto seen = sightings(c, [&](const BalloonPerception& p, const GimbalReport& reported) {
     return p.camera_pose(c.telemetry_enu_m(), c.telemetry_yaw_rad(), reported);
   });
@@ -124,8 +125,8 @@ TEST(Mbzirc2020BalloonPerception, TheReportedAttitudeCarriesTheGimbalsYawAndRoll
   EXPECT_LT((seen[0].position_enu_m - in_our_frame(c)).head<2>().norm(), 0.15);
   // and the report's angles are the camera's, in MAVLink's signs
   const GimbalReport r = c.report(MissionConfig{}, 60.0);
-  EXPECT_NEAR(r.pitch_rad, 6.0 * kDeg, 1e-9);
-  EXPECT_NEAR(r.yaw_rad, -3.0 * kDeg, 1e-9);  // clockwise positive
+  EXPECT_NEAR(r.pitch_rad, 6.0 * kDegToRad, 1e-9);
+  EXPECT_NEAR(r.yaw_rad, -3.0 * kDegToRad, 1e-9);  // clockwise positive
   EXPECT_NEAR(r.roll_rad, 0.0, 1e-9);
 }
 

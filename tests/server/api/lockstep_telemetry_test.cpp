@@ -23,6 +23,7 @@
 namespace uavsim::server::api {
 namespace {
 
+using common::mavlink::MavCmd;
 using mavlink::testing::TestGcs;
 namespace msg = common::mavlink::msg;
 using testing::Json;
@@ -79,9 +80,9 @@ class MavlinkApiServer {
 // the sequence number of the last message g sent (TestGcs numbers its frames from 0)
 uint8_t last_seq(const TestGcs& g) { return static_cast<uint8_t>(g.sent_frames() - 1); }
 
-void command(TestGcs& g, uint16_t cmd, std::array<float, 7> p = {}) {
+void command(TestGcs& g, MavCmd cmd, std::array<float, 7> p = {}) {
   msg::CommandLong c;
-  c.command = cmd;
+  c.command = mavlink::testing::cmd_id(cmd);
   c.target_system = 1;
   c.target_component = 1;
   c.param1 = p[0], c.param2 = p[1], c.param3 = p[2], c.param4 = p[3];
@@ -91,7 +92,8 @@ void command(TestGcs& g, uint16_t cmd, std::array<float, 7> p = {}) {
 
 void set_interval(TestGcs& g, uint32_t msgid, double interval_s) {
   // MAV_CMD_SET_MESSAGE_INTERVAL: msgid, interval in microseconds
-  command(g, 511, {static_cast<float>(msgid), static_cast<float>(interval_s * 1e6)});
+  command(g, MavCmd::SetMessageInterval,
+          {static_cast<float>(msgid), static_cast<float>(interval_s * 1e6)});
 }
 
 // joins lockstep with period_s and resumes the clock; returns the reply of the join
@@ -180,9 +182,9 @@ std::vector<std::string> fly_scripted() {
     }
     if (phase == 0 && status && (status->onboard_control_sensors_health & kPrearm) &&
         (status->onboard_control_sensors_health & kGps)) {
-      command(gcs, 176, {1, 4});          // MAV_CMD_DO_SET_MODE: custom mode GUIDED
-      command(gcs, 400, {1});             // MAV_CMD_COMPONENT_ARM_DISARM
-      command(gcs, 22, {0, 0, 0, 0, 0, 0, 5});  // MAV_CMD_NAV_TAKEOFF to 5 m
+      command(gcs, MavCmd::DoSetMode, {1, 4});  // custom mode GUIDED
+      command(gcs, MavCmd::ComponentArmDisarm, {1});
+      command(gcs, MavCmd::NavTakeoff, {0, 0, 0, 0, 0, 0, 5});  // to 5 m
       phase = 1;
     } else if (phase == 1 && global && global->relative_alt >= 4500) {
       msg::SetPositionTargetLocalNed sp;
@@ -194,7 +196,7 @@ std::vector<std::string> fly_scripted() {
       gcs.send(sp);
       phase = 2;
     } else if (phase == 2 && local && local->x >= 4.5f) {
-      command(gcs, 21);  // MAV_CMD_NAV_LAND
+      command(gcs, MavCmd::NavLand);
       phase = 3;
     } else if (phase == 3 && global && global->relative_alt < 200) {
       phase = 4;

@@ -7,6 +7,8 @@
 
 #include <fstream>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::server::app {
 namespace {
 
@@ -66,7 +68,7 @@ TEST(FieldSetup, WorldSettingsThenCommandLine) {
   EXPECT_FALSE(c.wind_from_seeded);
   EXPECT_EQ(c.wind.turbulence_sd_m_s, 2.0);
   EXPECT_EQ(c.gimbal.time_const_s, 0.1);
-  EXPECT_NEAR(c.gimbal.rate_max_rad_s, M_PI / 2, 1e-12);
+  EXPECT_NEAR(c.gimbal.rate_max_rad_s, common::kPi / 2, 1e-12);
   EXPECT_EQ(c.balloons.height_spread_m, 0.3);
   EXPECT_FALSE(c.balloons.sway);
   EXPECT_EQ(c.battery_resistance_ohm, 0.02);

@@ -13,13 +13,14 @@
 #include "mavlink_endpoint/test_gcs.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/object_bodies.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/common/frames.hpp"
 
 namespace uavsim::server::mavlink::testing {
 namespace {
 
 namespace frames = ::uavsim::common::frames;
-constexpr double kDeg = common::kPi / 180.0;
+using common::kDegToRad;
 // The report against the camera body as placed for the same step: float quaternion, and the body
 // turned by the vehicle's rotation within one physics step (it stands on the ground)
 constexpr double kMatch_deg = 0.1;
@@ -32,7 +33,7 @@ class GimbalReportTest : public EndpointTest {
     physics::ComposeOptions o;
     o.models_dir = UAVSIM_MODELS_DIR;
     sim::SimConfig c;
-    c.field.gimbal = {0.05, 180.0 * kDeg, 1000.0 * kDeg};
+    c.field.gimbal = {0.05, 180.0 * kDegToRad, 1000.0 * kDegToRad};
     sim_ = std::make_unique<sim::Simulation>(
         physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", o), c);
     objects_ = objects::add_world_objects(*sim_);
@@ -73,12 +74,12 @@ class GimbalReportTest : public EndpointTest {
 TEST_F(GimbalReportTest, DuringASlewTheReportedAttitudeLagsTheCommandAndIsTheCamerasOwn) {
   auto g = connect();
   // GIMBAL_DEVICE_ATTITUDE_STATUS every 10 ms; level first (the world's forward gimbal)
-  EXPECT_EQ(command(*g, 511, {285, 10000}), 0);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {285, 10000}), 0);
   ASSERT_TRUE(step_until(
       *g, [&] { return g->count<msg::GimbalDeviceAttitudeStatus>() > 0; }, 1.0));
   // DO_MOUNT_CONTROL, 60 deg down: handled in the next control step, stepped from here on
   msg::CommandLong c;
-  c.command = 205;
+  c.command = cmd_id(MavCmd::DoMountControl);
   c.target_system = 1;
   c.target_component = 1;
   c.param1 = -60.0f;
@@ -115,12 +116,13 @@ TEST_F(GimbalReportTest, DuringASlewTheReportedAttitudeLagsTheCommandAndIsTheCam
     const auto it = seen.find(m.time_boot_ms);
     if (it == seen.end()) continue;  // before the command
     ++checks;
-    EXPECT_EQ(m.flags & 32, 32);  // GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME
+    EXPECT_TRUE(has_flag(m.flags, GimbalDeviceFlags::YawInVehicleFrame));
     worst_deg = std::max(
         worst_deg,
-        reported_enu(m, it->second.heading_ned_rad).angularDistance(it->second.camera_enu) / kDeg);
+        reported_enu(m, it->second.heading_ned_rad).angularDistance(it->second.camera_enu) /
+            kDegToRad);
     const Eigen::Quaterniond q(m.q[0], m.q[1], m.q[2], m.q[3]);
-    last_pitch_deg = frames::euler_from_q_ned_frd(q).pitch_rad / kDeg;
+    last_pitch_deg = frames::euler_from_q_ned_frd(q).pitch_rad / kDegToRad;
     most_lag_deg = std::max(most_lag_deg, std::abs(last_pitch_deg - -60.0));
   }
   EXPECT_GT(checks, 50);

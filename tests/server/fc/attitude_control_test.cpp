@@ -15,7 +15,6 @@
 namespace uavsim::server::fc {
 namespace {
 
-constexpr double kDegToRad = kPi / 180.0;
 constexpr double kDtS = 0.002;  // the FC's control step (500 Hz)
 constexpr double kTol = 1e-9;
 

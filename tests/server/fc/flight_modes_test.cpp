@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "fc/mode_context.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::fc {
 namespace {
@@ -147,7 +148,7 @@ TEST(FlightModes, AutoPhasesFollowTheItems) {
   rtl.kind = MissionItem::Kind::kRtl;
   MissionItem yaw;
   yaw.kind = MissionItem::Kind::kConditionYaw;
-  yaw.yaw_enu_rad = 3.0 * M_PI / 2.0;  // 270 deg ENU = -90 deg once wrapped
+  yaw.yaw_enu_rad = 3.0 * common::kPi / 2.0;  // 270 deg ENU = -90 deg once wrapped
   b.mission.items = {MissionItem{}, land_here, rtl, yaw};
   AutoMode& a = b.modes.automatic;
   ModeContext c = b.context();
@@ -162,7 +163,7 @@ TEST(FlightModes, AutoPhasesFollowTheItems) {
   EXPECT_FALSE(b.modes.rtl.landing());
   // CONDITION_YAW: the heading target, wrapped to (-pi, pi]
   a.start_item(c, 3);
-  EXPECT_NEAR(b.yaw.target_rad, -M_PI / 2.0, kTol);
+  EXPECT_NEAR(b.yaw.target_rad, -common::kPi / 2.0, kTol);
   EXPECT_TRUE(b.yaw.fixed);
   EXPECT_FALSE(a.ends_flight_at_touchdown());
   // past the end: mission complete, holding at the last item

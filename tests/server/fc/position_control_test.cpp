@@ -19,7 +19,6 @@ constexpr double kDtS = 0.002;  // the FC's control step (500 Hz)
 constexpr double kMassKg = 1.5;
 constexpr double kHoverN = kMassKg * kGravityM_S2;  // 1.5 * 9.80665 = 14.71 N
 constexpr double kTol = 1e-9;
-constexpr double kDegToRad = kPi / 180.0;
 
 EstimatedState at(const Eigen::Vector3d& position_enu_m,
                   const Eigen::Vector3d& velocity_enu_m_s = Eigen::Vector3d::Zero()) {

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "../fc/test_airframes.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink {
 namespace {
@@ -72,14 +73,14 @@ TEST(CommandMapper, SetModeNeedsTheCustomModeFlagAndAKnownMode) {
 }
 
 TEST(CommandMapper, ConditionYawHeadingBecomesEnuYaw) {
-  const double deg = M_PI / 180.0;
+  const double deg = common::kPi / 180.0;
   // absolute: yaw_enu = 90 deg - heading; north (0) = +90 deg ENU, east (90) = 0, west (270) = -180
   EXPECT_NEAR(fc_request<cmd::Yaw>(command(MavCmd::ConditionYaw, {0, 0, 0, 0})).yaw.yaw_enu_rad,
-              M_PI / 2, kTol);
+              common::kPi / 2, kTol);
   EXPECT_NEAR(fc_request<cmd::Yaw>(command(MavCmd::ConditionYaw, {90, 0, 0, 0})).yaw.yaw_enu_rad,
               0.0, kTol);
   EXPECT_NEAR(fc_request<cmd::Yaw>(command(MavCmd::ConditionYaw, {270, 0, 0, 0})).yaw.yaw_enu_rad,
-              -M_PI, kTol);
+              -common::kPi, kTol);
   // relative: clockwise (+1, and 0 = "shortest", which ArduCopter turns clockwise) is a negative
   // ENU change
   const auto cw = fc_request<cmd::Yaw>(command(MavCmd::ConditionYaw, {30, 15, 1, 1})).yaw;

@@ -9,7 +9,7 @@ namespace {
 
 class BadInputTest : public EndpointTest {
  protected:
-  int unknown_command(TestGcs& g) { return command(g, 31000); }
+  int unknown_command(TestGcs& g) { return command(g, kUnsupportedCmd); }
   void send_garbage_then_expect_ack(TestGcs& g, std::span<const std::uint8_t> bytes) {
     const auto before = server_->stats(0).bytes_received;
     g.send_raw(bytes);
@@ -30,7 +30,7 @@ TEST_F(BadInputTest, RandomBytesAreSkipped) {
 TEST_F(BadInputTest, BadCrcIsCounted) {
   auto g = connect();
   msg::CommandLong c;
-  c.command = 400;
+  c.command = cmd_id(MavCmd::ComponentArmDisarm);
   c.param1 = 1;
   c.target_system = 1;
   EncodedFrame f = encode(FrameHeader{255, 190, 0, Version::kV2, std::nullopt}, c);
@@ -43,7 +43,7 @@ TEST_F(BadInputTest, BadCrcIsCounted) {
 TEST_F(BadInputTest, TruncatedFrameFollowedByAGoodOneIsRecovered) {
   auto g = connect();
   msg::CommandLong c;
-  c.command = 400;
+  c.command = cmd_id(MavCmd::ComponentArmDisarm);
   c.param1 = 1;
   c.target_system = 1;
   const EncodedFrame f = encode(FrameHeader{255, 190, 0, Version::kV2, std::nullopt}, c);
@@ -104,7 +104,7 @@ TEST_F(BadInputTest, ClientThatNeverReadsIsCappedAndCostsNobodyElse) {
   for (TestGcs* g : {lazy.get(), good.get()}) {
     for (std::uint32_t id : {0u, 1u, 24u, 30u, 31u, 32u, 33u, 74u, 147u}) {
       msg::CommandLong cmd;
-      cmd.command = 511;
+      cmd.command = cmd_id(MavCmd::SetMessageInterval);
       cmd.target_system = 1;
       cmd.param1 = static_cast<float>(id);
       cmd.param2 = 1000;

@@ -41,7 +41,7 @@ TEST_F(EndpointTest, AConnectionWithNoDescriptorLeftIsClosedNotSpunOn) {
   // descriptors are back: a ground station connects and is answered (31000: no such command)
   auto g = connect();
   EXPECT_EQ(server_->client_count(0), 2u);  // the first one and this
-  EXPECT_EQ(command(*g, 31000), 3);  // MAV_RESULT_UNSUPPORTED
+  EXPECT_EQ(command(*g, kUnsupportedCmd), 3);  // MAV_RESULT_UNSUPPORTED
 }
 
 }  // namespace

@@ -19,9 +19,9 @@ class FlightTest : public EndpointTest {
   // GUIDED, arm, take off to alt_m; returns when GLOBAL_POSITION_INT.relative_alt says it is there
   void take_off(TestGcs& g, double alt_m) {
     wait_gps_ready(g);
-    ASSERT_EQ(command(g, 176, {1, 4}), 0);
-    ASSERT_EQ(command(g, 400, {1}), 0);
-    ASSERT_EQ(command(g, 22, {0, 0, 0, 0, 0, 0, static_cast<float>(alt_m)}), 0);
+    ASSERT_EQ(command(g, MavCmd::DoSetMode, {1, 4}), 0);
+    ASSERT_EQ(command(g, MavCmd::ComponentArmDisarm, {1}), 0);
+    ASSERT_EQ(command(g, MavCmd::NavTakeoff, {0, 0, 0, 0, 0, 0, static_cast<float>(alt_m)}), 0);
     ASSERT_TRUE(step_until(g, [&] {
       const auto p = g.last<msg::GlobalPositionInt>();
       return p && std::abs(p->relative_alt / 1000.0 - alt_m) < kAltTolM;
@@ -32,10 +32,11 @@ class FlightTest : public EndpointTest {
   }
 
   void land_and_wait_disarm(TestGcs& g) {
-    ASSERT_EQ(command(g, 21), 0);
+    ASSERT_EQ(command(g, MavCmd::NavLand), 0);
     ASSERT_TRUE(step_until(g, [&] {
       const auto hb = g.last<msg::Heartbeat>();
-      return hb && hb->custom_mode == 9 && (hb->base_mode & 128) == 0;
+      return hb && hb->custom_mode == to_underlying(CopterMode::Land) &&
+             !has_flag(hb->base_mode, MavModeFlag::SafetyArmed);
     }, 60.0)) << "never disarmed after LAND";
   }
 };
@@ -61,7 +62,7 @@ TEST_F(FlightTest, GuidedTakeoffGotoLocalNedAndLand) {
   EXPECT_NEAR(sim_->truth(0).position_enu_m.x(), 5.0, 1.5);
   EXPECT_NEAR(sim_->truth(0).position_enu_m.y(), 10.0, 1.5);
   // POSITION_TARGET_LOCAL_NED reports the goal in NED
-  EXPECT_EQ(command(*g, 512, {85}), 0);
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {85}), 0);
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::PositionTargetLocalNed>() > 0; }, 1.0));
   const auto tgt = g->last<msg::PositionTargetLocalNed>();
   EXPECT_NEAR(tgt->x, 10.0, kPosTolM);  // the controller's current (shaped) target, near the goal
@@ -105,7 +106,7 @@ TEST_F(FlightTest, MissionItemWithCurrent2IsAGuidedGoto) {
   mi.target_system = 0;
   mi.target_component = 0;
   mi.frame = 3;
-  mi.command = 16;
+  mi.command = cmd_id(MavCmd::NavWaypoint);
   mi.current = 2;
   mi.x = static_cast<float>(dest.lat_deg);
   mi.y = static_cast<float>(dest.lon_deg);
@@ -134,14 +135,14 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
     it.frame = 6;
     it.autocontinue = 1;
     if (seq == 0) {
-      it.command = 16;
+      it.command = cmd_id(MavCmd::NavWaypoint);
       it.frame = 0;
     } else if (seq == 1) {
-      it.command = 22;
+      it.command = cmd_id(MavCmd::NavTakeoff);
       it.z = 10;
     } else {
       const Geodetic gd = geodetic_from_ned(o, wps[seq - 2]);
-      it.command = 16;
+      it.command = cmd_id(MavCmd::NavWaypoint);
       it.x = static_cast<std::int32_t>(std::llround(gd.lat_deg * 1e7));
       it.y = static_cast<std::int32_t>(std::llround(gd.lon_deg * 1e7));
       it.z = 10;
@@ -173,9 +174,9 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
 
   // fly it: GUIDED, arm, AUTO via MISSION_START
   wait_gps_ready(*g);
-  ASSERT_EQ(command(*g, 176, {1, 4}), 0);
-  ASSERT_EQ(command(*g, 400, {1}), 0);
-  ASSERT_EQ(command(*g, 300, {0, 0}), 0);
+  ASSERT_EQ(command(*g, MavCmd::DoSetMode, {1, 4}), 0);
+  ASSERT_EQ(command(*g, MavCmd::ComponentArmDisarm, {1}), 0);
+  ASSERT_EQ(command(*g, MavCmd::MissionStart, {0, 0}), 0);
   ASSERT_TRUE(step_until(*g, [&] {
     for (const auto& r : g->all<msg::MissionItemReached>()) if (r.seq == 4) return true;
     return false;

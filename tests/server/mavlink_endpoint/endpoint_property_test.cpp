@@ -71,11 +71,11 @@ class PropertyTest : public EndpointTest {
   void fly(TestGcs& g) {
     if (!sim_->fc(0).armed())
       wait_gps_ready(g);  // SYS_STATUS reports the pre-arm checks while disarmed
-    ASSERT_EQ(command(g, 176, {1, 4}), kAccepted);
+    ASSERT_EQ(command(g, MavCmd::DoSetMode, {1, 4}), kAccepted);
     if (!sim_->fc(0).armed()) {
-      ASSERT_EQ(command(g, 400, {1}), kAccepted);
+      ASSERT_EQ(command(g, MavCmd::ComponentArmDisarm, {1}), kAccepted);
     }
-    (void)command(g, 22,
+    (void)command(g, MavCmd::NavTakeoff,
                   {0, 0, 0, 0, 0, 0, static_cast<float>(kTakeoffAltM)});  // refused when airborne
     hold_at(g, kTakeoffAltM);
   }
@@ -107,7 +107,7 @@ class PropertyTest : public EndpointTest {
         g, [&] { return g.count<msg::Heartbeat>() > beats + 1; }, 3.0))
         << "no heartbeat after " << after;
     ASSERT_NO_FATAL_FAILURE(fly(g)) << "after " << after;
-    ASSERT_EQ(command(g, 115, {90, 90, 0, 0}), kAccepted) << "after " << after;
+    ASSERT_EQ(command(g, MavCmd::ConditionYaw, {90, 90, 0, 0}), kAccepted) << "after " << after;
     const double want = kPi / 2;  // ATTITUDE.yaw is NED: 90 deg is east
     EXPECT_TRUE(step_until(
         g,

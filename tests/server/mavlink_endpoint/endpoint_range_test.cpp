@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "test_gcs.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::mavlink::testing {
 namespace {
@@ -18,9 +19,9 @@ class RangeTest : public EndpointTest {
   // GUIDED, arm, take off to 3 m; returns once telemetry says it is there
   void take_off(TestGcs& g) {
     wait_gps_ready(g);
-    ASSERT_EQ(command(g, 176, {1, 4}), kAccepted);
-    ASSERT_EQ(command(g, 400, {1}), kAccepted);
-    ASSERT_EQ(command(g, 22, {0, 0, 0, 0, 0, 0, 3}), kAccepted);
+    ASSERT_EQ(command(g, MavCmd::DoSetMode, {1, 4}), kAccepted);
+    ASSERT_EQ(command(g, MavCmd::ComponentArmDisarm, {1}), kAccepted);
+    ASSERT_EQ(command(g, MavCmd::NavTakeoff, {0, 0, 0, 0, 0, 0, 3}), kAccepted);
     ASSERT_TRUE(step_until(g, [&] {
       const auto p = g.last<msg::GlobalPositionInt>();
       return p && std::abs(p->relative_alt / 1000.0 - 3.0) < 0.5;
@@ -29,23 +30,29 @@ class RangeTest : public EndpointTest {
 
   // the vehicle still obeys: CONDITION_YAW to a heading is accepted and flown (ATTITUDE.yaw is NED)
   void expect_turns_to(TestGcs& g, double heading_deg) {
-    ASSERT_EQ(command(g, 115, {static_cast<float>(heading_deg), 90, 0, 0}), kAccepted);
-    const double want = heading_deg * M_PI / 180.0;
-    EXPECT_TRUE(step_until(g, [&] {
-      const auto a = g.last<msg::Attitude>();
-      return a && std::abs(std::remainder(a->yaw - want, 2 * M_PI)) < kHeadingTolRad;
-    }, 15.0)) << "vehicle did not turn to " << heading_deg << " deg after the bad input; truth heading "
-              << [&] {
-                   const Eigen::Vector3d fwd = sim_->truth(0).q_enu_body * Eigen::Vector3d::UnitX();
-                   return 90.0 - std::atan2(fwd.y(), fwd.x()) * 180.0 / M_PI;
-                 }()
-              << " deg, last ATTITUDE yaw "
-              << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->yaw * 180.0 / M_PI : -999.0)
-              << " at " << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->time_boot_ms : 0)
-              << " ms, yaw target (ENU) " << sim_->fc(0).yaw_target_enu_rad() * 180.0 / M_PI
-              << " ms, sim " << sim_->time_s() << " s, dropped full "
-              << server_->stats(0).frames_dropped_full << ", mode "
-              << (g.last<msg::Heartbeat>() ? g.last<msg::Heartbeat>()->custom_mode : 99);
+    ASSERT_EQ(command(g, MavCmd::ConditionYaw, {static_cast<float>(heading_deg), 90, 0, 0}),
+              kAccepted);
+    const double want = heading_deg * common::kPi / 180.0;
+    EXPECT_TRUE(step_until(
+        g,
+        [&] {
+          const auto a = g.last<msg::Attitude>();
+          return a && std::abs(std::remainder(a->yaw - want, 2 * common::kPi)) < kHeadingTolRad;
+        },
+        15.0))
+        << "vehicle did not turn to " << heading_deg << " deg after the bad input; truth heading "
+        <<
+        [&] {
+          const Eigen::Vector3d fwd = sim_->truth(0).q_enu_body * Eigen::Vector3d::UnitX();
+          return 90.0 - std::atan2(fwd.y(), fwd.x()) * 180.0 / common::kPi;
+        }()
+        << " deg, last ATTITUDE yaw "
+        << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->yaw * 180.0 / common::kPi : -999.0)
+        << " at " << (g.last<msg::Attitude>() ? g.last<msg::Attitude>()->time_boot_ms : 0)
+        << " ms, yaw target (ENU) " << sim_->fc(0).yaw_target_enu_rad() * 180.0 / common::kPi
+        << " ms, sim " << sim_->time_s() << " s, dropped full "
+        << server_->stats(0).frames_dropped_full << ", mode "
+        << (g.last<msg::Heartbeat>() ? g.last<msg::Heartbeat>()->custom_mode : 99);
   }
 
   // sends a GUIDED velocity setpoint of zero with this yaw rate (NED, rad/s) and waits until the
@@ -71,7 +78,8 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   take_off(*g);
   fc::FlightController& fc = sim_->fc(0);
   // the three inputs that once spun the angle wrap forever, given straight to the controller
-  EXPECT_EQ(fc.set_yaw({M_PI / 2.0 - 1e30 * M_PI / 180.0, false, 0.0}), fc::CommandResult::kAccepted);
+  EXPECT_EQ(fc.set_yaw({common::kPi / 2.0 - 1e30 * common::kPi / 180.0, false, 0.0}),
+            fc::CommandResult::kAccepted);
   step_for(0.5);
   fc::GuidedTarget t;
   t.velocity_enu_m_s = Eigen::Vector3d::Zero();
@@ -80,10 +88,10 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
   step_for(0.2);
   fc::MissionItem yaw_item;
   yaw_item.kind = fc::MissionItem::Kind::kConditionYaw;
-  yaw_item.yaw_enu_rad = M_PI / 2.0 - 1e30 * M_PI / 180.0;
+  yaw_item.yaw_enu_rad = common::kPi / 2.0 - 1e30 * common::kPi / 180.0;
   yaw_item.position_valid = false;
   fc.set_mission({fc::MissionItem{}, yaw_item});
-  ASSERT_EQ(command(*g, 300, {0, 0}), kAccepted);  // AUTO runs the yaw item
+  ASSERT_EQ(command(*g, MavCmd::MissionStart, {0, 0}), kAccepted);  // AUTO runs the yaw item
   step_for(0.2);
   // back in GUIDED the vehicle is as controllable as before
   std::string events;
@@ -91,7 +99,7 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
     events += std::string(sim::event_type_name(e.type)) + " " + e.detail + "; ";
   }
   ASSERT_TRUE(fc.armed()) << events;
-  ASSERT_EQ(command(*g, 176, {1, 4}), kAccepted);
+  ASSERT_EQ(command(*g, MavCmd::DoSetMode, {1, 4}), kAccepted);
   expect_turns_to(*g, 90.0);
   EXPECT_TRUE(sim_->truth(0).position_enu_m.allFinite());
 }
@@ -99,9 +107,10 @@ TEST_F(RangeTest, HugeAnglesAndRatesReachingTheControllerDoNotHangTheLoop) {
 TEST_F(RangeTest, OutOfRangeYawInputsAreRefusedAtTheEdge) {
   auto g = connect();
   take_off(*g);
-  EXPECT_EQ(command(*g, 115, {1e30f, 0, 0, 0}), kDenied);                                   // angle
-  EXPECT_EQ(command(*g, 115, {90, std::numeric_limits<float>::infinity(), 0, 0}), kDenied);  // rate
-  EXPECT_EQ(command(*g, 115, {90, -5, 0, 0}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::ConditionYaw, {1e30f, 0, 0, 0}), kDenied);  // angle
+  EXPECT_EQ(command(*g, MavCmd::ConditionYaw, {90, std::numeric_limits<float>::infinity(), 0, 0}),
+            kDenied);  // rate
+  EXPECT_EQ(command(*g, MavCmd::ConditionYaw, {90, -5, 0, 0}), kDenied);
   // velocity setpoint with yaw_rate 3.4e38: counted as rejected, never applied
   const auto rejected = server_->stats(0).rejected_inputs;
   send_yaw_rate(*g, 3.4e38f);
@@ -140,7 +149,8 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
     const fc::TruthState tr = sim_->truth(0);
     max_tilt_rate = std::max(max_tilt_rate, tr.rate_body_rad_s.head<2>().norm());
     const double up = (tr.q_enu_body * Eigen::Vector3d::UnitZ()).z();
-    max_tilt_deg = std::max(max_tilt_deg, std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI);
+    max_tilt_deg =
+        std::max(max_tilt_deg, std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / common::kPi);
     if (sim_->time_s() > end - 1.5) {  // the turn, after a second to reach its rate
       yaw_rate_sum += tr.rate_body_rad_s.z();
       ++samples;
@@ -151,18 +161,18 @@ TEST_F(RangeTest, AYawRateAboveTheVehiclesMaximumIsFlownAtItWithoutTumbling) {
   EXPECT_LT(max_tilt_rate, 3.0);
   EXPECT_NEAR(sim_->truth(0).position_enu_m.z(), z0, 0.5);
   // clockwise seen from above (NED yaw rate > 0) is a negative ENU body rate, at 90 deg/s
-  EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * M_PI / 180.0, 0.15);
+  EXPECT_NEAR(-yaw_rate_sum / samples, 90.0 * common::kPi / 180.0, 0.15);
 }
 
 TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
   auto g = connect();
   msg::MissionItemInt yaw;
-  yaw.command = 115;
+  yaw.command = cmd_id(MavCmd::ConditionYaw);
   yaw.frame = 3;
   yaw.param1 = 1e30f;
   EXPECT_EQ(upload_one(*g, yaw), kMissionError);
   msg::MissionItemInt wp;
-  wp.command = 16;
+  wp.command = cmd_id(MavCmd::NavWaypoint);
   wp.frame = 3;
   wp.x = 1'000'000'000;  // 100 degrees of latitude
   wp.y = 1;
@@ -177,7 +187,7 @@ TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
   // the legacy float item with latitude 1e30 (its conversion to 1e-7 degrees would overflow)
   msg::MissionItem legacy;
   legacy.target_system = 1;
-  legacy.command = 16;
+  legacy.command = cmd_id(MavCmd::NavWaypoint);
   legacy.frame = 3;
   legacy.current = 2;
   legacy.x = 1e30f;
@@ -195,32 +205,34 @@ TEST_F(RangeTest, MissionItemsOutOfRangeGetAMissionError) {
 TEST_F(RangeTest, FloatToIntegerFieldsOutOfRangeAreDenied) {
   auto g = connect();
   wait_gps_ready(*g);
-  ASSERT_EQ(command(*g, 176, {1, 4}), kAccepted);  // GUIDED
+  ASSERT_EQ(command(*g, MavCmd::DoSetMode, {1, 4}), kAccepted);  // GUIDED
   // custom_mode 2^32 and 1e30 once became 0 (STABILIZE) through an undefined cast
-  EXPECT_EQ(command(*g, 176, {1, 4294967296.0f}), kDenied);
-  EXPECT_EQ(command(*g, 176, {1, 1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 176, {1e30f, 4}), kDenied);
-  EXPECT_EQ(command(*g, 176, {1, 4.5f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4294967296.0f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1e30f, 4}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4.5f}), kDenied);
   EXPECT_EQ(sim_->fc(0).mode(), fc::Mode::kGuided);
-  EXPECT_EQ(command(*g, 300, {1e30f, 0}), kDenied);
-  EXPECT_EQ(command(*g, 300, {0, -1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 224, {4294967296.0f}), kDenied);
-  EXPECT_EQ(command(*g, 178, {1e30f, 5}), kDenied);
-  EXPECT_EQ(command(*g, 178, {1, 1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 512, {1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 512, {-1}), kDenied);
-  EXPECT_EQ(command(*g, 511, {1e30f, 1000}), kDenied);
-  EXPECT_EQ(command(*g, 510, {1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 205, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 1000, {0, 0, 0, 0, 1e30f}), kDenied);
-  EXPECT_EQ(command(*g, 22, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::MissionStart, {1e30f, 0}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::MissionStart, {0, -1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMissionCurrent, {4294967296.0f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoChangeSpeed, {1e30f, 5}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoChangeSpeed, {1, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {-1}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {1e30f, 1000}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::GetMessageInterval, {1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoMountControl, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::DoGimbalManagerPitchyaw, {0, 0, 0, 0, 1e30f}), kDenied);
+  EXPECT_EQ(command(*g, MavCmd::NavTakeoff, {0, 0, 0, 0, 0, 0, 1e30f}), kDenied);
   // the same commands in range still work
-  EXPECT_EQ(command(*g, 512, {0}), kAccepted);
-  EXPECT_EQ(command(*g, 178, {1, 5}), kAccepted);
-  EXPECT_EQ(command(*g, 176, {1, 5}), kAccepted);  // LOITER
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {0}), kAccepted);
+  EXPECT_EQ(command(*g, MavCmd::DoChangeSpeed, {1, 5}), kAccepted);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 5}), kAccepted);  // LOITER
   EXPECT_EQ(sim_->fc(0).mode(), fc::Mode::kLoiter);
-  EXPECT_EQ(command(*g, 176, {1, 4294967295.0f}), kDenied);  // rounds to 2^32 as a float
-  EXPECT_EQ(command(*g, 176, {1, 4000}), kFailed);            // a whole number, but no such mode
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4294967295.0f}),
+            kDenied);  // rounds to 2^32 as a float
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4000}),
+            kFailed);  // a whole number, but no such mode
 }
 
 TEST_F(RangeTest, ParamSetOutOfRangeLeavesTheValue) {

@@ -42,8 +42,8 @@ class RcTest : public EndpointTest {
     hb.autopilot = 8;
     g.send(hb);
     wait_gps_ready(g);
-    ASSERT_EQ(command(g, 176, {1, static_cast<float>(mode)}), 0);
-    ASSERT_EQ(command(g, 400, {1}), 0);
+    ASSERT_EQ(command(g, MavCmd::DoSetMode, {1, static_cast<float>(mode)}), 0);
+    ASSERT_EQ(command(g, MavCmd::ComponentArmDisarm, {1}), 0);
   }
 };
 

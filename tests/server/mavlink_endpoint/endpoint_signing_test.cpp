@@ -44,7 +44,7 @@ class SigningTest : public EndpointTest {
   // sends an arm COMMAND_LONG; true when it was acked within 1 s of sim time
   bool arm_acked(TestGcs& g) {
     msg::CommandLong c;
-    c.command = 400;
+    c.command = cmd_id(MavCmd::ComponentArmDisarm);
     c.target_system = 1;
     c.target_component = 1;
     c.param1 = 1;
@@ -66,7 +66,7 @@ TEST_F(SigningTest, SignedClientArmsUnsignedAndWronglySignedCommandsAreIgnored) 
   const SecretKey key = key_of(3);
   auto g = connect();
   wait_gps_ready(*g);
-  EXPECT_EQ(command(*g, 176, {1, 4}), 0);  // GUIDED, before signing
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4}), 0);  // GUIDED, before signing
   const std::uint64_t t0 = wall_timestamp_10us();
   setup_signing(*g, key, t0);
   drain(*g);
@@ -138,7 +138,8 @@ TEST_F(SigningTest, AllZeroKeyDisablesSigning) {
   g->sign_with(SigningParams{key, 0, wall_timestamp_10us()});
   setup_signing(*g, SecretKey{}, 0);  // signed, so it is accepted: turns signing off
   g->sign_with(std::nullopt);
-  EXPECT_EQ(command(*g, 31000), 3);  // an unsigned command is answered again (UNSUPPORTED)
+  EXPECT_EQ(command(*g, kUnsupportedCmd),
+            3);  // an unsigned command is answered again (UNSUPPORTED)
   g->clear();
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::Heartbeat>() >= 1; }, 2.0));
   for (const Frame& f : g->frames()) EXPECT_FALSE(f.signature) << "msgid " << f.msgid;
@@ -164,10 +165,10 @@ TEST_F(ConfiguredKeyTest, ServerStartedWithAKeySignsFromTheFirstFrame) {
   EXPECT_EQ(g->parser_stats().unsigned_rejected, 0u);
   EXPECT_EQ(g->parser_stats().bad_signature, 0u);
   EXPECT_EQ(g->parser_stats().replayed, 0u);
-  EXPECT_EQ(command(*g, 31000), -1);  // unsigned: no answer
+  EXPECT_EQ(command(*g, kUnsupportedCmd), -1);  // unsigned: no answer
   EXPECT_GE(server_->stats(0).unsigned_rejected, 1u);
   g->sign_with(SigningParams{key_of(21), 0, wall_timestamp_10us()});
-  EXPECT_EQ(command(*g, 31000), 3);
+  EXPECT_EQ(command(*g, kUnsupportedCmd), 3);
 }
 
 }  // namespace

@@ -104,7 +104,7 @@ TEST_F(EndpointTest, SysStatusReportsPrearmAndGpsHealthOnceReady) {
 
 TEST_F(EndpointTest, UnknownCommandIsUnsupported) {
   auto g = connect();
-  EXPECT_EQ(command(*g, 31000), 3);  // MAV_RESULT_UNSUPPORTED
+  EXPECT_EQ(command(*g, kUnsupportedCmd), 3);  // MAV_RESULT_UNSUPPORTED
   const auto ack = g->last<msg::CommandAck>();
   EXPECT_EQ(ack->target_system, 255);
   EXPECT_EQ(ack->target_component, 190);
@@ -112,9 +112,9 @@ TEST_F(EndpointTest, UnknownCommandIsUnsupported) {
 
 TEST_F(EndpointTest, BroadcastTargetIsAcceptedOtherSystemsAreIgnored) {
   auto g = connect();
-  EXPECT_EQ(command(*g, 31000, {}, 0), 3);  // target 0 = broadcast: handled
+  EXPECT_EQ(command(*g, kUnsupportedCmd, {}, 0), 3);  // target 0 = broadcast: handled
   msg::CommandLong c;
-  c.command = 31000;
+  c.command = cmd_id(kUnsupportedCmd);
   c.target_system = 42;
   g->send(c);
   sync_client(*g);
@@ -140,22 +140,26 @@ TEST_F(EndpointTest, SetModeMessageIsAckedWithItsMessageId) {
   EXPECT_EQ(sim_->fc(0).mode(), fc::Mode::kGuided);
   ASSERT_TRUE(step_until(*g, [&] { return g->last<msg::Heartbeat>()->custom_mode == 4; }, 2.0));
   // an unknown mode number fails, a mode without CUSTOM_MODE_ENABLED fails
-  EXPECT_EQ(command(*g, 176, {1, 99}), 4);
-  EXPECT_EQ(command(*g, 176, {0, 5}), 4);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 99}), 4);
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {0, 5}), 4);
 }
 
 TEST_F(EndpointTest, ArmDisarmFollowArduCopterRules) {
   auto g = connect();
   wait_gps_ready(*g);
-  EXPECT_EQ(command(*g, 176, {1, 4}), 0);   // GUIDED
-  EXPECT_EQ(command(*g, 400, {1}), 0);      // arm
+  EXPECT_EQ(command(*g, MavCmd::DoSetMode, {1, 4}), 0);        // GUIDED
+  EXPECT_EQ(command(*g, MavCmd::ComponentArmDisarm, {1}), 0);  // arm
   EXPECT_TRUE(sim_->fc(0).armed());
-  EXPECT_EQ(command(*g, 400, {1}), 0);      // already armed: accepted
-  ASSERT_TRUE(step_until(*g, [&] { return g->last<msg::Heartbeat>()->base_mode & 128; }, 2.0));
-  EXPECT_EQ(command(*g, 400, {7}), 3);      // param1 neither 0 nor 1: unsupported
-  EXPECT_EQ(command(*g, 400, {0}), 0);      // disarm on the ground
+  EXPECT_EQ(command(*g, MavCmd::ComponentArmDisarm, {1}), 0);  // already armed: accepted
+  ASSERT_TRUE(step_until(
+      *g, [&] { return has_flag(g->last<msg::Heartbeat>()->base_mode, MavModeFlag::SafetyArmed); },
+      2.0));
+  EXPECT_EQ(command(*g, MavCmd::ComponentArmDisarm, {7}),
+            3);  // param1 neither 0 nor 1: unsupported
+  EXPECT_EQ(command(*g, MavCmd::ComponentArmDisarm, {0}), 0);  // disarm on the ground
   EXPECT_FALSE(sim_->fc(0).armed());
-  EXPECT_EQ(command(*g, 22, {0, 0, 0, 0, 0, 0, 10}), 4);  // take-off while disarmed: FAILED
+  EXPECT_EQ(command(*g, MavCmd::NavTakeoff, {0, 0, 0, 0, 0, 0, 10}),
+            4);  // take-off while disarmed: FAILED
 }
 
 TEST_F(EndpointTest, ParamListStreamsEveryIndexWithCount) {
@@ -271,20 +275,20 @@ TEST_F(EndpointTest, ParamSetEchoesAndReadsBackByNameAndIndex) {
 
 TEST_F(EndpointTest, Mavlink1ClientIsAnsweredInMavlink1) {
   auto g = connect(0, Version::kV1);
-  EXPECT_EQ(command(*g, 31000), 3);
+  EXPECT_EQ(command(*g, kUnsupportedCmd), 3);
   const Frame* ack = g->last_frame(msg::CommandAck::kId);
   ASSERT_NE(ack, nullptr);
   EXPECT_EQ(ack->version, Version::kV1);
   // and a v2 client on the same port still gets v2
   auto g2 = connect();
-  EXPECT_EQ(command(*g2, 31000), 3);
+  EXPECT_EQ(command(*g2, kUnsupportedCmd), 3);
   EXPECT_EQ(g2->last_frame(msg::CommandAck::kId)->version, Version::kV2);
 }
 
 TEST_F(EndpointTest, SetMessageIntervalChangesARate) {
   auto g = connect();
   // ATTITUDE_QUATERNION is not streamed by default; ask for 10 Hz
-  EXPECT_EQ(command(*g, 511, {31, 100000}), 0);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {31, 100000}), 0);
   g->clear();
   step_for(2.0);
   ASSERT_TRUE(wait_for([&] {
@@ -293,8 +297,8 @@ TEST_F(EndpointTest, SetMessageIntervalChangesARate) {
   }));
   EXPECT_NEAR(static_cast<double>(g->count<msg::AttitudeQuaternion>()), 20.0, 1.0);
   // -1 stops it; an unknown message id fails
-  EXPECT_EQ(command(*g, 511, {31, -1}), 0);
-  EXPECT_EQ(command(*g, 511, {9999, 100000}), 4);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {31, -1}), 0);
+  EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {9999, 100000}), 4);
   g->clear();
   step_for(1.0);
   g->poll_once(50);
@@ -336,16 +340,16 @@ TEST_F(EndpointTest, RequestDataStreamSetsAGroupRate) {
 
 TEST_F(EndpointTest, RequestMessageAndCapabilities) {
   auto g = connect();
-  EXPECT_EQ(command(*g, 512, {148}), 0);  // AUTOPILOT_VERSION
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {148}), 0);  // AUTOPILOT_VERSION
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::AutopilotVersion>() > 0; }, kAnswerS));
   const std::uint64_t caps = g->last<msg::AutopilotVersion>()->capabilities;
   for (std::uint64_t bit : {4u, 8u, 128u, 8192u, 2u}) EXPECT_TRUE(caps & bit) << bit;
-  EXPECT_EQ(command(*g, 520, {1}), 0);
+  EXPECT_EQ(command(*g, MavCmd::RequestAutopilotCapabilities, {1}), 0);
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::AutopilotVersion>() > 1; }, kAnswerS));
-  EXPECT_EQ(command(*g, 512, {245}), 0);  // EXTENDED_SYS_STATE
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {245}), 0);  // EXTENDED_SYS_STATE
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::ExtendedSysState>() > 0; }, kAnswerS));
   EXPECT_EQ(g->last<msg::ExtendedSysState>()->landed_state, 1);  // ON_GROUND
-  EXPECT_EQ(command(*g, 512, {60000}), 4);  // unknown id: FAILED
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {60000}), 4);    // unknown id: FAILED
 }
 
 TEST_F(EndpointTest, TimesyncRequestIsAnsweredWithSimTime) {
@@ -371,10 +375,11 @@ TEST_F(EndpointTest, TimesyncRequestIsAnsweredWithSimTime) {
 
 TEST_F(EndpointTest, GimbalCommandsAreStoredForTheCamera) {
   auto g = connect();
-  EXPECT_EQ(command(*g, 205, {-45, 0, 30, 0, 0, 0, 2}), 0);  // DO_MOUNT_CONTROL
+  EXPECT_EQ(command(*g, MavCmd::DoMountControl, {-45, 0, 30, 0, 0, 0, 2}), 0);  // DO_MOUNT_CONTROL
   EXPECT_DOUBLE_EQ(server_->gimbal(0).pitch_deg, -45.0);
   EXPECT_DOUBLE_EQ(server_->gimbal(0).yaw_deg, 30.0);
-  EXPECT_EQ(command(*g, 1000, {-90, 10, 0, 0, 16}), 0);  // GIMBAL_MANAGER_PITCHYAW, yaw lock
+  EXPECT_EQ(command(*g, MavCmd::DoGimbalManagerPitchyaw, {-90, 10, 0, 0, 16}),
+            0);  // GIMBAL_MANAGER_PITCHYAW, yaw lock
   EXPECT_DOUBLE_EQ(server_->gimbal(0).pitch_deg, -90.0);
   EXPECT_TRUE(server_->gimbal(0).yaw_earth_frame);
   EXPECT_GE(server_->gimbal(0).stamp_s, 0.0);
@@ -382,7 +387,8 @@ TEST_F(EndpointTest, GimbalCommandsAreStoredForTheCamera) {
 
 TEST_F(EndpointTest, GimbalAttitudeIsStreamedAfterMountControl) {
   auto g = connect();
-  EXPECT_EQ(command(*g, 205, {-90, 0, 0, 0, 0, 0, 2}), 0);  // DO_MOUNT_CONTROL: straight down
+  EXPECT_EQ(command(*g, MavCmd::DoMountControl, {-90, 0, 0, 0, 0, 0, 2}),
+            0);  // DO_MOUNT_CONTROL: straight down
   g->clear();
   ASSERT_TRUE(step_until(*g, [&] {
     return g->count<msg::MountOrientation>() > 0 && g->count<msg::GimbalDeviceAttitudeStatus>() > 0;
@@ -398,7 +404,7 @@ TEST_F(EndpointTest, GimbalAttitudeIsStreamedAfterMountControl) {
   EXPECT_NEAR(gd->q[1], 0.0, 1e-4);
   EXPECT_NEAR(gd->q[2], -std::sqrt(0.5), 1e-4);
   EXPECT_NEAR(gd->q[3], 0.0, 1e-4);
-  EXPECT_EQ(gd->flags & 32, 32);  // GIMBAL_DEVICE_FLAGS_YAW_IN_VEHICLE_FRAME
+  EXPECT_TRUE(has_flag(gd->flags, GimbalDeviceFlags::YawInVehicleFrame));
   EXPECT_EQ(gd->gimbal_device_id, 1);
   // a few Hz: EXTRA3 at 2 Hz by default
   g->clear();
@@ -426,7 +432,7 @@ TEST_F(EndpointTest, SeveralClientsEachGetTelemetryAndTheirOwnAcks) {
   auto a = connect();
   auto b = connect();
   EXPECT_EQ(server_->client_count(0), 2u);
-  EXPECT_EQ(command(*a, 31000), 3);
+  EXPECT_EQ(command(*a, kUnsupportedCmd), 3);
   step_for(1.5);
   a->poll_once(20);
   b->poll_once(20);

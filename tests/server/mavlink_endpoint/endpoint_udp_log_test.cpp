@@ -108,7 +108,7 @@ TEST_F(EndpointUdpTest, StreamsToAGroundStationAndAnswersItOnTheSameSocket) {
   msg::CommandLong cmd;
   cmd.target_system = 1;
   cmd.target_component = 1;
-  cmd.command = 512;  // REQUEST_MESSAGE AUTOPILOT_VERSION
+  cmd.command = cmd_id(MavCmd::RequestMessage);  // REQUEST_MESSAGE AUTOPILOT_VERSION
   cmd.param1 = 148;
   gcs.send_to(gcs.vehicle_port(), cmd);
   ASSERT_TRUE(wait_for([&] { return server_->stats(0).frames_received >= 1; }));
@@ -156,7 +156,8 @@ TEST_F(EndpointUdpTest, TlogHoldsWhatTheClientReceivedAndSentWithMonotonicSimSta
   g->send(rds);
   sync_client(*g);
   step_for(2.0);
-  EXPECT_EQ(command(*g, 512, {148}), 0);  // REQUEST_MESSAGE AUTOPILOT_VERSION: accepted
+  EXPECT_EQ(command(*g, MavCmd::RequestMessage, {148}),
+            0);  // REQUEST_MESSAGE AUTOPILOT_VERSION: accepted
   step_for(1.0);
   // everything the endpoint queued is written, and has arrived, before the log is closed
   ASSERT_TRUE(server_->flush_queued());

@@ -34,6 +34,18 @@ using namespace ::uavsim::common::mavlink;
 
 namespace uavsim::server::mavlink::testing {
 
+// a command's number as COMMAND_LONG and MISSION_ITEM_INT carry it
+constexpr std::uint16_t cmd_id(MavCmd cmd) {
+  return static_cast<std::uint16_t>(to_underlying(cmd));
+}
+// a command ArduCopter does not serve (MAV_CMD_WAYPOINT_USER_1): answered UNSUPPORTED
+constexpr MavCmd kUnsupportedCmd = MavCmd::WaypointUser1;
+// whether a bitmask field (base_mode, flags, ...) has flag's bit set
+template <typename Flag>
+constexpr bool has_flag(std::uint64_t bits, Flag flag) {
+  return (bits & to_underlying(flag)) != 0;
+}
+
 class TestGcs {
  public:
   // receive_buffer_bytes > 0 shrinks the socket's receive buffer (a client that reads slowly fills up fast)
@@ -287,7 +299,12 @@ class EndpointTest : public ::testing::Test {
     while (sim_->time_s() < end) sim_->step();
   }
 
-  // sends a COMMAND_LONG and returns its COMMAND_ACK result (-1: no ack within 2 s of sim time)
+  // the MAV_CMD name's form of command() below
+  int command(TestGcs& g, MavCmd cmd, std::array<float, 7> p = {}, std::uint8_t target_system = 1) {
+    return command(g, cmd_id(cmd), p, target_system);
+  }
+  // sends a COMMAND_LONG and returns its COMMAND_ACK result (-1: no ack within 2 s of sim time); a
+  // raw number is for commands MAVLink does not name
   int command(TestGcs& g, std::uint16_t cmd, std::array<float, 7> p = {}, std::uint8_t target_system = 1) {
     msg::CommandLong c;
     c.command = cmd;

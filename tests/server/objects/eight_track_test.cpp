@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "uavsim/common/angles.hpp"
+
 namespace uavsim::server::objects {
 namespace {
 
@@ -15,7 +17,7 @@ TEST(EightTrack, DefaultLengthMatchesClosedForm) {
   // L = 4a + 2R(pi + 2 phi) = 41.231 + 40 (3.14159 + 2.18982) = 254.49 m
   const EightTrack t;
   const double phi = std::asin(20.0 / 22.5);
-  EXPECT_NEAR(t.length_m(), 4 * 22.5 * std::cos(phi) + 40.0 * (M_PI + 2 * phi), kTol);
+  EXPECT_NEAR(t.length_m(), 4 * 22.5 * std::cos(phi) + 40.0 * (common::kPi + 2 * phi), kTol);
   EXPECT_NEAR(t.length_m(), 254.49, 0.01);
 }
 

@@ -8,6 +8,7 @@
 #include "objects/balloons.hpp"
 #include "objects/gimbal.hpp"
 #include "objects_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::objects {
 namespace {
@@ -90,7 +91,7 @@ TEST(GimbalDynamics, AFastManoeuvreTiltsTheViewForAMoment) {
   auto sim = field_2020(1, field);
   const ObjectSet set = add_world_objects(*sim);
   const Gimbal& g = set.gimbals->gimbals()[0];
-  const Eigen::Quaterniond level(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  const Eigen::Quaterniond level(Eigen::AngleAxisd(common::kPi / 2, Eigen::Vector3d::UnitZ()));
   physics::set_vehicle_state(sim->world(), 0, Eigen::Vector3d(-10, -27, 3), level,
                              Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   for (int k = 0; k < 200; ++k) sim->step();
@@ -128,7 +129,7 @@ TEST(GimbalDynamics, CapturesPlaceTheBodiesButNeverStepTheLoop) {
   auto a = field_2020(1, field);
   auto b = field_2020(1, field);
   const ObjectSet sa = add_world_objects(*a), sb = add_world_objects(*b);
-  const Eigen::Quaterniond level(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  const Eigen::Quaterniond level(Eigen::AngleAxisd(common::kPi / 2, Eigen::Vector3d::UnitZ()));
   for (int k = 0; k < 300; ++k) {
     const double pitch_rad = 0.3 * std::sin(k * 0.05);
     const Eigen::Quaterniond q =

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "objects_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::objects {
 namespace {
@@ -40,7 +41,7 @@ TEST(Gimbal, ForwardCameraLooksLevelAlongTheHeadingAndTargetsPointIt) {
   Gimbal& g = set.gimbals->gimbals()[0];
   EXPECT_EQ(g.mode, GimbalMode::kForward);
   // pitched 15 deg nose down, heading north (yaw 90 deg): the camera looks level to the north
-  const Eigen::Quaterniond q(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()) *
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(common::kPi / 2, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(0.26, Eigen::Vector3d::UnitY()));
   physics::set_vehicle_state(sim->world(), 0, Eigen::Vector3d(-10, -27, 3), q, Eigen::Vector3d::Zero(),
                              Eigen::Vector3d::Zero());
@@ -49,11 +50,12 @@ TEST(Gimbal, ForwardCameraLooksLevelAlongTheHeadingAndTargetsPointIt) {
   EXPECT_LT((pointing_enu(*sim, g) - Eigen::Vector3d(0, 1, 0)).norm(), 1e-6);
   // targets: 30 deg down, 90 deg to the left of the heading (west)
   g.mode = GimbalMode::kTargets;
-  g.pitch_rad = -M_PI / 6;
-  g.yaw_rad = M_PI / 2;
+  g.pitch_rad = -common::kPi / 6;
+  g.yaw_rad = common::kPi / 2;
   sim->step();
   sim->step();
-  EXPECT_LT((pointing_enu(*sim, g) - Eigen::Vector3d(-std::cos(M_PI / 6), 0, -0.5)).norm(), 1e-3);
+  EXPECT_LT((pointing_enu(*sim, g) - Eigen::Vector3d(-std::cos(common::kPi / 6), 0, -0.5)).norm(),
+            1e-3);
 }
 
 }  // namespace

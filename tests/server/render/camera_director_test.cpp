@@ -10,6 +10,7 @@
 
 #include "render/frame_service.hpp"
 #include "render/overlay.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render {
 namespace {
@@ -21,7 +22,7 @@ FrameCamera camera_640x480() {
   FrameCamera c;
   c.width_px = 640;
   c.height_px = 480;
-  c.fy_px = 240.0 / std::tan(22.5 * M_PI / 180.0);  // 579.4 px
+  c.fy_px = 240.0 / std::tan(22.5 * common::kPi / 180.0);  // 579.4 px
   c.fx_px = c.fy_px;
   c.cx_px = 320.0;
   c.cy_px = 240.0;

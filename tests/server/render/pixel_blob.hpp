@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "render/camera_renderer.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render::testing {
 
@@ -16,7 +17,7 @@ struct Blob {
   double u = 0.0;
   double v = 0.0;
   double area_px = 0.0;
-  double radius_px() const { return std::sqrt(area_px / M_PI); }
+  double radius_px() const { return std::sqrt(area_px / common::kPi); }
 };
 
 // pick(r, g, b) -> bool over every pixel of an RGB8 frame

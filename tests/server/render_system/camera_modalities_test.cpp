@@ -25,6 +25,7 @@
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
 #include "render/video_recorder.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render {
 namespace {
@@ -227,7 +228,7 @@ TEST(CameraSegmentation, BalloonPixelsAreWhereTheBalloonProjects) {
   ASSERT_GT(n, 20);
   EXPECT_NEAR(su / n, p.x(), 0.5);
   EXPECT_NEAR(sv / n, p.y(), 0.5);
-  EXPECT_NEAR(std::sqrt(n / M_PI), radius_px, 0.08 * radius_px);
+  EXPECT_NEAR(std::sqrt(n / common::kPi), radius_px, 0.08 * radius_px);
 }
 
 TEST(CameraSegmentation, MarkerClassCoversTheMarkerAndNothingOutOfViewIsLabelled) {

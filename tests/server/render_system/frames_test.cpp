@@ -9,9 +9,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "mav_client.hpp"
 #include "frame_fixture.hpp"
+#include "mav_client.hpp"
 #include "physics/object_bodies.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render::testing {
 namespace {
@@ -40,7 +41,7 @@ Blob green_blob(const std::string& rgb, int w, int h) {
   if (b.pixels > 0) {
     b.u = su / b.pixels;
     b.v = sv / b.pixels;
-    b.radius_px = std::sqrt(b.pixels / M_PI);
+    b.radius_px = std::sqrt(b.pixels / common::kPi);
   }
   return b;
 }
@@ -88,7 +89,8 @@ TEST(FramesApi, CameraListAndErrorReplies) {
   EXPECT_EQ(cams["uav0_front"]["width"], 640);
   EXPECT_EQ(cams["uav0_front"]["height"], 480);
   EXPECT_DOUBLE_EQ(cams["uav0_front"]["fps"].get<double>(), 15.0);
-  EXPECT_NEAR(cams["uav0_front"]["intrinsics"]["fy"].get<double>(), 240.0 / std::tan(11.0 * M_PI / 180.0), 1e-6);
+  EXPECT_NEAR(cams["uav0_front"]["intrinsics"]["fy"].get<double>(),
+              240.0 / std::tan(11.0 * common::kPi / 180.0), 1e-6);
   EXPECT_DOUBLE_EQ(cams["uav0_front"]["intrinsics"]["cx"].get<double>(), 319.5);
   EXPECT_EQ(cams["overview"]["formats"], Json({"rgb", "grey", "jpeg"}));
 

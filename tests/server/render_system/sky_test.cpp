@@ -13,6 +13,7 @@
 #include "physics/world.hpp"
 #include "render/camera_renderer.hpp"
 #include "render/camera_setup.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render::testing {
 namespace {
@@ -64,7 +65,7 @@ void expect_sky(const std::string& world_file, const std::string& camera, const 
   const int mocap = m->body_mocapid[id];
   ASSERT_GE(mocap, 0);
   mjData* d = mj_makeData(m);
-  const Eigen::Quaterniond up(Eigen::AngleAxisd(-M_PI / 3, Eigen::Vector3d::UnitY()));
+  const Eigen::Quaterniond up(Eigen::AngleAxisd(-common::kPi / 3, Eigen::Vector3d::UnitY()));
   d->mocap_pos[3 * mocap + 2] = 10.0;
   d->mocap_quat[4 * mocap + 0] = up.w();
   d->mocap_quat[4 * mocap + 1] = up.x();

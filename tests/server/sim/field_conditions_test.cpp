@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::sim {
 namespace {
@@ -65,10 +66,10 @@ TEST(FieldWind, HoveringQuadHoldsPositionAndTiltsIntoTheWind) {
   const double v = 5.0;
   const double drag_n = a.drag_lin_n_per_m_s.x() * v + a.drag_quad_n_per_m2_s2.x() * v * v;
   const double expected_rad = std::atan(drag_n / (a.mass_kg * kG));
-  constexpr double kTiltTolerance_rad = 0.5 * M_PI / 180.0;
+  constexpr double kTiltTolerance_rad = 0.5 * common::kPi / 180.0;
   EXPECT_NEAR(tilt_sum / n, expected_rad, kTiltTolerance_rad);
-  RecordProperty("tilt_deg", std::to_string(tilt_sum / n * 180.0 / M_PI));
-  RecordProperty("expected_tilt_deg", std::to_string(expected_rad * 180.0 / M_PI));
+  RecordProperty("tilt_deg", std::to_string(tilt_sum / n * 180.0 / common::kPi));
+  RecordProperty("expected_tilt_deg", std::to_string(expected_rad * 180.0 / common::kPi));
   RecordProperty("max_position_error_m", std::to_string(max_err_m));
   // into the wind: thrust leans west, against the air moving east
   EXPECT_LT(lean_x_sum / n, -0.9 * std::sin(expected_rad));

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sim_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::sim {
 namespace {
@@ -32,7 +33,7 @@ constexpr double kHoverRateJitterRad_S = 0.047;
 // a lost rotor: LAND descends at LAND_SPEED_HIGH 1.5 m/s, the loss transient may add a little; the
 // crash detector's hard-landing speed is 3 m/s. Tilt: ANGLE_MAX 30 deg plus the loss transient.
 constexpr double kDeadRotorMaxSinkM_S = 2.5;
-constexpr double kDeadRotorMaxTiltRad = 40.0 * M_PI / 180.0;
+constexpr double kDeadRotorMaxTiltRad = 40.0 * common::kPi / 180.0;
 
 class EveryFrame : public ::testing::TestWithParam<const char*> {};
 
@@ -76,12 +77,12 @@ TEST_P(EveryFrame, YawOf90DegSettles) {
   take_off(*sim, 10.0);
   const double yaw0 = yaw_of(sim->truth(0).q_enu_body);
   sim->post(0, [](fc::FlightController& f) {
-    EXPECT_EQ(f.set_yaw({-90.0 * M_PI / 180.0, true, 0.0}), fc::CommandResult::kAccepted);
+    EXPECT_EQ(f.set_yaw({-90.0 * common::kPi / 180.0, true, 0.0}), fc::CommandResult::kAccepted);
   });
   sim->run_until(sim->time_s() + 15.0);
   // clockwise seen from above is negative ENU yaw
   const double turned = wrap_pi(yaw_of(sim->truth(0).q_enu_body) - yaw0);
-  EXPECT_NEAR(turned, -M_PI / 2, 3.0 * M_PI / 180.0);
+  EXPECT_NEAR(turned, -common::kPi / 2, 3.0 * common::kPi / 180.0);
   EXPECT_LT(std::abs(sim->truth(0).rate_body_rad_s.z()), 0.02);  // stopped turning
 }
 
@@ -269,9 +270,12 @@ TEST(Flight, HexaWithOneDeadRotorStillLands) {
     }
   }
   ASSERT_GE(detected_at, 0.0) << "the loss was never detected";
-  std::printf("[hexa, rotor 0 dead] detected after %.3f s, max sink %.2f m/s, max |yaw rate| %.2f rad/s, max tilt %.1f deg, "
-              "touchdown at %.2f m/s, disarmed %d\n",
-              detected_at - failed_at, max_sink, max_yaw_rate, max_tilt * 180.0 / M_PI, touchdown_speed, !sim->fc(0).armed());
+  std::printf(
+      "[hexa, rotor 0 dead] detected after %.3f s, max sink %.2f m/s, max |yaw rate| %.2f rad/s, "
+      "max tilt %.1f deg, "
+      "touchdown at %.2f m/s, disarmed %d\n",
+      detected_at - failed_at, max_sink, max_yaw_rate, max_tilt * 180.0 / common::kPi,
+      touchdown_speed, !sim->fc(0).armed());
   EXPECT_EQ(sim->events().count(EventType::kCrash), 0u);
   EXPECT_FALSE(sim->fc(0).armed()) << "did not land and disarm";
   EXPECT_LT(sim->truth(0).position_enu_m.z(), 0.5);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rendered_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/balloon_detector.hpp"
 #include "uavsim/vision/marker_detector.hpp"
 
@@ -47,7 +48,7 @@ void for_each_arena_frame(RenderedWorld& w, uint64_t seed, F look_at_frame) {
   int frame = 0;
   for (const auto& b : balloons) {
     for (const double d : {3.0, 8.0, 14.0, 20.0}) {
-      const double az = 2.0 * M_PI * unit(rng);
+      const double az = 2.0 * common::kPi * unit(rng);
       const double height_m = frame % 2 == 0 ? 0.8 + 1.4 * unit(rng) : 3.5 + 6.0 * unit(rng);
       const Eigen::Vector3d cam = b.position_enu_m +
                                   Eigen::Vector3d(d * std::cos(az), d * std::sin(az), 0.0) +
@@ -106,7 +107,7 @@ TEST(BalloonRendered, NothingInFramesOfTheTruck) {
     w.sim->run_until(2.5 * i);
     w.objects.trucks.at(0)->before_step(*w.sim);
     const server::objects::TruckState truck = w.objects.trucks.at(0)->state(w.sim->time_s());
-    const double az = 2.0 * M_PI * unit(rng);
+    const double az = 2.0 * common::kPi * unit(rng);
     const double d = i % 3 == 2 ? 0.5 : 5.0 + 15.0 * unit(rng);
     const double height_m = i % 3 == 2 ? 10.0 : 1.0 + 7.0 * unit(rng);
     const Eigen::Vector3d cam =

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "rendered_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/balloon_detector.hpp"
 
 namespace uavsim::vision::rendered {
@@ -63,7 +64,7 @@ BalloonTruth balloon_truth(RenderedWorld& w, const server::render::CameraFrame& 
   // (the balloon's own pole may hide a sliver of its bottom: that is how it looks)
   t.unoccluded = w.first_hit(f.position_enu_m, b.position_enu_m) == geom_id;
   for (int i = 0; i < 8 && t.unoccluded; ++i) {
-    const double a = 2.0 * M_PI * i / 8;
+    const double a = 2.0 * common::kPi * i / 8;
     const Eigen::Vector3d rim =
         b.position_enu_m + 0.9 * b.radius_m * (std::cos(a) * e1 + std::sin(a) * e2);
     const int hit = w.first_hit(f.position_enu_m, rim);
@@ -133,9 +134,9 @@ TEST(BalloonRendered, DetectsAndRangesBalloonsFrom3To25m) {
           // a camera position d from the balloon, clear of the other balloons and poles
           Eigen::Vector3d cam;
           for (int attempt = 0; attempt < 50; ++attempt) {
-            const double az = 2.0 * M_PI * unit(rng);
+            const double az = 2.0 * common::kPi * unit(rng);
             const double el = bg != kGround ? std::asin((0.8 + 1.4 * unit(rng) - c.z()) / d)
-                                            : (5.0 + 30.0 * unit(rng)) * M_PI / 180.0;
+                                            : (5.0 + 30.0 * unit(rng)) * common::kPi / 180.0;
             cam = c + d * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                           std::sin(el));
             bool clear = true;

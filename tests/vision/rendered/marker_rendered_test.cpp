@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "rendered_fixture.hpp"
+#include "uavsim/common/angles.hpp"
 #include "uavsim/vision/eight_track.hpp"
 #include "uavsim/vision/marker_detector.hpp"
 #include "uavsim/vision/track_kalman.hpp"
@@ -24,7 +25,7 @@ namespace {
 constexpr double kMaxMarkerErrorM = 0.3;  // arena coordinates, horizontal
 constexpr double kMinMarkerDetectionRate = 0.95;
 constexpr double kHeightAboveDeckM = 10.0;
-constexpr double kMaxTiltRad = 10.0 * M_PI / 180.0;
+constexpr double kMaxTiltRad = 10.0 * common::kPi / 180.0;
 constexpr int kWidthPx = 640;
 constexpr int kHeightPx = 480;
 // the hexa's camera mount (mbzirc2017.xml: uavsim:gimbal:uav0_gimbal "uav0 down 0 0 -0.09")
@@ -45,7 +46,7 @@ void place_hexa(RenderedWorld& w, const Eigen::Vector3d& camera_enu_m, double ro
   const Eigen::Quaterniond q_body = q_enu_body_from_rpy(roll_rad, pitch_rad, yaw_rad);
   server::physics::set_vehicle_state(w.world(), 0, camera_enu_m - q_body * kMountBodyM, q_body,
                                      Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
-  w.place_camera("uav0_gimbal", camera_enu_m, q_body * look(0.0, -M_PI / 2));
+  w.place_camera("uav0_gimbal", camera_enu_m, q_body * look(0.0, -common::kPi / 2));
 }
 
 // Runs the simulation to t_s (the truck drives) and puts the truck where it is at exactly t_s, the
@@ -96,7 +97,8 @@ TEST(MarkerRendered, LocatesMarkerOnTheDrivingTruckFrom10mWithTilt) {
     const Eigen::Vector3d camera_enu_m =
         truth.deck_centre_enu_m +
         Eigen::Vector3d(2.5 * unit(rng), 2.5 * unit(rng), kHeightAboveDeckM);
-    place_hexa(w, camera_enu_m, kMaxTiltRad * unit(rng), kMaxTiltRad * unit(rng), M_PI * unit(rng));
+    place_hexa(w, camera_enu_m, kMaxTiltRad * unit(rng), kMaxTiltRad * unit(rng),
+               common::kPi * unit(rng));
     for (int size = 0; size < 2; ++size) {
       const int index = 2 * size + i % 2;
       Look& l = looks[index];
@@ -182,8 +184,9 @@ TEST(TrackKalmanRendered, TracksTheDrivingTruckAt7HzWith150msLatency) {
     const double now_s = w.sim->time_s();
     const Eigen::Vector3d lagged = truck.state(std::max(0.0, now_s - 0.4)).deck_centre_enu_m;
     place_hexa(w, lagged + Eigen::Vector3d(0.0, 0.0, kHeightAboveDeckM),
-               kMaxTiltRad * std::sin(2.0 * M_PI * now_s / 7.0),
-               kMaxTiltRad * std::cos(2.0 * M_PI * now_s / 11.0), truck.state(now_s).yaw_rad);
+               kMaxTiltRad * std::sin(2.0 * common::kPi * now_s / 7.0),
+               kMaxTiltRad * std::cos(2.0 * common::kPi * now_s / 11.0),
+               truck.state(now_s).yaw_rad);
     const server::render::CameraFrame f = w.render(0);
     ++frames;
     score(now_s);

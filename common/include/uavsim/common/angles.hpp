@@ -1,5 +1,6 @@
-// Angle helpers: the one implementation of pi and of wrapping to (-pi, pi], for the flight controller, the
-// MAVLink frames, the client and the missions (header-only).
+// Angle helpers: the one implementation of pi, of degrees to radians and back, and of wrapping to
+// (-pi, pi], for the flight controller, the MAVLink frames, the client and the missions
+// (header-only).
 #pragma once
 
 #include <cmath>
@@ -7,6 +8,9 @@
 namespace uavsim::common {
 
 inline constexpr double kPi = 3.14159265358979323846;
+// multiply degrees by kDegToRad for radians, radians by kRadToDeg for degrees
+inline constexpr double kDegToRad = kPi / 180.0;
+inline constexpr double kRadToDeg = 180.0 / kPi;
 
 // An angle in (-pi, pi], in O(1) for any input: std::remainder is exact, so small excursions come back
 // exactly as a subtract-2pi loop would give them, and 1e30 costs no more than 1. A non-finite angle has no

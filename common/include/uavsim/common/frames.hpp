@@ -39,13 +39,13 @@ inline Eigen::Quaterniond q_enu_flu_from_q_ned_frd(const Eigen::Quaterniond& q_n
 inline double yaw_ned_from_yaw_enu(double yaw_enu_rad) { return wrap_pi(kPi / 2.0 - yaw_enu_rad); }
 inline double yaw_enu_from_yaw_ned(double yaw_ned_rad) { return wrap_pi(kPi / 2.0 - yaw_ned_rad); }
 
-// Roll, pitch, yaw (Tait-Bryan z-y'-x'' as in MAVLink ATTITUDE) of q_ned_frd.
+// Roll, pitch, yaw: the Tait-Bryan angles z-y'-x'' of a rotation, q = Rz(yaw) Ry(pitch) Rx(roll).
 struct Euler {
   double roll_rad = 0.0;
   double pitch_rad = 0.0;
   double yaw_rad = 0.0;
 };
-inline Euler euler_from_q_ned_frd(const Eigen::Quaterniond& q) {
+inline Euler euler_zyx(const Eigen::Quaterniond& q) {
   const double w = q.w(), x = q.x(), y = q.y(), z = q.z();
   Euler e;
   e.roll_rad = std::atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y));
@@ -53,6 +53,15 @@ inline Euler euler_from_q_ned_frd(const Eigen::Quaterniond& q) {
   e.pitch_rad = std::asin(s > 1.0 ? 1.0 : (s < -1.0 ? -1.0 : s));
   e.yaw_rad = std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
   return e;
+}
+// MAVLink's attitude (ATTITUDE): of q_ned_frd, yaw from north clockwise, pitch nose up.
+inline Euler euler_from_q_ned_frd(const Eigen::Quaterniond& q_ned_frd) {
+  return euler_zyx(q_ned_frd);
+}
+// The simulator's attitude: of q_enu_flu, yaw from east counter-clockwise, pitch about the left
+// axis (nose down), roll about the forward axis (as the ground-truth records write it).
+inline Euler euler_from_q_enu_flu(const Eigen::Quaterniond& q_enu_flu) {
+  return euler_zyx(q_enu_flu);
 }
 
 // Rotates a horizontal NED vector given in a yaw-aligned body frame (MAV_FRAME_BODY_*) into NED.

@@ -1,0 +1,144 @@
+#include "api/lockstep_ops.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <optional>
+
+#include "api/request_fields.hpp"
+#include "api/vehicle_arg.hpp"
+#include "sim/checked_number.hpp"
+#include "uavsim/common/shm_ring.hpp"
+
+namespace uavsim::server::api {
+
+namespace {
+
+// lockstep_join's timeout_s: a deadline further out is no different from none
+constexpr double kMaxLockstepTimeout_s = 1e6;
+// lockstep_join's period_s: an hour of sim time between ticks at most
+constexpr double kMaxPeriod_s = 3600.0;
+
+}  // namespace
+
+LockstepOps::LockstepOps(sim::Simulation& sim, LockstepCoordinator& lockstep, ClockOps& clock,
+                         ShmTransport* shm, Server server)
+    : sim_(sim), lockstep_(lockstep), clock_(clock), shm_(shm), server_(std::move(server)) {}
+
+void LockstepOps::register_ops(OpTable& table) {
+  using Member = void (LockstepOps::*)(uint64_t, const Json&, OpReply*);
+  const auto add = [this, &table](const char* name, Member op) {
+    table.add({name, "lockstep", std::bind_front(op, this), core_op_fields()});
+  };
+  add("lockstep_join", &LockstepOps::op_join);
+  add("lockstep_leave", &LockstepOps::op_leave);
+  add("done", &LockstepOps::op_done);
+  add("lockstep_shm", &LockstepOps::op_shm);
+}
+
+void LockstepOps::on_disconnect(uint64_t conn) {
+  clock_.lockstep_left(lockstep_.leave(conn, sim_.time_s()));
+}
+
+void LockstepOps::op_join(uint64_t conn, const Json& request, OpReply* reply) {
+  const auto period = number_field(request, "period_s");
+  const auto timeout = number_field(request, "timeout_s");
+  if (!period) {
+    return reply->fail(ApiError::kMissingField,
+                       "\"period_s\" (sim seconds between ticks) is required");
+  }
+  if (!(*period > 0.0) || !std::isfinite(*period) || *period > kMaxPeriod_s) {
+    return reply->fail(ApiError::kBadField, "\"period_s\" must be in (0, 3600]");
+  }
+  if (timeout && !(*timeout > 0.0 && *timeout <= kMaxLockstepTimeout_s)) {
+    return reply->fail(ApiError::kBadField, "\"timeout_s\" must be in (0, 1e6]");
+  }
+  // the first tick is the next multiple of the period at or after now; strictly after now for a
+  // connection whose output of now was prepared before it joined (a camera subscriber: the frame
+  // due at a tick must have been captured for a lockstep client)
+  const bool after_now = server_.prepared_before_join(conn);
+  const double from_s = sim_.time_s() + (after_now ? 0.5 * sim_.control_dt_s() : 0.0);
+  const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, from_s);
+  reply->result = {{"period_s", joined.period_s},
+                   {"first_tick_time", joined.first_tick_time_s},
+                   {"timeout_s", joined.timeout_s}};
+}
+
+void LockstepOps::op_leave(uint64_t conn, const Json&, OpReply*) {
+  clock_.lockstep_left(lockstep_.leave(conn, sim_.time_s()));
+}
+
+void LockstepOps::op_done(uint64_t conn, const Json& request, OpReply* reply) {
+  const auto tick = number_field(request, "tick");  // a number when present (core_op_fields)
+  const auto busy = number_field(request, "busy_until");
+  auto seqs = request.find("mavlink_seq");
+  std::string message;
+  if (const auto refused = lockstep_.check_done(conn, tick, &message)) {
+    return reply->fail(*refused, std::move(message));
+  }
+  if (has_field(request, "busy_until") && (!busy || !std::isfinite(*busy))) {
+    return reply->fail(ApiError::kBadField, "\"busy_until\" must be a sim time in seconds");
+  }
+  if (seqs != request.end() && !seqs->is_object()) {
+    return reply->fail(ApiError::kBadField, "\"mavlink_seq\" must be an object {vehicle: seq}");
+  }
+  std::map<size_t, uint8_t> wait;
+  if (seqs != request.end()) {
+    for (auto it = seqs->begin(); it != seqs->end(); ++it) {
+      Json probe = {{"vehicle", it.key()}};
+      // "0" names vehicle 0; any other string a vehicle name
+      char* end = nullptr;
+      const long index = std::strtol(it.key().c_str(), &end, 10);
+      if (!it.key().empty() && *end == '\0') probe["vehicle"] = index;
+      const auto v = required_vehicle(sim_, probe, reply);
+      if (!v) return;
+      if (!it.value().is_number_integer() || it.value().get<int64_t>() < 0 ||
+          it.value().get<int64_t>() > 255) {
+        return reply->fail(ApiError::kBadField,
+                           "MAVLink sequence numbers are integers in [0, 255]");
+      }
+      wait[*v] = static_cast<uint8_t>(it.value().get<int64_t>());
+    }
+  }
+  const int64_t done_tick = lockstep_.take_done(conn, busy, std::move(wait));
+  reply->result = {{"tick", done_tick}, {"mavlink_seq_checked", server_.seq_checked()}};
+}
+
+void LockstepOps::op_shm(uint64_t conn, const Json& request, OpReply* reply) {
+  // only for a client on this machine, once, and not behind a step's reply (which must come on TCP)
+  if (shm_ == nullptr) {
+    return reply->fail(ApiError::kNotAvailable, "this server serves no shared-memory stream");
+  }
+  const std::string peer = server_.peer_address(conn);
+  if (peer.rfind("127.", 0) != 0) {
+    return reply->fail(ApiError::kNotAvailable,
+                       "the shared-memory stream is for clients on the server's machine; "
+                       "this one connects from " +
+                           peer);
+  }
+  if (shm_->attached(conn)) {
+    return reply->fail(ApiError::kBadState,
+                       "this connection is on the shared-memory stream already");
+  }
+  if (clock_.step_in_progress(conn)) {
+    return reply->fail(ApiError::kBusy, "a step request of this connection is in progress");
+  }
+  const auto bytes = number_field(request, "ring_bytes");
+  const auto ring_bytes = bytes ? sim::checked_integer<uint64_t>(*bytes)
+                                : std::optional<uint64_t>(ShmTransport::kDefaultRingBytes);
+  if (!ring_bytes || common::shm::region_bytes(static_cast<size_t>(*ring_bytes)) == 0) {
+    return reply->fail(ApiError::kBadField,
+                       "\"ring_bytes\" must be a power of two in [65536, 268435456]");
+  }
+  std::string why;
+  const auto offer = shm_->offer(conn, static_cast<size_t>(*ring_bytes), &why);
+  if (!offer) return reply->fail(ApiError::kNotAvailable, "no shared-memory stream: " + why);
+  // the reply is the last message on TCP; everything after it goes to the ring
+  const Json id = request.contains("id") ? request["id"] : Json(nullptr);
+  server_.send(conn, ok_reply(id, *offer));
+  shm_->activate(conn);
+  reply->deferred = true;
+}
+
+}  // namespace uavsim::server::api
