@@ -264,6 +264,10 @@ void CoverageRun::set_up() {
                 {"model", "range"},
                 {"range_m", o_.radio_range_m},
                 {"loss", o_.radio_loss}};
+  if (o_.radio_backend == "ns3") {
+    radio["technology"] = o_.radio_technology;
+    radio["send_spread_s"] = o_.radio_send_spread_s;
+  }
   if (o_.radio_tdma_slot_s > 0) {
     radio["tdma"] = true;
     radio["slot_s"] = o_.radio_tdma_slot_s;
@@ -286,13 +290,14 @@ void CoverageRun::set_up() {
     fail("resume refused");
   } else {
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                  "radio %s%s range %.0f m loss %.2f, seed %llu%s",
-                  o_.agents, o_.length_x_m, o_.width_y_m, stripes_, o_.failure_prob,
-                  o_.radio_backend.c_str(), o_.radio_tdma_slot_s > 0 ? " tdma" : "",
-                  o_.radio_range_m, o_.radio_loss, static_cast<unsigned long long>(o_.seed),
-                  o_.gcs ? ", with a ground station" : "");
+    std::snprintf(
+        buf, sizeof buf,
+        "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
+        "radio %s%s%s range %.0f m loss %.2f, seed %llu%s",
+        o_.agents, o_.length_x_m, o_.width_y_m, stripes_, o_.failure_prob, o_.radio_backend.c_str(),
+        o_.radio_backend == "ns3" ? (" " + o_.radio_technology).c_str() : "",
+        o_.radio_tdma_slot_s > 0 ? " tdma" : "", o_.radio_range_m, o_.radio_loss,
+        static_cast<unsigned long long>(o_.seed), o_.gcs ? ", with a ground station" : "");
     say(buf);
   }
 }
@@ -635,6 +640,8 @@ Json CoverageRun::summary_json(const CoverageScore& s) {
   summary["radio_loss"] = o_.radio_loss;
   summary["radio_backend"] = o_.radio_backend;
   summary["radio_tdma_slot_s"] = o_.radio_tdma_slot_s;
+  summary["radio_technology"] = o_.radio_technology;
+  summary["radio_send_spread_s"] = o_.radio_send_spread_s;
   summary["radio"] = radio_end_;
   summary["line_spacing_m"] = o_.line_spacing_m;
   summary["thesis_flocking"] = o_.thesis_flocking;
