@@ -138,7 +138,7 @@ bool run_options_agree(const CoverageRunOptions& o) {
                  o.radio_technology.c_str());
     return false;
   }
-  if (o.radio_send_spread_s > 0.0 && (o.radio_backend != "ns3" || o.radio_tdma_slot_s > 0.0)) {
+  if (o.radio_send_spread_s >= 0.0 && (o.radio_backend != "ns3" || o.radio_tdma_slot_s > 0.0)) {
     std::fprintf(stderr, "coverage-run: --radio-send-spread needs --radio-backend ns3, no TDMA\n");
     return false;
   }
