@@ -64,7 +64,7 @@ constexpr uint16_t kPanId = 1;
 // destination PAN 2, destination 2, source 2, FCS 2
 constexpr uint32_t kMacHeaderBytes = 11;
 constexpr uint32_t kMaxPayloadBytes = 127 - kMacHeaderBytes;
-// 802.11 carries up to 2304 bytes; uavsim's radio API, its event stream and wire.hpp carry 127
+// 802.11's MSDU carries up to 2304 bytes; uavsim offers an Ethernet MTU's 1500 (wire.hpp)
 constexpr uint32_t kMaxWifiPayloadBytes = wire::kMaxFrameBytes;
 // 802.15.4's default macMinBE (ns-3's too): the random backoff of unslotted CSMA-CA
 constexpr uint8_t kStandardMacMinBE = 3;
@@ -319,8 +319,8 @@ class Helper {
     return in.ok();
   }
 
-  // a frame to its sender's MAC, now (at_ns -1) or at at_ns (its TDMA slot): broadcast, or unicast
-  // with ACK and retries
+  // a frame to its sender's MAC, now (at_ns -1) or at at_ns (its TDMA slot, or the entry the
+  // server drew to spread a step's frames): broadcast, or unicast with ACK and retries
   void hand(Frame f, const std::vector<uint8_t>& data, int64_t at_ns) {
     Ptr<Packet> p = Create<Packet>(data.data(), static_cast<uint32_t>(data.size()));
     McpsDataRequestParams params;
@@ -343,14 +343,24 @@ class Helper {
     // in the ledger from now on: the helper stays busy until the frame is settled
     ledger_.add(p->GetUid(), std::move(f));
     if (wifi()) {
-      wifi_[from]->Send(p, to < 0 ? Mac48Address::GetBroadcast() : wifi_[to]->GetAddress(),
-                        kWifiProtocol);
+      const Mac48Address dest = to < 0 ? Mac48Address::GetBroadcast()
+                                       : Mac48Address::ConvertFrom(wifi_[to]->GetAddress());
+      if (at_ns < 0) {
+        send_wifi(this, from, dest, p);
+      } else {
+        Simulator::Schedule(NanoSeconds(at_ns) - Simulator::Now(), &Helper::send_wifi, this, from,
+                            dest, p);
+      }
     } else if (at_ns < 0) {
       request(this, from, params, p);
     } else {
       Simulator::Schedule(NanoSeconds(at_ns) - Simulator::Now(), &Helper::request, this, from,
                           params, p);
     }
+  }
+
+  static void send_wifi(Helper* h, uint32_t from, Mac48Address to, Ptr<Packet> p) {
+    h->wifi_[from]->Send(p, to, kWifiProtocol);
   }
 
   static void request(Helper* h, uint32_t from, McpsDataRequestParams params, Ptr<Packet> p) {

@@ -25,9 +25,10 @@
 //   kError  u16 bytes, text (a request the helper could not carry out; the server ends the run)
 // kStep runs ns-3 to t_ns (Simulator::Stop(t - Now()) + Run()), then sets the positions, the extra
 // losses and hands the frames to the MACs in the order given (at_ns -1: at once; else at at_ns,
-// a TDMA slot's start, within the next step), and reports what happened since the previous
-// kStepDone. busy: frames in flight; quiet_until_ns: they report nothing before that time, so
-// the server steps the helper again at the first step at or after it (or when it hands frames).
+// a TDMA slot's start or a frame's spread entry, within the next step), and reports what happened
+// since the previous kStepDone. busy: frames in flight; quiet_until_ns: they report nothing before
+// that time, so the server steps the helper again at the first step at or after it (or when it
+// hands frames).
 #pragma once
 
 #include <poll.h>
@@ -88,7 +89,8 @@ struct Channel {
 
 inline constexpr uint32_t kMaxMessageBytes = 64u << 20;  // far above any step's traffic
 inline constexpr uint32_t kMaxVehicles = 100000;
-inline constexpr uint16_t kMaxFrameBytes = 127;
+// the largest frame of any technology: 802.11's (an Ethernet MTU); 802.15.4 carries at most 127
+inline constexpr uint16_t kMaxFrameBytes = 1500;
 
 class Writer {
  public:

@@ -60,7 +60,7 @@ struct A2aRadio::Impl {
   }
 
   void take_frame(int from, bool broadcast, double time_s, std::vector<std::uint8_t> bytes) {
-    if (bytes.empty() || bytes.size() > kRadioMaxFrameBytes) return;
+    if (bytes.empty() || bytes.size() > kRadioLargestFrameBytes) return;
     RadioFrame f;
     f.time_s = time_s;
     f.from = from;
@@ -76,7 +76,8 @@ A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 A2aRadio::~A2aRadio() {
   if (SimChannel* channel = LoopServices(impl_->loop).sim_channel())
     channel->remove_event_sink(impl_->radio_sink_id);
-  unsubscribe_lockstep_events(impl_->loop, impl_->sink_id, {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
+  unsubscribe_lockstep_events(impl_->loop, impl_->sink_id,
+                              {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
 
 int A2aRadio::vehicle() const { return impl_->vehicle; }
@@ -99,7 +100,8 @@ Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
                               "radio: a frame carries 1-" + std::to_string(impl_->max_frame_bytes) +
                                   " bytes, not " + std::to_string(data.size()));
   }
-  Json req = {{"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", common::base64_encode(data)}};
+  Json req = {
+      {"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", common::base64_encode(data)}};
   if (to >= 0) {
     req["to"] = to;
   } else {
@@ -143,9 +145,9 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
     return R(id.error());
   }
   // the channel's frame size (a server without the field: 802.15.4's whole 127 bytes)
-  if (auto it = result.find("max_frame_bytes"); it != result.end() && it->is_number_unsigned() &&
-                                                it->get<std::uint64_t>() >= 1 &&
-                                                it->get<std::uint64_t>() <= kRadioMaxFrameBytes) {
+  if (auto it = result.find("max_frame_bytes");
+      it != result.end() && it->is_number_unsigned() && it->get<std::uint64_t>() >= 1 &&
+      it->get<std::uint64_t>() <= kRadioLargestFrameBytes) {
     s->max_frame_bytes = it->get<std::size_t>();
   }
   s->sink_id = *id;

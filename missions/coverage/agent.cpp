@@ -49,7 +49,7 @@ Agent::Agent(const CoverageConfig& config, int id, const Eigen::Vector2d& home_e
       aggregation_(id, config.stripe_count()),
       reassembler_(config.stripe_count()),
       flock_(config.gains),
-      aggregate_pacer_(kAggregateAirtimeShare, kAggregateBurst_s) {}
+      aggregate_pacer_(kAggregateAirtimeShare, kAggregateBurst_s, frames.max_frame_bytes) {}
 
 bool Agent::is_leader_state() const {
   return state_ == AgentState::kQuerying || state_ == AgentState::kDeploying ||

@@ -255,6 +255,15 @@ void CoverageRun::start_agents(const std::string& lockstep) {
   }
 }
 
+double CoverageRun::send_spread_s() const {
+  if (o_.radio_backend != "ns3" || o_.radio_tdma_slot_s > 0.0) return 0.0;
+  if (o_.radio_send_spread_s >= 0.0) return o_.radio_send_spread_s;
+  // the agents' programs run on clocks of their own, not at the server's tick: on 802.11 (DCF sends
+  // at once on an idle medium) their frames enter over one tick, as theirs would; 802.15.4's
+  // CSMA-CA draws an initial backoff of its own
+  return o_.radio_technology == "802.11" ? kAgentPeriod_s : 0.0;
+}
+
 void CoverageRun::set_up() {
   SimConnection& api = launch_->api();
   // 3. hold the clock at t = 0 with this seed; the radio; the events; the launcher's ticks
@@ -264,6 +273,10 @@ void CoverageRun::set_up() {
                 {"model", "range"},
                 {"range_m", o_.radio_range_m},
                 {"loss", o_.radio_loss}};
+  if (o_.radio_backend == "ns3") {
+    radio["technology"] = o_.radio_technology;
+    radio["send_spread_s"] = send_spread_s();
+  }
   if (o_.radio_tdma_slot_s > 0) {
     radio["tdma"] = true;
     radio["slot_s"] = o_.radio_tdma_slot_s;
@@ -286,13 +299,14 @@ void CoverageRun::set_up() {
     fail("resume refused");
   } else {
     char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
-                  "radio %s%s range %.0f m loss %.2f, seed %llu%s",
-                  o_.agents, o_.length_x_m, o_.width_y_m, stripes_, o_.failure_prob,
-                  o_.radio_backend.c_str(), o_.radio_tdma_slot_s > 0 ? " tdma" : "",
-                  o_.radio_range_m, o_.radio_loss, static_cast<unsigned long long>(o_.seed),
-                  o_.gcs ? ", with a ground station" : "");
+    std::snprintf(
+        buf, sizeof buf,
+        "coverage-run: %d agents, area %.0f x %.0f m (%d stripes), failure p %.4f, "
+        "radio %s%s%s range %.0f m loss %.2f, seed %llu%s",
+        o_.agents, o_.length_x_m, o_.width_y_m, stripes_, o_.failure_prob, o_.radio_backend.c_str(),
+        o_.radio_backend == "ns3" ? (" " + o_.radio_technology).c_str() : "",
+        o_.radio_tdma_slot_s > 0 ? " tdma" : "", o_.radio_range_m, o_.radio_loss,
+        static_cast<unsigned long long>(o_.seed), o_.gcs ? ", with a ground station" : "");
     say(buf);
   }
 }
@@ -635,6 +649,8 @@ Json CoverageRun::summary_json(const CoverageScore& s) {
   summary["radio_loss"] = o_.radio_loss;
   summary["radio_backend"] = o_.radio_backend;
   summary["radio_tdma_slot_s"] = o_.radio_tdma_slot_s;
+  summary["radio_technology"] = o_.radio_technology;
+  summary["radio_send_spread_s"] = send_spread_s();
   summary["radio"] = radio_end_;
   summary["line_spacing_m"] = o_.line_spacing_m;
   summary["thesis_flocking"] = o_.thesis_flocking;

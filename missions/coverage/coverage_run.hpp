@@ -107,6 +107,8 @@ class CoverageRun {
   Json gaps() const;
   void print_time_in_states(const std::array<double, kAgentStateCount>& time_in_state_s) const;
   void print_radio() const;
+  // the radio_config send_spread_s of this run (--radio-send-spread, or its default)
+  double send_spread_s() const;
 
   const CoverageRunOptions& o_;
   CoverageConfig config_;

@@ -169,9 +169,10 @@ std::optional<FrameFit> fit_frames(size_t channel_max_bytes, std::string* error)
     return std::nullopt;
   }
   FrameFit fit;
-  fit.max_frame_bytes = std::min(channel_max_bytes, kMaxFrameBytes);
-  fit.beacon_records = static_cast<int>(std::min(
-      (fit.max_frame_bytes - kBeaconHeaderBytes) / kRecordBytes, size_t{kMaxRecordsPerBeacon}));
+  fit.max_frame_bytes = std::min(channel_max_bytes, kMaxAggregateFrameBytes);
+  fit.beacon_records = static_cast<int>(
+      std::min((std::min(fit.max_frame_bytes, kMaxFrameBytes) - kBeaconHeaderBytes) / kRecordBytes,
+               size_t{kMaxRecordsPerBeacon}));
   return fit;
 }
 
@@ -241,10 +242,12 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
 }
 
 std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& fit) {
-  // frames of [kMinFrameBytes, kMaxFrameBytes] (fit_frames' range), so one interval always fits
-  const size_t max_bytes = std::clamp(fit.max_frame_bytes, kMinFrameBytes, kMaxFrameBytes);
-  const std::vector<Run> runs =
-      apd_runs(m.apd, (max_bytes - kAggregateHeaderBytes - kRunHeaderBytes) / kIntervalBytes);
+  // frames of [kMinFrameBytes, kMaxAggregateFrameBytes] (fit_frames' range), so one interval
+  // always fits; a run's interval count is a byte
+  const size_t max_bytes = std::clamp(fit.max_frame_bytes, kMinFrameBytes, kMaxAggregateFrameBytes);
+  const std::vector<Run> runs = apd_runs(
+      m.apd, std::min<size_t>(
+                 (max_bytes - kAggregateHeaderBytes - kRunHeaderBytes) / kIntervalBytes, 255));
   // fragments: as many runs as fit the frame after the header
   std::vector<Frame> frames;
   std::vector<std::pair<int, int>> stripe_range;  // first, count of each fragment
@@ -287,7 +290,7 @@ std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& f
 }
 
 std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
-  if (f.size() < kAggregateHeaderBytes || f.size() > kMaxFrameBytes) return std::nullopt;
+  if (f.size() < kAggregateHeaderBytes || f.size() > kMaxAggregateFrameBytes) return std::nullopt;
   Reader r{f};
   if (r.u8() != static_cast<unsigned>(MessageType::kAggregate)) return std::nullopt;
   const int sender = static_cast<int>(r.u8());

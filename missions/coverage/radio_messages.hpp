@@ -1,8 +1,9 @@
 // The flock's radio messages in 802.15.4 frames of at most 127 bytes (the thesis the project
 // descends from, sections 3.3, 3.4 and 6.2), or fewer where the channel says so: a channel that
 // accounts for the MAC header carries at most 116 (uavsim::client::A2aRadio::max_frame_bytes()),
-// and the encoders fit every frame to the size they are given (FrameFit). Little-endian, fixed
-// point:
+// and the encoders fit every frame to the size they are given (FrameFit). On a channel of larger
+// frames (802.11: 1500 bytes) aggregation fragments grow to its size; beacons stay as on 127.
+// Little-endian, fixed point:
 //
 //   beacon (8 per second, section 3.3), 14 + 14 * n bytes, n <= 8 and within the frame size (8 in
 //   127 bytes, 7 in 116):
@@ -44,8 +45,12 @@
 
 namespace uavsim::missions::coverage {
 
-// The largest frame of the layout: 802.15.4's 127-byte PHY payload.
+// The largest beacon of the layout: 802.15.4's 127-byte PHY payload.
 inline constexpr size_t kMaxFrameBytes = 127;
+// The largest aggregation fragment: 802.11's 1500 bytes. Beacons stay within 127 bytes (8
+// records) on any channel; a map sent in fewer, larger fragments arrives whole more often where
+// broadcasts are lost (a message is used once every fragment of it has arrived).
+inline constexpr size_t kMaxAggregateFrameBytes = 1500;
 // The most ADB records a beacon carries (8 in a 127-byte frame, as the thesis's flock sent).
 inline constexpr int kMaxRecordsPerBeacon = 8;
 // The smallest frame the flock can talk in: an aggregation fragment's header (29 bytes) and one
@@ -61,9 +66,9 @@ struct FrameFit {
   int beacon_records = kMaxRecordsPerBeacon;
 };
 
-// The fit for a channel whose frames carry at most channel_max_bytes: up to kMaxFrameBytes of
-// them (the layout is 802.15.4's; a channel allowing more is used up to 127), as many records a
-// beacon as fit, at most kMaxRecordsPerBeacon. Nothing, with the reason in *error, when
+// The fit for a channel whose frames carry at most channel_max_bytes: aggregation fragments of up
+// to kMaxAggregateFrameBytes of them, beacons of up to kMaxFrameBytes with as many records as fit,
+// at most kMaxRecordsPerBeacon. Nothing, with the reason in *error, when
 // channel_max_bytes is under kMinFrameBytes.
 std::optional<FrameFit> fit_frames(size_t channel_max_bytes, std::string* error);
 
@@ -93,8 +98,8 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin, const Frame
 std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& origin);
 
 // One message as one or more frames, each at most fit.max_frame_bytes long (at most
-// (fit.max_frame_bytes - 31) / 4 intervals a stripe are sent: 24 in 127 bytes, 21 in 116; the
-// rest dropped, so a message claims less, never more). fit comes from fit_frames().
+// (fit.max_frame_bytes - 31) / 4 intervals a stripe are sent, at most 255: 24 in 127 bytes, 21 in
+// 116; the rest dropped, so a message claims less, never more). fit comes from fit_frames().
 std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& fit);
 
 // The first byte of a frame, if it is one of ours.

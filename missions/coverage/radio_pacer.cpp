@@ -14,10 +14,11 @@ double frame_airtime_s(size_t frame_bytes) {
   return static_cast<double>(frame_bytes + kPhyHeaderBytes) * 8.0 / kBitRate_bit_s;
 }
 
-RadioPacer::RadioPacer(double share, double burst_s)
+RadioPacer::RadioPacer(double share, double burst_s, size_t max_frame_bytes)
     : share_(std::clamp(share, 0.01, 1.0)),
       // at least one full frame, or a long pause would never earn enough for one
-      burst_s_(std::max(std::isfinite(burst_s) ? burst_s : 0.0, frame_airtime_s(kMaxFrameBytes))),
+      burst_s_(std::max(std::isfinite(burst_s) ? burst_s : 0.0,
+                        frame_airtime_s(std::min(max_frame_bytes, kMaxAggregateFrameBytes)))),
       credit_s_(burst_s_) {}
 
 void RadioPacer::push(std::vector<Frame> frames) {

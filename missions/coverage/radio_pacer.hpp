@@ -26,8 +26,9 @@ class RadioPacer {
  public:
   // share: of the radio's airtime, for the paced frames (0, 1]; the rest is the beacons' margin.
   // burst_s: the airtime that may go out at once after a pause (a short message is not delayed;
-  // a beacon waits at most about this long behind the paced frames).
-  RadioPacer(double share, double burst_s);
+  // a beacon waits at most about this long behind the paced frames), at least the airtime of one
+  // frame of max_frame_bytes (the largest it is given), or a long pause would never earn one.
+  RadioPacer(double share, double burst_s, size_t max_frame_bytes = kMaxFrameBytes);
 
   // Nothing left to send: the next message may be queued.
   bool idle() const { return queue_.empty(); }

@@ -53,6 +53,12 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --radio-loss P      probability that a frame heard in range is lost (0-1, default 0; simple only)
   --radio-backend B   the radio channel: simple (default: closed form) or ns3 (ns-3's 802.15.4:
                       CSMA-CA, SINR; 116-byte frames, which the agents fit their messages to)
+  --radio-technology T  on ns3: 802.15.4 (default) or 802.11 (802.11g ad hoc, 6 Mbit/s, DCF;
+                      1500-byte frames)
+  --radio-send-spread S  on ns3 without TDMA: frames enter the channel at seeded offsets up to S
+                      seconds after they were sent, as agents on clocks of their own would send
+                      them (0-1; 0: one step on 802.11, none on 802.15.4; default: the agents'
+                      tick, 0.05 s, on 802.11, none on 802.15.4)
   --radio-tdma D      the seed's TDMA on either backend: slots of D seconds (0.001-1; at least
                       4.256 ms on simple, 4.576 ms on ns3) in a 1 s period, slot k vehicle k mod N
   --per-process K     agents per coverage-agent process (default 1)

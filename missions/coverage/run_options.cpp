@@ -76,6 +76,11 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
     } else if (a == "--radio-backend" &&
                (std::strcmp(val, "simple") == 0 || std::strcmp(val, "ns3") == 0)) {
       o->radio_backend = val;
+    } else if (a == "--radio-technology" &&
+               (std::strcmp(val, "802.15.4") == 0 || std::strcmp(val, "802.11") == 0)) {
+      o->radio_technology = val;
+    } else if (a == "--radio-send-spread" && parse_double(val, 0, 1, &v)) {
+      o->radio_send_spread_s = v;
     } else if (a == "--radio-tdma" && parse_double(val, 0.001, 1, &v)) {
       // the server checks the rest (a slot holds a frame; the vehicles' slots fit in the period)
       o->radio_tdma_slot_s = v;
@@ -126,6 +131,15 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
 bool run_options_agree(const CoverageRunOptions& o) {
   if (!o.gcs && (o.gcs_cut_s >= 0.0 || o.gcs_loss > 0.0)) {
     std::fprintf(stderr, "coverage-run: --gcs-cut and --gcs-loss need --gcs\n");
+    return false;
+  }
+  if (o.radio_technology != "802.15.4" && o.radio_backend != "ns3") {
+    std::fprintf(stderr, "coverage-run: --radio-technology %s needs --radio-backend ns3\n",
+                 o.radio_technology.c_str());
+    return false;
+  }
+  if (o.radio_send_spread_s >= 0.0 && (o.radio_backend != "ns3" || o.radio_tdma_slot_s > 0.0)) {
+    std::fprintf(stderr, "coverage-run: --radio-send-spread needs --radio-backend ns3, no TDMA\n");
     return false;
   }
   for (const auto& [t, id] : o.kills) {

@@ -28,6 +28,13 @@ struct CoverageRunOptions : launch::RunOptions {
   double radio_loss = 0.0;
   // the server's radio channel (--radio-backend): simple (closed form) or ns3 (ns-3's 802.15.4)
   std::string radio_backend = "simple";
+  // --radio-technology: ns3's 802.15.4 (lr-wpan, the default) or 802.11g ad hoc at 6 Mbit/s
+  std::string radio_technology = "802.15.4";
+  // --radio-send-spread S: on ns3, frames enter the channel at seeded offsets up to S after they
+  // were sent (the server's send_spread_s; 0: one step on 802.11, none on 802.15.4). Default
+  // (negative): the agents' tick on 802.11, whose real programs run on clocks of their own (in
+  // lockstep they all send at the tick, and DCF starts such frames together); none on 802.15.4
+  double radio_send_spread_s = -1.0;
   // --radio-tdma D: the seed's TDMA with slots of D seconds in a 1 s period (the GPS pulse); 0: off
   double radio_tdma_slot_s = 0.0;
   std::vector<std::pair<double, int>> kills;  // (sim time, agent)

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "uavsim/client/event_loop.hpp"
+#include "uavsim/client/sim_connection.hpp"
 
 extern char** environ;
 
@@ -218,6 +219,31 @@ TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
   const auto got = (*r1)->take_received();
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].data, frame(116, 3));
+}
+
+TEST(A2aRadio, CarriesFramesOf1500BytesOnNs3s80211) {
+#ifndef UAVSIM_HAS_NS3
+  GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh installs it)";
+#endif
+  ServerProcess server({"--radio-backend", "ns3"});
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  {
+    auto api = SimConnection::connect("127.0.0.1", static_cast<std::uint16_t>(server.api_port()));
+    ASSERT_TRUE(api) << api.message();
+    ASSERT_TRUE((*api)->request({{"op", "radio_config"}, {"technology", "802.11"}}));
+  }
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
+  ASSERT_TRUE(r0 && r1);
+  EXPECT_EQ((*r0)->max_frame_bytes(), 1500u);
+  EXPECT_EQ((*r0)->send(frame(1501, 0)).code(), Error::kInvalidArgument);
+  ASSERT_TRUE((*r0)->send(frame(1500, 5)));
+  ASSERT_TRUE(loop.run_for(3 * kPeriod_s));
+  const auto got = (*r1)->take_received();
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].data, frame(1500, 5));
 }
 
 }  // namespace

@@ -23,23 +23,25 @@ constexpr FieldSpec kSubscribeFields[] = {{"vehicle", FieldType::kIndexOrName},
 constexpr FieldSpec kVehicleFields[] = {{"vehicle", FieldType::kIndexOrName}};
 // radio_config's numbers are checked here for type and finiteness; their own ranges by the channel
 // (RadioChannel::set_config), which names the range it refuses
-constexpr FieldSpec kConfigFields[] = {{"range_m", FieldType::kNumber},
-                                       {"tx_power_dbm", FieldType::kNumber},
-                                       {"sensitivity_dbm", FieldType::kNumber},
-                                       {"reference_loss_db", FieldType::kNumber},
-                                       {"path_loss_exponent", FieldType::kNumber},
-                                       {"shadowing_sigma_db", FieldType::kNumber},
-                                       {"loss", FieldType::kNumber},
-                                       {"latency_s", FieldType::kNumber},
-                                       {"slot_s", FieldType::kNumber},
-                                       {"period_s", FieldType::kNumber},
-                                       {"tdma", FieldType::kBoolean},
-                                       {"collisions", FieldType::kBoolean},
-                                       {"model", FieldType::kString},
-                                       {"technology", FieldType::kString},
-                                       {"max_queue_frames", FieldType::kNumber, 1, 1000000},
-                                       {"mac_header_bytes", FieldType::kNumber, 0, radio::kMaxMacHeaderBytes},
-                                       {"obstacle_loss_db", FieldType::kArray}};
+constexpr FieldSpec kConfigFields[] = {
+    {"range_m", FieldType::kNumber},
+    {"tx_power_dbm", FieldType::kNumber},
+    {"sensitivity_dbm", FieldType::kNumber},
+    {"reference_loss_db", FieldType::kNumber},
+    {"path_loss_exponent", FieldType::kNumber},
+    {"shadowing_sigma_db", FieldType::kNumber},
+    {"loss", FieldType::kNumber},
+    {"latency_s", FieldType::kNumber},
+    {"send_spread_s", FieldType::kNumber},
+    {"slot_s", FieldType::kNumber},
+    {"period_s", FieldType::kNumber},
+    {"tdma", FieldType::kBoolean},
+    {"collisions", FieldType::kBoolean},
+    {"model", FieldType::kString},
+    {"technology", FieldType::kString},
+    {"max_queue_frames", FieldType::kNumber, 1, 1000000},
+    {"mac_header_bytes", FieldType::kNumber, 0, radio::kMaxMacHeaderBytes},
+    {"obstacle_loss_db", FieldType::kArray}};
 constexpr FieldSpec kLinkOpenFields[] = {{"vehicle", FieldType::kIndexOrName},
                                          {"uav_port", FieldType::kNumber, 0, kPortLimit},
                                          {"gcs_port", FieldType::kNumber, 0, kPortLimit},
@@ -53,7 +55,8 @@ constexpr FieldSpec kLinkImpairFields[] = {{"vehicle", FieldType::kIndexOrName},
 // A whole-number field whose range its FieldSpec has checked: true with *out set (left alone when
 // absent), or false with reply failed for a fraction.
 template <typename T>
-bool whole_field(const nlohmann::json& request, const char* key, std::optional<T>* out, OpReply* reply) {
+bool whole_field(const nlohmann::json& request, const char* key, std::optional<T>* out,
+                 OpReply* reply) {
   const auto it = request.find(key);
   if (it == request.end()) return true;
   if (!it->is_number_integer() && !it->is_number_unsigned()) {
@@ -72,7 +75,8 @@ RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelay
 
 void RadioOps::register_ops(OpTable& table) {
   using Op = void (RadioOps::*)(uint64_t, const Json&, OpReply*);
-  const auto add = [&](const char* name, const char* group, Op op, std::span<const FieldSpec> fields) {
+  const auto add = [&](const char* name, const char* group, Op op,
+                       std::span<const FieldSpec> fields) {
     table.add({name, group, std::bind_front(op, this), fields});
   };
   add("radio_send", "radio", &RadioOps::op_send, kSendFields);
@@ -98,6 +102,7 @@ RadioOps::Json RadioOps::config_json() const {
               {"shadowing_sigma_db", c.shadowing_sigma_db},
               {"loss", c.loss_probability},
               {"latency_s", c.latency_s},
+              {"send_spread_s", c.send_spread_s},
               {"tdma", c.tdma},
               {"slot_s", c.slot_s},
               {"period_s", c.period_s},
@@ -119,6 +124,7 @@ void RadioOps::op_config(uint64_t, const Json& request, OpReply* reply) {
                                                      {"shadowing_sigma_db", &c.shadowing_sigma_db},
                                                      {"loss", &c.loss_probability},
                                                      {"latency_s", &c.latency_s},
+                                                     {"send_spread_s", &c.send_spread_s},
                                                      {"slot_s", &c.slot_s},
                                                      {"period_s", &c.period_s}};
   for (const auto& [key, field] : numbers) {
@@ -128,12 +134,14 @@ void RadioOps::op_config(uint64_t, const Json& request, OpReply* reply) {
   if (const auto v = bool_field(request, "collisions")) c.collisions = *v;
   if (const auto name = string_field(request, "model")) {
     const auto p = radio::propagation_from_name(*name);
-    if (!p) return reply->fail(ApiError::kBadField, "\"model\" must be \"range\" or \"log_distance\"");
+    if (!p)
+      return reply->fail(ApiError::kBadField, "\"model\" must be \"range\" or \"log_distance\"");
     c.propagation = *p;
   }
   if (const auto name = string_field(request, "technology")) {
     const auto t = radio::technology_from_name(*name);
-    if (!t) return reply->fail(ApiError::kBadField, "\"technology\" must be \"802.15.4\" or \"802.11\"");
+    if (!t)
+      return reply->fail(ApiError::kBadField, "\"technology\" must be \"802.15.4\" or \"802.11\"");
     c.technology = *t;
   }
   std::optional<size_t> queue_frames, header_bytes;
@@ -147,12 +155,14 @@ void RadioOps::op_config(uint64_t, const Json& request, OpReply* reply) {
     // one loss per MuJoCo geom group, in dB; groups not given block nothing
     bool ok = it->size() <= radio::kGeomGroups;
     for (size_t g = 0; ok && g < it->size(); ++g) {
-      ok = (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
+      ok =
+          (*it)[g].is_number() && (*it)[g].get<double>() >= 0.0 && (*it)[g].get<double>() <= 1000.0;
     }
     if (!ok) {
-      return reply->fail(ApiError::kBadField,
-                         "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
-                         "geom group)");
+      return reply->fail(
+          ApiError::kBadField,
+          "\"obstacle_loss_db\" must be an array of up to 6 numbers in [0, 1000] (dB per "
+          "geom group)");
     }
     c.obstacle_loss_db.fill(0.0);
     for (size_t g = 0; g < it->size(); ++g) c.obstacle_loss_db[g] = (*it)[g].get<double>();
@@ -173,24 +183,28 @@ void RadioOps::op_send(uint64_t, const Json& request, OpReply* reply) {
   if (!(to_field->is_string() && to_field->get<std::string>() == "broadcast")) {
     const auto v = vehicle_index(sim_, *to_field, reply);
     if (!v) return;
-    if (*v == *from) return reply->fail(ApiError::kBadField, "a vehicle cannot send a frame to itself");
+    if (*v == *from)
+      return reply->fail(ApiError::kBadField, "a vehicle cannot send a frame to itself");
     to = static_cast<int>(*v);
   }
   const auto data_b64 = string_field(request, "data_b64");
-  if (!data_b64) return reply->fail(ApiError::kMissingField, "\"data_b64\" (the frame, base64) is required");
-  // a generous bound before decoding: 127 bytes are 172 characters
+  if (!data_b64)
+    return reply->fail(ApiError::kMissingField, "\"data_b64\" (the frame, base64) is required");
+  // a bound before decoding: n bytes are 4 * ceil(n / 3) characters (127: 172; 1500: 2000)
   const size_t max_bytes = radio_.model().max_payload_bytes();
-  if (data_b64->size() > 4 * radio::kMaxFrameBytes) {
-    return reply->fail(ApiError::kFrameTooLarge,
-                       "a frame is at most " + std::to_string(max_bytes) + " bytes (802.15.4)");
+  const char* technology = radio::technology_name(radio_.model().config().technology);
+  if (data_b64->size() > 4 * ((max_bytes + 2) / 3)) {
+    return reply->fail(ApiError::kFrameTooLarge, "a frame is at most " + std::to_string(max_bytes) +
+                                                     " bytes (" + technology + ")");
   }
   const auto data = common::base64_decode(*data_b64);
   if (!data) return reply->fail(ApiError::kBadBase64, "\"data_b64\" is not valid base64");
   if (data->empty()) return reply->fail(ApiError::kBadField, "a frame carries at least one byte");
   if (data->size() > max_bytes) {
-    return reply->fail(ApiError::kFrameTooLarge, "a frame is at most " + std::to_string(max_bytes) +
-                                                     " bytes (802.15.4 on the " + radio_.model().backend_name() +
-                                                     " backend), got " + std::to_string(data->size()));
+    return reply->fail(ApiError::kFrameTooLarge,
+                       "a frame is at most " + std::to_string(max_bytes) + " bytes (" + technology +
+                           " on the " + radio_.model().backend_name() + " backend), got " +
+                           std::to_string(data->size()));
   }
   if (const std::string why = radio_.model().failure(); !why.empty()) {
     return reply->fail(ApiError::kNotAvailable, "the radio failed: " + why);
@@ -200,16 +214,20 @@ void RadioOps::op_send(uint64_t, const Json& request, OpReply* reply) {
     if (r.error == radio::Error::kQueueFull) {
       // the sender offers more than its airtime carries: said with what would fit, and counted
       const radio::RadioConfig& c = radio_.model().config();
-      char carries[64];
-      std::snprintf(carries, sizeof(carries), "%.2f ms",
-                    1e3 * radio::airtime_s(data->size() + c.mac_header_bytes));
+      // 802.15.4's airtime at 250 kbit/s (802.11's depends on its contention: not said)
+      std::string carries;
+      if (c.technology == radio::Technology::k802154) {
+        char ms[64];
+        std::snprintf(ms, sizeof(ms), "%.2f ms",
+                      1e3 * radio::airtime_s(data->size() + c.mac_header_bytes));
+        carries = std::string(": the channel carries one such frame per ") + ms +
+                  (c.tdma ? " in the sender's own TDMA slots" : "");
+      }
       return reply->fail(ApiError::kQueueFull,
                          "vehicle " + std::to_string(*from) + " has " +
                              std::to_string(radio_.model().queued(*from)) +
                              " frames waiting to go on air (max_queue_frames " +
-                             std::to_string(c.max_queue_frames) +
-                             "): the channel carries one such frame per " + carries +
-                             (c.tdma ? " in the sender's own TDMA slots" : "") +
+                             std::to_string(c.max_queue_frames) + ")" + carries +
                              "; this frame is dropped (radio_stats: refused)");
     }
     return reply->fail(ApiError::kBadField, radio::error_name(r.error));
@@ -223,7 +241,8 @@ void RadioOps::op_subscribe(uint64_t conn, const Json& request, OpReply* reply) 
 
 void RadioOps::op_unsubscribe(uint64_t conn, const Json& request, OpReply* reply) {
   if (has_field(request, "batch")) {
-    return reply->fail(ApiError::kBadField, "\"batch\" is a boolean of radio_subscribe (one radio_batch event a gate)");
+    return reply->fail(ApiError::kBadField,
+                       "\"batch\" is a boolean of radio_subscribe (one radio_batch event a gate)");
   }
   subscription_op(conn, request, false, reply);
 }
@@ -248,10 +267,11 @@ void RadioOps::subscription_op(uint64_t conn, const Json& request, bool subscrib
       sub.vehicles.erase(v);
     }
   }
-  reply->result = {{"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
-                   {"batch", sub.batch},
-                   {"max_frame_bytes", radio_.model().max_payload_bytes()},
-                   {"time_s", sim_.time_s()}};
+  reply->result = {
+      {"vehicles", Json(std::vector<size_t>(sub.vehicles.begin(), sub.vehicles.end()))},
+      {"batch", sub.batch},
+      {"max_frame_bytes", radio_.model().max_payload_bytes()},
+      {"time_s", sim_.time_s()}};
 }
 
 void RadioOps::op_stats(uint64_t, const Json& request, OpReply* reply) {
@@ -300,17 +320,18 @@ void RadioOps::op_stats(uint64_t, const Json& request, OpReply* reply) {
 RadioOps::Json RadioOps::relay_json(size_t vehicle, radio::GcsRelay& r) const {
   const radio::RelayImpairment& i = r.impairment();
   const radio::RelayStats& s = r.stats();
-  return Json{{"vehicle", vehicle},
-              {"uav_port", r.uav_port()},
-              {"gcs_port", r.gcs_port()},
-              {"loss", i.loss_probability},
-              {"latency_s", i.latency_s},
-              {"outage_until_s", std::isfinite(i.outage_until_s) ? Json(i.outage_until_s) : Json(nullptr)},
-              {"to_gcs_forwarded", s.to_gcs_forwarded},
-              {"to_gcs_dropped", s.to_gcs_dropped},
-              {"to_uav_forwarded", s.to_uav_forwarded},
-              {"to_uav_dropped", s.to_uav_dropped},
-              {"time_s", sim_.time_s()}};
+  return Json{
+      {"vehicle", vehicle},
+      {"uav_port", r.uav_port()},
+      {"gcs_port", r.gcs_port()},
+      {"loss", i.loss_probability},
+      {"latency_s", i.latency_s},
+      {"outage_until_s", std::isfinite(i.outage_until_s) ? Json(i.outage_until_s) : Json(nullptr)},
+      {"to_gcs_forwarded", s.to_gcs_forwarded},
+      {"to_gcs_dropped", s.to_gcs_dropped},
+      {"to_uav_forwarded", s.to_uav_forwarded},
+      {"to_uav_dropped", s.to_uav_dropped},
+      {"time_s", sim_.time_s()}};
 }
 
 std::optional<size_t> RadioOps::relay_vehicle(const Json& request, OpReply* reply) const {
@@ -324,7 +345,8 @@ std::optional<size_t> RadioOps::relay_vehicle(const Json& request, OpReply* repl
 radio::GcsRelay* RadioOps::open_relay(size_t vehicle, OpReply* reply) const {
   radio::GcsRelay* r = relays_->relay(vehicle);
   if (r == nullptr) {
-    reply->fail(ApiError::kNotAvailable, "vehicle " + std::to_string(vehicle) + " has no relay (gcs_link_open)");
+    reply->fail(ApiError::kNotAvailable,
+                "vehicle " + std::to_string(vehicle) + " has no relay (gcs_link_open)");
   }
   return r;
 }
@@ -333,7 +355,8 @@ void RadioOps::op_link_open(uint64_t conn, const Json& request, OpReply* reply) 
   const auto v = relay_vehicle(request, reply);
   if (!v) return;
   std::optional<uint16_t> uav_port, gcs_port, target_port;
-  if (!whole_field(request, "uav_port", &uav_port, reply) || !whole_field(request, "gcs_port", &gcs_port, reply) ||
+  if (!whole_field(request, "uav_port", &uav_port, reply) ||
+      !whole_field(request, "gcs_port", &gcs_port, reply) ||
       !whole_field(request, "gcs_target_port", &target_port, reply)) {
     return;
   }
@@ -345,8 +368,9 @@ void RadioOps::op_link_open(uint64_t conn, const Json& request, OpReply* reply) 
     if (!target_host) {
       target_host = peer;
     } else if (*target_host != peer) {
-      return reply->fail(ApiError::kForbidden, "gcs_target_host must be this client's own address (" + peer +
-                                                   ") unless the server runs with --allow-remote-gcs");
+      return reply->fail(ApiError::kForbidden,
+                         "gcs_target_host must be this client's own address (" + peer +
+                             ") unless the server runs with --allow-remote-gcs");
     }
   }
   std::string why;
@@ -422,7 +446,8 @@ void RadioOps::send_held(uint64_t conn, const Send& send) {
   if (it == held_.end()) return;
   Json frames = std::move(it->second);
   held_.erase(it);
-  send(conn, Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
+  send(conn,
+       Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
 }
 
 void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,

@@ -81,7 +81,7 @@ std::string Ns3Channel::validate_ns3(const RadioConfig& c, size_t vehicles) {
 
 Ns3Channel::Ns3Channel(size_t vehicles, const RadioConfig& config, uint64_t seed, double step_s,
                        const Ns3Options& options)
-    : vehicles_(vehicles), config_(config), step_s_(step_s), options_(options) {
+    : vehicles_(vehicles), config_(config), step_s_(step_s), options_(options), seed_(seed) {
   // what ns-3 always does, whatever the simple model's defaults say
   config_.mac_header_bytes = kNs3MacHeaderBytes;
   config_.collisions = true;
@@ -119,7 +119,7 @@ bool Ns3Channel::expect_ready(const std::vector<uint8_t>& request) {
   const auto type = in.get<uint8_t>();
   const auto max_payload = in.get<uint32_t>();
   if (!in.ok() || type != static_cast<uint8_t>(wire::MessageType::kReady) || max_payload == 0 ||
-      max_payload > kMaxFrameBytes) {
+      max_payload > kLargestFrameBytes) {
     fail("a malformed ready answer");
     return false;
   }
@@ -135,6 +135,7 @@ void Ns3Channel::reset_state() {
   next_seq_.assign(vehicles_, 0);
   queued_.assign(vehicles_, 0);
   busy_until_s_.assign(vehicles_, 0.0);
+  last_entry_ns_.assign(vehicles_, -1);
   in_flight_.assign(vehicles_, 0);
   pushed_loss_db_.assign(vehicles_ * vehicles_, 0.0);
   pending_.clear();
@@ -149,6 +150,7 @@ void Ns3Channel::reset(uint64_t seed) {
   w.put(static_cast<uint8_t>(wire::MessageType::kReset));
   w.put(seed);
   expect_ready(w.message());
+  seed_ = seed;
   reset_state();
 }
 
@@ -173,6 +175,7 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
       queue_.clear();
       in_flight_.assign(vehicles_, 0);
       busy_until_s_.assign(vehicles_, 0.0);
+      last_entry_ns_.assign(vehicles_, -1);
       busy_ = false;
       helper_ns_ = 0;
       quiet_until_ns_ = 0;
@@ -183,6 +186,24 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
 }
 
 int64_t Ns3Channel::to_ns(double t_s) const { return std::llround(t_s * 1e9); }
+
+int64_t Ns3Channel::entry_ns(size_t from, int64_t queued_ns) {
+  const int64_t spread_ns = config_.technology == Technology::k80211
+                                ? std::max(to_ns(config_.send_spread_s), to_ns(step_s_))
+                                : to_ns(config_.send_spread_s);
+  if (spread_ns <= 0) return -1;
+  // splitmix64 of (seed, sender, send time): the frames a sender sends at one time share their
+  // offset, as a program's frames of one tick leave together
+  uint64_t x = seed_ ^ (static_cast<uint64_t>(from) * 0x9e3779b97f4a7c15ull) ^
+               (static_cast<uint64_t>(queued_ns) * 0xc2b2ae3d27d4eb4full);
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  x ^= x >> 31;
+  const int64_t at_ns = queued_ns + static_cast<int64_t>(x % static_cast<uint64_t>(spread_ns));
+  // never before the sender's previous frame: a sender's frames go to its MAC in the order sent
+  last_entry_ns_[from] = std::max(at_ns, last_entry_ns_[from]);
+  return last_entry_ns_[from];
+}
 
 SendResult Ns3Channel::send(size_t from, int to, const std::vector<uint8_t>& data, double now_s) {
   SendResult r;
@@ -211,6 +232,8 @@ SendResult Ns3Channel::send(size_t from, int to, const std::vector<uint8_t>& dat
       const double start_s = tdma_slot_start_s(config_, vehicles_, from, earliest_s);
       busy_until_s_[from] = start_s + airtime_s(data.size() + kNs3MacHeaderBytes);
       q.slot_ns = to_ns(start_s);
+    } else {
+      q.slot_ns = entry_ns(from, q.queued_ns);
     }
     queue_.push_back(std::move(q));
     ++queued_[from];
@@ -339,7 +362,7 @@ bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
     const auto rx_ns = in.get<int64_t>();
     in.get<uint8_t>();  // LQI
     const auto n = in.get<uint16_t>();
-    if (!in.ok() || to >= vehicles_ || from >= vehicles_ || n == 0 || n > kMaxFrameBytes ||
+    if (!in.ok() || to >= vehicles_ || from >= vehicles_ || n == 0 || n > max_payload_bytes_ ||
         !in.bytes(n, &d.data)) {
       return false;
     }

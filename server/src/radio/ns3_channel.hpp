@@ -21,6 +21,9 @@
 // the helper puts it to the sender's MAC at the slot's start, with CSMA-CA's random backoff off
 // (macMinBE 0) so it goes on air one clear-channel assessment and one turnaround later (320 us).
 // Deliveries arrive at max(end of reception + latency_s, queued + one step), like the simple model.
+// Without TDMA a frame enters the channel at a seeded offset after it was sent (send_spread_s,
+// radio_channel.hpp; at least one step on 802.11): drawn from (seed, sender, send time), so the
+// same for every frame a sender sends at one time and independent of the order of the requests.
 #pragma once
 
 #include <sys/types.h>
@@ -92,7 +95,8 @@ class Ns3Channel : public RadioChannel {
     int to = kBroadcast;
     uint64_t seq = 0;
     int64_t queued_ns = 0;
-    int64_t slot_ns = -1;  // TDMA: the start of its slot; -1: handed at once
+    int64_t slot_ns =
+        -1;  // when it enters: its TDMA slot's start, or its spread entry; -1: at once
     std::vector<uint8_t> data;
   };
 
@@ -105,11 +109,14 @@ class Ns3Channel : public RadioChannel {
   bool expect_ready(const std::vector<uint8_t>& request);
   bool read_step_done(const std::vector<uint8_t>& reply);
   int64_t to_ns(double t_s) const;
+  // when a frame from sender, sent at queued_ns, enters the channel (send_spread_s); -1: at once
+  int64_t entry_ns(size_t from, int64_t queued_ns);
 
   size_t vehicles_;
   RadioConfig config_;
   double step_s_;
   Ns3Options options_;
+  uint64_t seed_;
   pid_t pid_ = -1;
   int fd_ = -1;
   std::string failure_;
@@ -122,6 +129,7 @@ class Ns3Channel : public RadioChannel {
   std::vector<uint64_t> next_seq_;
   std::vector<size_t> queued_;          // per sender: in queue_
   std::vector<double> busy_until_s_;    // per sender, TDMA: end of its last frame's slot use
+  std::vector<int64_t> last_entry_ns_;  // per sender: its last frame's entry (frames keep order)
   std::vector<size_t> in_flight_;       // per sender: handed, not yet confirmed
   std::vector<double> pushed_loss_db_;  // from * N + to: the obstacle loss the helper has
   std::vector<Delivery> pending_;       // received, not yet arrived (latency, one-step floor)

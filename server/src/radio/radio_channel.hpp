@@ -19,7 +19,10 @@
 
 namespace uavsim::server::radio {
 
-inline constexpr size_t kMaxFrameBytes = 127;     // 802.15.4 aMaxPHYPacketSize
+inline constexpr size_t kMaxFrameBytes = 127;  // 802.15.4 aMaxPHYPacketSize
+// The largest payload of any technology: 802.11 on the ns3 backend carries an Ethernet MTU's 1500
+// bytes (its MSDU could take 2304; 1500 is what IP over Wi-Fi uses and what a program can count on)
+inline constexpr size_t kLargestFrameBytes = 1500;
 inline constexpr double kBitRateBitS = 250000.0;  // 2.4 GHz O-QPSK PHY
 inline constexpr size_t kPhyOverheadBytes =
     6;  // preamble (4) + start-of-frame delimiter (1) + length (1)
@@ -64,6 +67,13 @@ struct RadioConfig {
   bool collisions =
       false;  // overlapping frames heard at a receiver are both lost (half duplex too)
   size_t max_queue_frames = 256;  // per vehicle; send() refuses more
+  // the ns3 backend without TDMA: a frame enters the channel at a seeded offset in [0,
+  // send_spread_s) after it was sent, the same for the frames one sender sends at one time (which
+  // keep their order). Lockstep programs all send at the server's step boundary, where real ones
+  // run on clocks of their own; 802.11's DCF sends at once on an idle medium, so a step's frames
+  // would start together and collide: on 802.11 the spread is at least one step. 0 on 802.15.4
+  // (its CSMA-CA starts with a random backoff of up to 2.24 ms): frames go to the MAC at once
+  double send_spread_s = 0.0;
   // bytes of MAC header and FCS the PHY carries besides a frame's payload: 0 (the default of the
   // simple backend) lets a payload fill the whole 127-byte PSDU; 11 is a data frame with short
   // addresses and a compressed PAN id (frame control 2, sequence 1, PAN 2, two addresses 2 + 2,
@@ -117,7 +127,8 @@ class RadioChannel {
 
   // "simple" or "ns3".
   virtual const char* backend_name() const = 0;
-  // The largest payload send() accepts, bytes (127 minus the MAC header the backend accounts for).
+  // The largest payload send() accepts, bytes: 802.15.4's 127 minus the MAC header the backend
+  // accounts for; 1500 on 802.11 (kLargestFrameBytes).
   virtual size_t max_payload_bytes() const = 0;
 
   // Queues a frame from vehicle from to vehicle to (or kBroadcast) at time now_s.

@@ -1,10 +1,11 @@
 #include "radio/radio_model.hpp"
-#include "uavsim/common/angles.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::radio {
 
@@ -37,7 +38,8 @@ void take_arrivals(std::vector<Delivery>* pending, double now_s, std::vector<Del
   auto arrived = std::stable_partition(pending->begin(), pending->end(), [&](const Delivery& d) {
     return d.time_s > now_s + kTimeEps;
   });
-  std::vector<Delivery> ready(std::make_move_iterator(arrived), std::make_move_iterator(pending->end()));
+  std::vector<Delivery> ready(std::make_move_iterator(arrived),
+                              std::make_move_iterator(pending->end()));
   pending->erase(arrived, pending->end());
   std::sort(ready.begin(), ready.end(), [](const Delivery& a, const Delivery& b) {
     if (a.time_s != b.time_s) return a.time_s < b.time_s;
@@ -85,9 +87,12 @@ const char* error_name(Error e) {
 }
 
 std::string validate(const RadioConfig& c, size_t vehicles) {
-  // every number of a config comes from outside (API, world): each is finite and within the physical
-  // range its field states (radio_model.hpp), so no value reaches a loop, a log or a cast unusable
-  const auto in = [](double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; };
+  // every number of a config comes from outside (API, world): each is finite and within the
+  // physical range its field states (radio_model.hpp), so no value reaches a loop, a log or a cast
+  // unusable
+  const auto in = [](double v, double lo, double hi) {
+    return std::isfinite(v) && v >= lo && v <= hi;
+  };
   const auto range = [](const char* name, double lo, double hi) {
     return std::string(name) + " must be in [" + number_text(lo) + ", " + number_text(hi) + "]";
   };
@@ -103,6 +108,9 @@ std::string validate(const RadioConfig& c, size_t vehicles) {
     return range("shadowing_sigma_db", 0.0, kMaxShadowingSigmaDb);
   if (!in(c.loss_probability, 0.0, 1.0)) return "loss_probability must be in [0, 1]";
   if (!in(c.latency_s, 0.0, kMaxLatencyS)) return range("latency_s", 0.0, kMaxLatencyS);
+  if (!in(c.send_spread_s, 0.0, kMaxSendSpreadS))
+    return range("send_spread_s", 0.0, kMaxSendSpreadS);
+  if (c.send_spread_s > 0.0 && c.tdma) return "send_spread_s must be 0 with tdma (slots are exact)";
   if (c.max_queue_frames == 0) return "max_queue_frames must be > 0";
   if (c.mac_header_bytes > kMaxMacHeaderBytes)
     return "mac_header_bytes must be in [0, " + std::to_string(kMaxMacHeaderBytes) + "]";
@@ -128,6 +136,10 @@ std::string validate(const RadioConfig& c, size_t vehicles) {
 std::string RadioModel::validate_simple(const RadioConfig& config, size_t vehicles) {
   if (config.technology != Technology::k802154) {
     return "technology 802.11 needs the ns3 backend (the simple model is 802.15.4's)";
+  }
+  if (config.send_spread_s != 0.0) {
+    return "send_spread_s needs the ns3 backend (the simple model has no medium access to spread "
+           "for)";
   }
   return validate(config, vehicles);
 }
@@ -202,14 +214,15 @@ double tdma_slot_start_s(const RadioConfig& config, size_t vehicles, size_t vehi
   const double T = config.period_s;
   const double D = config.slot_s;
   // whole slots in a period; the remainder is wasted (seed 6.2). validate() bounds T / D below a
-  // million and guarantees a slot to every vehicle (N D <= T), so the count is a safe integer and the
-  // answer lies in this period or the next: no loop over slots or periods
+  // million and guarantees a slot to every vehicle (N D <= T), so the count is a safe integer and
+  // the answer lies in this period or the next: no loop over slots or periods
   const auto slots = static_cast<uint64_t>(std::floor(T / D + 1e-9));
   const auto n = static_cast<uint64_t>(vehicles);
   const double period_start = std::floor(t_s / T) * T;
   // the first slot of this period that starts at or after t_s (within kTimeEps)
   const double into_s = std::max(0.0, t_s - kTimeEps - period_start);
-  const auto first = static_cast<uint64_t>(std::min(std::ceil(into_s / D - 1e-9), static_cast<double>(slots)));
+  const auto first =
+      static_cast<uint64_t>(std::min(std::ceil(into_s / D - 1e-9), static_cast<double>(slots)));
   // this vehicle's slots are vehicle, vehicle + N, ...: the first of them at or after `first`
   uint64_t k = vehicle;
   if (first > k) k += (first - k + n - 1) / n * n;

@@ -32,12 +32,12 @@
 namespace uavsim::server::radio {
 
 // The range of every number a RadioConfig accepts (validate() refuses the rest with bad_field's
-// message): physical values with room to spare, so that a huge, negative or denormal number from the API
-// or a world never reaches the propagation maths or the slot arithmetic.
+// message): physical values with room to spare, so that a huge, negative or denormal number from
+// the API or a world never reaches the propagation maths or the slot arithmetic.
 inline constexpr double kMinRangeM = 0.1;
 inline constexpr double kMaxRangeM = 1e6;
-inline constexpr double kMinTxPowerDbm = -50.0;  // below any real transceiver
-inline constexpr double kMaxTxPowerDbm = 60.0;   // 1 kW
+inline constexpr double kMinTxPowerDbm = -50.0;       // below any real transceiver
+inline constexpr double kMaxTxPowerDbm = 60.0;        // 1 kW
 inline constexpr double kMinSensitivityDbm = -174.0;  // the thermal noise floor in 1 Hz
 inline constexpr double kMaxSensitivityDbm = 0.0;
 inline constexpr double kMaxLossDb = 300.0;
@@ -45,7 +45,8 @@ inline constexpr double kMinPathLossExponent = 1.0;   // waveguide-like corridor
 inline constexpr double kMaxPathLossExponent = 10.0;  // dense obstruction stays under 6
 inline constexpr double kMaxShadowingSigmaDb = 30.0;
 inline constexpr double kMaxLatencyS = 3600.0;
-inline constexpr double kMaxPeriodS = 3600.0;  // TDMA period T
+inline constexpr double kMaxPeriodS = 3600.0;   // TDMA period T
+inline constexpr double kMaxSendSpreadS = 1.0;  // a program's tick is well under a second
 
 // Why a config is unusable for vehicles vehicles ("" if usable); names the field.
 std::string validate(const RadioConfig& config, size_t vehicles);
@@ -137,7 +138,8 @@ class RadioModel : public RadioChannel {
   // per sender: accepted, not yet on air (in queues_ or scheduled_). send() refuses a frame past
   // max_queue_frames of them: a sender offering more than its airtime carries is told at once
   // (queue_full) instead of growing scheduled_ without end (issue 29: 7000 frames a second from
-  // one client, 1420 carried, left a backlog of 22000 frames after 4 s and slowed the loop 10^4-fold)
+  // one client, 1420 carried, left a backlog of 22000 frames after 4 s and slowed the loop
+  // 10^4-fold)
   std::vector<size_t> backlog_;
 };
 

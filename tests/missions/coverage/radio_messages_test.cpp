@@ -182,9 +182,14 @@ TEST(RadioMessages, TheFrameFitFollowsTheChannel) {
   ASSERT_TRUE(ns3) << error;
   EXPECT_EQ(ns3->max_frame_bytes, 116u);
   EXPECT_EQ(ns3->beacon_records, 7);
+  // 802.11's 1500 bytes: aggregation fragments of up to 1500, beacons as at 127 (8 records)
+  const auto wifi = fit_frames(1500, &error);
+  ASSERT_TRUE(wifi) << error;
+  EXPECT_EQ(wifi->max_frame_bytes, 1500u);
+  EXPECT_EQ(wifi->beacon_records, 8);
   const auto large = fit_frames(2304, &error);
   ASSERT_TRUE(large) << error;
-  EXPECT_EQ(large->max_frame_bytes, 127u);
+  EXPECT_EQ(large->max_frame_bytes, 1500u);
   EXPECT_EQ(large->beacon_records, 8);
   const auto smallest = fit_frames(kMinFrameBytes, &error);
   ASSERT_TRUE(smallest) << error;
@@ -208,11 +213,11 @@ TEST(RadioMessages, BeaconsFitTheChannelsFrameAndRoundTrip) {
   for (int i = 0; i < 25; ++i)
     b.records.push_back({i, static_cast<uint16_t>(100 + i), 10.0 + i, 20.0 - i, 0.25 * i, 0.1 * i,
                          -0.1 * i, i % 5, 40 * i, i % 2 == 0});
-  for (size_t bytes : {kMinFrameBytes, kNs3FrameBytes, kMaxFrameBytes}) {
+  for (size_t bytes : {kMinFrameBytes, kNs3FrameBytes, kMaxFrameBytes, kMaxAggregateFrameBytes}) {
     SCOPED_TRACE(bytes);
     const FrameFit fit = *fit_frames(bytes, nullptr);
     const Frame f = encode_beacon(b, o, fit);
-    EXPECT_LE(f.size(), bytes);
+    EXPECT_LE(f.size(), std::min(bytes, kMaxFrameBytes));
     EXPECT_EQ(f.size(), 14u + 14u * static_cast<size_t>(fit.beacon_records));
     // as many as fit: one more would not
     if (fit.beacon_records < kMaxRecordsPerBeacon) {
@@ -260,10 +265,10 @@ TEST(RadioMessages, AggregationFragmentsFitTheChannelsFrameAndNothingIsCut) {
     for (int band = 0; band < 20; ++band)
       dense.apd.add(s, {(200.0 * band + s / 3) / 10.0, 20.0 * band + 10.0});
   for (const AggregateMessage* m : {&ragged, &dense}) {
-    size_t fragments[2] = {0, 0};
-    size_t longest[2] = {0, 0};
+    size_t fragments[3] = {0, 0, 0};
+    size_t longest[3] = {0, 0, 0};
     int k = 0;
-    for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes}) {
+    for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes, kMaxAggregateFrameBytes}) {
       SCOPED_TRACE(bytes);
       const auto frames = encode_aggregate(*m, *fit_frames(bytes, nullptr));
       fragments[k] = frames.size();
@@ -280,6 +285,7 @@ TEST(RadioMessages, AggregationFragmentsFitTheChannelsFrameAndNothingIsCut) {
       ++k;
     }
     EXPECT_GE(fragments[0], fragments[1]);
+    EXPECT_GT(fragments[1], fragments[2]);  // 1500 bytes: fewer, larger fragments
     // the ragged map's small runs fill a fragment to the end (the dense map's 82-byte runs go one
     // to a fragment at either size)
     if (m == &ragged) {
@@ -363,6 +369,24 @@ TEST(RadioMessages, MalformedStationApdsAreRefused) {
   ASSERT_EQ(inverted[at + 1], 1);
   std::swap(inverted[at + 2], inverted[at + 4]);
   EXPECT_FALSE(decode_apd(inverted, 10));
+}
+
+// At 1500 bytes a fragment has room for 367 intervals, but a run counts its intervals in a byte:
+// 300 intervals in a stripe are sent as 255 (claiming less, never more), in frames within 1500.
+TEST(RadioMessages, AStripeOf300IntervalsIsSentAs255In1500ByteFrames) {
+  AggregateMessage m;
+  m.apd = AreaParts(2);
+  for (int s = 0; s < 2; ++s)
+    for (int band = 0; band < 300; ++band) m.apd.add(s, {2.0 * band, 2.0 * band + 1.0});
+  const auto frames = encode_aggregate(m, *fit_frames(kMaxAggregateFrameBytes, nullptr));
+  AggregateReassembler r(2);
+  std::optional<AggregateMessage> d;
+  for (const Frame& f : frames) {
+    EXPECT_LE(f.size(), kMaxAggregateFrameBytes);
+    d = r.add(f);
+  }
+  ASSERT_TRUE(d);
+  for (int s = 0; s < 2; ++s) EXPECT_EQ(d->apd.stripe(s).size(), 255u);
 }
 
 }  // namespace

@@ -469,7 +469,11 @@ TEST(RadioApi, OnNs3ASaturatedChannelShowsChannelAccessFailuresInTheStats) {
 // Two lockstep clients, one a vehicle's program each, both broadcast in the same ticks (ns-3 draws
 // CSMA-CA backoffs for the frames that contend): whichever client's sends and done reach the server
 // first, the frames go to ns-3 in the same order and every delivery is the same, field by field.
-TEST(RadioApi, OnNs3TheOrderOfLockstepClientsRequestsDoesNotMatter) {
+// On 802.11 the frames also enter at their spread offsets (send_spread_s): drawn per sender and
+// send time, so the same whichever request came first.
+class RadioApiOnNs3 : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(RadioApiOnNs3, TheOrderOfLockstepClientsRequestsDoesNotMatter) {
   if (!radio::find_ns3_helper()) GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh)";
   constexpr double kPeriod_s = 0.02;
   constexpr int kSendingTicks = 10;  // then 5 quiet ticks: every frame is delivered in lockstep
@@ -478,6 +482,7 @@ TEST(RadioApi, OnNs3TheOrderOfLockstepClientsRequestsDoesNotMatter) {
   auto deliveries = [&](bool vehicle1_first) {
     RadioServer server(radio::Backend::kNs3);
     TestClient watch(server.port());
+    EXPECT_TRUE(watch.request({{"op", "radio_config"}, {"technology", GetParam()}})["ok"]);
     EXPECT_TRUE(watch.request({{"op", "radio_subscribe"}})["ok"]);
     TestClient program[2] = {TestClient(server.port()), TestClient(server.port())};
     for (TestClient& c : program)
@@ -526,6 +531,50 @@ TEST(RadioApi, OnNs3TheOrderOfLockstepClientsRequestsDoesNotMatter) {
   EXPECT_EQ(senders.size(), 2u);
   ASSERT_EQ(first.size(), reversed.size());
   for (size_t i = 0; i < first.size(); ++i) EXPECT_EQ(first[i], reversed[i]) << i;
+}
+
+INSTANTIATE_TEST_SUITE_P(Technologies, RadioApiOnNs3, ::testing::Values("802.15.4", "802.11"),
+                         [](const auto& info) {
+                           return std::string(info.param) == "802.11" ? "Wifi" : "LrWpan";
+                         });
+
+// 802.11 carries an Ethernet MTU: 1500 bytes through the API's base64 both ways, 1501 refused
+TEST(RadioApi, OnNs3s80211AFrameCarries1500Bytes) {
+  if (!radio::find_ns3_helper()) GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh)";
+  RadioServer server(radio::Backend::kNs3);
+  TestClient c(server.port());
+  Json cfg = c.request({{"op", "radio_config"}, {"technology", "802.11"}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["max_frame_bytes"], 1500);
+  EXPECT_EQ(cfg["result"]["send_spread_s"], 0.0);
+  const Json sub = c.request({{"op", "radio_subscribe"}, {"vehicle", 1}});
+  EXPECT_EQ(sub["result"]["max_frame_bytes"], 1500);
+  const Json big = c.request(send_op(0, 1, common::base64_encode(std::vector<uint8_t>(1501, 1))));
+  EXPECT_EQ(error_code(big), "frame_too_large");
+  EXPECT_NE(big["error"]["message"].get<std::string>().find("1500 bytes (802.11"),
+            std::string::npos)
+      << big;
+  // far past the bound: refused before decoding
+  EXPECT_EQ(error_code(c.request(send_op(0, 1, std::string(8000, 'A')))), "frame_too_large");
+  const std::vector<uint8_t> full(1500, 9);
+  ASSERT_TRUE(c.request(send_op(0, 1, common::base64_encode(full)))["ok"]);
+  ASSERT_TRUE(c.request({{"op", "step"}, {"steps", 20}})["ok"]);
+  const Json e = c.next_event("radio");
+  ASSERT_FALSE(e.is_null());
+  EXPECT_EQ(e["data_b64"], common::base64_encode(full));
+  // the spread is a setting of 802.11 and ns3 only: in [0, 1] s, not with the simple model
+  cfg = c.request({{"op", "radio_config"}, {"send_spread_s", 0.05}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["send_spread_s"], 0.05);
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"send_spread_s", 2}})), "bad_field");
+  EXPECT_EQ(error_code(c.request({{"op", "radio_config"}, {"send_spread_s", -1}})), "bad_field");
+  // back to 802.15.4: 116 bytes again
+  cfg = c.request({{"op", "radio_config"}, {"technology", "802.15.4"}, {"send_spread_s", 0}});
+  ASSERT_TRUE(cfg["ok"]) << cfg;
+  EXPECT_EQ(cfg["result"]["max_frame_bytes"], 116);
+  RadioServer simple;
+  TestClient s(simple.port());
+  EXPECT_EQ(error_code(s.request({{"op", "radio_config"}, {"send_spread_s", 0.01}})), "bad_field");
 }
 
 }  // namespace

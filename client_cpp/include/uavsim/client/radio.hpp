@@ -1,5 +1,5 @@
 // A2aRadio: a vehicle's air-to-air radio (IEEE 802.15.4 frames of 1-127 bytes, seed 6.2; the
-// simulator's channel may allow fewer: max_frame_bytes()), as a
+// simulator's channel may allow fewer, or up to 1500 on 802.11: max_frame_bytes()), as a
 // drone's onboard computer drives its radio module. In the simulator it is the server's radio
 // (docs/protocol.md "Radio"), carried on the loop's lockstep connection: a frame that arrives at
 // sim time t is received before the tick at or after t, in the same order in every run, so a
@@ -21,7 +21,10 @@
 
 namespace uavsim::client {
 
+// 802.15.4's whole PSDU: the frame size of a server that does not say its channel's
 inline constexpr std::size_t kRadioMaxFrameBytes = 127;
+// The largest frame any channel of the simulator carries (802.11 on its ns3 backend)
+inline constexpr std::size_t kRadioLargestFrameBytes = 1500;
 
 struct RadioFrame {
   double time_s = 0.0;  // arrival (sim time)
@@ -49,7 +52,8 @@ class A2aRadio {
 
   int vehicle() const;
   // The largest frame the simulator's radio channel carries, bytes: 127 on its simple backend, 116
-  // on ns3 (802.15.4's 127-byte PSDU less the MAC header and FCS the channel accounts for).
+  // on ns3's 802.15.4 (its 127-byte PSDU less the MAC header and FCS the channel accounts for),
+  // 1500 on ns3's 802.11.
   std::size_t max_frame_bytes() const;
   // Puts a frame on air: to every vehicle in range (to < 0) or to one vehicle. Does not wait for
   // the simulator's answer (a refusal is counted in counters().refused). kInvalidArgument for an

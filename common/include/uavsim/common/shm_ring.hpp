@@ -130,7 +130,8 @@ class RingReader {
 
 // ---- the tick record (RecordType::kTick)
 
-inline constexpr std::size_t kMaxRadioFrameBytes = 127;  // 802.15.4's whole PSDU
+// 802.11's frames on the ns3 backend (an Ethernet MTU); 802.15.4's are at most 127
+inline constexpr std::size_t kMaxRadioFrameBytes = 1500;
 inline constexpr std::uint32_t kMaxRadioFramesPerTick = 1u << 20;
 inline constexpr std::uint32_t kMaxVehicleIndex = 1u << 16;
 
