@@ -91,10 +91,10 @@ void ClockOps::finish_step(const char* by_op) {
     send_(conn, ok_reply(id, {{"time_s", sim_.time_s()}, {"paused", true}}));
   } else {
     // another clock op took the clock: the step ends here, and says how far it got (the time as the
-    // wire writes it, with its line end)
+    // wire writes it)
     const uint64_t done = steps_requested_ - steps_remaining_;
     const std::string time =
-        Json(sim_.time_s()).dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
+        Json(sim_.time_s()).dump(-1, ' ', false, Json::error_handler_t::replace);
     send_(conn,
           error_reply(id, ApiError::kInterrupted,
                       std::string("a ") + by_op + " ended the step after " + std::to_string(done) +

@@ -121,7 +121,9 @@ TEST(ApiChaos, AResumeFromAnotherClientAnswersTheStepInProgress) {
   const Json step = b.reply();
   EXPECT_EQ(step["id"], "s") << step;
   EXPECT_EQ(error_code(step), "interrupted") << step;
-  EXPECT_NE(step["error"]["message"].get<std::string>().find("resume"), std::string::npos) << step;
+  const std::string message = step["error"]["message"].get<std::string>();
+  EXPECT_NE(message.find("resume"), std::string::npos) << step;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << "a message is one line: " << step;
   EXPECT_EQ(b.reply()["id"], "after");
   // and stepping works again, from either client
   ASSERT_TRUE(a.request({{"op", "pause"}}).value("ok", false));
