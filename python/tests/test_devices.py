@@ -21,8 +21,11 @@ def test_two_vehicles_talk_over_the_radio():
         assert got1[0].time_s > 0 and r0.counters.sent == 1 and r1.counters.received == 1
         with pytest.raises(uavsim.InvalidArgumentError):
             r0.send(b"")
+        # the simple backend's channel: 802.15.4's whole PSDU
+        assert r0.max_frame_bytes == uavsim._core.RADIO_MAX_FRAME_BYTES == 127
+        r0.send(b"x" * r0.max_frame_bytes)
         with pytest.raises(uavsim.InvalidArgumentError):
-            r0.send(b"x" * (uavsim._core.RADIO_MAX_FRAME_BYTES + 1))
+            r0.send(b"x" * (r0.max_frame_bytes + 1))
         with pytest.raises(TypeError):
             r0.send("a str is not bytes")
         with pytest.raises(uavsim.InvalidArgumentError):
