@@ -14,6 +14,7 @@
 #include "uavsim/client/sim_connection.hpp"
 #include "uavsim/common/angles.hpp"
 #include "uavsim/common/install_paths.hpp"
+#include "uavsim/common/splitmix.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
 namespace {
@@ -62,10 +63,8 @@ std::string world_with_speed(const std::string& world, double kmh, uint64_t seed
 // A uniform number in [0, 1) from the seed and a stream number (splitmix64: the same on every
 // platform, unlike the standard library's distributions).
 double seeded_uniform(uint64_t seed, uint64_t stream) {
-  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + (stream + 1) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  z ^= z >> 31;
+  const uint64_t z =
+      common::splitmix64_mix(seed * common::kSplitMixGamma + (stream + 1) * 0xBF58476D1CE4E5B9ULL);
   return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 

@@ -1,7 +1,9 @@
 #include "objects/balloons.hpp"
-#include "uavsim/common/angles.hpp"
 
 #include <cmath>
+
+#include "uavsim/common/angles.hpp"
+#include "uavsim/common/splitmix.hpp"
 
 namespace uavsim::server::objects {
 
@@ -11,12 +13,7 @@ namespace {
 // on every platform and standard library
 struct SplitMix64 {
   uint64_t state;
-  uint64_t next() {
-    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
+  uint64_t next() { return common::splitmix64_mix(state += common::kSplitMixGamma); }
   double uniform(double lo, double hi) {  // 53 random bits in [lo, hi)
     return lo + (hi - lo) * static_cast<double>(next() >> 11) * 0x1.0p-53;
   }

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "radio/radio_model.hpp"
+#include "uavsim/common/splitmix.hpp"
 #include "wire.hpp"
 
 namespace uavsim::server::radio {
@@ -194,11 +195,9 @@ int64_t Ns3Channel::entry_ns(size_t from, int64_t queued_ns) {
   if (spread_ns <= 0) return -1;
   // splitmix64 of (seed, sender, send time): the frames a sender sends at one time share their
   // offset, as a program's frames of one tick leave together
-  uint64_t x = seed_ ^ (static_cast<uint64_t>(from) * 0x9e3779b97f4a7c15ull) ^
-               (static_cast<uint64_t>(queued_ns) * 0xc2b2ae3d27d4eb4full);
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  x ^= x >> 31;
+  const uint64_t x =
+      common::splitmix64_mix(seed_ ^ (static_cast<uint64_t>(from) * common::kSplitMixGamma) ^
+                             (static_cast<uint64_t>(queued_ns) * 0xc2b2ae3d27d4eb4full));
   const int64_t at_ns = queued_ns + static_cast<int64_t>(x % static_cast<uint64_t>(spread_ns));
   // never before the sender's previous frame: a sender's frames go to its MAC in the order sent
   last_entry_ns_[from] = std::max(at_ns, last_entry_ns_[from]);

@@ -14,6 +14,7 @@
 #include "render/camera_director.hpp"
 #include "render/camera_renderer.hpp"
 #include "render/camera_setup.hpp"
+#include "uavsim/common/splitmix.hpp"
 
 namespace uavsim::server::render {
 
@@ -82,14 +83,9 @@ std::shared_ptr<const std::string> encode_segmentation(const std::vector<int32_t
 class FrameNoise {
  public:
   FrameNoise(uint64_t seed, uint64_t stream, int camera, int64_t index)
-      : state_(seed ^ (stream + static_cast<uint64_t>(camera) * 0x9E3779B97F4A7C15ull) ^
+      : state_(seed ^ (stream + static_cast<uint64_t>(camera) * common::kSplitMixGamma) ^
                (static_cast<uint64_t>(index) * 0xBF58476D1CE4E5B9ull)) {}
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
+  uint64_t next() { return common::splitmix64_mix(state_ += common::kSplitMixGamma); }
   // approximately N(0, 1): the centred sum of four 16-bit uniforms (mean 2, variance 4/12), scaled
   double gauss() {
     constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit

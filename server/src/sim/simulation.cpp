@@ -4,16 +4,15 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "uavsim/common/splitmix.hpp"
+
 namespace uavsim::server::sim {
 
 namespace {
 
 // splitmix64: decorrelates per-vehicle seeds derived from one world seed
 uint64_t mix_seed(uint64_t seed, uint64_t index) {
-  uint64_t z = seed + 0x9E3779B97F4A7C15ull * (index + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
+  return common::splitmix64_mix(seed + common::kSplitMixGamma * (index + 1));
 }
 
 // Past these a vehicle's rotor wrench or state is a numerical failure (NaN from a controller, a blow-up),
