@@ -9,14 +9,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "../support/launcher_run.hpp"
+#include "five_quads_run.hpp"
 
 namespace {
 
 using Json = nlohmann::json;
+using uavsim::tests::kFullCoverage;
 
 constexpr double kBudget_s = 900.0;  // the mission takes about 450 s of sim time
-constexpr double kFullCoverage = 0.999;
 
 TEST(CoverageWifi, TenQuadsCover300By300MetresAndLandOnNs3s80211) {
   std::string out;
