@@ -48,10 +48,9 @@ bool AggregationNode::on_message(const AggregateMessage& m, int leader_id, const
   heard_[m.sender] = {m.responded, (m.acked & bit(local_id_)) != 0};
   // merge: the union of the areas and of the responded sets (Algorithm 4)
   const uint64_t before_responded = responded_;
-  AreaParts merged = apd_;
-  merged.merge(m.apd);
-  const bool grew = !(merged == apd_) || (responded_ | m.responded) != before_responded;
-  apd_ = std::move(merged);
+  bool area_grew = false;
+  apd_.merge(m.apd, &area_grew);
+  const bool grew = area_grew || (responded_ | m.responded) != before_responded;
   responded_ |= m.responded;
   merged_from_ |= bit(m.sender);
   if (grew || joined) changed();
@@ -65,12 +64,9 @@ bool AggregationNode::seq_newer_query(uint16_t candidate) const {
 
 void AggregationNode::refresh_own(const AreaParts& own) {
   if (!active_) return;
-  AreaParts merged = apd_;
-  merged.merge(own);
-  if (!(merged == apd_)) {
-    apd_ = std::move(merged);
-    changed();
-  }
+  bool grew = false;
+  apd_.merge(own, &grew);
+  if (grew) changed();
 }
 
 bool AggregationNode::acknowledged_by(int neighbour) const {

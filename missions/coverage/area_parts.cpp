@@ -2,32 +2,67 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <iterator>
 
 namespace uavsim::missions::coverage {
 
-std::vector<Interval> normalize_stripe(const std::vector<Interval>& patches) {
-  // discontinuity map: +1 where a patch starts, -1 where one ends (Algorithm 4)
-  std::map<double, int> discont;
-  for (const Interval& p : patches) {
+namespace {
+
+// Appends the union of intervals sorted by start to *out as sorted, disjoint, non-touching
+// intervals: one that starts at or before the end of the one being built (overlapping or touching)
+// extends it. Empty and inverted intervals (NaN ends too) are skipped.
+template <typename It>
+void sweep_sorted(It first, It last, std::vector<Interval>* out) {
+  bool open = false;
+  Interval cur;
+  for (; first != last; ++first) {
+    const Interval& p = *first;
     if (!(p.end_m > p.start_m)) continue;
-    discont[p.start_m] += 1;
-    discont[p.end_m] -= 1;
-  }
-  // sweep in increasing y: an interval opens when the running sum leaves 0 and closes when it
-  // returns to 0 (a patch ending where another starts nets 0 there, so they join)
-  std::vector<Interval> result;
-  int sum = 0;
-  double start = 0.0;
-  for (const auto& [y, delta] : discont) {
-    const int prev = sum;
-    sum += delta;
-    if (prev == 0 && sum > 0) {
-      start = y;
-    } else if (prev > 0 && sum == 0) {
-      result.push_back({start, y});
+    if (open && p.start_m <= cur.end_m) {
+      cur.end_m = std::max(cur.end_m, p.end_m);
+      continue;
     }
+    if (open) out->push_back(cur);
+    cur = p;
+    open = true;
   }
+  if (open) out->push_back(cur);
+}
+
+bool by_start(const Interval& a, const Interval& b) { return a.start_m < b.start_m; }
+
+// True when the list is already in normal form (sorted, non-empty, disjoint, non-touching): what a
+// decoder hands over from a well-formed message.
+bool is_normal(const std::vector<Interval>& list) {
+  for (size_t i = 0; i < list.size(); ++i) {
+    if (!(list[i].end_m > list[i].start_m)) return false;
+    if (i > 0 && !(list[i].start_m > list[i - 1].end_m)) return false;
+  }
+  return true;
+}
+
+// True when every interval of the normal list `part` lies inside one interval of the normal list
+// `whole` (the union would be `whole` unchanged). Both sorted: one pass over each.
+bool contains_all(const std::vector<Interval>& whole, const std::vector<Interval>& part) {
+  size_t w = 0;
+  for (const Interval& p : part) {
+    while (w < whole.size() && whole[w].end_m < p.end_m) ++w;
+    if (w == whole.size() || whole[w].start_m > p.start_m) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// Algorithm 4 builds a discontinuity map (+1 where a patch starts, -1 where one ends) and sweeps
+// it; sorting the patches by start and extending while they overlap or touch gives the same union
+// in the same normal form, without a tree node per end (this runs for every radio message an agent
+// hears).
+std::vector<Interval> normalize_stripe(const std::vector<Interval>& patches) {
+  std::vector<Interval> sorted = patches;
+  std::sort(sorted.begin(), sorted.end(), by_start);
+  std::vector<Interval> result;
+  sweep_sorted(sorted.begin(), sorted.end(), &result);
   return result;
 }
 
@@ -48,21 +83,30 @@ bool AreaParts::add(int stripe, Interval covered) {
   return true;
 }
 
-bool AreaParts::merge(const AreaParts& other) {
+bool AreaParts::merge(const AreaParts& other, bool* changed) {
+  if (changed) *changed = false;
   if (other.stripe_count() != stripe_count()) return false;
+  std::vector<Interval> both;
   for (size_t i = 0; i < stripes_.size(); ++i) {
-    if (other.stripes_[i].empty()) continue;
-    // concatenate the two lists, then normalise (MERGE_APDS)
-    std::vector<Interval> tmp = stripes_[i];
-    tmp.insert(tmp.end(), other.stripes_[i].begin(), other.stripes_[i].end());
-    stripes_[i] = normalize_stripe(tmp);
+    std::vector<Interval>& mine = stripes_[i];
+    const std::vector<Interval>& theirs = other.stripes_[i];
+    // nothing new (the usual case once neighbours agree): the union is this stripe as it is
+    if (contains_all(mine, theirs)) continue;
+    // MERGE_APDS: the union of two normal lists; both are sorted, so a merge replaces the sort
+    both.clear();
+    std::merge(mine.begin(), mine.end(), theirs.begin(), theirs.end(), std::back_inserter(both),
+               by_start);
+    mine.clear();
+    sweep_sorted(both.begin(), both.end(), &mine);
+    if (changed) *changed = true;
   }
   return true;
 }
 
 bool AreaParts::set_stripe(int stripe, const std::vector<Interval>& intervals) {
   if (stripe < 0 || stripe >= stripe_count()) return false;
-  stripes_[static_cast<size_t>(stripe)] = normalize_stripe(intervals);
+  auto& list = stripes_[static_cast<size_t>(stripe)];
+  list = is_normal(intervals) ? intervals : normalize_stripe(intervals);
   return true;
 }
 

@@ -42,7 +42,8 @@ class AreaParts {
   // range (nothing changes).
   bool add(int stripe, Interval covered);
   // Algorithm 4's MERGE_APDS into this one; the stripe counts must match (false otherwise).
-  bool merge(const AreaParts& other);
+  // *changed, if given, says whether the union differs from what this held.
+  bool merge(const AreaParts& other, bool* changed = nullptr);
   // Replaces a stripe's list (decoders); the list is normalised.
   bool set_stripe(int stripe, const std::vector<Interval>& intervals);
 

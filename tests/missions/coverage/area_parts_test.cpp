@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <random>
 
 namespace uavsim::missions::coverage {
 namespace {
@@ -52,6 +54,88 @@ TEST(AreaParts, FrontiersAreTheFirstUncoveredYFromEachSide) {
   EXPECT_FALSE(a.lowest_uncovered(0, 100));
   EXPECT_TRUE(a.covers_all(100));
   EXPECT_NEAR(a.covered_fraction(100), (100.0 + 99.9) / 200.0, 1e-9);
+}
+
+// Algorithm 4's NORMALIZE_STRIPE as the thesis writes it (a discontinuity map swept in increasing
+// y): the oracle for the sort-and-sweep that the mission runs.
+std::vector<Interval> algorithm4_normalize(const std::vector<Interval>& patches) {
+  std::map<double, int> discont;
+  for (const Interval& p : patches) {
+    if (!(p.end_m > p.start_m)) continue;
+    discont[p.start_m] += 1;
+    discont[p.end_m] -= 1;
+  }
+  std::vector<Interval> result;
+  int sum = 0;
+  double start = 0.0;
+  for (const auto& [y, delta] : discont) {
+    const int prev = sum;
+    sum += delta;
+    if (prev == 0 && sum > 0) start = y;
+    if (prev > 0 && sum == 0) result.push_back({start, y});
+  }
+  return result;
+}
+
+// Patches on a 0.5 m grid, so that ends often coincide (touching and shared ends are the cases
+// that matter), some empty or inverted.
+std::vector<Interval> random_patches(std::mt19937_64& rng, int count) {
+  std::uniform_int_distribution<int> grid(0, 60), len(-2, 12);
+  std::vector<Interval> out;
+  for (int i = 0; i < count; ++i) {
+    const double a = 0.5 * grid(rng);
+    out.push_back({a, a + 0.5 * len(rng)});
+  }
+  return out;
+}
+
+TEST(NormalizeStripe, AgreesWithAlgorithm4OnRandomPatches) {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const auto patches = random_patches(rng, 1 + trial % 12);
+    ASSERT_EQ(normalize_stripe(patches), algorithm4_normalize(patches)) << "trial " << trial;
+  }
+}
+
+TEST(AreaParts, MergeSaysWhetherTheUnionGrew) {
+  std::mt19937_64 rng(11);
+  for (int trial = 0; trial < 1000; ++trial) {
+    AreaParts a(3), b(3);
+    for (int s = 0; s < 3; ++s) {
+      a.set_stripe(s, random_patches(rng, trial % 6));
+      b.set_stripe(s, random_patches(rng, trial % 4));
+    }
+    AreaParts expected = a;
+    for (int s = 0; s < 3; ++s) {
+      std::vector<Interval> both = a.stripe(s);
+      both.insert(both.end(), b.stripe(s).begin(), b.stripe(s).end());
+      expected.set_stripe(s, algorithm4_normalize(both));
+    }
+    const AreaParts before = a;
+    bool changed = true;
+    ASSERT_TRUE(a.merge(b, &changed));
+    ASSERT_EQ(a, expected) << "trial " << trial;
+    ASSERT_EQ(changed, !(a == before)) << "trial " << trial;
+  }
+  // a part already held changes nothing
+  AreaParts whole(1), part(1);
+  whole.add(0, {0, 10});
+  part.add(0, {2, 10});
+  bool changed = true;
+  ASSERT_TRUE(whole.merge(part, &changed));
+  EXPECT_FALSE(changed);
+  part.add(0, {10, 11});  // touching: one interval [2, 11) that reaches past
+  ASSERT_TRUE(whole.merge(part, &changed));
+  EXPECT_TRUE(changed);
+  EXPECT_EQ(whole.stripe(0), (std::vector<Interval>{{0, 11}}));
+}
+
+TEST(AreaParts, SetStripeNormalisesAListThatIsNotInNormalForm) {
+  AreaParts a(1);
+  a.set_stripe(0, {{5, 8}, {0, 5}, {7, 9}, {20, 10}});  // unsorted, touching, inverted
+  EXPECT_EQ(a.stripe(0), (std::vector<Interval>{{0, 9}}));
+  a.set_stripe(0, {{0, 1}, {2, 3}});  // already normal: kept as it is
+  EXPECT_EQ(a.stripe(0), (std::vector<Interval>{{0, 1}, {2, 3}}));
 }
 
 CoverageConfig small_area() {
