@@ -104,9 +104,14 @@ bool AreaParts::merge(const AreaParts& other, bool* changed) {
 }
 
 bool AreaParts::set_stripe(int stripe, const std::vector<Interval>& intervals) {
+  return set_stripe(stripe, intervals.data(), intervals.size());
+}
+
+bool AreaParts::set_stripe(int stripe, const Interval* intervals, size_t count) {
   if (stripe < 0 || stripe >= stripe_count()) return false;
   auto& list = stripes_[static_cast<size_t>(stripe)];
-  list = is_normal(intervals) ? intervals : normalize_stripe(intervals);
+  list.assign(intervals, intervals + count);
+  if (!is_normal(list)) list = normalize_stripe(list);
   return true;
 }
 

@@ -46,6 +46,7 @@ class AreaParts {
   bool merge(const AreaParts& other, bool* changed = nullptr);
   // Replaces a stripe's list (decoders); the list is normalised.
   bool set_stripe(int stripe, const std::vector<Interval>& intervals);
+  bool set_stripe(int stripe, const Interval* intervals, size_t count);
 
   // True when [start_m, end_m) of the stripe is covered (gaps under kCoverageSlack_m ignored).
   bool stripe_covers(int stripe, Interval span) const;

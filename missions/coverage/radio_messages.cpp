@@ -137,22 +137,42 @@ void write_run(Writer& w, const Run& run) {
   }
 }
 
-// Reads runs up to the end of the bytes into (stripe, intervals), stripes first .. first+count-1
-// exactly; false on anything malformed (an inverted interval, too many or too few stripes).
-bool read_runs(Reader& r, int first, int count,
-               std::vector<std::pair<int, std::vector<Interval>>>* stripes) {
+// The runs of one message, decoded: every run's intervals in one flat list, so that decoding a
+// message allocates twice however many stripes it carries (every agent decodes every aggregate
+// frame it hears).
+struct DecodedRuns {
+  struct Span {
+    int first = 0;   // stripe
+    int repeat = 0;  // stripes first .. first+repeat-1 share the intervals
+    size_t begin = 0;
+    size_t count = 0;
+  };
+  std::vector<Span> spans;
+  std::vector<Interval> intervals;
+
+  void apply_to(AreaParts* apd) const {
+    for (const Span& sp : spans)
+      for (int k = 0; k < sp.repeat; ++k)
+        apd->set_stripe(sp.first + k, intervals.data() + sp.begin, sp.count);
+  }
+};
+
+// Reads runs up to the end of the bytes, stripes first .. first+count-1 exactly; false on
+// anything malformed (an inverted interval, too many or too few stripes).
+bool read_runs(Reader& r, int first, int count, DecodedRuns* out) {
   int s = first;
   while (r.pos < r.f.size()) {
     const int repeat = static_cast<int>(r.u8());
     const unsigned n = r.u8();
-    std::vector<Interval> list;
+    const size_t begin = out->intervals.size();
     for (unsigned k = 0; k < n; ++k) {
       const double a = r.u16() / 10.0, b = r.u16() / 10.0;
       if (!(b > a)) return false;
-      list.push_back({a, b});
+      out->intervals.push_back({a, b});
     }
     if (!r.ok || repeat < 1 || s + repeat > first + count) return false;
-    for (int k = 0; k < repeat; ++k) stripes->emplace_back(s++, list);
+    out->spans.push_back({s, repeat, begin, n});
+    s += repeat;
   }
   return r.ok && s == first + count;
 }
@@ -307,9 +327,9 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
       fragment >= fragments || first + count > stripes_) {
     return std::nullopt;
   }
-  // parse the runs into (stripe, intervals) before touching any state
-  std::vector<std::pair<int, std::vector<Interval>>> stripes;
-  if (!read_runs(r, first, count, &stripes)) return std::nullopt;
+  // parse the runs before touching any state
+  DecodedRuns runs;
+  if (!read_runs(r, first, count, &runs)) return std::nullopt;
 
   Partial& p = partial_[sender];
   if (p.fragments != fragments || p.origin != origin || p.query_id != query_id ||
@@ -327,7 +347,7 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
   }
   p.message.responded = responded;
   p.message.acked = acked;
-  for (const auto& [index, list] : stripes) p.message.apd.set_stripe(index, list);
+  runs.apply_to(&p.message.apd);
   p.received.set(static_cast<size_t>(fragment));
   if (p.received.count() != static_cast<size_t>(fragments)) return std::nullopt;
   AggregateMessage done = std::move(p.message);
@@ -346,10 +366,10 @@ std::vector<uint8_t> encode_apd(const AreaParts& apd) {
 std::optional<AreaParts> decode_apd(const std::vector<uint8_t>& bytes, int stripes) {
   Reader r{bytes};
   if (stripes <= 0 || static_cast<int>(r.u16()) != stripes || !r.ok) return std::nullopt;
-  std::vector<std::pair<int, std::vector<Interval>>> lists;
-  if (!read_runs(r, 0, stripes, &lists)) return std::nullopt;
+  DecodedRuns runs;
+  if (!read_runs(r, 0, stripes, &runs)) return std::nullopt;
   AreaParts apd(stripes);
-  for (const auto& [index, list] : lists) apd.set_stripe(index, list);
+  runs.apply_to(&apd);
   return apd;
 }
 
