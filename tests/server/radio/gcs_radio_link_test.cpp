@@ -182,6 +182,44 @@ TEST_F(GcsRadioLinkTest, DatagramsCrossBothWaysWithAn80211Latency) {
   EXPECT_TRUE(failures_.empty());
 }
 
+TEST_F(GcsRadioLinkTest, TheFaultApisImpairmentAppliesFirst) {
+  start(Eigen::Vector3d(0.0, 10.0, 1.5), 0.0, false);
+  // 50 ms of latency on the relay's side, then the radio's few ms
+  relay_->impair(0.0, 0.05, 0.0, sim_->time_s());
+  Seen delayed;
+  exchange(5, &delayed);
+  EXPECT_EQ(delayed.up.size(), 5u);
+  EXPECT_EQ(delayed.down.size(), 5u);
+  for (double l : latencies_) {
+    EXPECT_GE(l, 0.05 + kMinLatency_s);
+    EXPECT_LE(l, 0.05 + kMaxLatency_s);
+  }
+  // an outage drops everything at the relay, before the radio
+  relay_->impair(0.0, 0.0, 10.0, sim_->time_s());
+  Seen cut;
+  exchange(5, &cut);
+  EXPECT_TRUE(cut.up.empty());
+  EXPECT_TRUE(cut.down.empty());
+  EXPECT_EQ(cut.stats.to_gcs_dropped, 5u);
+  EXPECT_EQ(cut.stats.to_uav_dropped, 5u);
+  EXPECT_EQ(relays_->radio()->channel().link(0, 2).sent, 5u);  // uav0 -> ground node: the first 5
+}
+
+TEST_F(GcsRadioLinkTest, AResetStartsTheRadioAndTheCountersAfresh) {
+  start(Eigen::Vector3d(0.0, 10.0, 1.5), 0.0, false);
+  Seen before, after;
+  exchange(3, &before);
+  EXPECT_EQ(before.stats.to_gcs_forwarded, 3u);
+  sim_->reset(1);
+  EXPECT_EQ(relay_->stats().to_gcs_forwarded, 0u);
+  exchange(3, &after);
+  EXPECT_EQ(after.up.size(), 3u);
+  EXPECT_EQ(after.down.size(), 3u);
+  EXPECT_EQ(after.stats.to_gcs_forwarded, 3u);
+  EXPECT_EQ(after.stats.to_uav_forwarded, 3u);
+  EXPECT_TRUE(failures_.empty());
+}
+
 TEST_F(GcsRadioLinkTest, DatagramsOverTheLargestFrameAreDroppedAndCounted) {
   start(Eigen::Vector3d(0.0, 10.0, 1.5), 0.0, false);
   ASSERT_EQ(relays_->radio()->max_datagram_bytes(), 1500u);
