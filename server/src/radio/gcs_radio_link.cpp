@@ -100,8 +100,7 @@ GcsRadioLink::GcsRadioLink(sim::Simulation& sim, std::unique_ptr<RadioChannel> c
       channel_(std::move(channel)),
       gcs_enu_m_(gcs_position_enu_m),
       ground_(sim.vehicle_count()),
-      sight_(sim.world()),
-      sights_((ground_ + 1) * (ground_ + 1)),
+      sights_(sim.world(), ground_ + 1),
       positions_enu_m_(ground_ + 1, gcs_position_enu_m),
       velocities_enu_m_s_(ground_ + 1, Eigen::Vector3d::Zero()),
       reported_losses_(2 * ground_, 0) {
@@ -114,27 +113,8 @@ GcsRadioLink::GcsRadioLink(sim::Simulation& sim, std::unique_ptr<RadioChannel> c
 }
 
 double GcsRadioLink::link_loss_db(size_t from, size_t to) {
-  const std::array<double, kGeomGroups>& config_db = channel_->config().obstacle_loss_db;
-  if (std::all_of(config_db.begin(), config_db.end(), [](double db) { return db <= 0.0; })) {
-    return 0.0;
-  }
-  // one cast serves both directions, cast again as the A2A radio's (sim_radio.hpp)
-  const size_t a = std::min(from, to);
-  const size_t b = std::max(from, to);
-  Sight& s = sights_[a * (ground_ + 1) + b];
-  const Eigen::Vector3d& pa = positions_enu_m_[a];
-  const Eigen::Vector3d& pb = positions_enu_m_[b];
-  if (!s.valid || (s.a_enu_m - pa).norm() > SimRadio::kObstacleMove_m ||
-      (s.b_enu_m - pb).norm() > SimRadio::kObstacleMove_m ||
-      sim_.time_s() - s.cast_s > SimRadio::kObstacleMaxAge_s) {
-    // the ground node's index is past the vehicles: line_of_sight.hpp skips no geoms of its own
-    s.loss_db = sight_.blocked_loss_db(pa, pb, a, b, config_db);
-    s.a_enu_m = pa;
-    s.b_enu_m = pb;
-    s.cast_s = sim_.time_s();
-    s.valid = true;
-  }
-  return s.loss_db;
+  return sights_.loss_db(from, to, positions_enu_m_[from], positions_enu_m_[to],
+                         channel_->config().obstacle_loss_db, sim_.time_s());
 }
 
 bool GcsRadioLink::send(size_t vehicle, bool to_gcs, const std::vector<uint8_t>& bytes) {
@@ -183,7 +163,7 @@ uint64_t GcsRadioLink::take_losses(size_t vehicle, bool to_gcs) {
 void GcsRadioLink::reset(uint64_t sim_seed) {
   channel_->reset(gcs_radio_seed(sim_seed));
   std::fill(reported_losses_.begin(), reported_losses_.end(), 0);
-  for (Sight& s : sights_) s.valid = false;
+  sights_.clear();
 }
 
 }  // namespace uavsim::server::radio

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/line_of_sight.hpp"
+#include "radio/link_sight_cache.hpp"
 #include "radio/ns3_channel.hpp"
 #include "radio/radio_channel.hpp"
 #include "sim/simulation.hpp"
@@ -106,22 +106,14 @@ class GcsRadioLink {
   }
 
  private:
-  struct Sight {
-    bool valid = false;
-    Eigen::Vector3d a_enu_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d b_enu_m = Eigen::Vector3d::Zero();
-    double loss_db = 0.0;
-    double cast_s = 0.0;
-  };
   double link_loss_db(size_t from, size_t to);
   uint64_t channel_losses(size_t vehicle, bool to_gcs) const;
 
   sim::Simulation& sim_;
   std::unique_ptr<RadioChannel> channel_;
   Eigen::Vector3d gcs_enu_m_;
-  size_t ground_;  // the ground node's index: the vehicle count
-  physics::LineOfSight sight_;
-  std::vector<Sight> sights_;  // min(from, to) * nodes + max(from, to)
+  size_t ground_;          // the ground node's index: the vehicle count
+  LinkSightCache sights_;  // the ground node's index is past the vehicles: no vehicle
   std::vector<Eigen::Vector3d> positions_enu_m_;
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<uint64_t> reported_losses_;  // vehicle * 2 + to_gcs
