@@ -533,11 +533,14 @@ int run_server(const Options& given_options) {
       return 1;
     }
     // a radio that fails (the ns3 helper died or hung) ends the run: never a silently perfect radio
-    radio->set_on_failure([&runner, &radio_failed](const std::string& why) {
-      std::cerr << "uavsim-server: radio: " << why << "; ending the run\n";
-      radio_failed = true;
-      runner.stop();
-    });
+    const auto end_run_on_failure = [&runner, &radio_failed](const std::string& what) {
+      return [&runner, &radio_failed, what](const std::string& why) {
+        std::cerr << "uavsim-server: " << what << ": " << why << "; ending the run\n";
+        radio_failed = true;
+        runner.stop();
+      };
+    };
+    radio->set_on_failure(end_run_on_failure("radio"));
     if (!options.quiet) {
       std::cout << "uavsim-server: radio: " << radio->model().backend_name() << " backend, frames of at most "
                 << radio->model().max_payload_bytes() << " bytes" << "\n";
@@ -558,11 +561,7 @@ int run_server(const Options& given_options) {
       std::cerr << "uavsim-server: gcs link: " << e.what() << "\n";
       return 1;
     }
-    gcs_relays->set_on_failure([&runner, &radio_failed](const std::string& why) {
-      std::cerr << "uavsim-server: gcs link radio: " << why << "; ending the run\n";
-      radio_failed = true;
-      runner.stop();
-    });
+    gcs_relays->set_on_failure(end_run_on_failure("gcs link radio"));
     if (!options.quiet && gcs_relays->radio() != nullptr) {
       const Eigen::Vector3d& g = gcs_relays->radio()->gcs_position_enu_m();
       std::cout << "uavsim-server: gcs link: ns3 backend (802.11g ad hoc, 6 Mbit/s), ground station at (" << g.x()

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "../support/launcher_run.hpp"
+#include "mission_expect.hpp"
 
 namespace {
 
@@ -23,13 +24,7 @@ TEST(Mbzirc2020Ns3, TwoUavsPopAllFiveBalloonsOverAn80211GcsLink) {
                                   "--seed 1 --gcs-link-backend ns3", &out);
   ASSERT_TRUE(r.is_object()) << out;
   EXPECT_EQ(r["gcs_link_backend"], "ns3") << out;
-  EXPECT_EQ(r["total"].get<int>(), 5) << out;
-  EXPECT_EQ(r["popped"].get<int>(), 5) << out;
-  EXPECT_FALSE(r["collision"].get<bool>()) << out;
-  EXPECT_TRUE(r["crashes"].empty()) << out;
-  EXPECT_GT(r["mission_time_s"].get<double>(), 0.0) << out;
-  EXPECT_LT(r["mission_time_s"].get<double>(), kBudget_s) << out;
-  EXPECT_TRUE(r["success"].get<bool>()) << out;
+  uavsim::tests::expect_all_five_popped(r, out, kBudget_s);
   // both links carried the mission's traffic over the radio, both ways
   ASSERT_EQ(r["gcs_links"].size(), 2u) << out;
   for (const Json& g : r["gcs_links"]) {
