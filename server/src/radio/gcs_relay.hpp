@@ -11,8 +11,9 @@
 //
 // Over a radio (--gcs-link-backend ns3, gcs_radio_link.hpp): a datagram due per the impairment
 // (the fault API's loss, outage and latency still apply first, on the relay's side) goes on ns-3's
-// 802.11 channel instead of straight to its peer, and is sent on at the sim time the channel
-// delivers it; what the channel loses, or refuses (larger than 1500 bytes), counts as dropped.
+// 802.11 channel instead of straight to its peer, and is sent on at the first pump at or after the
+// sim time the channel delivers it; what the channel loses, or refuses (larger than 1500 bytes),
+// counts as dropped.
 #pragma once
 
 #include <netinet/in.h>
