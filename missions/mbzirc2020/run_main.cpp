@@ -39,9 +39,10 @@ using uavsim::launch::Launcher;
 struct Options : uavsim::launch::RunOptions {
   double budget_s = 400.0;
   double wall_limit_s = 1800.0;
-  std::string kill;            // vehicle to kill right after its take-off
-  double gcs_loss = 0.0;       // the GCS link relay's loss probability, both vehicles
-  double gcs_latency_s = 0.0;  // and its one-way latency
+  std::string kill;                         // vehicle to kill right after its take-off
+  double gcs_loss = 0.0;                    // the GCS link relay's loss probability, both vehicles
+  double gcs_latency_s = 0.0;               // and its one-way latency
+  std::string gcs_link_backend = "simple";  // the relay's channel: simple, or ns3's 802.11
   std::string camera_size = "384x216";
   double camera_fps = 15;
   std::string uav, gcs;
@@ -61,6 +62,9 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   --gcs-loss P        impair both UAVs' GCS links in the server's relay: drop each datagram with
                       probability P (0-1, seeded; default 0)
   --gcs-latency S     and deliver the rest S seconds of sim time later (default 0)
+  --gcs-link-backend B  the relay's channel: simple (default: whole datagrams at the next control
+                      step) or ns3 (each datagram over ns-3's 802.11g ad hoc between the UAV and a
+                      ground node at the launch point; the server's --gcs-link-backend)
   --camera-size WxH   the UAV cameras' size (default 384x216: 39 x 21 deg as the seed's oCam-1CGN-U)
   --camera-fps F      the UAV cameras' frame rate (default 15)
   --realism LEVEL     field|ideal: the server's conditions (default: the world's; docs/results/field_conditions.md)
@@ -114,7 +118,11 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       ok = parse_double(v, 0.0, 1.0, &o->gcs_loss);
     else if (a == "--gcs-latency")
       ok = parse_double(v, 0.0, 60.0, &o->gcs_latency_s);
-    else if (a == "--json")
+    else if (a == "--gcs-link-backend") {
+      o->gcs_link_backend = v;
+      ok = o->gcs_link_backend == "simple" || o->gcs_link_backend == "ns3";
+      if (!ok) std::fprintf(stderr, "mbzirc2020-run: --gcs-link-backend needs simple or ns3\n");
+    } else if (a == "--json")
       o->json_path = v;
     else if (a == "--run-dir")
       o->run_dir = v;
@@ -458,6 +466,7 @@ Json summary_json(const Options& o, const Run& run, const Launcher& launch, bool
   summary["mission"] = "mbzirc2020";
   summary["run_dir"] = o.run_dir;
   summary["seed"] = o.seed;
+  summary["gcs_link_backend"] = o.gcs_link_backend;
   summary["popped"] = run.popped;
   summary["total"] = run.balloons_total;
   summary["mission_time_s"] = mission_time_s(run);
@@ -499,9 +508,12 @@ int main(int argc, char** argv) {
   Run run;
 
   // 1. the server, on ephemeral ports, as fast as possible; then the mission on it
-  const std::vector<std::string> cameras{"--camera", "uav0_front:" + cam_opts, "--camera",
-                                         "uav1_front:" + cam_opts};
-  if (auto started = uavsim::launch::start_run_server(launch, o, cameras); !started) {
+  std::vector<std::string> server_args{"--camera", "uav0_front:" + cam_opts, "--camera",
+                                       "uav1_front:" + cam_opts};
+  if (o.gcs_link_backend != "simple") {
+    server_args.insert(server_args.end(), {"--gcs-link-backend", o.gcs_link_backend});
+  }
+  if (auto started = uavsim::launch::start_run_server(launch, o, server_args); !started) {
     h.fail("the server did not start: " + started.message());
   } else if (launch.mavlink_port("uav0") == 0 || launch.mavlink_port("uav1") == 0) {
     h.fail("the server did not start (no API / MAVLink ports)");

@@ -331,6 +331,7 @@ RadioOps::Json RadioOps::relay_json(size_t vehicle, radio::GcsRelay& r) const {
       {"to_gcs_dropped", s.to_gcs_dropped},
       {"to_uav_forwarded", s.to_uav_forwarded},
       {"to_uav_dropped", s.to_uav_dropped},
+      {"backend", relays_->backend_name()},
       {"time_s", sim_.time_s()}};
 }
 

@@ -98,6 +98,13 @@ sim socket API (docs/protocol.md):
                       TDMA, optional collisions; the default) or ns3 (ns-3's IEEE 802.15.4 lr-wpan: CSMA-CA,
                       ACKs and retries, SINR errors, in the helper program uavsim-ns3-radio); over the
                       world's <text name="uavsim:radio_backend" data="B"/> (docs/protocol.md "Radio")
+  --gcs-link-backend B  the GCS link relay's channel: simple (the closed-form relay; the default) or ns3
+                      (each datagram over ns-3's 802.11g ad hoc between the vehicle and a ground node, in
+                      a uavsim-ns3-radio helper of its own); over the world's
+                      <text name="uavsim:gcs_link_backend" data="B"/> (docs/protocol.md "Ground-station link")
+  --gcs-position X,Y,Z  where the ground node stands (ENU metres, each within +-100000); over the world's
+                      <numeric name="uavsim:gcs_position" data="X Y Z"/>; default: 1.5 m above the mean of
+                      the vehicles' start positions
 
 cameras and logs:
   --camera CAM:K=V,...  camera settings over the world's uavsim:camera:CAM text (CAM * for all):
@@ -213,6 +220,25 @@ std::optional<WindOption> parse_wind(const std::string& text, std::string* why) 
   w.from_deg = v[1];
   if (v.size() == 3) w.turbulence_sd_m_s = v[2];
   return w;
+}
+
+std::optional<std::array<double, 3>> parse_gcs_position(const std::string& text, std::string* why) {
+  std::array<double, 3> p{};
+  std::stringstream ss(text);
+  std::string part;
+  size_t n = 0;
+  bool ok = std::count(text.begin(), text.end(), ',') == 2;
+  while (ok && std::getline(ss, part, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(part.c_str(), &end);
+    ok = n < 3 && !part.empty() && *end == '\0' && std::isfinite(x) && std::abs(x) <= 100000.0;
+    if (ok) p[n++] = x;
+  }
+  if (!ok || n != 3) {
+    *why = "--gcs-position needs X,Y,Z (ENU metres, each within +-100000), got '" + text + "'";
+    return std::nullopt;
+  }
+  return p;
 }
 
 std::optional<HomeOption> parse_home(const std::string& text, std::string* why) {
@@ -490,6 +516,17 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         ok = v == "simple" || v == "ns3";
         if (!ok) why = "--radio-backend needs simple or ns3, got '" + v + "'";
         o.radio_backend = v;
+      }
+    } else if (a == "--gcs-link-backend") {
+      if ((ok = value(&v))) {
+        ok = v == "simple" || v == "ns3";
+        if (!ok) why = "--gcs-link-backend needs simple or ns3, got '" + v + "'";
+        o.gcs_link_backend = v;
+      }
+    } else if (a == "--gcs-position") {
+      if ((ok = value(&v))) {
+        o.gcs_position = parse_gcs_position(v, &why);
+        ok = o.gcs_position.has_value();
       }
     } else if (a == "--camera") {
       if ((ok = value(&v))) o.camera_overrides.push_back(v);

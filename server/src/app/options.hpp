@@ -97,6 +97,10 @@ struct Options {
   bool record_overlay = true;                 // --record-overlay 0: frames without the text
   bool record_tiled = false;                  // --record-layout tiled: onboard cameras beside the view
   std::optional<std::string> radio_backend;   // --radio-backend simple|ns3: over the world's uavsim:radio_backend
+  // --gcs-link-backend simple|ns3: the GCS link relay's datagrams over ns-3's 802.11 (ns3); over the
+  // world's uavsim:gcs_link_backend
+  std::optional<std::string> gcs_link_backend;
+  std::optional<std::array<double, 3>> gcs_position;  // --gcs-position X,Y,Z: over the world's uavsim:gcs_position
   std::vector<std::string> record_tiles;      // --record-tile CAM[:rgb|depth|segmentation], repeated
 };
 

@@ -20,6 +20,7 @@
 #include "api/api_server.hpp"
 #include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
+#include "radio/gcs_relay.hpp"
 #include "api/sensor_ops.hpp"
 #include "app/demo_flight.hpp"
 #include "app/endpoint_hooks.hpp"
@@ -493,7 +494,7 @@ int run_server(const Options& given_options) {
 
   // the sim socket API: requests run in the control gate, on this (the loop) thread
   radio::SimRadio* radio = nullptr;  // owned by s
-  bool radio_failed = false;          // the radio's channel failed: the run ended early
+  bool radio_failed = false;          // a radio's channel (A2A or GCS link) failed: the run ended early
   radio::GcsRelaySet* gcs_relays = nullptr;  // likewise
   std::unique_ptr<api::RadioOps> radio_ops;  // outlives api_server, which serves its ops
   std::unique_ptr<api::SensorOps> sensor_ops;  // likewise
@@ -532,16 +533,41 @@ int run_server(const Options& given_options) {
       return 1;
     }
     // a radio that fails (the ns3 helper died or hung) ends the run: never a silently perfect radio
-    radio->set_on_failure([&runner, &radio_failed](const std::string& why) {
-      std::cerr << "uavsim-server: radio: " << why << "; ending the run\n";
-      radio_failed = true;
-      runner.stop();
-    });
+    const auto end_run_on_failure = [&runner, &radio_failed](const std::string& what) {
+      return [&runner, &radio_failed, what](const std::string& why) {
+        std::cerr << "uavsim-server: " << what << ": " << why << "; ending the run\n";
+        radio_failed = true;
+        runner.stop();
+      };
+    };
+    radio->set_on_failure(end_run_on_failure("radio"));
     if (!options.quiet) {
       std::cout << "uavsim-server: radio: " << radio->model().backend_name() << " backend, frames of at most "
                 << radio->model().max_payload_bytes() << " bytes" << "\n";
     }
     gcs_relays = &radio::GcsRelaySet::create(s, options.api_bind_address);
+    // the GCS link's channel: --gcs-link-backend, else the world's uavsim:gcs_link_backend; ns3
+    // carries its datagrams over 802.11 between each vehicle and a ground node
+    try {
+      bool gcs_ns3 = options.gcs_link_backend == "ns3";
+      radio::GcsRadioOptions gcs_radio;
+      if (options.gcs_position) {
+        gcs_radio.gcs_position_enu_m =
+            Eigen::Vector3d((*options.gcs_position)[0], (*options.gcs_position)[1], (*options.gcs_position)[2]);
+      }
+      radio::apply_world_gcs_settings(s.world(), options.gcs_link_backend.has_value(), &gcs_ns3, &gcs_radio);
+      if (gcs_ns3) gcs_relays->use_radio(std::make_unique<radio::GcsRadioLink>(s, gcs_radio));
+    } catch (const std::exception& e) {
+      std::cerr << "uavsim-server: gcs link: " << e.what() << "\n";
+      return 1;
+    }
+    gcs_relays->set_on_failure(end_run_on_failure("gcs link radio"));
+    if (!options.quiet && gcs_relays->radio() != nullptr) {
+      const Eigen::Vector3d& g = gcs_relays->radio()->gcs_position_enu_m();
+      std::cout << "uavsim-server: gcs link: ns3 backend (802.11g ad hoc, 6 Mbit/s), ground station at (" << g.x()
+                << ", " << g.y() << ", " << g.z() << ") m, datagrams of at most "
+                << gcs_relays->radio()->max_datagram_bytes() << " bytes\n";
+    }
     api::GcsTargetPolicy gcs_targets{options.allow_remote_gcs,
                                      [api = api_server.get()](uint64_t conn) { return api->peer_address(conn); }};
     radio_ops = std::make_unique<api::RadioOps>(s, *radio, gcs_relays, std::move(gcs_targets));

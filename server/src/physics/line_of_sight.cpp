@@ -13,8 +13,10 @@ constexpr int kMaxHits = 32;
 // how far past a hit the next cast starts (m): far below any geom, far above rounding
 constexpr double kStepPast_m = 1e-4;
 
-// the root body of a vehicle in shard 0's model (-1: the vehicle lives in another shard)
+// the root body of a vehicle in shard 0's model (-1: the vehicle lives in another shard, or the
+// index is no vehicle)
 int vehicle_root(const World& world, size_t vehicle) {
+  if (vehicle >= world.vehicles().size()) return -1;
   const VehicleBinding& v = world.vehicles()[vehicle];
   if (v.shard != 0 || v.body_id < 0) return -1;
   return world.model()->body_rootid[v.body_id];

@@ -20,8 +20,9 @@ class LineOfSight {
 
   // The largest loss_db[g] among the geom groups g of the geoms the segment from a to b crosses
   // (0: nothing in a group with a loss > 0 is in the way). vehicle_a and vehicle_b index
-  // world.vehicles(). Reads the last kinematics pass (geom poses of the last step). Loop thread
-  // only (the world's data).
+  // world.vehicles(); an index past them is an end that is no vehicle (the GCS link's ground
+  // station), whose own geoms there are none to skip. Reads the last kinematics pass (geom poses of
+  // the last step). Loop thread only (the world's data).
   double blocked_loss_db(const Eigen::Vector3d& a_enu_m, const Eigen::Vector3d& b_enu_m,
                          size_t vehicle_a, size_t vehicle_b,
                          const std::array<double, kGeomGroupCount>& loss_db) const;

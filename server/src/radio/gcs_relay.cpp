@@ -132,19 +132,29 @@ void GcsRelay::pump(double now_s) {
   size_t sent = 0;
   for (; sent < in_flight_.size() && in_flight_[sent].due_s <= now_s + 1e-9; ++sent) {
     const InFlight& d = in_flight_[sent];
-    const std::optional<sockaddr_in>& peer = d.to_gcs ? gcs_peer_ : uav_peer_;
-    uint64_t& forwarded = d.to_gcs ? stats_.to_gcs_forwarded : stats_.to_uav_forwarded;
-    uint64_t& dropped = d.to_gcs ? stats_.to_gcs_dropped : stats_.to_uav_dropped;
-    // vehicle -> GCS leaves from the GCS-side socket, GCS -> vehicle from the vehicle-side one
-    const int fd = d.to_gcs ? gcs_fd_ : uav_fd_;
-    if (peer && sendto(fd, d.bytes.data(), d.bytes.size(), MSG_DONTWAIT,
-                       reinterpret_cast<const sockaddr*>(&*peer), sizeof(*peer)) >= 0) {
-      ++forwarded;
-    } else {
-      ++dropped;  // no peer yet, or a full socket buffer: a lost datagram, as on a real link
+    if (!carrier_) {
+      forward(d.to_gcs, d.bytes);
+    } else if (!carrier_(d.to_gcs, d.bytes)) {
+      ++(d.to_gcs ? stats_.to_gcs_dropped : stats_.to_uav_dropped);  // the radio refused it
     }
   }
   in_flight_.erase(in_flight_.begin(), in_flight_.begin() + static_cast<std::ptrdiff_t>(sent));
+}
+
+void GcsRelay::deliver(bool to_gcs, const std::vector<uint8_t>& bytes) { forward(to_gcs, bytes); }
+
+void GcsRelay::forward(bool to_gcs, const std::vector<uint8_t>& bytes) {
+  const std::optional<sockaddr_in>& peer = to_gcs ? gcs_peer_ : uav_peer_;
+  uint64_t& forwarded = to_gcs ? stats_.to_gcs_forwarded : stats_.to_uav_forwarded;
+  uint64_t& dropped = to_gcs ? stats_.to_gcs_dropped : stats_.to_uav_dropped;
+  // vehicle -> GCS leaves from the GCS-side socket, GCS -> vehicle from the vehicle-side one
+  const int fd = to_gcs ? gcs_fd_ : uav_fd_;
+  if (peer && sendto(fd, bytes.data(), bytes.size(), MSG_DONTWAIT,
+                     reinterpret_cast<const sockaddr*>(&*peer), sizeof(*peer)) >= 0) {
+    ++forwarded;
+  } else {
+    ++dropped;  // no peer yet, or a full socket buffer: a lost datagram, as on a real link
+  }
 }
 
 GcsRelaySet& GcsRelaySet::create(sim::Simulation& sim, std::string bind_address) {
@@ -176,8 +186,19 @@ GcsRelay* GcsRelaySet::open(size_t vehicle, uint16_t uav_port, uint16_t gcs_port
   relays_[vehicle].reset();  // frees the ports first, so the same ones can be asked for again
   relays_[vehicle] = GcsRelay::open(bind_address_, uav_port, gcs_port, gcs_host, gcs_target_port,
                                     relay_seed(sim_.config().seed, vehicle), error);
+  if (relays_[vehicle] && radio_) {
+    // the new relay counts only its own datagrams' losses
+    radio_->take_losses(vehicle, true);
+    radio_->take_losses(vehicle, false);
+    GcsRadioLink* radio = radio_.get();
+    relays_[vehicle]->set_carrier([radio, vehicle](bool to_gcs, const std::vector<uint8_t>& b) {
+      return radio->send(vehicle, to_gcs, b);
+    });
+  }
   return relays_[vehicle].get();
 }
+
+void GcsRelaySet::use_radio(std::unique_ptr<GcsRadioLink> radio) { radio_ = std::move(radio); }
 
 GcsRelay* GcsRelaySet::relay(size_t vehicle) {
   return vehicle < relays_.size() ? relays_[vehicle].get() : nullptr;
@@ -188,12 +209,31 @@ void GcsRelaySet::pump() {
   for (auto& r : relays_) {
     if (r) r->pump(now);
   }
+  if (!radio_) return;
+  // over the radio: what it delivers by now goes on to its peer, what it lost counts as dropped
+  std::vector<GcsRadioLink::Arrival> arrived;
+  radio_->step(&arrived);
+  for (const GcsRadioLink::Arrival& a : arrived) {
+    if (a.vehicle < relays_.size() && relays_[a.vehicle])
+      relays_[a.vehicle]->deliver(a.to_gcs, a.bytes);
+  }
+  for (size_t i = 0; i < relays_.size(); ++i) {
+    if (relays_[i]) {
+      relays_[i]->count_carrier_losses(radio_->take_losses(i, true), radio_->take_losses(i, false));
+    }
+  }
+  const std::string why = radio_->failure();
+  if (!why.empty() && !failure_reported_) {
+    failure_reported_ = true;
+    if (on_failure_) on_failure_(why);
+  }
 }
 
 void GcsRelaySet::reset(uint64_t seed) {
   for (size_t i = 0; i < relays_.size(); ++i) {
     if (relays_[i]) relays_[i]->reset(relay_seed(seed, i));
   }
+  if (radio_) radio_->reset(seed);
 }
 
 }  // namespace uavsim::server::radio

@@ -8,11 +8,18 @@
 // a datagram's arrival time is the sim time of the pump that read it, so the relay adds no
 // wall-clock behaviour of its own, and it stops with the clock (pause, lockstep). Peers are learned
 // from the last datagram each side received; the GCS peer can also be given up front.
+//
+// Over a radio (--gcs-link-backend ns3, gcs_radio_link.hpp): a datagram due per the impairment
+// (the fault API's loss, outage and latency still apply first, on the relay's side) goes on ns-3's
+// 802.11 channel instead of straight to its peer, and is sent on at the first pump at or after the
+// sim time the channel delivers it; what the channel loses, or refuses (larger than 1500 bytes),
+// counts as dropped.
 #pragma once
 
 #include <netinet/in.h>
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -20,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "radio/gcs_radio_link.hpp"
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::radio {
@@ -67,6 +75,19 @@ class GcsRelay {
   const RelayImpairment& impairment() const { return impairment_; }
   const RelayStats& stats() const { return stats_; }
 
+  // Where due datagrams go instead of straight to their peer: a radio that hands them back through
+  // deliver() when they arrive. It returns false when it refuses one (counted dropped). Single
+  // caller.
+  using Carrier = std::function<bool(bool to_gcs, const std::vector<uint8_t>& bytes)>;
+  void set_carrier(Carrier carrier) { carrier_ = std::move(carrier); }
+  // Sends a datagram the carrier delivered on to its peer now. Single caller.
+  void deliver(bool to_gcs, const std::vector<uint8_t>& bytes);
+  // Counts datagrams the carrier lost on the way. Single caller.
+  void count_carrier_losses(uint64_t to_gcs, uint64_t to_uav) {
+    stats_.to_gcs_dropped += to_gcs;
+    stats_.to_uav_dropped += to_uav;
+  }
+
  private:
   struct InFlight {
     double due_s = 0.0;
@@ -75,6 +96,8 @@ class GcsRelay {
   };
   GcsRelay() = default;
   void receive(int fd, bool to_gcs, double now_s);
+  // sends to the peer of that direction, counted forwarded or dropped
+  void forward(bool to_gcs, const std::vector<uint8_t>& bytes);
   double uniform();
 
   int uav_fd_ = -1;
@@ -87,6 +110,7 @@ class GcsRelay {
   RelayStats stats_;
   std::vector<InFlight> in_flight_;  // ordered by due time, arrival order among equals
   std::mt19937_64 rng_;
+  Carrier carrier_;  // empty: due datagrams go straight to their peer
 };
 
 // Every vehicle's relay, owned by the simulation and pumped at control steps (schedule()).
@@ -112,6 +136,16 @@ class GcsRelaySet {
   // Every open relay back to its initial state for a reset with seed. Loop thread only.
   void reset(uint64_t seed);
 
+  // Carries every relay's datagrams over radio from now on (gcs_radio_link.hpp). Before the loop
+  // starts, before any relay opens.
+  void use_radio(std::unique_ptr<GcsRadioLink> radio);
+  GcsRadioLink* radio() { return radio_.get(); }  // null: the closed-form relay. Loop thread only.
+  // "ns3" over a radio, else "simple".
+  const char* backend_name() const { return radio_ ? "ns3" : "simple"; }
+  // Called once, on the loop thread, when the radio fails (its helper died or hung), with why: the
+  // server ends the run. Before the loop starts.
+  void set_on_failure(std::function<void(const std::string&)> fn) { on_failure_ = std::move(fn); }
+
   GcsRelaySet(sim::Simulation& sim, std::string bind_address);  // use attach()
 
  private:
@@ -121,6 +155,9 @@ class GcsRelaySet {
   sim::Simulation& sim_;
   std::string bind_address_;
   std::vector<std::unique_ptr<GcsRelay>> relays_;  // per vehicle
+  std::unique_ptr<GcsRadioLink> radio_;
+  std::function<void(const std::string&)> on_failure_;
+  bool failure_reported_ = false;
 };
 
 }  // namespace uavsim::server::radio

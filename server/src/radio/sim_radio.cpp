@@ -73,8 +73,7 @@ void SimRadio::schedule(sim::StepSchedule& steps) {
 SimRadio::SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel)
     : sim_(sim),
       channel_(std::move(channel)),
-      sight_(sim.world()),
-      sights_(sim.vehicle_count() * sim.vehicle_count()),
+      sights_(sim.world(), sim.vehicle_count()),
       positions_enu_m_(sim.vehicle_count(), Eigen::Vector3d::Zero()),
       velocities_enu_m_s_(sim.vehicle_count(), Eigen::Vector3d::Zero()),
       refused_(sim.vehicle_count(), 0) {
@@ -82,26 +81,8 @@ SimRadio::SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel)
 }
 
 double SimRadio::link_loss_db(size_t from, size_t to) {
-  const std::array<double, kGeomGroups>& config_db = channel_->config().obstacle_loss_db;
-  bool any = false;
-  for (double db : config_db) any = any || db > 0.0;
-  if (!any) return 0.0;
-  // one cast serves both directions (the path is the same segment)
-  const size_t a = std::min(from, to);
-  const size_t b = std::max(from, to);
-  LinkSight& s = sights_[a * positions_enu_m_.size() + b];
-  const Eigen::Vector3d& pa = positions_enu_m_[a];
-  const Eigen::Vector3d& pb = positions_enu_m_[b];
-  if (!s.valid || s.loss_config_db != config_db || (s.a_enu_m - pa).norm() > kObstacleMove_m ||
-      (s.b_enu_m - pb).norm() > kObstacleMove_m || sim_.time_s() - s.cast_s > kObstacleMaxAge_s) {
-    s.loss_db = sight_.blocked_loss_db(pa, pb, a, b, config_db);
-    s.a_enu_m = pa;
-    s.b_enu_m = pb;
-    s.loss_config_db = config_db;
-    s.cast_s = sim_.time_s();
-    s.valid = true;
-  }
-  return s.loss_db;
+  return sights_.loss_db(from, to, positions_enu_m_[from], positions_enu_m_[to],
+                         channel_->config().obstacle_loss_db, sim_.time_s());
 }
 
 SendResult SimRadio::send(size_t from, int to, const std::vector<uint8_t>& data) {
@@ -151,7 +132,7 @@ void SimRadio::reset(uint64_t seed) {
   channel_->reset(radio_seed(seed));
   inbox_.clear();
   refused_.assign(refused_.size(), 0);
-  for (LinkSight& s : sights_) s.valid = false;
+  sights_.clear();
   check_failure();
 }
 

@@ -3,9 +3,9 @@
 // should see). The simulation owns it; schedule() registers it to be advanced in every step's
 // pre-physics phase and reset with the world (seeded from the sim seed). Obstacles: the paths
 // frames use are cast through the world (physics/line_of_sight.hpp), each blocked one adding the
-// config's obstacle_loss_db of the geom groups it crosses; cached per link, cast again only when
-// a frame uses the link and one of its ends has moved more than kObstacleMove_m, or the cast is
-// older than kObstacleMaxAge_s (obstacles move too: a truck, a wall).
+// config's obstacle_loss_db of the geom groups it crosses; cached per link (link_sight_cache.hpp),
+// cast again only when a frame uses the link and one of its ends has moved, or the cast is old
+// (obstacles move too: a truck, a wall).
 #pragma once
 
 #include <cstdint>
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "physics/line_of_sight.hpp"
+#include "radio/link_sight_cache.hpp"
 #include "radio/ns3_channel.hpp"
 #include "radio/radio_channel.hpp"
 #include "radio/radio_model.hpp"
@@ -90,10 +90,6 @@ class SimRadio {
   }
 
   static constexpr size_t kMaxInbox = 1u << 16;
-  // a link's line of sight is cast again when an end moved more than this since the last cast
-  static constexpr double kObstacleMove_m = 0.05;
-  // ... or when the cast is older than this (a truck at 10 m/s moves 1 m)
-  static constexpr double kObstacleMaxAge_s = 0.1;
 
   SimRadio(sim::Simulation& sim, std::unique_ptr<RadioChannel> channel);  // use attach()
 
@@ -102,19 +98,9 @@ class SimRadio {
   double link_loss_db(size_t from, size_t to);
   void check_failure();
 
-  struct LinkSight {
-    bool valid = false;
-    Eigen::Vector3d a_enu_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d b_enu_m = Eigen::Vector3d::Zero();
-    std::array<double, kGeomGroups> loss_config_db{};
-    double loss_db = 0.0;
-    double cast_s = 0.0;
-  };
-
   sim::Simulation& sim_;
   std::unique_ptr<RadioChannel> channel_;
-  physics::LineOfSight sight_;
-  std::vector<LinkSight> sights_;  // min(from, to) * N + max(from, to): paths are symmetric
+  LinkSightCache sights_;
   std::vector<Eigen::Vector3d> positions_enu_m_;
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Delivery> inbox_;

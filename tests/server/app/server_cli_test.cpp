@@ -166,6 +166,30 @@ TEST(ServerCli, TheRadioBackendIsChosenAndNamedAtStart) {
   EXPECT_TRUE(has(r, "exited with status 1")) << r.output;
 }
 
+TEST(ServerCli, TheGcsLinkBackendAndPositionAreCheckedAndNamedAtStart) {
+  const std::string run = "empty" + kWorlds +
+                          " --rate 0 --duration 0.1 --api-port 0 --mavlink-port -1 --out none "
+                          "--no-cameras ";
+  ServerRun r = run_server("empty --gcs-link-backend wifi");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_TRUE(has(r, "--gcs-link-backend needs simple or ns3")) << r.output;
+  for (const char* bad : {"1,2", "1,2,3,4", "1,nan,3", "1,2,100001", "1,,3"}) {
+    r = run_server(run + "--gcs-position " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_TRUE(has(r, "--gcs-position needs X,Y,Z")) << r.output;
+  }
+  // the simple relay says nothing more; a helper that cannot work ends the server at start
+  r = run_server(run + "--gcs-position 5,-3,2");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(has(r, "gcs link:")) << r.output;
+  setenv("UAVSIM_NS3_RADIO", "/bin/false", 1);
+  r = run_server(run + "--gcs-link-backend ns3");
+  unsetenv("UAVSIM_NS3_RADIO");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(has(r, "uavsim-server: gcs link: ")) << r.output;
+  EXPECT_TRUE(has(r, "the ns-3 radio helper failed")) << r.output;
+}
+
 TEST(ServerCli, WaitForClientsHoldsTheClockUntilAClientConnects) {
   const std::string cmd =
       std::string(UAVSIM_SERVER_BIN) + " empty" + kWorlds +
