@@ -21,7 +21,6 @@ struct A2aRadio::Impl {
   int vehicle;
   std::uint64_t sink_id = 0;
   std::uint64_t radio_sink_id = 0;  // the tick records' frames (shared-memory stream)
-  std::uint64_t refusal_sink_id = 0;  // the refusals of radio_send (successes are not answered)
   std::size_t max_frame_bytes = kRadioMaxFrameBytes;  // the channel's, from the subscription
   std::vector<RadioFrame> inbox;
   RadioCounters counters;
@@ -75,10 +74,8 @@ struct A2aRadio::Impl {
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
-  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel()) {
+  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel())
     channel->remove_event_sink(impl_->radio_sink_id);
-    channel->remove_event_sink(impl_->refusal_sink_id);
-  }
   unsubscribe_lockstep_events(impl_->loop, impl_->sink_id,
                               {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
@@ -110,9 +107,11 @@ Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
   } else {
     req["to"] = "broadcast";
   }
+  Impl* s = impl_.get();
   SimChannel* channel = LoopServices(impl_->loop).sim_channel();
-  if (channel == nullptr ||
-      !channel->request_unless_refused(std::move(req), impl_->refusal_sink_id)) {
+  if (channel == nullptr || !channel->request(std::move(req), [s](const Json& j) {
+        if (j.value("ok", false) != true) ++s->counters.refused;
+      })) {
     return Result<void>::fail(Error::kConnectionLost, "radio: no simulator connection");
   }
   ++impl_->counters.sent;
@@ -136,9 +135,6 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
   if (channel == nullptr) return R::fail(Error::kConnectionLost, "radio: no simulator connection");
   s->radio_sink_id =
       channel->add_radio_sink([s](const common::shm::RadioFrame& f) { s->on_frame(f); });
-  s->refusal_sink_id = channel->add_refusal_sink([s](const Json& j) {
-    if (j.value("ok", false) != true) ++s->counters.refused;
-  });
   Json result;
   auto id = subscribe_lockstep_events(
       loop, "radio_batch", [s](const Json& e) { s->on_batch(e); },
@@ -146,7 +142,6 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
       "radio of vehicle " + std::to_string(vehicle), &result);
   if (!id) {
     channel->remove_event_sink(s->radio_sink_id);
-    channel->remove_event_sink(s->refusal_sink_id);
     return R(id.error());
   }
   // the channel's frame size (a server without the field: 802.15.4's whole 127 bytes)

@@ -71,28 +71,6 @@ bool SimChannel::request(Json request, ReplyHandler on_reply) {
   return true;
 }
 
-namespace {
-// the id the requests of a refusal sink carry: "q<sink id>" (request ids are "r<n>")
-std::string refusal_id(std::uint64_t sink) {
-  std::string id = std::to_string(sink);
-  id.insert(id.begin(), 'q');
-  return id;
-}
-}  // namespace
-
-bool SimChannel::request_unless_refused(Json request, std::uint64_t refusal_sink) {
-  if (fd_ < 0) return false;
-  request["id"] = refusal_id(refusal_sink);
-  request["reply"] = "errors";
-  return send(request.dump());
-}
-
-std::uint64_t SimChannel::add_refusal_sink(ReplyHandler sink) {
-  const std::uint64_t id = next_event_sink_++;
-  refusal_sinks_[refusal_id(id)] = std::move(sink);
-  return id;
-}
-
 bool SimChannel::send(const std::string& line) {
   if (fd_ < 0) return false;
   if (outputs_held_) {
@@ -216,7 +194,6 @@ std::uint64_t SimChannel::add_radio_sink(RadioSink sink) {
 
 void SimChannel::remove_event_sink(std::uint64_t id) {
   if (radio_sinks_.erase(id) > 0) return;
-  if (refusal_sinks_.erase(refusal_id(id)) > 0) return;
   for (auto it = event_sinks_.begin(); it != event_sinks_.end(); ++it) {
     if (it->second.first == id) {
       event_sinks_.erase(it);
@@ -248,17 +225,11 @@ void SimChannel::route(const Json& j, std::string_view payload) {
     return;
   }
   if (j.contains("id") && j["id"].is_string()) {
-    const std::string& id = j["id"].get_ref<const std::string&>();
-    auto it = reply_handlers_.find(id);
+    auto it = reply_handlers_.find(j["id"].get<std::string>());
     if (it != reply_handlers_.end()) {
       auto fn = std::move(it->second);
       reply_handlers_.erase(it);
       fn(j);
-      return;
-    }
-    if (auto r = refusal_sinks_.find(id); r != refusal_sinks_.end()) {
-      auto sink = r->second;  // the sink may remove itself
-      sink(j);
       return;
     }
   }

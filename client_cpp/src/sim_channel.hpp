@@ -77,11 +77,6 @@ class SimChannel {
   // Sends request (an object with "op") with the next id; on_reply gets the whole reply when it is
   // read. False when the connection is closed or the send fails (no handler is kept then).
   bool request(Json request, ReplyHandler on_reply);
-  // Sends request asking to be answered only if it is refused ("reply": "errors",
-  // docs/protocol.md): nothing comes back for a success, so bulk requests (a radio frame each) do
-  // not wake the loop once more each; a refusal goes to the refusal sink (add_refusal_sink). False
-  // when closed or the send fails.
-  bool request_unless_refused(Json request, std::uint64_t refusal_sink);
   // One line (no newline), held while outputs are held. False when closed or the send fails.
   bool send(const std::string& line);
   // One line, never held (the lockstep `done`).
@@ -115,10 +110,6 @@ class SimChannel {
   // Radio frames of tick records go to sink. Returns the sink's id (remove_event_sink removes it).
   std::uint64_t add_radio_sink(RadioSink sink);
   void remove_event_sink(std::uint64_t id);  // nothing if there is none (an event or radio sink)
-  // The refusals of requests sent with request_unless_refused(.., id) go to sink (an older server
-  // that answers every request sends successes too: the sink reads "ok"). Returns the sink's id;
-  // remove_event_sink removes it.
-  std::uint64_t add_refusal_sink(ReplyHandler sink);
 
  private:
   void route(const Json& message, std::string_view payload);
@@ -139,7 +130,6 @@ class SimChannel {
   std::map<std::string, FrameSink> frame_sinks_;
   std::multimap<std::string, std::pair<std::uint64_t, EventSink>> event_sinks_;
   std::map<std::uint64_t, RadioSink> radio_sinks_;
-  std::map<std::string, ReplyHandler> refusal_sinks_;  // by the id their requests carry
   std::unique_ptr<ShmStream> ring_;
   common::shm::RingReader::Record record_;  // reused: its buffer keeps its capacity
   std::uint64_t next_event_sink_ = 1;

@@ -353,10 +353,6 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   spec->handler(conn, request, &reply);
   trail.set_detail(nullptr);
   if (reply.failed()) return reply_error(conn, id, *reply.error, reply.message);
-  // "reply": "errors" (checked on the I/O thread): a success is not answered, so a client that
-  // sends a frame a request is not woken once more for each
-  const auto quiet = request.find("reply");
-  if (quiet != request.end() && *quiet == "errors") return;
   if (!reply.deferred) this->reply(conn, ok_reply(id, std::move(reply.result)));
 }
 

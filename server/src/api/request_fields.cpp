@@ -109,13 +109,6 @@ ParsedLine parse_request_line(std::string_view line) {
     }
     out.id = *it;
   }
-  // "reply": "errors" asks for no reply when the op succeeds (a radio_send per frame, answered
-  // only to refuse it); "all" (the default) answers every request
-  if (auto it = body.find("reply"); it != body.end()) {
-    if (!it->is_string() || (*it != "all" && *it != "errors")) {
-      return fail(common::ApiError::kBadField, "\"reply\" must be \"all\" or \"errors\"");
-    }
-  }
   if (!string_field(body, "op")) {
     Json id = out.id;
     fail(common::ApiError::kMissingField, "a request needs \"op\" (a string)");

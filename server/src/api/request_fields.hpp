@@ -43,10 +43,9 @@ struct ParsedLine {
   std::string error_message;
 };
 
-// Parses a request line: valid JSON (bad_json), at most kMaxNestingDepth deep (bad_request), an
-// object (bad_request) whose "id", if any, is a number, string, boolean or null (bad_field: a
-// structured id is never echoed), whose "reply", if any, is "all" or "errors" (bad_field) and whose
-// "op" is a string (missing_field). Thread-safe (pure).
+// Parses a request line: valid JSON (bad_json), at most kMaxNestingDepth deep (bad_request), an object
+// (bad_request) whose "id", if any, is a number, string, boolean or null (bad_field: a structured id is
+// never echoed) and whose "op" is a string (missing_field). Thread-safe (pure).
 ParsedLine parse_request_line(std::string_view line);
 
 // The first field of request that is present with another type than specs gives it (or a number

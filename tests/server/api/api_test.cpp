@@ -257,35 +257,5 @@ TEST(Api, BadInputGetsErrorRepliesAndTheConnectionCarriesOn) {
   EXPECT_TRUE(d.request({{"op", "status"}})["ok"]);
 }
 
-TEST(Api, ARequestThatAsksForErrorsOnlyIsAnsweredOnlyWhenRefused) {
-  TestServer server("mbzirc2020.xml", paused());
-  RawClient c(server.port());
-  // a success gets no line: the next line is the reply to the request after it
-  c.send({{"op", "kill_vehicle"}, {"vehicle", 1}, {"id", 1}, {"reply", "errors"}});
-  Json r = c.request({{"op", "vehicles"}, {"id", 2}});
-  EXPECT_EQ(r["id"], 2);
-  EXPECT_EQ(r["result"]["vehicles"][1]["crashed"], true) << r;  // and the op was applied
-  // a refusal is answered as usual, with its id
-  c.send({{"op", "kill_vehicle"}, {"vehicle", 9}, {"id", 3}, {"reply", "errors"}});
-  r = c.reply();
-  EXPECT_EQ(error_code(r), "unknown_vehicle");
-  EXPECT_EQ(r["id"], 3);
-  // "all" is the default, spelt out
-  r = c.request({{"op", "status"}, {"id", 4}, {"reply", "all"}});
-  EXPECT_EQ(r["id"], 4);
-  EXPECT_TRUE(r["ok"]);
-  // anything else is refused, with the id, and nothing is applied
-  for (const Json& bad : {Json("none"), Json(1), Json::array({"errors"})}) {
-    r = c.request({{"op", "resume"}, {"id", 5}, {"reply", bad}});
-    EXPECT_EQ(error_code(r), "bad_field") << bad;
-    EXPECT_EQ(r["id"], 5);
-  }
-  EXPECT_EQ(c.request({{"op", "status"}})["result"]["paused"], true);
-  // an op whose reply waits for its steps still replies
-  r = c.request({{"op", "step"}, {"steps", 5}, {"id", 6}, {"reply", "errors"}});
-  EXPECT_EQ(r["id"], 6);
-  EXPECT_NEAR(r["result"]["time_s"].get<double>(), 5 * kControlDt_s, kTimeTol_s);
-}
-
 }  // namespace
 }  // namespace uavsim::server::api
