@@ -164,6 +164,24 @@ TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
   EXPECT_TRUE((*r0)->take_received().empty());
 }
 
+TEST(A2aRadio, CountsTheSimulatorsRefusals) {
+  // a frame past the sender's queue of 256 is refused with queue_full; the radio counts those
+  ServerProcess server;
+  ASSERT_GT(server.api_port(), 0) << server.output();
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
+  ASSERT_TRUE(r0 && r1);
+  constexpr int kQueueFrames = 256, kSent = 300;
+  for (int i = 0; i < kSent; ++i) ASSERT_TRUE((*r0)->send(frame(100, static_cast<uint8_t>(i))));
+  ASSERT_TRUE(loop.run_for(kPeriod_s));
+  EXPECT_EQ((*r0)->counters().sent, static_cast<uint64_t>(kSent));
+  EXPECT_EQ((*r0)->counters().refused, static_cast<uint64_t>(kSent - kQueueFrames));
+  // the queued ones go on air one after the other: the first has arrived at the next tick
+  EXPECT_FALSE((*r1)->take_received().empty());
+}
+
 TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
   ServerProcess server;
   ASSERT_GT(server.api_port(), 0) << server.output();
