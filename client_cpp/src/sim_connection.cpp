@@ -17,8 +17,9 @@
 
 #include "api_stream.hpp"
 #include "net.hpp"
-#include "uavsim/common/base64.hpp"
+#include "shm_stream.hpp"
 #include "uavsim/common/api_error.hpp"
+#include "uavsim/common/base64.hpp"
 
 namespace uavsim::client {
 
@@ -94,6 +95,9 @@ struct SimConnection::Impl {
   std::map<std::string, std::function<void(const SimMessage&)>> handlers;
   std::deque<Json> replies;       // replies read, not yet claimed by request()
   std::optional<Failure> broken;  // why the connection is closed
+  // the shared-memory stream (use_shared_memory): everything the server sends comes from it
+  std::unique_ptr<ShmStream> ring;
+  common::shm::RingReader::Record record;  // reused: its buffer keeps its capacity
 
   ~Impl() { close_fd(); }
 
@@ -102,6 +106,7 @@ struct SimConnection::Impl {
   void close_fd() {
     if (fd >= 0) ::close(fd);
     fd = -1;
+    ring.reset();
   }
   Failure fail(Error code, std::string message) {
     close_fd();
@@ -138,9 +143,61 @@ struct SimConnection::Impl {
     return std::nullopt;
   }
 
+  // a tick record of the shared-memory stream as the socket would carry it to this connection: the
+  // radio frames that arrived since the last tick (there are some only for a batch subscription)
+  // as one radio_batch line, then the tick
+  std::optional<Failure> deliver_tick(const std::vector<std::uint8_t>& payload) {
+    std::string why;
+    auto tick = common::shm::decode_tick(payload, &why);
+    if (!tick) return fail(Error::kProtocol, "sim API: shared-memory stream: " + why);
+    if (!tick->frames.empty()) {
+      Json frames = Json::array();
+      for (const auto& f : tick->frames) {
+        frames.push_back(Json::array({f.to, f.from, f.seq, f.broadcast, f.time_s, f.sent_time_s,
+                                      common::base64_encode(f.data)}));
+      }
+      deliver({{"event", "radio_batch"}, {"time", tick->time_s}, {"frames", std::move(frames)}},
+              {});
+    }
+    deliver({{"event", "tick"}, {"tick", tick->tick}, {"time", tick->time_s}}, {});
+    return std::nullopt;
+  }
+
+  // every record waiting in the ring, delivered
+  std::optional<Failure> read_ring() {
+    const bool closed = ring->drain_wakeups();  // and armed: a record written from now wakes us
+    std::string why;
+    for (;;) {
+      const auto status = ring->next(&record, &why);
+      if (status == common::shm::RingReader::Status::kEmpty) break;
+      if (status == common::shm::RingReader::Status::kCorrupt)
+        return fail(Error::kProtocol, "sim API: shared-memory stream: " + why);
+      if (record.type == common::shm::RecordType::kStream) {
+        if (auto e =
+                parse(reinterpret_cast<const char*>(record.payload.data()), record.payload.size()))
+          return e;
+      } else if (auto e = deliver_tick(record.payload)) {
+        return e;
+      }
+      if (!ring) return broken;  // a handler's message broke the connection
+    }
+    if (closed) return fail(Error::kConnectionLost, "sim API: the server closed the connection");
+    return std::nullopt;
+  }
+
   // waits up to timeout_ms for bytes, then reads all there are and delivers the whole messages
   std::optional<Failure> read_some(int timeout_ms) {
     if (fd < 0) return broken ? *broken : Failure{Error::kNotConnected, "sim API: not connected"};
+    if (ring) {
+      // records may wait without a wake-up of their own (read before the last one was armed)
+      const std::size_t before = replies.size() + queue.size();
+      if (auto e = read_ring()) return e;
+      if (replies.size() + queue.size() > before || timeout_ms == 0) return std::nullopt;
+      pollfd w{ring->wake_fd(), POLLIN, 0};
+      if (::poll(&w, 1, timeout_ms) < 0 && errno != EINTR)
+        return fail(Error::kIo, std::string("sim API: poll: ") + std::strerror(errno));
+      return read_ring();
+    }
     pollfd p{fd, POLLIN, 0};
     const int r = ::poll(&p, 1, timeout_ms);
     if (r < 0) {
@@ -239,6 +296,7 @@ bool SimConnection::connected() const {
 }
 int SimConnection::fd() const {
   impl_->assert_owner_thread();
+  if (impl_->ring) return impl_->ring->wake_fd();
   return impl_->fd;
 }
 
@@ -315,6 +373,33 @@ Result<void> SimConnection::poll(int timeout_ms) {
   // replies nobody waits for (of requests that timed out) are dropped
   impl_->replies.clear();
   return ok();
+}
+
+Result<void> SimConnection::use_shared_memory(double timeout_s) {
+  Impl& m = *impl_;
+  m.assert_owner_thread();
+  if (m.ring) return ok();
+  if (m.fd < 0)
+    return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
+  const auto ops = m.hello.find("ops");
+  const bool offered = ops != m.hello.end() && ops->is_array() &&
+                       std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
+  if (!offered)
+    return Failure{Error::kUnsupported, "sim API: the server does not offer shared memory"};
+  if (!ShmStream::peer_is_local(m.fd))
+    return Failure{Error::kUnsupported, "sim API: shared memory needs the server on this machine"};
+  auto offer = request({{"op", "lockstep_shm"}, {"ring_bytes", ShmStream::kRingBytes}}, timeout_s);
+  if (!offer) return offer.error();
+  // the server writes everything after its reply into the ring: nothing more comes on the socket
+  auto ring = ShmStream::open(*offer);
+  if (!ring) return m.fail(ring.code(), "sim API: " + ring.message());
+  m.ring = std::move(*ring);
+  return ok();
+}
+
+bool SimConnection::on_shared_memory() const {
+  impl_->assert_owner_thread();
+  return impl_->ring != nullptr;
 }
 
 Result<nlohmann::json> SimConnection::status() { return request({{"op", "status"}}); }

@@ -80,6 +80,8 @@ class TestClient {
  public:
   explicit TestClient(uint16_t port) : client_(port) {}
   const Json& hello() const { return client_.hello(); }
+  // what the server streams comes on the shared-memory stream from now on (SimApiClient)
+  bool use_shared_memory() { return client_.use_shared_memory(); }
   Json request(Json j) { return client_.request(std::move(j)); }
   // the next streamed message (null after a 10 s timeout)
   Json read_message() { return client_.read().json; }

@@ -1,6 +1,8 @@
 // The lockstep contract (seed 5.3/6.5, gzuav's Begin-Tick/End-Tick): ticks at multiples of each
-// client's period, the clock held until every joined client is done, busy_until, MAVLink seq waits and
-// the dead-client timeout.
+// client's period, the clock held until every joined client is done, busy_until, MAVLink seq waits
+// and the dead-client timeout — on both transports: every test runs with its lockstep clients
+// reading over TCP and over the shared-memory stream (docs/protocol.md), the contract the same on
+// both.
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
@@ -12,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <ostream>
 #include <thread>
 
 #include "api/api_server.hpp"
@@ -26,6 +29,17 @@ using testing::TestServer;
 
 constexpr double kEndTime_s = 0.3;
 
+enum class Transport { kTcp, kShm };
+void PrintTo(Transport t, std::ostream* os) { *os << (t == Transport::kTcp ? "tcp" : "shm"); }
+
+class LockstepContract : public ::testing::TestWithParam<Transport> {
+ protected:
+  // A lockstep client as this test's transport has it read: on shared memory from before its join.
+  static void choose_transport(TestClient& c) {
+    if (GetParam() == Transport::kShm) ASSERT_TRUE(c.use_shared_memory());
+  }
+};
+
 std::string error_code_of(const Json& reply) {
   return reply.value("ok", true) ? "" : reply["error"].value("code", "");
 }
@@ -37,7 +51,7 @@ struct LockstepRun {
 
 // client A (period 10 ms) fails a motor of uav0 at its tick 5; client B (period 20 ms) declares itself busy
 // for 100 ms at its tick 2 (detached timing) and kills uav1 at its tick 10
-LockstepRun run_scenario() {
+LockstepRun run_scenario(Transport transport) {
   ApiConfig config;
   config.start_paused = true;
   TestServer server("mbzirc2020.xml", config);
@@ -46,6 +60,7 @@ LockstepRun run_scenario() {
   auto client = [&](double period, std::vector<double>* ticks, auto on_tick) {
     return std::thread([&, period, ticks, on_tick] {
       TestClient c(server.port());
+      if (transport == Transport::kShm) ASSERT_TRUE(c.use_shared_memory());
       const Json j = c.request({{"op", "lockstep_join"}, {"period_s", period}});
       ASSERT_TRUE(j["ok"]) << j;
       for (;;) {
@@ -87,9 +102,9 @@ LockstepRun run_scenario() {
   return run;
 }
 
-TEST(Lockstep, TwoClientsGiveIdenticalRunsAndEventsAtTheirTicks) {
-  const LockstepRun first = run_scenario();
-  const LockstepRun second = run_scenario();
+TEST_P(LockstepContract, TwoClientsGiveIdenticalRunsAndEventsAtTheirTicks) {
+  const LockstepRun first = run_scenario(GetParam());
+  const LockstepRun second = run_scenario(GetParam());
   EXPECT_EQ(first.ticks_a, second.ticks_a);
   EXPECT_EQ(first.ticks_b, second.ticks_b);
   EXPECT_EQ(first.events, second.events);
@@ -107,19 +122,20 @@ TEST(Lockstep, TwoClientsGiveIdenticalRunsAndEventsAtTheirTicks) {
   EXPECT_NEAR(at["vehicle_killed"], 0.20, 1e-9);
 }
 
-TEST(Lockstep, BusyUntilSkipsTheClientsTicksUntilThatTime) {
-  const LockstepRun run = run_scenario();
+TEST_P(LockstepContract, BusyUntilSkipsTheClientsTicksUntilThatTime) {
+  const LockstepRun run = run_scenario(GetParam());
   // B: 0, 0.02, 0.04 (busy until 0.14), then 0.14, 0.16, ...
   const std::vector<double> expected = {0.0, 0.02, 0.04, 0.14, 0.16, 0.18, 0.20, 0.22, 0.24, 0.26, 0.28, 0.30};
   ASSERT_EQ(run.ticks_b.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(run.ticks_b[i], expected[i], 1e-9) << i;
 }
 
-TEST(Lockstep, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
+TEST_P(LockstepContract, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
   ApiConfig config;
   config.lockstep_timeout_s = 0.2;  // wall clock
   TestServer server("empty.xml", config);
   TestClient dead(server.port()), observer(server.port());
+  choose_transport(dead);
   ASSERT_TRUE(dead.request({{"op", "lockstep_join"}, {"period_s", 0.01}})["ok"]);
   const Json tick = dead.next_event("tick");
   ASSERT_FALSE(tick.is_null());
@@ -140,11 +156,12 @@ TEST(Lockstep, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
 // A real process on the lockstep, stopped (SIGSTOP) for longer than its timeout: the server drops
 // it and the clock goes on; continued (SIGCONT), its next "done" is told that it was dropped. The
 // client is forked before the server starts (no threads to copy) and reports through a pipe.
-TEST(Lockstep, AClientStoppedLongerThanItsTimeoutIsDroppedAndToldSoWhenItComesBack) {
+TEST_P(LockstepContract, AClientStoppedLongerThanItsTimeoutIsDroppedAndToldSoWhenItComesBack) {
   constexpr double kTimeout_s = 0.3;  // wall clock
   int to_child[2], from_child[2];
   ASSERT_EQ(pipe(to_child), 0);
   ASSERT_EQ(pipe(from_child), 0);
+  const bool shm = GetParam() == Transport::kShm;
   const pid_t child = fork();
   if (child == 0) {
     prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlives the test
@@ -153,6 +170,7 @@ TEST(Lockstep, AClientStoppedLongerThanItsTimeoutIsDroppedAndToldSoWhenItComesBa
     uint16_t port = 0;
     if (read(to_child[0], &port, sizeof(port)) != sizeof(port)) _exit(2);
     TestClient c(port);
+    if (shm && !c.use_shared_memory()) _exit(4);
     if (!c.request({{"op", "lockstep_join"}, {"period_s", 0.01}, {"timeout_s", kTimeout_s}})["ok"]) _exit(3);
     (void)!write(from_child[1], "j", 1);
     for (;;) {
@@ -225,12 +243,13 @@ class FakeSeqWaiter : public SeqWaiter {
   std::atomic<int> processed{-1};
 };
 
-TEST(Lockstep, DoneWaitsForTheNamedMavlinkSequenceNumber) {
+TEST_P(LockstepContract, DoneWaitsForTheNamedMavlinkSequenceNumber) {
   FakeSeqWaiter waiter;
   ApiConfig config;
   config.start_paused = false;
   TestServer server("empty.xml", config, nullptr, &waiter);
   TestClient c(server.port()), observer(server.port());
+  choose_transport(c);
   ASSERT_TRUE(c.request({{"op", "lockstep_join"}, {"period_s", 0.01}})["ok"]);
   const Json tick = c.next_event("tick");
   const Json r = c.request({{"op", "done"}, {"tick", tick["tick"]}, {"mavlink_seq", {{"0", 7}}}});
@@ -246,6 +265,12 @@ TEST(Lockstep, DoneWaitsForTheNamedMavlinkSequenceNumber) {
   EXPECT_NEAR(next["time"].get<double>(), tick["time"].get<double>() + 0.01, 1e-9);
   EXPECT_EQ(error_code_of(c.request({{"op", "done"}, {"mavlink_seq", {{"uav7", 1}}}})), "unknown_vehicle");
 }
+
+INSTANTIATE_TEST_SUITE_P(Transports, LockstepContract,
+                         ::testing::Values(Transport::kTcp, Transport::kShm),
+                         [](const ::testing::TestParamInfo<Transport>& info) {
+                           return info.param == Transport::kTcp ? "tcp" : "shm";
+                         });
 
 }  // namespace
 }  // namespace uavsim::server::api

@@ -63,6 +63,15 @@ class SimApiClient {
     if (c) conn_ = std::move(*c);
   }
 
+  // Moves what the server streams to this client onto the shared-memory stream (false, with a test
+  // failure, if it cannot).
+  bool use_shared_memory() {
+    if (!conn_) return false;
+    const auto r = conn_->use_shared_memory(wait_s_);
+    EXPECT_TRUE(r) << r.message();
+    return static_cast<bool>(r);
+  }
+
   // The server's hello (null if the connection failed).
   const Json& hello() const { return conn_ ? conn_->hello() : null_; }
 

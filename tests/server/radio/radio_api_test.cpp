@@ -216,10 +216,15 @@ TEST(RadioApi, ABatchSubscriberGetsOneLineAGateWithTheSameFramesInTheSameOrder) 
   EXPECT_TRUE(batch.request({{"op", "status"}})["ok"]);
 }
 
-TEST(RadioApi, ALockstepBatchSubscriberGetsItsFramesInOneLineJustBeforeEachTick) {
+// the lockstep client reads over TCP, or over the shared-memory stream, where the frames come in
+// the tick's record and SimConnection hands them over as the same radio_batch line
+class RadioApiLockstepBatch : public ::testing::TestWithParam<bool> {};
+
+TEST_P(RadioApiLockstepBatch, ALockstepBatchSubscriberGetsItsFramesInOneLineJustBeforeEachTick) {
   RadioServer server;
   TestClient lockstep(server.port());
   TestClient free_running(server.port());
+  if (GetParam()) ASSERT_TRUE(lockstep.use_shared_memory());
   ASSERT_TRUE(lockstep.request({{"op", "radio_subscribe"}, {"batch", true}})["ok"]);
   ASSERT_TRUE(free_running.request({{"op", "radio_subscribe"}, {"batch", true}})["ok"]);
   constexpr double kPeriod_s = 0.02;
@@ -242,6 +247,9 @@ TEST(RadioApi, ALockstepBatchSubscriberGetsItsFramesInOneLineJustBeforeEachTick)
       // the frames that arrived since the last tick: every one of the three, none from later
       ASSERT_EQ(m["frames"].size(), 3u) << m;
       for (const Json& f : m["frames"]) {
+        EXPECT_EQ(f[1], 0) << m;      // from vehicle 0
+        EXPECT_EQ(f[3], true) << m;   // broadcast
+        EXPECT_EQ(f[6], frame) << m;  // its bytes
         EXPECT_GT(f[4].get<double>(), last_tick_s) << m;
         EXPECT_LE(f[4].get<double>(), last_tick_s + kPeriod_s + kTimeTol_s) << m;
       }
@@ -277,6 +285,11 @@ TEST(RadioApi, ALockstepBatchSubscriberGetsItsFramesInOneLineJustBeforeEachTick)
   }
   EXPECT_EQ(lines, 33);
 }
+
+INSTANTIATE_TEST_SUITE_P(Transports, RadioApiLockstepBatch, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "shm" : "tcp";
+                         });
 
 TEST(RadioApi, ImpairingTheGcsLinkReportsTheRelay) {
   RadioServer server;

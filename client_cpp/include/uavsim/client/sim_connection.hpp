@@ -57,9 +57,18 @@ class SimConnection {
   const nlohmann::json& hello() const;
   // False once the connection is closed, lost or broken by a malformed message. Owner thread only.
   bool connected() const;
-  // The socket, for a caller's own poll loop (readable: call poll(0)); -1 once closed. Owner
-  // thread only.
+  // The descriptor to wait on, for a caller's own poll loop (readable: call poll(0)): the socket,
+  // or on the shared-memory stream its wake-up; -1 once closed. Owner thread only.
   int fd() const;
+
+  // Moves what the server sends this connection onto its shared-memory stream (docs/protocol.md,
+  // "Shared-memory stream"): the same messages in the same order — a tick and its radio frames
+  // (those of a batch subscription) are read from shared memory and handed over as the `tick` and
+  // `radio_batch` messages the socket would carry; requests still go on the socket. For a server
+  // on this machine that offers it; kUnsupported otherwise (the connection goes on over TCP), the
+  // server's refusal as request()'s. Owner thread only.
+  Result<void> use_shared_memory(double timeout_s = 10.0);
+  bool on_shared_memory() const;
 
   // Sends req (an object with "op") with the next id and waits up to timeout_s of wall time for its
   // reply; returns the reply's "result" (an empty object when it has none). Failures: the server's
