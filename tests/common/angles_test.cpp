@@ -8,6 +8,8 @@
 namespace uavsim::common {
 namespace {
 
+constexpr double kUlpTol = 1e-15;  // a few ulps of 1.0
+
 TEST(WrapPi, SmallExcursionsWrapIntoTheHalfOpenInterval) {
   EXPECT_DOUBLE_EQ(wrap_pi(0.5), 0.5);
   EXPECT_DOUBLE_EQ(wrap_pi(kPi + 0.5), -kPi + 0.5);
@@ -36,7 +38,7 @@ TEST(Angles, DegreesAndRadiansConvertBothWays) {
   // 180 deg = pi rad; the two constants are each other's inverse
   EXPECT_DOUBLE_EQ(180.0 * kDegToRad, kPi);
   EXPECT_DOUBLE_EQ(kPi * kRadToDeg, 180.0);
-  EXPECT_NEAR(kDegToRad * kRadToDeg, 1.0, 1e-15);
+  EXPECT_NEAR(kDegToRad * kRadToDeg, 1.0, kUlpTol);
 }
 
 }  // namespace

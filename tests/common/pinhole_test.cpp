@@ -12,6 +12,7 @@ namespace uavsim::common {
 namespace {
 
 constexpr double kExact = 1e-12;  // closed-form arithmetic on a few doubles
+constexpr double kRayDirTol = 1e-9;
 
 TEST(Pinhole, NinetyDegreeFovyPutsTheImageEdgeAtOneFocalLength) {
   // fovy 90 deg: tan(45 deg) = 1, so fy = h/2; the axis between the middle pixels of an even image
@@ -56,7 +57,7 @@ TEST(Pinhole, ProjectAndRayAreInverse) {
   EXPECT_NEAR(p.y(), 239.5 + k.fy_px / 8.0, kExact * 1e3);
   const Eigen::Vector3d ray = k.ray_cam(p);
   EXPECT_NEAR(ray.norm(), 1.0, kExact);
-  EXPECT_NEAR((ray - Eigen::Vector3d(1.0, 0.5, 4.0).normalized()).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((ray - Eigen::Vector3d(1.0, 0.5, 4.0).normalized()).norm(), 0.0, kRayDirTol);
 }
 
 TEST(Pinhole, ContainsReachesHalfAPixelPastTheCentres) {

@@ -18,6 +18,8 @@ constexpr double kBalloonDiameterM = 0.6;
 constexpr double kMinDetectionRate = 0.95;  // in frames where the balloon is >= 20 px wide
 constexpr double kMaxRangeError = 0.10;     // relative, 3 to 25 m
 constexpr double kNoiseSigma = 3.0;
+constexpr double kRangeTolM = 1e-6;
+constexpr double kPosTolM = 1e-9;
 
 // 640 x 480, 60 deg horizontal field of view: fx = 320 / tan(30 deg) = 554.3 px
 PinholeIntrinsics test_camera() {
@@ -60,8 +62,8 @@ TEST(BalloonDetector, RangeFromKnownDiameterOnAxisAndOffAxis) {
   const double a = std::asin(rr / d);
   const Eigen::Vector3d p =
       sphere_position_from_circle(k, {k.cx_px, k.cy_px}, k.fx_px * std::tan(a), 2 * rr);
-  EXPECT_NEAR(p.norm(), d, 1e-6);
-  EXPECT_NEAR(p.x(), 0.0, 1e-9);
+  EXPECT_NEAR(p.norm(), d, kRangeTolM);
+  EXPECT_NEAR(p.x(), 0.0, kPosTolM);
 }
 
 TEST(BalloonDetector, DetectsShadedBalloonsAndMeasuresRange) {
@@ -137,7 +139,7 @@ TEST(BalloonDetector, BalloonNextToClutterIsStillFound) {
   synthetic::add_noise(kNoiseSigma, rng(), &image);
   const auto detections = detector.detect(image);
   ASSERT_EQ(detections.size(), 1u);
-  EXPECT_NEAR(detections[0].range_m, 8.0, 0.8);
+  EXPECT_NEAR(detections[0].range_m, 8.0, kMaxRangeError * 8.0);
 }
 
 TEST(BalloonTracker, ConfirmsAfterConsecutiveHitsAndIgnoresFlicker) {
@@ -151,7 +153,7 @@ TEST(BalloonTracker, ConfirmsAfterConsecutiveHitsAndIgnoresFlicker) {
   EXPECT_TRUE(tracker.update(200'000, {balloon}).empty());
   const auto confirmed = tracker.update(300'000, {balloon});
   ASSERT_EQ(confirmed.size(), 1u);
-  EXPECT_NEAR((confirmed[0].position_m - balloon).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((confirmed[0].position_m - balloon).norm(), 0.0, kPosTolM);
   // the false positive was never confirmed and has been dropped after max_misses
   for (int i = 4; i < 8; ++i) tracker.update(i * 100'000, {balloon});
   EXPECT_EQ(tracker.tracks().size(), 1u);

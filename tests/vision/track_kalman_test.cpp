@@ -21,6 +21,13 @@ constexpr int64_t kLatencyUs = 150'000;
 constexpr double kNoiseM = 0.3;
 constexpr double kMaxErrorM = 1.0;
 constexpr double kSettleS = 3.0;  // errors count after this
+// the speed along the track, estimated from noisy or offset positions
+constexpr double kSpeedTolM_S = 0.3;
+constexpr double kArcTolM = 0.1;
+// two exact measurements: the estimate is exact up to the track projection's round-off
+constexpr double kTwoPointTol = 1e-6;
+constexpr double kReorderTolM = 1e-9;
+constexpr double kInterceptTolM = 0.01;
 
 // the truck: constant speed along the track, lateral offset weaving +-0.3 m with a 17 s period
 struct Truck {
@@ -117,7 +124,7 @@ TEST(TrackKalman, FollowsSlowdownFrom15To5KmH) {
   }
   std::printf("[ kalman   ] braking 15 -> 5 km/h at 0.5 m/s^2: max error %.3f m\n", max_err_m);
   EXPECT_LT(max_err_m, kMaxErrorM);
-  EXPECT_NEAR(filter.estimate_at(to_us(60.0))->v_s_m_s, kSlowM_S, 0.3);
+  EXPECT_NEAR(filter.estimate_at(to_us(60.0))->v_s_m_s, kSlowM_S, kSpeedTolM_S);
 }
 
 TEST(TrackKalman, SpeedAndDirectionFromTwoPoints) {
@@ -132,11 +139,11 @@ TEST(TrackKalman, SpeedAndDirectionFromTwoPoints) {
   EXPECT_EQ(filter.add_measurement(500'000, p1), MeasurementResult::kInitialised);
   const auto e = filter.estimate_at(500'000);
   ASSERT_TRUE(e.has_value());
-  EXPECT_NEAR(e->v_s_m_s, -4.0, 1e-6);  // -2 m in 0.5 s
-  EXPECT_NEAR(e->s_m, 98.0, 1e-6);
+  EXPECT_NEAR(e->v_s_m_s, -4.0, kTwoPointTol);  // -2 m in 0.5 s
+  EXPECT_NEAR(e->s_m, 98.0, kTwoPointTol);
   // extrapolation follows the curve: 2 s later the truck is 8 m further back along the track
   EXPECT_NEAR((filter.estimate_at(2'500'000)->position_enu_m - track.point_enu(90.0)).norm(), 0.0,
-              1e-6);
+              kTwoPointTol);
 }
 
 // Regression (found on rendered frames, tests/vision/rendered): the MBZIRC 2017 truck starts at the
@@ -146,7 +153,6 @@ TEST(TrackKalman, SpeedAndDirectionFromTwoPoints) {
 TEST(TrackKalman, InitialisesOnTheRightBranchJustAfterTheCrossing) {
   const EightTrack track;
   constexpr double kSpeedM_S = 15.0 / 3.6;
-  constexpr double kSpeedTolM_S = 0.3;
   int cases = 0;
   for (double s0 = 0.5; s0 < 9.0; s0 += 0.25) {
     for (const double l_m : {-0.04, -0.01, 0.0, 0.02, 0.05}) {
@@ -158,7 +164,7 @@ TEST(TrackKalman, InitialisesOnTheRightBranchJustAfterTheCrossing) {
       const auto e = filter.estimate_at(1'428'571);
       ASSERT_TRUE(e.has_value());
       EXPECT_NEAR(e->v_s_m_s, kSpeedM_S, kSpeedTolM_S) << "s0 " << s0 << " l " << l_m;
-      EXPECT_NEAR(e->s_m, s0 + kSpeedM_S * dt_s, 0.1) << "s0 " << s0 << " l " << l_m;
+      EXPECT_NEAR(e->s_m, s0 + kSpeedM_S * dt_s, kArcTolM) << "s0 " << s0 << " l " << l_m;
       ++cases;
     }
   }
@@ -189,7 +195,7 @@ TEST(TrackKalman, OutOfOrderMeasurementEqualsInOrder) {
   EXPECT_NEAR(
       (in_order.estimate_at(now)->position_enu_m - shuffled.estimate_at(now)->position_enu_m)
           .norm(),
-      0.0, 1e-9);
+      0.0, kReorderTolM);
 }
 
 TEST(TrackKalman, RejectsOutlier) {
@@ -233,7 +239,7 @@ TEST(TrackKalman, InterceptionPointIsReachableAndOnTheTruck) {
   const auto ic = filter.intercept(to_us(now_s), uav, kUavSpeedM_S);
   ASSERT_TRUE(ic.has_value());
   // the UAV needs exactly the time to go to fly there, and the truck is there then
-  EXPECT_NEAR((ic->point_enu_m - uav).norm(), kUavSpeedM_S * ic->time_to_go_s, 0.01);
+  EXPECT_NEAR((ic->point_enu_m - uav).norm(), kUavSpeedM_S * ic->time_to_go_s, kInterceptTolM);
   EXPECT_LT((ic->point_enu_m - truck.position(now_s + ic->time_to_go_s)).norm(), 0.05);
   // and no earlier meeting exists: sample the truck's path before it
   for (double tau = 0.0; tau < ic->time_to_go_s - 0.05; tau += 0.05) {

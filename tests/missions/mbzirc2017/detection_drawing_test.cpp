@@ -17,6 +17,7 @@ namespace uavsim::missions::mbzirc2017 {
 namespace {
 
 constexpr double kAltitudeM = 8.0;
+constexpr double kRingRadiusRelTol = 0.25;
 
 vision::PinholeIntrinsics down_camera() {
   return vision::PinholeIntrinsics::from_fovy(640, 480, common::kPi / 3);
@@ -65,7 +66,7 @@ TEST(DetectionDrawing, RingsTheAcceptedMarkerWhereItIsAndCaptionsTheState) {
   EXPECT_LT((hit->head<2>() - marker).norm(), 0.2);
   // the marker's 0.65 m ring radius at 6.5 m is about 0.65 / 6.5 * f pixels; drawn 3 px outside it
   const double expect_px = 0.65 / (kAltitudeM - config.deck_height_m) * k.fx_px + 3.0;
-  EXPECT_NEAR(ring->geometry_px[2], expect_px, 0.25 * expect_px);
+  EXPECT_NEAR(ring->geometry_px[2], expect_px, kRingRadiusRelTol * expect_px);
   EXPECT_EQ(ring->colour_bgr, cv::Scalar(0, 220, 0));  // accepted: green
   EXPECT_NE(f.text.find("uav0 t=1.00 Search\naccepted, 1 detections"), std::string::npos) << f.text;
 }

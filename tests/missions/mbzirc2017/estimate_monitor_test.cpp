@@ -13,6 +13,7 @@ namespace uavsim::missions::mbzirc2017 {
 namespace {
 
 constexpr double kTelemetry_s = 0.05;  // 20 Hz LOCAL_POSITION_NED
+constexpr double kStepTol_m = 1e-9;
 
 // Flying a curve at 4 m/s, turning at 0.5 rad/s (2 m/s^2 of centripetal acceleration), the
 // position jittering by 3 cm (the FC's own GPS corrections): the unexplained sum stays far below
@@ -45,7 +46,7 @@ TEST(EstimateMonitor, AStepIsNoticedAtOnceAndSettlesAfterItsQuietTime) {
   p += Eigen::Vector2d(0.6, 0.8);  // |step| = 1.0 m
   m.add(t, p, Eigen::Vector2d::Zero());
   EXPECT_TRUE(m.settling());
-  EXPECT_NEAR(m.unexplained_m(), 1.0, 1e-9);
+  EXPECT_NEAR(m.unexplained_m(), 1.0, kStepTol_m);
   EXPECT_EQ(m.jumps(), 1);
   const double stepped_s = t;
   // still settling until the step left the window and settle_s passed after that

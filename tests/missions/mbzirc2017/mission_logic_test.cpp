@@ -12,13 +12,17 @@ namespace uavsim::missions::mbzirc2017 {
 namespace {
 
 constexpr double kStep_s = 0.05;
+constexpr double kExactTol = 1e-12;
+constexpr double kSpeedTol_m_s = 1e-9;  // commanded speeds, up to round-off
+constexpr double kHoldAltTol_m = 0.1;
+constexpr double kMatchSpeedTol_m_s = 0.3;  // over the truck, at its speed
 
 TEST(Funnel, WidensWithHeightUpToItsCap) {
   const MissionConfig c;
   const Funnel f(c);
   // radius = 0.4 + 0.45 h, at most 3.5 m: 0.4 at the deck, 2.65 at 5 m, capped at 7 m (3.55)
   EXPECT_DOUBLE_EQ(f.radius_m(0.0), 0.4);
-  EXPECT_NEAR(f.radius_m(5.0), 2.65, 1e-12);
+  EXPECT_NEAR(f.radius_m(5.0), 2.65, kExactTol);
   EXPECT_DOUBLE_EQ(f.radius_m(7.0), 3.5);
   EXPECT_DOUBLE_EQ(f.radius_m(-1.0), 0.4);  // below the deck plane: the base
   EXPECT_TRUE(f.contains(5.0, 2.6));
@@ -104,12 +108,12 @@ TEST(LandingFsm, TakesOffThenGoesToTheCentreAtEightMetres) {
   // flies to the centre at the cruise speed, holding 8 m
   const FsmOutputs out = h.step();
   ASSERT_EQ(out.action, FsmOutputs::Action::kVelocity);
-  EXPECT_NEAR(out.velocity_enu_m_s.head<2>().norm(), h.config.cruise_speed_m_s, 1e-9);
+  EXPECT_NEAR(out.velocity_enu_m_s.head<2>().norm(), h.config.cruise_speed_m_s, kSpeedTol_m_s);
   EXPECT_GT(out.velocity_enu_m_s.z(), 0.0);
   // the truck never seen: it waits over the centre
   EXPECT_FALSE(h.run_until(LandingState::kIntercept, 30.0, false));
   EXPECT_LT(h.in.position_enu_m.head<2>().norm(), 0.5);
-  EXPECT_NEAR(h.in.position_enu_m.z(), 8.0, 0.1);
+  EXPECT_NEAR(h.in.position_enu_m.z(), 8.0, kHoldAltTol_m);
 }
 
 TEST(LandingFsm, SeenTruckLeadsToInterceptWaitApproachAndLandsOnTheSwitch) {
@@ -139,7 +143,7 @@ TEST(LandingFsm, SeenTruckLeadsToInterceptWaitApproachAndLandsOnTheSwitch) {
   EXPECT_LT(min_vz, -0.8);  // faster high up
   // over the truck, at its speed
   EXPECT_LT(std::abs(h.in.position_enu_m.x() - h.truck_x), h.config.funnel_base_radius_m);
-  EXPECT_NEAR(h.in.velocity_enu_m_s.x(), h.truck_speed, 0.3);
+  EXPECT_NEAR(h.in.velocity_enu_m_s.x(), h.truck_speed, kMatchSpeedTol_m_s);
   // a pad switch closes: force disarm at once, Landed, and it stays off
   h.in.switch_closed = true;
   const FsmOutputs landed = h.step();
@@ -163,7 +167,7 @@ TEST(LandingFsm, FirstMissGoesBackToInterceptSecondToTheCentre) {
   EXPECT_NE(both.note.find("Intercept -> WaitUntilVisible"), std::string::npos) << both.note;
   // moves at half the truck's speed while it searches
   const FsmOutputs wait = h.step();
-  EXPECT_NEAR(wait.velocity_enu_m_s.x(), 0.5 * h.truck_speed, 1e-9);
+  EXPECT_NEAR(wait.velocity_enu_m_s.x(), 0.5 * h.truck_speed, kSpeedTol_m_s);
   // 12 s unseen: first miss
   EXPECT_FALSE(h.run_until(LandingState::kIntercept, 11.5, false));
   ASSERT_TRUE(h.run_until(LandingState::kIntercept, 1.0, false));

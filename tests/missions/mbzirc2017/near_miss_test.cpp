@@ -15,14 +15,18 @@ namespace {
 const std::string kModels = UAVSIM_MODELS_DIR;
 constexpr double kRimTol_m = 0.19 * (1.0 - 0.99144);  // 24 rim points: r (1 - cos(pi / 24))
 
+// box faces and distances: a few additions and subtractions
+constexpr double kExactTol_m = 1e-12;
+constexpr double kClearanceTol_m = 1e-9;
+
 TEST(NearMiss, LoadsTheTrucksCollidingBoxes) {
   const TruckShape t = load_truck_shape(kModels + "/objects/truck.xml");
   EXPECT_EQ(t.deck.name, "deck");
-  EXPECT_NEAR(t.deck.centre_m.z() + t.deck.half_m.z(), 1.5, 1e-12);  // the deck's top
+  EXPECT_NEAR(t.deck.centre_m.z() + t.deck.half_m.z(), 1.5, kExactTol_m);  // the deck's top
   ASSERT_EQ(t.parts.size(), 2u);  // chassis and cab; the marker and wheels are visual
   EXPECT_EQ(t.parts[0].name, "chassis");
   EXPECT_EQ(t.parts[1].name, "cab");
-  EXPECT_NEAR(t.parts[1].centre_m.x() - t.parts[1].half_m.x(), 2.0, 1e-12);  // its rear face
+  EXPECT_NEAR(t.parts[1].centre_m.x() - t.parts[1].half_m.x(), 2.0, kExactTol_m);  // its rear face
 }
 
 TEST(NearMiss, LoadsTheHexasCollidingGeoms) {
@@ -31,8 +35,8 @@ TEST(NearMiss, LoadsTheHexasCollidingGeoms) {
   EXPECT_EQ(v.spheres.size(), 7u * 50u + 2u * 9u);
   ASSERT_EQ(v.gear_points_m.size(), 4u);
   for (const Eigen::Vector3d& g : v.gear_points_m) {
-    EXPECT_NEAR(std::abs(g.x()), 0.2, 1e-12);
-    EXPECT_NEAR(g.z(), -0.362, 1e-12);  // skid axis 0.35 below, radius 0.012
+    EXPECT_NEAR(std::abs(g.x()), 0.2, kExactTol_m);
+    EXPECT_NEAR(g.z(), -0.362, kExactTol_m);  // skid axis 0.35 below, radius 0.012
   }
 }
 
@@ -48,9 +52,10 @@ TEST(NearMiss, RejectsWhatItCannotScore) {
 
 TEST(NearMiss, BoxDistanceIsSigned) {
   BodyBox cab{"cab", Eigen::Vector3d(2.5, 0, 1.7), Eigen::Vector3d(0.5, 1.0, 0.35)};
-  EXPECT_NEAR(box_distance_m(cab, {3.5, 0, 1.7}), 0.5, 1e-12);
-  EXPECT_NEAR(box_distance_m(cab, {3.3, 1.3, 2.45}), std::sqrt(0.09 + 0.09 + 0.16), 1e-12);
-  EXPECT_NEAR(box_distance_m(cab, {2.5, 0, 1.7}), -0.35, 1e-12);  // inside: to the nearest face
+  EXPECT_NEAR(box_distance_m(cab, {3.5, 0, 1.7}), 0.5, kExactTol_m);
+  EXPECT_NEAR(box_distance_m(cab, {3.3, 1.3, 2.45}), std::sqrt(0.09 + 0.09 + 0.16), kExactTol_m);
+  // inside: to the nearest face
+  EXPECT_NEAR(box_distance_m(cab, {2.5, 0, 1.7}), -0.35, kExactTol_m);
 }
 
 // The hexa sitting centred on the deck of a truck heading north-east: skids 0.9 m from the deck's
@@ -64,10 +69,10 @@ TEST(NearMiss, CentredOnTheDeck) {
   const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
   t.add(truck + Eigen::Vector3d(0, 0, 1.862), q, truck, yaw);
   ASSERT_TRUE(t.min_clearance_m("cab"));
-  EXPECT_NEAR(*t.min_clearance_m("cab"), 2.0 - 0.5797, 1e-9);
-  EXPECT_NEAR(*t.min_clearance_m("chassis"), 0.1, 1e-9);  // through the deck
+  EXPECT_NEAR(*t.min_clearance_m("cab"), 2.0 - 0.5797, kClearanceTol_m);
+  EXPECT_NEAR(*t.min_clearance_m("chassis"), 0.1, kClearanceTol_m);  // through the deck
   ASSERT_TRUE(t.min_deck_edge_margin_m());
-  EXPECT_NEAR(*t.min_deck_edge_margin_m(), 0.9, 1e-9);
+  EXPECT_NEAR(*t.min_deck_edge_margin_m(), 0.9, kClearanceTol_m);
 }
 
 // Moving forward from the centre to 1.5 m at propeller height: the tips reach 2.08 m, 8 cm into
@@ -80,7 +85,7 @@ TEST(NearMiss, PropellerIntoTheCabIsANegativeClearance) {
   t.add(Eigen::Vector3d(0, 0, 1.862), level, Eigen::Vector3d::Zero(), 0.0);
   t.add(Eigen::Vector3d(1.5, 0, 1.862), level, Eigen::Vector3d::Zero(), 0.0);
   EXPECT_NEAR(*t.min_clearance_m("cab"), 2.0 - 2.0797, kRimTol_m);
-  EXPECT_NEAR(*t.min_deck_edge_margin_m(), 1.1 - 1.7, 1e-9);
+  EXPECT_NEAR(*t.min_deck_edge_margin_m(), 1.1 - 1.7, kClearanceTol_m);
   // far away (50 m), the bound stays the minimum
   t.add(Eigen::Vector3d(50, 0, 8), level, Eigen::Vector3d::Zero(), 0.0);
   EXPECT_LT(*t.min_clearance_m("cab"), 0.0);

@@ -111,7 +111,7 @@ TEST(AttitudeController, YawErrorTakesTheShortWayRound) {
   ParamTable t(5000.0);
   const Eigen::Vector3d r =
       rate_target_for(ypr(170 * kDegToRad, 0, 0), ypr(-170 * kDegToRad, 0, 0), t);
-  EXPECT_NEAR(r.z(), -3.0 * 20.0 * kDegToRad, 1e-9);
+  EXPECT_NEAR(r.z(), -3.0 * 20.0 * kDegToRad, kTol);
   // and q, -q are the same attitude
   const Eigen::Quaterniond target = ypr(0.3, 0.1, -0.2);
   Eigen::Quaterniond neg = target;

@@ -24,6 +24,7 @@ constexpr double kStepOvershootMaxM = 1.5;
 constexpr double kPassTolM = 1.0;
 constexpr double kYawSettleTolRad = 3.0 * kPi / 180.0;
 constexpr double kLandedZM = 0.05;
+constexpr double kGuidedVelTolM_S = 0.3;
 // a lost rotor is found within this: the monitor confirms over 0.12 s once the residual (30 ms
 // low-pass) has built up
 constexpr double kLossDetectMaxS = 0.3;
@@ -132,7 +133,7 @@ TEST(ClosedLoop, GuidedVelocityTargetStopsAfterTimeout) {
   t.velocity_enu_m_s = Eigen::Vector3d(2.0, 0.0, 0.0);
   ASSERT_EQ(sim.fc.set_guided_target(t), CommandResult::kAccepted);
   sim.run_for(2.0);
-  EXPECT_NEAR(sim.plant.truth().velocity_enu_m_s.x(), 2.0, 0.3);
+  EXPECT_NEAR(sim.plant.truth().velocity_enu_m_s.x(), 2.0, kGuidedVelTolM_S);
   // GUID_TIMEOUT = 3 s without a new target: stop and hold
   sim.run_for(6.0);
   EXPECT_LT(sim.plant.truth().velocity_enu_m_s.norm(), 0.2);

@@ -110,7 +110,7 @@ TEST(Estimator, InitialisesAttitudeFromGravityAndCompassAtOnce) {
   rig.tick(truth);
   ASSERT_TRUE(rig.est.attitude_ok());
   EXPECT_LT(tilt_error_rad(rig.est.state().q_enu_body, truth.q_enu_body), 5 * 0.03 / kGravityM_S2);
-  EXPECT_NEAR(rig.est.yaw_enu_rad(), yaw_of(truth.q_enu_body), 5 * 0.02);
+  EXPECT_NEAR(rig.est.yaw_enu_rad(), yaw_of(truth.q_enu_body), 5 * kYawTolRad);
 }
 
 TEST(Estimator, TracksAConstantVelocityWithoutLag) {

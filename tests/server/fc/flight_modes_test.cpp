@@ -22,6 +22,10 @@ constexpr double kTol = 1e-12;
 constexpr double kDtS = 0.0025;
 // speeds compared with a limit: the carrot's last step may round above it
 constexpr double kSpeedTolM_S = 1e-6;
+// positions the modes hold exactly, up to round-off
+constexpr double kPosTolM = 1e-9;
+// the take-off's end height over home
+constexpr double kTakeoffAltTolM = 0.5;
 
 TEST(FlightModes, NeedsAndAllowsAsArduCopter) {
   FlightModes modes;
@@ -250,17 +254,17 @@ TEST(FlightModes, RtlClimbsReturnsLoitersThenLands) {
       if (b.nav.carrot.destination() == home_at_alt) {
         // the return starts once the carrot is at RTL_ALT, the vehicle with it
         climb_end_s = b.now_s;
-        EXPECT_NEAR(b.est.position_enu_m.z(), alt, 1e-9);
+        EXPECT_NEAR(b.est.position_enu_m.z(), alt, kPosTolM);
       }
     } else if (near_home_s < 0.0) {
       max_return_xy_m_s = std::max(max_return_xy_m_s, speed_xy);
-      EXPECT_NEAR(b.est.position_enu_m.z(), alt, 1e-9);
+      EXPECT_NEAR(b.est.position_enu_m.z(), alt, kPosTolM);
       if (b.nav.carrot.arrived() &&
           (b.est.position_enu_m - home_at_alt).head<2>().norm() < d.wp_radius_m) {
         near_home_s = b.now_s;
       }
     } else {
-      EXPECT_NEAR((b.est.position_enu_m - home_at_alt).norm(), 0.0, 1e-9);  // loitering
+      EXPECT_NEAR((b.est.position_enu_m - home_at_alt).norm(), 0.0, kPosTolM);  // loitering
     }
     EXPECT_FALSE(rtl.landing() && near_home_s < 0.0);
     if (rtl.landing()) land_s = b.now_s;
@@ -355,7 +359,7 @@ TEST(FlightModes, AutoFliesTheItemsInTurnAndReportsEachReached) {
   EXPECT_EQ(b.mission.current, 6);
   EXPECT_TRUE(a.landing());
   // the take-off ends at 10 m over home, a waypoint within WPNAV_RADIUS of it
-  EXPECT_NEAR(reached[0].position_enu_m.z(), 10.0, 0.5);
+  EXPECT_NEAR(reached[0].position_enu_m.z(), 10.0, kTakeoffAltTolM);
   EXPECT_LT((reached[1].position_enu_m - wp_a.position_enu_m).norm(), d.wp_radius_m);
   EXPECT_LT((reached[2].position_enu_m - wp_b.position_enu_m).norm(), d.wp_radius_m);
   // wp_b holds its 3 s (the mode sees the vehicle there this step or the next)
@@ -369,7 +373,7 @@ TEST(FlightModes, AutoFliesTheItemsInTurnAndReportsEachReached) {
   EXPECT_NEAR(max_xy_m_s[5], d.wp_speed_m_s / 2.0, kSpeedTolM_S);
   // the land item flies to its point at the current height, then descends there
   EXPECT_EQ(b.nav.land_xy_enu_m.head<2>(), land.position_enu_m.head<2>());
-  EXPECT_NEAR((b.est.position_enu_m - land.position_enu_m).head<2>().norm(), 0.0, 1e-9);
+  EXPECT_NEAR((b.est.position_enu_m - land.position_enu_m).head<2>().norm(), 0.0, kPosTolM);
 }
 
 }  // namespace

@@ -10,6 +10,9 @@ namespace uavsim::server::fc {
 namespace {
 
 constexpr double kTolN = 1e-9;
+constexpr double kWrenchTol = 1e-9;  // N for the thrust, N m for the torques
+constexpr double kCmdTol = 1e-9;
+constexpr double kScaleTol = 1e-9;
 
 // the wrench the per-rotor thrusts produce, through the allocation matrix
 Eigen::Vector4d wrench_of(const Mixer& m, const std::vector<double>& thrust) {
@@ -28,7 +31,7 @@ void hover_is_equal_thrust(const airframe::AirframeParams& af) {
   for (std::size_t k = 0; k < n; ++k) {
     EXPECT_NEAR(thrust[k], weight / n, kTolN);
     // max thrust is 2 m g / n, so cmd = sqrt(1/2)
-    EXPECT_NEAR(cmd[k], std::sqrt(0.5), 1e-9);
+    EXPECT_NEAR(cmd[k], std::sqrt(0.5), kCmdTol);
   }
   EXPECT_NEAR(st.thrust_n, weight, kTolN);
   EXPECT_DOUBLE_EQ(st.roll_pitch_scale, 1.0);
@@ -49,10 +52,10 @@ void pure_torques_are_recovered(const airframe::AirframeParams& af) {
     ASSERT_DOUBLE_EQ(st.roll_pitch_scale, 1.0);
     ASSERT_DOUBLE_EQ(st.yaw_scale, 1.0);
     const Eigen::Vector4d w = wrench_of(m, thrust);
-    EXPECT_NEAR(w[0], tau.x(), 1e-9);
-    EXPECT_NEAR(w[1], tau.y(), 1e-9);
-    EXPECT_NEAR(w[2], tau.z(), 1e-9);
-    EXPECT_NEAR(w[3], weight, 1e-9);
+    EXPECT_NEAR(w[0], tau.x(), kWrenchTol);
+    EXPECT_NEAR(w[1], tau.y(), kWrenchTol);
+    EXPECT_NEAR(w[2], tau.z(), kWrenchTol);
+    EXPECT_NEAR(w[3], weight, kWrenchTol);
   }
 }
 
@@ -87,9 +90,9 @@ TEST(Mixer, SaturationKeepsRollPitchThenYawHeadroomThenGivesUpThrust) {
   const MixerStatus st = m.mix(tau, max_total, thrust.data(), cmd.data());
   const Eigen::Vector4d w = wrench_of(m, thrust);
   EXPECT_DOUBLE_EQ(st.roll_pitch_scale, 1.0);
-  EXPECT_NEAR(w[0], 0.5, 1e-9);
+  EXPECT_NEAR(w[0], 0.5, kWrenchTol);
   EXPECT_LT(st.yaw_scale, 1.0);
-  EXPECT_NEAR(w[2], 0.2 * st.yaw_scale, 1e-9);
+  EXPECT_NEAR(w[2], 0.2 * st.yaw_scale, kWrenchTol);
   EXPECT_TRUE(st.limit_thrust_up);
   EXPECT_LT(w[3], max_total);
   for (int k = 0; k < 4; ++k) {
@@ -111,17 +114,17 @@ TEST(Mixer, FullThrustDemandLeavesYawOnlyItsHeadroom) {
   const double max_n = af.rotors[0].max_thrust_n;
   const MixerStatus st =
       m.mix(Eigen::Vector3d(0.0, 0.0, 0.2), 4.0 * max_n, thrust.data(), cmd.data());
-  EXPECT_NEAR(thrust[0], 0.6 * max_n, 1e-9);
-  EXPECT_NEAR(thrust[1], 0.6 * max_n, 1e-9);
-  EXPECT_NEAR(thrust[2], max_n, 1e-9);
-  EXPECT_NEAR(thrust[3], max_n, 1e-9);
-  EXPECT_NEAR(st.yaw_scale, 0.2 * max_n / (15.625 * 0.2), 1e-9);
-  EXPECT_NEAR(st.thrust_n, 3.2 * max_n, 1e-9);
+  EXPECT_NEAR(thrust[0], 0.6 * max_n, kTolN);
+  EXPECT_NEAR(thrust[1], 0.6 * max_n, kTolN);
+  EXPECT_NEAR(thrust[2], max_n, kTolN);
+  EXPECT_NEAR(thrust[3], max_n, kTolN);
+  EXPECT_NEAR(st.yaw_scale, 0.2 * max_n / (15.625 * 0.2), kScaleTol);
+  EXPECT_NEAR(st.thrust_n, 3.2 * max_n, kTolN);
   EXPECT_TRUE(st.limit_thrust_up);
   const Eigen::Vector4d w = wrench_of(m, thrust);
-  EXPECT_NEAR(w[2], 0.2 * max_n * 4.0 * 0.016, 1e-9);
-  EXPECT_NEAR(w[0], 0.0, 1e-9);
-  EXPECT_NEAR(w[1], 0.0, 1e-9);
+  EXPECT_NEAR(w[2], 0.2 * max_n * 4.0 * 0.016, kWrenchTol);
+  EXPECT_NEAR(w[0], 0.0, kWrenchTol);
+  EXPECT_NEAR(w[1], 0.0, kWrenchTol);
 }
 
 TEST(Mixer, YawBesideAMidCollectiveIsKeptWhole) {
@@ -133,9 +136,9 @@ TEST(Mixer, YawBesideAMidCollectiveIsKeptWhole) {
   const MixerStatus st =
       m.mix(Eigen::Vector3d(0.0, 0.0, 0.2), 2.0 * max_n, thrust.data(), cmd.data());
   EXPECT_DOUBLE_EQ(st.yaw_scale, 1.0);
-  EXPECT_NEAR(thrust[0], 0.5 * max_n - 3.125, 1e-9);
-  EXPECT_NEAR(thrust[2], 0.5 * max_n + 3.125, 1e-9);
-  EXPECT_NEAR(st.thrust_n, 2.0 * max_n, 1e-9);
+  EXPECT_NEAR(thrust[0], 0.5 * max_n - 3.125, kTolN);
+  EXPECT_NEAR(thrust[2], 0.5 * max_n + 3.125, kTolN);
+  EXPECT_NEAR(st.thrust_n, 2.0 * max_n, kTolN);
 }
 
 TEST(Mixer, ZeroThrustDemandIsRaisedToKeepAttitudeTorque) {
@@ -143,7 +146,7 @@ TEST(Mixer, ZeroThrustDemandIsRaisedToKeepAttitudeTorque) {
   std::vector<double> thrust(4), cmd(4);
   const MixerStatus st = m.mix(Eigen::Vector3d(0.3, 0, 0), 0.0, thrust.data(), cmd.data());
   EXPECT_TRUE(st.limit_thrust_down);
-  EXPECT_NEAR(wrench_of(m, thrust)[0], 0.3, 1e-9);
+  EXPECT_NEAR(wrench_of(m, thrust)[0], 0.3, kWrenchTol);
 }
 
 TEST(Mixer, ImpossibleRollIsScaledNotClipped) {
@@ -153,9 +156,9 @@ TEST(Mixer, ImpossibleRollIsScaledNotClipped) {
   const MixerStatus st = m.mix(Eigen::Vector3d(50.0, 0, 0), 10.0, thrust.data(), cmd.data());
   const Eigen::Vector4d w = wrench_of(m, thrust);
   EXPECT_LT(st.roll_pitch_scale, 1.0);
-  EXPECT_NEAR(w[0], 50.0 * st.roll_pitch_scale, 1e-9);
-  EXPECT_NEAR(w[1], 0.0, 1e-9);
-  EXPECT_NEAR(w[2], 0.0, 1e-9);
+  EXPECT_NEAR(w[0], 50.0 * st.roll_pitch_scale, kWrenchTol);
+  EXPECT_NEAR(w[1], 0.0, kWrenchTol);
+  EXPECT_NEAR(w[2], 0.0, kWrenchTol);
 }
 
 TEST(Mixer, MotorCommandInvertsSquareLaw) {
@@ -165,7 +168,7 @@ TEST(Mixer, MotorCommandInvertsSquareLaw) {
   m.mix(Eigen::Vector3d(0.5, -0.3, 0.1), 50.0, thrust.data(), cmd.data());
   // plant: thrust = max * speed^2, so speed = cmd must give the thrust back
   for (int k = 0; k < 6; ++k)
-    EXPECT_NEAR(af.rotors[k].max_thrust_n * cmd[k] * cmd[k], thrust[k], 1e-9);
+    EXPECT_NEAR(af.rotors[k].max_thrust_n * cmd[k] * cmd[k], thrust[k], kTolN);
 }
 
 TEST(Mixer, RejectsUnusableLayouts) {

@@ -13,6 +13,8 @@
 namespace uavsim::server::fc {
 namespace {
 
+constexpr double kExactTol = 1e-12;
+
 TEST(Params, GetAndSetKnownParameter) {
   FlightController fc(test::make_quad(), 1);
   EXPECT_EQ(fc.param("WPNAV_SPEED"), 1000.0);
@@ -71,7 +73,7 @@ TEST(Params, DerivedValuesAreSi) {
   ASSERT_TRUE(t.set("WPNAV_SPEED", 750.0));
   EXPECT_DOUBLE_EQ(t.derived().wp_speed_m_s, 7.5);
   ASSERT_TRUE(t.set("ANGLE_MAX", 4500.0));
-  EXPECT_NEAR(t.derived().angle_max_rad, kPi / 4.0, 1e-12);
+  EXPECT_NEAR(t.derived().angle_max_rad, kPi / 4.0, kExactTol);
   // RTL_SPEED 0 means WPNAV_SPEED, as ArduCopter
   EXPECT_DOUBLE_EQ(t.derived().rtl_speed_m_s, 7.5);
 }

@@ -19,6 +19,14 @@ constexpr double kDtS = 0.002;  // the FC's control step (500 Hz)
 constexpr double kMassKg = 1.5;
 constexpr double kHoverN = kMassKg * kGravityM_S2;  // 1.5 * 9.80665 = 14.71 N
 constexpr double kTol = 1e-9;
+// where the two branches of the sqrt controller meet, 1e-9 m apart
+constexpr double kBranchTolM_S = 1e-6;
+// the horizontal thrust at the tilt limit
+constexpr double kTiltThrustTolN = 1e-6;
+constexpr double kExactTol = 1e-12;
+// the height a 20 % heavier vehicle settles to, and its thrust, relative to its weight
+constexpr double kSettledAltTolM = 0.01;
+constexpr double kThrustRelTol = 0.01;
 
 EstimatedState at(const Eigen::Vector3d& position_enu_m,
                   const Eigen::Vector3d& velocity_enu_m_s = Eigen::Vector3d::Zero()) {
@@ -42,7 +50,7 @@ TEST(SqrtController, LinearNearZeroThenTheSpeedThatStopsAtConstantDeceleration) 
   EXPECT_NEAR(sqrt_controller(10.0, 1.0, 2.5, 0.0), std::sqrt(43.75), kTol);
   EXPECT_NEAR(sqrt_controller(-10.0, 1.0, 2.5, 0.0), -std::sqrt(43.75), kTol);
   // continuous where the branches meet: at e = 2.5 m both give 2.5 m/s
-  EXPECT_NEAR(sqrt_controller(2.5 + 1e-9, 1.0, 2.5, 0.0), 2.5, 1e-6);
+  EXPECT_NEAR(sqrt_controller(2.5 + 1e-9, 1.0, 2.5, 0.0), 2.5, kBranchTolM_S);
   // no gain: pure sqrt(2 a |e|), the speed that stops exactly in e; no acceleration limit: linear
   EXPECT_NEAR(sqrt_controller(5.0, 0.0, 2.5, 0.0), 5.0, kTol);
   EXPECT_NEAR(sqrt_controller(5.0, 3.0, 0.0, 0.0), 15.0, kTol);
@@ -79,12 +87,12 @@ TEST(PositionController, HorizontalThrustPointsAtTheTargetAndStopsAtTheLeanLimit
     const double tan_max = std::tan(angle_max_cdeg * 0.01 * kDegToRad);
     const Eigen::Vector2d dir = (target - p).head<2>().normalized();
     EXPECT_NEAR(pc.velocity_target().head<2>().norm(), 12.0, kTol);
-    EXPECT_NEAR(thrust.head<2>().norm(), kMassKg * kGravityM_S2 * tan_max, 1e-6);
-    EXPECT_NEAR(thrust.head<2>().normalized().dot(dir), 1.0, 1e-12);
+    EXPECT_NEAR(thrust.head<2>().norm(), kMassKg * kGravityM_S2 * tan_max, kTiltThrustTolN);
+    EXPECT_NEAR(thrust.head<2>().normalized().dot(dir), 1.0, kExactTol);
     // level: the vertical part is still the weight, so the tilt is exactly ANGLE_MAX
     EXPECT_NEAR(thrust.z(), kHoverN, kTol);
     EXPECT_NEAR(std::atan2(thrust.head<2>().norm(), thrust.z()), angle_max_cdeg * 0.01 * kDegToRad,
-                1e-9);
+                kTol);
   }
 }
 
@@ -167,7 +175,7 @@ TEST(PositionController, AltHoldPassesTheAccelerationFeedForwardUpToTheLeanLimit
   EXPECT_NEAR(thrust.x(), 0.0, kTol);
   sp.accel_enu_m_s2 = Eigen::Vector3d(0.0, -20.0, 0.0);
   thrust = pc.update(at(p), 0.0, sp, t.values(), t.derived(), kMassKg, kDtS, {});
-  EXPECT_NEAR(thrust.y(), -kMassKg * kGravityM_S2 * std::tan(30.0 * kDegToRad), 1e-9);
+  EXPECT_NEAR(thrust.y(), -kMassKg * kGravityM_S2 * std::tan(30.0 * kDegToRad), kTol);
 }
 
 TEST(PositionController, AccelerationIntegratorRemovesAMassError) {
@@ -189,8 +197,8 @@ TEST(PositionController, AccelerationIntegratorRemovesAMassError) {
     vel.z() += accel_z * kDtS;
     pos.z() += vel.z() * kDtS;
   }
-  EXPECT_NEAR(pos.z(), target.z(), 0.01);
-  EXPECT_NEAR(thrust.z(), kTrueMassKg * kGravityM_S2, 0.01 * kTrueMassKg * kGravityM_S2);
+  EXPECT_NEAR(pos.z(), target.z(), kSettledAltTolM);
+  EXPECT_NEAR(thrust.z(), kTrueMassKg * kGravityM_S2, kThrustRelTol * kTrueMassKg * kGravityM_S2);
 }
 
 TEST(PositionController, ResetClearsTheIntegrators) {

@@ -10,6 +10,14 @@
 namespace uavsim::server::fc {
 namespace {
 
+// the measured deviations of correlated errors: few independent samples
+constexpr double kGpsBiasStdRelTol = 0.15;
+constexpr double kRtkHStdTolM = 0.001;
+constexpr double kRtkVStdTolM = 0.002;
+constexpr double kBaroStdRelTol = 0.2;  // N_eff ~ 150
+// five deviations of the compass offset (SIM_MAG_OFS_SD 0.05 rad) bound a single draw
+constexpr double kMagOffsetMaxRad = 5 * 0.05;
+
 TruthState at_rest() {
   TruthState t;
   t.position_enu_m = Eigen::Vector3d(1, 2, 10);
@@ -57,8 +65,8 @@ TEST(SensorErrors, GpsBiasWandersWithItsStationaryDeviation) {
     if (k > 0) lag1 += e[k].x() * e[k - 1].x();
     sum2 += e[k].x() * e[k].x();
   }
-  EXPECT_NEAR(stddev(x), 0.7, 0.15 * 0.7);
-  EXPECT_NEAR(stddev(z), 1.4, 0.15 * 1.4);  // vertical: twice
+  EXPECT_NEAR(stddev(x), 0.7, kGpsBiasStdRelTol * 0.7);
+  EXPECT_NEAR(stddev(z), 1.4, kGpsBiasStdRelTol * 1.4);  // vertical: twice
   // slowly: one 0.1 s sample to the next is correlated by exp(-0.1 / 120)
   EXPECT_GT(lag1 / sum2, 0.99);
 }
@@ -92,8 +100,8 @@ TEST(SensorErrors, RtkIsCentimetreLevelWithoutBias) {
     x.push_back(v.x());
     z.push_back(v.z());
   }
-  EXPECT_NEAR(stddev(x), 0.01, 0.001);
-  EXPECT_NEAR(stddev(z), 0.02, 0.002);
+  EXPECT_NEAR(stddev(x), 0.01, kRtkHStdTolM);
+  EXPECT_NEAR(stddev(z), 0.02, kRtkVStdTolM);
   double max_h = 0.0;
   for (const auto& v : e) max_h = std::max(max_h, v.head<2>().norm());
   EXPECT_LT(max_h, 0.08);  // no jumps: 1 cm noise, 20000 samples stay within ~5 sd
@@ -139,9 +147,9 @@ TEST(SensorErrors, BarometerDriftsAndCompassHasAFixedOffset) {
       ASSERT_EQ(f.heading_enu_rad, heading);  // constant: an offset, not noise
     }
   }
-  EXPECT_NEAR(stddev(baro), 0.5, 0.2 * 0.5);
+  EXPECT_NEAR(stddev(baro), 0.5, kBaroStdRelTol * 0.5);
   EXPECT_NE(heading, 0.0);
-  EXPECT_LT(std::abs(heading), 5 * 0.05);
+  EXPECT_LT(std::abs(heading), kMagOffsetMaxRad);
 }
 
 }  // namespace

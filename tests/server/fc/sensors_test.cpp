@@ -13,6 +13,7 @@ namespace {
 // 20000 samples: the standard error of a measured std is ~0.5 %; allow 5 %
 constexpr double kStdRelTol = 0.05;
 constexpr int kSamples = 20000;
+constexpr double kExactTol = 1e-12;
 
 double stddev(const std::vector<double>& v) {
   double mean = 0.0;
@@ -118,7 +119,7 @@ TEST(Sensors, GpsDenialAndGlitch) {
   s.sample(0.1, hover_truth(), p, &f);
   EXPECT_TRUE(f.gps.fix_3d);
   EXPECT_EQ(f.gps.satellites, 12);
-  EXPECT_NEAR(f.gps.position_enu_m.x(), 31.0, 1e-12);
+  EXPECT_NEAR(f.gps.position_enu_m.x(), 31.0, kExactTol);
 }
 
 }  // namespace

@@ -21,6 +21,10 @@ constexpr double kLimitTol = 1e-9;
 constexpr double kSnapEarlyXyS = 0.05 / 2.5 + kDtS;
 constexpr double kSnapEarlyZS = 0.05 / 1.0 + kDtS;
 constexpr double kSnapSpeedM_S = 0.05;
+// speeds compared with a limit: the carrot's last step may round above it
+constexpr double kSpeedTolM_S = 1e-6;
+constexpr double kPeakSpeedTolM_S = 0.05;
+constexpr double kOvershootTolM = 0.02;
 
 struct Leg {
   double arrived_s = -1.0;
@@ -65,7 +69,7 @@ TEST(WaypointNav, LevelLegReachesCruiseSpeedAndStopsOnTheDestination) {
   ASSERT_GT(leg.arrived_s, 0.0);
   EXPECT_GE(leg.arrived_s, 14.0 - kSnapEarlyXyS);
   EXPECT_LE(leg.arrived_s, 14.5);
-  EXPECT_NEAR(leg.max_speed_xy, 10.0, 1e-6);  // it does reach cruise speed
+  EXPECT_NEAR(leg.max_speed_xy, 10.0, kSpeedTolM_S);  // it does reach cruise speed
   EXPECT_LE(leg.max_accel_xy, 2.5 + kLimitTol);
   EXPECT_LE(leg.max_speed_up, kLimitTol);
   EXPECT_LE(leg.max_off_line_m, 1e-9);
@@ -85,7 +89,7 @@ TEST(WaypointNav, ShortLegIsATriangleProfile) {
   nav.start(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d(0.0, 20.0, 0.0));
   const Leg leg = fly(nav, lim, 30.0);
   ASSERT_GT(leg.arrived_s, 0.0);
-  EXPECT_NEAR(leg.max_speed_xy, std::sqrt(50.0), 0.05);
+  EXPECT_NEAR(leg.max_speed_xy, std::sqrt(50.0), kPeakSpeedTolM_S);
   EXPECT_GE(leg.arrived_s, 2.0 * std::sqrt(50.0) / 2.5 - kSnapEarlyXyS);
   EXPECT_LE(leg.arrived_s, 2.0 * std::sqrt(50.0) / 2.5 + 0.5);
 }
@@ -98,7 +102,7 @@ TEST(WaypointNav, ClimbAndDescentKeepTheirOwnSpeedAndAcceleration) {
     nav.start(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, 30));
     const Leg leg = fly(nav, lim, 60.0);
     ASSERT_GT(leg.arrived_s, 0.0);
-    EXPECT_NEAR(leg.max_speed_up, 2.5, 1e-6);
+    EXPECT_NEAR(leg.max_speed_up, 2.5, kSpeedTolM_S);
     EXPECT_LE(leg.max_accel_z, 1.0 + kLimitTol);
     EXPECT_LE(leg.max_speed_xy, kLimitTol);
     // 2.5 s up to speed (3.125 m), 23.75 m cruising (9.5 s), 2.5 s braking: 14.5 s at best
@@ -110,7 +114,7 @@ TEST(WaypointNav, ClimbAndDescentKeepTheirOwnSpeedAndAcceleration) {
     nav.start(Eigen::Vector3d(0, 0, 30), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
     const Leg leg = fly(nav, lim, 60.0);
     ASSERT_GT(leg.arrived_s, 0.0);
-    EXPECT_NEAR(leg.max_speed_dn, 1.5, 1e-6);
+    EXPECT_NEAR(leg.max_speed_dn, 1.5, kSpeedTolM_S);
     EXPECT_LE(leg.max_speed_up, kLimitTol);
     EXPECT_LE(leg.max_accel_z, 1.0 + kLimitTol);
   }
@@ -129,7 +133,7 @@ TEST(WaypointNav, ClimbingLegIsLimitedByWhicheverAxisBindsFirst) {
   ASSERT_GT(leg.arrived_s, 0.0);
   EXPECT_LE(leg.max_speed_xy, 10.0 + kLimitTol);
   EXPECT_LE(leg.max_speed_up, 2.5 + kLimitTol);
-  EXPECT_NEAR(leg.max_speed_xy, 10.0, 1e-6);
+  EXPECT_NEAR(leg.max_speed_xy, 10.0, kSpeedTolM_S);
   EXPECT_LE(leg.max_accel_xy, 2.5 + kLimitTol);
   EXPECT_LE(leg.max_accel_z, 1.0 + kLimitTol);
   // 50 m east while climbing 20 m: 10 m/s level would need 4 m/s up, so the climb rate binds at 2.5
@@ -137,8 +141,8 @@ TEST(WaypointNav, ClimbingLegIsLimitedByWhicheverAxisBindsFirst) {
   nav.start(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d(50, 0, 20));
   leg = fly(nav, lim, 60.0);
   ASSERT_GT(leg.arrived_s, 0.0);
-  EXPECT_NEAR(leg.max_speed_up, 2.5, 1e-6);
-  EXPECT_NEAR(leg.max_speed_xy, 6.25, 1e-6);
+  EXPECT_NEAR(leg.max_speed_up, 2.5, kSpeedTolM_S);
+  EXPECT_NEAR(leg.max_speed_xy, 6.25, kSpeedTolM_S);
 }
 
 TEST(WaypointNav, CarrotWaitsForAVehicleBeyondTheLeash) {
@@ -172,7 +176,7 @@ TEST(WaypointNav, NewDestinationMidLegHasNoJump) {
   for (int k = 0; k < 4000; ++k) nav.update(kDtS, lim, nav.position());  // 8 s
   const Eigen::Vector3d p_before = nav.position();
   const Eigen::Vector3d v_before = nav.velocity();
-  ASSERT_NEAR(v_before.x(), 10.0, 1e-6);
+  ASSERT_NEAR(v_before.x(), 10.0, kSpeedTolM_S);
   nav.set_destination(Eigen::Vector3d(0, 50, 0));
   EXPECT_EQ(nav.position(), p_before);
   EXPECT_EQ(nav.velocity(), v_before);
@@ -206,7 +210,7 @@ TEST(WaypointNav, StartKeepsTheVehiclesVelocity) {
   nav.update(kDtS, lim, nav.position());
   EXPECT_GE(nav.velocity().x(), 0.0);
   // it overshot west by 5^2 / (2 * 2.5) = 5 m before turning
-  EXPECT_NEAR(nav.position().x(), -5.0, 0.02);
+  EXPECT_NEAR(nav.position().x(), -5.0, kOvershootTolM);
 }
 
 TEST(WaypointNav, ZeroOrNegativeStepChangesNothing) {

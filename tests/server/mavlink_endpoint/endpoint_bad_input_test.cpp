@@ -6,6 +6,7 @@
 namespace uavsim::server::mavlink::testing {
 namespace {
 
+constexpr double kSimTimeTolS = 0.01;
 
 class BadInputTest : public EndpointTest {
  protected:
@@ -135,7 +136,7 @@ TEST_F(BadInputTest, ClientThatNeverReadsIsCappedAndCostsNobodyElse) {
   }, 10.0)) << good_hb;
   const EndpointStats s = server_->stats(0);
   EXPECT_GT(s.frames_dropped_full, 0u);
-  EXPECT_NEAR(sim_->time_s(), wall_start + 20.0, 0.01);
+  EXPECT_NEAR(sim_->time_s(), wall_start + 20.0, kSimTimeTolS);
   EXPECT_EQ(unknown_command(*good), 3);
 }
 

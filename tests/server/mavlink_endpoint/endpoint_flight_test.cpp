@@ -8,6 +8,12 @@ namespace {
 
 constexpr double kAltTolM = 0.5;
 constexpr double kPosTolM = 1.0;
+// the vehicle at a goal: the estimate's own offset from truth plus the hold error
+constexpr double kArrivedPosTolM = 1.5;
+constexpr double kSidewaysMaxM = 0.5;
+// a mission item read back: lat/lon in 1e-7 deg, altitude through a float
+constexpr double kItemLatLonTolE7 = 2;
+constexpr double kItemAltTolM = 0.01;
 
 class FlightTest : public EndpointTest {
  protected:
@@ -59,8 +65,8 @@ TEST_F(FlightTest, GuidedTakeoffGotoLocalNedAndLand) {
     return p && std::hypot(p->x - 10.0, p->y - 5.0) < kPosTolM && std::abs(p->z + 10.0) < kAltTolM;
   }, 30.0));
   // telemetry is the estimate, and the estimate tracks the truth: the vehicle is really there (ENU x = east)
-  EXPECT_NEAR(sim_->truth(0).position_enu_m.x(), 5.0, 1.5);
-  EXPECT_NEAR(sim_->truth(0).position_enu_m.y(), 10.0, 1.5);
+  EXPECT_NEAR(sim_->truth(0).position_enu_m.x(), 5.0, kArrivedPosTolM);
+  EXPECT_NEAR(sim_->truth(0).position_enu_m.y(), 10.0, kArrivedPosTolM);
   // POSITION_TARGET_LOCAL_NED reports the goal in NED
   EXPECT_EQ(command(*g, MavCmd::RequestMessage, {85}), 0);
   ASSERT_TRUE(step_until(*g, [&] { return g->count<msg::PositionTargetLocalNed>() > 0; }, 1.0));
@@ -94,7 +100,7 @@ TEST_F(FlightTest, BodyFrameVelocitySetpointMovesAlongTheHeading) {
   const double side = -dn * std::sin(yaw) + de * std::cos(yaw);
   EXPECT_GT(forward, 2.0);
   EXPECT_LT(forward, 4.5);
-  EXPECT_LT(std::abs(side), 0.5);
+  EXPECT_LT(std::abs(side), kSidewaysMaxM);
 }
 
 TEST_F(FlightTest, MissionItemWithCurrent2IsAGuidedGoto) {
@@ -168,9 +174,9 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
   const auto back = *g->last<msg::MissionItemInt>();
   EXPECT_EQ(back.seq, 3);
   EXPECT_EQ(back.command, 16);
-  EXPECT_NEAR(back.x, item_for(3).x, 2);
-  EXPECT_NEAR(back.y, item_for(3).y, 2);
-  EXPECT_NEAR(back.z, 10.0, 0.01);
+  EXPECT_NEAR(back.x, item_for(3).x, kItemLatLonTolE7);
+  EXPECT_NEAR(back.y, item_for(3).y, kItemLatLonTolE7);
+  EXPECT_NEAR(back.z, 10.0, kItemAltTolM);
 
   // fly it: GUIDED, arm, AUTO via MISSION_START
   wait_gps_ready(*g);
@@ -186,8 +192,8 @@ TEST_F(FlightTest, MissionUploadDownloadAndAutoFlight) {
   EXPECT_NE(std::find(reached.begin(), reached.end(), 2), reached.end());
   EXPECT_NE(std::find(reached.begin(), reached.end(), 3), reached.end());
   const auto p = g->last<msg::LocalPositionNed>();
-  EXPECT_NEAR(p->x, 0.0, 1.5);
-  EXPECT_NEAR(p->y, 10.0, 1.5);
+  EXPECT_NEAR(p->x, 0.0, kArrivedPosTolM);
+  EXPECT_NEAR(p->y, 10.0, kArrivedPosTolM);
   EXPECT_EQ(g->last<msg::Heartbeat>()->custom_mode, 3u);  // AUTO
 }
 

@@ -8,6 +8,15 @@ namespace uavsim::server::mavlink::testing {
 namespace {
 
 constexpr double kAnswerS = 1.0;  // sim-time bound for a reply to a request
+// streamed message counts over a window: one either side of the rate's figure
+constexpr double kCountTol = 1.0;
+// time_boot_ms of the last message: within one stream period (4 Hz, 2 Hz) of the sim clock
+constexpr double kAttitudeAgeTolMs = 260.0;
+constexpr double kMountAgeTolMs = 600.0;
+constexpr double kLevelTolRad = 0.05;
+constexpr double kOriginTolDeg = 1e-4;
+constexpr double kMountAngleTolDeg = 1e-3;
+constexpr double kQuatTol = 1e-4;  // float fields
 
 TEST_F(EndpointTest, FirstFrameIsAMavlink2HeartbeatOfAnArduCopterQuad) {
   auto g = connect();
@@ -35,9 +44,9 @@ TEST_F(EndpointTest, StreamsDefaultTelemetryInSimTime) {
     return g->count<msg::Heartbeat>() >= 5;
   }));
   // 5 s of sim: HEARTBEAT 1 Hz -> 5 (+1 on connect); POSITION 4 Hz -> 20; EXTENDED_STATUS 2 Hz -> 10
-  EXPECT_NEAR(static_cast<double>(g->count<msg::Heartbeat>()), 6.0, 1.0);
-  EXPECT_NEAR(static_cast<double>(g->count<msg::GlobalPositionInt>()), 20.0, 1.0);
-  EXPECT_NEAR(static_cast<double>(g->count<msg::SysStatus>()), 10.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::Heartbeat>()), 6.0, kCountTol);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::GlobalPositionInt>()), 20.0, kCountTol);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::SysStatus>()), 10.0, kCountTol);
   EXPECT_GE(g->count<msg::Attitude>(), 19u);
   EXPECT_GE(g->count<msg::VfrHud>(), 19u);
   EXPECT_GE(g->count<msg::GpsRawInt>(), 9u);
@@ -47,12 +56,12 @@ TEST_F(EndpointTest, StreamsDefaultTelemetryInSimTime) {
   // time_boot_ms is sim time: the last ATTITUDE is within one period of the sim clock
   const auto att = g->last<msg::Attitude>();
   ASSERT_TRUE(att);
-  EXPECT_NEAR(att->time_boot_ms, sim_->time_s() * 1000.0, 260.0);
+  EXPECT_NEAR(att->time_boot_ms, sim_->time_s() * 1000.0, kAttitudeAgeTolMs);
   // at rest on the ground of empty.xml: level, near the origin, GPS position near the geodetic origin
-  EXPECT_NEAR(att->roll, 0.0, 0.05);
+  EXPECT_NEAR(att->roll, 0.0, kLevelTolRad);
   const auto gp = g->last<msg::GlobalPositionInt>();
-  EXPECT_NEAR(gp->lat / 1e7, server_->config().origin.lat_deg, 1e-4);
-  EXPECT_NEAR(gp->lon / 1e7, server_->config().origin.lon_deg, 1e-4);
+  EXPECT_NEAR(gp->lat / 1e7, server_->config().origin.lat_deg, kOriginTolDeg);
+  EXPECT_NEAR(gp->lon / 1e7, server_->config().origin.lon_deg, kOriginTolDeg);
 }
 
 TEST_F(EndpointTest, TheIoThreadIsWokenOnlyByControlStepsThatQueuedFrames) {
@@ -295,7 +304,7 @@ TEST_F(EndpointTest, SetMessageIntervalChangesARate) {
     g->poll_once(5);
     return g->count<msg::AttitudeQuaternion>() >= 19;
   }));
-  EXPECT_NEAR(static_cast<double>(g->count<msg::AttitudeQuaternion>()), 20.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::AttitudeQuaternion>()), 20.0, kCountTol);
   // -1 stops it; an unknown message id fails
   EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {31, -1}), 0);
   EXPECT_EQ(command(*g, MavCmd::SetMessageInterval, {9999, 100000}), 4);
@@ -322,7 +331,7 @@ TEST_F(EndpointTest, RequestDataStreamSetsAGroupRate) {
     g->poll_once(5);
     return g->count<msg::GlobalPositionInt>() >= 19;
   }));
-  EXPECT_NEAR(static_cast<double>(g->count<msg::GlobalPositionInt>()), 20.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::GlobalPositionInt>()), 20.0, kCountTol);
   // stop ALL: only heartbeats remain
   r.req_stream_id = 0;
   r.start_stop = 0;
@@ -394,16 +403,16 @@ TEST_F(EndpointTest, GimbalAttitudeIsStreamedAfterMountControl) {
     return g->count<msg::MountOrientation>() > 0 && g->count<msg::GimbalDeviceAttitudeStatus>() > 0;
   }, 2.0)) << "gimbal attitude is not streamed";
   const auto mo = g->last<msg::MountOrientation>();
-  EXPECT_NEAR(mo->pitch, -90.0, 1e-3);
-  EXPECT_NEAR(mo->roll, 0.0, 1e-3);
-  EXPECT_NEAR(mo->yaw, 0.0, 1e-3);
-  EXPECT_NEAR(mo->time_boot_ms, sim_->time_s() * 1000.0, 600.0);
+  EXPECT_NEAR(mo->pitch, -90.0, kMountAngleTolDeg);
+  EXPECT_NEAR(mo->roll, 0.0, kMountAngleTolDeg);
+  EXPECT_NEAR(mo->yaw, 0.0, kMountAngleTolDeg);
+  EXPECT_NEAR(mo->time_boot_ms, sim_->time_s() * 1000.0, kMountAgeTolMs);
   // the quaternion (w x y z) is a -90 deg pitch about y: w = cos(-45 deg), y = sin(-45 deg)
   const auto gd = g->last<msg::GimbalDeviceAttitudeStatus>();
-  EXPECT_NEAR(gd->q[0], std::sqrt(0.5), 1e-4);
-  EXPECT_NEAR(gd->q[1], 0.0, 1e-4);
-  EXPECT_NEAR(gd->q[2], -std::sqrt(0.5), 1e-4);
-  EXPECT_NEAR(gd->q[3], 0.0, 1e-4);
+  EXPECT_NEAR(gd->q[0], std::sqrt(0.5), kQuatTol);
+  EXPECT_NEAR(gd->q[1], 0.0, kQuatTol);
+  EXPECT_NEAR(gd->q[2], -std::sqrt(0.5), kQuatTol);
+  EXPECT_NEAR(gd->q[3], 0.0, kQuatTol);
   EXPECT_TRUE(has_flag(gd->flags, GimbalDeviceFlags::YawInVehicleFrame));
   EXPECT_EQ(gd->gimbal_device_id, 1);
   // a few Hz: EXTRA3 at 2 Hz by default
@@ -413,7 +422,7 @@ TEST_F(EndpointTest, GimbalAttitudeIsStreamedAfterMountControl) {
     g->poll_once(5);
     return g->count<msg::MountOrientation>() >= 3;
   }));
-  EXPECT_NEAR(static_cast<double>(g->count<msg::GimbalDeviceAttitudeStatus>()), 4.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(g->count<msg::GimbalDeviceAttitudeStatus>()), 4.0, kCountTol);
 }
 
 TEST_F(EndpointTest, GcsHeartbeatsAreCountedAsHandled) {

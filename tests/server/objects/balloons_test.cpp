@@ -7,6 +7,9 @@
 namespace uavsim::server::objects {
 namespace {
 
+constexpr double kPosTol_m = 1e-9;
+constexpr double kPopTimeTol_s = 0.01;
+
 using testing::drive_step;
 using testing::make_shipped;
 using testing::make_world;
@@ -42,7 +45,7 @@ TEST(Balloons, PlacementRespectsTheArenaSpacingAndVehicleClearance) {
       EXPECT_LE(p[i].x(), 40.0);
       EXPECT_GE(p[i].y(), -25.0);
       EXPECT_LE(p[i].y(), 25.0);
-      EXPECT_NEAR(p[i].z() + set.balloons->balloons()[i].radius_m, 3.0, 1e-9);
+      EXPECT_NEAR(p[i].z() + set.balloons->balloons()[i].radius_m, 3.0, kPosTol_m);
       for (size_t j = 0; j < i; ++j) EXPECT_GE((p[i] - p[j]).head<2>().norm(), 5.0);
       for (size_t v = 0; v < sim->vehicle_count(); ++v) {
         EXPECT_GE((p[i] - sim->truth(v).position_enu_m).head<2>().norm(), 5.0);
@@ -84,7 +87,7 @@ TEST(Balloons, BladesPopABalloonWithoutCrashing) {
   EXPECT_EQ(b.popped_by, 0);
   // blade tips 0.46 m ahead of the body: contact when the body is at 6 - 0.3 - 0.46 = 5.24 m, 1.62 s
   // after the start at 2 m (at 2 m/s)
-  EXPECT_NEAR(b.popped_time_s, (6.0 - 0.3 - 0.46 - 2.0) / 2.0, 0.01);
+  EXPECT_NEAR(b.popped_time_s, (6.0 - 0.3 - 0.46 - 2.0) / 2.0, kPopTimeTol_s);
   const sim::Event& e = sim->events().recent().back();
   EXPECT_EQ(e.type, sim::EventType::kBalloonPopped);
   EXPECT_NE(e.detail.find("b0"), std::string::npos);

@@ -11,6 +11,8 @@ namespace uavsim::server::objects {
 namespace {
 
 constexpr double kTol = 1e-9;
+constexpr double kQuotedTol_m = 0.01;  // lengths quoted to the centimetre
+constexpr double kShortStepTol_m = 1e-6;
 
 TEST(EightTrack, DefaultLengthMatchesClosedForm) {
   // c = 22.5, phi = asin(20 / 22.5) = 1.09491; a = c cos(phi) = 10.3078
@@ -18,7 +20,7 @@ TEST(EightTrack, DefaultLengthMatchesClosedForm) {
   const EightTrack t;
   const double phi = std::asin(20.0 / 22.5);
   EXPECT_NEAR(t.length_m(), 4 * 22.5 * std::cos(phi) + 40.0 * (common::kPi + 2 * phi), kTol);
-  EXPECT_NEAR(t.length_m(), 254.49, 0.01);
+  EXPECT_NEAR(t.length_m(), 254.49, kQuotedTol_m);
 }
 
 TEST(EightTrack, IsArcLengthParametrisedAndContinuous) {
@@ -27,7 +29,7 @@ TEST(EightTrack, IsArcLengthParametrisedAndContinuous) {
   for (double s = 0.0; s < t.length_m() + 1.0; s += ds) {
     const TrackPoint a = t.at(s), b = t.at(s + ds);
     // a chord of 1 cm on a 20 m circle is shorter than the arc by ds^3 / (24 R^2): negligible
-    EXPECT_NEAR((b.position_enu_m - a.position_enu_m).norm(), ds, 1e-6) << "s = " << s;
+    EXPECT_NEAR((b.position_enu_m - a.position_enu_m).norm(), ds, kShortStepTol_m) << "s = " << s;
     EXPECT_NEAR(a.tangent_enu.norm(), 1.0, kTol);
     // the tangent is the derivative of the position
     EXPECT_LT((((b.position_enu_m - a.position_enu_m) / ds) - a.tangent_enu).norm(), 1e-3) << s;
@@ -54,8 +56,8 @@ TEST(EightTrack, DefaultEightFillsTheArenaWithin90By60) {
     hi = hi.cwiseMax(t.at(s).position_enu_m);
   }
   // x: +-(c + R) = +-42.5 m; y: +-R = +-20 m
-  EXPECT_NEAR(hi.x() - lo.x(), 85.0, 0.01);
-  EXPECT_NEAR(hi.y() - lo.y(), 40.0, 0.01);
+  EXPECT_NEAR(hi.x() - lo.x(), 85.0, kQuotedTol_m);
+  EXPECT_NEAR(hi.y() - lo.y(), 40.0, kQuotedTol_m);
   EXPECT_LE(hi.x(), 45.0);
   EXPECT_GE(lo.x(), -45.0);
   EXPECT_LE(hi.y(), 30.0);
@@ -81,7 +83,7 @@ TEST(EightTrack, DistanceIsZeroOnTheTrackAndGrowsOffIt) {
     const TrackPoint tp = t.at(s);
     EXPECT_LT(t.distance_m(tp.position_enu_m), 1e-9) << s;
     const Eigen::Vector2d left(-tp.tangent_enu.y(), tp.tangent_enu.x());
-    EXPECT_NEAR(t.distance_m(tp.position_enu_m + 0.5 * left), 0.5, 1e-6) << s;
+    EXPECT_NEAR(t.distance_m(tp.position_enu_m + 0.5 * left), 0.5, kShortStepTol_m) << s;
   }
 }
 
@@ -99,8 +101,8 @@ TEST(SpeedProfile, FifteenKmhForEightMinutesThenFive) {
   EXPECT_DOUBLE_EQ(s.speed_m_s(479.9), 15.0 / 3.6);
   EXPECT_DOUBLE_EQ(s.speed_m_s(480.1), 5.0 / 3.6);
   // 8 min at 15 km/h = 2000 m, then 60 s at 5 km/h = 83.33 m
-  EXPECT_NEAR(s.arc_length_m(480.0), 2000.0, 1e-9);
-  EXPECT_NEAR(s.arc_length_m(540.0), 2000.0 + 250.0 / 3.0, 1e-9);
+  EXPECT_NEAR(s.arc_length_m(480.0), 2000.0, kTol);
+  EXPECT_NEAR(s.arc_length_m(540.0), 2000.0 + 250.0 / 3.0, kTol);
 }
 
 }  // namespace

@@ -13,6 +13,17 @@
 namespace uavsim::server::objects {
 namespace {
 
+constexpr double kAngleTol_rad = 1e-9;
+// discrete first order against the continuous exp(-t / tau)
+constexpr double kDecayRelTol = 0.02;
+// the shipped gimbal's view pitch: level, after one time constant, after five
+constexpr double kLevelTol_rad = 1e-6;
+constexpr double kOneTauTol_rad = 0.03;
+constexpr double kSettledTol_rad = 0.01;
+// the balloon's lean in the wind, and its axis' tilt against that lean
+constexpr double kLeanTol_m = 0.05;
+constexpr double kLeanAxisTol = 0.01;
+
 double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
   return Eigen::AngleAxisd(a.conjugate() * b).angle();
 }
@@ -29,12 +40,13 @@ TEST(GimbalDynamics, AttitudeStepGivesAPointingErrorThatDecaysWithTheTimeConstan
   step_gimbal_motion(p, q_enu_target, kDt, &m);  // starts on target, body level
   const Eigen::Quaterniond q_enu_body(Eigen::AngleAxisd(kStep_rad, Eigen::Vector3d::UnitX()));
   const Eigen::Quaterniond q_body_target = q_enu_body.conjugate() * q_enu_target;
-  EXPECT_NEAR(angle_between(q_enu_body * m.q_body_cam, q_enu_target), kStep_rad, 1e-9);
+  EXPECT_NEAR(angle_between(q_enu_body * m.q_body_cam, q_enu_target), kStep_rad, kAngleTol_rad);
   for (double t = kDt; t <= 3.0 * p.time_const_s + 1e-9; t += kDt) {
     step_gimbal_motion(p, q_body_target, kDt, &m);
     const double err = angle_between(q_enu_body * m.q_body_cam, q_enu_target);
     // discrete first order: (1 - dt / tau)^k against exp(-k dt / tau): within 2 % over three tau
-    EXPECT_NEAR(err, kStep_rad * std::exp(-t / p.time_const_s), 0.02 * kStep_rad) << "t = " << t;
+    EXPECT_NEAR(err, kStep_rad * std::exp(-t / p.time_const_s), kDecayRelTol * kStep_rad)
+        << "t = " << t;
   }
 }
 
@@ -100,7 +112,7 @@ TEST(GimbalDynamics, AFastManoeuvreTiltsTheViewForAMoment) {
         physics::body_orientation_enu(sim->world(), g.body_id) * Eigen::Vector3d::UnitX();
     return std::asin(std::clamp(x.z(), -1.0, 1.0));
   };
-  EXPECT_NEAR(pitch_of_view(), 0.0, 1e-6);
+  EXPECT_NEAR(pitch_of_view(), 0.0, kLevelTol_rad);
   const Eigen::Quaterniond nose_down =
       level * Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()));
   auto hold = [&](int steps) {
@@ -113,9 +125,9 @@ TEST(GimbalDynamics, AFastManoeuvreTiltsTheViewForAMoment) {
   hold(2);
   EXPECT_LT(pitch_of_view(), -0.25);  // tilted with the body
   hold(48);                           // 50 ms: one time constant
-  EXPECT_NEAR(pitch_of_view(), -0.3 * std::exp(-1.0), 0.03);
+  EXPECT_NEAR(pitch_of_view(), -0.3 * std::exp(-1.0), kOneTauTol_rad);
   hold(200);  // 5 time constants
-  EXPECT_NEAR(pitch_of_view(), 0.0, 0.01);
+  EXPECT_NEAR(pitch_of_view(), 0.0, kSettledTol_rad);
 }
 
 TEST(GimbalDynamics, CapturesPlaceTheBodiesButNeverStepTheLoop) {
@@ -212,13 +224,13 @@ TEST(FieldBalloons, BalloonsLeanDownwindAndSway) {
     max_dx = std::max(max_dx, dx);
   }
   const double lean_m = 0.5 * (min_dx + max_dx);
-  EXPECT_NEAR(lean_m, 0.23, 0.05);
+  EXPECT_NEAR(lean_m, 0.23, kLeanTol_m);
   // settled (the damping takes the first swing out in a few seconds)
   EXPECT_LT(max_dx - min_dx, 0.02);
   // the body (pole and balloon) leans east about its foot: its z axis has a positive x component
   const int body = sim->world().body_id(set.balloons->balloons()[0].name);
   const mjtNum* q = sim->world().data()->xquat + 4 * body;  // w x y z
-  EXPECT_NEAR(2.0 * (q[1] * q[3] + q[0] * q[2]), lean_m / 2.7, 0.01);
+  EXPECT_NEAR(2.0 * (q[1] * q[3] + q[0] * q[2]), lean_m / 2.7, kLeanAxisTol);
 
   // turbulence makes them sway
   field.wind.turbulence_sd_m_s = 1.5;

@@ -16,6 +16,12 @@ using testing::make_world;
 constexpr double kLateral_m = 0.5;
 constexpr double kWobble = 0.03;
 constexpr double kDt_s = 0.01;
+// the trapezoid rule against the closed-form offset and arc length
+constexpr double kRateTol_m_s = 1e-4;
+constexpr double kArcLengthTol_m = 1e-3;
+constexpr double kScheduleDistRelTol = 0.03;
+constexpr double kRoundOffTol = 1e-12;
+constexpr double kDirTol = 1e-9;
 
 DriverParams person() {
   DriverParams p;
@@ -36,8 +42,8 @@ TEST(TruckDriver, StaysWithinItsBoundsAndMovesSmoothly) {
         std::max(max_wobble, std::abs(d.speed_m_s(schedule, t) / schedule.speed_m_s(t) - 1.0));
     // smooth: the offset's rate is its derivative, and the rate changes by at most a bounded
     // acceleration: sum a w^2 <= 0.5 m (2 pi / 10 s)^2 = 0.2 m/s^2
-    ASSERT_NEAR((l - last_l) / kDt_s, 0.5 * (d.lateral_rate_m_s(t) + last_rate), 1e-4) << t;
-    ASSERT_LE(std::abs(d.lateral_rate_m_s(t) - last_rate), 0.2 * kDt_s + 1e-12) << t;
+    ASSERT_NEAR((l - last_l) / kDt_s, 0.5 * (d.lateral_rate_m_s(t) + last_rate), kRateTol_m_s) << t;
+    ASSERT_LE(std::abs(d.lateral_rate_m_s(t) - last_rate), 0.2 * kDt_s + kRoundOffTol) << t;
     last_l = l;
     last_rate = d.lateral_rate_m_s(t);
   }
@@ -59,9 +65,10 @@ TEST(TruckDriver, ArcLengthIsTheIntegralOfTheSpeed) {
     if (std::abs(t + kDt_s - 40.0) < 0.5 * kDt_s)
       s = d.arc_length_m(schedule, t + kDt_s);  // the step
   }
-  EXPECT_NEAR(s, d.arc_length_m(schedule, 80.0), 1e-3);
+  EXPECT_NEAR(s, d.arc_length_m(schedule, 80.0), kArcLengthTol_m);
   // on average the schedule's distance: 80 s, 40 at 4.17 and 40 at 1.39 m/s = 222 m, +-3 %
-  EXPECT_NEAR(d.arc_length_m(schedule, 80.0), 40.0 * (15.0 + 5.0) / 3.6, 0.03 * 222.3);
+  EXPECT_NEAR(d.arc_length_m(schedule, 80.0), 40.0 * (15.0 + 5.0) / 3.6,
+              kScheduleDistRelTol * 222.3);
 }
 
 TEST(TruckDriver, SameSeedSameDriveOtherSeedAnother) {
@@ -111,7 +118,7 @@ TEST(TruckDriver, ShippedWorldTruckWandersAroundTheEightAndHeadsWhereItGoes) {
     ASSERT_LE(off, kLateral_m + 1e-3) << t;
     // the heading is the direction of travel
     const Eigen::Vector2d dir(std::cos(s.yaw_rad), std::sin(s.yaw_rad));
-    ASSERT_NEAR(dir.dot(s.velocity_enu_m_s.head<2>().normalized()), 1.0, 1e-9) << t;
+    ASSERT_NEAR(dir.dot(s.velocity_enu_m_s.head<2>().normalized()), 1.0, kDirTol) << t;
     // the velocity is the derivative of the position
     const Eigen::Vector3d ahead = truck.state(t + 1e-4).position_enu_m;
     ASSERT_LT((ahead - s.position_enu_m - 1e-4 * s.velocity_enu_m_s).norm(), 1e-5) << t;

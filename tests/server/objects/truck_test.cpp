@@ -14,6 +14,7 @@ using testing::make_world;
 
 constexpr double kSpeedTol = 0.02;     // +-2% of the nominal speed
 constexpr double kOnTrackTol_m = 0.1;  // the truck's origin stays this close to the eight's centre line
+constexpr double kPosTol_m = 1e-9;
 
 Eigen::Vector3d truck_position(sim::Simulation& sim, const Truck& truck) {
   return physics::body_position_enu_m(sim.world(), sim.world().body_id(truck.params().name));
@@ -29,7 +30,7 @@ TEST(Truck, ShippedWorldHasTheMbzirc2017TrackAndSchedule) {
   EXPECT_DOUBLE_EQ(p.speed.speed1_m_s, 15.0 / 3.6);
   EXPECT_DOUBLE_EQ(p.speed.speed2_m_s, 5.0 / 3.6);
   EXPECT_DOUBLE_EQ(p.speed.switch_time_s, 480.0);
-  EXPECT_NEAR(set.trucks[0]->deck_height_m(), 1.5, 1e-9);
+  EXPECT_NEAR(set.trucks[0]->deck_height_m(), 1.5, kPosTol_m);
 }
 
 TEST(Truck, DrivesTheEightAtFifteenThenFiveKmh) {
@@ -44,7 +45,7 @@ TEST(Truck, DrivesTheEightAtFifteenThenFiveKmh) {
     sim->step();
     const Eigen::Vector3d p = truck_position(*sim, truck);
     ASSERT_LT(truck.track().distance_m(p.head<2>()), kOnTrackTol_m) << "t = " << sim->time_s();
-    ASSERT_NEAR(p.z(), 0.0, 1e-9);
+    ASSERT_NEAR(p.z(), 0.0, kPosTol_m);
     // average speed over each 0.5 s window away from the switch (a chord on a 20 m circle is shorter
     // than the arc by < 0.01%)
     if (sim->time_s() - last_t >= 0.5 - 1e-9) {

@@ -14,6 +14,11 @@
 namespace uavsim::server::physics {
 namespace {
 
+constexpr double kPosTol_m = 1e-9;
+constexpr double kDirTol = 1e-9;
+// the soft contact lets the skids sink a few millimetres
+constexpr double kSkidRestTol_m = 0.005;
+
 namespace fs = std::filesystem;
 
 // writes text into a fresh file under the test's temp dir and returns its path
@@ -110,12 +115,12 @@ TEST(WorldComposer, GridMakesRowsTimesColsVehiclesWithPrefixedNames) {
   EXPECT_EQ(world->vehicles()[6].airframe.rotors.size(), 6u);
   // q4 is row 1, col 1: (1 + 5, 2 + 5); the template's own z offset (0.16 m) is kept
   const auto t = world->truth(4);
-  EXPECT_NEAR(t.position_enu_m.x(), 6.0, 1e-9);
-  EXPECT_NEAR(t.position_enu_m.y(), 7.0, 1e-9);
-  EXPECT_NEAR(t.position_enu_m.z(), 0.16, 1e-9);
+  EXPECT_NEAR(t.position_enu_m.x(), 6.0, kPosTol_m);
+  EXPECT_NEAR(t.position_enu_m.y(), 7.0, kPosTol_m);
+  EXPECT_NEAR(t.position_enu_m.z(), 0.16, kPosTol_m);
   // yaw 90 deg: body x points north (ENU y)
   const Eigen::Vector3d x_enu = world->truth(6).q_enu_body * Eigen::Vector3d::UnitX();
-  EXPECT_NEAR(x_enu.y(), 1.0, 1e-9);
+  EXPECT_NEAR(x_enu.y(), 1.0, kDirTol);
   EXPECT_GE(world->body_id("q3"), 0);
   const std::string mjcf = compose_world(path, options());
   EXPECT_NE(mjcf.find("\"q3/hull\""), std::string::npos);  // names inside templates are prefixed
@@ -176,7 +181,7 @@ TEST(WorldComposer, LeanQuadsStillRestOnTheirGear) {
   for (int i = 0; i < 1000; ++i) world->step();
   // dropped 5 cm, it stands on its skids: the body origin 0.16 m up (gear bottom 0.15 + 0.01 below it),
   // less the soft contact's few millimetres
-  EXPECT_NEAR(world->truth(0).position_enu_m.z(), 0.16, 0.005);
+  EXPECT_NEAR(world->truth(0).position_enu_m.z(), 0.16, kSkidRestTol_m);
   EXPECT_LT(world->truth(0).velocity_enu_m_s.norm(), 0.01);
 }
 

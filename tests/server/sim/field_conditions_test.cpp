@@ -13,6 +13,8 @@ namespace {
 using testing::take_off;
 
 constexpr double kG = 9.81;
+constexpr double kVoltTol_V = 1e-9;
+constexpr double kExactTol = 1e-12;
 
 std::unique_ptr<Simulation> make_field_sim(const FieldConditions& field, uint64_t seed = 1) {
   physics::ComposeOptions o;
@@ -151,8 +153,8 @@ TEST(FieldBattery, SagUnderLoadLowersTheAvailableThrust) {
   airframe::BatteryState b;
   const double thrust[4] = {9.0, 9.0, 9.0, 9.0};
   airframe::step_battery(a, thrust, 0.002, &b);
-  EXPECT_NEAR(12.6 - b.voltage_v, 0.02 * b.current_a, 1e-9);
-  EXPECT_NEAR(s_full, (b.voltage_v / 12.6) * (b.voltage_v / 12.6), 1e-12);
+  EXPECT_NEAR(12.6 - b.voltage_v, 0.02 * b.current_a, kVoltTol_V);
+  EXPECT_NEAR(s_full, (b.voltage_v / 12.6) * (b.voltage_v / 12.6), kExactTol);
   // without resistance: the ideal world's thrust does not depend on the battery
   a.battery.internal_resistance_ohm = 0.0;
   EXPECT_EQ(scale_at(9.0).second, 1.0);

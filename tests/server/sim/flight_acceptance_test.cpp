@@ -34,6 +34,8 @@ constexpr double kHoverRateJitterRad_S = 0.047;
 // crash detector's hard-landing speed is 3 m/s. Tilt: ANGLE_MAX 30 deg plus the loss transient.
 constexpr double kDeadRotorMaxSinkM_S = 2.5;
 constexpr double kDeadRotorMaxTiltRad = 40.0 * common::kPi / 180.0;
+constexpr double kYawSettleTolRad = 3.0 * common::kPi / 180.0;
+constexpr double kYawStoppedRateRad_S = 0.02;
 
 class EveryFrame : public ::testing::TestWithParam<const char*> {};
 
@@ -82,8 +84,8 @@ TEST_P(EveryFrame, YawOf90DegSettles) {
   sim->run_until(sim->time_s() + 15.0);
   // clockwise seen from above is negative ENU yaw
   const double turned = wrap_pi(yaw_of(sim->truth(0).q_enu_body) - yaw0);
-  EXPECT_NEAR(turned, -common::kPi / 2, 3.0 * common::kPi / 180.0);
-  EXPECT_LT(std::abs(sim->truth(0).rate_body_rad_s.z()), 0.02);  // stopped turning
+  EXPECT_NEAR(turned, -common::kPi / 2, kYawSettleTolRad);
+  EXPECT_LT(std::abs(sim->truth(0).rate_body_rad_s.z()), kYawStoppedRateRad_S);  // stopped turning
 }
 
 // steady hover: truth roll/pitch body-rate jitter stays small (RMS over 10 s). GPS position noise

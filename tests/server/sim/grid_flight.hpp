@@ -15,6 +15,9 @@
 
 namespace uavsim::server::sim::testing {
 
+// the flyers' hover height after 15 s
+inline constexpr double kGridHoverAltTol_m = 0.3;
+
 // Loads world_path (n quads on the ground), checks they all start parked, and has every (n /
 // flyers)-th one take off to 5 m and hover for 15 s of sim time while the others stay parked; no
 // crash, no constraint buffer overflow.
@@ -38,7 +41,7 @@ inline void fly_some_of_a_grid(const std::string& world_path, size_t n, size_t f
     const fc::TruthState t = sim.truth(i);
     if (i % stride == 0) {
       // hovering 5 m above the start (the body origin stands 0.16 m up on the gear)
-      EXPECT_NEAR(t.position_enu_m.z(), 5.16, 0.3) << sim.vehicle_name(i);
+      EXPECT_NEAR(t.position_enu_m.z(), 5.16, kGridHoverAltTol_m) << sim.vehicle_name(i);
       EXPECT_LT(t.velocity_enu_m_s.norm(), 0.3) << sim.vehicle_name(i);
     } else {
       EXPECT_TRUE(sim.world().parked(i)) << sim.vehicle_name(i);
@@ -122,7 +125,7 @@ inline uint64_t fly_all_of_a_sharded_grid(const std::string& world_path, size_t 
   for (size_t i = 0; i < n; ++i) {
     const fc::TruthState t = sim.truth(i);
     // hovering 5 m above the start (the body origin stands 0.16 m up on the gear)
-    EXPECT_NEAR(t.position_enu_m.z(), 5.16, 0.3) << sim.vehicle_name(i);
+    EXPECT_NEAR(t.position_enu_m.z(), 5.16, kGridHoverAltTol_m) << sim.vehicle_name(i);
     EXPECT_FALSE(sim.world().parked(i)) << sim.vehicle_name(i);
   }
   EXPECT_EQ(sim.events().count(EventType::kCrash), 0u);

@@ -13,6 +13,7 @@ namespace {
 using testing::FakeWallClock;
 
 constexpr double kTolS = 0.05;  // a control step or two of slack
+constexpr double kRoundOffTol_s = 1e-9;
 
 TEST(Runner, RealTimePacingFollowsTheWallClock) {
   auto sim = testing::make_sim("empty.xml");
@@ -73,7 +74,7 @@ TEST(Runner, RateZeroTakesNoWallTimeAndStopsOnTheEndTime) {
   const double start = clock.now_s();
   runner.run_until(2.0);
   EXPECT_EQ(clock.now_s(), start);
-  EXPECT_NEAR(sim->time_s(), 2.0, 0.5 * sim->physics_dt_s() + 1e-9);
+  EXPECT_NEAR(sim->time_s(), 2.0, 0.5 * sim->physics_dt_s() + kRoundOffTol_s);
 }
 
 TEST(Runner, StopFromTheGateEndsTheRunAfterThatStep) {
@@ -90,7 +91,7 @@ TEST(Runner, StopFromTheGateEndsTheRunAfterThatStep) {
   });
   runner.run_until(10.0);
   ASSERT_GE(stopped_at, 1.0);
-  EXPECT_NEAR(sim->time_s(), stopped_at + sim->physics_dt_s(), 1e-9);
+  EXPECT_NEAR(sim->time_s(), stopped_at + sim->physics_dt_s(), kRoundOffTol_s);
 }
 
 }  // namespace

@@ -13,6 +13,9 @@
 
 namespace uavsim::server::sim::testing {
 
+// how near the take-off target take_off waits for, and then requires
+inline constexpr double kTakeoffReachedTol_m = 0.3;
+
 inline std::unique_ptr<Simulation> make_sim(const std::string& world, uint64_t seed = 1) {
   physics::ComposeOptions o;
   o.models_dir = UAVSIM_MODELS_DIR;
@@ -45,10 +48,12 @@ inline void take_off(Simulation& sim, double altitude_m, size_t vehicle = 0) {
   ASSERT_EQ(arm, fc::CommandResult::kAccepted);
   ASSERT_EQ(takeoff, fc::CommandResult::kAccepted);
   const double deadline = sim.time_s() + 30.0;
-  while (std::abs(sim.truth(vehicle).position_enu_m.z() - target_z) > 0.3 && sim.time_s() < deadline) {
+  while (std::abs(sim.truth(vehicle).position_enu_m.z() - target_z) > kTakeoffReachedTol_m &&
+         sim.time_s() < deadline) {
     sim.step();
   }
-  ASSERT_NEAR(sim.truth(vehicle).position_enu_m.z(), target_z, 0.3) << "take-off did not reach altitude";
+  ASSERT_NEAR(sim.truth(vehicle).position_enu_m.z(), target_z, kTakeoffReachedTol_m)
+      << "take-off did not reach altitude";
 }
 
 inline void goto_enu(Simulation& sim, const Eigen::Vector3d& p, size_t vehicle = 0) {

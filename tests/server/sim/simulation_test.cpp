@@ -10,6 +10,7 @@
 namespace uavsim::server::sim {
 namespace {
 
+constexpr double kTimeTol_s = 1e-12;
 using testing::goto_enu;
 using testing::make_sim;
 using testing::take_off;
@@ -68,7 +69,7 @@ TEST(Simulation, TasksRunAtTheNextControlBoundaryInVehicleOrder) {
   EXPECT_EQ(order[0].first, 0u);
   EXPECT_EQ(order[1].first, 1u);
   EXPECT_EQ(order[2].first, 2u);
-  EXPECT_NEAR(order[0].second, 0.002, 1e-12);
+  EXPECT_NEAR(order[0].second, 0.002, kTimeTol_s);
 }
 
 TEST(Simulation, VehiclesThatCollideAreBothCrashed) {

@@ -11,6 +11,9 @@
 namespace uavsim::server::sim {
 namespace {
 
+// the other vehicle's hover height through the fault
+constexpr double kHoverAltTol_m = 0.3;
+
 TEST(StateFault, RunawayVehicleIsKilledAndPutBackOnceWhileTheOtherFliesOn) {
   auto sim = testing::make_sim("mbzirc2020.xml");
   testing::take_off(*sim, 3.0, 1);
@@ -29,7 +32,7 @@ TEST(StateFault, RunawayVehicleIsKilledAndPutBackOnceWhileTheOtherFliesOn) {
   EXPECT_LT((sim->truth(0).position_enu_m - start0).norm(), 0.5);
   // the clock was not reset and vehicle 1 still hovers
   EXPECT_GT(sim->time_s(), t0);
-  EXPECT_NEAR(sim->truth(1).position_enu_m.z(), z1, 0.3);
+  EXPECT_NEAR(sim->truth(1).position_enu_m.z(), z1, kHoverAltTol_m);
   EXPECT_TRUE(sim->fc(1).armed());
   // a second runaway of the dead vehicle is put back again, without another event
   sim->world().set_pose(0, far, level);
@@ -58,7 +61,7 @@ void expect_rule_applied(Simulation& sim, const std::string& reason, double t0, 
   EXPECT_TRUE(t.position_enu_m.allFinite() && t.velocity_enu_m_s.allFinite());
   EXPECT_LT((t.position_enu_m - sim.runtime(0).start_position_enu_m).norm(), 0.5);
   EXPECT_GT(sim.time_s(), t0);
-  EXPECT_NEAR(sim.truth(1).position_enu_m.z(), z1, 0.3);
+  EXPECT_NEAR(sim.truth(1).position_enu_m.z(), z1, kHoverAltTol_m);
   EXPECT_TRUE(sim.fc(1).armed());
 }
 

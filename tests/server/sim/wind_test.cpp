@@ -9,6 +9,13 @@
 namespace uavsim::server::airframe {
 namespace {
 
+constexpr double kExactTol = 1e-12;
+// the autocorrelation estimated from one seeded series
+constexpr double kCorrTol = 0.05;
+// the gust's 1 - cos profile sampled at 1 ms steps
+constexpr double kGustTol_m_s = 1e-6;
+constexpr double kMeanWindTol_m_s = 1e-9;
+
 WindParams breeze(double sd_m_s) {
   WindParams p;
   p.speed_m_s = 5.0;
@@ -21,10 +28,10 @@ WindParams breeze(double sd_m_s) {
 TEST(Wind, MeanWindBlowsFromItsDirection) {
   WindField w(breeze(0.0), 1);
   w.step(0.01);
-  EXPECT_NEAR(w.velocity_enu_m_s().x(), -5.0, 1e-12);
-  EXPECT_NEAR(w.velocity_enu_m_s().y(), 0.0, 1e-12);
+  EXPECT_NEAR(w.velocity_enu_m_s().x(), -5.0, kExactTol);
+  EXPECT_NEAR(w.velocity_enu_m_s().y(), 0.0, kExactTol);
   // from the north: towards -y
-  EXPECT_NEAR(wind_direction_enu(0.0).y(), -1.0, 1e-12);
+  EXPECT_NEAR(wind_direction_enu(0.0).y(), -1.0, kExactTol);
 }
 
 TEST(Wind, TurbulenceHasTheConfiguredIntensityAndCorrelationTime) {
@@ -56,7 +63,7 @@ TEST(Wind, TurbulenceHasTheConfiguredIntensityAndCorrelationTime) {
   EXPECT_NEAR(sd(2), 0.5 * kSigma, kTolerance * kSigma);  // vertical: half, near the ground
   // Gauss-Markov autocorrelation at one correlation time: exp(-1) = 0.37
   const double rho = lagged / (n - lag) / (sum2[0] / n);
-  EXPECT_NEAR(rho, std::exp(-1.0), 0.05);
+  EXPECT_NEAR(rho, std::exp(-1.0), kCorrTol);
 }
 
 TEST(Wind, SameSeedSameHistoryDifferentSeedDifferent) {
@@ -80,10 +87,10 @@ TEST(Wind, GustIsOneMinusCosineAlongTheMeanWind) {
   w.gust(4.0, 2.0);
   // halfway through a 2 s gust: the full 4 m/s on top of the mean 5 m/s, towards -x
   for (int k = 0; k < 1000; ++k) w.step(0.001);
-  EXPECT_NEAR(w.velocity_enu_m_s().x(), -9.0, 1e-6);
+  EXPECT_NEAR(w.velocity_enu_m_s().x(), -9.0, kGustTol_m_s);
   // over: back to the mean
   for (int k = 0; k < 1001; ++k) w.step(0.001);
-  EXPECT_NEAR(w.velocity_enu_m_s().x(), -5.0, 1e-9);
+  EXPECT_NEAR(w.velocity_enu_m_s().x(), -5.0, kMeanWindTol_m_s);
 }
 
 TEST(Wind, RandomGustsComeAtTheirRate) {
