@@ -36,6 +36,24 @@ std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std
   return uav;
 }
 
+std::optional<VehicleProgram> start_vehicle_program(const std::string& vehicle,
+                                                    const std::string& mavlink) {
+  VehicleProgram p;
+  p.program = ProgramLoop::create(vehicle);
+  if (!p.program) return std::nullopt;
+  p.vehicle = connect_vehicle(*p.program, vehicle, mavlink);
+  if (!p.vehicle) return std::nullopt;
+  return p;
+}
+
+bool wait_vehicle_ready(const ProgramLoop& program, client::Vehicle& uav, double timeout_s) {
+  if (auto r = uav.wait_ready(timeout_s); !r) {
+    program.log("wait ready: " + r.message());
+    return false;
+  }
+  return true;
+}
+
 client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m) {
   auto r = uav.set_mode(client::FlightMode::kGuided);
   if (r) r = uav.arm();

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "uavsim/client/event_loop.hpp"
@@ -37,6 +38,23 @@ class ProgramLoop {
 // 20 Hz telemetry the missions fly on, connected within 30 s; nullptr after logging "connect: why".
 std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std::string& vehicle,
                                                  const std::string& mavlink);
+
+// What a vehicle program (mbzirc2017-uav, mbzirc2020-uav) sets up first: its loop, named after the
+// vehicle, and its link to the vehicle.
+struct VehicleProgram {
+  std::unique_ptr<ProgramLoop> program;
+  std::unique_ptr<client::Vehicle> vehicle;
+};
+
+// The loop of the program for the simulated vehicle `vehicle` and that vehicle's link (as
+// connect_vehicle); nullopt after the loop's error on stderr or "connect: why" in the log.
+// Loop thread only (the calling thread becomes it).
+std::optional<VehicleProgram> start_vehicle_program(const std::string& vehicle,
+                                                    const std::string& mavlink);
+
+// Waits up to timeout_s for the vehicle to be ready to fly (client::Vehicle::wait_ready); false
+// after "wait ready: why" in the log.
+bool wait_vehicle_ready(const ProgramLoop& program, client::Vehicle& uav, double timeout_s);
 
 // The missions' take-off: GUIDED, armed, climbing to altitude_m above the ground, without waiting
 // for it (the mission's state machine watches the climb). The first refusal's error.
