@@ -1,6 +1,10 @@
 #include "uavsim/launch/run_options.hpp"
 
+#include <cstdint>
 #include <cstdio>
+#include <utility>
+
+#include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::launch {
 
@@ -15,6 +19,37 @@ bool resolve_run_files(const std::string& mission, RunOptions* o, bool record) {
   o->record = files->video;
   o->json_path = files->summary;
   return true;
+}
+
+RunOptionParse parse_run_option(const std::string& name, const char* value, RunOptions* o) {
+  // the options given as text
+  const std::pair<const char*, std::string*> texts[] = {
+      {"--world", &o->world},
+      {"--server", &o->server},
+      {"--record", &o->record},
+      {"--record-camera", &o->record_camera},
+      {"--record-layout", &o->record_layout},
+      {"--run-dir", &o->run_dir},
+      {"--json", &o->json_path},
+      {"--events", &o->events_path},
+      {"--realism", &o->realism},
+      {"--wind", &o->wind},
+  };
+  for (const auto& [option, field] : texts) {
+    if (name == option) {
+      *field = value;
+      return RunOptionParse::kTaken;
+    }
+  }
+  // and as numbers
+  bool ok = true;
+  if (name == "--seed")
+    ok = common::parse_integer<std::uint64_t>(value, 0, UINT64_MAX, &o->seed);
+  else if (name == "--truth-hz")
+    ok = common::parse_double(value, 0.01, 1000.0, &o->truth_hz);
+  else
+    return RunOptionParse::kNotCommon;
+  return ok ? RunOptionParse::kTaken : RunOptionParse::kBad;
 }
 
 ServerSpec run_server_spec(const RunOptions& o, const std::vector<std::string>& mission_args) {

@@ -48,7 +48,8 @@ struct Options : uavsim::launch::RunOptions {
 };
 
 using uavsim::common::parse_double;
-using uavsim::common::parse_integer;
+using uavsim::launch::parse_run_option;
+using uavsim::launch::RunOptionParse;
 
 int usage() {
   std::fprintf(stderr, R"(usage: mbzirc2020-run [options]
@@ -98,12 +99,8 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       return false;
     else if ((v = next()) == nullptr)
       return false;
-    else if (a == "--seed") {
-      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o->seed)) return false;
-    } else if (a == "--world")
-      o->world = v;
-    else if (a == "--record")
-      o->record = v;
+    else if (const auto common = parse_run_option(a, v, o); common != RunOptionParse::kNotCommon)
+      ok = common == RunOptionParse::kTaken;
     else if (a == "--budget")
       ok = parse_double(v, 1.0, 36000.0, &o->budget_s);
     else if (a == "--wall-limit")
@@ -114,28 +111,10 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       ok = parse_double(v, 0.0, 1.0, &o->gcs_loss);
     else if (a == "--gcs-latency")
       ok = parse_double(v, 0.0, 60.0, &o->gcs_latency_s);
-    else if (a == "--json")
-      o->json_path = v;
-    else if (a == "--run-dir")
-      o->run_dir = v;
-    else if (a == "--record-camera")
-      o->record_camera = v;
-    else if (a == "--record-layout")
-      o->record_layout = v;
-    else if (a == "--truth-hz")
-      ok = parse_double(v, 0.01, 1000.0, &o->truth_hz);
-    else if (a == "--events")
-      o->events_path = v;
-    else if (a == "--realism")
-      o->realism = v;
-    else if (a == "--wind")
-      o->wind = v;
     else if (a == "--camera-size")
       o->camera_size = v;
     else if (a == "--camera-fps")
       ok = parse_double(v, 0.1, 1000.0, &o->camera_fps);
-    else if (a == "--server")
-      o->server = v;
     else if (a == "--uav")
       o->uav = v;
     else if (a == "--gcs")

@@ -29,6 +29,19 @@ struct RunOptions {
   bool quiet = false;
 };
 
+// What parse_run_option made of an option.
+enum class RunOptionParse {
+  kNotCommon,  // not one of RunOptions': the launcher's own, or unknown
+  kTaken,      // set into the options
+  kBad,        // one of RunOptions', but its value is not usable (usage)
+};
+
+// The option `name` with its `value` into o when it is one the launchers share: --seed (a whole
+// number), --world, --server, --record, --record-camera, --record-layout, --run-dir, --json,
+// --events, --realism, --wind and --truth-hz (0.01 to 1000). The launchers' flags without a value
+// (--quiet, --no-run-dir, --no-record) stay theirs. Thread-safe.
+RunOptionParse parse_run_option(const std::string& name, const char* value, RunOptions* o);
+
 // The run files (resolve_run_files) set into o: run_dir, record (the video) and json_path; false
 // after "MISSION-run: why" on stderr when the run directory cannot be used. record false:
 // --no-record. Thread-safe.
