@@ -19,9 +19,12 @@ sweep_usage() {
   exit 2
 }
 
-# sweep_seeds FIRST COUNT: a usage error unless FIRST is a whole number and COUNT a positive one.
+# sweep_seeds FIRST COUNT: sets first and count; a usage error unless FIRST is a whole number and
+# COUNT a positive one.
 sweep_seeds() {
-  [[ "$1" =~ ^[0-9]+$ && "$2" =~ ^[1-9][0-9]*$ ]] || sweep_usage
+  first=$1
+  count=$2
+  [[ "$first" =~ ^[0-9]+$ && "$count" =~ ^[1-9][0-9]*$ ]] || sweep_usage
 }
 
 # sweep_toml_args WORD...: the words as TOML strings, each after ", " (quotes and backslashes

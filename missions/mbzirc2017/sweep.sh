@@ -15,9 +15,7 @@ source "$(dirname "$0")/../common/sweep_lib.sh"
 sweep_start 2,13 "${MBZIRC2017_RUN:-$root/build/missions/mbzirc2017/mbzirc2017-run}" "$@"
 case "$cmd" in
   jobs)
-    first=${3:-1}
-    count=${4:-20}
-    sweep_seeds "$first" "$count"
+    sweep_seeds "${3:-1}" "${4:-20}"
     space=${6:-fixed}
     [[ "$space" == fixed || "$space" == sampled ]] || { echo "SPACE: fixed or sampled" >&2; exit 2; }
     args=(--mission mbzirc2017 --seeds "$first-$((first + count - 1))" --budget 300 --arg=--quiet)

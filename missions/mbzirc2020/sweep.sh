@@ -13,9 +13,7 @@ source "$(dirname "$0")/../common/sweep_lib.sh"
 sweep_start 2,11 "${MBZIRC2020_RUN:-$root/build/missions/mbzirc2020/mbzirc2020-run}" "$@"
 case "$cmd" in
   jobs)
-    first=${3:-1}
-    count=${4:-10}
-    sweep_seeds "$first" "$count"
+    sweep_seeds "${3:-1}" "${4:-10}"
     [[ -z "${5:-}" || "$5" =~ ^(field|ideal)$ ]] || sweep_usage
     seeds="[$(seq -s, "$first" $((first + count - 1)))]"
     realism=${5:+realism = \"$5\"}
