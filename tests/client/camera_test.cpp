@@ -1,10 +1,6 @@
 // CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a small
 // camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host clock.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -14,68 +10,18 @@
 
 #include "uavsim/client/camera.hpp"
 #include "uavsim/client/event_loop.hpp"
-
-extern char** environ;
+#include "server_process.hpp"
 
 namespace uavsim::client::testing {
 namespace {
 
-// uavsim-server on ephemeral ports; the API port read from its output
-class ServerProcess {
- public:
-  explicit ServerProcess(const std::vector<std::string>& extra) {
-    std::vector<std::string> args{UAVSIM_SERVER, std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", "--rate", "0",
-                                  "--mavlink-port", "0", "--api-port", "0"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, fds[0]);
-    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fds[1]);
-    out_ = fdopen(fds[0], "r");
-    char line[1024];
-    const std::regex api(R"(sim API on tcp:[0-9.]+:(\d+))");
-    const std::regex mav(R"(MAVLink on tcp:[0-9.]+:(\d+))");
-    while (pid_ > 0 && fgets(line, sizeof(line), out_) != nullptr) {
-      output_ += line;
-      std::cmatch m;
-      if (std::regex_search(line, m, mav) && mavlink_port_ == 0) mavlink_port_ = std::stoi(m[1]);
-      if (std::regex_search(line, m, api)) {
-        port_ = std::stoi(m[1]);
-        break;
-      }
-    }
-  }
-  ~ServerProcess() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (out_ != nullptr) fclose(out_);
-  }
-  int api_port() const { return port_; }
-  int mavlink_port() const { return mavlink_port_; }
-  const std::string& output() const { return output_; }
-
- private:
-  pid_t pid_ = -1;
-  FILE* out_ = nullptr;
-  int port_ = 0;
-  int mavlink_port_ = 0;
-  std::string output_;
-};
+// the empty world, its cameras as each test asks
+const std::string kEmptyWorld = std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml";
 
 const std::vector<std::string> kSmallCamera{"--camera", "overview:width=64,height=48,fps=10"};
 
 TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose) {
-  ServerProcess server(kSmallCamera);
+  ServerProcess server(kEmptyWorld, kSmallCamera);
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -129,7 +75,7 @@ TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose)
 }
 
 TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
-  ServerProcess server(kSmallCamera);
+  ServerProcess server(kEmptyWorld, kSmallCamera);
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::host());
   ASSERT_TRUE(l);
@@ -158,7 +104,7 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
 
 // depth and segmentation beside colour, typed: one frame per capture with all three images
 TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCapture) {
-  ServerProcess server({"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
+  ServerProcess server(kEmptyWorld, {"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -223,7 +169,7 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
 
 // the README's example program, unchanged, against a server: UAVSIM_MAVLINK + UAVSIM_LOCKSTEP
 TEST(Examples, FlySquareUnderLockstep) {
-  ServerProcess server({"--no-cameras"});
+  ServerProcess server(kEmptyWorld, {"--no-cameras"});
   ASSERT_GT(server.mavlink_port(), 0) << server.output();
   const std::string cmd = "UAVSIM_MAVLINK=tcp:127.0.0.1:" + std::to_string(server.mavlink_port()) +
                           " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) + " timeout 120 " +
