@@ -1,16 +1,17 @@
-// CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a small
-// camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host clock.
+// CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a
+// small camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host
+// clock.
+#include "uavsim/client/camera.hpp"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <cmath>
 #include <cstdio>
 #include <regex>
 
-#include <Eigen/LU>
-
-#include "uavsim/client/camera.hpp"
-#include "uavsim/client/event_loop.hpp"
 #include "server_process.hpp"
+#include "uavsim/client/event_loop.hpp"
 
 namespace uavsim::client::testing {
 namespace {
@@ -104,7 +105,9 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
 
 // depth and segmentation beside colour, typed: one frame per capture with all three images
 TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCapture) {
-  ServerProcess server(kEmptyWorld, {"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
+  ServerProcess server(
+      kEmptyWorld,
+      {"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -114,7 +117,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   config.camera = "overview";
   config.depth = true;
   config.segmentation = true;
-  auto sub = CameraSubscriber::subscribe(loop, config, [&](const CameraFrame& f) { frames.push_back(f); });
+  auto sub =
+      CameraSubscriber::subscribe(loop, config, [&](const CameraFrame& f) { frames.push_back(f); });
   ASSERT_TRUE(sub) << sub.message();
   EXPECT_GT((*sub)->depth_far_m(), (*sub)->depth_near_m());
   const std::vector<std::string>& classes = (*sub)->segmentation_classes();
@@ -123,15 +127,16 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   EXPECT_EQ(classes[0], "none");
   ASSERT_TRUE(loop.run_for(0.5));
   ASSERT_GE(frames.size(), 4u);
-  for (std::size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].seq, static_cast<std::int64_t>(i));
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    EXPECT_EQ(frames[i].seq, static_cast<std::int64_t>(i));
   const CameraFrame& f = frames.back();
   ASSERT_EQ(f.image.type(), CV_8UC3);
   ASSERT_EQ(f.depth_m.type(), CV_32FC1);
   ASSERT_EQ(f.object_ids.type(), CV_16UC1);
   ASSERT_EQ(f.class_ids.type(), CV_16UC1);
   ASSERT_EQ(f.depth_m.size(), f.image.size());
-  // the bottom row sees the ground: its depth along the axis is the camera height over the ray's slope,
-  // and its label is the ground's
+  // the bottom row sees the ground: its depth along the axis is the camera height over the ray's
+  // slope, and its label is the ground's
   const float z = f.depth_m.at<float>(119, 80);
   EXPECT_TRUE(std::isfinite(z) && z > 1.0f && z < 30.0f) << z;
   const int object = f.object_ids.at<uint16_t>(119, 80);
@@ -141,7 +146,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   // the quad at the origin is labelled a vehicle somewhere in the image
   bool vehicle = false;
   for (int v = 0; v < 120; ++v) {
-    for (int u = 0; u < 160; ++u) vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
+    for (int u = 0; u < 160; ++u)
+      vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
   }
   EXPECT_TRUE(vehicle);
 
@@ -151,7 +157,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   depth_only.segmentation = false;
   (*sub).reset();
   frames.clear();
-  auto d = CameraSubscriber::subscribe(loop, depth_only, [&](const CameraFrame& fr) { frames.push_back(fr); });
+  auto d = CameraSubscriber::subscribe(loop, depth_only,
+                                       [&](const CameraFrame& fr) { frames.push_back(fr); });
   ASSERT_TRUE(d) << d.message();
   ASSERT_TRUE(loop.run_for(0.3));
   ASSERT_FALSE(frames.empty());
@@ -172,8 +179,8 @@ TEST(Examples, FlySquareUnderLockstep) {
   ServerProcess server(kEmptyWorld, {"--no-cameras"});
   ASSERT_GT(server.mavlink_port(), 0) << server.output();
   const std::string cmd = "UAVSIM_MAVLINK=tcp:127.0.0.1:" + std::to_string(server.mavlink_port()) +
-                          " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) + " timeout 120 " +
-                          FLY_SQUARE + " 2>&1";
+                          " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) +
+                          " timeout 120 " + FLY_SQUARE + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   ASSERT_NE(p, nullptr);
   std::string out;

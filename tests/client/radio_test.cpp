@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "server_process.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/sim_connection.hpp"
-#include "server_process.hpp"
 
 namespace uavsim::client::testing {
 namespace {
