@@ -20,11 +20,13 @@
 
 #include <atomic>
 #include <chrono>
+#include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "api/overlay_ops.hpp"
+#include "app/hover_all.hpp"
 #include "app/recording.hpp"
 #include "app/run_reporter.hpp"
 #include "objects/world_objects.hpp"
@@ -43,7 +45,6 @@ namespace render = uavsim::server::render;
 namespace physics = uavsim::server::physics;
 namespace objects = uavsim::server::objects;
 namespace sim = uavsim::server::sim;
-namespace fc = uavsim::server::fc;
 using Clock = std::chrono::steady_clock;
 
 enum Variant { kNoCameras, kIdleCameras, kRecordSingle, kRecordTiled };
@@ -103,19 +104,9 @@ void BM_Run(benchmark::State& state) {
     }
   }
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
-  std::vector<bool> launched(s.vehicle_count(), false);
-  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (launched[i] || !s.fc(i).prearm_ok()) continue;
-      launched[i] = true;
-      s.post(i, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(false);
-        f.takeoff(5.0);
-      });
-    }
-  });
+  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover 5)
+  app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
   render::FrameService* fs = frames.get();
   if (fs != nullptr) {

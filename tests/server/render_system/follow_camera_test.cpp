@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "app/hover_all.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "render/camera_director.hpp"
@@ -97,19 +99,9 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   frames.set_director(overview, std::make_shared<CameraDirector>(params));
   frames.add_consumer(&collector);
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
-  std::vector<bool> launched(s.vehicle_count(), false);
-  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (launched[i] || !s.fc(i).prearm_ok()) continue;
-      launched[i] = true;
-      s.post(i, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(false);
-        f.takeoff(5.0);
-      });
-    }
-  });
+  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover 5)
+  app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
   runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
   runner.run_until(kRunS);
