@@ -1,7 +1,5 @@
 #include "app/options.hpp"
 
-#include "app/param_file.hpp"
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -11,6 +9,8 @@
 #include <limits>
 #include <sstream>
 #include <string>
+
+#include "app/param_file.hpp"
 
 namespace uavsim::server::app {
 
@@ -157,8 +157,8 @@ std::string format_number(double v) {
   return os.str();
 }
 
-std::optional<double> parse_number(const std::string& flag, const std::string& text, const NumberRule& rule,
-                                   std::string* why) {
+std::optional<double> parse_number(const std::string& flag, const std::string& text,
+                                   const NumberRule& rule, std::string* why) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   const bool parsed = !text.empty() && end != text.c_str() && *end == '\0' && std::isfinite(v);
@@ -168,13 +168,15 @@ std::optional<double> parse_number(const std::string& flag, const std::string& t
   if (std::isfinite(rule.lo) && std::isfinite(rule.hi)) {
     range = " from " + format_number(rule.lo) + " to " + format_number(rule.hi);
   } else if (std::isfinite(rule.lo)) {
-    range = rule.lo == 0.0 && rule.integer ? " (0 or more)" : " of at least " + format_number(rule.lo);
+    range =
+        rule.lo == 0.0 && rule.integer ? " (0 or more)" : " of at least " + format_number(rule.lo);
   }
   *why = flag + " needs " + rule.what + range + ", got '" + text + "'";
   return std::nullopt;
 }
 
-std::optional<std::string> read_first_line(const std::string& flag, const std::string& path, std::string* why) {
+std::optional<std::string> read_first_line(const std::string& flag, const std::string& path,
+                                           std::string* why) {
   std::ifstream in(path);
   if (!in) {
     *why = flag + ": cannot read '" + path + "'";
@@ -203,9 +205,13 @@ std::optional<WindOption> parse_wind(const std::string& text, std::string* why) 
   }
   const bool shape = (v.size() == 2 || v.size() == 3) &&
                      std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
-  if (!shape || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 || (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
-    *why = "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 degrees "
-           "clockwise from north, turbulence 0..20 m/s standard deviation), got '" + text + "'";
+  if (!shape || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 ||
+      (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
+    *why =
+        "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 "
+        "degrees "
+        "clockwise from north, turbulence 0..20 m/s standard deviation), got '" +
+        text + "'";
     return std::nullopt;
   }
   WindOption w;
@@ -226,8 +232,8 @@ std::optional<HomeOption> parse_home(const std::string& text, std::string* why) 
     v.push_back(x);
   }
   HomeOption h;
-  const bool shape = (v.size() == 3 || v.size() == 4) && std::count(text.begin(), text.end(), ',') + 1 ==
-                                                               static_cast<long>(v.size());
+  const bool shape = (v.size() == 3 || v.size() == 4) &&
+                     std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
   if (shape) {
     h.lat_deg = v[0];
     h.lon_deg = v[1];
@@ -236,14 +242,17 @@ std::optional<HomeOption> parse_home(const std::string& text, std::string* why) 
   }
   if (!shape || std::abs(h.lat_deg) > 90.0 || std::abs(h.lon_deg) > 180.0 || h.alt_m < -500.0 ||
       h.alt_m > 10000.0) {
-    *why = "--home needs LAT,LON,ALT (latitude -90..90, longitude -180..180 degrees, altitude -500..10000 m "
-           "above sea level), got '" +
-           text + "'";
+    *why =
+        "--home needs LAT,LON,ALT (latitude -90..90, longitude -180..180 degrees, altitude "
+        "-500..10000 m "
+        "above sea level), got '" +
+        text + "'";
     return std::nullopt;
   }
   if (h.heading_deg != 0.0) {
     *why = "--home: a start heading (" + text.substr(text.rfind(',') + 1) +
-           ") is not taken from the command line here: each vehicle's heading is its yaw_deg in the world file "
+           ") is not taken from the command line here: each vehicle's heading is its yaw_deg in "
+           "the world file "
            "(give LAT,LON,ALT or a heading of 0)";
     return std::nullopt;
   }
@@ -264,7 +273,8 @@ std::optional<std::array<uint8_t, 32>> parse_signing_key(const std::string& text
     for (std::size_t d = 0; d < 2; ++d) {
       const char c = hex[2 * k + d];
       if (!std::isxdigit(static_cast<unsigned char>(c))) return std::nullopt;
-      const int nibble = std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::tolower(c) - 'a' + 10;
+      const int nibble =
+          std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::tolower(c) - 'a' + 10;
       byte = byte * 16 + nibble;
     }
     key[k] = static_cast<uint8_t>(byte);
@@ -311,13 +321,15 @@ std::optional<UdpTarget> udp_target(const UdpOut& out, int vehicle, std::string*
   return t;
 }
 
-std::optional<std::string> port_range_error(const std::string& flag, int base_port, std::size_t vehicle_count) {
+std::optional<std::string> port_range_error(const std::string& flag, int base_port,
+                                            std::size_t vehicle_count) {
   if (base_port <= 0 || vehicle_count == 0) return std::nullopt;
   const long last = base_port + 10L * static_cast<long>(vehicle_count - 1);
   if (last <= 65535) return std::nullopt;
   const long highest_base = 65535 - 10L * static_cast<long>(vehicle_count - 1);
-  std::string msg = flag + " " + std::to_string(base_port) + ": the world has " + std::to_string(vehicle_count) +
-                    " vehicles, and the last would use port " + std::to_string(last) + ", past 65535; ";
+  std::string msg = flag + " " + std::to_string(base_port) + ": the world has " +
+                    std::to_string(vehicle_count) + " vehicles, and the last would use port " +
+                    std::to_string(last) + ", past 65535; ";
   if (highest_base >= 1) msg += "use a base of at most " + std::to_string(highest_base) + " or ";
   return msg + flag + " 0 (ephemeral ports, printed at start)";
 }
@@ -446,7 +458,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
           UdpOut out;
           const auto eq = v.find('=');
           if (eq != std::string::npos && eq > 0 && v.find(':') > eq) {
-            const auto n = parse_number(a, v.substr(0, eq), {0, 100000, true, "a vehicle index before '='"}, &why);
+            const auto n = parse_number(a, v.substr(0, eq),
+                                        {0, 100000, true, "a vehicle index before '='"}, &why);
             ok = n.has_value();
             if (n) out.vehicle = static_cast<int>(*n);
             out.spec = v.substr(eq + 1);
@@ -522,7 +535,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       }
     } else if (a == "--record-tile") {
       if ((ok = value(&v))) {
-        const std::string modality = v.find(':') == std::string::npos ? "rgb" : v.substr(v.find(':') + 1);
+        const std::string modality =
+            v.find(':') == std::string::npos ? "rgb" : v.substr(v.find(':') + 1);
         ok = !v.empty() && v.front() != ':' &&
              (modality == "rgb" || modality == "depth" || modality == "segmentation") &&
              o.record_tiles.size() < kMaxRecordTiles;
@@ -579,7 +593,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
   }
   if (key_text) {
     o.mavlink_key = parse_signing_key(*key_text);
-    if (!o.mavlink_key) return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
+    if (!o.mavlink_key)
+      return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
   }
   if (o.world_path.empty() && !o.version && !o.list_worlds)
     return fail("no world given (a world file or a shipped world's name; see --help)");
