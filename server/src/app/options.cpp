@@ -6,11 +6,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <string>
 
 #include "app/param_file.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::server::app {
 
@@ -193,19 +195,39 @@ std::optional<std::string> read_first_line(const std::string& flag, const std::s
   return line.substr(first, last - first + 1);
 }
 
-std::optional<WindOption> parse_wind(const std::string& text, std::string* why) {
+// the choices as a list for a message: "a, b or c"
+std::string one_of(std::initializer_list<const char*> choices) {
+  std::string list;
+  std::size_t k = 0;
+  for (const char* c : choices) {
+    if (k > 0) list += k + 1 == choices.size() ? " or " : ", ";
+    list += c;
+    ++k;
+  }
+  return list;
+}
+
+// the comma-separated numbers of text when there are min_count to max_count of them, each part a
+// whole finite number (common/parse_number.hpp's rule); empty when not
+std::vector<double> number_list(const std::string& text, std::size_t min_count,
+                                std::size_t max_count) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string part;
   while (std::getline(ss, part, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
+    double x = 0.0;
+    if (!uavsim::common::parse_double(part.c_str(), -HUGE_VAL, HUGE_VAL, &x)) return {};
     v.push_back(x);
   }
-  const bool shape = (v.size() == 2 || v.size() == 3) &&
+  // getline drops an empty last part ("3,90,"): the commas count the parts
+  const bool shape = v.size() >= min_count && v.size() <= max_count &&
                      std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
-  if (!shape || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 ||
+  return shape ? v : std::vector<double>{};
+}
+
+std::optional<WindOption> parse_wind(const std::string& text, std::string* why) {
+  const std::vector<double> v = number_list(text, 2, 3);
+  if (v.empty() || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 ||
       (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
     *why =
         "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 "
@@ -222,18 +244,9 @@ std::optional<WindOption> parse_wind(const std::string& text, std::string* why) 
 }
 
 std::optional<HomeOption> parse_home(const std::string& text, std::string* why) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string part;
-  while (std::getline(ss, part, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
-    v.push_back(x);
-  }
+  const std::vector<double> v = number_list(text, 3, 4);
   HomeOption h;
-  const bool shape = (v.size() == 3 || v.size() == 4) &&
-                     std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
+  const bool shape = !v.empty();
   if (shape) {
     h.lat_deg = v[0];
     h.lon_deg = v[1];
@@ -368,6 +381,15 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if (v) *out = *v;
       return v.has_value();
     };
+    // a value that must be one of `choices`, or a failure naming them
+    auto choice = [&](std::initializer_list<const char*> choices, std::string* out) {
+      if (!value(out)) return false;
+      for (const char* c : choices) {
+        if (*out == c) return true;
+      }
+      why = a + " needs " + one_of(choices) + ", got '" + *out + "'";
+      return false;
+    };
     std::string v;
     double x = 0.0;
     bool ok = true;
@@ -422,14 +444,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         ok = o.home.has_value();
       }
     } else if (a == "--realism") {
-      if ((ok = value(&v))) {
-        ok = v == "field" || v == "ideal";
-        if (ok) {
-          o.realism = v;
-        } else {
-          why = "--realism needs field or ideal, got '" + v + "'";
-        }
-      }
+      if ((ok = choice({"field", "ideal"}, &v))) o.realism = v;
     } else if (a == "--wind") {
       if ((ok = value(&v))) {
         o.wind = parse_wind(v, &why);
@@ -499,21 +514,13 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
     } else if (a == "--watchdog") {
       ok = number({0.0, 86400, false, "wall seconds"}, &o.watchdog_s);
     } else if (a == "--radio-backend") {
-      if ((ok = value(&v))) {
-        ok = v == "simple" || v == "ns3";
-        if (!ok) why = "--radio-backend needs simple or ns3, got '" + v + "'";
-        o.radio_backend = v;
-      }
+      if ((ok = choice({"simple", "ns3"}, &v))) o.radio_backend = v;
     } else if (a == "--camera") {
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {
       o.cameras = false;
     } else if (a == "--gl") {
-      if ((ok = value(&v))) {
-        ok = v == "egl" || v == "osmesa" || v == "auto";
-        if (!ok) why = "--gl needs egl, osmesa or auto, got '" + v + "'";
-        o.gl_backend = v;
-      }
+      if ((ok = choice({"egl", "osmesa", "auto"}, &v))) o.gl_backend = v;
     } else if (a == "--render-threads") {
       ok = number({1, 64, true, "a thread count"}, &x);
       o.render_threads = static_cast<int>(x);
@@ -528,11 +535,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         o.record_camera = v;
       }
     } else if (a == "--record-overlay") {
-      if ((ok = value(&v))) {
-        ok = v == "0" || v == "1";
-        if (!ok) why = "--record-overlay needs 0 or 1, got '" + v + "'";
-        o.record_overlay = v == "1";
-      }
+      if ((ok = choice({"0", "1"}, &v))) o.record_overlay = v == "1";
     } else if (a == "--record-tile") {
       if ((ok = value(&v))) {
         const std::string modality =
@@ -548,11 +551,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         o.record_tiled = true;
       }
     } else if (a == "--record-layout") {
-      if ((ok = value(&v))) {
-        ok = v == "single" || v == "tiled";
-        if (!ok) why = "--record-layout needs single or tiled, got '" + v + "'";
-        o.record_tiled = v == "tiled";
-      }
+      if ((ok = choice({"single", "tiled"}, &v))) o.record_tiled = v == "tiled";
     } else if (a == "--record-size") {
       if ((ok = value(&v))) {
         // each side digits only, range-checked as a long before the cast (sscanf's %d overflows

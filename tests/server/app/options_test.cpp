@@ -282,6 +282,8 @@ TEST(Options, WordChoicesAreExact) {
   expect_refused({"w.xml", "--realism", "Field"}, {"--realism needs field or ideal", "'Field'"});
   expect_refused({"w.xml", "--realism", ""}, {"--realism"});
   expect_refused({"w.xml", "--record-overlay", "yes"}, {"--record-overlay needs 0 or 1", "'yes'"});
+  expect_refused({"w.xml", "--radio-backend", "ns2"},
+                 {"--radio-backend needs simple or ns3", "'ns2'"});
   expect_refused({"w.xml", "--record-camera", ""}, {"--record-camera needs"});
   expect_refused({"w.xml", "--record-camera", "follow:"}, {"--record-camera needs"});
   expect_refused({"w.xml", "-x"}, {"unknown option -x"});
