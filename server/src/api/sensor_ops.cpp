@@ -14,14 +14,20 @@ SensorOps::SensorOps(sim::Simulation& sim)
 
 void SensorOps::register_ops(OpTable& table) {
   static constexpr FieldSpec kFields[] = {{"vehicle", FieldType::kIndexOrName}};
-  table.add({"sensor_list", "sensor", [this](uint64_t, const Json&, OpReply* reply) { list(reply); }});
+  table.add(
+      {"sensor_list", "sensor", [this](uint64_t, const Json&, OpReply* reply) { list(reply); }});
   table.add({"sensor_read", "sensor",
-             [this](uint64_t, const Json& request, OpReply* reply) { read_now(request, reply); }, kFields});
+             [this](uint64_t, const Json& request, OpReply* reply) { read_now(request, reply); },
+             kFields});
   table.add({"sensor_subscribe", "sensor",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { subscribe(conn, request, reply); },
+             [this](uint64_t conn, const Json& request, OpReply* reply) {
+               subscribe(conn, request, reply);
+             },
              kFields});
   table.add({"sensor_unsubscribe", "sensor",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { unsubscribe(conn, request, reply); },
+             [this](uint64_t conn, const Json& request, OpReply* reply) {
+               unsubscribe(conn, request, reply);
+             },
              kFields});
 }
 

@@ -15,11 +15,11 @@
 #include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
-#include "uavsim/common/api_error.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
+#include "uavsim/common/api_error.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -82,7 +82,8 @@ TEST(OpTable, RadioSensorAndOverlayOpsDeclareTheirFields) {
     ASSERT_NE(spec, nullptr);
     EXPECT_FALSE(spec->typed_fields.empty()) << op;
   }
-  // radio_send's sender is an index or a name: a number of another kind is refused by the table's spec
+  // radio_send's sender is an index or a name: a number of another kind is refused by the table's
+  // spec
   Json bad = {{"op", "radio_send"}, {"vehicle", 0.5}, {"to", "broadcast"}, {"data_b64", "AA=="}};
   EXPECT_TRUE(mistyped_field(bad, table.find("radio_send")->typed_fields).has_value());
 }
