@@ -44,22 +44,11 @@ FrameStream::FrameStream(const sim::Simulation& sim, render::FrameService& servi
     : sim_(sim), service_(service), server_(server), is_lockstep_(std::move(is_lockstep)) {}
 
 void FrameStream::register_ops(OpTable& table) {
-  table.add({"camera_list", "camera",
-             [this](uint64_t, const Json& request, OpReply* reply) { op_list(request, reply); },
-             core_op_fields()});
-  table.add({"camera_subscribe", "camera",
-             [this](uint64_t conn, const Json& request, OpReply* reply) {
-               op_subscribe(conn, request, reply);
-             },
-             core_op_fields()});
-  table.add({"camera_unsubscribe", "camera",
-             [this](uint64_t conn, const Json& request, OpReply* reply) {
-               op_unsubscribe(conn, request, reply);
-             },
-             core_op_fields()});
-  table.add({"camera_blackout", "camera",
-             [this](uint64_t, const Json& request, OpReply* reply) { op_blackout(request, reply); },
-             core_op_fields()});
+  const OpRegistrar<FrameStream> add(table, this, "camera");
+  add("camera_list", &FrameStream::op_list);
+  add("camera_subscribe", &FrameStream::op_subscribe);
+  add("camera_unsubscribe", &FrameStream::op_unsubscribe);
+  add("camera_blackout", &FrameStream::op_blackout);
 }
 
 void FrameStream::register_unavailable(OpTable& table) {

@@ -36,12 +36,9 @@ void OverlayOps::register_ops(OpTable& table) {
                                                  {"text", FieldType::kString}};
   static constexpr FieldSpec kNoteFields[] = {{"text", FieldType::kString},
                                               {"vehicle", FieldType::kIndexOrName}};
-  table.add({"overlay_counter", "overlay",
-             [this](uint64_t, const Json& request, OpReply* reply) { counter(request, reply); },
-             kCounterFields});
-  table.add({"overlay_note", "overlay",
-             [this](uint64_t, const Json& request, OpReply* reply) { note(request, reply); },
-             kNoteFields});
+  const OpRegistrar<OverlayOps> add(table, this, "overlay");
+  add("overlay_counter", &OverlayOps::counter, kCounterFields);
+  add("overlay_note", &OverlayOps::note, kNoteFields);
 }
 
 std::vector<std::string> OverlayOps::counters() const {

@@ -23,14 +23,8 @@ Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()});
 }  // namespace
 
 void VehicleOps::register_ops(OpTable& table) {
-  using Query = void (VehicleOps::*)(const Json&, OpReply*);
   using Fault = void (VehicleOps::*)(size_t, const Json&, OpReply*);
-  const auto query = [&](const char* name, Query op) {
-    table.add(
-        {name, "vehicle",
-         [this, op](uint64_t, const Json& request, OpReply* reply) { (this->*op)(request, reply); },
-         core_op_fields()});
-  };
+  const OpRegistrar<VehicleOps> query(table, this, "vehicle");
   // a fault names a vehicle and answers it with the sim time it took effect
   const auto fault = [&](const char* name, Fault op) {
     table.add({name, "fault",

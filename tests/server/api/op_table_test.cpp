@@ -50,6 +50,39 @@ TEST(OpTable, AnOpRegisteredTwiceIsAStartupErrorNamingBothGroups) {
   }
 }
 
+// a group whose handlers take what they need of (conn, request, reply)
+struct ThreeShapes {
+  void with_conn(uint64_t conn, const Json& request, OpReply* reply) {
+    reply->result = {{"conn", conn}, {"x", request["x"]}};
+  }
+  void with_request(const Json& request, OpReply* reply) const { reply->result = request["x"]; }
+  void reply_only(OpReply* reply) const { reply->result = "listed"; }
+};
+
+TEST(OpRegistrar, RegistersMembersOfEveryShapeUnderTheGroupsNameAndFields) {
+  static constexpr FieldSpec kOwn[] = {{"x", FieldType::kNumber}};
+  OpTable table;
+  ThreeShapes group;
+  const OpRegistrar<ThreeShapes> add(table, &group, "shapes");
+  add("a", &ThreeShapes::with_conn);
+  add("b", &ThreeShapes::with_request, kOwn);
+  add("c", &ThreeShapes::reply_only, {});
+  EXPECT_EQ(table.names(), (std::vector<std::string>{"a", "b", "c"}));
+  for (const char* op : {"a", "b", "c"}) EXPECT_EQ(table.find(op)->group, "shapes") << op;
+  // the core fields unless the op names its own
+  EXPECT_EQ(table.find("a")->typed_fields.size(), core_op_fields().size());
+  EXPECT_EQ(table.find("b")->typed_fields.size(), 1u);
+  EXPECT_TRUE(table.find("c")->typed_fields.empty());
+  // each handler is handed what it takes
+  OpReply reply;
+  table.find("a")->handler(7, {{"x", 2}}, &reply);
+  EXPECT_EQ(reply.result, (Json{{"conn", 7}, {"x", 2}}));
+  table.find("b")->handler(7, {{"x", 3}}, &reply);
+  EXPECT_EQ(reply.result, 3);
+  table.find("c")->handler(7, Json::object(), &reply);
+  EXPECT_EQ(reply.result, "listed");
+}
+
 TEST(ApiErrorCodes, EveryCodeHasItsOwnWireNameThatReadsBack) {
   std::set<std::string_view> names;
   for (const auto& [code, name] : common::kApiErrorCodes) {
