@@ -61,7 +61,8 @@ void BM_Run(benchmark::State& state) {
       sim::SimConfig{});
   objects::ObjectSet world_objects = objects::add_world_objects(s);
   app::RunReporter reporter(s, nullptr, nullptr);
-  s.schedule().add(sim::Phase::kPostControl, "reporter", [&reporter] { reporter.on_control_step(); });
+  s.schedule().add(sim::Phase::kPostControl, "reporter",
+                   [&reporter] { reporter.on_control_step(); });
   api::OverlayOps notes(s);
 
   // the cameras and the recorder as server_app wires them
@@ -104,13 +105,15 @@ void BM_Run(benchmark::State& state) {
     }
   }
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover 5)
+  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover
+  // 5)
   app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
   s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
   render::FrameService* fs = frames.get();
   if (fs != nullptr) {
-    runner.add_gate(sim::Phase::kCapture, "frames", [fs, &s](double) { fs->capture(s.world().data()); });
+    runner.add_gate(sim::Phase::kCapture, "frames",
+                    [fs, &s](double) { fs->capture(s.world().data()); });
   }
   runner.run_until(kWarmupS);
   if (fs != nullptr) fs->wait_delivered();

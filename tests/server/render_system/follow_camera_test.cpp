@@ -99,11 +99,13 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   frames.set_director(overview, std::make_shared<CameraDirector>(params));
   frames.add_consumer(&collector);
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover 5)
+  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover
+  // 5)
   app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
   s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
-  runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
+  runner.add_gate(sim::Phase::kCapture, "frames",
+                  [&](double) { frames.capture(s.world().data()); });
   runner.run_until(kRunS);
   frames.wait_delivered();
   return collector.shots();

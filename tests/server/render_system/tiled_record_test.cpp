@@ -5,10 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -124,7 +124,8 @@ TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
     frames.add_consumer(&raw);
     frames.add_consumer(recorder.get());
     sim::Runner runner(s, 0.0);
-    runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
+    runner.add_gate(sim::Phase::kCapture, "frames",
+                    [&](double) { frames.capture(s.world().data()); });
     runner.run_until(kRunS);
     frames.wait_delivered();
   }
