@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "api/overlay_ops.hpp"
+#include "app/camera_owners.hpp"
 #include "app/hover_all.hpp"
 #include "app/recording.hpp"
 #include "app/run_reporter.hpp"
@@ -70,13 +71,7 @@ void BM_Run(benchmark::State& state) {
   std::unique_ptr<render::VideoRecorder> recorder;
   std::atomic<uint64_t> frames_out{0};
   if (variant != kNoCameras) {
-    render::CameraOwners owners;
-    for (const auto& v : s.world().vehicles())
-      owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-    if (world_objects.gimbals) {
-      for (const auto& g : world_objects.gimbals->gimbals())
-        owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-    }
+    const render::CameraOwners owners = app::camera_owners(s.world(), world_objects);
     const std::vector<std::string> overrides{"uav0_front:width=384,height=216,fps=15",
                                              "uav1_front:width=384,height=216,fps=15"};
     std::vector<render::CameraSetup> cameras =
@@ -105,8 +100,7 @@ void BM_Run(benchmark::State& state) {
     }
   }
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover
-  // 5)
+  // both quads: GUIDED, arm, take off to 5 m once pre-arm passes (uavsim-server --hover 5)
   app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
   s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);

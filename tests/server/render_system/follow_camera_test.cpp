@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "app/camera_owners.hpp"
 #include "app/hover_all.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
@@ -73,13 +74,7 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
       physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
       sim::SimConfig{});
   objects::ObjectSet objects = objects::add_world_objects(s);
-  CameraOwners owners;
-  for (const auto& v : s.world().vehicles())
-    owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-  if (objects.gimbals) {
-    for (const auto& g : objects.gimbals->gimbals())
-      owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-  }
+  const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<CameraSetup> cameras =
       discover_cameras(s.world().model(), owners, {}, 1.0 / s.control_dt_s());
   int overview = -1;
@@ -99,8 +94,7 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   frames.set_director(overview, std::make_shared<CameraDirector>(params));
   frames.add_consumer(&collector);
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass (uavsim-server --hover
-  // 5)
+  // both quads: GUIDED, arm, take off to 5 m once pre-arm passes (uavsim-server --hover 5)
   app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
   s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);

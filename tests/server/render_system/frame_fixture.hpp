@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "api/api_server.hpp"
+#include "app/camera_owners.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "mavlink/endpoint.hpp"
@@ -65,13 +66,7 @@ class FrameServer {
                              [this] { bridge_->update(*sim_); });
       }
     }
-    CameraOwners owners;
-    for (const auto& v : sim_->world().vehicles())
-      owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-    if (objects_.gimbals) {
-      for (const auto& g : objects_.gimbals->gimbals())
-        owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-    }
+    const CameraOwners owners = app::camera_owners(sim_->world(), objects_);
     cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides,
                                 1.0 / sim_->control_dt_s());
     FrameServiceOptions fo;

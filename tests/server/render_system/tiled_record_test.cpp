@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "app/camera_owners.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "render/camera_setup.hpp"
@@ -81,13 +82,7 @@ TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
       physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
       sim::SimConfig{});
   objects::ObjectSet objects = objects::add_world_objects(s);
-  CameraOwners owners;
-  for (const auto& v : s.world().vehicles())
-    owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-  if (objects.gimbals) {
-    for (const auto& g : objects.gimbals->gimbals())
-      owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-  }
+  const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<std::string> overrides{"*:fps=15", "uav0_front:width=384,height=216",
                                      "uav1_front:width=384,height=216"};
   const std::vector<CameraSetup> cameras =
