@@ -36,7 +36,6 @@
 #include <string>
 
 #include "landing_run.hpp"
-#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
 #include "uavsim/launch/run_options.hpp"
@@ -158,16 +157,14 @@ bool parse_options(int argc, char** argv, LandingRunOptions* o) {
 
 int main(int argc, char** argv) {
   LandingRunOptions o;
-  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
-  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2017.xml";
-  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
+  uavsim::launch::default_world_and_server(&o, "mbzirc2017.xml", UAVSIM_MODELS_DIR,
+                                           UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2017-uav");
   if (!parse_options(argc, argv, &o)) return usage();
   if (!uavsim::launch::resolve_run_files("mbzirc2017", &o, !o.no_record)) return 2;
   uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2017-run", o.quiet);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  uavsim::launch::keep_run_summary(launch, "mbzirc2017", o);
   LandingRun run(launch, o);
   if (const int code = run.prepare(); code != 0) return code;
   run.start_server();

@@ -24,7 +24,6 @@
 #include <vector>
 
 #include "uavsim/client/sim_connection.hpp"
-#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
 #include "uavsim/launch/run_options.hpp"
@@ -457,9 +456,8 @@ Json summary_json(const Options& o, const Run& run, const Launcher& launch, bool
 
 int main(int argc, char** argv) {
   Options o;
-  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
-  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2020.xml";
-  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
+  uavsim::launch::default_world_and_server(&o, "mbzirc2020.xml", UAVSIM_MODELS_DIR,
+                                           UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
   o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
   bool record = true;
@@ -472,8 +470,7 @@ int main(int argc, char** argv) {
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
   uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2020-run", o.quiet);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  uavsim::launch::keep_run_summary(launch, "mbzirc2020", o);
   Harness h;
   Run run;
 

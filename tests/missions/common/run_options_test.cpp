@@ -103,6 +103,17 @@ TEST(ParseRunOption, UnusableNumbersAreBad) {
   EXPECT_EQ(parse_run_option("--truth-hz", "ten", &o), RunOptionParse::kBad);
 }
 
+// the world file under the models directory's worlds/, and the built server when none is installed
+TEST(DefaultWorldAndServer, TheWorldUnderModelsWorldsAndTheBuiltServer) {
+  RunOptions o;
+  uavsim::launch::default_world_and_server(&o, "w.xml", "/src/models",
+                                           "/build/server/uavsim-server");
+  const std::string tail = "/worlds/w.xml";
+  ASSERT_GE(o.world.size(), tail.size());
+  EXPECT_EQ(o.world.substr(o.world.size() - tail.size()), tail) << o.world;
+  EXPECT_EQ(o.server, "/build/server/uavsim-server");
+}
+
 TEST(ResolveRunFiles, NoRunDirectoryAndNoRecordLeaveNoFiles) {
   RunOptions o;
   o.run_dir = "none";
