@@ -4,20 +4,15 @@
 
 #include <gtest/gtest.h>
 
-#include <string>
-
+#include "../sim/sim_fixture.hpp"
 #include "objects/gimbal.hpp"
-#include "sim/simulation.hpp"
 
 namespace uavsim::server::app {
 namespace {
 
 TEST(CameraOwners, NameEveryVehicleRootAndTheGimbalsCarryingTheirCameras) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   const objects::ObjectSet objects = objects::add_world_objects(s);
   const render::CameraOwners owners = camera_owners(s.world(), objects);
   ASSERT_EQ(owners.vehicle_root_bodies.size(), s.vehicle_count());
@@ -33,11 +28,8 @@ TEST(CameraOwners, NameEveryVehicleRootAndTheGimbalsCarryingTheirCameras) {
 
 // a world without objects: the vehicles only
 TEST(CameraOwners, WithoutGimbalsOnlyTheVehicles) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   const render::CameraOwners owners = camera_owners(s.world(), objects::ObjectSet{});
   EXPECT_EQ(owners.vehicle_root_bodies.size(), s.vehicle_count());
   EXPECT_TRUE(owners.gimbal_body_vehicle.empty());
