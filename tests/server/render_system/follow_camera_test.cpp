@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../sim/sim_fixture.hpp"
 #include "app/camera_owners.hpp"
 #include "app/hover_all.hpp"
 #include "objects/world_objects.hpp"
@@ -68,11 +69,8 @@ class Collector : public FrameConsumer {
 
 // runs the scripted take-off of both quads with the overview camera directed by `params`
 std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   objects::ObjectSet objects = objects::add_world_objects(s);
   const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<CameraSetup> cameras =

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "../sim/sim_fixture.hpp"
 #include "app/camera_owners.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
@@ -76,11 +77,8 @@ class Collector : public FrameConsumer {
 };
 
 TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   objects::ObjectSet objects = objects::add_world_objects(s);
   const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<std::string> overrides{"*:fps=15", "uav0_front:width=384,height=216",
