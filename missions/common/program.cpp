@@ -61,4 +61,26 @@ client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m) {
   return r;
 }
 
+void fly(const ProgramLoop& program, client::Vehicle& uav, const FlightCommand& command,
+         double yaw_enu_rad, bool log_velocity_refusal) {
+  switch (command.action) {
+    case FlightCommand::Action::kNone:
+      break;
+    case FlightCommand::Action::kArmAndTakeOff:
+      if (auto r = take_off_guided(uav, command.takeoff_altitude_m); !r)
+        program.log("take-off: " + r.message());
+      break;
+    case FlightCommand::Action::kVelocity:
+      if (auto r = uav.set_velocity_enu_yaw(command.velocity_enu_m_s, yaw_enu_rad);
+          !r && log_velocity_refusal) {
+        program.log("velocity: " + r.message());
+      }
+      break;
+    case FlightCommand::Action::kForceDisarm:
+      // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
+      if (auto r = uav.disarm(true); !r) program.log("force disarm: " + r.message());
+      break;
+  }
+}
+
 }  // namespace uavsim::mission

@@ -130,27 +130,6 @@ void log_note(const uavsim::mission::ProgramLoop& program, const std::string& no
   }
 }
 
-// the FSM's action: a take-off, a velocity setpoint (heading held), the motors off
-void fly(Vehicle& uav, const FsmOutputs& out, double yaw_hold,
-         const uavsim::mission::ProgramLoop& program) {
-  switch (out.action) {
-    case FsmOutputs::Action::kNone:
-      break;
-    case FsmOutputs::Action::kArmAndTakeOff:
-      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
-        program.log("take-off: " + r.message());
-      break;
-    case FsmOutputs::Action::kVelocity:
-      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, yaw_hold); !r)
-        program.log("velocity: " + r.message());
-      break;
-    case FsmOutputs::Action::kForceDisarm:
-      // all motors off at once, in flight if need be (MAV_CMD_COMPONENT_ARM_DISARM, 21196)
-      if (auto r = uav.disarm(true); !r) program.log("force disarm: " + r.message());
-      break;
-  }
-}
-
 void log_interception(const uavsim::mission::ProgramLoop& program, const TruckKnowledge& truck) {
   char buf[128];
   std::snprintf(buf, sizeof(buf), "interception point (%.1f, %.1f), %.1f s to go",
@@ -304,7 +283,8 @@ int main(int argc, char** argv) {
         in.truck.interception_enu_m) {
       log_interception(program, in.truck);
     }
-    fly(uav, out, yaw_hold, program);
+    // the heading held throughout
+    uavsim::mission::fly(program, uav, out, yaw_hold);
     if (fsm.state() == LandingState::kLanded) {
       if (!touchdown_reported) {
         touchdown_reported = true;

@@ -166,29 +166,6 @@ VehicleInputs vehicle_inputs(double now_s, const Telemetry& t, const BalloonPerc
   return in;
 }
 
-// the FSM's action: a take-off, a velocity setpoint, the motors off
-void fly(Vehicle& uav, const VehicleOutputs& out, VehicleState state,
-         const uavsim::mission::ProgramLoop& program) {
-  switch (out.action) {
-    case VehicleOutputs::Action::kNone:
-      break;
-    case VehicleOutputs::Action::kArmAndTakeOff:
-      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
-        program.log("take-off failed: " + r.message());
-      break;
-    case VehicleOutputs::Action::kVelocity:
-      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad);
-          !r && state != VehicleState::kFailed) {
-        program.log("velocity: " + r.message());
-      }
-      break;
-    case VehicleOutputs::Action::kDisarm:
-      // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
-      if (auto r = uav.disarm(true); !r) program.log("disarm: " + r.message());
-      break;
-  }
-}
-
 // the STATUS the GCS reads (seed 7.2's topic)
 UavStatus status_of(const VehicleFsm& fsm, bool ready, const Telemetry& t) {
   UavStatus s;
@@ -292,7 +269,8 @@ int main(int argc, char** argv) {
     const VehicleOutputs out = fsm.step(vehicle_inputs(loop.now(), t, perception, *link));
     if (!out.note.empty()) program.log(out.note);
     point_camera(out.camera_pitch_rad);
-    fly(uav, out, fsm.state(), program);
+    // a failed vehicle's refused setpoints are expected: not logged
+    uavsim::mission::fly(program, uav, out, out.yaw_enu_rad, fsm.state() != VehicleState::kFailed);
     if (out.airspace) link->publish(kTopicAirspace, encode_airspace(*out.airspace));
     if (out.popped_enu_m) link->publish(kTopicPopped, encode_point(*out.popped_enu_m));
     if (fsm.state() != last_state || loop.now() - last_status_s >= kStatusPeriod_s) {

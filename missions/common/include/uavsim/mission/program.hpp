@@ -11,6 +11,7 @@
 
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/mission/flight_command.hpp"
 
 namespace uavsim::mission {
 
@@ -59,5 +60,13 @@ bool wait_vehicle_ready(const ProgramLoop& program, client::Vehicle& uav, double
 // The missions' take-off: GUIDED, armed, climbing to altitude_m above the ground, without waiting
 // for it (the mission's state machine watches the climb). The first refusal's error.
 client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m);
+
+// Carries out the state machine's command on the vehicle: take_off_guided, the velocity setpoint
+// with the heading yaw_enu_rad, or all motors off at once (MAV_CMD_COMPONENT_ARM_DISARM forced). A
+// refusal goes to the log as "take-off: why", "velocity: why" or "force disarm: why"; a refused
+// velocity only when log_velocity_refusal (a failed vehicle's setpoints are refused by design).
+// Loop thread only.
+void fly(const ProgramLoop& program, client::Vehicle& uav, const FlightCommand& command,
+         double yaw_enu_rad, bool log_velocity_refusal = true);
 
 }  // namespace uavsim::mission
