@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace uavsim::mission {
 
@@ -34,6 +35,19 @@ std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std
     return nullptr;
   }
   return uav;
+}
+
+bool parse_vehicle_program_option(const std::string& name, const char* value,
+                                  VehicleProgramOptions* o) {
+  for (auto [option, field] :
+       {std::pair{"--mavlink", &o->mavlink}, std::pair{"--vehicle", &o->vehicle},
+        std::pair{"--camera", &o->camera}, std::pair{"--video-log", &o->video_log}}) {
+    if (name == option) {
+      *field = value;
+      return true;
+    }
+  }
+  return false;
 }
 
 std::optional<VehicleProgram> start_vehicle_program(const std::string& vehicle,

@@ -53,26 +53,15 @@ int usage() {
   return 2;
 }
 
-struct Options {
-  std::string mavlink, vehicle = "uav0", camera, video_log;
-};
+using Options = uavsim::mission::VehicleProgramOptions;
 
 // the command line; nullopt: not usable (usage)
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
+  o.vehicle = "uav0";
   for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--mavlink") {
-      o.mavlink = argv[i + 1];
-    } else if (a == "--vehicle") {
-      o.vehicle = argv[i + 1];
-    } else if (a == "--camera") {
-      o.camera = argv[i + 1];
-    } else if (a == "--video-log") {
-      o.video_log = argv[i + 1];
-    } else {
+    if (!uavsim::mission::parse_vehicle_program_option(argv[i], argv[i + 1], &o))
       return std::nullopt;
-    }
   }
   if (o.mavlink.empty() || argc % 2 == 0) return std::nullopt;
   if (o.camera.empty()) o.camera = o.vehicle + "_down";

@@ -58,9 +58,8 @@ int usage() {
   return 2;
 }
 
-struct Options {
+struct Options : uavsim::mission::VehicleProgramOptions {
   int index = -1;
-  std::string mavlink, camera, vehicle, video_log;
   std::string gcs_host;
   int gcs_port = 0;
 };
@@ -73,17 +72,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--index") {
       if (!uavsim::common::parse_integer(argv[i + 1], 0, 1, &o.index)) return std::nullopt;
-    } else if (a == "--mavlink") {
-      o.mavlink = argv[i + 1];
     } else if (a == "--gcs") {
       gcs = argv[i + 1];
-    } else if (a == "--camera") {
-      o.camera = argv[i + 1];
-    } else if (a == "--vehicle") {
-      o.vehicle = argv[i + 1];
-    } else if (a == "--video-log") {
-      o.video_log = argv[i + 1];
-    } else {
+    } else if (!uavsim::mission::parse_vehicle_program_option(a, argv[i + 1], &o)) {
       return std::nullopt;
     }
   }

@@ -40,6 +40,19 @@ class ProgramLoop {
 std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std::string& vehicle,
                                                  const std::string& mavlink);
 
+// The command-line options every vehicle program takes; a program's own Options derive from it.
+struct VehicleProgramOptions {
+  std::string mavlink;    // --mavlink tcp:HOST:PORT
+  std::string vehicle;    // --vehicle NAME: the simulated vehicle
+  std::string camera;     // --camera NAME
+  std::string video_log;  // --video-log FILE.vlog ("" none)
+};
+
+// The option `name` with its `value` into o when it is one of VehicleProgramOptions'; false when
+// it is not (the program's own, or unknown). Thread-safe.
+bool parse_vehicle_program_option(const std::string& name, const char* value,
+                                  VehicleProgramOptions* o);
+
 // What a vehicle program (mbzirc2017-uav, mbzirc2020-uav) sets up first: its loop, named after the
 // vehicle, and its link to the vehicle.
 struct VehicleProgram {
