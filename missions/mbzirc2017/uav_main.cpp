@@ -166,8 +166,7 @@ int main(int argc, char** argv) {
   if (!o) return usage();
   const std::string& vehicle = o->vehicle;
 
-  std::optional<uavsim::mission::VehicleProgram> started =
-      uavsim::mission::start_vehicle_program(vehicle, o->mavlink);
+  auto started = uavsim::mission::start_vehicle_program(vehicle, o->mavlink);
   if (!started) return 1;
   uavsim::mission::ProgramLoop& program = *started->program;
   EventLoop& loop = program.loop();

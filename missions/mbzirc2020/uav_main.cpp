@@ -177,8 +177,7 @@ int main(int argc, char** argv) {
   const std::string& me = o->vehicle;
   const int index = o->index;
 
-  std::optional<uavsim::mission::VehicleProgram> started =
-      uavsim::mission::start_vehicle_program(me, o->mavlink);
+  auto started = uavsim::mission::start_vehicle_program(me, o->mavlink);
   if (!started) return 1;
   uavsim::mission::ProgramLoop& program = *started->program;
   EventLoop& loop = program.loop();
