@@ -20,11 +20,14 @@
 
 #include <atomic>
 #include <chrono>
+#include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "api/overlay_ops.hpp"
+#include "app/camera_owners.hpp"
+#include "app/hover_all.hpp"
 #include "app/recording.hpp"
 #include "app/run_reporter.hpp"
 #include "objects/world_objects.hpp"
@@ -43,7 +46,6 @@ namespace render = uavsim::server::render;
 namespace physics = uavsim::server::physics;
 namespace objects = uavsim::server::objects;
 namespace sim = uavsim::server::sim;
-namespace fc = uavsim::server::fc;
 using Clock = std::chrono::steady_clock;
 
 enum Variant { kNoCameras, kIdleCameras, kRecordSingle, kRecordTiled };
@@ -60,7 +62,8 @@ void BM_Run(benchmark::State& state) {
       sim::SimConfig{});
   objects::ObjectSet world_objects = objects::add_world_objects(s);
   app::RunReporter reporter(s, nullptr, nullptr);
-  s.schedule().add(sim::Phase::kPostControl, "reporter", [&reporter] { reporter.on_control_step(); });
+  s.schedule().add(sim::Phase::kPostControl, "reporter",
+                   [&reporter] { reporter.on_control_step(); });
   api::OverlayOps notes(s);
 
   // the cameras and the recorder as server_app wires them
@@ -68,13 +71,7 @@ void BM_Run(benchmark::State& state) {
   std::unique_ptr<render::VideoRecorder> recorder;
   std::atomic<uint64_t> frames_out{0};
   if (variant != kNoCameras) {
-    render::CameraOwners owners;
-    for (const auto& v : s.world().vehicles())
-      owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-    if (world_objects.gimbals) {
-      for (const auto& g : world_objects.gimbals->gimbals())
-        owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-    }
+    const render::CameraOwners owners = app::camera_owners(s.world(), world_objects);
     const std::vector<std::string> overrides{"uav0_front:width=384,height=216,fps=15",
                                              "uav1_front:width=384,height=216,fps=15"};
     std::vector<render::CameraSetup> cameras =
@@ -103,23 +100,14 @@ void BM_Run(benchmark::State& state) {
     }
   }
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
-  std::vector<bool> launched(s.vehicle_count(), false);
-  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (launched[i] || !s.fc(i).prearm_ok()) continue;
-      launched[i] = true;
-      s.post(i, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(false);
-        f.takeoff(5.0);
-      });
-    }
-  });
+  // both quads: GUIDED, arm, take off to 5 m once pre-arm passes (uavsim-server --hover 5)
+  app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
   render::FrameService* fs = frames.get();
   if (fs != nullptr) {
-    runner.add_gate(sim::Phase::kCapture, "frames", [fs, &s](double) { fs->capture(s.world().data()); });
+    runner.add_gate(sim::Phase::kCapture, "frames",
+                    [fs, &s](double) { fs->capture(s.world().data()); });
   }
   runner.run_until(kWarmupS);
   if (fs != nullptr) fs->wait_delivered();

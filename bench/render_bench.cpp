@@ -27,13 +27,13 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "../tests/support/mjcf_scene.hpp"
 #include "render/camera_renderer.hpp"
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
@@ -100,24 +100,15 @@ std::string camera_ring() {
   return xml;
 }
 
-struct Scene {
-  mjModel* m = nullptr;
-  mjData* d = nullptr;
-  Scene() {
-    const std::string path = "/tmp/uavsim_render_bench.xml";
-    std::string xml = kSceneXml;
-    xml.replace(xml.find("CAMERA_RING"), std::string("CAMERA_RING").size(), camera_ring());
-    std::ofstream(path) << xml;
-    char error[1000] = "";
-    m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-    if (m == nullptr) throw std::runtime_error(std::string("render_bench: ") + error);
-    d = mj_makeData(m);
-    mj_forward(m, d);
-  }
-  ~Scene() {
-    mj_deleteData(d);
-    mj_deleteModel(m);
-  }
+// the scene with its ring of cameras
+std::string scene_xml() {
+  std::string xml = kSceneXml;
+  xml.replace(xml.find("CAMERA_RING"), std::string("CAMERA_RING").size(), camera_ring());
+  return xml;
+}
+
+struct Scene : uavsim::testing::MjcfScene {
+  Scene() : MjcfScene(scene_xml(), "/tmp/uavsim_render_bench.xml") {}
 };
 
 // frames per second of wall time over the timed loop

@@ -35,6 +35,7 @@
 #include "path_planner.hpp"
 #include "radio_messages.hpp"
 #include "radio_pacer.hpp"
+#include "uavsim/mission/vehicle_snapshot.hpp"
 
 namespace uavsim::missions::coverage {
 
@@ -52,14 +53,9 @@ enum class AgentState : uint8_t {
 inline constexpr int kAgentStateCount = 9;
 const char* agent_state_name(AgentState s);  // "Taking Off", ...
 
-struct AgentInputs {
+// the telemetry (VehicleSnapshot: MAVLink, world ENU), then the radio
+struct AgentInputs : uavsim::mission::VehicleSnapshot {
   double now_s = 0.0;
-  // telemetry (MAVLink), world ENU
-  bool armed = false;
-  bool on_ground = true;
-  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-  double yaw_enu_rad = 0.0;
   // radio frames heard since the last step, in arrival order
   std::vector<Frame> received;
   // optimised variant (3.6): the ground station's latest map, if one arrived

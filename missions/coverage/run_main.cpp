@@ -129,8 +129,7 @@ int main(int argc, char** argv) {
   CoverageRun run(o, config, spec);
   if (!run.make_world()) return 4;
   Launcher launch("coverage-run", /*quiet=*/true);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "coverage"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  uavsim::launch::keep_run_summary(launch, "coverage", o);
   run.start(launch);
   if (!run.failed()) {
     run.set_up();

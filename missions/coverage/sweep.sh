@@ -22,12 +22,8 @@
 # the ground lost at the failures (share of the rectangle, all and per failed agent), its floor.
 # COVERAGE_RUN overrides the launcher (default: build/missions/coverage/coverage-run).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
-run=${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}
-cmd=${1:-}
-out=${2:-}
-usage() { sed -n 2,24p "$0"; exit 2; }
-[[ -n "$cmd" && -n "$out" ]] || usage
+source "$(dirname "$0")/../common/sweep_lib.sh"
+sweep_start 2,24 "${COVERAGE_RUN:-$root/build/missions/coverage/coverage-run}" "$@"
 case "$cmd" in
   jobs)
     area=${3:-600x600}
@@ -35,19 +31,20 @@ case "$cmd" in
     agents=${SWEEP_AGENTS-5 10 15 20 25}
     fail_agents=${SWEEP_FAIL_AGENTS-25}
     probs=${SWEEP_PROBS-0.0005 0.0007 0.0009 0.001 0.003 0.005 0.007 0.009}
-    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[1-9][0-9]*$ ]] || usage
-    for n in $agents $fail_agents; do [[ "$n" =~ ^[0-9]+$ ]] || usage; done
-    for p in $probs; do [[ "$p" =~ ^0?\.[0-9]+$ ]] || usage; done
+    [[ "$area" =~ ^[0-9.]+x[0-9.]+$ && "$seeds" =~ ^[1-9][0-9]*$ ]] || sweep_usage
+    for n in $agents $fail_agents; do [[ "$n" =~ ^[0-9]+$ ]] || sweep_usage; done
+    for p in $probs; do [[ "$p" =~ ^0?\.[0-9]+$ ]] || sweep_usage; done
     # SWEEP_ARGS: its --budget is the sweep's; the rest goes to every run as it is
     budget=5000
-    extra=""
+    rest=()
     set -- ${SWEEP_ARGS-}
     while (($#)); do
       if [[ "$1" == --budget && $# -gt 1 ]]; then budget=$2; shift 2; continue; fi
-      extra+=", \"${1//[\"\\]/}\""
+      rest+=("$1")
       shift
     done
-    [[ "$budget" =~ ^[0-9.]+$ ]] || usage
+    extra=$(sweep_toml_args "${rest[@]}")
+    [[ "$budget" =~ ^[0-9.]+$ ]] || sweep_usage
     list() { local out="" x; for x in "$@"; do out+="${out:+, }$x"; done; echo "[$out]"; }
     mkdir -p "$out"
     {
@@ -60,7 +57,7 @@ case "$cmd" in
       [[ -z "${agents// /}" ]] || part "agents = $(list $agents)"
       [[ -z "$fail_agents" ]] || part "agents = $fail_agents, failure_prob = $(list $probs)"
     } > "$out/sweep.toml"
-    /usr/bin/python3 "$root/tools/sweep/uavsim-sweep" jobs "$out/sweep.toml" "$out" --launcher-dir "$(dirname "$run")"
+    sweep_jobs "$out/sweep.toml"
     ;;
   table)
     python3 - "$out" "$root" <<'PY'
@@ -168,5 +165,5 @@ PY
     [[ -x "$py" ]] || py=python3
     "$py" "$root/missions/coverage/plot_sweep.py" "$out" "${3:-$out}"
     ;;
-  *) usage ;;
+  *) sweep_usage ;;
 esac

@@ -13,6 +13,7 @@
 #include "funnel.hpp"
 #include "mission_config.hpp"
 #include "uavsim/client/pid.hpp"
+#include "uavsim/mission/flight_command.hpp"
 
 namespace uavsim::missions::mbzirc2017 {
 
@@ -48,11 +49,8 @@ struct FsmInputs {
   TruckKnowledge truck;
 };
 
-struct FsmOutputs {
-  enum class Action { kNone, kArmAndTakeOff, kVelocity, kForceDisarm };
-  Action action = Action::kNone;
-  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-  double takeoff_altitude_m = 0.0;
+// the flight command (the heading is held by the program), then the FSM's note
+struct FsmOutputs : uavsim::mission::FlightCommand {
   std::string note;  // a progress line, when something happened
 };
 

@@ -36,7 +36,6 @@
 #include <string>
 
 #include "landing_run.hpp"
-#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
 #include "uavsim/launch/run_options.hpp"
@@ -87,6 +86,8 @@ Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV prog
 
 using uavsim::common::parse_double;
 using uavsim::common::parse_integer;
+using uavsim::launch::parse_run_option;
+using uavsim::launch::RunOptionParse;
 
 // the command line into o; false: not usable (usage)
 bool parse_options(int argc, char** argv, LandingRunOptions* o) {
@@ -110,8 +111,9 @@ bool parse_options(int argc, char** argv, LandingRunOptions* o) {
       return false;
     } else if ((v = next()) == nullptr) {
       return false;
-    } else if (a == "--seed") {
-      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o->seed)) return false;
+    } else if (const auto common = parse_run_option(a, v, o);
+               common != RunOptionParse::kNotCommon) {
+      if (common == RunOptionParse::kBad) return false;
     } else if (a == "--truck-speed-kmh") {
       if (std::string(v) == "random") {
         o->random_truck_speed = true;
@@ -138,32 +140,10 @@ bool parse_options(int argc, char** argv, LandingRunOptions* o) {
       if (!parse_integer<int>(v, 0, kMaxBlackouts, &o->random_blackouts)) return false;
     } else if (a == "--start-time") {
       if (!parse_double(v, 0.0, kMaxStart_s, &o->start_time_s)) return false;
-    } else if (a == "--record") {
-      o->record = v;
-    } else if (a == "--json") {
-      o->json_path = v;
-    } else if (a == "--run-dir") {
-      o->run_dir = v;
-    } else if (a == "--record-camera") {
-      o->record_camera = v;
-    } else if (a == "--record-layout") {
-      o->record_layout = v;
-    } else if (a == "--truth-hz") {
-      if (!parse_double(v, 0.01, 1000.0, &o->truth_hz)) return false;
-    } else if (a == "--events") {
-      o->events_path = v;
-    } else if (a == "--realism") {
-      o->realism = v;
-    } else if (a == "--wind") {
-      o->wind = v;
     } else if (a == "--budget") {
       if (!parse_double(v, 1.0, 36000.0, &o->budget_s)) return false;
     } else if (a == "--wall-limit") {
       if (!parse_double(v, 1.0, 86400.0, &o->wall_limit_s)) return false;
-    } else if (a == "--world") {
-      o->world = v;
-    } else if (a == "--server") {
-      o->server = v;
     } else if (a == "--uav") {
       o->uav = v;
     } else {
@@ -177,16 +157,14 @@ bool parse_options(int argc, char** argv, LandingRunOptions* o) {
 
 int main(int argc, char** argv) {
   LandingRunOptions o;
-  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
-  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2017.xml";
-  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
+  uavsim::launch::default_world_and_server(&o, "mbzirc2017.xml", UAVSIM_MODELS_DIR,
+                                           UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2017-uav");
   if (!parse_options(argc, argv, &o)) return usage();
   if (!uavsim::launch::resolve_run_files("mbzirc2017", &o, !o.no_record)) return 2;
   uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2017-run", o.quiet);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "mbzirc2017"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  uavsim::launch::keep_run_summary(launch, "mbzirc2017", o);
   LandingRun run(launch, o);
   if (const int code = run.prepare(); code != 0) return code;
   run.start_server();

@@ -11,16 +11,11 @@
 # MBZIRC2017_RUN overrides the launcher (default: build/missions/mbzirc2017/mbzirc2017-run); MBZIRC2017_ARGS
 # adds options to every run.
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
-run=${MBZIRC2017_RUN:-$root/build/missions/mbzirc2017/mbzirc2017-run}
-cmd=${1:-}
-out=${2:-}
-[[ -n "$cmd" && -n "$out" ]] || { sed -n 2,13p "$0"; exit 2; }
+source "$(dirname "$0")/../common/sweep_lib.sh"
+sweep_start 2,13 "${MBZIRC2017_RUN:-$root/build/missions/mbzirc2017/mbzirc2017-run}" "$@"
 case "$cmd" in
   jobs)
-    first=${3:-1}
-    count=${4:-20}
-    [[ "$first" =~ ^[0-9]+$ && "$count" =~ ^[1-9][0-9]*$ ]] || { sed -n 2,13p "$0"; exit 2; }
+    sweep_seeds "${3:-1}" "${4:-20}"
     space=${6:-fixed}
     [[ "$space" == fixed || "$space" == sampled ]] || { echo "SPACE: fixed or sampled" >&2; exit 2; }
     args=(--mission mbzirc2017 --seeds "$first-$((first + count - 1))" --budget 300 --arg=--quiet)
@@ -29,7 +24,7 @@ case "$cmd" in
       for a in --start-phase random --truck-speed-kmh random --random-blackouts 2; do args+=("--arg=$a"); done
     fi
     for a in ${MBZIRC2017_ARGS:-}; do args+=("--arg=$a"); done
-    /usr/bin/python3 "$root/tools/sweep/uavsim-sweep" jobs "${args[@]}" --launcher-dir "$(dirname "$run")" "$out"
+    sweep_jobs "${args[@]}"
     ;;
   table)
     python3 - "$out" <<'PY'
@@ -115,5 +110,5 @@ else:
 print("the thesis's competition run (section 7.1): one landing, 140 s")
 PY
     ;;
-  *) sed -n 2,13p "$0"; exit 2 ;;
+  *) sweep_usage ;;
 esac

@@ -30,6 +30,7 @@
 #include "uavsim/client/vehicle.hpp"
 #include "uavsim/mission/camera_frames.hpp"
 #include "uavsim/mission/program.hpp"
+#include "uavsim/mission/vehicle_camera.hpp"
 #include "uavsim/vision/video_log.hpp"
 
 using namespace uavsim::client;
@@ -52,26 +53,15 @@ int usage() {
   return 2;
 }
 
-struct Options {
-  std::string mavlink, vehicle = "uav0", camera, video_log;
-};
+using Options = uavsim::mission::VehicleProgramOptions;
 
 // the command line; nullopt: not usable (usage)
 std::optional<Options> parse_options(int argc, char** argv) {
   Options o;
+  o.vehicle = "uav0";
   for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--mavlink") {
-      o.mavlink = argv[i + 1];
-    } else if (a == "--vehicle") {
-      o.vehicle = argv[i + 1];
-    } else if (a == "--camera") {
-      o.camera = argv[i + 1];
-    } else if (a == "--video-log") {
-      o.video_log = argv[i + 1];
-    } else {
+    if (!uavsim::mission::parse_vehicle_program_option(argv[i], argv[i + 1], &o))
       return std::nullopt;
-    }
   }
   if (o.mavlink.empty() || argc % 2 == 0) return std::nullopt;
   if (o.camera.empty()) o.camera = o.vehicle + "_down";
@@ -129,27 +119,6 @@ void log_note(const uavsim::mission::ProgramLoop& program, const std::string& no
   }
 }
 
-// the FSM's action: a take-off, a velocity setpoint (heading held), the motors off
-void fly(Vehicle& uav, const FsmOutputs& out, double yaw_hold,
-         const uavsim::mission::ProgramLoop& program) {
-  switch (out.action) {
-    case FsmOutputs::Action::kNone:
-      break;
-    case FsmOutputs::Action::kArmAndTakeOff:
-      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
-        program.log("take-off: " + r.message());
-      break;
-    case FsmOutputs::Action::kVelocity:
-      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, yaw_hold); !r)
-        program.log("velocity: " + r.message());
-      break;
-    case FsmOutputs::Action::kForceDisarm:
-      // all motors off at once, in flight if need be (MAV_CMD_COMPONENT_ARM_DISARM, 21196)
-      if (auto r = uav.disarm(true); !r) program.log("force disarm: " + r.message());
-      break;
-  }
-}
-
 void log_interception(const uavsim::mission::ProgramLoop& program, const TruckKnowledge& truck) {
   char buf[128];
   std::snprintf(buf, sizeof(buf), "interception point (%.1f, %.1f), %.1f s to go",
@@ -197,14 +166,11 @@ int main(int argc, char** argv) {
   if (!o) return usage();
   const std::string& vehicle = o->vehicle;
 
-  auto program = uavsim::mission::ProgramLoop::create(vehicle);
-  if (!program) return 1;
-  EventLoop& loop = program->loop();
-  auto log = [&](const std::string& s) { program->log(s); };
-  const std::unique_ptr<Vehicle> link =
-      uavsim::mission::connect_vehicle(*program, vehicle, o->mavlink);
-  if (!link) return 1;
-  Vehicle& uav = *link;
+  auto started = uavsim::mission::start_vehicle_program(vehicle, o->mavlink);
+  if (!started) return 1;
+  uavsim::mission::ProgramLoop& program = *started->program;
+  EventLoop& loop = program.loop();
+  Vehicle& uav = *started->vehicle;
 
   TimedPose pose;
   // the position's own time (time_boot_ms) on the loop clock: the smallest arrival delay seen is
@@ -241,26 +207,14 @@ int main(int argc, char** argv) {
   // pipeline that always takes the latest image)
   std::optional<Pending> pending;
   std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
-  if (!o->video_log.empty()) {
-    auto opened = uavsim::vision::VideoLogWriter::open(
-        o->video_log, uavsim::vision::write_error_said_by(o->vehicle));
-    if (!opened) {
-      log("--video-log " + o->video_log + ": " + uavsim::vision::to_string(opened.error()));
-      return 1;
-    }
-    vlog = std::move(*opened);
-  }
-  CameraConfig cc;
-  cc.camera = o->camera;
-  cc.format = CameraFormat::kGrey;
-  auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
-    if (pose.time_s < 0 || f.image.empty()) return;
-    pending = pending_frame(f, pose, perception);
-  });
-  if (!sub) {
-    log("camera " + o->camera + ": " + sub.message());
-    return 1;
-  }
+  if (!uavsim::mission::open_video_log(program, o->video_log, &vlog)) return 1;
+  const auto sub = uavsim::mission::subscribe_camera(program, o->camera, CameraFormat::kGrey,
+                                                     [&](const CameraFrame& f) {
+                                                       if (pose.time_s < 0 || f.image.empty())
+                                                         return;
+                                                       pending = pending_frame(f, pose, perception);
+                                                     });
+  if (!sub) return 1;
 
   // the landing-pad microswitches
   bool switch_closed = false;
@@ -268,30 +222,27 @@ int main(int argc, char** argv) {
   auto switches =
       PadSwitches::subscribe(loop, vehicle, [&](const SwitchState& s) { switch_closed = s.any(); });
   if (!switches) {
-    log("pad switches: " + switches.message());
+    program.log("pad switches: " + switches.message());
     return 1;
   }
 
-  if (auto r = uav.wait_ready(120); !r) {
-    log("wait ready: " + r.message());
-    return 1;
-  }
+  if (!uavsim::mission::wait_vehicle_ready(program, uav, 120)) return 1;
   const double yaw_hold = enu_yaw_from_ned(uav.telemetry().yaw_rad);
   LandingFsm fsm(config);
-  log("ready: MBZIRC 2017 landing, FSM of seed fig. 7.6");
+  program.log("ready: MBZIRC 2017 landing, FSM of seed fig. 7.6");
 
   double last_step_s = -1e9, landed_s = -1.0;
   int reported_detections = 0;
   bool touchdown_reported = false;
   while (loop.now() < kBudget_s) {
     if (!loop.clock_alive()) {
-      log("clock lost");
+      program.log("clock lost");
       return 1;
     }
     if (pending) {
       const Pending frame = std::move(*pending);
       pending.reset();
-      camera_dark = look_at(loop, config, frame, perception, reported_detections, *program);
+      camera_dark = look_at(loop, config, frame, perception, reported_detections, program);
       reported_detections = perception.detections();
       if (vlog) {
         DrawingContext context;
@@ -315,22 +266,23 @@ int main(int argc, char** argv) {
                                     estimate_monitor.settling(), perception);
     const LandingState before = fsm.state();
     const FsmOutputs out = fsm.step(in);
-    log_note(*program, out.note);
+    log_note(program, out.note);
     if (fsm.state() == LandingState::kIntercept && before != LandingState::kIntercept &&
         in.truck.interception_enu_m) {
-      log_interception(*program, in.truck);
+      log_interception(program, in.truck);
     }
-    fly(uav, out, yaw_hold, *program);
+    // the heading held throughout
+    uavsim::mission::fly(program, uav, out, yaw_hold);
     if (fsm.state() == LandingState::kLanded) {
       if (!touchdown_reported) {
         touchdown_reported = true;
         landed_s = loop.now();
-        log_touchdown(*program, in);
+        log_touchdown(program, in);
       }
       if (loop.now() - landed_s > kLinger_s && !uav.telemetry().armed) break;
     }
   }
-  log(std::string("mission over: ") + landing_state_name(fsm.state()) + ", " +
-      std::to_string(perception.detections()) + " marker detections");
+  program.log(std::string("mission over: ") + landing_state_name(fsm.state()) + ", " +
+              std::to_string(perception.detections()) + " marker detections");
   return fsm.state() == LandingState::kLanded ? 0 : 3;
 }

@@ -24,7 +24,6 @@
 #include <vector>
 
 #include "uavsim/client/sim_connection.hpp"
-#include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/launch/launcher.hpp"
 #include "uavsim/launch/run_options.hpp"
@@ -49,7 +48,8 @@ struct Options : uavsim::launch::RunOptions {
 };
 
 using uavsim::common::parse_double;
-using uavsim::common::parse_integer;
+using uavsim::launch::parse_run_option;
+using uavsim::launch::RunOptionParse;
 
 int usage() {
   std::fprintf(stderr, R"(usage: mbzirc2020-run [options]
@@ -102,12 +102,8 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       return false;
     else if ((v = next()) == nullptr)
       return false;
-    else if (a == "--seed") {
-      if (!parse_integer<std::uint64_t>(v, 0, UINT64_MAX, &o->seed)) return false;
-    } else if (a == "--world")
-      o->world = v;
-    else if (a == "--record")
-      o->record = v;
+    else if (const auto common = parse_run_option(a, v, o); common != RunOptionParse::kNotCommon)
+      ok = common == RunOptionParse::kTaken;
     else if (a == "--budget")
       ok = parse_double(v, 1.0, 36000.0, &o->budget_s);
     else if (a == "--wall-limit")
@@ -122,28 +118,11 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       o->gcs_link_backend = v;
       ok = o->gcs_link_backend == "simple" || o->gcs_link_backend == "ns3";
       if (!ok) std::fprintf(stderr, "mbzirc2020-run: --gcs-link-backend needs simple or ns3\n");
-    } else if (a == "--json")
-      o->json_path = v;
-    else if (a == "--run-dir")
-      o->run_dir = v;
-    else if (a == "--record-camera")
-      o->record_camera = v;
-    else if (a == "--record-layout")
-      o->record_layout = v;
-    else if (a == "--truth-hz")
-      ok = parse_double(v, 0.01, 1000.0, &o->truth_hz);
-    else if (a == "--events")
-      o->events_path = v;
-    else if (a == "--realism")
-      o->realism = v;
-    else if (a == "--wind")
-      o->wind = v;
+    }
     else if (a == "--camera-size")
       o->camera_size = v;
     else if (a == "--camera-fps")
       ok = parse_double(v, 0.1, 1000.0, &o->camera_fps);
-    else if (a == "--server")
-      o->server = v;
     else if (a == "--uav")
       o->uav = v;
     else if (a == "--gcs")
@@ -487,9 +466,8 @@ Json summary_json(const Options& o, const Run& run, const Launcher& launch, bool
 
 int main(int argc, char** argv) {
   Options o;
-  // an install's own server and models (PREFIX/bin, PREFIX/share/uavsim/models), else the build's
-  o.world = uavsim::common::find_models_dir("", UAVSIM_MODELS_DIR).path + "/worlds/mbzirc2020.xml";
-  o.server = uavsim::common::installed_or_built_program("uavsim-server", UAVSIM_SERVER_PATH);
+  uavsim::launch::default_world_and_server(&o, "mbzirc2020.xml", UAVSIM_MODELS_DIR,
+                                           UAVSIM_SERVER_PATH);
   o.uav = uavsim::launch::sibling_program("mbzirc2020-uav");
   o.gcs = uavsim::launch::sibling_program("mbzirc2020-gcs");
   bool record = true;
@@ -502,8 +480,7 @@ int main(int argc, char** argv) {
                                ",fps=" + std::to_string(static_cast<int>(o.camera_fps));
   uavsim::launch::catch_interrupts();
   Launcher launch("mbzirc2020-run", o.quiet);
-  launch.keep_summary(o.json_path,
-                      {{"mission", "mbzirc2020"}, {"seed", o.seed}, {"run_dir", o.run_dir}});
+  uavsim::launch::keep_run_summary(launch, "mbzirc2020", o);
   Harness h;
   Run run;
 

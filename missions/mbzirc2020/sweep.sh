@@ -9,21 +9,15 @@
 # OUT_DIR/runs/ID (its run directory, log and exit code). MBZIRC2020_RUN overrides the launcher (default:
 # build/missions/mbzirc2020/mbzirc2020-run); MBZIRC2020_ARGS adds options to every run (e.g. --wind 6,270).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
-run=${MBZIRC2020_RUN:-$root/build/missions/mbzirc2020/mbzirc2020-run}
-cmd=${1:-}
-out=${2:-}
-[[ -n "$cmd" && -n "$out" ]] || { sed -n 2,11p "$0"; exit 2; }
+source "$(dirname "$0")/../common/sweep_lib.sh"
+sweep_start 2,11 "${MBZIRC2020_RUN:-$root/build/missions/mbzirc2020/mbzirc2020-run}" "$@"
 case "$cmd" in
   jobs)
-    first=${3:-1}
-    count=${4:-10}
-    [[ "$first" =~ ^[0-9]+$ && "$count" =~ ^[1-9][0-9]*$ ]] || { sed -n 2,11p "$0"; exit 2; }
-    [[ -z "${5:-}" || "$5" =~ ^(field|ideal)$ ]] || { sed -n 2,11p "$0"; exit 2; }
+    sweep_seeds "${3:-1}" "${4:-10}"
+    [[ -z "${5:-}" || "$5" =~ ^(field|ideal)$ ]] || sweep_usage
     seeds="[$(seq -s, "$first" $((first + count - 1)))]"
     realism=${5:+realism = \"$5\"}
-    extra=""
-    for a in ${MBZIRC2020_ARGS:-}; do extra+=", \"${a//[\"\\]/}\""; done
+    extra=$(sweep_toml_args ${MBZIRC2020_ARGS:-})
     mkdir -p "$out"
     # two sweeps in one: both UAVs, and uav1 killed after its take-off
     {
@@ -34,7 +28,7 @@ case "$cmd" in
           "$seeds" "$extra" "$grid"
       done
     } > "$out/sweep.toml"
-    /usr/bin/python3 "$root/tools/sweep/uavsim-sweep" jobs "$out/sweep.toml" --launcher-dir "$(dirname "$run")" "$out"
+    sweep_jobs "$out/sweep.toml"
     ;;
   table)
     python3 - "$out" <<'PY'
@@ -75,5 +69,5 @@ print("two UAVs: " + stats(two) + "   (seed table 7.1: 126 s and 162 s, 5/5)")
 print("one UAV:  " + stats(one) + "   (seed table 7.1: 262 s and 306 s, 5/5)")
 PY
     ;;
-  *) sed -n 2,11p "$0"; exit 2 ;;
+  *) sweep_usage ;;
 esac

@@ -28,6 +28,7 @@
 #include "uavsim/common/parse_number.hpp"
 #include "uavsim/mission/camera_frames.hpp"
 #include "uavsim/mission/program.hpp"
+#include "uavsim/mission/vehicle_camera.hpp"
 #include "uavsim/vision/video_log.hpp"
 #include "vehicle_fsm.hpp"
 
@@ -57,9 +58,8 @@ int usage() {
   return 2;
 }
 
-struct Options {
+struct Options : uavsim::mission::VehicleProgramOptions {
   int index = -1;
-  std::string mavlink, camera, vehicle, video_log;
   std::string gcs_host;
   int gcs_port = 0;
 };
@@ -72,17 +72,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "--index") {
       if (!uavsim::common::parse_integer(argv[i + 1], 0, 1, &o.index)) return std::nullopt;
-    } else if (a == "--mavlink") {
-      o.mavlink = argv[i + 1];
     } else if (a == "--gcs") {
       gcs = argv[i + 1];
-    } else if (a == "--camera") {
-      o.camera = argv[i + 1];
-    } else if (a == "--vehicle") {
-      o.vehicle = argv[i + 1];
-    } else if (a == "--video-log") {
-      o.video_log = argv[i + 1];
-    } else {
+    } else if (!uavsim::mission::parse_vehicle_program_option(a, argv[i + 1], &o)) {
       return std::nullopt;
     }
   }
@@ -165,29 +157,6 @@ VehicleInputs vehicle_inputs(double now_s, const Telemetry& t, const BalloonPerc
   return in;
 }
 
-// the FSM's action: a take-off, a velocity setpoint, the motors off
-void fly(Vehicle& uav, const VehicleOutputs& out, VehicleState state,
-         const uavsim::mission::ProgramLoop& program) {
-  switch (out.action) {
-    case VehicleOutputs::Action::kNone:
-      break;
-    case VehicleOutputs::Action::kArmAndTakeOff:
-      if (auto r = uavsim::mission::take_off_guided(uav, out.takeoff_altitude_m); !r)
-        program.log("take-off failed: " + r.message());
-      break;
-    case VehicleOutputs::Action::kVelocity:
-      if (auto r = uav.set_velocity_enu_yaw(out.velocity_enu_m_s, out.yaw_enu_rad);
-          !r && state != VehicleState::kFailed) {
-        program.log("velocity: " + r.message());
-      }
-      break;
-    case VehicleOutputs::Action::kDisarm:
-      // forced: the autopilot's land detector may not have agreed yet (the FSM saw the touchdown)
-      if (auto r = uav.disarm(true); !r) program.log("disarm: " + r.message());
-      break;
-  }
-}
-
 // the STATUS the GCS reads (seed 7.2's topic)
 UavStatus status_of(const VehicleFsm& fsm, bool ready, const Telemetry& t) {
   UavStatus s;
@@ -208,14 +177,11 @@ int main(int argc, char** argv) {
   const std::string& me = o->vehicle;
   const int index = o->index;
 
-  auto program = uavsim::mission::ProgramLoop::create(me);
-  if (!program) return 1;
-  EventLoop& loop = program->loop();
-  auto log = [&](const std::string& s) { program->log(s); };
-  const std::unique_ptr<Vehicle> vehicle =
-      uavsim::mission::connect_vehicle(*program, me, o->mavlink);
-  if (!vehicle) return 1;
-  Vehicle& uav = *vehicle;
+  auto started = uavsim::mission::start_vehicle_program(me, o->mavlink);
+  if (!started) return 1;
+  uavsim::mission::ProgramLoop& program = *started->program;
+  EventLoop& loop = program.loop();
+  Vehicle& uav = *started->vehicle;
 
   // the ground-station link (seed 6.3)
   std::string error;
@@ -223,11 +189,11 @@ int main(int argc, char** argv) {
       GcsLink::open(GcsLinkConfig{static_cast<uint8_t>(index)},
                     {"127.0.0.1", 0, o->gcs_host, static_cast<uint16_t>(o->gcs_port)}, &error);
   if (!link) {
-    log("GCS link: " + error);
+    program.log("GCS link: " + error);
     return 1;
   }
   (void)loop.watch_fd(link->fd(), EventLoop::kReadable,
-                      [&](uint32_t) { link->service(program->now_us()); });
+                      [&](uint32_t) { link->service(program.now_us()); });
 
   TimedPose pose;
   GimbalReports gimbal_reports;
@@ -245,34 +211,18 @@ int main(int argc, char** argv) {
   const MissionConfig config;
   BalloonPerception perception(config);
   std::unique_ptr<uavsim::vision::VideoLogWriter> vlog;
-  if (!o->video_log.empty()) {
-    auto opened = uavsim::vision::VideoLogWriter::open(
-        o->video_log, uavsim::vision::write_error_said_by(me));
-    if (!opened) {
-      log("--video-log " + o->video_log + ": " + uavsim::vision::to_string(opened.error()));
-      return 1;
-    }
-    vlog = std::move(*opened);
-  }
-  CameraConfig cc;
-  cc.camera = o->camera;
-  cc.format = CameraFormat::kBgr;
-  auto sub = CameraSubscriber::subscribe(loop, cc, [&](const CameraFrame& f) {
-    on_camera_frame(f, pose, gimbal_reports, perception, vlog.get(), me);
-  });
-  if (!sub) {
-    log("camera " + o->camera + ": " + sub.message());
-    return 1;
-  }
+  if (!uavsim::mission::open_video_log(program, o->video_log, &vlog)) return 1;
+  const auto sub = uavsim::mission::subscribe_camera(
+      program, o->camera, CameraFormat::kBgr, [&](const CameraFrame& f) {
+        on_camera_frame(f, pose, gimbal_reports, perception, vlog.get(), me);
+      });
+  if (!sub) return 1;
 
-  if (auto r = uav.wait_ready(120); !r) {
-    log("wait ready: " + r.message());
-    return 1;
-  }
+  if (!uavsim::mission::wait_vehicle_ready(program, uav, 120)) return 1;
   if (auto r = uav.command_long(kSetMessageInterval, {kGimbalDeviceAttitudeStatus,
                                                       kGimbalReportInterval_us, 0, 0, 0, 0, 0});
       !r) {
-    log("gimbal reports: " + r.message() + " (frames placed with the commanded elevation)");
+    program.log("gimbal reports: " + r.message() + " (frames placed with the commanded elevation)");
   }
   // the gimbal follows the FSM's wanted elevation; if it refuses, the camera stays level
   bool gimbal_ok = true;
@@ -281,7 +231,7 @@ int main(int argc, char** argv) {
     if (!gimbal_ok || pitch_rad == gimbal_pitch_rad) return;
     perception.set_camera_pitch(pitch_rad, loop.now());
     if (auto r = uav.point_gimbal(pitch_rad * 180.0 / uavsim::common::kPi, 0.0); !r) {
-      log("gimbal: " + r.message() + " (keeping it level)");
+      program.log("gimbal: " + r.message() + " (keeping it level)");
       gimbal_ok = false;
       perception.set_camera_pitch(0.0, loop.now());
     }
@@ -291,25 +241,26 @@ int main(int argc, char** argv) {
   const Eigen::Vector2d home = uav.telemetry().position_enu_m.head<2>();
   const Side side = index == 0 ? Side::kSouth : Side::kNorth;
   VehicleFsm fsm(config, index, side, home);
-  log(std::string("ready at (") + std::to_string(home.x()).substr(0, 6) + ", " +
-      std::to_string(home.y()).substr(0, 6) + "), side " +
-      (side == Side::kSouth ? "south" : "north") + ": waiting for the GCS start");
+  program.log(std::string("ready at (") + std::to_string(home.x()).substr(0, 6) + ", " +
+              std::to_string(home.y()).substr(0, 6) + "), side " +
+              (side == Side::kSouth ? "south" : "north") + ": waiting for the GCS start");
 
   double last_status_s = -1e9, end_s = -1.0;
   VehicleState last_state = fsm.state();
   while (end_s < 0 || loop.now() < end_s + kLinger_s) {
     if (auto r = loop.run_for(kStep_s); !r) {
-      log("clock: " + r.message());
+      program.log("clock: " + r.message());
       return 1;
     }
-    link->service(program->now_us());
+    link->service(program.now_us());
 
     // inputs: telemetry, sightings, GCS messages; outputs: setpoints and GCS messages
     const Telemetry& t = uav.telemetry();
     const VehicleOutputs out = fsm.step(vehicle_inputs(loop.now(), t, perception, *link));
-    if (!out.note.empty()) log(out.note);
+    if (!out.note.empty()) program.log(out.note);
     point_camera(out.camera_pitch_rad);
-    fly(uav, out, fsm.state(), *program);
+    // a failed vehicle's refused setpoints are expected: not logged
+    uavsim::mission::fly(program, uav, out, out.yaw_enu_rad, fsm.state() != VehicleState::kFailed);
     if (out.airspace) link->publish(kTopicAirspace, encode_airspace(*out.airspace));
     if (out.popped_enu_m) link->publish(kTopicPopped, encode_point(*out.popped_enu_m));
     if (fsm.state() != last_state || loop.now() - last_status_s >= kStatusPeriod_s) {
@@ -320,8 +271,8 @@ int main(int argc, char** argv) {
     if (end_s < 0 &&
         (fsm.state() == VehicleState::kLanded || fsm.state() == VehicleState::kFailed)) {
       end_s = loop.now();
-      log(std::string("mission over: ") + vehicle_state_name(fsm.state()) + ", " +
-          std::to_string(fsm.popped()) + " balloon(s) pierced");
+      program.log(std::string("mission over: ") + vehicle_state_name(fsm.state()) + ", " +
+                  std::to_string(fsm.popped()) + " balloon(s) pierced");
     }
   }
   loop.unwatch_fd(link->fd());

@@ -26,6 +26,8 @@
 #include "messages.hpp"
 #include "mission_config.hpp"
 #include "touchdown_gate.hpp"
+#include "uavsim/mission/flight_command.hpp"
+#include "uavsim/mission/vehicle_snapshot.hpp"
 
 namespace uavsim::missions::mbzirc2020 {
 
@@ -52,14 +54,10 @@ struct BalloonSighting {
   double last_seen_s = 0.0;                                  // loop time of the last hit
 };
 
-struct VehicleInputs {
+// the telemetry (VehicleSnapshot: MAVLink, world ENU, and the attitude's roll and pitch), the
+// camera's sightings, the GCS messages
+struct VehicleInputs : uavsim::mission::VehicleSnapshot {
   double now_s = 0.0;
-  // telemetry (MAVLink)
-  bool armed = false;
-  bool on_ground = true;
-  Eigen::Vector3d position_enu_m = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();
-  double yaw_enu_rad = 0.0;
   double roll_rad = 0.0, pitch_rad = 0.0;  // ATTITUDE (NED: right wing down, nose up positive)
   // camera
   std::vector<BalloonSighting> balloons;
@@ -68,12 +66,9 @@ struct VehicleInputs {
   std::vector<std::optional<AirspaceArea>> airspace_replies;
 };
 
-struct VehicleOutputs {
-  enum class Action { kNone, kArmAndTakeOff, kVelocity, kDisarm };
-  Action action = Action::kNone;
-  Eigen::Vector3d velocity_enu_m_s = Eigen::Vector3d::Zero();  // kVelocity
-  double yaw_enu_rad = 0.0;                                    // kVelocity
-  double takeoff_altitude_m = 0.0;                             // kArmAndTakeOff
+// the flight command with its heading, the gimbal's elevation, the GCS messages, the note
+struct VehicleOutputs : uavsim::mission::FlightCommand {
+  double yaw_enu_rad = 0.0;  // kVelocity
   // the gimbal's wanted elevation (negative: down); level while piercing, so that the balloon stays
   // in view up to the blades, a few degrees down otherwise (mission_config.hpp)
   double camera_pitch_rad = 0.0;

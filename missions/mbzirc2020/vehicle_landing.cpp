@@ -148,7 +148,7 @@ void VehicleFsm::land_descend(const VehicleInputs& in, VehicleOutputs& out) {
   out.yaw_enu_rad = landing_yaw_rad_;
   if (touched_down(in, h, pause)) {
     land_phase_ = LandPhase::kMotorsOff;
-    out.action = VehicleOutputs::Action::kDisarm;
+    out.action = VehicleOutputs::Action::kForceDisarm;
     out.note = fmt("touchdown at %.2f m: motors off", h);
   }
 }

@@ -1,81 +1,28 @@
-// CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a small
-// camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host clock.
-#include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
+// CameraSubscriber against uavsim-server (a subprocess: its frame service renders offscreen) on a
+// small camera: frames as cv::Mat with stamps, intrinsics and pose, under lockstep and on the host
+// clock.
+#include "uavsim/client/camera.hpp"
 
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
 #include <cmath>
 #include <cstdio>
 #include <regex>
 
-#include <Eigen/LU>
-
-#include "uavsim/client/camera.hpp"
+#include "server_process.hpp"
 #include "uavsim/client/event_loop.hpp"
-
-extern char** environ;
 
 namespace uavsim::client::testing {
 namespace {
 
-// uavsim-server on ephemeral ports; the API port read from its output
-class ServerProcess {
- public:
-  explicit ServerProcess(const std::vector<std::string>& extra) {
-    std::vector<std::string> args{UAVSIM_SERVER, std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml", "--rate", "0",
-                                  "--mavlink-port", "0", "--api-port", "0"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, fds[0]);
-    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fds[1]);
-    out_ = fdopen(fds[0], "r");
-    char line[1024];
-    const std::regex api(R"(sim API on tcp:[0-9.]+:(\d+))");
-    const std::regex mav(R"(MAVLink on tcp:[0-9.]+:(\d+))");
-    while (pid_ > 0 && fgets(line, sizeof(line), out_) != nullptr) {
-      output_ += line;
-      std::cmatch m;
-      if (std::regex_search(line, m, mav) && mavlink_port_ == 0) mavlink_port_ = std::stoi(m[1]);
-      if (std::regex_search(line, m, api)) {
-        port_ = std::stoi(m[1]);
-        break;
-      }
-    }
-  }
-  ~ServerProcess() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (out_ != nullptr) fclose(out_);
-  }
-  int api_port() const { return port_; }
-  int mavlink_port() const { return mavlink_port_; }
-  const std::string& output() const { return output_; }
-
- private:
-  pid_t pid_ = -1;
-  FILE* out_ = nullptr;
-  int port_ = 0;
-  int mavlink_port_ = 0;
-  std::string output_;
-};
+// the empty world, its cameras as each test asks
+const std::string kEmptyWorld = std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml";
 
 const std::vector<std::string> kSmallCamera{"--camera", "overview:width=64,height=48,fps=10"};
 
 TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose) {
-  ServerProcess server(kSmallCamera);
+  ServerProcess server(kEmptyWorld, kSmallCamera);
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -129,7 +76,7 @@ TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose)
 }
 
 TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
-  ServerProcess server(kSmallCamera);
+  ServerProcess server(kEmptyWorld, kSmallCamera);
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::host());
   ASSERT_TRUE(l);
@@ -158,7 +105,9 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
 
 // depth and segmentation beside colour, typed: one frame per capture with all three images
 TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCapture) {
-  ServerProcess server({"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
+  ServerProcess server(
+      kEmptyWorld,
+      {"--camera", "overview:width=160,height=120,fps=10,modalities=rgb+depth+segmentation"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
   ASSERT_TRUE(l) << l.message();
@@ -168,7 +117,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   config.camera = "overview";
   config.depth = true;
   config.segmentation = true;
-  auto sub = CameraSubscriber::subscribe(loop, config, [&](const CameraFrame& f) { frames.push_back(f); });
+  auto sub =
+      CameraSubscriber::subscribe(loop, config, [&](const CameraFrame& f) { frames.push_back(f); });
   ASSERT_TRUE(sub) << sub.message();
   EXPECT_GT((*sub)->depth_far_m(), (*sub)->depth_near_m());
   const std::vector<std::string>& classes = (*sub)->segmentation_classes();
@@ -177,15 +127,16 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   EXPECT_EQ(classes[0], "none");
   ASSERT_TRUE(loop.run_for(0.5));
   ASSERT_GE(frames.size(), 4u);
-  for (std::size_t i = 0; i < frames.size(); ++i) EXPECT_EQ(frames[i].seq, static_cast<std::int64_t>(i));
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    EXPECT_EQ(frames[i].seq, static_cast<std::int64_t>(i));
   const CameraFrame& f = frames.back();
   ASSERT_EQ(f.image.type(), CV_8UC3);
   ASSERT_EQ(f.depth_m.type(), CV_32FC1);
   ASSERT_EQ(f.object_ids.type(), CV_16UC1);
   ASSERT_EQ(f.class_ids.type(), CV_16UC1);
   ASSERT_EQ(f.depth_m.size(), f.image.size());
-  // the bottom row sees the ground: its depth along the axis is the camera height over the ray's slope,
-  // and its label is the ground's
+  // the bottom row sees the ground: its depth along the axis is the camera height over the ray's
+  // slope, and its label is the ground's
   const float z = f.depth_m.at<float>(119, 80);
   EXPECT_TRUE(std::isfinite(z) && z > 1.0f && z < 30.0f) << z;
   const int object = f.object_ids.at<uint16_t>(119, 80);
@@ -195,7 +146,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   // the quad at the origin is labelled a vehicle somewhere in the image
   bool vehicle = false;
   for (int v = 0; v < 120; ++v) {
-    for (int u = 0; u < 160; ++u) vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
+    for (int u = 0; u < 160; ++u)
+      vehicle = vehicle || classes.at(f.class_ids.at<uint16_t>(v, u)) == "vehicle";
   }
   EXPECT_TRUE(vehicle);
 
@@ -205,7 +157,8 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
   depth_only.segmentation = false;
   (*sub).reset();
   frames.clear();
-  auto d = CameraSubscriber::subscribe(loop, depth_only, [&](const CameraFrame& fr) { frames.push_back(fr); });
+  auto d = CameraSubscriber::subscribe(loop, depth_only,
+                                       [&](const CameraFrame& fr) { frames.push_back(fr); });
   ASSERT_TRUE(d) << d.message();
   ASSERT_TRUE(loop.run_for(0.3));
   ASSERT_FALSE(frames.empty());
@@ -223,11 +176,11 @@ TEST(CameraSubscriber, DepthAndSegmentationArriveTypedWithTheColourOfTheirCaptur
 
 // the README's example program, unchanged, against a server: UAVSIM_MAVLINK + UAVSIM_LOCKSTEP
 TEST(Examples, FlySquareUnderLockstep) {
-  ServerProcess server({"--no-cameras"});
+  ServerProcess server(kEmptyWorld, {"--no-cameras"});
   ASSERT_GT(server.mavlink_port(), 0) << server.output();
   const std::string cmd = "UAVSIM_MAVLINK=tcp:127.0.0.1:" + std::to_string(server.mavlink_port()) +
-                          " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) + " timeout 120 " +
-                          FLY_SQUARE + " 2>&1";
+                          " UAVSIM_LOCKSTEP=127.0.0.1:" + std::to_string(server.api_port()) +
+                          " timeout 120 " + FLY_SQUARE + " 2>&1";
   FILE* p = popen(cmd.c_str(), "r");
   ASSERT_NE(p, nullptr);
   std::string out;

@@ -4,20 +4,15 @@
 #include "uavsim/client/radio.hpp"
 
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <regex>
 #include <string>
 #include <vector>
 
+#include "server_process.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/sim_connection.hpp"
-
-extern char** environ;
 
 namespace uavsim::client::testing {
 namespace {
@@ -25,57 +20,8 @@ namespace {
 constexpr double kPeriod_s = 0.02;  // the loop's lockstep period
 constexpr double kTimeTol_s = 1e-6;
 
-// uavsim-server on ephemeral ports; the API port read from its banner
-class ServerProcess {
- public:
-  explicit ServerProcess(const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> args{
-        UAVSIM_SERVER,    std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/three_quads.xml",
-        "--rate",         "0",
-        "--mavlink-port", "0",
-        "--api-port",     "0",
-        "--no-cameras"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int fds[2];
-    if (pipe(fds) != 0) return;
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, fds[0]);
-    if (posix_spawn(&pid_, argv[0], &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fds[1]);
-    out_ = fdopen(fds[0], "r");
-    char line[1024];
-    const std::regex api(R"(sim API on tcp:[0-9.]+:(\d+))");
-    while (pid_ > 0 && fgets(line, sizeof(line), out_) != nullptr) {
-      output_ += line;
-      std::cmatch m;
-      if (std::regex_search(line, m, api)) {
-        port_ = std::stoi(m[1]);
-        break;
-      }
-    }
-  }
-  ~ServerProcess() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (out_ != nullptr) fclose(out_);
-  }
-  int api_port() const { return port_; }
-  const std::string& output() const { return output_; }
-
- private:
-  pid_t pid_ = -1;
-  FILE* out_ = nullptr;
-  int port_ = 0;
-  std::string output_;
-};
+// the three quads, without cameras
+const std::string kThreeQuads = std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/three_quads.xml";
 
 std::vector<std::uint8_t> frame(std::size_t n, std::uint8_t first) {
   std::vector<std::uint8_t> f(n);
@@ -84,7 +30,7 @@ std::vector<std::uint8_t> frame(std::size_t n, std::uint8_t first) {
 }
 
 TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
-  ServerProcess server;
+  ServerProcess server(kThreeQuads, {"--no-cameras"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
@@ -124,7 +70,7 @@ TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
 // on air at the next tick, so it is heard one tick later than above, and the loop answered tick t0
 // before the work (the simulation stepped on meanwhile).
 TEST(A2aRadio, PipelinedAFrameSentDuringATickGoesOnAirAtTheNext) {
-  ServerProcess server;
+  ServerProcess server(kThreeQuads, {"--no-cameras"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
@@ -147,7 +93,7 @@ TEST(A2aRadio, PipelinedAFrameSentDuringATickGoesOnAirAtTheNext) {
 }
 
 TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
-  ServerProcess server;
+  ServerProcess server(kThreeQuads, {"--no-cameras"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
@@ -183,7 +129,7 @@ TEST(A2aRadio, CountsTheSimulatorsRefusals) {
 }
 
 TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
-  ServerProcess server;
+  ServerProcess server(kThreeQuads, {"--no-cameras"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
@@ -208,7 +154,7 @@ TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
 
 TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
   {
-    ServerProcess server;
+    ServerProcess server(kThreeQuads, {"--no-cameras"});
     ASSERT_GT(server.api_port(), 0) << server.output();
     auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
     ASSERT_TRUE(l) << l.message();
@@ -221,7 +167,7 @@ TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
 #ifndef UAVSIM_HAS_NS3
   GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh installs it)";
 #endif
-  ServerProcess server({"--radio-backend", "ns3"});
+  ServerProcess server(kThreeQuads, {"--no-cameras", "--radio-backend", "ns3"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
@@ -243,7 +189,7 @@ TEST(A2aRadio, CarriesFramesOf1500BytesOnNs3s80211) {
 #ifndef UAVSIM_HAS_NS3
   GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh installs it)";
 #endif
-  ServerProcess server({"--radio-backend", "ns3"});
+  ServerProcess server(kThreeQuads, {"--no-cameras", "--radio-backend", "ns3"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   {
     auto api = SimConnection::connect("127.0.0.1", static_cast<std::uint16_t>(server.api_port()));

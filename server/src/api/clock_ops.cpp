@@ -28,10 +28,7 @@ ClockOps::ClockOps(sim::Simulation& sim, sim::Runner* runner, const LockstepCoor
       paused_(start_paused) {}
 
 void ClockOps::register_ops(OpTable& table) {
-  using Member = void (ClockOps::*)(uint64_t, const Json&, OpReply*);
-  const auto add = [this, &table](const char* name, Member op) {
-    table.add({name, "clock", std::bind_front(op, this), core_op_fields()});
-  };
+  const OpRegistrar<ClockOps> add(table, this, "clock");
   add("status", &ClockOps::op_status);
   add("pause", &ClockOps::op_pause);
   add("pause_at", &ClockOps::op_pause_at);

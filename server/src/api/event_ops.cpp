@@ -12,10 +12,7 @@ namespace uavsim::server::api {
 EventOps::EventOps(sim::Simulation& sim, Send send) : sim_(sim), send_(std::move(send)) {}
 
 void EventOps::register_ops(OpTable& table) {
-  using Member = void (EventOps::*)(uint64_t, const Json&, OpReply*);
-  const auto add = [this, &table](const char* name, Member op) {
-    table.add({name, "events", std::bind_front(op, this), core_op_fields()});
-  };
+  const OpRegistrar<EventOps> add(table, this, "events");
   add("events", &EventOps::op_events);
   add("subscribe_events", &EventOps::op_subscribe);
   add("unsubscribe_events", &EventOps::op_unsubscribe);

@@ -13,16 +13,19 @@ namespace {
 constexpr int kDefaultJpegQuality = 90;
 // the most frames a subscription may skip between two it gets (fps = camera fps / every)
 constexpr int kMaxEvery = 1000000;
-// a frame is dropped for a connection that still has more than this many frames' bytes queued unsent
+// a frame is dropped for a connection that still has more than this many frames' bytes queued
+// unsent
 constexpr size_t kMaxQueuedFrames = 2;
-// the most bytes one capture (every image of a subscription's frame) may have: with kMaxQueuedFrames
-// more queued it stays below the line server's 64 MiB per connection, beyond which it closes the
-// connection as overloaded
+// the most bytes one capture (every image of a subscription's frame) may have: with
+// kMaxQueuedFrames more queued it stays below the line server's 64 MiB per connection, beyond which
+// it closes the connection as overloaded
 constexpr size_t kMaxCaptureBytes = 20u << 20;
 // rgb, grey, jpeg, depth, segmentation
 constexpr size_t kMaxModalities = 5;
 
-std::string dump(const nlohmann::json& j) { return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string dump(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 // the modalities a camera gives, as camera_list names them
 nlohmann::json modality_list(const render::Modalities& m) {
   nlohmann::json list = nlohmann::json::array();
@@ -36,22 +39,16 @@ constexpr std::string_view kCameraOps[] = {"camera_list", "camera_subscribe", "c
                                            "camera_blackout"};
 }  // namespace
 
-FrameStream::FrameStream(const sim::Simulation& sim, render::FrameService& service, LineServer& server,
-                         std::function<bool(uint64_t)> is_lockstep)
+FrameStream::FrameStream(const sim::Simulation& sim, render::FrameService& service,
+                         LineServer& server, std::function<bool(uint64_t)> is_lockstep)
     : sim_(sim), service_(service), server_(server), is_lockstep_(std::move(is_lockstep)) {}
 
 void FrameStream::register_ops(OpTable& table) {
-  table.add({"camera_list", "camera",
-             [this](uint64_t, const Json& request, OpReply* reply) { op_list(request, reply); }, core_op_fields()});
-  table.add({"camera_subscribe", "camera",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { op_subscribe(conn, request, reply); },
-             core_op_fields()});
-  table.add({"camera_unsubscribe", "camera",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { op_unsubscribe(conn, request, reply); },
-             core_op_fields()});
-  table.add({"camera_blackout", "camera",
-             [this](uint64_t, const Json& request, OpReply* reply) { op_blackout(request, reply); },
-             core_op_fields()});
+  const OpRegistrar<FrameStream> add(table, this, "camera");
+  add("camera_list", &FrameStream::op_list);
+  add("camera_subscribe", &FrameStream::op_subscribe);
+  add("camera_unsubscribe", &FrameStream::op_unsubscribe);
+  add("camera_blackout", &FrameStream::op_blackout);
 }
 
 void FrameStream::register_unavailable(OpTable& table) {
@@ -98,7 +95,8 @@ FrameStream::Json FrameStream::depth_json(const render::FrameCamera& c) const {
 FrameStream::Json FrameStream::segmentation_json() const {
   Json classes = Json::array();
   for (int k = 0; k < render::kSegmentClassCount; ++k) {
-    classes.push_back({{"id", k}, {"name", render::segment_class_name(static_cast<render::SegmentClass>(k))}});
+    classes.push_back(
+        {{"id", k}, {"name", render::segment_class_name(static_cast<render::SegmentClass>(k))}});
   }
   Json objects = Json::array();
   for (const render::SegmentObject& o : service_.labels().objects) {
@@ -124,30 +122,39 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   }
   if (mods != request.end()) {
     if (!mods->is_array() || mods->empty() || mods->size() > kMaxModalities) {
-      return fail(ApiError::kBadField,
-                  "\"modalities\" must be a list of 1 to 5 of \"rgb\", \"grey\", \"jpeg\", \"depth\", "
-                  "\"segmentation\"");
+      return fail(
+          ApiError::kBadField,
+          "\"modalities\" must be a list of 1 to 5 of \"rgb\", \"grey\", \"jpeg\", \"depth\", "
+          "\"segmentation\"");
     }
     for (const Json& m : *mods) {
-      const auto e = m.is_string() ? render::encoding_from_name(m.get<std::string>()) : std::nullopt;
+      const auto e =
+          m.is_string() ? render::encoding_from_name(m.get<std::string>()) : std::nullopt;
       if (!e) {
-        return fail(ApiError::kBadField, "unknown modality " + dump(m) +
-                                     " in \"modalities\" (rgb, grey, jpeg, depth, segmentation)");
+        return fail(ApiError::kBadField,
+                    "unknown modality " + dump(m) +
+                        " in \"modalities\" (rgb, grey, jpeg, depth, segmentation)");
       }
-      if (std::any_of(keys->begin(), keys->end(), [&](const render::EncodingKey& k) { return k.encoding == *e; })) {
-        return fail(ApiError::kBadField, "modality " + dump(m) + " is named twice in \"modalities\"");
+      if (std::any_of(keys->begin(), keys->end(),
+                      [&](const render::EncodingKey& k) { return k.encoding == *e; })) {
+        return fail(ApiError::kBadField,
+                    "modality " + dump(m) + " is named twice in \"modalities\"");
       }
       keys->push_back({*e, 0});
     }
     std::sort(keys->begin(), keys->end(),
-              [](const render::EncodingKey& a, const render::EncodingKey& b) { return a.encoding < b.encoding; });
+              [](const render::EncodingKey& a, const render::EncodingKey& b) {
+                return a.encoding < b.encoding;
+              });
   } else {
     render::EncodingKey key;
     if (f != request.end()) {
-      const auto e = f->is_string() ? render::encoding_from_name(f->get<std::string>()) : std::nullopt;
+      const auto e =
+          f->is_string() ? render::encoding_from_name(f->get<std::string>()) : std::nullopt;
       if (!e) {
-        return fail(ApiError::kBadField,
-                    "\"format\" must be \"rgb\", \"grey\", \"jpeg\", \"depth\" or \"segmentation\"");
+        return fail(
+            ApiError::kBadField,
+            "\"format\" must be \"rgb\", \"grey\", \"jpeg\", \"depth\" or \"segmentation\"");
       }
       key.encoding = *e;
     }
@@ -157,23 +164,26 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   // what the camera gives (its modalities); JPEG is of its colour image
   const render::Modalities& has = info.modalities;
   for (const render::EncodingKey& k : *keys) {
-    const bool given = k.encoding == render::Encoding::kGrey ? has.grey
-                       : k.encoding == render::Encoding::kDepth ? has.depth
+    const bool given = k.encoding == render::Encoding::kGrey           ? has.grey
+                       : k.encoding == render::Encoding::kDepth        ? has.depth
                        : k.encoding == render::Encoding::kSegmentation ? has.segmentation
-                                                                        : has.rgb;
+                                                                       : has.rgb;
     if (!given) {
-      return fail(ApiError::kBadField, "camera '" + info.name + "' gives no " + render::encoding_name(k.encoding) +
-                                   " (it gives " + modality_list(has).dump() +
-                                   "; the world's uavsim:camera text or --camera " + info.name +
-                                   ":modalities=... sets what it gives)");
+      return fail(ApiError::kBadField, "camera '" + info.name + "' gives no " +
+                                           render::encoding_name(k.encoding) + " (it gives " +
+                                           modality_list(has).dump() +
+                                           "; the world's uavsim:camera text or --camera " +
+                                           info.name + ":modalities=... sets what it gives)");
     }
   }
 
   // JPEG quality
-  const auto jpeg = std::find_if(keys->begin(), keys->end(),
-                                 [](const render::EncodingKey& k) { return k.encoding == render::Encoding::kJpeg; });
+  const auto jpeg = std::find_if(keys->begin(), keys->end(), [](const render::EncodingKey& k) {
+    return k.encoding == render::Encoding::kJpeg;
+  });
   if (auto q = request.find("quality"); q != request.end()) {
-    if (jpeg == keys->end()) return fail(ApiError::kBadField, "\"quality\" applies to \"jpeg\" only");
+    if (jpeg == keys->end())
+      return fail(ApiError::kBadField, "\"quality\" applies to \"jpeg\" only");
     if (!q->is_number() || q->get<double>() < 1 || q->get<double>() > 100 ||
         std::floor(q->get<double>()) != q->get<double>()) {
       return fail(ApiError::kBadField, "\"quality\" must be an integer in [1, 100]");
@@ -187,13 +197,17 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   size_t bytes = 0;
   const size_t pixels = static_cast<size_t>(info.width_px) * static_cast<size_t>(info.height_px);
   for (const render::EncodingKey& k : *keys) {
-    bytes += pixels * static_cast<size_t>(k.encoding == render::Encoding::kJpeg ? 3 : render::bytes_per_pixel(k.encoding));
+    bytes += pixels * static_cast<size_t>(k.encoding == render::Encoding::kJpeg
+                                              ? 3
+                                              : render::bytes_per_pixel(k.encoding));
   }
   if (bytes > kMaxCaptureBytes) {
-    return fail(ApiError::kBadField, "a capture of camera '" + info.name + "' with these modalities is too large: " +
-                                 std::to_string(bytes) + " bytes at " + std::to_string(info.width_px) + "x" +
-                                 std::to_string(info.height_px) + ", at most " + std::to_string(kMaxCaptureBytes) +
-                                 " (ask for fewer modalities, or give the camera a smaller size)");
+    return fail(ApiError::kBadField,
+                "a capture of camera '" + info.name + "' with these modalities is too large: " +
+                    std::to_string(bytes) + " bytes at " + std::to_string(info.width_px) + "x" +
+                    std::to_string(info.height_px) + ", at most " +
+                    std::to_string(kMaxCaptureBytes) +
+                    " (ask for fewer modalities, or give the camera a smaller size)");
   }
   return true;
 }
@@ -212,7 +226,8 @@ void FrameStream::on_disconnect(uint64_t conn) {
 
 void FrameStream::op_list(const Json&, OpReply* reply) const {
   Json list = Json::array();
-  for (size_t i = 0; i < service_.cameras().size(); ++i) list.push_back(camera_json(static_cast<int>(i)));
+  for (size_t i = 0; i < service_.cameras().size(); ++i)
+    list.push_back(camera_json(static_cast<int>(i)));
   reply->result = {{"cameras", list}};
 }
 
@@ -230,9 +245,10 @@ std::optional<int> FrameStream::camera_field(const Json& request, OpReply* reply
   const std::optional<int> camera = service_.find(name);
   if (!camera) {
     std::string names;
-    for (const render::FrameCamera& c : service_.cameras()) names += (names.empty() ? "" : ", ") + c.name;
-    reply->fail(ApiError::kBadField,
-                "no camera named '" + name + "' (cameras: " + (names.empty() ? "none" : names) + ")");
+    for (const render::FrameCamera& c : service_.cameras())
+      names += (names.empty() ? "" : ", ") + c.name;
+    reply->fail(ApiError::kBadField, "no camera named '" + name +
+                                         "' (cameras: " + (names.empty() ? "none" : names) + ")");
   }
   return camera;
 }
@@ -274,10 +290,11 @@ void FrameStream::op_subscribe(uint64_t conn, const Json& request, OpReply* repl
     // every frame, every second, ... up to one frame in kMaxEvery: a tiny fps (1e-300) once became
     // a divisor past INT_MAX, and its cast to int was undefined
     const std::optional<int> whole = sim::checked_integer<int>(n, 1, kMaxEvery);
-    if (!(fps > 0) || !std::isfinite(fps) || !whole || std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
-      return reply->fail(ApiError::kBadField, "\"fps\" must be camera '" + name + "''s fps (" +
-                                                  dump(Json(info.fps_hz)) + ") divided by a whole number up to " +
-                                                  std::to_string(kMaxEvery));
+    if (!(fps > 0) || !std::isfinite(fps) || !whole ||
+        std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
+      return reply->fail(ApiError::kBadField,
+                         "\"fps\" must be camera '" + name + "''s fps (" + dump(Json(info.fps_hz)) +
+                             ") divided by a whole number up to " + std::to_string(kMaxEvery));
     }
     every = *whole;
   }
@@ -303,14 +320,15 @@ void FrameStream::op_subscribe(uint64_t conn, const Json& request, OpReply* repl
   }
   Json& result = reply->result;
   result = {{"camera", name},
-             {"format", render::encoding_name(keys.front().encoding)},
-             {"modalities", names},
-             {"fps", info.fps_hz / every},
-             {"quality", quality},
-             {"width", info.width_px},
-             {"height", info.height_px},
-             {"intrinsics", {{"fx", info.fx_px}, {"fy", info.fy_px}, {"cx", info.cx_px}, {"cy", info.cy_px}}},
-             {"every", every}};
+            {"format", render::encoding_name(keys.front().encoding)},
+            {"modalities", names},
+            {"fps", info.fps_hz / every},
+            {"quality", quality},
+            {"width", info.width_px},
+            {"height", info.height_px},
+            {"intrinsics",
+             {{"fx", info.fx_px}, {"fy", info.fy_px}, {"cx", info.cx_px}, {"cy", info.cy_px}}},
+            {"every", every}};
   for (const render::EncodingKey& k : keys) {
     if (k.encoding == render::Encoding::kDepth) result["depth"] = depth_json(info);
     if (k.encoding == render::Encoding::kSegmentation) result["segmentation"] = segmentation_json();
@@ -321,7 +339,8 @@ void FrameStream::op_blackout(const Json& request, OpReply* reply) {
   const double now_s = sim_.time_s();
   auto fail = [&](ApiError c, std::string m) { reply->fail(c, std::move(m)); };
   auto cam_it = request.find("camera");
-  if (cam_it == request.end()) return fail(ApiError::kMissingField, "\"camera\" (a camera name) is required");
+  if (cam_it == request.end())
+    return fail(ApiError::kMissingField, "\"camera\" (a camera name) is required");
   const std::optional<int> camera =
       cam_it->is_string() ? service_.find(cam_it->get<std::string>()) : std::nullopt;
   if (!camera) return fail(ApiError::kBadField, "\"camera\" must name a camera of camera_list");
@@ -338,7 +357,9 @@ void FrameStream::op_blackout(const Json& request, OpReply* reply) {
     std::lock_guard<std::mutex> lock(mutex_);
     blackouts_[*camera] = {from_us, until_us};
   }
-  reply->result = {{"camera", cam_it->get<std::string>()}, {"from_s", from_us * 1e-6}, {"until_s", until_us * 1e-6}};
+  reply->result = {{"camera", cam_it->get<std::string>()},
+                   {"from_s", from_us * 1e-6},
+                   {"until_s", until_us * 1e-6}};
 }
 
 void FrameStream::clear_blackouts() {
@@ -346,8 +367,8 @@ void FrameStream::clear_blackouts() {
   blackouts_.clear();
 }
 
-void FrameStream::want(int camera, int64_t index, int64_t, std::vector<render::EncodingKey>* encodings,
-                       bool* must_deliver) {
+void FrameStream::want(int camera, int64_t index, int64_t,
+                       std::vector<render::EncodingKey>* encodings, bool* must_deliver) {
   std::vector<Pending> takers;
   for (auto& [conn, cams] : subs_) {
     auto it = cams.find(camera);
@@ -386,20 +407,22 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) R.push_back(frame.R_enu_cam(i, j));
   }
-  const Json pose = {{"position_enu_m",
-                      {frame.position_enu_m.x(), frame.position_enu_m.y(), frame.position_enu_m.z()}},
-                     {"R_enu_cam", R}};
+  const Json pose = {
+      {"position_enu_m",
+       {frame.position_enu_m.x(), frame.position_enu_m.y(), frame.position_enu_m.z()}},
+      {"R_enu_cam", R}};
   const Json intrinsics = {{"fx", c.fx_px}, {"fy", c.fy_px}, {"cx", c.cx_px}, {"cy", c.cy_px}};
   const auto blackout = blackouts_.find(frame.camera);
   const bool black = blackout != blackouts_.end() && frame.stamp_us >= blackout->second.first &&
                      frame.stamp_us < blackout->second.second;
   std::vector<std::pair<render::EncodingKey, std::shared_ptr<const std::string>>> black_images;
-  // a blacked-out camera: the same frame, every pixel black and no depth (encoded once per encoding);
-  // segmentation is ground truth of the scene, not of the sensor, and stays
+  // a blacked-out camera: the same frame, every pixel black and no depth (encoded once per
+  // encoding); segmentation is ground truth of the scene, not of the sensor, and stays
   auto image = [&](const render::EncodingKey& key) -> const std::string* {
     const std::string* bytes = frame.image(key);
     if (!black || bytes == nullptr || key.encoding == render::Encoding::kSegmentation) return bytes;
-    auto it = std::find_if(black_images.begin(), black_images.end(), [&](const auto& b) { return b.first == key; });
+    auto it = std::find_if(black_images.begin(), black_images.end(),
+                           [&](const auto& b) { return b.first == key; });
     if (it == black_images.end()) {
       black_images.emplace_back(key, render::encode_black_frame(c.width_px, c.height_px, key));
       it = std::prev(black_images.end());
@@ -422,13 +445,15 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
       ++sub.dropped;
       continue;
     }
-    // what this subscription lost before this frame: frames reach a subscription in seq order, so every
-    // earlier seq not delivered was dropped. (The running total `sub.dropped` may already count frames
-    // after this one, which the renderer refused while this one was still being rendered.)
+    // what this subscription lost before this frame: frames reach a subscription in seq order, so
+    // every earlier seq not delivered was dropped. (The running total `sub.dropped` may already
+    // count frames after this one, which the renderer refused while this one was still being
+    // rendered.)
     const uint64_t delivered = sub.delivered.load();
     const uint64_t dropped_before = p.seq > delivered ? p.seq - delivered : 0;
     Json names = Json::array();
-    for (const render::EncodingKey& key : sub.keys) names.push_back(render::encoding_name(key.encoding));
+    for (const render::EncodingKey& key : sub.keys)
+      names.push_back(render::encoding_name(key.encoding));
     // one header line and its bytes per image, all in one send: nothing comes between the parts
     std::string message;
     message.reserve(bytes + 1024 * parts.size());

@@ -27,10 +27,7 @@ LockstepOps::LockstepOps(sim::Simulation& sim, LockstepCoordinator& lockstep, Cl
     : sim_(sim), lockstep_(lockstep), clock_(clock), shm_(shm), server_(std::move(server)) {}
 
 void LockstepOps::register_ops(OpTable& table) {
-  using Member = void (LockstepOps::*)(uint64_t, const Json&, OpReply*);
-  const auto add = [this, &table](const char* name, Member op) {
-    table.add({name, "lockstep", std::bind_front(op, this), core_op_fields()});
-  };
+  const OpRegistrar<LockstepOps> add(table, this, "lockstep");
   add("lockstep_join", &LockstepOps::op_join);
   add("lockstep_leave", &LockstepOps::op_leave);
   add("done", &LockstepOps::op_done);

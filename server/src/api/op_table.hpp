@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -88,6 +89,46 @@ class OpTable {
  private:
   std::vector<OpSpec> ops_;                           // in registration order
   std::map<std::string, size_t, std::less<>> index_;  // name -> ops_ index
+};
+
+// Registers the ops of one group whose handlers are the group's own member functions, each under
+// the group's name and with the core ops' typed fields unless it names its own:
+//   OpRegistrar<ClockOps> add(table, this, "clock");
+//   add("status", &ClockOps::op_status);
+// A member may take (conn, request, reply), (request, reply) or (reply) alone.
+template <class Group>
+class OpRegistrar {
+ public:
+  OpRegistrar(OpTable& table, Group* group, std::string group_name,
+              std::span<const FieldSpec> fields = core_op_fields())
+      : table_(table), group_(group), name_(std::move(group_name)), fields_(fields) {}
+
+  template <class Member>
+  void operator()(const char* op, Member member) const {
+    (*this)(op, member, fields_);
+  }
+  template <class Member>
+  void operator()(const char* op, Member member, std::span<const FieldSpec> fields) const {
+    Group* g = group_;
+    table_.add(
+        {op, name_,
+         [g, member](uint64_t conn, const nlohmann::json& request, OpReply* reply) {
+           using Json = nlohmann::json;
+           if constexpr (std::is_invocable_v<Member, Group*, uint64_t, const Json&, OpReply*>)
+             std::invoke(member, g, conn, request, reply);
+           else if constexpr (std::is_invocable_v<Member, Group*, const Json&, OpReply*>)
+             std::invoke(member, g, request, reply);
+           else
+             std::invoke(member, g, reply);
+         },
+         fields});
+  }
+
+ private:
+  OpTable& table_;
+  Group* group_;
+  std::string name_;
+  std::span<const FieldSpec> fields_;
 };
 
 // An op group: registers its ops in the server's table and hears the loop-side hooks of the server.

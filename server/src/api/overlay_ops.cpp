@@ -32,14 +32,13 @@ std::optional<std::string> overlay_text_field(const nlohmann::json& request, OpR
 }  // namespace
 
 void OverlayOps::register_ops(OpTable& table) {
-  static constexpr FieldSpec kCounterFields[] = {{"name", FieldType::kString}, {"text", FieldType::kString}};
+  static constexpr FieldSpec kCounterFields[] = {{"name", FieldType::kString},
+                                                 {"text", FieldType::kString}};
   static constexpr FieldSpec kNoteFields[] = {{"text", FieldType::kString},
                                               {"vehicle", FieldType::kIndexOrName}};
-  table.add({"overlay_counter", "overlay",
-             [this](uint64_t, const Json& request, OpReply* reply) { counter(request, reply); },
-             kCounterFields});
-  table.add({"overlay_note", "overlay",
-             [this](uint64_t, const Json& request, OpReply* reply) { note(request, reply); }, kNoteFields});
+  const OpRegistrar<OverlayOps> add(table, this, "overlay");
+  add("overlay_counter", &OverlayOps::counter, kCounterFields);
+  add("overlay_note", &OverlayOps::note, kNoteFields);
 }
 
 std::vector<std::string> OverlayOps::counters() const {
@@ -59,7 +58,8 @@ void OverlayOps::counter(const Json& request, OpReply* reply) {
   if (text->empty()) {
     counters_.erase(*name);
   } else if (counters_.count(*name) == 0 && counters_.size() >= kMaxOverlayCounters) {
-    return reply->fail(ApiError::kBadField, "at most " + std::to_string(kMaxOverlayCounters) + " counters");
+    return reply->fail(ApiError::kBadField,
+                       "at most " + std::to_string(kMaxOverlayCounters) + " counters");
   } else {
     counters_[*name] = *text;
   }

@@ -74,19 +74,16 @@ RadioOps::RadioOps(sim::Simulation& sim, radio::SimRadio& radio, radio::GcsRelay
     : sim_(sim), radio_(radio), relays_(relays), policy_(std::move(policy)) {}
 
 void RadioOps::register_ops(OpTable& table) {
-  using Op = void (RadioOps::*)(uint64_t, const Json&, OpReply*);
-  const auto add = [&](const char* name, const char* group, Op op,
-                       std::span<const FieldSpec> fields) {
-    table.add({name, group, std::bind_front(op, this), fields});
-  };
-  add("radio_send", "radio", &RadioOps::op_send, kSendFields);
-  add("radio_subscribe", "radio", &RadioOps::op_subscribe, kSubscribeFields);
-  add("radio_unsubscribe", "radio", &RadioOps::op_unsubscribe, kVehicleFields);
-  add("radio_stats", "radio", &RadioOps::op_stats, kVehicleFields);
-  add("radio_config", "radio", &RadioOps::op_config, kConfigFields);
-  add("gcs_link_open", "gcs_link", &RadioOps::op_link_open, kLinkOpenFields);
-  add("gcs_link_impair", "gcs_link", &RadioOps::op_link_impair, kLinkImpairFields);
-  add("gcs_link_stats", "gcs_link", &RadioOps::op_link_stats, kVehicleFields);
+  const OpRegistrar<RadioOps> radio(table, this, "radio");
+  radio("radio_send", &RadioOps::op_send, kSendFields);
+  radio("radio_subscribe", &RadioOps::op_subscribe, kSubscribeFields);
+  radio("radio_unsubscribe", &RadioOps::op_unsubscribe, kVehicleFields);
+  radio("radio_stats", &RadioOps::op_stats, kVehicleFields);
+  radio("radio_config", &RadioOps::op_config, kConfigFields);
+  const OpRegistrar<RadioOps> link(table, this, "gcs_link");
+  link("gcs_link_open", &RadioOps::op_link_open, kLinkOpenFields);
+  link("gcs_link_impair", &RadioOps::op_link_impair, kLinkImpairFields);
+  link("gcs_link_stats", &RadioOps::op_link_stats, kVehicleFields);
 }
 
 RadioOps::Json RadioOps::config_json() const {

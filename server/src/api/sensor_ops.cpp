@@ -14,15 +14,12 @@ SensorOps::SensorOps(sim::Simulation& sim)
 
 void SensorOps::register_ops(OpTable& table) {
   static constexpr FieldSpec kFields[] = {{"vehicle", FieldType::kIndexOrName}};
-  table.add({"sensor_list", "sensor", [this](uint64_t, const Json&, OpReply* reply) { list(reply); }});
-  table.add({"sensor_read", "sensor",
-             [this](uint64_t, const Json& request, OpReply* reply) { read_now(request, reply); }, kFields});
-  table.add({"sensor_subscribe", "sensor",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { subscribe(conn, request, reply); },
-             kFields});
-  table.add({"sensor_unsubscribe", "sensor",
-             [this](uint64_t conn, const Json& request, OpReply* reply) { unsubscribe(conn, request, reply); },
-             kFields});
+  // the group checks its own fields: sensor_list reads none
+  const OpRegistrar<SensorOps> add(table, this, "sensor", kFields);
+  add("sensor_list", &SensorOps::list, {});
+  add("sensor_read", &SensorOps::read_now);
+  add("sensor_subscribe", &SensorOps::subscribe);
+  add("sensor_unsubscribe", &SensorOps::unsubscribe);
 }
 
 std::vector<bool> SensorOps::read(size_t vehicle) const {

@@ -23,14 +23,8 @@ Json vec3(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()});
 }  // namespace
 
 void VehicleOps::register_ops(OpTable& table) {
-  using Query = void (VehicleOps::*)(const Json&, OpReply*);
   using Fault = void (VehicleOps::*)(size_t, const Json&, OpReply*);
-  const auto query = [&](const char* name, Query op) {
-    table.add(
-        {name, "vehicle",
-         [this, op](uint64_t, const Json& request, OpReply* reply) { (this->*op)(request, reply); },
-         core_op_fields()});
-  };
+  const OpRegistrar<VehicleOps> query(table, this, "vehicle");
   // a fault names a vehicle and answers it with the sim time it took effect
   const auto fault = [&](const char* name, Fault op) {
     table.add({name, "fault",
@@ -88,7 +82,8 @@ void VehicleOps::vehicles(const Json&, OpReply* reply) {
 }
 
 void VehicleOps::truck(const Json&, OpReply* reply) {
-  if (objects_.trucks.empty()) return reply->fail(ApiError::kNotAvailable, "this world has no truck");
+  if (objects_.trucks.empty())
+    return reply->fail(ApiError::kNotAvailable, "this world has no truck");
   Json trucks = Json::array();
   for (const objects::Truck* truck : objects_.trucks) {
     const objects::TruckState s = truck->state(sim_.time_s());
@@ -135,7 +130,8 @@ void VehicleOps::motor_failure(size_t v, const Json& request, OpReply* reply) {
   const size_t rotors = sim_.airframe(v).rotors.size();
   if (!rotor) return reply->fail(ApiError::kMissingField, "\"rotor\" (index) is required");
   if (*rotor < 0 || *rotor >= static_cast<double>(rotors) || std::floor(*rotor) != *rotor) {
-    return reply->fail(ApiError::kBadField, "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
+    return reply->fail(ApiError::kBadField,
+                       "\"rotor\" must be in [0, " + std::to_string(rotors) + ")");
   }
   sim_.set_motor_failed(v, static_cast<size_t>(*rotor),
                         bool_field(request, "failed").value_or(true));
@@ -151,7 +147,8 @@ void VehicleOps::gps_glitch(size_t v, const Json& request, OpReply* reply) {
     return x.is_number() && std::abs(x.get<double>()) <= kMaxGlitch_m;
   };
   if (it->size() != 3 || !in_range((*it)[0]) || !in_range((*it)[1]) || !in_range((*it)[2])) {
-    return reply->fail(ApiError::kBadField, "\"offset_enu_m\" must be three numbers of at most 1e5 m");
+    return reply->fail(ApiError::kBadField,
+                       "\"offset_enu_m\" must be three numbers of at most 1e5 m");
   }
   sim_.fc(v).set_gps_glitch(
       Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>()));
@@ -186,7 +183,8 @@ void VehicleOps::gimbal(const Json& request, OpReply* reply) {
   const auto angle_ok = [](const std::optional<double>& a) {
     return !a || sim::finite_in(*a, -kMaxGimbalAngle_deg, kMaxGimbalAngle_deg);
   };
-  if (!name) return reply->fail(ApiError::kMissingField, "\"gimbal\" (the gimbal body's name) is required");
+  if (!name)
+    return reply->fail(ApiError::kMissingField, "\"gimbal\" (the gimbal body's name) is required");
   if (g == nullptr) return reply->fail(ApiError::kBadField, "no gimbal named '" + *name + "'");
   if (mode && *mode != "down" && *mode != "forward" && *mode != "targets") {
     return reply->fail(ApiError::kBadField, "\"mode\" must be down, forward or targets");
@@ -220,7 +218,8 @@ void VehicleOps::wind(const Json& request, OpReply* reply) {
   if (turbulence) w.turbulence_sd_m_s = *turbulence;
   const std::string why = airframe::validate(w);
   if (!why.empty() || (from && std::abs(*from) > 360.0)) {
-    return reply->fail(ApiError::kBadField, why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
+    return reply->fail(ApiError::kBadField,
+                       why.empty() ? "\"from_deg\" must be in [-360, 360]" : why);
   }
   if ((gust && !sim::finite_in(*gust, 0.0, 50.0)) ||
       (gust_duration && !sim::finite_in(*gust_duration, 0.01, 600.0))) {

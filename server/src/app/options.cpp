@@ -1,16 +1,18 @@
 #include "app/options.hpp"
 
-#include "app/param_file.hpp"
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <string>
+
+#include "app/param_file.hpp"
+#include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::server::app {
 
@@ -164,8 +166,8 @@ std::string format_number(double v) {
   return os.str();
 }
 
-std::optional<double> parse_number(const std::string& flag, const std::string& text, const NumberRule& rule,
-                                   std::string* why) {
+std::optional<double> parse_number(const std::string& flag, const std::string& text,
+                                   const NumberRule& rule, std::string* why) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
   const bool parsed = !text.empty() && end != text.c_str() && *end == '\0' && std::isfinite(v);
@@ -175,13 +177,15 @@ std::optional<double> parse_number(const std::string& flag, const std::string& t
   if (std::isfinite(rule.lo) && std::isfinite(rule.hi)) {
     range = " from " + format_number(rule.lo) + " to " + format_number(rule.hi);
   } else if (std::isfinite(rule.lo)) {
-    range = rule.lo == 0.0 && rule.integer ? " (0 or more)" : " of at least " + format_number(rule.lo);
+    range =
+        rule.lo == 0.0 && rule.integer ? " (0 or more)" : " of at least " + format_number(rule.lo);
   }
   *why = flag + " needs " + rule.what + range + ", got '" + text + "'";
   return std::nullopt;
 }
 
-std::optional<std::string> read_first_line(const std::string& flag, const std::string& path, std::string* why) {
+std::optional<std::string> read_first_line(const std::string& flag, const std::string& path,
+                                           std::string* why) {
   std::ifstream in(path);
   if (!in) {
     *why = flag + ": cannot read '" + path + "'";
@@ -198,21 +202,45 @@ std::optional<std::string> read_first_line(const std::string& flag, const std::s
   return line.substr(first, last - first + 1);
 }
 
-std::optional<WindOption> parse_wind(const std::string& text, std::string* why) {
+// the choices as a list for a message: "a, b or c"
+std::string one_of(std::initializer_list<const char*> choices) {
+  std::string list;
+  std::size_t k = 0;
+  for (const char* c : choices) {
+    if (k > 0) list += k + 1 == choices.size() ? " or " : ", ";
+    list += c;
+    ++k;
+  }
+  return list;
+}
+
+// the comma-separated numbers of text when there are min_count to max_count of them, each part a
+// whole finite number (common/parse_number.hpp's rule); empty when not
+std::vector<double> number_list(const std::string& text, std::size_t min_count,
+                                std::size_t max_count) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string part;
   while (std::getline(ss, part, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
+    double x = 0.0;
+    if (!uavsim::common::parse_double(part.c_str(), -HUGE_VAL, HUGE_VAL, &x)) return {};
     v.push_back(x);
   }
-  const bool shape = (v.size() == 2 || v.size() == 3) &&
+  // getline drops an empty last part ("3,90,"): the commas count the parts
+  const bool shape = v.size() >= min_count && v.size() <= max_count &&
                      std::count(text.begin(), text.end(), ',') + 1 == static_cast<long>(v.size());
-  if (!shape || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 || (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
-    *why = "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 degrees "
-           "clockwise from north, turbulence 0..20 m/s standard deviation), got '" + text + "'";
+  return shape ? v : std::vector<double>{};
+}
+
+std::optional<WindOption> parse_wind(const std::string& text, std::string* why) {
+  const std::vector<double> v = number_list(text, 2, 3);
+  if (v.empty() || v[0] < 0 || v[0] > 50 || v[1] < -360 || v[1] > 360 ||
+      (v.size() == 3 && (v[2] < 0 || v[2] > 20))) {
+    *why =
+        "--wind needs SPEED,DIR_DEG[,GUST] (speed 0..50 m/s, direction it blows from -360..360 "
+        "degrees "
+        "clockwise from north, turbulence 0..20 m/s standard deviation), got '" +
+        text + "'";
     return std::nullopt;
   }
   WindOption w;
@@ -223,37 +251,18 @@ std::optional<WindOption> parse_wind(const std::string& text, std::string* why) 
 }
 
 std::optional<std::array<double, 3>> parse_gcs_position(const std::string& text, std::string* why) {
-  std::array<double, 3> p{};
-  std::stringstream ss(text);
-  std::string part;
-  size_t n = 0;
-  bool ok = std::count(text.begin(), text.end(), ',') == 2;
-  while (ok && std::getline(ss, part, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    ok = n < 3 && !part.empty() && *end == '\0' && std::isfinite(x) && std::abs(x) <= 100000.0;
-    if (ok) p[n++] = x;
-  }
-  if (!ok || n != 3) {
+  const std::vector<double> v = number_list(text, 3, 3);
+  if (v.empty() || std::any_of(v.begin(), v.end(), [](double x) { return std::abs(x) > 100000.0; })) {
     *why = "--gcs-position needs X,Y,Z (ENU metres, each within +-100000), got '" + text + "'";
     return std::nullopt;
   }
-  return p;
+  return std::array<double, 3>{v[0], v[1], v[2]};
 }
 
 std::optional<HomeOption> parse_home(const std::string& text, std::string* why) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string part;
-  while (std::getline(ss, part, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    if (part.empty() || *end != '\0' || !std::isfinite(x)) break;
-    v.push_back(x);
-  }
+  const std::vector<double> v = number_list(text, 3, 4);
   HomeOption h;
-  const bool shape = (v.size() == 3 || v.size() == 4) && std::count(text.begin(), text.end(), ',') + 1 ==
-                                                               static_cast<long>(v.size());
+  const bool shape = !v.empty();
   if (shape) {
     h.lat_deg = v[0];
     h.lon_deg = v[1];
@@ -262,14 +271,17 @@ std::optional<HomeOption> parse_home(const std::string& text, std::string* why) 
   }
   if (!shape || std::abs(h.lat_deg) > 90.0 || std::abs(h.lon_deg) > 180.0 || h.alt_m < -500.0 ||
       h.alt_m > 10000.0) {
-    *why = "--home needs LAT,LON,ALT (latitude -90..90, longitude -180..180 degrees, altitude -500..10000 m "
-           "above sea level), got '" +
-           text + "'";
+    *why =
+        "--home needs LAT,LON,ALT (latitude -90..90, longitude -180..180 degrees, altitude "
+        "-500..10000 m "
+        "above sea level), got '" +
+        text + "'";
     return std::nullopt;
   }
   if (h.heading_deg != 0.0) {
     *why = "--home: a start heading (" + text.substr(text.rfind(',') + 1) +
-           ") is not taken from the command line here: each vehicle's heading is its yaw_deg in the world file "
+           ") is not taken from the command line here: each vehicle's heading is its yaw_deg in "
+           "the world file "
            "(give LAT,LON,ALT or a heading of 0)";
     return std::nullopt;
   }
@@ -290,7 +302,8 @@ std::optional<std::array<uint8_t, 32>> parse_signing_key(const std::string& text
     for (std::size_t d = 0; d < 2; ++d) {
       const char c = hex[2 * k + d];
       if (!std::isxdigit(static_cast<unsigned char>(c))) return std::nullopt;
-      const int nibble = std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::tolower(c) - 'a' + 10;
+      const int nibble =
+          std::isdigit(static_cast<unsigned char>(c)) ? c - '0' : std::tolower(c) - 'a' + 10;
       byte = byte * 16 + nibble;
     }
     key[k] = static_cast<uint8_t>(byte);
@@ -337,13 +350,15 @@ std::optional<UdpTarget> udp_target(const UdpOut& out, int vehicle, std::string*
   return t;
 }
 
-std::optional<std::string> port_range_error(const std::string& flag, int base_port, std::size_t vehicle_count) {
+std::optional<std::string> port_range_error(const std::string& flag, int base_port,
+                                            std::size_t vehicle_count) {
   if (base_port <= 0 || vehicle_count == 0) return std::nullopt;
   const long last = base_port + 10L * static_cast<long>(vehicle_count - 1);
   if (last <= 65535) return std::nullopt;
   const long highest_base = 65535 - 10L * static_cast<long>(vehicle_count - 1);
-  std::string msg = flag + " " + std::to_string(base_port) + ": the world has " + std::to_string(vehicle_count) +
-                    " vehicles, and the last would use port " + std::to_string(last) + ", past 65535; ";
+  std::string msg = flag + " " + std::to_string(base_port) + ": the world has " +
+                    std::to_string(vehicle_count) + " vehicles, and the last would use port " +
+                    std::to_string(last) + ", past 65535; ";
   if (highest_base >= 1) msg += "use a base of at most " + std::to_string(highest_base) + " or ";
   return msg + flag + " 0 (ephemeral ports, printed at start)";
 }
@@ -381,6 +396,15 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       const auto v = parse_number(a, text, rule, &why);
       if (v) *out = *v;
       return v.has_value();
+    };
+    // a value that must be one of `choices`, or a failure naming them
+    auto choice = [&](std::initializer_list<const char*> choices, std::string* out) {
+      if (!value(out)) return false;
+      for (const char* c : choices) {
+        if (*out == c) return true;
+      }
+      why = a + " needs " + one_of(choices) + ", got '" + *out + "'";
+      return false;
     };
     std::string v;
     double x = 0.0;
@@ -436,14 +460,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         ok = o.home.has_value();
       }
     } else if (a == "--realism") {
-      if ((ok = value(&v))) {
-        ok = v == "field" || v == "ideal";
-        if (ok) {
-          o.realism = v;
-        } else {
-          why = "--realism needs field or ideal, got '" + v + "'";
-        }
-      }
+      if ((ok = choice({"field", "ideal"}, &v))) o.realism = v;
     } else if (a == "--wind") {
       if ((ok = value(&v))) {
         o.wind = parse_wind(v, &why);
@@ -472,7 +489,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
           UdpOut out;
           const auto eq = v.find('=');
           if (eq != std::string::npos && eq > 0 && v.find(':') > eq) {
-            const auto n = parse_number(a, v.substr(0, eq), {0, 100000, true, "a vehicle index before '='"}, &why);
+            const auto n = parse_number(a, v.substr(0, eq),
+                                        {0, 100000, true, "a vehicle index before '='"}, &why);
             ok = n.has_value();
             if (n) out.vehicle = static_cast<int>(*n);
             out.spec = v.substr(eq + 1);
@@ -512,17 +530,9 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
     } else if (a == "--watchdog") {
       ok = number({0.0, 86400, false, "wall seconds"}, &o.watchdog_s);
     } else if (a == "--radio-backend") {
-      if ((ok = value(&v))) {
-        ok = v == "simple" || v == "ns3";
-        if (!ok) why = "--radio-backend needs simple or ns3, got '" + v + "'";
-        o.radio_backend = v;
-      }
+      if ((ok = choice({"simple", "ns3"}, &v))) o.radio_backend = v;
     } else if (a == "--gcs-link-backend") {
-      if ((ok = value(&v))) {
-        ok = v == "simple" || v == "ns3";
-        if (!ok) why = "--gcs-link-backend needs simple or ns3, got '" + v + "'";
-        o.gcs_link_backend = v;
-      }
+      if ((ok = choice({"simple", "ns3"}, &v))) o.gcs_link_backend = v;
     } else if (a == "--gcs-position") {
       if ((ok = value(&v))) {
         o.gcs_position = parse_gcs_position(v, &why);
@@ -533,11 +543,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
     } else if (a == "--no-cameras") {
       o.cameras = false;
     } else if (a == "--gl") {
-      if ((ok = value(&v))) {
-        ok = v == "egl" || v == "osmesa" || v == "auto";
-        if (!ok) why = "--gl needs egl, osmesa or auto, got '" + v + "'";
-        o.gl_backend = v;
-      }
+      if ((ok = choice({"egl", "osmesa", "auto"}, &v))) o.gl_backend = v;
     } else if (a == "--render-threads") {
       ok = number({1, 64, true, "a thread count"}, &x);
       o.render_threads = static_cast<int>(x);
@@ -552,14 +558,11 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         o.record_camera = v;
       }
     } else if (a == "--record-overlay") {
-      if ((ok = value(&v))) {
-        ok = v == "0" || v == "1";
-        if (!ok) why = "--record-overlay needs 0 or 1, got '" + v + "'";
-        o.record_overlay = v == "1";
-      }
+      if ((ok = choice({"0", "1"}, &v))) o.record_overlay = v == "1";
     } else if (a == "--record-tile") {
       if ((ok = value(&v))) {
-        const std::string modality = v.find(':') == std::string::npos ? "rgb" : v.substr(v.find(':') + 1);
+        const std::string modality =
+            v.find(':') == std::string::npos ? "rgb" : v.substr(v.find(':') + 1);
         ok = !v.empty() && v.front() != ':' &&
              (modality == "rgb" || modality == "depth" || modality == "segmentation") &&
              o.record_tiles.size() < kMaxRecordTiles;
@@ -571,11 +574,7 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
         o.record_tiled = true;
       }
     } else if (a == "--record-layout") {
-      if ((ok = value(&v))) {
-        ok = v == "single" || v == "tiled";
-        if (!ok) why = "--record-layout needs single or tiled, got '" + v + "'";
-        o.record_tiled = v == "tiled";
-      }
+      if ((ok = choice({"single", "tiled"}, &v))) o.record_tiled = v == "tiled";
     } else if (a == "--record-size") {
       if ((ok = value(&v))) {
         // each side digits only, range-checked as a long before the cast (sscanf's %d overflows
@@ -616,7 +615,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
   }
   if (key_text) {
     o.mavlink_key = parse_signing_key(*key_text);
-    if (!o.mavlink_key) return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
+    if (!o.mavlink_key)
+      return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
   }
   if (o.world_path.empty() && !o.version && !o.list_worlds)
     return fail("no world given (a world file or a shipped world's name; see --help)");

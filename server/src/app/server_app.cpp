@@ -25,6 +25,7 @@
 #include "app/demo_flight.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "app/field_setup.hpp"
+#include "app/camera_owners.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/hover_all.hpp"
 #include "app/loop_guard.hpp"
@@ -386,12 +387,9 @@ int run_server(const Options& given_options) {
   size_t recorded = 0;  // the camera --record films
   if (options.cameras && (options.api_port >= 0 || options.record_path)) {
     std::vector<render::CameraSetup> cameras;
-    render::CameraOwners owners;  // which cameras and geoms are a vehicle's
+    // which cameras and geoms are a vehicle's
+    const render::CameraOwners owners = camera_owners(s.world(), world_objects);
     try {
-      for (const physics::VehicleBinding& v : s.world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-      if (world_objects.gimbals != nullptr) {
-        for (const objects::Gimbal& g : world_objects.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-      }
       std::vector<std::string> overrides = options.camera_overrides;
       cameras = render::discover_cameras(s.world().model(), owners, overrides, 1.0 / s.control_dt_s());
       if (!cameras.empty() && s.world().shard_count() > 1) {

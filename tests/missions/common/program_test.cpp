@@ -23,6 +23,21 @@ TEST(ProgramLoop, LogLinesNameTheProgramAndTheLoopTime) {
   EXPECT_EQ(program->name(), "uav7");
 }
 
+TEST(VehicleProgramOptions, TheSharedOptionsAreTakenOthersLeftToTheProgram) {
+  uavsim::mission::VehicleProgramOptions o;
+  using uavsim::mission::parse_vehicle_program_option;
+  EXPECT_TRUE(parse_vehicle_program_option("--mavlink", "tcp:127.0.0.1:5760", &o));
+  EXPECT_TRUE(parse_vehicle_program_option("--vehicle", "uav1", &o));
+  EXPECT_TRUE(parse_vehicle_program_option("--camera", "uav1_front", &o));
+  EXPECT_TRUE(parse_vehicle_program_option("--video-log", "v.vlog", &o));
+  EXPECT_EQ(o.mavlink, "tcp:127.0.0.1:5760");
+  EXPECT_EQ(o.vehicle, "uav1");
+  EXPECT_EQ(o.camera, "uav1_front");
+  EXPECT_EQ(o.video_log, "v.vlog");
+  EXPECT_FALSE(parse_vehicle_program_option("--index", "1", &o));
+  EXPECT_FALSE(parse_vehicle_program_option("--gcs", "127.0.0.1:1", &o));
+}
+
 TEST(ProgramLoop, NowUsIsTheLoopTimeInMicroseconds) {
   const auto program = ProgramLoop::create("gcs");
   ASSERT_NE(program, nullptr);

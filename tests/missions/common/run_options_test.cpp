@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
 
+using uavsim::launch::parse_run_option;
 using uavsim::launch::run_server_spec;
+using uavsim::launch::RunOptionParse;
 using uavsim::launch::RunOptions;
 using Args = std::vector<std::string>;
 
@@ -48,6 +51,67 @@ TEST(RunServerSpec, AnEmptyLayoutIsNotPassed) {
   EXPECT_EQ(
       run_server_spec(o, {"--no-cameras"}).extra_args,
       (Args{"--seed", "1", "--no-cameras", "--record", "v.mp4", "--record-camera", "overview"}));
+}
+
+TEST(ParseRunOption, TheSharedOptionsAreTaken) {
+  RunOptions o;
+  const std::pair<const char*, const char*> given[] = {
+      {"--world", "w.xml"},
+      {"--server", "/bin/s"},
+      {"--record", "v.mp4"},
+      {"--record-camera", "top"},
+      {"--record-layout", "single"},
+      {"--run-dir", "d"},
+      {"--json", "s.json"},
+      {"--events", "e.jsonl"},
+      {"--realism", "ideal"},
+      {"--wind", "3,90"},
+      {"--seed", "42"},
+      {"--truth-hz", "25"},
+  };
+  for (const auto& [name, value] : given)
+    EXPECT_EQ(parse_run_option(name, value, &o), RunOptionParse::kTaken) << name;
+  EXPECT_EQ(o.world, "w.xml");
+  EXPECT_EQ(o.server, "/bin/s");
+  EXPECT_EQ(o.record, "v.mp4");
+  EXPECT_EQ(o.record_camera, "top");
+  EXPECT_EQ(o.record_layout, "single");
+  EXPECT_EQ(o.run_dir, "d");
+  EXPECT_EQ(o.json_path, "s.json");
+  EXPECT_EQ(o.events_path, "e.jsonl");
+  EXPECT_EQ(o.realism, "ideal");
+  EXPECT_EQ(o.wind, "3,90");
+  EXPECT_EQ(o.seed, 42u);
+  EXPECT_EQ(o.truth_hz, 25.0);
+}
+
+// the launchers' own options and flags are left to them
+TEST(ParseRunOption, OthersAreNotCommon) {
+  RunOptions o;
+  EXPECT_EQ(parse_run_option("--budget", "60", &o), RunOptionParse::kNotCommon);
+  EXPECT_EQ(parse_run_option("--quiet", "x", &o), RunOptionParse::kNotCommon);
+  EXPECT_EQ(parse_run_option("--no-record", "x", &o), RunOptionParse::kNotCommon);
+}
+
+// a seed must be a whole number; ground truth from 0.01 to 1000 rows a second
+TEST(ParseRunOption, UnusableNumbersAreBad) {
+  RunOptions o;
+  EXPECT_EQ(parse_run_option("--seed", "1.5", &o), RunOptionParse::kBad);
+  EXPECT_EQ(parse_run_option("--seed", "-1", &o), RunOptionParse::kBad);
+  EXPECT_EQ(parse_run_option("--truth-hz", "0", &o), RunOptionParse::kBad);
+  EXPECT_EQ(parse_run_option("--truth-hz", "1001", &o), RunOptionParse::kBad);
+  EXPECT_EQ(parse_run_option("--truth-hz", "ten", &o), RunOptionParse::kBad);
+}
+
+// the world file under the models directory's worlds/, and the built server when none is installed
+TEST(DefaultWorldAndServer, TheWorldUnderModelsWorldsAndTheBuiltServer) {
+  RunOptions o;
+  uavsim::launch::default_world_and_server(&o, "w.xml", "/src/models",
+                                           "/build/server/uavsim-server");
+  const std::string tail = "/worlds/w.xml";
+  ASSERT_GE(o.world.size(), tail.size());
+  EXPECT_EQ(o.world.substr(o.world.size() - tail.size()), tail) << o.world;
+  EXPECT_EQ(o.server, "/build/server/uavsim-server");
 }
 
 TEST(ResolveRunFiles, NoRunDirectoryAndNoRecordLeaveNoFiles) {

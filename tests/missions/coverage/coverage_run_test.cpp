@@ -35,12 +35,9 @@ TEST(CoverageRun, FiveQuadsCoverTheRectangleAndLand) {
   std::string out;
   const Json r = run_flock("", &out);
   ASSERT_TRUE(r.is_object()) << out;
-  EXPECT_GE(r["coverage"].get<double>(), kFullCoverage) << out;
-  EXPECT_EQ(r["failed"].get<int>(), 0) << out;
-  EXPECT_EQ(r["landed"].get<int>(), 5) << out;
+  uavsim::tests::expect_complete_flock(r, 5, out);
   EXPECT_EQ(r["completed_by"].get<int>(), 0) << out;
   EXPECT_GT(r["mission_time_s"].get<double>(), 0.0) << out;
-  EXPECT_LT(r["mission_time_s"].get<double>(), kBudget_s) << out;
   // every quad flew and used its battery (3S, 5000 mAh: thesis eqs. 4.6-4.9)
   for (const Json& a : r["per_agent"]) {
     EXPECT_GT(a["energy_mah"].get<double>(), 100.0) << a.dump();
@@ -50,7 +47,6 @@ TEST(CoverageRun, FiveQuadsCoverTheRectangleAndLand) {
   // nobody failed: nothing was lost, nothing flown to recover it (table 4.3's measure)
   EXPECT_EQ(r["recovery_distance_m"].get<double>(), 0.0) << out;
   EXPECT_EQ(r["recovered_fraction"].get<double>(), 0.0) << out;
-  EXPECT_TRUE(r["success"].get<bool>()) << out;
 }
 
 // Fig. 4.6: the leader (agent 0) dies mid-mission; agent 1 ages it out of its ADB, becomes the

@@ -573,7 +573,7 @@ TEST(Mbzirc2020VehicleFsm, DescendsOnVelocityAndTurnsTheMotorsOffAtTouchdown) {
   for (int i = 0; i < 4000 && !disarm; ++i) {
     const Eigen::Vector3d before = v.in.position_enu_m;
     const VehicleOutputs out = fsm.step(v.in);
-    disarm = out.action == VehicleOutputs::Action::kDisarm;
+    disarm = out.action == VehicleOutputs::Action::kForceDisarm;
     v.apply(out, 0.05);
     v.in.position_enu_m.z() = std::max(v.in.position_enu_m.z(), 0.0);  // the ground
     v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
@@ -606,7 +606,7 @@ TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
     const Eigen::Vector3d before = v.in.position_enu_m;
     top_z = std::max(top_z, before.z());
     const VehicleOutputs out = fsm.step(v.in);
-    ASSERT_NE(out.action, VehicleOutputs::Action::kDisarm);
+    ASSERT_NE(out.action, VehicleOutputs::Action::kForceDisarm);
     v.apply(out, 0.05);
     v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;
   }
@@ -622,7 +622,7 @@ TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
     v.in.position_enu_m.z() += vz * 0.05;
     v.in.now_s += 0.05;
     const VehicleOutputs o = fsm.step(v.in);
-    EXPECT_NE(o.action, VehicleOutputs::Action::kDisarm) << "vz " << vz;
+    EXPECT_NE(o.action, VehicleOutputs::Action::kForceDisarm) << "vz " << vz;
   }
   // an unbroken second and more at 0.5 m/s, then the gear meets the ground: that is a touchdown
   bool disarm = false;
@@ -630,13 +630,13 @@ TEST(Mbzirc2020VehicleFsm, ARecoveryFromASinkIsNotATouchdown) {
     v.in.velocity_enu_m_s.z() = -0.5;
     v.in.position_enu_m.z() -= 0.025;
     v.in.now_s += 0.05;
-    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kDisarm;
+    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kForceDisarm;
   }
   EXPECT_FALSE(disarm);
   for (int i = 0; i < 3 && !disarm; ++i) {
     v.in.velocity_enu_m_s.z() = 0.0;
     v.in.now_s += 0.05;
-    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kDisarm;
+    disarm = fsm.step(v.in).action == VehicleOutputs::Action::kForceDisarm;
   }
   EXPECT_TRUE(disarm);
 }
@@ -686,7 +686,7 @@ TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
   };
   for (int i = 0;
        i < 4000 && !(fsm.state() == VehicleState::kLand && v.in.position_enu_m.z() < 0.8); ++i) {
-    ASSERT_NE(step().action, VehicleOutputs::Action::kDisarm);
+    ASSERT_NE(step().action, VehicleOutputs::Action::kForceDisarm);
   }
   ASSERT_LT(v.in.position_enu_m.z(), 0.8);
   // the gust: 0.8 m/s east for 2 s, then still for 0.5 s: the descent stops (a slow climb: on a
@@ -705,7 +705,7 @@ TEST(Mbzirc2020VehicleFsm, ALandingDescentWaitsOutAGust) {
   for (int i = 0; i < 400 && !disarm; ++i) {
     const VehicleOutputs out = step();
     descending = descending || out.velocity_enu_m_s.z() < 0.0;
-    disarm = out.action == VehicleOutputs::Action::kDisarm;
+    disarm = out.action == VehicleOutputs::Action::kForceDisarm;
   }
   EXPECT_TRUE(descending);
   EXPECT_TRUE(disarm);
@@ -732,7 +732,7 @@ TEST(Mbzirc2020VehicleFsm, LandsWithItsSkidsAlongTheWindTurningHighUp) {
     v.in.pitch_rad = -std::asin(fwd / std::cos(v.in.roll_rad));
     const Eigen::Vector3d before = v.in.position_enu_m;
     const VehicleOutputs out = fsm.step(v.in);
-    disarm = out.action == VehicleOutputs::Action::kDisarm;
+    disarm = out.action == VehicleOutputs::Action::kForceDisarm;
     v.apply(out, 0.05);
     v.in.position_enu_m.z() = std::max(v.in.position_enu_m.z(), 0.0);
     v.in.velocity_enu_m_s = (v.in.position_enu_m - before) / 0.05;

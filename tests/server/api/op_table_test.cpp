@@ -15,11 +15,11 @@
 #include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
 #include "api/sensor_ops.hpp"
-#include "uavsim/common/api_error.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "radio/gcs_relay.hpp"
 #include "radio/sim_radio.hpp"
+#include "uavsim/common/api_error.hpp"
 
 namespace uavsim::server::api {
 namespace {
@@ -48,6 +48,39 @@ TEST(OpTable, AnOpRegisteredTwiceIsAStartupErrorNamingBothGroups) {
     EXPECT_NE(std::string(e.what()).find("'status'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("'radio'"), std::string::npos) << e.what();
   }
+}
+
+// a group whose handlers take what they need of (conn, request, reply)
+struct ThreeShapes {
+  void with_conn(uint64_t conn, const Json& request, OpReply* reply) {
+    reply->result = {{"conn", conn}, {"x", request["x"]}};
+  }
+  void with_request(const Json& request, OpReply* reply) const { reply->result = request["x"]; }
+  void reply_only(OpReply* reply) const { reply->result = "listed"; }
+};
+
+TEST(OpRegistrar, RegistersMembersOfEveryShapeUnderTheGroupsNameAndFields) {
+  static constexpr FieldSpec kOwn[] = {{"x", FieldType::kNumber}};
+  OpTable table;
+  ThreeShapes group;
+  const OpRegistrar<ThreeShapes> add(table, &group, "shapes");
+  add("a", &ThreeShapes::with_conn);
+  add("b", &ThreeShapes::with_request, kOwn);
+  add("c", &ThreeShapes::reply_only, {});
+  EXPECT_EQ(table.names(), (std::vector<std::string>{"a", "b", "c"}));
+  for (const char* op : {"a", "b", "c"}) EXPECT_EQ(table.find(op)->group, "shapes") << op;
+  // the core fields unless the op names its own
+  EXPECT_EQ(table.find("a")->typed_fields.size(), core_op_fields().size());
+  EXPECT_EQ(table.find("b")->typed_fields.size(), 1u);
+  EXPECT_TRUE(table.find("c")->typed_fields.empty());
+  // each handler is handed what it takes
+  OpReply reply;
+  table.find("a")->handler(7, {{"x", 2}}, &reply);
+  EXPECT_EQ(reply.result, (Json{{"conn", 7}, {"x", 2}}));
+  table.find("b")->handler(7, {{"x", 3}}, &reply);
+  EXPECT_EQ(reply.result, 3);
+  table.find("c")->handler(7, Json::object(), &reply);
+  EXPECT_EQ(reply.result, "listed");
 }
 
 TEST(ApiErrorCodes, EveryCodeHasItsOwnWireNameThatReadsBack) {
@@ -82,7 +115,8 @@ TEST(OpTable, RadioSensorAndOverlayOpsDeclareTheirFields) {
     ASSERT_NE(spec, nullptr);
     EXPECT_FALSE(spec->typed_fields.empty()) << op;
   }
-  // radio_send's sender is an index or a name: a number of another kind is refused by the table's spec
+  // radio_send's sender is an index or a name: a number of another kind is refused by the table's
+  // spec
   Json bad = {{"op", "radio_send"}, {"vehicle", 0.5}, {"to", "broadcast"}, {"data_b64", "AA=="}};
   EXPECT_TRUE(mistyped_field(bad, table.find("radio_send")->typed_fields).has_value());
 }

@@ -1,11 +1,12 @@
 // The option parser: every bad value is refused with a message naming the option and what it needs;
 // keys and tokens come from files or the environment; --out expands per vehicle.
+#include "app/options.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <map>
 
-#include "app/options.hpp"
 #include "app/server_app.hpp"
 
 namespace uavsim::server::app {
@@ -83,11 +84,13 @@ TEST(Options, OutOfRangeNumbersSayWhatTheOptionNeeds) {
 }
 
 TEST(Options, RecordTilesNameACameraAndOneOfItsImages) {
-  const ParseResult r = parse({"w.xml", "--record-tile", "uav0_front:depth", "--record-tile", "uav1_front"});
+  const ParseResult r =
+      parse({"w.xml", "--record-tile", "uav0_front:depth", "--record-tile", "uav1_front"});
   ASSERT_TRUE(r.options.has_value()) << r.error;
   EXPECT_EQ(r.options->record_tiles, (std::vector<std::string>{"uav0_front:depth", "uav1_front"}));
   EXPECT_TRUE(r.options->record_tiled);
-  expect_refused({"w.xml", "--record-tile", "uav0_front:thermal"}, {"--record-tile", "rgb|depth|segmentation"});
+  expect_refused({"w.xml", "--record-tile", "uav0_front:thermal"},
+                 {"--record-tile", "rgb|depth|segmentation"});
   expect_refused({"w.xml", "--record-tile", ":depth"}, {"--record-tile"});
   std::vector<std::string> many{"w.xml"};
   for (int i = 0; i < 7; ++i) many.insert(many.end(), {"--record-tile", "c" + std::to_string(i)});
@@ -95,26 +98,46 @@ TEST(Options, RecordTilesNameACameraAndOneOfItsImages) {
 }
 
 TEST(Options, ValidFlagsSetTheirFields) {
-  const ParseResult r = parse({"w.xml",       "--seed",
-                               "42",          "--physics-hz",
-                               "2000",        "--control-hz",
-                               "400",         "--rate",
-                               "2.5",         "--duration",
-                               "90",          "--wait-for-clients",
-                               "3",           "--realism",
-                               "field",       "--wind",
-                               "6,270,1.5",   "--mavlink-port",
-                               "-1",          "--api-port",
-                               "0",           "--lockstep-timeout",
-                               "0.5",         "--record",
-                               "o.mp4",       "--record-fps",
-                               "30",          "--record-size",
-                               "1280x720",    "--record-overlay",
-                               "0",           "--record-layout",
-                               "tiled",       "--record-camera",
-                               "follow:uav1", "--no-cameras",
-                               "--gl",        "auto",
-                               "--render-threads", "3",
+  const ParseResult r = parse({"w.xml",
+                               "--seed",
+                               "42",
+                               "--physics-hz",
+                               "2000",
+                               "--control-hz",
+                               "400",
+                               "--rate",
+                               "2.5",
+                               "--duration",
+                               "90",
+                               "--wait-for-clients",
+                               "3",
+                               "--realism",
+                               "field",
+                               "--wind",
+                               "6,270,1.5",
+                               "--mavlink-port",
+                               "-1",
+                               "--api-port",
+                               "0",
+                               "--lockstep-timeout",
+                               "0.5",
+                               "--record",
+                               "o.mp4",
+                               "--record-fps",
+                               "30",
+                               "--record-size",
+                               "1280x720",
+                               "--record-overlay",
+                               "0",
+                               "--record-layout",
+                               "tiled",
+                               "--record-camera",
+                               "follow:uav1",
+                               "--no-cameras",
+                               "--gl",
+                               "auto",
+                               "--render-threads",
+                               "3",
                                "--quiet"});
   ASSERT_TRUE(r.options) << r.error;
   const Options& o = *r.options;
@@ -259,6 +282,8 @@ TEST(Options, WordChoicesAreExact) {
   expect_refused({"w.xml", "--realism", "Field"}, {"--realism needs field or ideal", "'Field'"});
   expect_refused({"w.xml", "--realism", ""}, {"--realism"});
   expect_refused({"w.xml", "--record-overlay", "yes"}, {"--record-overlay needs 0 or 1", "'yes'"});
+  expect_refused({"w.xml", "--radio-backend", "ns2"},
+                 {"--radio-backend needs simple or ns3", "'ns2'"});
   expect_refused({"w.xml", "--record-camera", ""}, {"--record-camera needs"});
   expect_refused({"w.xml", "--record-camera", "follow:"}, {"--record-camera needs"});
   expect_refused({"w.xml", "-x"}, {"unknown option -x"});
@@ -308,7 +333,8 @@ TEST(Options, SigningKeyFromOptionFileOrEnvironment) {
   const ParseResult bad = parse({"w.xml"}, {{"UAVSIM_MAVLINK_KEY", "abc"}});
   EXPECT_FALSE(bad.options);
   EXPECT_NE(bad.error.find("UAVSIM_MAVLINK_KEY"), std::string::npos) << bad.error;
-  expect_refused({"w.xml", "--mavlink-key-file", ::testing::TempDir() + "missing"}, {"cannot read"});
+  expect_refused({"w.xml", "--mavlink-key-file", ::testing::TempDir() + "missing"},
+                 {"cannot read"});
   expect_refused({"w.xml", "--mavlink-key", kKeyHex.substr(2) + "zz"}, {"64 hex digits"});
 }
 
@@ -322,8 +348,8 @@ TEST(Options, ApiTokenFromFile) {
 }
 
 TEST(Options, UdpOutExpandsPerVehicle) {
-  const ParseResult r = parse({"w.xml", "--out", "udp:127.0.0.1:14550", "--out", "2=udpin:0.0.0.0:14600",
-                               "--out", "udp:10.0.0.{i}:14550"});
+  const ParseResult r = parse({"w.xml", "--out", "udp:127.0.0.1:14550", "--out",
+                               "2=udpin:0.0.0.0:14600", "--out", "udp:10.0.0.{i}:14550"});
   ASSERT_TRUE(r.options);
   ASSERT_EQ(r.options->udp_outs.size(), 3u);
   std::string why;
@@ -380,7 +406,8 @@ TEST(Options, NonLoopbackBindsAreWarnedAbout) {
 TEST(Options, UnknownWorldListsTheShippedOnes) {
   EXPECT_EQ(resolve_world_path("mbzirc2020", UAVSIM_MODELS_DIR),
             std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml");
-  EXPECT_EQ(resolve_world_path("empty.xml", UAVSIM_MODELS_DIR), std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml");
+  EXPECT_EQ(resolve_world_path("empty.xml", UAVSIM_MODELS_DIR),
+            std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml");
   try {
     resolve_world_path("no_such_world", UAVSIM_MODELS_DIR);
     FAIL() << "no error";

@@ -7,11 +7,11 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "../../support/mjcf_scene.hpp"
 #include "pixel_blob.hpp"
 #include "render/camera_renderer.hpp"
 #include "render/gl_context.hpp"
@@ -65,22 +65,8 @@ constexpr char kSceneXml[] = R"(
 const Eigen::Vector3d kHullCentreEnuM(0.0, 0.0, 2.0);
 const Eigen::Vector3d kBalloonCentreEnuM(3.0, 1.0, 2.7);
 
-struct Scene {
-  mjModel* m = nullptr;
-  mjData* d = nullptr;
-  Scene() {
-    const std::string path = ::testing::TempDir() + "gl_backend_scene.xml";
-    std::ofstream(path) << kSceneXml;
-    char error[1000] = "";
-    m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-    if (m == nullptr) throw std::runtime_error(error);
-    d = mj_makeData(m);
-    mj_forward(m, d);
-  }
-  ~Scene() {
-    mj_deleteData(d);
-    mj_deleteModel(m);
-  }
+struct Scene : uavsim::testing::MjcfScene {
+  Scene() : MjcfScene(kSceneXml, ::testing::TempDir() + "gl_backend_scene.xml") {}
 };
 
 using testing::Blob;

@@ -5,11 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "../sim/sim_fixture.hpp"
+#include "app/camera_owners.hpp"
+#include "app/hover_all.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "render/camera_director.hpp"
@@ -65,19 +69,10 @@ class Collector : public FrameConsumer {
 
 // runs the scripted take-off of both quads with the overview camera directed by `params`
 std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   objects::ObjectSet objects = objects::add_world_objects(s);
-  CameraOwners owners;
-  for (const auto& v : s.world().vehicles())
-    owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-  if (objects.gimbals) {
-    for (const auto& g : objects.gimbals->gimbals())
-      owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-  }
+  const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<CameraSetup> cameras =
       discover_cameras(s.world().model(), owners, {}, 1.0 / s.control_dt_s());
   int overview = -1;
@@ -97,21 +92,12 @@ std::vector<Shot> fly(DirectorParams params, FrameCamera* camera_out) {
   frames.set_director(overview, std::make_shared<CameraDirector>(params));
   frames.add_consumer(&collector);
 
-  // both quads: GUIDED, arm, take off to 5 m once their pre-arm checks pass
-  std::vector<bool> launched(s.vehicle_count(), false);
-  s.schedule().add(sim::Phase::kPostControl, "launch", [&launched, &s] {
-    for (size_t i = 0; i < s.vehicle_count(); ++i) {
-      if (launched[i] || !s.fc(i).prearm_ok()) continue;
-      launched[i] = true;
-      s.post(i, [](fc::FlightController& f) {
-        f.set_mode(fc::Mode::kGuided);
-        f.arm(false);
-        f.takeoff(5.0);
-      });
-    }
-  });
+  // both quads: GUIDED, arm, take off to 5 m once pre-arm passes (uavsim-server --hover 5)
+  app::HoverAll hover(5.0, std::cout, /*quiet=*/true);
+  s.schedule().add(sim::Phase::kPostControl, "launch", [&hover, &s] { hover.on_control_step(s); });
   sim::Runner runner(s, 0.0);
-  runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
+  runner.add_gate(sim::Phase::kCapture, "frames",
+                  [&](double) { frames.capture(s.world().data()); });
   runner.run_until(kRunS);
   frames.wait_delivered();
   return collector.shots();

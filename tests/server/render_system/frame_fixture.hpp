@@ -1,19 +1,20 @@
-// A running server with cameras, for the frame-service system tests: a world with its objects, the frame
-// service, the sim API and (optionally) the MAVLink endpoint with the gimbal bridge and the endpoint hooks,
-// wired as server_app.cpp wires them; a Runner on its own thread. FrameClient is the client library's
-// SimConnection, which reads frames (a header line, then exactly "bytes" raw bytes) with the other messages.
+// A running server with cameras, for the frame-service system tests: a world with its objects, the
+// frame service, the sim API and (optionally) the MAVLink endpoint with the gimbal bridge and the
+// endpoint hooks, wired as server_app.cpp wires them; a Runner on its own thread. FrameClient is
+// the client library's SimConnection, which reads frames (a header line, then exactly "bytes" raw
+// bytes) with the other messages.
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
 #include "api/api_server.hpp"
+#include "app/camera_owners.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "mavlink/endpoint.hpp"
@@ -44,7 +45,9 @@ class FrameServer {
     physics::ComposeOptions co;
     co.models_dir = UAVSIM_MODELS_DIR;
     sim_ = std::make_unique<sim::Simulation>(
-        physics::World::load(o.world.front() == '/' ? o.world : std::string(UAVSIM_MODELS_DIR) + "/worlds/" + o.world,
+        physics::World::load(o.world.front() == '/'
+                                 ? o.world
+                                 : std::string(UAVSIM_MODELS_DIR) + "/worlds/" + o.world,
                              co),
         sim::SimConfig{});
     objects_ = objects::add_world_objects(*sim_);
@@ -57,16 +60,15 @@ class FrameServer {
       if (objects_.gimbals) {
         mavlink::MavlinkServer* ms = mavlink_.get();
         bridge_ = std::make_unique<app::MavlinkGimbalBridge>(
-            *objects_.gimbals, [ms](size_t v) -> const mavlink::GimbalState& { return ms->gimbal(v); });
-        sim_->schedule().add(sim::Phase::kPostControl, "gimbal_bridge", [this] { bridge_->update(*sim_); });
+            *objects_.gimbals,
+            [ms](size_t v) -> const mavlink::GimbalState& { return ms->gimbal(v); });
+        sim_->schedule().add(sim::Phase::kPostControl, "gimbal_bridge",
+                             [this] { bridge_->update(*sim_); });
       }
     }
-    CameraOwners owners;
-    for (const auto& v : sim_->world().vehicles()) owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-    if (objects_.gimbals) {
-      for (const auto& g : objects_.gimbals->gimbals()) owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-    }
-    cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides, 1.0 / sim_->control_dt_s());
+    const CameraOwners owners = app::camera_owners(sim_->world(), objects_);
+    cameras_ = discover_cameras(sim_->world().model(), owners, o.camera_overrides,
+                                1.0 / sim_->control_dt_s());
     FrameServiceOptions fo;
     fo.owners = owners;
     frames_ = std::make_unique<FrameService>(sim_->world().model(), cameras_, fo);
@@ -81,7 +83,8 @@ class FrameServer {
     }
     api_->set_frame_service(frames_.get());
     FrameService* fs = frames_.get();
-    runner_->add_gate(sim::Phase::kCapture, "frames", [fs, this](double) { fs->capture(sim_->world().data()); });
+    runner_->add_gate(sim::Phase::kCapture, "frames",
+                      [fs, this](double) { fs->capture(sim_->world().data()); });
     runner_->add_gate(sim::Phase::kQueuedTasks, "api", api_->gate());
     api_->start();
     loop_ = std::thread([this] { runner_->run_until(std::numeric_limits<double>::infinity()); });
@@ -97,7 +100,9 @@ class FrameServer {
   uint16_t port() const { return api_->port(); }
   uint16_t mavlink_port(size_t v) const { return mavlink_->port(v); }
   mavlink::MavlinkServer& mavlink() { return *mavlink_; }
-  sim::Simulation& sim() { return *sim_; }  // only while the loop is held (paused, or a lockstep tick)
+  sim::Simulation& sim() {
+    return *sim_;
+  }  // only while the loop is held (paused, or a lockstep tick)
   FrameService& frames() { return *frames_; }
 
  private:
@@ -115,8 +120,9 @@ class FrameServer {
 
 using api::testing::Message;  // a streamed message: the JSON, and for a frame its image bytes
 
-// The sim API on the client library's SimConnection (frames with their image bytes); waits end after
-// 20 s. rcvbuf > 0 sets the socket's receive buffer (a client that reads slowly fills it sooner).
+// The sim API on the client library's SimConnection (frames with their image bytes); waits end
+// after 20 s. rcvbuf > 0 sets the socket's receive buffer (a client that reads slowly fills it
+// sooner).
 class FrameClient : public api::testing::SimApiClient {
  public:
   explicit FrameClient(uint16_t port, int rcvbuf = 0) : SimApiClient(port, rcvbuf, 20.0) {}

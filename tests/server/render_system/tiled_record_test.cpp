@@ -5,15 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <mutex>
-#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
+#include "../sim/sim_fixture.hpp"
+#include "app/camera_owners.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "render/camera_setup.hpp"
@@ -75,19 +77,10 @@ class Collector : public FrameConsumer {
 };
 
 TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
-  physics::ComposeOptions co;
-  co.models_dir = UAVSIM_MODELS_DIR;
-  sim::Simulation s(
-      physics::World::load(std::string(UAVSIM_MODELS_DIR) + "/worlds/mbzirc2020.xml", co),
-      sim::SimConfig{});
+  const auto world = sim::testing::make_sim("mbzirc2020.xml");
+  sim::Simulation& s = *world;
   objects::ObjectSet objects = objects::add_world_objects(s);
-  CameraOwners owners;
-  for (const auto& v : s.world().vehicles())
-    owners.vehicle_root_bodies.emplace_back(v.body_id, v.name);
-  if (objects.gimbals) {
-    for (const auto& g : objects.gimbals->gimbals())
-      owners.gimbal_body_vehicle[g.body_id] = g.vehicle;
-  }
+  const CameraOwners owners = app::camera_owners(s.world(), objects);
   std::vector<std::string> overrides{"*:fps=15", "uav0_front:width=384,height=216",
                                      "uav1_front:width=384,height=216"};
   const std::vector<CameraSetup> cameras =
@@ -124,7 +117,8 @@ TEST(TiledRecord, TilesHoldTheOnboardCamerasOfTheSameInstant) {
     frames.add_consumer(&raw);
     frames.add_consumer(recorder.get());
     sim::Runner runner(s, 0.0);
-    runner.add_gate(sim::Phase::kCapture, "frames", [&](double) { frames.capture(s.world().data()); });
+    runner.add_gate(sim::Phase::kCapture, "frames",
+                    [&](double) { frames.capture(s.world().data()); });
     runner.run_until(kRunS);
     frames.wait_delivered();
   }

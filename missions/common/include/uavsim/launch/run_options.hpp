@@ -29,6 +29,25 @@ struct RunOptions {
   bool quiet = false;
 };
 
+// The launcher's defaults for o: the world models/worlds/WORLD_FILE and the uavsim-server program,
+// an install's own (PREFIX/share/uavsim/models, PREFIX/bin) else the build's (built_models_dir,
+// built_server). Thread-safe.
+void default_world_and_server(RunOptions* o, const std::string& world_file,
+                              const std::string& built_models_dir, const std::string& built_server);
+
+// What parse_run_option made of an option.
+enum class RunOptionParse {
+  kNotCommon,  // not one of RunOptions': the launcher's own, or unknown
+  kTaken,      // set into the options
+  kBad,        // one of RunOptions', but its value is not usable (usage)
+};
+
+// The option `name` with its `value` into o when it is one the launchers share: --seed (a whole
+// number), --world, --server, --record, --record-camera, --record-layout, --run-dir, --json,
+// --events, --realism, --wind and --truth-hz (0.01 to 1000). The launchers' flags without a value
+// (--quiet, --no-run-dir, --no-record) stay theirs. Thread-safe.
+RunOptionParse parse_run_option(const std::string& name, const char* value, RunOptions* o);
+
 // The run files (resolve_run_files) set into o: run_dir, record (the video) and json_path; false
 // after "MISSION-run: why" on stderr when the run directory cannot be used. record false:
 // --no-record. Thread-safe.
@@ -43,6 +62,10 @@ ServerSpec run_server_spec(const RunOptions& o, const std::vector<std::string>& 
 // Owner thread only (launch's).
 Result<void> start_run_server(Launcher& launch, const RunOptions& o,
                               const std::vector<std::string>& mission_args);
+
+// Starts keeping the run's summary at o.json_path (Launcher::keep_summary), begun with the mission,
+// the seed and the run directory. Owner thread only (launch's).
+void keep_run_summary(Launcher& launch, const std::string& mission, const RunOptions& o);
 
 // The checks every launcher's loop makes after its own: true when the run must end now, because
 // the wall-clock limit is reached (said as "NAME: wall-clock limit reached"), the server has

@@ -6,10 +6,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/vehicle.hpp"
+#include "uavsim/mission/flight_command.hpp"
 
 namespace uavsim::mission {
 
@@ -38,8 +40,46 @@ class ProgramLoop {
 std::unique_ptr<client::Vehicle> connect_vehicle(ProgramLoop& program, const std::string& vehicle,
                                                  const std::string& mavlink);
 
+// The command-line options every vehicle program takes; a program's own Options derive from it.
+struct VehicleProgramOptions {
+  std::string mavlink;    // --mavlink tcp:HOST:PORT
+  std::string vehicle;    // --vehicle NAME: the simulated vehicle
+  std::string camera;     // --camera NAME
+  std::string video_log;  // --video-log FILE.vlog ("" none)
+};
+
+// The option `name` with its `value` into o when it is one of VehicleProgramOptions'; false when
+// it is not (the program's own, or unknown). Thread-safe.
+bool parse_vehicle_program_option(const std::string& name, const char* value,
+                                  VehicleProgramOptions* o);
+
+// What a vehicle program (mbzirc2017-uav, mbzirc2020-uav) sets up first: its loop, named after the
+// vehicle, and its link to the vehicle.
+struct VehicleProgram {
+  std::unique_ptr<ProgramLoop> program;
+  std::unique_ptr<client::Vehicle> vehicle;
+};
+
+// The loop of the program for the simulated vehicle `vehicle` and that vehicle's link (as
+// connect_vehicle); nullopt after the loop's error on stderr or "connect: why" in the log.
+// Loop thread only (the calling thread becomes it).
+std::optional<VehicleProgram> start_vehicle_program(const std::string& vehicle,
+                                                    const std::string& mavlink);
+
+// Waits up to timeout_s for the vehicle to be ready to fly (client::Vehicle::wait_ready); false
+// after "wait ready: why" in the log.
+bool wait_vehicle_ready(const ProgramLoop& program, client::Vehicle& uav, double timeout_s);
+
 // The missions' take-off: GUIDED, armed, climbing to altitude_m above the ground, without waiting
 // for it (the mission's state machine watches the climb). The first refusal's error.
 client::Result<void> take_off_guided(client::Vehicle& uav, double altitude_m);
+
+// Carries out the state machine's command on the vehicle: take_off_guided, the velocity setpoint
+// with the heading yaw_enu_rad, or all motors off at once (MAV_CMD_COMPONENT_ARM_DISARM forced). A
+// refusal goes to the log as "take-off: why", "velocity: why" or "force disarm: why"; a refused
+// velocity only when log_velocity_refusal (a failed vehicle's setpoints are refused by design).
+// Loop thread only.
+void fly(const ProgramLoop& program, client::Vehicle& uav, const FlightCommand& command,
+         double yaw_enu_rad, bool log_velocity_refusal = true);
 
 }  // namespace uavsim::mission
