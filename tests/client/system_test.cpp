@@ -19,6 +19,13 @@ namespace uavsim::client::testing {
 namespace {
 
 constexpr double kTruthTolM = 0.5;
+constexpr double kLoopTimeTol_s = 0.0021;  // a 2 ms control step, and a margin
+constexpr double kVehicleTimeTol_s = 0.5;
+constexpr double kCrossTrackTol_m = 0.5;
+constexpr double kSpeedTol_m_s = 0.2;
+constexpr double kStopDriftTol_m = 0.3;
+constexpr double kGimbalTol_deg = 0.1;
+constexpr double kTimeTol_s = 1e-9;
 
 class ClientSystemTest : public ::testing::Test {
  protected:
@@ -88,8 +95,8 @@ TEST_F(ClientSystemTest, ConnectWaitReadyAndTelemetry) {
   EXPECT_GT(t.battery_voltage_v, 10.0);
   EXPECT_GT(t.battery_remaining_pct, 50);
   // the loop's clock is the simulator's: now() is the sim time of the tick being handled
-  EXPECT_NEAR(api_->sim_time(), loop_->now(), 0.0021);
-  EXPECT_NEAR(t.vehicle_time_s, loop_->now(), 0.5);
+  EXPECT_NEAR(api_->sim_time(), loop_->now(), kLoopTimeTol_s);
+  EXPECT_NEAR(t.vehicle_time_s, loop_->now(), kVehicleTimeTol_s);
   expect_telemetry_matches_truth();
 }
 
@@ -132,15 +139,15 @@ TEST_F(ClientSystemTest, VelocityIsResentBeyondTheGuidedTimeout) {
   const Eigen::Vector3d moved = api_->truth_position_enu() - start;
   // ~8 s at 1 m/s east: a single setpoint would have stopped after ~3 s
   EXPECT_GT(moved.x(), 6.0) << moved.transpose();
-  EXPECT_LT(std::abs(moved.y()), 0.5);
-  EXPECT_NEAR(uav_->telemetry().velocity_enu_m_s.x(), 1.0, 0.2);
+  EXPECT_LT(std::abs(moved.y()), kCrossTrackTol_m);
+  EXPECT_NEAR(uav_->telemetry().velocity_enu_m_s.x(), 1.0, kSpeedTol_m_s);
   r = uav_->stop();
   ASSERT_TRUE(r) << r.message();
   ASSERT_TRUE(loop_->run_for(4.0));
   EXPECT_LT(uav_->telemetry().velocity_enu_m_s.norm(), 0.2);
   const double x_after_stop = api_->truth_position_enu().x();
   ASSERT_TRUE(loop_->run_for(4.0));
-  EXPECT_NEAR(api_->truth_position_enu().x(), x_after_stop, 0.3);  // no stale re-sends
+  EXPECT_NEAR(api_->truth_position_enu().x(), x_after_stop, kStopDriftTol_m);  // no stale re-sends
 }
 
 TEST_F(ClientSystemTest, YawAndVelocityWithYawRate) {
@@ -248,7 +255,7 @@ TEST_F(ClientSystemTest, GimbalPointing) {
   r = loop_->run_until([&] { return t.has_gimbal && std::abs(t.gimbal_pitch_deg + 45.0) < 0.1; }, 3.0,
                        "MOUNT_STATUS");
   ASSERT_TRUE(r) << r.message();
-  EXPECT_NEAR(t.gimbal_yaw_deg, 10.0, 0.1);
+  EXPECT_NEAR(t.gimbal_yaw_deg, 10.0, kGimbalTol_deg);
 }
 
 TEST_F(ClientSystemTest, TakeoffWhileDisarmedIsRefusedWithTheMavResult) {
@@ -343,10 +350,10 @@ TEST_F(ClientSystemTest, LockstepTimersRunInSimTime) {
   const TimerId id = loop_->call_every(0.1, [&] { ++count; });
   ASSERT_TRUE(loop_->run_for(1.0));
   EXPECT_EQ(count, 10);
-  EXPECT_NEAR(loop_->now() - t0, 1.0, 1e-9);
+  EXPECT_NEAR(loop_->now() - t0, 1.0, kTimeTol_s);
   EXPECT_TRUE(loop_->cancel(id));
   // the simulator is exactly where the loop says (it holds the tick while we work)
-  EXPECT_NEAR(api_->sim_time(), loop_->now(), 1e-9);
+  EXPECT_NEAR(api_->sim_time(), loop_->now(), kTimeTol_s);
   // detached timing: fn appears to take 0.5 s of sim time, and the sim runs meanwhile: fn returns only once
   // the simulator (asked over another connection) has gone past the busy section's end without this loop
   const double b0 = loop_->now();
@@ -356,7 +363,7 @@ TEST_F(ClientSystemTest, LockstepTimersRunInSimTime) {
   });
   EXPECT_GE(loop_->now(), b0 + 0.5 - 1e-9);
   EXPECT_LT(loop_->now(), b0 + 0.5 + 0.02 + 1e-9);
-  EXPECT_NEAR(api_->sim_time(), loop_->now(), 1e-9);
+  EXPECT_NEAR(api_->sim_time(), loop_->now(), kTimeTol_s);
 }
 
 // ---------------------------------------------------------------------------------------------- no server

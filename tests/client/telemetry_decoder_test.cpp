@@ -21,6 +21,7 @@ using mav::to_underlying;
 using testing::FakeMavPort;
 
 constexpr double kTol = 1e-9;
+constexpr double kFloatAngleTol_rad = 1e-6;  // the attitude quaternion travels as floats
 
 class TelemetryDecoderTest : public ::testing::Test {
  protected:
@@ -147,10 +148,10 @@ TEST_F(TelemetryDecoderTest, GimbalDeviceAttitudeInTheVehicleFrame) {
   };
   const auto expect_camera = [&] {
     EXPECT_TRUE(tm().has_gimbal_attitude);
-    EXPECT_NEAR(tm().gimbal_attitude_time_s, 61.234, 1e-9);
-    EXPECT_NEAR(tm().gimbal_attitude_roll_rad, 2 * kDegToRad, 1e-6);
-    EXPECT_NEAR(tm().gimbal_attitude_pitch_rad, 6 * kDegToRad, 1e-6);
-    EXPECT_NEAR(tm().gimbal_attitude_yaw_rad, 10 * kDegToRad, 1e-6);
+    EXPECT_NEAR(tm().gimbal_attitude_time_s, 61.234, kTol);
+    EXPECT_NEAR(tm().gimbal_attitude_roll_rad, 2 * kDegToRad, kFloatAngleTol_rad);
+    EXPECT_NEAR(tm().gimbal_attitude_pitch_rad, 6 * kDegToRad, kFloatAngleTol_rad);
+    EXPECT_NEAR(tm().gimbal_attitude_yaw_rad, 10 * kDegToRad, kFloatAngleTol_rad);
   };
   port_.deliver(status(q_vehicle, 4 | 8 | 32,
                        30 * kDegToRad));  // ROLL_LOCK | PITCH_LOCK | YAW_IN_VEHICLE_FRAME

@@ -17,6 +17,10 @@
 namespace uavsim::client {
 namespace {
 
+constexpr double kPidTol = 1e-9;
+constexpr double kRoundTripTol = 1e-9;  // degrees and metres back from a conversion
+constexpr double kYawTol_rad = 1e-12;
+
 TEST(Result, ValueAndFailure) {
   Result<int> a = 3;
   ASSERT_TRUE(a);
@@ -40,11 +44,11 @@ TEST(Pid, ProportionalIntegralDerivativeAndLiveGains) {
   pid.reset();
   double out = 0;
   for (int i = 0; i < 10; ++i) out = pid.update(1.0, 0.0, 0.1);
-  EXPECT_NEAR(out, 1.0, 1e-9);  // integral of 1 over 1 s
+  EXPECT_NEAR(out, 1.0, kPidTol);  // integral of 1 over 1 s
   pid.set_gains({.kd = 1.0});
   pid.reset();
   pid.update(0.0, 0.0, 0.1);
-  EXPECT_NEAR(pid.update(0.0, 0.5, 0.1), -5.0, 1e-9);  // derivative on measurement
+  EXPECT_NEAR(pid.update(0.0, 0.5, 0.1), -5.0, kPidTol);  // derivative on measurement
   // saturation and anti-windup
   pid.set_gains({.kp = 1.0, .ki = 10.0, .output_min = -1.0, .output_max = 1.0});
   pid.reset();
@@ -69,12 +73,12 @@ TEST(Geodesy, IsTheServersImplementation) {
   EXPECT_DOUBLE_EQ(enu.x(), ned.y());
   EXPECT_DOUBLE_EQ(enu.z(), -ned.z());
   const Geodetic back = geodetic_from_enu(o, enu);
-  EXPECT_NEAR(back.lat_deg, p.lat_deg, 1e-9);
-  EXPECT_NEAR(back.lon_deg, p.lon_deg, 1e-9);
-  EXPECT_NEAR(back.alt_m, p.alt_m, 1e-9);
-  EXPECT_NEAR(enu_yaw_from_ned(0.0), common::kPi / 2, 1e-12);  // north
-  EXPECT_NEAR(enu_yaw_from_ned(common::kPi / 2), 0.0, 1e-12);  // east
-  EXPECT_NEAR(ned_yaw_from_enu(enu_yaw_from_ned(1.0)), 1.0, 1e-12);
+  EXPECT_NEAR(back.lat_deg, p.lat_deg, kRoundTripTol);
+  EXPECT_NEAR(back.lon_deg, p.lon_deg, kRoundTripTol);
+  EXPECT_NEAR(back.alt_m, p.alt_m, kRoundTripTol);
+  EXPECT_NEAR(enu_yaw_from_ned(0.0), common::kPi / 2, kYawTol_rad);  // north
+  EXPECT_NEAR(enu_yaw_from_ned(common::kPi / 2), 0.0, kYawTol_rad);  // east
+  EXPECT_NEAR(ned_yaw_from_enu(enu_yaw_from_ned(1.0)), 1.0, kYawTol_rad);
 }
 
 TEST(Geodesy, TelemetryOriginIsZeroUntilTheVehicleSendsIt) {

@@ -10,6 +10,8 @@
 namespace uavsim::missions::coverage {
 namespace {
 
+constexpr double kFractionTol = 1e-9;
+
 TEST(NormalizeStripe, UnitesOverlappingAndTouchingPatchesLikeFig37) {
   // fig. 3.7's situation: patches in any order, some overlapping, some touching, one apart.
   // discontinuity map: 0:+1 5:+1 10:-1 15:-1 20:+1 30:-1+1=0 35:-1 40:+1 45:-1
@@ -53,7 +55,7 @@ TEST(AreaParts, FrontiersAreTheFirstUncoveredYFromEachSide) {
   a.add(1, {50.0, 100});
   EXPECT_FALSE(a.lowest_uncovered(0, 100));
   EXPECT_TRUE(a.covers_all(100));
-  EXPECT_NEAR(a.covered_fraction(100), (100.0 + 99.9) / 200.0, 1e-9);
+  EXPECT_NEAR(a.covered_fraction(100), (100.0 + 99.9) / 200.0, kFractionTol);
 }
 
 // Algorithm 4's NORMALIZE_STRIPE as the thesis writes it (a discontinuity map swept in increasing

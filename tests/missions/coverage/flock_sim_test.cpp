@@ -19,6 +19,7 @@ namespace {
 constexpr double kDt_s = 0.05;
 constexpr double kLag_s = 0.4;  // velocity response of a quad in GUIDED
 constexpr double kGravity_m_s2 = 9.81;
+constexpr double kSurvivorsTol = 1e-3;
 
 struct SimVehicle {
   SimVehicle(Agent a, const Eigen::Vector3d& p) : agent(std::move(a)), position_enu_m(p) {}
@@ -238,7 +239,7 @@ FlockRun fly(const FlockScenario& s) {
 TEST(FlockSim, FiveAgentsCoverTheRectangleAndLand) {
   const FlockRun r = fly({});
   EXPECT_TRUE(r.all_done);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
   EXPECT_GT(r.min_separation_m, 2.0);
   // 150 x 100 with a ~37 m swath: three or four passes of ~165 m at 5 m/s plus turns
   EXPECT_LT(r.mission_time_s, 600.0);
@@ -254,7 +255,7 @@ TEST(FlockSim, PassesRunWithNoTwoNeighboursFurtherApartThanAFootprint) {
   s.line_spacing_m = 15.0;
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
   EXPECT_GT(r.min_separation_m, 2.0);
   EXPECT_LT(r.max_gap_running_m, area().y_sensor_m) << "mission " << r.mission_time_s << " s";
   std::printf("widest gap in a pass %.2f m, mission %.1f s\n", r.max_gap_running_m,
@@ -270,7 +271,7 @@ TEST(FlockSim, EightAgentsGoHomeInTheirLayersWithoutCrossingAClimbingNeighbour) 
   s.line_spacing_m = 7.0;
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
   EXPECT_GT(r.min_separation_m, 2.0);
   std::printf("min separation %.2f m, mission %.1f s\n", r.min_separation_m, r.mission_time_s);
 }
@@ -281,7 +282,7 @@ TEST(FlockSim, LeaderKilledANewLeaderFinishes) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.completed_by, 1);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 TEST(FlockSim, NonLeaderKilledItsStripesAreCoveredAgain) {
@@ -289,7 +290,7 @@ TEST(FlockSim, NonLeaderKilledItsStripesAreCoveredAgain) {
   s.kills = {{70.0, 3}};
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 // With a ground station, an agent deep inside a line of 12 dies in the first pass: its pictures
@@ -307,7 +308,7 @@ TEST(FlockSim, AgentLostDeepInsideTheLineTheLeaderRunsTheStretchAgain) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rewinds, 1);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
   std::printf("mission %.1f s, without the loss %.1f s\n", r.mission_time_s, calm.mission_time_s);
   // an agent near the edge: the next pass covers its strip, no rewind
   s.kills = {{30.0, 10}};
@@ -324,7 +325,7 @@ TEST(FlockSim, ThirtyPercentRadioLossStillCoversEverything) {
   s.loss = 0.3;
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 TEST(FlockSim, AgentLostOnTheWayHomeTheFlockGoesBackForItsStripes) {
@@ -334,7 +335,7 @@ TEST(FlockSim, AgentLostOnTheWayHomeTheFlockGoesBackForItsStripes) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rounds, 2);  // one recall
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
   const FlockRun plain = fly({});
   EXPECT_GT(r.mission_time_s, plain.mission_time_s);  // the extra pass costs time
   std::printf("recall: mission %.1f s (without the loss %.1f s), distance %.0f m (%.0f m)\n",
@@ -349,7 +350,7 @@ TEST(FlockSim, AgentKilledInItsLandingDescentIsAFailureNotALanding) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rounds, 2);  // the leader, still flying, noticed the loss and recalled the flock
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 TEST(FlockSim, LeaderLostOnTheWayHomeTheNextOneChecksAndRecalls) {
@@ -358,7 +359,7 @@ TEST(FlockSim, LeaderLostOnTheWayHomeTheNextOneChecksAndRecalls) {
   const FlockRun r = fly(s);
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rounds, 2);
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 TEST(FlockSim, LastFlyerLostAfterTheOthersLandedTheLowestLandedTakesOffAgain) {
@@ -371,7 +372,7 @@ TEST(FlockSim, LastFlyerLostAfterTheOthersLandedTheLowestLandedTakesOffAgain) {
   EXPECT_TRUE(r.all_done);
   EXPECT_EQ(r.rounds, 2);
   EXPECT_EQ(r.takeoffs, 6);  // five, and agent 1 again
-  EXPECT_NEAR(r.survivors_fraction, 1.0, 1e-3);
+  EXPECT_NEAR(r.survivors_fraction, 1.0, kSurvivorsTol);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@ namespace uavsim::missions::coverage {
 namespace {
 
 constexpr double kTol = 1e-9;
+constexpr double kRoundedTol_m_s = 1e-6;  // against a value given to 6 decimals
 
 TEST(Flocking, AngleDiffAndSaturate) {
   EXPECT_NEAR(angle_diff(3.0, -3.0), 6.0 - 2.0 * common::kPi, kTol);  // 6 rad wraps to -0.283
@@ -56,7 +57,7 @@ TEST(Flocking, SeparationPushesAwayFromTheNearestAgentAcrossTheLine) {
   // sep = 0.5 * (-1)^2 + 0.6 * (1 - (3 / 7.5)^0.4) = 0.5 + 0.6 * (1 - 0.693145) = 0.684113
   EXPECT_TRUE(out.separating);
   EXPECT_NEAR(out.ortho_m_s, 0.5 + 0.6 * (1.0 - std::pow(0.4, 0.4)), kTol);
-  EXPECT_NEAR(out.ortho_m_s, 0.684113, 1e-6);
+  EXPECT_NEAR(out.ortho_m_s, 0.684113, kRoundedTol_m_s);
   // R3x: parallelDiff 0 -> direction +x; (1, -3) is 1 m ahead and 3 m across (< D_R1 / 2):
   // obstructed, no parallel speed
   EXPECT_TRUE(out.obstructed);
@@ -148,8 +149,8 @@ TEST(Flocking, AxesFollowTheLeadersHeading) {
   EXPECT_NEAR(out.parallel_m_s, 1.0 + 0.0005 * 5 * 0.05, kTol);
   EXPECT_NEAR(out.ortho_m_s, -1.0, kTol);
   // velocity: 1.000125 * (-1, 0) + (-1) * (0, -1) = (-1.000125, 1)
-  EXPECT_NEAR(out.velocity_enu_m_s.x(), -1.000125, 1e-9);
-  EXPECT_NEAR(out.velocity_enu_m_s.y(), 1.0, 1e-9);
+  EXPECT_NEAR(out.velocity_enu_m_s.x(), -1.000125, kTol);
+  EXPECT_NEAR(out.velocity_enu_m_s.y(), 1.0, kTol);
 }
 
 }  // namespace

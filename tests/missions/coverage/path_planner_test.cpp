@@ -10,6 +10,9 @@
 namespace uavsim::missions::coverage {
 namespace {
 
+constexpr double kPosTol_m = 1e-9;
+constexpr double kHeadingTol_rad = 1e-12;
+
 // 10 stripes of 5.6 m over x in [0, 56), y in [0, 100)
 CoverageConfig config() {
   CoverageConfig c;
@@ -31,7 +34,7 @@ TEST(PathPlanner, FlockExtentOfAFormedFlockIsItsMeasuredSpan) {
   // agents 6.9 m apart above the leader span 27.6 m, not 4 * 7.5 = 30 m
   const FlockExtent e = flock_extent(10.0, {16.9, 23.8, 30.7, 37.6}, 7.5);
   EXPECT_DOUBLE_EQ(e.low_extent_m, 0.0);
-  EXPECT_NEAR(e.high_extent_m, 27.6, 1e-9);
+  EXPECT_NEAR(e.high_extent_m, 27.6, kPosTol_m);
 }
 
 TEST(PathPlanner, EmptyMapLowSideTranslatesTheFlockEdgeOntoTheFrontierWithTheMargin) {
@@ -43,8 +46,8 @@ TEST(PathPlanner, EmptyMapLowSideTranslatesTheFlockEdgeOntoTheFrontierWithTheMar
   // frontier y = 0 everywhere; leader y = 0 + 0 (extent) + 5 (half footprint) - 2 (20% of 10)
   for (const auto& q : p->points_enu_m) EXPECT_DOUBLE_EQ(q.y(), 3.0);
   // run-in: first stripe centre 2.8 - 2.8 - 7 = -7; run-out: 53.2 + 2.8 + 7 = 63; heading +x
-  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, 1e-9);
-  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, 1e-9);
+  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, kPosTol_m);
+  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, kPosTol_m);
   EXPECT_EQ(p->heading_rad, 0.0);
   EXPECT_EQ(p->points_enu_m.size(), 12u);  // 10 stripes + run-in + run-out
 }
@@ -60,7 +63,7 @@ TEST(PathPlanner, HighSideAndDirectionFromTheNearerEnd) {
   EXPECT_FALSE(p->low_side);
   // frontier 100; leader y = 100 - (0 + 5 - 2) = 97
   EXPECT_DOUBLE_EQ(p->points_enu_m.front().y(), 97.0);
-  EXPECT_NEAR(p->heading_rad, common::kPi, 1e-12);
+  EXPECT_NEAR(p->heading_rad, common::kPi, kHeadingTol_rad);
   EXPECT_GT(p->points_enu_m.front().x(), p->points_enu_m.back().x());
   // low side from the same place would start at y = 40 + 30 + 3 = 73: farther than 97 from 95?
   // |73 - 95| = 22 > |97 - 95| = 2: the high side is the nearer one
@@ -116,9 +119,9 @@ TEST(PathPlanner, StripesAtTheEndsDroppedByTheThresholdAreStillFlownOver) {
   EXPECT_EQ(p->points_enu_m.size(), 10u);  // stripes 2..9 + run-in + run-out
   // the run-in still starts a footprint before stripe 0 (centre 2.8 - 2.8 - 7 = -7), at the first
   // kept point's y (40 + 5 - 2): the flock passes over the dropped stripes without swinging
-  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, 1e-9);
+  EXPECT_NEAR(p->points_enu_m.front().x(), -7.0, kPosTol_m);
   EXPECT_DOUBLE_EQ(p->points_enu_m.front().y(), 43.0);
-  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, 1e-9);
+  EXPECT_NEAR(p->points_enu_m.back().x(), 63.0, kPosTol_m);
   EXPECT_DOUBLE_EQ(path_y_at(*p, 2.8), 43.0);
 }
 

@@ -14,6 +14,12 @@ namespace {
 // 802.15.4's whole frame (the simple channel), and lr-wpan's with its MAC header (the ns3 channel)
 const FrameFit k127 = FrameFit{};
 constexpr size_t kNs3FrameBytes = 116;
+constexpr double kPosQuantTol_m = 0.051;      // half of the 0.1 m step, and a margin
+constexpr double kSpeedQuantTol_m_s = 0.051;  // the same for the 0.1 m/s step
+constexpr double kHeadingQuantTol_rad = 1e-4;
+constexpr double kSpeedTol_m_s = 1e-9;
+constexpr double kIntervalTol_m = 0.1;
+constexpr double kFractionTol = 1e-3;
 
 TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
   const RadioFrameOrigin o{100.0, -50.0};
@@ -28,17 +34,17 @@ TEST(RadioMessages, BeaconRoundTripsWithinAFrame) {
   ASSERT_TRUE(d);
   EXPECT_EQ(d->self.id, 3);
   EXPECT_EQ(d->self.seq, 65000);
-  EXPECT_NEAR(d->self.x_m, 123.5, 0.051);  // 0.1 m steps
-  EXPECT_NEAR(d->self.y_m, -40.0, 0.051);
-  EXPECT_NEAR(d->self.heading_rad, -1.5, 1e-4);
-  EXPECT_NEAR(d->self.vx_m_s, 4.9, 1e-9);
-  EXPECT_NEAR(d->self.vy_m_s, -0.3, 1e-9);
+  EXPECT_NEAR(d->self.x_m, 123.5, kPosQuantTol_m);  // 0.1 m steps
+  EXPECT_NEAR(d->self.y_m, -40.0, kPosQuantTol_m);
+  EXPECT_NEAR(d->self.heading_rad, -1.5, kHeadingQuantTol_rad);
+  EXPECT_NEAR(d->self.vx_m_s, 4.9, kSpeedTol_m_s);
+  EXPECT_NEAR(d->self.vy_m_s, -0.3, kSpeedTol_m_s);
   EXPECT_TRUE(d->going_home);
   ASSERT_EQ(d->records.size(), 8u);
   EXPECT_EQ(d->records[6].id, 16);
   EXPECT_EQ(d->records[6].distance_hops, 2);
   EXPECT_EQ(d->records[6].age_ms, 1500);
-  EXPECT_NEAR(d->records[6].heading_rad, 3.1, 1e-4);
+  EXPECT_NEAR(d->records[6].heading_rad, 3.1, kHeadingQuantTol_rad);
 }
 
 TEST(RadioMessages, BeaconCarriesLandedFlagsAndTheSurveyRound) {
@@ -140,8 +146,8 @@ TEST(RadioMessages, AFragmentedMapIsReassembledInAnyOrderAndRoundedInwards) {
     // start rounded up, end down, to 0.1 m: never more than was covered
     EXPECT_GE(iv.start_m, m.apd.stripe(s)[0].start_m - 1e-9);
     EXPECT_LE(iv.end_m, m.apd.stripe(s)[0].end_m + 1e-9);
-    EXPECT_NEAR(iv.start_m, m.apd.stripe(s)[0].start_m, 0.1);
-    EXPECT_NEAR(iv.end_m, m.apd.stripe(s)[0].end_m, 0.1);
+    EXPECT_NEAR(iv.start_m, m.apd.stripe(s)[0].start_m, kIntervalTol_m);
+    EXPECT_NEAR(iv.end_m, m.apd.stripe(s)[0].end_m, kIntervalTol_m);
   }
 }
 
@@ -163,7 +169,7 @@ TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
     d = r.add(f);
   }
   ASSERT_TRUE(d);
-  EXPECT_NEAR(d->apd.covered_fraction(600.0), m.apd.covered_fraction(600.0), 1e-3);
+  EXPECT_NEAR(d->apd.covered_fraction(600.0), m.apd.covered_fraction(600.0), kFractionTol);
   ASSERT_EQ(d->apd.stripe(107).size(), 16u);
 }
 
@@ -233,11 +239,11 @@ TEST(RadioMessages, BeaconsFitTheChannelsFrameAndRoundTrip) {
       const AgentRecord& got = d->records[i];
       EXPECT_EQ(got.id, sent.id);
       EXPECT_EQ(got.seq, sent.seq);
-      EXPECT_NEAR(got.x_m, sent.x_m, 0.051);
-      EXPECT_NEAR(got.y_m, sent.y_m, 0.051);
-      EXPECT_NEAR(got.heading_rad, sent.heading_rad, 1e-4);
-      EXPECT_NEAR(got.vx_m_s, sent.vx_m_s, 0.051);
-      EXPECT_NEAR(got.vy_m_s, sent.vy_m_s, 0.051);
+      EXPECT_NEAR(got.x_m, sent.x_m, kPosQuantTol_m);
+      EXPECT_NEAR(got.y_m, sent.y_m, kPosQuantTol_m);
+      EXPECT_NEAR(got.heading_rad, sent.heading_rad, kHeadingQuantTol_rad);
+      EXPECT_NEAR(got.vx_m_s, sent.vx_m_s, kSpeedQuantTol_m_s);
+      EXPECT_NEAR(got.vy_m_s, sent.vy_m_s, kSpeedQuantTol_m_s);
       EXPECT_EQ(got.distance_hops, sent.distance_hops);
       EXPECT_EQ(got.age_ms, sent.age_ms);
       EXPECT_EQ(got.landed, sent.landed);

@@ -10,13 +10,15 @@
 namespace uavsim::missions::coverage {
 namespace {
 
+constexpr double kAirtimeTol_s = 1e-9;
+
 std::vector<Frame> message(int frames, uint8_t tag) {
   return std::vector<Frame>(static_cast<size_t>(frames), Frame(kMaxFrameBytes, tag));
 }
 
 TEST(RadioPacer, AirtimeOfAFullFrameAt250kbits) {
-  EXPECT_NEAR(frame_airtime_s(127), 4.256e-3, 1e-9);  // (127 + 6) bytes * 8 / 250 kbit/s
-  EXPECT_NEAR(frame_airtime_s(0), 0.192e-3, 1e-9);
+  EXPECT_NEAR(frame_airtime_s(127), 4.256e-3, kAirtimeTol_s);  // (127 + 6) bytes * 8 / 250 kbit/s
+  EXPECT_NEAR(frame_airtime_s(0), 0.192e-3, kAirtimeTol_s);
 }
 
 TEST(RadioPacer, AShortMessageGoesAtOnceALongOneWithinItsShareStepByStep) {

@@ -12,6 +12,8 @@ namespace {
 constexpr int kStripes = 10;
 constexpr double kWidth_m = 100.0;
 constexpr double kLength_m = 150.0;  // stripes 15 m long along x
+constexpr double kFractionTol = 1e-12;
+constexpr double kDistanceTol_m = 1e-9;
 
 // An APD with the same interval in stripes [first, last].
 AreaParts band(int first, int last, double start_m, double end_m) {
@@ -43,22 +45,22 @@ TEST(RecoveryMeter, AgentPhotographingWhatAFailedAgentAloneHeldRecoversInProport
   meter.agent_report(0, band(0, 9, 0, 12));
   meter.agent_report(1, band(0, 9, 10, 20));
   // y 12-20: 8 m of 100 in every stripe
-  EXPECT_NEAR(meter.agent_failed(1), 8.0 / 100.0, 1e-12);
-  EXPECT_NEAR(meter.lost_fraction(), 8.0 / 100.0, 1e-12);
+  EXPECT_NEAR(meter.agent_failed(1), 8.0 / 100.0, kFractionTol);
+  EXPECT_NEAR(meter.lost_fraction(), 8.0 / 100.0, kFractionTol);
   // agent 0 photographs y 12-28 in every stripe: half of it (12-20) was lost, so half its flight
   // over the ten 15 m stripes
   meter.agent_report(0, band(0, 9, 0, 28));
-  EXPECT_NEAR(meter.distance_m(), 75.0, 1e-9);
-  EXPECT_NEAR(meter.recovered_fraction(), 0.08, 1e-12);
-  EXPECT_NEAR(meter.lost_fraction(), 0.0, 1e-12);
+  EXPECT_NEAR(meter.distance_m(), 75.0, kDistanceTol_m);
+  EXPECT_NEAR(meter.recovered_fraction(), 0.08, kFractionTol);
+  EXPECT_NEAR(meter.lost_fraction(), 0.0, kFractionTol);
   // ground recovered is no longer lost: flying over it again recovers nothing
   meter.agent_report(0, unite(band(0, 9, 0, 28), band(0, 4, 30, 40)));
-  EXPECT_NEAR(meter.distance_m(), 75.0, 1e-9);
+  EXPECT_NEAR(meter.distance_m(), 75.0, kDistanceTol_m);
   // the failure's loss stays counted after its recovery; agent 0 now alone holds 0-28 and
   // 30-40 in half the stripes: lost with it, and lost a second time for y 12-20
-  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08, 1e-12);
-  EXPECT_NEAR(meter.agent_failed(0), 0.28 + 0.05, 1e-12);
-  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08 + 0.33, 1e-12);
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08, kFractionTol);
+  EXPECT_NEAR(meter.agent_failed(0), 0.28 + 0.05, kFractionTol);
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.08 + 0.33, kFractionTol);
 }
 
 TEST(RecoveryMeter, NothingIsLostWhileALiveAgentOrTheStationHoldsIt) {
@@ -95,20 +97,21 @@ TEST(RecoveryMeter, WithoutFailuresNothingIsRecoveredAndSliversAreNotLost) {
 TEST(RecoveryMeter, AReportReadAfterTheFailureAddsToWhatIsLostAndTheFailedRecoverNothing) {
   RecoveryMeter meter(kStripes, kWidth_m, kLength_m);
   meter.agent_report(1, band(0, 9, 0, 10));
-  EXPECT_NEAR(meter.agent_failed(1), 0.10, 1e-12);
+  EXPECT_NEAR(meter.agent_failed(1), 0.10, kFractionTol);
   EXPECT_EQ(meter.agent_failed(1), 0.0);  // the kill and its event both say so: counted once
-  EXPECT_NEAR(meter.lost_fraction(), 0.10, 1e-12);
+  EXPECT_NEAR(meter.lost_fraction(), 0.10, kFractionTol);
   // its last pictures, printed before the kill and read after it
   meter.agent_report(1, band(0, 9, 0, 20));
-  EXPECT_NEAR(meter.lost_fraction(), 0.20, 1e-12);
-  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.20, 1e-12);
+  EXPECT_NEAR(meter.lost_fraction(), 0.20, kFractionTol);
+  EXPECT_NEAR(meter.lost_at_failures_fraction(), 0.20, kFractionTol);
   EXPECT_EQ(meter.distance_m(), 0.0);
   // the station's later map (the recovering agent's pictures delivered before its own report)
   // does not hide the recovery
   meter.station_report(band(0, 9, 0, 20));
   meter.agent_report(0, band(0, 9, 0, 20));
-  EXPECT_NEAR(meter.distance_m(), 150.0, 1e-9);  // all of its pictures, over ten 15 m stripes
-  EXPECT_NEAR(meter.recovered_fraction(), 0.20, 1e-12);
+  EXPECT_NEAR(meter.distance_m(), 150.0,
+              kDistanceTol_m);  // all of its pictures, over ten 15 m stripes
+  EXPECT_NEAR(meter.recovered_fraction(), 0.20, kFractionTol);
 }
 
 TEST(RecoveryMeter, ReportsOfAnotherStripeCountAreIgnored) {

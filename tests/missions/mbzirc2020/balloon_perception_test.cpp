@@ -24,6 +24,9 @@ namespace {
 namespace frames = common::frames;
 using common::kDegToRad;
 
+constexpr double kHeightTol_m = 0.05;
+constexpr double kAngleTol_rad = 1e-9;
+
 struct Seed14AtSixtySeconds {
   // ground truth (truth_uav0.csv, summary.json) and the field's errors
   Eigen::Vector3d vehicle_enu_m{35.80, -14.48, 2.83};
@@ -109,7 +112,7 @@ TEST(Mbzirc2020BalloonPerception, PlacesTheBalloonWithTheGimbalsReportedAttitude
   });
   ASSERT_EQ(seen.size(), 1u);
   // its height as our own (the pierce's blades go there); where the compass says it is
-  EXPECT_NEAR(seen[0].position_enu_m.z(), in_our_frame(c).z(), 0.05);
+  EXPECT_NEAR(seen[0].position_enu_m.z(), in_our_frame(c).z(), kHeightTol_m);
   EXPECT_LT((seen[0].position_enu_m - in_our_frame(c)).head<2>().norm(), 0.15);
 }
 
@@ -121,13 +124,13 @@ TEST(Mbzirc2020BalloonPerception, TheReportedAttitudeCarriesTheGimbalsYawAndRoll
     return p.camera_pose(c.telemetry_enu_m(), c.telemetry_yaw_rad(), reported);
   });
   ASSERT_EQ(seen.size(), 1u);
-  EXPECT_NEAR(seen[0].position_enu_m.z(), in_our_frame(c).z(), 0.05);
+  EXPECT_NEAR(seen[0].position_enu_m.z(), in_our_frame(c).z(), kHeightTol_m);
   EXPECT_LT((seen[0].position_enu_m - in_our_frame(c)).head<2>().norm(), 0.15);
   // and the report's angles are the camera's, in MAVLink's signs
   const GimbalReport r = c.report(MissionConfig{}, 60.0);
-  EXPECT_NEAR(r.pitch_rad, 6.0 * kDegToRad, 1e-9);
-  EXPECT_NEAR(r.yaw_rad, -3.0 * kDegToRad, 1e-9);  // clockwise positive
-  EXPECT_NEAR(r.roll_rad, 0.0, 1e-9);
+  EXPECT_NEAR(r.pitch_rad, 6.0 * kDegToRad, kAngleTol_rad);
+  EXPECT_NEAR(r.yaw_rad, -3.0 * kDegToRad, kAngleTol_rad);  // clockwise positive
+  EXPECT_NEAR(r.roll_rad, 0.0, kAngleTol_rad);
 }
 
 TEST(Mbzirc2020BalloonPerception, TheCommandedElevationPutsSeed14sBalloonLow) {

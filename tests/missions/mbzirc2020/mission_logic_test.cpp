@@ -19,6 +19,18 @@ namespace {
 
 using common::kPi;
 
+constexpr double kAngleTol_rad = 1e-9;
+constexpr double kLineTol_m = 1.0;  // on a side line of the arena, flown by the made-up vehicle
+constexpr double kAltTol_m = 0.2;   // holding the scan or the crossing altitude
+constexpr double kPierceAltTol_m = 0.1;
+constexpr double kSecondPierceAltTol_m = 0.15;
+constexpr double kHomeYawTol_rad = 1e-6;
+constexpr double kTransitAltTol_m = 0.35;
+constexpr double kLandingSpotTol_m = 0.6;
+constexpr double kDescentYawTol_rad = 10.0 * kPi / 180.0;
+constexpr double kLeanTol_deg = 0.05;
+constexpr double kLeanSinTol = 1e-9;
+
 UavStatus status(bool ready, Eigen::Vector3d p = Eigen::Vector3d::Zero()) {
   UavStatus s;
   s.ready = ready;
@@ -210,9 +222,9 @@ Eigen::Vector3d fly_to_pierce(const MissionConfig& config, VehicleFsm& fsm, Fake
   for (int i = 0; i < 2000 && fsm.state() != VehicleState::kBlindScan; ++i)
     v.apply(fsm.step(v.in), dt);
   EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
-  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);  // the south side line
-  EXPECT_NEAR(v.in.position_enu_m.z(), config.scan_altitude_low_m, 0.2);
-  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);  // camera towards the arena
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, kLineTol_m);  // the south side line
+  EXPECT_NEAR(v.in.position_enu_m.z(), config.scan_altitude_low_m, kAltTol_m);
+  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, kAngleTol_rad);  // camera towards the arena
 
   // a balloon in the other half is not ours: the scan goes on
   v.in.balloons = {{1, {v.in.position_enu_m.x() + 2, 15.0, 2.7}, v.in.now_s}};
@@ -253,7 +265,8 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
     out = fsm.step(v.in);
     // on the way, the blades ride just above the balloon's centre
     if (range < 3.0 && range > 1.0) {
-      EXPECT_NEAR(v.in.position_enu_m.z(), 2.7 + config.pierce_blade_above_centre_m, 0.1);
+      EXPECT_NEAR(v.in.position_enu_m.z(), 2.7 + config.pierce_blade_above_centre_m,
+                  kPierceAltTol_m);
     }
     v.apply(out, dt);
   }
@@ -278,7 +291,7 @@ TEST(Mbzirc2020VehicleFsm, FollowsFigure713ThroughAPierce) {
   EXPECT_TRUE(reported);
   EXPECT_EQ(fsm.popped(), 1);
   EXPECT_EQ(fsm.state(), VehicleState::kBlindScan);
-  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, kLineTol_m);
 }
 
 // A balloon seen in the way of a pierce, nearer than its target, becomes the target (one-UAV
@@ -318,7 +331,8 @@ TEST(Mbzirc2020VehicleFsm, APierceTakesABalloonInItsWay) {
     for (BalloonSighting& b : v.in.balloons) b.last_seen_s = v.in.now_s;
     v.apply(fsm.step(v.in), 0.05);
   }
-  EXPECT_NEAR(v.in.position_enu_m.z(), near.z() + config.pierce_blade_above_centre_m, 0.1);
+  EXPECT_NEAR(v.in.position_enu_m.z(), near.z() + config.pierce_blade_above_centre_m,
+              kPierceAltTol_m);
 }
 
 // The pole of a balloon we popped still stands: a later pierce whose path passes by it flies over
@@ -366,7 +380,8 @@ TEST(Mbzirc2020VehicleFsm, APierceFliesOverThePoleOfABalloonPoppedBefore) {
   // the pole's top is 0.28 m under its balloon's centre; the hull passes well above it
   EXPECT_GT(min_z_at_pole, first.z() + 0.3);
   // and the blades are down at the second balloon's height before they reach it
-  EXPECT_NEAR(z_near_second, second.z() + config.pierce_blade_above_centre_m, 0.15);
+  EXPECT_NEAR(z_near_second, second.z() + config.pierce_blade_above_centre_m,
+              kSecondPierceAltTol_m);
 }
 
 // A pierce the camera loses short of the balloon (two-UAV field seeds 2 and 5: the balloon seen
@@ -459,7 +474,7 @@ TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBa
   v.in.position_enu_m = {-10, -27, 0};
   fly_to_scans_done(fsm, v);
   ASSERT_EQ(fsm.state(), VehicleState::kScansDone);
-  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, 1.0);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -28.0, kLineTol_m);
   const double scan_z = v.in.position_enu_m.z();
   v.in.commands = {GcsCommand::kReTask};
   v.apply(fsm.step(v.in), 0.05);
@@ -480,9 +495,9 @@ TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBa
   }
   ASSERT_EQ(fsm.state(), VehicleState::kBlindScan);
   EXPECT_GT(config.cross_altitude_m, scan_z);
-  EXPECT_NEAR(v.in.position_enu_m.y(), -config.cross_line_back_m, 1.0);
-  EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m, 0.2);
-  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, 1e-9);
+  EXPECT_NEAR(v.in.position_enu_m.y(), -config.cross_line_back_m, kLineTol_m);
+  EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m, kAltTol_m);
+  EXPECT_NEAR(v.in.yaw_enu_rad, kPi / 2, kAngleTol_rad);
 
   // a balloon in the other half is now ours: request, and go down to its height meanwhile
   const Eigen::Vector3d balloon(v.in.position_enu_m.x() + 2, 15.0, 2.4);
@@ -495,7 +510,8 @@ TEST(Mbzirc2020VehicleFsm, ReTaskedAfterItsScansItScansTheOtherHalfFromOverTheBa
     v.apply(fsm.step(v.in), 0.05);
   }
   EXPECT_EQ(fsm.state(), VehicleState::kAreaAllocationRequest);
-  EXPECT_NEAR(v.in.position_enu_m.z(), balloon.z() + config.pierce_blade_above_centre_m, 0.1);
+  EXPECT_NEAR(v.in.position_enu_m.z(), balloon.z() + config.pierce_blade_above_centre_m,
+              kPierceAltTol_m);
   v.in.airspace_replies = {request};
   v.apply(fsm.step(v.in), 0.05);
   v.in.airspace_replies.clear();
@@ -528,11 +544,12 @@ TEST(Mbzirc2020VehicleFsm, AloneItScansItsOwnHalfAgainFromBeyondTheMiddle) {
     if (fsm.state() == VehicleState::kBlindScan && v.in.position_enu_m.y() > 3.0 &&
         std::abs(v.in.position_enu_m.y() - config.cross_line_back_m) < 1.2) {
       ++look_home_samples;
-      EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m, 0.2);
+      EXPECT_NEAR(v.in.position_enu_m.z() + config.rest_height_m, config.cross_altitude_m,
+                  kAltTol_m);
       min_x = std::min(min_x, v.in.position_enu_m.x());
       max_x = std::max(max_x, v.in.position_enu_m.x());
       if (std::abs(v.in.position_enu_m.x()) < 30.0) {
-        EXPECT_NEAR(v.in.yaw_enu_rad, -kPi / 2, 1e-6);  // looking south, home
+        EXPECT_NEAR(v.in.yaw_enu_rad, -kPi / 2, kHomeYawTol_rad);  // looking south, home
       }
     }
     v.apply(out, 0.05);
@@ -582,8 +599,9 @@ TEST(Mbzirc2020VehicleFsm, DescendsOnVelocityAndTurnsTheMotorsOffAtTouchdown) {
       min_vz = std::min(min_vz, v.in.velocity_enu_m_s.z());
   }
   ASSERT_TRUE(disarm);
-  EXPECT_NEAR(top_z + config.rest_height_m, config.landing_transit_altitude_s1_m, 0.35);
-  EXPECT_NEAR((v.in.position_enu_m.head<2>() - Eigen::Vector2d(10, -27)).norm(), 0.0, 0.6);
+  EXPECT_NEAR(top_z + config.rest_height_m, config.landing_transit_altitude_s1_m, kTransitAltTol_m);
+  EXPECT_NEAR((v.in.position_enu_m.head<2>() - Eigen::Vector2d(10, -27)).norm(), 0.0,
+              kLandingSpotTol_m);
   EXPECT_EQ(v.in.position_enu_m.z(), 0.0);
   EXPECT_GE(min_vz, -0.5 - 1e-9);  // the last 2 m at 0.5 m/s
   v.in.armed = false;
@@ -740,7 +758,7 @@ TEST(Mbzirc2020VehicleFsm, LandsWithItsSkidsAlongTheWindTurningHighUp) {
         v.in.position_enu_m.z() < config.landing_transit_altitude_s1_m - 1.0) {
       descending = true;
       descent_yaw = v.in.yaw_enu_rad;
-      EXPECT_NEAR(std::abs(descent_yaw), kPi / 2, 10.0 * kPi / 180.0);
+      EXPECT_NEAR(std::abs(descent_yaw), kPi / 2, kDescentYawTol_rad);
     }
     if (descending) {
       EXPECT_EQ(v.in.yaw_enu_rad, descent_yaw);
@@ -757,20 +775,20 @@ TEST(Mbzirc2020VehicleFsm, LandsWithItsSkidsAlongTheWindTurningHighUp) {
 // too.
 TEST(Mbzirc2020TouchdownGate, LaysTheSkidsAlongTheWindFromTheHoversLean) {
   const double lean_rad = std::atan(1.2 / (1.5 * 9.81));
-  EXPECT_NEAR(lean_rad * 180.0 / kPi, 4.7, 0.05);
+  EXPECT_NEAR(lean_rad * 180.0 / kPi, 4.7, kLeanTol_deg);
   TouchdownGate gate;
   EXPECT_FALSE(gate.skid_yaw_enu_rad(0.0));  // no sample yet: wind unknown
   for (int i = 0; i < 60; ++i) gate.update(0.05 * i, {0, 0}, 0.0, -lean_rad, 0.0);
   ASSERT_TRUE(gate.skid_yaw_enu_rad(0.3));
-  EXPECT_NEAR(*gate.skid_yaw_enu_rad(0.3), 0.0, 1e-9);
-  EXPECT_NEAR(std::abs(*gate.skid_yaw_enu_rad(2.0)), kPi, 1e-9);  // tail into the wind
-  EXPECT_NEAR(gate.lean_enu().norm(), std::sin(lean_rad), 1e-9);
+  EXPECT_NEAR(*gate.skid_yaw_enu_rad(0.3), 0.0, kAngleTol_rad);
+  EXPECT_NEAR(std::abs(*gate.skid_yaw_enu_rad(2.0)), kPi, kAngleTol_rad);  // tail into the wind
+  EXPECT_NEAR(gate.lean_enu().norm(), std::sin(lean_rad), kLeanSinTol);
 
   TouchdownGate north;
   for (int i = 0; i < 60; ++i) north.update(0.05 * i, {0, 0}, lean_rad, 0.0, kPi / 2);
   ASSERT_TRUE(north.skid_yaw_enu_rad(kPi / 2));
-  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 - 0.2)), 0.0, 1e-9);
-  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 + 0.2)), kPi, 1e-9);
+  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 - 0.2)), 0.0, kAngleTol_rad);
+  EXPECT_NEAR(std::abs(*north.skid_yaw_enu_rad(kPi / 2 + 0.2)), kPi, kAngleTol_rad);
 
   // a lean of 1 deg (a calm day, sensor bias) tells no direction: the heading is left alone
   TouchdownGate calm;

@@ -28,6 +28,7 @@ using testing::TestClient;
 using testing::TestServer;
 
 constexpr double kEndTime_s = 0.3;
+constexpr double kTimeTol_s = 1e-9;
 
 enum class Transport { kTcp, kShm };
 void PrintTo(Transport t, std::ostream* os) { *os << (t == Transport::kTcp ? "tcp" : "shm"); }
@@ -110,16 +111,17 @@ TEST_P(LockstepContract, TwoClientsGiveIdenticalRunsAndEventsAtTheirTicks) {
   EXPECT_EQ(first.events, second.events);
   // A ticked every 10 ms from 0
   ASSERT_EQ(first.ticks_a.size(), 31u);
-  for (size_t i = 0; i < first.ticks_a.size(); ++i) EXPECT_NEAR(first.ticks_a[i], 0.01 * i, 1e-9);
+  for (size_t i = 0; i < first.ticks_a.size(); ++i)
+    EXPECT_NEAR(first.ticks_a[i], 0.01 * i, kTimeTol_s);
   // the commands took effect exactly at the ticks they were sent in: A's tick 5, B's tick 10
   std::map<std::string, double> at;
   for (const auto& [type, time] : first.events) {
     at.emplace(type, time);
   }
   ASSERT_TRUE(at.count("motor_failure"));
-  EXPECT_NEAR(at["motor_failure"], 0.05, 1e-9);
+  EXPECT_NEAR(at["motor_failure"], 0.05, kTimeTol_s);
   ASSERT_TRUE(at.count("vehicle_killed"));
-  EXPECT_NEAR(at["vehicle_killed"], 0.20, 1e-9);
+  EXPECT_NEAR(at["vehicle_killed"], 0.20, kTimeTol_s);
 }
 
 TEST_P(LockstepContract, BusyUntilSkipsTheClientsTicksUntilThatTime) {
@@ -127,7 +129,8 @@ TEST_P(LockstepContract, BusyUntilSkipsTheClientsTicksUntilThatTime) {
   // B: 0, 0.02, 0.04 (busy until 0.14), then 0.14, 0.16, ...
   const std::vector<double> expected = {0.0, 0.02, 0.04, 0.14, 0.16, 0.18, 0.20, 0.22, 0.24, 0.26, 0.28, 0.30};
   ASSERT_EQ(run.ticks_b.size(), expected.size());
-  for (size_t i = 0; i < expected.size(); ++i) EXPECT_NEAR(run.ticks_b[i], expected[i], 1e-9) << i;
+  for (size_t i = 0; i < expected.size(); ++i)
+    EXPECT_NEAR(run.ticks_b[i], expected[i], kTimeTol_s) << i;
 }
 
 TEST_P(LockstepContract, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
@@ -141,7 +144,7 @@ TEST_P(LockstepContract, ADeadClientIsDroppedAfterTheTimeoutAndTheClockGoesOn) {
   ASSERT_FALSE(tick.is_null());
   // held at the tick: other clients are still served, and time does not move
   const double held = observer.request({{"op", "status"}})["result"]["time_s"];
-  EXPECT_NEAR(held, tick["time"].get<double>(), 1e-9);
+  EXPECT_NEAR(held, tick["time"].get<double>(), kTimeTol_s);
   EXPECT_EQ(observer.request({{"op", "status"}})["result"]["time_s"], held);
   // the dead client is dropped, then the clock runs again
   const Json dropped = dead.next_event("lockstep_dropped");
@@ -262,7 +265,7 @@ TEST_P(LockstepContract, DoneWaitsForTheNamedMavlinkSequenceNumber) {
   waiter.processed = 7;
   const Json next = c.next_event("tick");
   ASSERT_FALSE(next.is_null());
-  EXPECT_NEAR(next["time"].get<double>(), tick["time"].get<double>() + 0.01, 1e-9);
+  EXPECT_NEAR(next["time"].get<double>(), tick["time"].get<double>() + 0.01, kTimeTol_s);
   EXPECT_EQ(error_code_of(c.request({{"op", "done"}, {"mavlink_seq", {{"uav7", 1}}}})), "unknown_vehicle");
 }
 

@@ -29,6 +29,7 @@ constexpr double kControl_s = 0.002;
 // physics step between a send and the sim time read after it widens both ends by a step
 constexpr double kMinLatency_s = kControl_s;
 constexpr double kMaxLatency_s = 2 * kControl_s + 0.0023 + 0.001;
+constexpr double kStepTol_s = 1e-12;
 
 int udp_socket(uint16_t* port) {
   const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
@@ -92,7 +93,7 @@ class GcsRadioLinkTest : public ::testing::Test {
     sim_ = std::make_unique<sim::Simulation>(
         physics::World::load(std::string(UAVSIM_TEST_DATA_DIR) + "/worlds/radio_wall.xml", o),
         sim::SimConfig{});
-    ASSERT_NEAR(sim_->control_dt_s(), kControl_s, 1e-12);
+    ASSERT_NEAR(sim_->control_dt_s(), kControl_s, kStepTol_s);
     GcsRadioOptions radio;
     radio.ns3.helper_path = UAVSIM_NS3_HELPER_PATH;
     radio.gcs_position_enu_m = gcs;

@@ -12,6 +12,9 @@
 namespace uavsim::server::radio {
 namespace {
 
+constexpr double kHorizontalTol_m = 1e-6;
+constexpr double kHeightTol_m = 1e-9;
+
 // a world of one quad with the given <custom> elements, loaded from a temporary file
 std::unique_ptr<physics::World> world_with(const std::string& custom) {
   const std::string path = ::testing::TempDir() + "gcs_world_" + std::to_string(getpid()) + ".xml";
@@ -70,9 +73,9 @@ TEST(GcsWorldSettings, TheDefaultGroundStationStandsAboveTheVehiclesStart) {
   auto w = world_with("");
   sim::Simulation sim(std::move(w), sim::SimConfig{});
   const Eigen::Vector3d g = default_gcs_position(sim);
-  EXPECT_NEAR(g.x(), 3.0, 1e-6);
-  EXPECT_NEAR(g.y(), 4.0, 1e-6);
-  EXPECT_NEAR(g.z(), sim.truth(0).position_enu_m.z() + kGcsAntennaHeight_m, 1e-9);
+  EXPECT_NEAR(g.x(), 3.0, kHorizontalTol_m);
+  EXPECT_NEAR(g.y(), 4.0, kHorizontalTol_m);
+  EXPECT_NEAR(g.z(), sim.truth(0).position_enu_m.z() + kGcsAntennaHeight_m, kHeightTol_m);
   EXPECT_FALSE(validate_gcs_position(Eigen::Vector3d(0, 0, 100001)).empty());
   EXPECT_TRUE(validate_gcs_position(Eigen::Vector3d(-100000, 0, 0)).empty());
 }

@@ -23,6 +23,8 @@
 namespace uavsim::server::radio {
 namespace {
 
+constexpr double kRangeRelTol = 0.1;
+
 TEST(Ns3Radio, FramesCarry116BytesWithShortAddresses) {
   // 127-byte PSDU - 11 bytes of header and FCS = 116 (lr-wpan refuses 117 and 118 with short
   // addresses: its own 118 limit assumes a header without addresses)
@@ -99,8 +101,8 @@ TEST(Ns3Radio, HalfDeliveryDistanceMatchesTheSimpleModel) {
   const double simple_m = half_delivery_distance(Backend::kSimple);
   const double ns3_m = half_delivery_distance(Backend::kNs3);
   std::printf("half-delivery distance: simple %.1f m, ns3 %.1f m\n", simple_m, ns3_m);
-  EXPECT_NEAR(simple_m, 62.9, 62.9 * 0.1);
-  EXPECT_NEAR(ns3_m, simple_m, simple_m * 0.1)
+  EXPECT_NEAR(simple_m, 62.9, 62.9 * kRangeRelTol);
+  EXPECT_NEAR(ns3_m, simple_m, simple_m * kRangeRelTol)
       << "simple " << simple_m << " m, ns3 " << ns3_m << " m";
 }
 

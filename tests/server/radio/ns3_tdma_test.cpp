@@ -20,6 +20,8 @@ namespace {
 // its slot's start a frame goes on air with macMinBE 0
 constexpr double kAccess_s = 320e-6;
 constexpr double kTol_s = 2e-6;
+constexpr double kSlotIndexTol = 1e-3;
+constexpr double kAirtimeTol_s = 1e-6;
 
 RadioConfig tdma(double slot_s, double period_s) {
   RadioConfig c;
@@ -90,12 +92,12 @@ TEST(Ns3Tdma, FramesGoOnAirInTheSlotsTheSimpleModelGivesThem) {
     EXPECT_NEAR(n.tx_start_s, s.tx_start_s + kAccess_s, kTol_s) << i;
     // its sender's slot: a whole slot index k with k mod N = sender
     const double slot = std::fmod(s.tx_start_s + kTol_s, c.period_s) / c.slot_s;
-    EXPECT_NEAR(slot, std::round(slot), 1e-3) << i;
+    EXPECT_NEAR(slot, std::round(slot), kSlotIndexTol) << i;
     EXPECT_EQ(std::llround(std::floor(slot)) % 4, static_cast<int64_t>(n.from)) << i;
     // a frame sent to an empty queue waits less than 2 N D for a slot, then the access; the frame
     // arrives at the end of its airtime (no processing latency)
     if (n.seq == 0) EXPECT_LE(n.tx_start_s - n.queued_s, 2 * 4 * c.slot_s + kAccess_s) << i;
-    EXPECT_NEAR(n.time_s, n.tx_start_s + airtime_s(n.data.size() + 11), 1e-6) << i;
+    EXPECT_NEAR(n.time_s, n.tx_start_s + airtime_s(n.data.size() + 11), kAirtimeTol_s) << i;
   }
   // vehicle 0's three unicasts at 47 ms: one per own slot, 80 ms, then 100 and 140 ms
   std::vector<double> starts;

@@ -13,6 +13,9 @@ namespace {
 constexpr double kStep_s = 0.001;  // 1 kHz physics
 constexpr double kSigmas = 5.0;    // binomial tolerance: a 5-sigma miss happens ~6e-7 of the time
 constexpr double kTimeTol_s = 1e-9;
+constexpr double kAirtimeTol_s = 1e-12;
+constexpr double kSlotIndexTol = 1e-6;
+constexpr double kFrameCountTol = 2.0;
 
 // |k - n p| <= kSigmas * sqrt(n p (1 - p))
 void expect_binomial(uint64_t k, uint64_t n, double p, const char* what) {
@@ -45,7 +48,7 @@ std::vector<Eigen::Vector3d> line(std::initializer_list<double> xs) {
 
 TEST(RadioModel, AirtimeOfAFullFrameAt250kbps) {
   // (127 + 6 PHY header bytes) * 8 bits / 250 kbit/s = 4.256 ms
-  EXPECT_NEAR(airtime_s(127), 0.004256, 1e-12);
+  EXPECT_NEAR(airtime_s(127), 0.004256, kAirtimeTol_s);
 }
 
 TEST(RadioModel, BroadcastDeliveryRateMatchesTheLossProbability) {
@@ -302,7 +305,7 @@ TdmaRun run_tdma(size_t n, double slot_s, double period_s, double seconds) {
       // its own slot: (start mod T) / D is a whole slot index k with k mod N = sender
       const double in_period = std::fmod(x.tx_start_s + kTimeTol_s, period_s) - kTimeTol_s;
       const double slot = in_period / slot_s;
-      EXPECT_NEAR(slot, std::round(slot), 1e-6) << "not at a slot start: " << x.tx_start_s;
+      EXPECT_NEAR(slot, std::round(slot), kSlotIndexTol) << "not at a slot start: " << x.tx_start_s;
       EXPECT_EQ(static_cast<size_t>(std::llround(slot)) % n, x.from) << "in another vehicle's slot";
       EXPECT_LE(x.tx_start_s + airtime_s(x.data.size()), x.tx_start_s + slot_s + kTimeTol_s);
       if (x.seq == seq[x.from] && outstanding[x.from]) {
@@ -449,7 +452,7 @@ TEST(RadioModel, AFloodingSenderIsRefusedPastItsBacklogAndTheOthersStillGoOnAir)
   // what was accepted is what went on air plus what still waits, and it went at the channel's
   // rate: every frame back to back from the first step on
   EXPECT_EQ(m.transmitted(0) + m.queued(0), static_cast<uint64_t>(accepted));
-  EXPECT_NEAR(static_cast<double>(m.transmitted(0)), std::ceil(1.0 / airtime), 2.0);
+  EXPECT_NEAR(static_cast<double>(m.transmitted(0)), std::ceil(1.0 / airtime), kFrameCountTol);
   // still flooding at the end: the backlog full but for the frames of the last step's airtime
   EXPECT_GE(m.queued(0) + 2, c.max_queue_frames);
   int from_other = 0;

@@ -16,6 +16,9 @@ namespace uavsim::server::render {
 namespace {
 
 constexpr double kTol = 1e-9;
+constexpr double kPosTol_m = 1e-6;      // positions the director works out, up to round-off
+constexpr double kArrivedTol_m = 1e-3;  // after 13 time constants of smoothing
+constexpr int kRingColourTol = 40;      // colour levels out of 255
 
 // a 640 x 480 pinhole camera with the director's default 45 deg vertical field of view
 FrameCamera camera_640x480() {
@@ -61,7 +64,7 @@ TEST(CameraDirector, NeverCloserThanTheMinimumDistance) {
   CameraDirector director(p);
   const Eigen::Vector3d quad(3, 4, 1);
   const CameraPose pose = director.aim(0.0, {quad});
-  EXPECT_NEAR((pose.position_enu_m - quad).norm(), 8.0, 1e-6);
+  EXPECT_NEAR((pose.position_enu_m - quad).norm(), 8.0, kPosTol_m);
   // a 0.55 m quad at 8 m: 579.4 * 0.55 / 8 = 39.8 px across
   const FrameCamera c = camera_640x480();
   EXPECT_TRUE(inside(c, pose, quad));
@@ -72,7 +75,8 @@ TEST(CameraDirector, FollowsANamedVehicleOnly) {
   p.vehicle = 1;
   CameraDirector director(p);
   const CameraPose pose = director.aim(0.0, {{-500, 0, 1}, {10, 20, 5}});
-  EXPECT_NEAR((pose.position_enu_m - Eigen::Vector3d(10, 20, 5)).norm(), p.min_distance_m, 1e-6);
+  EXPECT_NEAR((pose.position_enu_m - Eigen::Vector3d(10, 20, 5)).norm(), p.min_distance_m,
+              kPosTol_m);
 }
 
 TEST(CameraDirector, SmoothsAJumpOverSimTime) {
@@ -84,14 +88,14 @@ TEST(CameraDirector, SmoothsAJumpOverSimTime) {
   // of it
   const CameraPose b = director.aim(1.0 / 15.0, {{10, 0, 5}});
   EXPECT_NEAR(b.position_enu_m.x() - a.position_enu_m.x(), 10.0 * (1.0 - std::exp(-1.0 / 15.0)),
-              1e-6);
+              kPosTol_m);
   // after many time constants it has arrived
   CameraPose c = b;
   for (int k = 2; k < 200; ++k) c = director.aim(k / 15.0, {{10, 0, 5}});
-  EXPECT_NEAR(c.position_enu_m.x(), 10.0, 1e-3);
+  EXPECT_NEAR(c.position_enu_m.x(), 10.0, kArrivedTol_m);
   // a reset (earlier sim time) jumps
   const CameraPose d = director.aim(0.0, {{-20, 0, 5}});
-  EXPECT_NEAR(d.position_enu_m.x(), -20.0, 1e-9);
+  EXPECT_NEAR(d.position_enu_m.x(), -20.0, kTol);
 }
 
 TEST(CameraDirector, TopLooksStraightDownOverTheVehicles) {
@@ -101,8 +105,8 @@ TEST(CameraDirector, TopLooksStraightDownOverTheVehicles) {
   const std::vector<Eigen::Vector3d> v{{-20, 0, 10}, {20, 10, 10}};
   const CameraPose pose = director.aim(0.0, v);
   EXPECT_NEAR(pose.R_enu_cam.col(2).z(), -1.0, kTol);
-  EXPECT_NEAR(pose.position_enu_m.x(), 0.0, 1e-9);
-  EXPECT_NEAR(pose.position_enu_m.y(), 5.0, 1e-9);
+  EXPECT_NEAR(pose.position_enu_m.x(), 0.0, kTol);
+  EXPECT_NEAR(pose.position_enu_m.y(), 5.0, kTol);
   const FrameCamera c = camera_640x480();
   for (const Eigen::Vector3d& x : v) EXPECT_TRUE(inside(c, pose, x));
 }
@@ -142,9 +146,9 @@ TEST(Overlay, DrawsTimeLabelsAndEvents) {
   uint8_t yellow[3];
   vehicle_colour_rgb(0, yellow);
   const size_t ring = (static_cast<size_t>(240) * 640 + 320 - kVehicleRingPx) * 3;
-  EXPECT_NEAR(img[ring], yellow[0], 40);
-  EXPECT_NEAR(img[ring + 1], yellow[1], 40);
-  EXPECT_NEAR(img[ring + 2], yellow[2], 40);
+  EXPECT_NEAR(img[ring], yellow[0], kRingColourTol);
+  EXPECT_NEAR(img[ring + 1], yellow[1], kRingColourTol);
+  EXPECT_NEAR(img[ring + 2], yellow[2], kRingColourTol);
   EXPECT_EQ(changed(316, 236, 8, 8), 0);  // the vehicle itself is not painted over
   // the marker's cross at (435, 240)
   EXPECT_GT(changed(429, 234, 13, 13), 30);

@@ -19,6 +19,9 @@ namespace {
 constexpr double kPixelTol = 2.0;      // brief: centre and radius within 2 px
 constexpr double kSubPixelTol = 0.25;  // rendered vs ray-cast silhouette centroid
 constexpr double kAreaRelTol = 0.03;   // tessellated sphere (28 slices) vs true silhouette area
+constexpr double kFocalTol_px = 1e-3;  // the expected focal lengths are given to 3 decimals
+constexpr double kCentreTol_px = 1e-2;  // the projected centre against its hand-worked value
+constexpr int kGreyTol = 1;             // one grey level of rounding
 
 // One camera at (0, 0, 1) looking along world +x (its right is world -y, its up world +z), a green
 // mocap ball and a green ball on a slide joint along world y. The headlight is pure ambient so that
@@ -133,7 +136,7 @@ TEST_F(CameraRendererTest, IntrinsicsFollowMujocosVerticalFovy) {
   // fy = (h/2) / tan(fovy/2) = 240 / tan(22.5 deg) = 579.41 px; square pixels; centre (w-1)/2,
   // (h-1)/2
   const CameraIntrinsics k = CameraIntrinsics::from_fovy_deg(640, 480, 45.0);
-  EXPECT_NEAR(k.fy_px, 579.411, 1e-3);
+  EXPECT_NEAR(k.fy_px, 579.411, kFocalTol_px);
   EXPECT_DOUBLE_EQ(k.fx_px, k.fy_px);
   EXPECT_DOUBLE_EQ(k.cx_px, 319.5);
   EXPECT_DOUBLE_EQ(k.cy_px, 239.5);
@@ -186,8 +189,8 @@ TEST_F(CameraRendererTest, BallOffCentreAppearsWhereIntrinsicsPredict) {
 
   // left and up in the image: u = cx - fx * 0.9/4 = 189.1, v = cy - fy * 0.6/4 = 152.6
   const Eigen::Vector2d centre_px = project(f, centre);
-  EXPECT_NEAR(centre_px.x(), 319.5 - 579.411 * 0.9 / 4.0, 1e-2);
-  EXPECT_NEAR(centre_px.y(), 239.5 - 579.411 * 0.6 / 4.0, 1e-2);
+  EXPECT_NEAR(centre_px.x(), 319.5 - 579.411 * 0.9 / 4.0, kCentreTol_px);
+  EXPECT_NEAR(centre_px.y(), 239.5 - 579.411 * 0.6 / 4.0, kCentreTol_px);
   EXPECT_NEAR(seen.u, centre_px.x(), kPixelTol);
   EXPECT_NEAR(seen.v, centre_px.y(), kPixelTol);
   // off the axis by theta the ball is an ellipse (alpha: its angular radius, sin(alpha) = r/D):
@@ -215,7 +218,7 @@ TEST_F(CameraRendererTest, FovyOverrideChangesFocalLength) {
   wide.fovy_deg = 60.0;
   CameraRenderer renderer(m_.get(), {wide});
   // fy = 120 / tan(30 deg) = 207.85 px
-  EXPECT_NEAR(renderer.intrinsics(0).fy_px, 207.846, 1e-3);
+  EXPECT_NEAR(renderer.intrinsics(0).fy_px, 207.846, kFocalTol_px);
   const Eigen::Vector3d centre(4, -0.7, 0.5);
   place_ball(centre);
   CameraFrame f;
@@ -275,7 +278,7 @@ TEST_F(CameraRendererTest, GreyIsBt601Luma) {
   renderer.render(d_.get(), 0, &f);
   ASSERT_EQ(f.pixels.size(), 320u * 240u);
   // pure green: Y = 0.587 * 255 = 149.7; background black
-  EXPECT_NEAR(f.pixels[120 * 320 + 160], 150, 1);
+  EXPECT_NEAR(f.pixels[120 * 320 + 160], 150, kGreyTol);
   EXPECT_EQ(f.pixels[0], 0);
 }
 

@@ -10,6 +10,8 @@
 namespace uavsim::server::render::testing {
 namespace {
 
+constexpr double kTimeTol_s = 1e-9;
+
 bool all_black(const std::string& bytes) {
   return std::all_of(bytes.begin(), bytes.end(), [](char c) { return c == 0; });
 }
@@ -27,7 +29,7 @@ TEST(CameraBlackout, FramesAreBlackForTheDurationThenThePictureComesBack) {
       c.request({{"op", "camera_blackout"}, {"camera", "overview"}, {"duration_s", 0.5}});
   ASSERT_TRUE(r["ok"]) << r;
   const double from = r["result"]["from_s"], until = r["result"]["until_s"];
-  EXPECT_NEAR(until - from, 0.5, 1e-9);
+  EXPECT_NEAR(until - from, 0.5, kTimeTol_s);
   int black = 0, lit_after = 0;
   // read frames until the overview's stamps pass the blackout's end by half a second
   for (;;) {

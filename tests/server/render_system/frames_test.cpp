@@ -19,6 +19,16 @@ namespace {
 
 constexpr double kBalloonRadiusM = 0.3;
 constexpr double kBalloonAboveBodyM = 2.7;
+constexpr double kTimeTol_s = 1e-9;
+constexpr double kFocalTol_px = 1e-6;
+constexpr double kPeriodTol_s = 0.0021;
+constexpr double kAxisTol = 1e-3;
+constexpr double kCentreTol_px = 2.0;
+constexpr double kRadiusRelTol = 0.05;
+constexpr double kRadiusTol_px = 1.0;
+constexpr double kTrackTol_px = 1.5;
+constexpr double kPitchTol_deg = 1e-6;
+constexpr double kRtlDelayTol_s = 0.5;
 
 // centroid and equivalent radius of the balloon-green pixels of an RGB image
 struct Blob {
@@ -90,7 +100,7 @@ TEST(FramesApi, CameraListAndErrorReplies) {
   EXPECT_EQ(cams["uav0_front"]["height"], 480);
   EXPECT_DOUBLE_EQ(cams["uav0_front"]["fps"].get<double>(), 15.0);
   EXPECT_NEAR(cams["uav0_front"]["intrinsics"]["fy"].get<double>(),
-              240.0 / std::tan(11.0 * common::kPi / 180.0), 1e-6);
+              240.0 / std::tan(11.0 * common::kPi / 180.0), kFocalTol_px);
   EXPECT_DOUBLE_EQ(cams["uav0_front"]["intrinsics"]["cx"].get<double>(), 319.5);
   EXPECT_EQ(cams["overview"]["formats"], Json({"rgb", "grey", "jpeg"}));
 
@@ -162,7 +172,7 @@ TEST(FramesApi, FormatsLayoutStampsAndSeq) {
     // stamps are control-step times (500 Hz)
     const int64_t us = h["stamp_us"];
     EXPECT_EQ(us % 2000, 0) << h;
-    EXPECT_NEAR(h["stamp"].get<double>(), us * 1e-6, 1e-9);
+    EXPECT_NEAR(h["stamp"].get<double>(), us * 1e-6, kTimeTol_s);
     EXPECT_EQ(h["pose"]["R_enu_cam"].size(), 9u);
     seen[cam].push_back(h);
   }
@@ -171,7 +181,7 @@ TEST(FramesApi, FormatsLayoutStampsAndSeq) {
     for (size_t k = 1; k < hs.size(); ++k) {
       EXPECT_EQ(hs[k]["seq"].get<int>(), hs[k - 1]["seq"].get<int>() + 1) << cam;
       const double dt = hs[k]["stamp"].get<double>() - hs[k - 1]["stamp"].get<double>();
-      EXPECT_NEAR(dt, period, 0.0021) << cam;
+      EXPECT_NEAR(dt, period, kPeriodTol_s) << cam;
     }
   }
 }
@@ -189,7 +199,7 @@ TEST(FramesAcceptance, BalloonAtPredictedPixelAndSize) {
   const Eigen::Vector3d cam = vec(first.json["pose"]["position_enu_m"]);
   const Eigen::Matrix3d R = mat(first.json["pose"]["R_enu_cam"]);
   // forward gimbal of a vehicle heading north: the optical axis is north, level
-  EXPECT_NEAR(R.col(2).y(), 1.0, 1e-3);
+  EXPECT_NEAR(R.col(2).y(), 1.0, kAxisTol);
   const Json& k = first.json["intrinsics"];
   const double fx = k["fx"], fy = k["fy"], cx = k["cx"], cy = k["cy"];
 
@@ -215,11 +225,11 @@ TEST(FramesAcceptance, BalloonAtPredictedPixelAndSize) {
     ASSERT_GT(b.pixels, 100);
     const double u = fx * p_cam.x() / p_cam.z() + cx;
     const double v = fy * p_cam.y() / p_cam.z() + cy;
-    EXPECT_NEAR(b.u, u, 2.0) << "balloon at " << p_cam.transpose();
-    EXPECT_NEAR(b.v, v, 2.0) << "balloon at " << p_cam.transpose();
+    EXPECT_NEAR(b.u, u, kCentreTol_px) << "balloon at " << p_cam.transpose();
+    EXPECT_NEAR(b.v, v, kCentreTol_px) << "balloon at " << p_cam.transpose();
     // apparent radius of a sphere: f r / sqrt(Z^2 - r^2)
     const double r_px = fy * kBalloonRadiusM / std::sqrt(p_cam.squaredNorm() - kBalloonRadiusM * kBalloonRadiusM);
-    EXPECT_NEAR(b.radius_px, r_px, 0.05 * r_px + 1.0);
+    EXPECT_NEAR(b.radius_px, r_px, kRadiusRelTol * r_px + kRadiusTol_px);
   }
 }
 
@@ -258,7 +268,7 @@ TEST(FramesAcceptance, StampMatchesThePoseShownAndFramesPrecedeTheirTick) {
       if (placed_for && std::abs(*placed_for - t) < 1e-9) {
         const Blob b = green_blob(frame->bytes, 320, 240);
         ASSERT_GT(b.pixels, 20);
-        EXPECT_NEAR(b.u, fx * lateral(t) / 10.0 + cx, 1.5) << "frame stamped " << t;
+        EXPECT_NEAR(b.u, fx * lateral(t) / 10.0 + cx, kTrackTol_px) << "frame stamped " << t;
         ++checked;
       }
     }
@@ -292,7 +302,7 @@ TEST(FramesAcceptance, ASubscriberJoiningLockstepGetsTheFrameOfEachTickBeforeIt)
   ASSERT_TRUE(c.request({{"op", "camera_subscribe"}, {"camera", "uav0_front"}})["ok"]);
   const Json join = c.request({{"op", "lockstep_join"}, {"period_s", 0.1}});
   ASSERT_TRUE(join["ok"]) << join;
-  EXPECT_NEAR(join["result"]["first_tick_time"].get<double>(), 0.1, 1e-9);
+  EXPECT_NEAR(join["result"]["first_tick_time"].get<double>(), 0.1, kTimeTol_s);
   ASSERT_TRUE(c.request({{"op", "resume"}})["ok"]);
   for (int n = 0; n < 3; ++n) {
     std::vector<Message> before;
@@ -305,9 +315,9 @@ TEST(FramesAcceptance, ASubscriberJoiningLockstepGetsTheFrameOfEachTickBeforeIt)
       EXPECT_EQ(m.json["dropped"].get<int>(), 0) << m.json;
     }
     const double t = tick.json["time"];
-    EXPECT_NEAR(t, 0.1 * (n + 1), 1e-9);
+    EXPECT_NEAR(t, 0.1 * (n + 1), kTimeTol_s);
     ASSERT_EQ(stamps.size(), 1u) << "frames before the tick at " << t;
-    EXPECT_NEAR(stamps[0], t, 1e-9);
+    EXPECT_NEAR(stamps[0], t, kTimeTol_s);
     ASSERT_TRUE(c.request({{"op", "done"}, {"tick", tick.json["tick"]}})["ok"]);
   }
 }
@@ -368,7 +378,8 @@ TEST(FramesMavlink, MountControlPitchDownTurnsTheCameraDown) {
   ASSERT_TRUE(c.request({{"op", "camera_subscribe"}, {"camera", "uav0_front"}, {"format", "grey"}})["ok"]);
   Message m = next_frame(c);
   ASSERT_FALSE(m.json.is_null());
-  EXPECT_NEAR(mat(m.json["pose"]["R_enu_cam"]).col(2).y(), 1.0, 1e-3) << "forward: looking north";
+  EXPECT_NEAR(mat(m.json["pose"]["R_enu_cam"]).col(2).y(), 1.0, kAxisTol)
+      << "forward: looking north";
   mav.command(205, {-90, 0, 0, 0, 0, 0, 2});  // pitch -90, MAV_MOUNT_MODE_MAVLINK_TARGETING
   bool down = false;
   for (int k = 0; k < 30 && !down; ++k) {
@@ -380,7 +391,7 @@ TEST(FramesMavlink, MountControlPitchDownTurnsTheCameraDown) {
   // the API reports the MAVLink pointing
   const Json g = c.request({{"op", "gimbal"}, {"gimbal", "uav0_gimbal"}});
   EXPECT_EQ(g["result"]["mode"], "targets");
-  EXPECT_NEAR(g["result"]["pitch_deg"].get<double>(), -90.0, 1e-6);
+  EXPECT_NEAR(g["result"]["pitch_deg"].get<double>(), -90.0, kPitchTol_deg);
   // NEUTRAL: level and straight ahead again
   mav.command(205, {0, 0, 0, 0, 0, 0, 1});
   bool forward = false;
@@ -410,7 +421,8 @@ TEST(EndpointHooks, CommandSentBeforeDoneTakesEffectAtThatTick) {
     ASSERT_FALSE(tick.is_null());
     // one control step later the command has been applied
     const Json g = c.request({{"op", "gimbal"}, {"gimbal", "uav0_gimbal"}});
-    ASSERT_NEAR(g["result"]["pitch_deg"].get<double>(), -n, 1e-6) << "command " << n << " was late";
+    ASSERT_NEAR(g["result"]["pitch_deg"].get<double>(), -n, kPitchTol_deg)
+        << "command " << n << " was late";
   }
 }
 
@@ -455,7 +467,7 @@ TEST(EndpointHooks, LinkDropTriggersTheGcsFailsafe) {
   ASSERT_GT(dropped_at, 0) << "never took off (t = " << t << ")";
   ASSERT_GT(rtl_at, 0) << "no RTL after the link drop at " << dropped_at;
   // FS_GCS_TIMEOUT 5 s after the last heartbeat
-  EXPECT_NEAR(rtl_at - dropped_at, 5.0, 0.5);
+  EXPECT_NEAR(rtl_at - dropped_at, 5.0, kRtlDelayTol_s);
   ASSERT_TRUE(c.request({{"op", "link_drop"}, {"vehicle", 0}, {"down", false}})["ok"]);
 }
 
