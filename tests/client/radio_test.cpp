@@ -112,7 +112,7 @@ TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
 
 TEST(A2aRadio, CountsTheSimulatorsRefusals) {
   // a frame past the sender's queue of 256 is refused with queue_full; the radio counts those
-  ServerProcess server;
+  ServerProcess server(kThreeQuads, {"--no-cameras"});
   ASSERT_GT(server.api_port(), 0) << server.output();
   auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
   ASSERT_TRUE(l) << l.message();
