@@ -16,6 +16,10 @@
 namespace uavsim::client::testing {
 namespace {
 
+constexpr double kStampTol_s = 1e-6;  // frame stamps are sim times of whole control steps
+constexpr double kIntrinsicsTol_px = 1e-6;
+constexpr double kRotationTol = 1e-6;  // a rotation matrix's determinant
+
 // the empty world, its cameras as each test asks
 const std::string kEmptyWorld = std::string(UAVSIM_MODELS_DIR) + "/worlds/empty.xml";
 
@@ -50,7 +54,7 @@ TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose)
     EXPECT_EQ(f.dropped, 0);
     EXPECT_GE(f.stamp_s, t0 - 1e-9);
     if (i > 0) {
-      EXPECT_NEAR(f.stamp_s - frames[i - 1].stamp_s, 0.1, 1e-6);
+      EXPECT_NEAR(f.stamp_s - frames[i - 1].stamp_s, 0.1, kStampTol_s);
     }
     ASSERT_EQ(f.image.rows, 48);
     ASSERT_EQ(f.image.cols, 64);
@@ -58,11 +62,11 @@ TEST(CameraSubscriber, LockstepFramesArriveBeforeTheirTickWithIntrinsicsAndPose)
   }
   const CameraFrame& f = frames.back();
   EXPECT_TRUE(f.vehicle.empty());
-  EXPECT_NEAR(f.intrinsics.cx, 31.5, 1e-6);
-  EXPECT_NEAR(f.intrinsics.cy, 23.5, 1e-6);
+  EXPECT_NEAR(f.intrinsics.cx, 31.5, kIntrinsicsTol_px);
+  EXPECT_NEAR(f.intrinsics.cy, 23.5, kIntrinsicsTol_px);
   EXPECT_GT(f.intrinsics.fx, 0.0);
   EXPECT_LT((f.pose.position_enu_m - Eigen::Vector3d(-12, -12, 8)).norm(), 1e-6);
-  EXPECT_NEAR(f.pose.R_enu_cam.determinant(), 1.0, 1e-6);
+  EXPECT_NEAR(f.pose.R_enu_cam.determinant(), 1.0, kRotationTol);
   cv::Scalar mean, stddev;
   cv::meanStdDev(f.image, mean, stddev);
   EXPECT_GT(stddev[0] + stddev[1] + stddev[2], 1.0) << "a blank image";
@@ -100,7 +104,7 @@ TEST(CameraSubscriber, HostClockOwnConnectionGreyAndJpeg) {
   EXPECT_EQ(grey[0].image.cols, 64);
   EXPECT_EQ(jpeg[0].image.type(), CV_8UC3);
   EXPECT_EQ(jpeg[0].image.rows, 48);
-  EXPECT_NEAR(jpeg[1].stamp_s - jpeg[0].stamp_s, 0.2 * (jpeg[1].seq - jpeg[0].seq), 1e-6);
+  EXPECT_NEAR(jpeg[1].stamp_s - jpeg[0].stamp_s, 0.2 * (jpeg[1].seq - jpeg[0].seq), kStampTol_s);
 }
 
 // depth and segmentation beside colour, typed: one frame per capture with all three images

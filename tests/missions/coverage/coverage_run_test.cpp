@@ -17,6 +17,13 @@
 
 namespace {
 
+constexpr double kFailTimeTol_s = 0.1;
+constexpr double kFractionTol = 1e-3;
+constexpr double kCompleteTol_s = 0.5;    // coverage complete within a tick or two
+constexpr double kMissionTol_s = 6.0;     // take-offs and landings move with the host's load
+constexpr double kDistanceRelTol = 0.01;  // of the flock's total distance
+constexpr double kTickTol_s = 1e-6;       // a sim time on a whole tick
+
 using Json = nlohmann::json;
 using uavsim::tests::kBudget_s;
 using uavsim::tests::kFullCoverage;
@@ -80,12 +87,12 @@ TEST(CoverageRun, NonLeaderKilledItsStripesAreCoveredAgain) {
   EXPECT_LT(r["lost_fraction_at_end"].get<double>(), 1e-3) << out;
   // the loss is recorded with the failure: when, and how much died with it (part of what it held,
   // the rest was under its neighbours' pictures too), all of it recovered
-  EXPECT_NEAR(dead["failed_at_s"].get<double>(), 70.0, 0.1) << out;
+  EXPECT_NEAR(dead["failed_at_s"].get<double>(), 70.0, kFailTimeTol_s) << out;
   const double lost = dead["lost_fraction"].get<double>();
   EXPECT_GT(lost, 0.02) << out;
   EXPECT_LE(lost, dead["held_fraction"].get<double>()) << out;
   EXPECT_EQ(r["lost_at_failures_fraction"].get<double>(), lost) << out;
-  EXPECT_NEAR(r["recovered_fraction"].get<double>(), lost, 1e-3) << out;
+  EXPECT_NEAR(r["recovered_fraction"].get<double>(), lost, kFractionTol) << out;
   EXPECT_GT(r["recovery_distance_m"].get<double>(), 0.0) << out;
   EXPECT_LT(r["recovery_distance_m"].get<double>(), 0.1 * r["distance_m_total"].get<double>())
       << out;
@@ -155,12 +162,13 @@ TEST(CoverageRun, OneProcessFlyingAllFiveAgentsFliesTheMissionOfOneProcessEach) 
   // move by a few tenths to a few seconds with the host's load (one process: 177.7-180.9 s, one per
   // agent: 177.8 s, idle and loaded): the links of one process come up one after the other.
   EXPECT_NEAR(one["coverage_complete_s"].get<double>(), each["coverage_complete_s"].get<double>(),
-              0.5)
+              kCompleteTol_s)
       << out_one << out_each;
-  EXPECT_NEAR(one["mission_time_s"].get<double>(), each["mission_time_s"].get<double>(), 6.0)
+  EXPECT_NEAR(one["mission_time_s"].get<double>(), each["mission_time_s"].get<double>(),
+              kMissionTol_s)
       << out_one << out_each;
   EXPECT_NEAR(one["distance_m_total"].get<double>(), each["distance_m_total"].get<double>(),
-              0.01 * each["distance_m_total"].get<double>())
+              kDistanceRelTol * each["distance_m_total"].get<double>())
       << out_one << out_each;
 }
 
@@ -264,7 +272,7 @@ TEST(CoverageRun, SameSeedGivesTheSameWholeSummaryToTheByte) {
   EXPECT_TRUE(r[0]["success"].get<bool>()) << out[0];
   // the end is one of the launcher's 1 s ticks
   const double end_s = r[0]["sim_time_s"].get<double>();
-  EXPECT_NEAR(end_s, std::round(end_s), 1e-6) << out[0];
+  EXPECT_NEAR(end_s, std::round(end_s), kTickTol_s) << out[0];
   EXPECT_GT(end_s, r[0]["last_touchdown_s"].get<double>()) << out[0];
   EXPECT_EQ(whole_summary(r[0]), whole_summary(r[1])) << out[0] << out[1];
 }

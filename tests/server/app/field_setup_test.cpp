@@ -12,6 +12,8 @@
 namespace uavsim::server::app {
 namespace {
 
+constexpr double kExactTol = 1e-12;
+
 std::unique_ptr<physics::World> world_with(const std::string& label, const std::string& custom) {
   const std::string path = ::testing::TempDir() + "/uavsim_field_" + label + ".xml";
   std::ofstream(path)
@@ -68,7 +70,7 @@ TEST(FieldSetup, WorldSettingsThenCommandLine) {
   EXPECT_FALSE(c.wind_from_seeded);
   EXPECT_EQ(c.wind.turbulence_sd_m_s, 2.0);
   EXPECT_EQ(c.gimbal.time_const_s, 0.1);
-  EXPECT_NEAR(c.gimbal.rate_max_rad_s, common::kPi / 2, 1e-12);
+  EXPECT_NEAR(c.gimbal.rate_max_rad_s, common::kPi / 2, kExactTol);
   EXPECT_EQ(c.balloons.height_spread_m, 0.3);
   EXPECT_FALSE(c.balloons.sway);
   EXPECT_EQ(c.battery_resistance_ohm, 0.02);

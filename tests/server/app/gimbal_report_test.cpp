@@ -24,6 +24,7 @@ using common::kDegToRad;
 // The report against the camera body as placed for the same step: float quaternion, and the body
 // turned by the vehicle's rotation within one physics step (it stands on the ground)
 constexpr double kMatch_deg = 0.1;
+constexpr double kSettled_deg = 0.5;  // the gimbal's hold error after a second
 
 // mbzirc2020.xml (two quads, forward cameras on gimbals) with the field's gimbal: 50 ms loop, 180
 // deg/s, 1000 deg/s^2; the endpoint, the objects and the gimbal bridge as uavsim-server has them
@@ -129,7 +130,7 @@ TEST_F(GimbalReportTest, DuringASlewTheReportedAttitudeLagsTheCommandAndIsTheCam
   EXPECT_LT(worst_deg, kMatch_deg) << "the report is not the camera's attitude";
   // 60 deg at no more than 180 deg/s: a third of a second behind the command at least
   EXPECT_GT(most_lag_deg, 45.0) << "the report does not lag the command";
-  EXPECT_NEAR(last_pitch_deg, -60.0, 0.5);  // settled after a second
+  EXPECT_NEAR(last_pitch_deg, -60.0, kSettled_deg);  // settled after a second
 }
 
 }  // namespace

@@ -19,6 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr double kSizeTol_m = 1e-6;  // float32 vertices
+constexpr double kMassTol_kg = 1e-3;
 
 // a 0.4 x 0.6 x 0.2 m box centred on the origin, six quads, z up
 constexpr const char* kBoxDae = R"(<?xml version="1.0" encoding="utf-8"?>
@@ -105,7 +106,7 @@ TEST_F(WorldMesh, ColladaMeshIsConvertedAndLoadsWithItsSize) {
   EXPECT_NEAR(s[2], 0.3, kSizeTol_m);
   // mass at MuJoCo's default density: 1000 kg/m^3 * 0.4 * 0.6 * 0.2 m^3 = 48 kg
   const mjModel* m = w->model();
-  EXPECT_NEAR(m->body_mass[mj_name2id(m, mjOBJ_BODY, "crate")], 48.0, 1e-3);
+  EXPECT_NEAR(m->body_mass[mj_name2id(m, mjOBJ_BODY, "crate")], 48.0, kMassTol_kg);
   // the composed world points at the one converted file in the cache
   const std::vector<fs::path> files = cached_files();
   ASSERT_EQ(files.size(), 1u);

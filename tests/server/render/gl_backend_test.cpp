@@ -25,6 +25,7 @@ constexpr double kMeanAbsDiffTol = 1.0;       // grey levels, mean over all pixe
 constexpr double kDifferentPixelsTol = 0.01;  // fraction of pixels off by more than kLargeDiff
 constexpr int kLargeDiff = 24;                // grey levels in any channel
 constexpr double kCentroidTol = 0.25;         // px between the backends' blob centroids
+constexpr double kAreaRelTol = 0.02;          // of a blob's area, between the backends
 constexpr double kProjectionTol = 2.0;        // px between a blob centroid and its projected centre
 
 // A quad-sized vehicle (dark hull, grey arms, four rotor discs) hovering in front of a green
@@ -137,7 +138,7 @@ void expect_same_scene(const CameraFrame& osmesa, const CameraFrame& egl) {
     ASSERT_GT(a.area_px, 20.0) << "the scene shows no " << name;
     EXPECT_NEAR(a.u, b.u, kCentroidTol);
     EXPECT_NEAR(a.v, b.v, kCentroidTol);
-    EXPECT_NEAR(a.area_px, b.area_px, 0.02 * a.area_px);
+    EXPECT_NEAR(a.area_px, b.area_px, kAreaRelTol * a.area_px);
     const Eigen::Vector2d at = project(osmesa, centre);
     // the balloon is a sphere: its silhouette's centroid is its centre's projection (to within the
     // perspective shift, well under a pixel here); the hull is seen from above, its top face
