@@ -18,6 +18,7 @@ using namespace ::uavsim::common::mavlink;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kTol = 1e-12;
+constexpr double kLatLonTol_deg = 1e-9;  // a float64 degree read back from its 1e-7 integer
 constexpr std::uint8_t kAccepted = to_underlying(MavResult::Accepted);
 constexpr std::uint8_t kDenied = to_underlying(MavResult::Denied);
 constexpr std::uint8_t kFailed = to_underlying(MavResult::Failed);
@@ -136,8 +137,8 @@ TEST(CommandMapper, RepositionReadsDegE7AndKeepsWhatIsNaN) {
   m.z = 500;
   const auto r = fc_request<cmd::Reposition>(command_args(m));
   ASSERT_TRUE(r.lat_lon.has_value());
-  EXPECT_NEAR(r.lat_lon->lat_deg, 47.397742, 1e-9);
-  EXPECT_NEAR(r.lat_lon->lon_deg, 8.545594, 1e-9);
+  EXPECT_NEAR(r.lat_lon->lat_deg, 47.397742, kLatLonTol_deg);
+  EXPECT_NEAR(r.lat_lon->lon_deg, 8.545594, kLatLonTol_deg);
   EXPECT_EQ(r.alt_m, 500.0);
   EXPECT_TRUE(r.amsl);
   // lat/lon 0: stay; NaN altitude: keep
