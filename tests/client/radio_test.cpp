@@ -29,12 +29,20 @@ std::vector<std::uint8_t> frame(std::size_t n, std::uint8_t first) {
   return f;
 }
 
+// A lockstep loop on the server (null, with the test's failure, when either cannot start).
+std::unique_ptr<EventLoop> lockstep_loop(const ServerProcess& server) {
+  EXPECT_GT(server.api_port(), 0) << server.output();
+  if (server.api_port() <= 0) return nullptr;
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
+  EXPECT_TRUE(l) << l.message();
+  return l ? std::move(*l) : nullptr;
+}
+
 TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
   ServerProcess server(kThreeQuads, {"--no-cameras"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   std::vector<std::unique_ptr<A2aRadio>> radio;
   for (int v = 0; v < 3; ++v) {
     auto r = A2aRadio::open(loop, v);
@@ -71,10 +79,9 @@ TEST(A2aRadio, AFrameIsReceivedAtTheFirstTickAtOrAfterItsArrival) {
 // before the work (the simulation stepped on meanwhile).
 TEST(A2aRadio, PipelinedAFrameSentDuringATickGoesOnAirAtTheNext) {
   ServerProcess server(kThreeQuads, {"--no-cameras"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
   ASSERT_TRUE(r0 && r1) << (r0 ? r1.message() : r0.message());
   loop.set_lockstep_pipelined(true);
@@ -94,10 +101,9 @@ TEST(A2aRadio, PipelinedAFrameSentDuringATickGoesOnAirAtTheNext) {
 
 TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
   ServerProcess server(kThreeQuads, {"--no-cameras"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1), r2 = A2aRadio::open(loop, 2);
   ASSERT_TRUE(r0 && r1 && r2);
   ASSERT_TRUE((*r1)->send(frame(127, 1), 2));  // a full 802.15.4 frame
@@ -113,10 +119,9 @@ TEST(A2aRadio, UnicastReachesOnlyTheAddressee) {
 TEST(A2aRadio, CountsTheSimulatorsRefusals) {
   // a frame past the sender's queue of 256 is refused with queue_full; the radio counts those
   ServerProcess server(kThreeQuads, {"--no-cameras"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
   ASSERT_TRUE(r0 && r1);
   constexpr int kQueueFrames = 256, kSent = 300;
@@ -130,10 +135,9 @@ TEST(A2aRadio, CountsTheSimulatorsRefusals) {
 
 TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
   ServerProcess server(kThreeQuads, {"--no-cameras"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  auto r = A2aRadio::open(**l, 0);
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  auto r = A2aRadio::open(*l, 0);
   ASSERT_TRUE(r) << r.message();
   const auto big = (*r)->send(frame(128, 0));
   ASSERT_FALSE(big);
@@ -141,7 +145,7 @@ TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
   const auto empty = (*r)->send({});
   ASSERT_FALSE(empty);
   EXPECT_EQ(empty.code(), Error::kInvalidArgument);
-  const auto unknown = A2aRadio::open(**l, 3);  // three_quads has vehicles 0-2
+  const auto unknown = A2aRadio::open(*l, 3);  // three_quads has vehicles 0-2
   ASSERT_FALSE(unknown);
   EXPECT_EQ(unknown.code(), Error::kDenied);
 
@@ -155,10 +159,9 @@ TEST(A2aRadio, RefusesFramesOutside1To127BytesAndTheHostClock) {
 TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
   {
     ServerProcess server(kThreeQuads, {"--no-cameras"});
-    ASSERT_GT(server.api_port(), 0) << server.output();
-    auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-    ASSERT_TRUE(l) << l.message();
-    auto r = A2aRadio::open(**l, 0);
+    auto l = lockstep_loop(server);
+    ASSERT_TRUE(l);
+    auto r = A2aRadio::open(*l, 0);
     ASSERT_TRUE(r) << r.message();
     EXPECT_EQ((*r)->max_frame_bytes(), 127u);
   }
@@ -168,10 +171,9 @@ TEST(A2aRadio, TakesItsFrameSizeFromTheServersChannel) {
   GTEST_SKIP() << "built without ns-3 (scripts/install_deps.sh installs it)";
 #endif
   ServerProcess server(kThreeQuads, {"--no-cameras", "--radio-backend", "ns3"});
-  ASSERT_GT(server.api_port(), 0) << server.output();
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
   ASSERT_TRUE(r0 && r1);
   EXPECT_EQ((*r0)->max_frame_bytes(), 116u);
@@ -196,9 +198,9 @@ TEST(A2aRadio, CarriesFramesOf1500BytesOnNs3s80211) {
     ASSERT_TRUE(api) << api.message();
     ASSERT_TRUE((*api)->request({{"op", "radio_config"}, {"technology", "802.11"}}));
   }
-  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), kPeriod_s));
-  ASSERT_TRUE(l) << l.message();
-  EventLoop& loop = **l;
+  auto l = lockstep_loop(server);
+  ASSERT_TRUE(l);
+  EventLoop& loop = *l;
   auto r0 = A2aRadio::open(loop, 0), r1 = A2aRadio::open(loop, 1);
   ASSERT_TRUE(r0 && r1);
   EXPECT_EQ((*r0)->max_frame_bytes(), 1500u);
