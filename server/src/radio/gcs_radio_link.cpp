@@ -40,15 +40,8 @@ std::string validate_gcs_position(const Eigen::Vector3d& p) {
 
 void apply_world_gcs_settings(const physics::World& world, bool backend_given, bool* use_ns3,
                               GcsRadioOptions* options) {
-  for (const auto& [name, data] : physics::custom_texts(world, "uavsim:gcs_link_backend")) {
-    if (name != "uavsim:gcs_link_backend") continue;
-    const auto b = backend_from_name(data);
-    if (!b) {
-      throw physics::WorldError(
-          "text uavsim:gcs_link_backend needs data=\"simple\" or \"ns3\", got \"" + data + "\"");
-    }
-    if (!backend_given) *use_ns3 = *b == Backend::kNs3;
-  }
+  const auto b = world_backend(world, "uavsim:gcs_link_backend");
+  if (b && !backend_given) *use_ns3 = *b == Backend::kNs3;
   const std::vector<double> p = physics::custom_numeric(world, "uavsim:gcs_position");
   if (!p.empty()) {
     const Eigen::Vector3d at = p.size() == 3 ? Eigen::Vector3d(p[0], p[1], p[2])
@@ -69,11 +62,9 @@ namespace {
 
 std::unique_ptr<RadioChannel> make_gcs_channel(sim::Simulation& sim,
                                                const GcsRadioOptions& options) {
-  Ns3Options o = options.ns3;
-  if (o.helper_path.empty()) o.helper_path = find_ns3_helper().value_or("");
-  return std::make_unique<Ns3Channel>(sim.vehicle_count() + 1, options.config,
-                                      GcsRadioLink::gcs_radio_seed(sim.config().seed),
-                                      sim.control_dt_s(), o);
+  // a node per vehicle and the ground station's
+  return make_channel({Backend::kNs3, options.ns3}, sim.vehicle_count() + 1, options.config,
+                      GcsRadioLink::gcs_radio_seed(sim.config().seed), sim.control_dt_s());
 }
 
 Eigen::Vector3d checked_position(const sim::Simulation& sim, const GcsRadioOptions& options) {

@@ -16,17 +16,23 @@ std::optional<Backend> backend_from_name(const std::string& name) {
   return std::nullopt;
 }
 
+std::optional<Backend> world_backend(const physics::World& world, const std::string& key) {
+  std::optional<Backend> chosen;
+  for (const auto& [name, data] : physics::custom_texts(world, key)) {
+    if (name != key) continue;
+    chosen = backend_from_name(data);
+    if (!chosen) {
+      throw physics::WorldError("text " + key + " needs data=\"simple\" or \"ns3\", got \"" + data +
+                                "\"");
+    }
+  }
+  return chosen;
+}
+
 void apply_world_radio_settings(const physics::World& world, BackendOptions* backend,
                                 bool backend_given, RadioConfig* config) {
-  for (const auto& [name, data] : physics::custom_texts(world, "uavsim:radio_backend")) {
-    if (name != "uavsim:radio_backend") continue;
-    const auto b = backend_from_name(data);
-    if (!b) {
-      throw physics::WorldError(
-          "text uavsim:radio_backend needs data=\"simple\" or \"ns3\", got \"" + data + "\"");
-    }
-    if (!backend_given) backend->backend = *b;
-  }
+  const auto b = world_backend(world, "uavsim:radio_backend");
+  if (b && !backend_given) backend->backend = *b;
   const std::vector<double> loss = physics::custom_numeric(world, "uavsim:radio_obstacle_loss_db");
   if (loss.empty()) return;
   bool ok = loss.size() <= kGeomGroups;
@@ -40,15 +46,15 @@ void apply_world_radio_settings(const physics::World& world, BackendOptions* bac
   for (size_t g = 0; g < loss.size(); ++g) config->obstacle_loss_db[g] = loss[g];
 }
 
-std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t vehicles,
+std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t nodes,
                                            const RadioConfig& config, uint64_t seed,
                                            double step_s) {
   if (backend.backend == Backend::kSimple) {
-    return std::make_unique<RadioModel>(vehicles, config, seed, step_s);
+    return std::make_unique<RadioModel>(nodes, config, seed, step_s);
   }
   Ns3Options o = backend.ns3;
   if (o.helper_path.empty()) o.helper_path = find_ns3_helper().value_or("");
-  return std::make_unique<Ns3Channel>(vehicles, config, seed, step_s, o);
+  return std::make_unique<Ns3Channel>(nodes, config, seed, step_s, o);
 }
 
 SimRadio& SimRadio::create(sim::Simulation& sim, const RadioConfig& config,

@@ -34,6 +34,11 @@ struct BackendOptions {
   Ns3Options ns3;  // helper_path empty: find_ns3_helper()
 };
 
+// The world's <text name="KEY" data="simple|ns3"/>, if it has one; physics::WorldError naming the
+// key for any other value. The A2A radio's uavsim:radio_backend and the GCS link's
+// uavsim:gcs_link_backend.
+std::optional<Backend> world_backend(const physics::World& world, const std::string& key);
+
 // The world's radio settings: uavsim:radio_backend (above) into *backend unless given (nullopt
 // keeps it), and <numeric name="uavsim:radio_obstacle_loss_db" data="G0 ... G5"/> (dB per MuJoCo
 // geom group, 0 to 1000, up to six values) into config->obstacle_loss_db. Throws
@@ -110,8 +115,9 @@ class SimRadio {
   bool failure_reported_ = false;
 };
 
-// A channel of the chosen backend. Throws as SimRadio::create.
-std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t vehicles,
+// A channel of the chosen backend for `nodes` radios (the ns3 helper found by find_ns3_helper()
+// unless its path is given). Throws as SimRadio::create.
+std::unique_ptr<RadioChannel> make_channel(const BackendOptions& backend, size_t nodes,
                                            const RadioConfig& config, uint64_t seed, double step_s);
 
 }  // namespace uavsim::server::radio
