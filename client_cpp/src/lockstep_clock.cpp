@@ -183,9 +183,7 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
   if (!buf.empty()) api.feed(buf.data(), buf.size());
   // the shared-memory stream: for a server on this machine that serves it; a server that does not
   // (an older one, a remote one) answers with an error and the connection goes on over TCP
-  const auto ops = h.find("ops");
-  const bool offered = ops != h.end() && ops->is_array() &&
-                       std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
+  const bool offered = ShmStream::offered_by(h);
   const bool local = ShmStream::peer_is_local(*fd);
   if (config.lockstep_transport == LoopConfig::Transport::kShm && (!offered || !local)) {
     return R::fail(
@@ -195,8 +193,7 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
   }
   if (use_shm && offered && local) {
     std::optional<Json> reply;
-    if (!api.request({{"op", "lockstep_shm"}, {"ring_bytes", ShmStream::kRingBytes}},
-                     [&reply](const Json& j) { reply = j; })) {
+    if (!api.request(ShmStream::offer_request(), [&reply](const Json& j) { reply = j; })) {
       return R::fail(Error::kIo, "lockstep: cannot send to the simulator");
     }
     if (auto r = read_api_until([&] { return reply.has_value(); },

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -115,6 +116,16 @@ bool ShmStream::drain_wakeups() {
   // cleared after the bytes are read: a record written from here on wakes the loop again
   reader_.arm();
   return closed;
+}
+
+bool ShmStream::offered_by(const nlohmann::json& hello) {
+  const auto ops = hello.find("ops");
+  return ops != hello.end() && ops->is_array() &&
+         std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
+}
+
+nlohmann::json ShmStream::offer_request() {
+  return {{"op", "lockstep_shm"}, {"ring_bytes", kRingBytes}};
 }
 
 bool ShmStream::peer_is_local(int socket_fd) {

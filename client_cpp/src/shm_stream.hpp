@@ -42,6 +42,10 @@ class ShmStream {
   // Whether the socket's peer is on this machine (a loopback address): only then is the stream
   // offered.
   static bool peer_is_local(int socket_fd);
+  // Whether a server's hello lists the op that offers the stream (lockstep_shm).
+  static bool offered_by(const nlohmann::json& hello);
+  // The request for the stream, with the ring this client asks for.
+  static nlohmann::json offer_request();
 
  private:
   ShmStream(void* region, std::size_t size, int fifo_fd, common::shm::RingReader reader)

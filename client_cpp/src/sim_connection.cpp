@@ -381,14 +381,11 @@ Result<void> SimConnection::use_shared_memory(double timeout_s) {
   if (m.ring) return ok();
   if (m.fd < 0)
     return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
-  const auto ops = m.hello.find("ops");
-  const bool offered = ops != m.hello.end() && ops->is_array() &&
-                       std::find(ops->begin(), ops->end(), "lockstep_shm") != ops->end();
-  if (!offered)
+  if (!ShmStream::offered_by(m.hello))
     return Failure{Error::kUnsupported, "sim API: the server does not offer shared memory"};
   if (!ShmStream::peer_is_local(m.fd))
     return Failure{Error::kUnsupported, "sim API: shared memory needs the server on this machine"};
-  auto offer = request({{"op", "lockstep_shm"}, {"ring_bytes", ShmStream::kRingBytes}}, timeout_s);
+  auto offer = request(ShmStream::offer_request(), timeout_s);
   if (!offer) return offer.error();
   // the server writes everything after its reply into the ring: nothing more comes on the socket
   auto ring = ShmStream::open(*offer);
