@@ -128,11 +128,19 @@ class FrameLedger {
     }
   }
 
-  // busy, quiet_until_ns and the deliveries, confirms and counters since the last report, into w
-  // (kStepDone after its time)
-  void report(uavsim::ns3wire::Writer& w) {
-    w.put<uint8_t>(frames_.empty() ? 0 : 1);
-    w.put(quiet_until_ns(frames_, ns3::Simulator::Now().GetNanoSeconds(), kSettle_ns));
+  // Frames in flight (not yet settled).
+  bool busy() const { return !frames_.empty(); }
+  // The earliest time at which the frames in flight can report anything (parts.h).
+  int64_t quiet_until() const {
+    return quiet_until_ns(frames_, ns3::Simulator::Now().GetNanoSeconds(), kSettle_ns);
+  }
+
+  // busy, quiet_until_ns (as busy() and quiet_until() said when the server's inputs were in: a
+  // step run ahead reports those, wire.hpp) and the deliveries, confirms and counters since the
+  // last report, into w (kStepDone after its time)
+  void report(uavsim::ns3wire::Writer& w, bool busy, int64_t quiet_until_ns) {
+    w.put<uint8_t>(busy ? 1 : 0);
+    w.put(quiet_until_ns);
     auto append = [&w](uint32_t count, const uavsim::ns3wire::Writer& part) {
       w.put(count);
       const std::vector<uint8_t> m = part.message();

@@ -71,6 +71,9 @@ constexpr uint8_t kStandardMacMinBE = 3;
 // O-QPSK 250 kbit/s: 32 us a byte; the PHY's preamble, delimiter and length take 6 bytes
 constexpr int64_t kByte_ns = 32000;
 constexpr uint32_t kPhyHeaderBytes = 6;
+// slices in one kStep: the server sends at most a few a step (its API gate's and its physics
+// step's); anything far beyond is a malformed message
+constexpr uint32_t kMaxSlices = 64;
 
 class Helper {
  public:
@@ -137,11 +140,18 @@ class Helper {
           sent = ready();
           break;
         }
-        case wire::MessageType::kStep:
+        case wire::MessageType::kStep: {
           if (vehicles_ == 0) return error("step before init");
-          if (!step(in)) return error("malformed step");
-          sent = step_done();
+          const auto slices = in.get<uint32_t>();
+          if (!in.ok() || slices > kMaxSlices) return error("malformed step");
+          for (uint32_t k = 0; k < slices; ++k) {
+            if (!slice(in)) return error("malformed step");
+          }
+          const auto ahead_ns = in.get<int64_t>();
+          if (!in.ok() || in.left() != 0) return error("malformed step");
+          sent = step_done(ahead_ns);
           break;
+        }
         case wire::MessageType::kQuit:
           Simulator::Destroy();
           return 0;
@@ -268,7 +278,8 @@ class Helper {
     }
   }
 
-  bool step(wire::Reader& in) {
+  // One slice of a kStep (wire.hpp): ns-3 to its time, then the server's inputs at that time.
+  bool slice(wire::Reader& in) {
     const auto t_ns = in.get<int64_t>();
     const auto with_kinematics = in.get<uint8_t>();
     if (!in.ok() || t_ns < Simulator::Now().GetNanoSeconds()) return false;
@@ -393,11 +404,22 @@ class Helper {
     h->ledger_.confirm(vehicle, uid, status);
   }
 
-  bool step_done() {
+  // The answer to a kStep, after running ahead to ahead_ns when the frames in flight would have
+  // the server step there anyway (busy, and ahead_ns at or after their quiet time): the server
+  // computes its next physics step meanwhile. busy and quiet_until go back as they were before
+  // the run ahead, which is what the server decides its next steps by (wire.hpp).
+  bool step_done(int64_t ahead_ns) {
+    const bool busy = ledger_.busy();
+    const int64_t quiet_until = ledger_.quiet_until();
+    if (busy && ahead_ns > Simulator::Now().GetNanoSeconds() && ahead_ns >= quiet_until) {
+      Simulator::Stop(NanoSeconds(ahead_ns) - Simulator::Now());
+      Simulator::Run();
+      ledger_.settle(channel_.sensitivity_dbm);
+    }
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kStepDone));
     w.put(Simulator::Now().GetNanoSeconds());
-    ledger_.report(w);
+    ledger_.report(w, busy, quiet_until);
     return wire::write_all(fd_, w.message()) == wire::IoResult::kOk;
   }
 

@@ -11,11 +11,11 @@
 //   kInit   u32 vehicles, u64 seed, Channel          -> kReady u32 max_payload_bytes
 //   kConfig Channel                                  -> kReady
 //   kReset  u64 seed                                 -> kReady
-//   kStep   i64 t_ns, u8 with_kinematics, [vehicles x (3 f64 position_enu_m, 3 f64
-//   velocity_enu_m_s)],
+//   kStep   u32 slices, slices x Slice, i64 ahead_ns     -> kStepDone (below)
+//     Slice i64 t_ns, u8 with_kinematics, [vehicles x (3 f64 position_enu_m, 3 f64
+//           velocity_enu_m_s)],
 //           u32 n, n x (u32 from, u32 to, f64 extra_loss_db),
 //           u32 n, n x (u32 from, i32 to, u64 seq, i64 queued_ns, i64 at_ns, u16 bytes, bytes)
-//                                                    -> kStepDone (below)
 //   kQuit                                            -> (none; the helper exits 0)
 //   kStepDone  i64 now_ns, u8 busy, i64 quiet_until_ns,
 //           u32 n, n x Delivery (u32 to, u32 from, u64 seq, u8 broadcast, i64 queued_ns,
@@ -23,12 +23,16 @@
 //           u32 n, n x (u32 from, u64 seq, u8 status: ConfirmStatus),
 //           u32 n, n x (u32 from, u32 to, u8 Counter)   (to = from for a vehicle's own counters)
 //   kError  u16 bytes, text (a request the helper could not carry out; the server ends the run)
-// kStep runs ns-3 to t_ns (Simulator::Stop(t - Now()) + Run()), then sets the positions, the extra
-// losses and hands the frames to the MACs in the order given (at_ns -1: at once; else at at_ns,
-// a TDMA slot's start or a frame's spread entry, within the next step), and reports what happened
-// since the previous kStepDone. busy: frames in flight; quiet_until_ns: they report nothing before
-// that time, so the server steps the helper again at the first step at or after it (or when it
-// hands frames).
+// Each Slice of a kStep runs ns-3 to its t_ns (Simulator::Stop(t - Now()) + Run()), then sets the
+// positions, the extra losses and hands the frames to the MACs in the order given (at_ns -1: at
+// once; else at at_ns, a TDMA slot's start or a frame's spread entry, within the next step).
+// busy: frames in flight after the slices; quiet_until_ns: they report nothing before that time,
+// so the server steps the helper again at the first step at or after it (or when it hands
+// frames). Then, if busy and ahead_ns >= quiet_until_ns (-1: never), the helper runs on to
+// ahead_ns, where the server's next step will be, while the server computes that step: the run
+// the server's next kStep would have started with, so nothing it reports changes, only when. The
+// kStepDone reports what happened since the previous one (receptions up to now_ns, the helper's
+// clock after any run ahead) with busy and quiet_until_ns as they were after the slices.
 #pragma once
 
 #include <poll.h>
@@ -101,6 +105,8 @@ class Writer {
     std::memcpy(body_.data() + at, &v, sizeof(T));
   }
   void bytes(const uint8_t* p, size_t n) { body_.insert(body_.end(), p, p + n); }
+  void append(const Writer& other) { bytes(other.body_.data(), other.body_.size()); }
+  const std::vector<uint8_t>& body() const { return body_; }
   // the message: length prefix and body
   std::vector<uint8_t> message() const {
     std::vector<uint8_t> m(4 + body_.size());

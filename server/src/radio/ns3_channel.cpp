@@ -129,9 +129,12 @@ bool Ns3Channel::expect_ready(const std::vector<uint8_t>& request) {
 }
 
 void Ns3Channel::reset_state() {
-  helper_ns_ = 0;
+  requested_ns_ = 0;
+  clock_ns_ = 0;
   busy_ = false;
   quiet_until_ns_ = 0;
+  slices_.clear();
+  slice_count_ = 0;
   queue_.clear();
   next_seq_.assign(vehicles_, 0);
   queued_.assign(vehicles_, 0);
@@ -146,6 +149,7 @@ void Ns3Channel::reset_state() {
 }
 
 void Ns3Channel::reset(uint64_t seed) {
+  collect();
   if (!failure_.empty()) return;
   wire::Writer w;
   w.put(static_cast<uint8_t>(wire::MessageType::kReset));
@@ -161,6 +165,9 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
     if (error != nullptr) *error = why;
     return false;
   }
+  // what was stepped under the old settings goes first
+  if (slice_count_ > 0 && failure_.empty()) send_step(-1, true);
+  collect();
   if (!same_channel(config, config_) && failure_.empty()) {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kConfig));
@@ -178,7 +185,8 @@ bool Ns3Channel::set_config(const RadioConfig& config, std::string* error) {
       busy_until_s_.assign(vehicles_, 0.0);
       last_entry_ns_.assign(vehicles_, -1);
       busy_ = false;
-      helper_ns_ = 0;
+      requested_ns_ = 0;
+      clock_ns_ = 0;
       quiet_until_ns_ = 0;
     }
   }
@@ -252,9 +260,7 @@ void Ns3Channel::set_velocities(const std::vector<Eigen::Vector3d>& velocities_e
   if (velocities_enu_m_s.size() == vehicles_) velocities_enu_m_s_ = velocities_enu_m_s;
 }
 
-void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
-                      std::vector<Delivery>* out, bool starting_now) {
-  const int64_t now_ns = to_ns(now_s);
+std::vector<Ns3Channel::Queued> Ns3Channel::take_due(int64_t now_ns, bool starting_now) {
   // frames to hand over: those sent by now (with starting_now false, those sent before now: a
   // lockstep client may still send for now), in (time, sender, seq) order: the order ns-3's
   // MACs get them, whatever order the requests came in
@@ -279,71 +285,124 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
     if (a.from != b.from) return a.from < b.from;
     return a.seq < b.seq;
   });
-  // frames in flight report nothing before quiet_until_ns_ (the helper's bound): no round trip
-  // before it
-  const bool advance = busy_ && now_ns > helper_ns_ && now_ns >= quiet_until_ns_;
-  if (failure_.empty() && (!hand.empty() || advance) && now_ns >= helper_ns_ &&
-      positions_enu_m.size() == vehicles_) {
-    wire::Writer w;
-    w.put(static_cast<uint8_t>(wire::MessageType::kStep));
-    w.put(now_ns);
-    w.put<uint8_t>(1);
-    for (size_t i = 0; i < vehicles_; ++i) {
-      for (int k = 0; k < 3; ++k) w.put(positions_enu_m[i][k]);
-      for (int k = 0; k < 3; ++k) w.put(velocities_enu_m_s_[i][k]);
-    }
-    // obstacle losses of the links this step's senders use (both ways: ACKs come back)
-    std::vector<size_t> senders;
-    for (const Queued& q : hand) senders.push_back(q.from);
-    std::sort(senders.begin(), senders.end());
-    senders.erase(std::unique(senders.begin(), senders.end()), senders.end());
-    wire::Writer losses;
-    uint32_t loss_count = 0;
-    for (size_t s : senders) {
-      for (size_t r = 0; r < vehicles_; ++r) {
-        if (r == s) continue;
-        const double db = link_loss_db(s, r);
-        for (const auto& [a, b] : {std::pair{s, r}, std::pair{r, s}}) {
-          double& pushed = pushed_loss_db_[a * vehicles_ + b];
-          if (std::abs(pushed - db) <= kObstacleLossChangeDb) continue;
-          pushed = db;
-          losses.put(static_cast<uint32_t>(a));
-          losses.put(static_cast<uint32_t>(b));
-          losses.put(db);
-          ++loss_count;
-        }
+  return hand;
+}
+
+void Ns3Channel::add_slice(int64_t t_ns, const std::vector<Eigen::Vector3d>& positions_enu_m,
+                           const std::vector<Queued>& hand) {
+  wire::Writer w;
+  w.put(t_ns);
+  w.put<uint8_t>(1);
+  for (size_t i = 0; i < vehicles_; ++i) {
+    for (int k = 0; k < 3; ++k) w.put(positions_enu_m[i][k]);
+    for (int k = 0; k < 3; ++k) w.put(velocities_enu_m_s_[i][k]);
+  }
+  // obstacle losses of the links this step's senders use (both ways: ACKs come back)
+  std::vector<size_t> senders;
+  for (const Queued& q : hand) senders.push_back(q.from);
+  std::sort(senders.begin(), senders.end());
+  senders.erase(std::unique(senders.begin(), senders.end()), senders.end());
+  wire::Writer losses;
+  uint32_t loss_count = 0;
+  for (size_t s : senders) {
+    for (size_t r = 0; r < vehicles_; ++r) {
+      if (r == s) continue;
+      const double db = link_loss_db(s, r);
+      for (const auto& [a, b] : {std::pair{s, r}, std::pair{r, s}}) {
+        double& pushed = pushed_loss_db_[a * vehicles_ + b];
+        if (std::abs(pushed - db) <= kObstacleLossChangeDb) continue;
+        pushed = db;
+        losses.put(static_cast<uint32_t>(a));
+        losses.put(static_cast<uint32_t>(b));
+        losses.put(db);
+        ++loss_count;
       }
     }
-    w.put(loss_count);
-    const std::vector<uint8_t> loss_bytes = losses.message();
-    w.bytes(loss_bytes.data() + 4, loss_bytes.size() - 4);
-    w.put(static_cast<uint32_t>(hand.size()));
-    for (const Queued& q : hand) {
-      w.put(static_cast<uint32_t>(q.from));
-      w.put(static_cast<int32_t>(q.to));
-      w.put(q.seq);
-      w.put(q.queued_ns);
-      w.put(q.slot_ns < 0 ? int64_t{-1} : std::max(q.slot_ns, now_ns));
-      w.put(static_cast<uint16_t>(q.data.size()));
-      w.bytes(q.data.data(), q.data.size());
-      --queued_[q.from];
-      ++in_flight_[q.from];
-    }
-    std::vector<uint8_t> reply;
-    if (exchange(w.message(), &reply) && !read_step_done(reply)) fail("a malformed step answer");
-    helper_ns_ = now_ns;
+  }
+  w.put(loss_count);
+  w.append(losses);
+  w.put(static_cast<uint32_t>(hand.size()));
+  for (const Queued& q : hand) {
+    w.put(static_cast<uint32_t>(q.from));
+    w.put(static_cast<int32_t>(q.to));
+    w.put(q.seq);
+    w.put(q.queued_ns);
+    w.put(q.slot_ns < 0 ? int64_t{-1} : std::max(q.slot_ns, t_ns));
+    w.put(static_cast<uint16_t>(q.data.size()));
+    w.bytes(q.data.data(), q.data.size());
+    --queued_[q.from];
+    ++in_flight_[q.from];
+  }
+  slices_.insert(slices_.end(), w.body().begin(), w.body().end());
+  ++slice_count_;
+}
+
+void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& positions_enu_m,
+                      std::vector<Delivery>* out, bool starting_now) {
+  const int64_t now_ns = to_ns(now_s);
+  // the answer to the step sent ahead (the last call's): receptions up to now among them
+  collect();
+  std::vector<Queued> hand = take_due(now_ns, starting_now);
+  // frames in flight report nothing before quiet_until_ns_ (the helper's bound): no slice before
+  // it
+  const bool advance = busy_ && now_ns > requested_ns_ && now_ns >= quiet_until_ns_;
+  if (failure_.empty() && (!hand.empty() || advance) && now_ns >= requested_ns_ &&
+      positions_enu_m.size() == vehicles_) {
+    // a helper that ran past now (a call off the step grid, pipelined) takes the inputs at its own
+    // time
+    add_slice(std::max(now_ns, clock_ns_), positions_enu_m, hand);
+    requested_ns_ = now_ns;
+    // what the helper reports between its clock and now arrives now: wait for it, unless the
+    // helper ran ahead to now, or its frames have nothing to report before now
+    const bool reports_due = clock_ns_ < now_ns && busy_ && now_ns >= quiet_until_ns_;
+    if (!pipelined_ || reports_due) send_step(-1, true);
   } else {
     for (const Queued& q : hand) --queued_[q.from];  // a failed helper: dropped
+  }
+  if (pipelined_ && starting_now && failure_.empty()) {
+    // this time's last call: what it has goes now, and the helper runs on to the next step while
+    // the server computes it
+    const int64_t ahead_ns = now_ns + to_ns(step_s_);
+    if (slice_count_ > 0 || (busy_ && ahead_ns >= quiet_until_ns_)) send_step(ahead_ns, false);
   }
 
   // arrivals up to now, in (time, receiver, sender, seq) order
   take_arrivals(&pending_, now_s, out);
 }
 
+void Ns3Channel::send_step(int64_t ahead_ns, bool wait) {
+  wire::Writer w;
+  w.put(static_cast<uint8_t>(wire::MessageType::kStep));
+  w.put(slice_count_);
+  w.bytes(slices_.data(), slices_.size());
+  w.put(ahead_ns);
+  slices_.clear();
+  slice_count_ = 0;
+  if (!send_request(w.message())) return;
+  outstanding_ = true;
+  if (wait) collect();
+}
+
+void Ns3Channel::collect() {
+  if (!outstanding_) return;
+  outstanding_ = false;
+  std::vector<uint8_t> reply;
+  if (read_reply(&reply) && !read_step_done(reply)) fail("a malformed step answer");
+}
+
+void Ns3Channel::set_pipelined(bool on) {
+  // the slices kept for the next send go first, in the mode they were made in
+  if (pipelined_ && !on && slice_count_ > 0 && failure_.empty()) send_step(-1, true);
+  collect();
+  pipelined_ = on;
+}
+
 bool Ns3Channel::read_step_done(const std::vector<uint8_t>& reply) {
   wire::Reader in(reply.data(), reply.size());
   if (in.get<uint8_t>() != static_cast<uint8_t>(wire::MessageType::kStepDone)) return false;
-  in.get<int64_t>();
+  const auto clock_ns = in.get<int64_t>();
+  if (!in.ok() || clock_ns < clock_ns_) return false;
+  clock_ns_ = clock_ns;
   const bool busy = in.get<uint8_t>() != 0;
   const auto quiet_until_ns = in.get<int64_t>();
   // receptions: they arrive after the processing latency, and never before one step after they

@@ -8,6 +8,14 @@
 // (Simulator::Stop(t - Now()) + Run()) and answers with the receptions and counters. While no frame
 // is in flight no round trip is made.
 //
+// Pipelined (set_pipelined, what SimRadio does): the helper works beside the server instead of
+// before it. A step's inputs (positions, losses, frames) go at the step's last call with the time
+// of the next step, and the helper runs ns-3 on to that time while the server computes its physics
+// step; the answer is read at the next step. That run is the one the next step would have started
+// with, so the deliveries, counters and their times are the same as stepped one at a time (test
+// Ns3Pipelined.*); the calls must come on the step grid (one starting_now call last at each time,
+// the next at now + step_s), else the helper takes inputs at its own time.
+//
 // Failure: a helper that dies, hangs (no answer within the timeout, wall time) or answers nonsense
 // puts the channel in a failed state with a message (failure()); from then on it refuses frames
 // and delivers nothing, and SimRadio ends the run (never a silently perfect radio).
@@ -78,6 +86,10 @@ class Ns3Channel : public RadioChannel {
     return access_failures_[vehicle];
   }
 
+  // Steps the helper one step ahead of the calls (above) when on; off: each step waits for the
+  // helper's answer (the default).
+  void set_pipelined(bool on) override;
+
   // Why the helper is unusable ("" while it works).
   std::string failure() const override { return failure_; }
   // The helper's process id (tests end it to check the failure path).
@@ -106,6 +118,17 @@ class Ns3Channel : public RadioChannel {
   void fail(const std::string& why, bool hung = false);
   // one request and its reply; false (and failed) on any I/O or protocol error
   bool exchange(const std::vector<uint8_t>& request, std::vector<uint8_t>* reply);
+  bool send_request(const std::vector<uint8_t>& request);
+  bool read_reply(std::vector<uint8_t>* reply);
+  // the queued frames due at now_ns, out of the queue, in the order ns-3 gets them
+  std::vector<Queued> take_due(int64_t now_ns, bool starting_now);
+  // a slice at t_ns (wire.hpp) with the positions and the frames handed, onto slices_
+  void add_slice(int64_t t_ns, const std::vector<Eigen::Vector3d>& positions_enu_m,
+                 const std::vector<Queued>& hand);
+  // slices_ as one kStep that runs on to ahead_ns (-1: no further); wait: read its answer now
+  void send_step(int64_t ahead_ns, bool wait);
+  // reads the answer of the kStep sent, if one is out
+  void collect();
   bool expect_ready(const std::vector<uint8_t>& request);
   bool read_step_done(const std::vector<uint8_t>& reply);
   int64_t to_ns(double t_s) const;
@@ -121,9 +144,15 @@ class Ns3Channel : public RadioChannel {
   int fd_ = -1;
   std::string failure_;
   size_t max_payload_bytes_ = 0;
-  int64_t helper_ns_ = 0;       // the helper's clock
+  int64_t requested_ns_ = 0;    // the time of the last slice
+  int64_t clock_ns_ = 0;        // the helper's clock in its last answer (ahead of requested_ns_
+                                // after a run ahead)
   bool busy_ = false;           // frames in flight in the helper
   int64_t quiet_until_ns_ = 0;  // busy: the helper has nothing to report before this time
+  bool pipelined_ = false;
+  bool outstanding_ = false;     // a kStep is out, its answer not yet read
+  std::vector<uint8_t> slices_;  // slices not yet sent (pipelined: this time's, sent at its end)
+  uint32_t slice_count_ = 0;
   std::vector<Eigen::Vector3d> velocities_enu_m_s_;
   std::vector<Queued> queue_;  // sent, not yet handed to the helper, in (time, from, seq)
   std::vector<uint64_t> next_seq_;

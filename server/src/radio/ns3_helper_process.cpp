@@ -57,6 +57,8 @@ std::optional<std::string> find_ns3_helper() {
 }
 
 Ns3Channel::~Ns3Channel() {
+  // a step sent ahead is answered first: the helper reads its quit only after writing that answer
+  collect();
   if (fd_ >= 0 && failure_.empty()) {
     wire::Writer w;
     w.put(static_cast<uint8_t>(wire::MessageType::kQuit));
@@ -138,14 +140,23 @@ void Ns3Channel::fail(const std::string& why, bool hung) {
 }
 
 bool Ns3Channel::exchange(const std::vector<uint8_t>& request, std::vector<uint8_t>* reply) {
+  return send_request(request) && read_reply(reply);
+}
+
+bool Ns3Channel::send_request(const std::vector<uint8_t>& request) {
   if (!failure_.empty()) return false;
-  wire::IoResult r = wire::write_all(fd_, request);
+  const wire::IoResult r = wire::write_all(fd_, request);
   if (r != wire::IoResult::kOk) {
     fail(std::string("sending to it: ") + wire::io_result_name(r));
     return false;
   }
+  return true;
+}
+
+bool Ns3Channel::read_reply(std::vector<uint8_t>* reply) {
+  if (!failure_.empty()) return false;
   const int timeout_ms = static_cast<int>(std::lround(options_.reply_timeout_s * 1000.0));
-  r = wire::read_message(fd_, timeout_ms, reply);
+  const wire::IoResult r = wire::read_message(fd_, timeout_ms, reply);
   if (r != wire::IoResult::kOk) {
     const bool hung = r == wire::IoResult::kTimeout;
     fail(std::string("waiting for its answer: ") + wire::io_result_name(r) +

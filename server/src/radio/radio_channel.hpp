@@ -148,6 +148,11 @@ class RadioChannel {
     (void)velocities_enu_m_s;
   }
 
+  // The caller's promise that it steps on the grid of step_s (at each time one call with
+  // starting_now last, the next at the next step): a backend whose work runs outside this process
+  // (ns3) may then run it one step ahead, beside the caller's own work, with the same outcomes.
+  virtual void set_pipelined(bool on) { (void)on; }
+
   // Replaces the config; false (and *error naming the field) if this backend cannot use it.
   virtual bool set_config(const RadioConfig& config, std::string* error) = 0;
   virtual const RadioConfig& config() const = 0;

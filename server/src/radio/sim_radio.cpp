@@ -72,6 +72,9 @@ SimRadio& SimRadio::attach(sim::Simulation& sim, const RadioConfig& config,
 }
 
 void SimRadio::schedule(sim::StepSchedule& steps) {
+  // on the schedule the channel is stepped at every physics step, last in kPrePhysics (the API
+  // gate's call at a control step comes before it): the grid set_pipelined asks for
+  channel_->set_pipelined(true);
   steps.add(sim::Phase::kPrePhysics, "radio", [this] { advance(); });
   steps.add_reset("radio", [this](uint64_t seed) { reset(seed); });
 }
