@@ -113,6 +113,12 @@ cameras and logs:
                       width, height, fps, fovy, shadows, reflections, skybox, msaa; field conditions:
                       noise (pixel sd), brightness (gain sd), latency_ms (docs/protocol.md)
   --no-cameras        no offscreen renderer (the camera ops answer not_available)
+  --render-cameras CAM[:FORMAT][@FPS],...  render these cameras with no client and discard the frames
+                      (repeatable): FORMAT rgb (the default), grey, depth or segmentation; FPS frames
+                      per sim second, the camera's own rate (the default) divided by a whole number.
+                      No frame is dropped: at --rate 0 the clock waits for the renderer, as for a
+                      lockstep client. With --hover, the floor of a mission that subscribes to them
+                      (docs/results/performance.md); the summary says how many frames were rendered
   --gl B              how cameras get OpenGL: osmesa (the default: Mesa's off-screen software
                       renderer), egl (EGL without a display: a GPU where there is one, else Mesa's
                       llvmpipe through the surfaceless platform) or auto (egl if it creates a
@@ -542,6 +548,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
       if ((ok = value(&v))) o.camera_overrides.push_back(v);
     } else if (a == "--no-cameras") {
       o.cameras = false;
+    } else if (a == "--render-cameras") {
+      if ((ok = value(&v))) ok = parse_render_cameras(v, &o.render_cameras, &why);
     } else if (a == "--gl") {
       if ((ok = choice({"egl", "osmesa", "auto"}, &v))) o.gl_backend = v;
     } else if (a == "--render-threads") {
@@ -618,6 +626,8 @@ ParseResult parse_args(const std::vector<std::string>& args, const EnvLookup& en
     if (!o.mavlink_key)
       return fail(key_source + ": a MAVLink signing key is 64 hex digits (32 bytes)");
   }
+  if (!o.cameras && !o.render_cameras.empty())
+    return fail("--render-cameras needs the renderer, which --no-cameras turns off");
   if (o.world_path.empty() && !o.version && !o.list_worlds)
     return fail("no world given (a world file or a shipped world's name; see --help)");
   r.options = std::move(o);

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "app/render_cameras_option.hpp"
+
 namespace uavsim::server::app {
 
 // One --out option: vehicles' MAVLink streams over UDP, as ArduPilot SITL and mavlink-router do it.
@@ -87,6 +89,8 @@ struct Options {
   std::optional<std::string> realism;         // --realism field|ideal: over the world's uavsim:realism
   std::optional<WindOption> wind;             // --wind: over the realism level's and the world's wind
   bool cameras = true;                        // --no-cameras: no renderer (camera ops answer not_available)
+  // --render-cameras: rendered with no client (app/camera_floor.hpp)
+  std::vector<RenderCamera> render_cameras;
   std::string gl_backend = "osmesa";          // --gl egl|osmesa|auto (render::make_gl_context)
   int render_threads = 0;                     // --render-threads N: camera render threads; 0 = automatic
   std::optional<std::string> record_path;     // --record out.mp4

@@ -25,6 +25,7 @@
 #include "app/demo_flight.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "app/field_setup.hpp"
+#include "app/camera_floor.hpp"
 #include "app/camera_owners.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/hover_all.hpp"
@@ -381,11 +382,14 @@ int run_server(const Options& given_options) {
   // the launchers' counters and notes for the video's overlay (overlay_* ops)
   api::OverlayOps overlay_ops(s);
 
-  // cameras: the frame service (render thread) for the API's subscriptions and --record
+  // cameras: the frame service (render thread) for the API's subscriptions, --record and
+  // --render-cameras (whose consumer outlives the service that delivers to it)
+  std::unique_ptr<CameraFloor> camera_floor;
   std::unique_ptr<render::FrameService> frames;
   std::unique_ptr<render::VideoRecorder> recorder;
   size_t recorded = 0;  // the camera --record films
-  if (options.cameras && (options.api_port >= 0 || options.record_path)) {
+  if (options.cameras &&
+      (options.api_port >= 0 || options.record_path || !options.render_cameras.empty())) {
     std::vector<render::CameraSetup> cameras;
     // which cameras and geoms are a vehicle's
     const render::CameraOwners owners = camera_owners(s.world(), world_objects);
@@ -427,8 +431,9 @@ int run_server(const Options& given_options) {
                     << " thread(s) with " << frames->gl_summary() << "\n";
         }
       } catch (const std::exception& e) {
-        if (options.record_path) {
-          std::cerr << "uavsim-server: --record: " << e.what() << "\n";
+        if (options.record_path || !options.render_cameras.empty()) {
+          std::cerr << "uavsim-server: " << (options.record_path ? "--record" : "--render-cameras")
+                    << ": " << e.what() << "\n";
           return 1;
         }
         std::cerr << "uavsim-server: warning: no camera frames: " << e.what() << "\n";
@@ -485,6 +490,18 @@ int run_server(const Options& given_options) {
                   << " as " << options.record_camera << ", " << recorder->width_px() << "x" << recorder->height_px()
                   << (options.record_tiled ? " tiled" : "") << " (" << recorder->encoder() << ")\n";
       }
+    }
+    if (!options.render_cameras.empty()) {
+      // the names and rates are checked now that the cameras are known (none: frames is null)
+      try {
+        camera_floor = std::make_unique<CameraFloor>(
+            frames ? frames->cameras() : std::vector<render::FrameCamera>{},
+            options.render_cameras);
+      } catch (const std::exception& e) {
+        std::cerr << "uavsim-server: " << e.what() << "\n";
+        return 2;
+      }
+      frames->add_consumer(camera_floor.get());
     }
   }
 
@@ -691,6 +708,10 @@ int run_server(const Options& given_options) {
         received += st.frames_received;
       }
       extra = "MAVLink frames: " + std::to_string(sent) + " sent, " + std::to_string(received) + " received";
+    }
+    if (camera_floor) {
+      if (!extra.empty()) extra += "; ";
+      extra += camera_floor->summary();
     }
     if (api_server && api_server->shm_transport().activated_total() > 0) {
       if (!extra.empty()) extra += "; ";

@@ -97,6 +97,39 @@ TEST(Options, RecordTilesNameACameraAndOneOfItsImages) {
   expect_refused(many, {"--record-tile", "at most 6"});
 }
 
+// --render-cameras: names, formats and rates are shaped and range-checked here; whether the world
+// has the camera, and whether the rate divides the camera's, the server checks (server_cli_test)
+TEST(Options, RenderCamerasAreShapedAndRangeChecked) {
+  const ParseResult r = parse({"w.xml", "--render-cameras", "uav0_front@15,uav1_front:grey",
+                               "--render-cameras", "down:depth@7.5"});
+  ASSERT_TRUE(r.options.has_value()) << r.error;
+  const std::vector<RenderCamera>& c = r.options->render_cameras;
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].camera, "uav0_front");
+  EXPECT_EQ(c[0].format, "rgb");
+  EXPECT_EQ(c[0].fps_hz, 15.0);
+  EXPECT_EQ(c[1].camera, "uav1_front");
+  EXPECT_EQ(c[1].format, "grey");
+  EXPECT_FALSE(c[1].fps_hz.has_value());  // the camera's own rate
+  EXPECT_EQ(c[2].format, "depth");
+  EXPECT_EQ(c[2].fps_hz, 7.5);
+  EXPECT_TRUE(parse({"w.xml"}).options->render_cameras.empty());
+  for (const char* fps : {"0", "-1", "1000.5", "nan", "inf", "1e308", "", "15x"}) {
+    expect_refused({"w.xml", "--render-cameras", std::string("cam@") + fps},
+                   {"--render-cameras", "FPS needs frames per sim second from 0.001 to 1000"});
+  }
+  for (const char* bad : {"", "cam:jpeg", ":rgb", "@15", "cam,", ",cam", "a,,b"}) {
+    expect_refused({"w.xml", "--render-cameras", bad},
+                   {"--render-cameras needs CAMERA[:rgb|grey|depth|segmentation][@FPS]"});
+  }
+  expect_refused({"w.xml", "--render-cameras", "cam,cam:grey"}, {"camera 'cam' named twice"});
+  expect_refused({"w.xml", "--render-cameras", "cam", "--render-cameras", "cam@1"},
+                 {"camera 'cam' named twice"});
+  expect_refused({"w.xml", "--render-cameras", "cam", "--no-cameras"},
+                 {"--render-cameras needs the renderer"});
+  expect_refused({"w.xml", "--render-cameras"}, {"--render-cameras needs a value"});
+}
+
 TEST(Options, ValidFlagsSetTheirFields) {
   const ParseResult r = parse({"w.xml",
                                "--seed",

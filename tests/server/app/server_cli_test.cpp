@@ -59,6 +59,49 @@ TEST(ServerCli, HoverTakesEveryVehicleUpAndHoldsWithNoClient) {
   }
 }
 
+// --render-cameras: with no client the server renders the named cameras' frames at their rates, in
+// sim time and none dropped, so a run of fixed sim duration renders an exact number (frame k is
+// taken at the first control step at or after k / fps, and the last step taken is before the end);
+// what the world does not have is refused before the clock starts
+TEST(ServerCli, RenderCamerasRendersEveryFrameDueWithNoClient) {
+  const std::string base = "mbzirc2017" + kWorlds +
+                           " --hover 4 --rate 0 --duration 3 --api-port -1 --mavlink-port -1"
+                           " --out none";
+  // uav0_down gives 7 frames a sim second (the world's uavsim:camera:uav0_down): k / 7 < 3 for
+  // k = 0 .. 20; at 1 fps one in every 7 of those: k = 0, 7, 14
+  ServerRun r = run_server(base + " --render-cameras uav0_down:grey");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(
+      has(r, "; 21 camera frames rendered for --render-cameras (uav0_down 21 at 7 fps grey)"))
+      << r.output;
+  r = run_server(base + " --render-cameras uav0_down@1,overview:rgb");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // the world camera overview at its default 15 fps: k / 15 < 3 for k = 0 .. 44
+  EXPECT_TRUE(has(r,
+                  "; 48 camera frames rendered for --render-cameras (uav0_down 3 at 1 fps rgb, "
+                  "overview 45 at 15 fps rgb)"))
+      << r.output;
+  // what only the world can say: exit code 2 before the clock starts, with what there is
+  r = run_server(base + " --render-cameras uav0_front");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r, "--render-cameras uav0_front: no such camera (cameras: overview, uav0_down)"))
+      << r.output;
+  r = run_server(base + " --render-cameras uav0_down@2");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r, "the fps must be the camera's (7) divided by a whole number")) << r.output;
+  r = run_server(base + " --render-cameras uav0_down:segmentation");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r, "the camera gives no segmentation images")) << r.output;
+  r = run_server("empty" + kWorlds +
+                 " --duration 1 --rate 0 --api-port -1 --mavlink-port -1"
+                 " --out none --render-cameras top");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r, "--render-cameras top: no such camera")) << r.output;
+  r = run_server(base + " --render-cameras uav0_down@0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(has(r, "FPS needs frames per sim second from 0.001 to 1000")) << r.output;
+}
+
 TEST(ServerCli, VersionPrintsAndExitsZero) {
   const ServerRun r = run_server("--version");
   EXPECT_EQ(r.exit_code, 0);
