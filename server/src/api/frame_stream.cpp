@@ -9,10 +9,18 @@
 
 namespace uavsim::server::api {
 
+std::optional<int> frame_divisor(double camera_fps_hz, double fps_hz) {
+  if (!(fps_hz > 0) || !std::isfinite(fps_hz)) return std::nullopt;
+  // every frame, every second, ... up to one frame in kMaxFrameDivisor: a tiny fps (1e-300) once
+  // became a divisor past INT_MAX, and its cast to int was undefined
+  const double n = std::round(camera_fps_hz / fps_hz);
+  const std::optional<int> whole = sim::checked_integer<int>(n, 1, kMaxFrameDivisor);
+  if (!whole || std::abs(camera_fps_hz / n - fps_hz) > 1e-6 * fps_hz) return std::nullopt;
+  return whole;
+}
+
 namespace {
 constexpr int kDefaultJpegQuality = 90;
-// the most frames a subscription may skip between two it gets (fps = camera fps / every)
-constexpr int kMaxEvery = 1000000;
 // a frame is dropped for a connection that still has more than this many frames' bytes queued
 // unsent
 constexpr size_t kMaxQueuedFrames = 2;
@@ -285,16 +293,13 @@ void FrameStream::op_subscribe(uint64_t conn, const Json& request, OpReply* repl
   if (!parse_keys(request, info, &keys, reply)) return;
   int every = 1;
   if (auto f = request.find("fps"); f != request.end()) {
-    const double fps = f->is_number() ? f->get<double>() : -1.0;
-    const double n = fps > 0 ? std::round(info.fps_hz / fps) : 0.0;
-    // every frame, every second, ... up to one frame in kMaxEvery: a tiny fps (1e-300) once became
-    // a divisor past INT_MAX, and its cast to int was undefined
-    const std::optional<int> whole = sim::checked_integer<int>(n, 1, kMaxEvery);
-    if (!(fps > 0) || !std::isfinite(fps) || !whole ||
-        std::abs(info.fps_hz / n - fps) > 1e-6 * fps) {
-      return reply->fail(ApiError::kBadField,
-                         "\"fps\" must be camera '" + name + "''s fps (" + dump(Json(info.fps_hz)) +
-                             ") divided by a whole number up to " + std::to_string(kMaxEvery));
+    const std::optional<int> whole =
+        frame_divisor(info.fps_hz, f->is_number() ? f->get<double>() : -1.0);
+    if (!whole) {
+      return reply->fail(ApiError::kBadField, "\"fps\" must be camera '" + name + "''s fps (" +
+                                                  dump(Json(info.fps_hz)) +
+                                                  ") divided by a whole number up to " +
+                                                  std::to_string(kMaxFrameDivisor));
     }
     every = *whole;
   }

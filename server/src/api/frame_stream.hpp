@@ -10,10 +10,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "api/line_server.hpp"
 #include "api/op_table.hpp"
@@ -21,6 +21,14 @@
 #include "sim/simulation.hpp"
 
 namespace uavsim::server::api {
+
+// The most frames a subscription may skip between two it takes.
+inline constexpr int kMaxFrameDivisor = 1000000;
+// The n for which a subscriber takes every n-th frame of a camera rendering camera_fps_hz, so that
+// it gets fps_hz frames a second: camera_fps_hz / n == fps_hz (within one part in a million), n in
+// [1, kMaxFrameDivisor]; nullopt for any other fps (not finite, <= 0, between two such rates). The
+// camera_subscribe op's rule, and --render-cameras'.
+std::optional<int> frame_divisor(double camera_fps_hz, double fps_hz);
 
 class FrameStream : public OpGroup, public render::FrameConsumer {
  public:

@@ -4,13 +4,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sim/checked_number.hpp"
+#include "api/frame_stream.hpp"
 
 namespace uavsim::server::app {
 
 namespace {
-// as camera_subscribe: at most one frame in this many
-constexpr int kMaxEvery = 1000000;
 
 bool gives(const render::Modalities& m, render::Encoding e) {
   switch (e) {
@@ -50,12 +48,11 @@ CameraFloor::CameraFloor(const std::vector<render::FrameCamera>& cameras,
       throw std::invalid_argument(entry + ": the camera gives no " + w.format + " images");
     }
     e->fps_hz = w.fps_hz.value_or(info.fps_hz);
-    const double n = std::round(info.fps_hz / e->fps_hz);
-    const std::optional<int> every = sim::checked_integer<int>(n, 1, kMaxEvery);
-    if (!every || std::abs(info.fps_hz / n - e->fps_hz) > 1e-6 * e->fps_hz) {
+    const std::optional<int> every = api::frame_divisor(info.fps_hz, e->fps_hz);
+    if (!every) {
       std::ostringstream m;
       m << entry << "@" << e->fps_hz << ": the fps must be the camera's (" << info.fps_hz
-        << ") divided by a whole number up to " << kMaxEvery;
+        << ") divided by a whole number up to " << api::kMaxFrameDivisor;
       throw std::invalid_argument(m.str());
     }
     e->every = *every;
