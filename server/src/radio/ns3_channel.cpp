@@ -361,8 +361,9 @@ void Ns3Channel::step(double now_s, const std::vector<Eigen::Vector3d>& position
   }
   if (pipelined_ && starting_now && failure_.empty()) {
     // this time's last call: what it has goes now, and the helper runs on to the next step while
-    // the server computes it
-    const int64_t ahead_ns = now_ns + to_ns(step_s_);
+    // the server computes it. The next step's time as the caller's clock will say it: MuJoCo adds
+    // the step to its time, and a sum rounded to nanoseconds can be 1 ns off now_ns + step
+    const int64_t ahead_ns = to_ns(now_s + step_s_);
     if (slice_count_ > 0 || (busy_ && ahead_ns >= quiet_until_ns_)) send_step(ahead_ns, false);
   }
 

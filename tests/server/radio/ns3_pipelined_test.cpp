@@ -79,8 +79,8 @@ Trace run_script(const RadioConfig& config, bool pipelined, double end_s, double
   Trace trace;
   std::vector<Eigen::Vector3d> vel;
   const auto steps = static_cast<int64_t>(std::llround(end_s / kStep_s));
-  for (int64_t k = 0; k <= steps; ++k) {
-    const double t = static_cast<double>(k) * kStep_s;
+  double t = 0.0;
+  for (int64_t k = 0; k <= steps; ++k, t += kStep_s) {  // the sim's clock: MuJoCo adds each step
     const std::vector<Eigen::Vector3d> pos = positions_at(t, &vel);
     std::vector<Delivery> out;
     ch->set_velocities(vel);
