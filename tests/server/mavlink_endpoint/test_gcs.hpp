@@ -1,18 +1,18 @@
-// A minimal ground station for endpoint tests: a blocking-connect, non-blocking-read TCP client with our
-// codec, plus a fixture that owns a Simulation and a MavlinkServer on ephemeral ports. Synchronisation is
-// by observable state only: the sim is stepped on the test thread until the expected frame arrives (with a
-// sim-time bound); waiting on the I/O thread is bounded by a wall-clock timeout, never a fixed sleep.
+// A minimal ground station for endpoint tests: a blocking-connect, non-blocking-read TCP client
+// with our codec, plus a fixture that owns a Simulation and a MavlinkServer on ephemeral ports.
+// Synchronisation is by observable state only: the sim is stepped on the test thread until the
+// expected frame arrives (with a sim-time bound); waiting on the I/O thread is bounded by a
+// wall-clock timeout, never a fixed sleep.
 #pragma once
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <chrono>
 #include <functional>
@@ -20,12 +20,12 @@
 #include <optional>
 #include <vector>
 
+#include "mavlink/endpoint.hpp"
+#include "sim/sim_fixture.hpp"
 #include "uavsim/common/mavlink/codec.hpp"
+#include "uavsim/common/mavlink/generated/messages.hpp"
 #include "uavsim/common/mavlink/parser.hpp"
 #include "uavsim/common/mavlink/signing.hpp"
-#include "mavlink/endpoint.hpp"
-#include "uavsim/common/mavlink/generated/messages.hpp"
-#include "sim/sim_fixture.hpp"
 
 // the endpoint tests speak the common codec unqualified, as the endpoint does
 namespace uavsim::server::mavlink {
@@ -48,7 +48,8 @@ constexpr bool has_flag(std::uint64_t bits, Flag flag) {
 
 class TestGcs {
  public:
-  // receive_buffer_bytes > 0 shrinks the socket's receive buffer (a client that reads slowly fills up fast)
+  // receive_buffer_bytes > 0 shrinks the socket's receive buffer (a client that reads slowly fills
+  // up fast)
   explicit TestGcs(std::uint16_t port, Version version = Version::kV2, int receive_buffer_bytes = 0)
       : version_(version) {
     fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -104,10 +105,11 @@ class TestGcs {
   }
   std::uint64_t sent_frames() const { return sent_frames_; }
 
-  // signs what send() sends from now on (timestamps from start_10us, strictly increasing); nullopt: unsigned
+  // signs what send() sends from now on (timestamps from start_10us, strictly increasing); nullopt:
+  // unsigned
   void sign_with(std::optional<SigningParams> signing) { signing_ = signing; }
-  // checks what arrives against key from now on: frames that are unsigned or wrongly signed are dropped and
-  // counted in parser_stats()
+  // checks what arrives against key from now on: frames that are unsigned or wrongly signed are
+  // dropped and counted in parser_stats()
   void verify_with(const SecretKey& key) {
     ParserConfig c;
     c.signing_key = key;
@@ -206,7 +208,8 @@ class EndpointTest : public ::testing::Test {
   }
 
   // connects a client and waits until the endpoint has accepted it
-  std::unique_ptr<TestGcs> connect(std::size_t vehicle = 0, Version v = Version::kV2, int rcvbuf = 0) {
+  std::unique_ptr<TestGcs> connect(std::size_t vehicle = 0, Version v = Version::kV2,
+                                   int rcvbuf = 0) {
     const std::size_t before = server_->stats(vehicle).clients_accepted;
     auto g = std::make_unique<TestGcs>(server_->port(vehicle), v, rcvbuf);
     EXPECT_TRUE(g->connected());
@@ -215,10 +218,12 @@ class EndpointTest : public ::testing::Test {
     return g;
   }
 
-  // waits until the endpoint has parsed every frame the clients sent (so the next step handles them)
+  // waits until the endpoint has parsed every frame the clients sent (so the next step handles
+  // them)
   void sync(std::uint64_t frames_sent_total, std::size_t vehicle = 0) {
-    ASSERT_TRUE(wait_for([&] { return server_->stats(vehicle).frames_received >= frames_sent_total; }))
-        << "endpoint never received the frames";
+    ASSERT_TRUE(wait_for([&] {
+      return server_->stats(vehicle).frames_received >= frames_sent_total;
+    })) << "endpoint never received the frames";
   }
 
   // steps whole control periods until pred() holds over what g received; false after max_sim_s
@@ -238,9 +243,10 @@ class EndpointTest : public ::testing::Test {
     return false;
   }
 
-  // steps one control period (the loop thread handles what the endpoint has parsed) and then waits, wall clock
-  // bounded, until pred() holds over what g received: a request-reply exchange that does not depend on how
-  // fast the I/O thread runs, unlike step_until whose sim time can run ahead of a slow thread
+  // steps one control period (the loop thread handles what the endpoint has parsed) and then waits,
+  // wall clock bounded, until pred() holds over what g received: a request-reply exchange that does
+  // not depend on how fast the I/O thread runs, unlike step_until whose sim time can run ahead of a
+  // slow thread
   bool step_and_await(TestGcs& g, const std::function<bool()>& pred) {
     for (int k = 0; k < sim_->control_decimation(); ++k) sim_->step();
     return wait_for([&] {
@@ -249,12 +255,14 @@ class EndpointTest : public ::testing::Test {
     });
   }
 
-  // uploads a mission of count items with the MISSION_COUNT / MISSION_REQUEST(_INT) / MISSION_ITEM_INT
-  // handshake, one exchange at a time, answering each request with item_for(seq); returns the MISSION_ACK
-  // type, or -1 when a reply never came
-  int upload_mission(TestGcs& g, int count, const std::function<msg::MissionItemInt(int)>& item_for) {
+  // uploads a mission of count items with the MISSION_COUNT / MISSION_REQUEST(_INT) /
+  // MISSION_ITEM_INT handshake, one exchange at a time, answering each request with item_for(seq);
+  // returns the MISSION_ACK type, or -1 when a reply never came
+  int upload_mission(TestGcs& g, int count,
+                     const std::function<msg::MissionItemInt(int)>& item_for) {
     const std::size_t acks = g.count<msg::MissionAck>();
-    // requests come as MISSION_REQUEST until the client has sent an INT item, then as MISSION_REQUEST_INT
+    // requests come as MISSION_REQUEST until the client has sent an INT item, then as
+    // MISSION_REQUEST_INT
     std::size_t reqs = g.count<msg::MissionRequest>(), reqs_int = g.count<msg::MissionRequestInt>();
     msg::MissionCount mc;
     mc.target_system = 1;
@@ -285,13 +293,19 @@ class EndpointTest : public ::testing::Test {
     return -1;  // more requests than items: the handshake went wrong
   }
 
-  // steps until SYS_STATUS reports GPS and pre-arm healthy (GUIDED can be entered then), at most 30 s
+  // steps until SYS_STATUS reports GPS and pre-arm healthy (GUIDED can be entered then), at most 30
+  // s
   void wait_gps_ready(TestGcs& g) {
     constexpr std::uint32_t kPrearm = 0x10000000, kGps = 32;
-    ASSERT_TRUE(step_until(g, [&] {
-      const auto s = g.last<msg::SysStatus>();
-      return s && (s->onboard_control_sensors_health & kPrearm) && (s->onboard_control_sensors_health & kGps);
-    }, 30.0)) << "GPS / pre-arm never healthy";
+    ASSERT_TRUE(step_until(
+        g,
+        [&] {
+          const auto s = g.last<msg::SysStatus>();
+          return s && (s->onboard_control_sensors_health & kPrearm) &&
+                 (s->onboard_control_sensors_health & kGps);
+        },
+        30.0))
+        << "GPS / pre-arm never healthy";
   }
 
   void step_for(double sim_s) {
@@ -305,7 +319,8 @@ class EndpointTest : public ::testing::Test {
   }
   // sends a COMMAND_LONG and returns its COMMAND_ACK result (-1: no ack within 2 s of sim time); a
   // raw number is for commands MAVLink does not name
-  int command(TestGcs& g, std::uint16_t cmd, std::array<float, 7> p = {}, std::uint8_t target_system = 1) {
+  int command(TestGcs& g, std::uint16_t cmd, std::array<float, 7> p = {},
+              std::uint8_t target_system = 1) {
     msg::CommandLong c;
     c.command = cmd;
     c.target_system = target_system;
@@ -315,13 +330,16 @@ class EndpointTest : public ::testing::Test {
     const std::size_t acks_before = g.count<msg::CommandAck>();
     g.send(c);
     sync_client(g);
-    if (!step_until(g, [&] { return g.count<msg::CommandAck>() > acks_before; }, 2.0)) return -1;
+    if (!step_until(
+            g, [&] { return g.count<msg::CommandAck>() > acks_before; }, 2.0))
+      return -1;
     const auto ack = g.last<msg::CommandAck>();
     EXPECT_EQ(ack->command, cmd);
     return ack->result;
   }
 
-  // waits until every frame the vehicle-0 clients sent (with send()) has been parsed by the endpoint
+  // waits until every frame the vehicle-0 clients sent (with send()) has been parsed by the
+  // endpoint
   void sync_client(TestGcs& g) {
     (void)g;
     std::uint64_t total = 0;
@@ -331,9 +349,10 @@ class EndpointTest : public ::testing::Test {
 
   std::unique_ptr<sim::Simulation> sim_;
   std::unique_ptr<MavlinkServer> server_;
-  std::vector<TestGcs*> clients_;  // vehicle-0 clients made by connect(); keep them alive in the test
-  // frames sent to vehicle 0 by clients not made with connect(): frames_received counts them too, so
-  // sync_client() would otherwise return before the listed clients' last frame was parsed
+  std::vector<TestGcs*>
+      clients_;  // vehicle-0 clients made by connect(); keep them alive in the test
+  // frames sent to vehicle 0 by clients not made with connect(): frames_received counts them too,
+  // so sync_client() would otherwise return before the listed clients' last frame was parsed
   std::uint64_t frames_from_unlisted_clients_ = 0;
 };
 
