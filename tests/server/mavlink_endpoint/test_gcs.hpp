@@ -183,6 +183,9 @@ class TestGcs {
 
 class EndpointTest : public ::testing::Test {
  protected:
+  // wall-clock bound for the I/O thread to write what the control steps queued (a loaded machine)
+  static constexpr double kFlushTimeoutS = 10.0;
+
   void start(const std::string& world = "empty.xml") {
     sim_ = sim::testing::make_sim(world);
     EndpointConfig c;
@@ -226,15 +229,26 @@ class EndpointTest : public ::testing::Test {
     })) << "endpoint never received the frames";
   }
 
-  // steps whole control periods until pred() holds over what g received; false after max_sim_s
+  // steps whole control periods until pred() holds over what g received; false after max_sim_s.
+  // pred() sees every frame of the periods stepped so far: after a period that queued frames, the
+  // I/O thread is waited for (wall clock, bounded) until it has written them. Otherwise the sim,
+  // stepped far faster than real time, runs ahead of a slow I/O thread (a loaded machine), and
+  // pred() judges old telemetry: a reply counted by a streamed copy of its message from seconds of
+  // sim time before.
   bool step_until(TestGcs& g, const std::function<bool()>& pred, double max_sim_s) {
     const double end = sim_->time_s() + max_sim_s;
+    std::uint64_t queued = frames_queued();
     while (sim_->time_s() < end) {
       for (int k = 0; k < sim_->control_decimation(); ++k) sim_->step();
+      if (const std::uint64_t now = frames_queued(); now != queued) {
+        queued = now;
+        EXPECT_TRUE(server_->flush_queued(kFlushTimeoutS))
+            << "the I/O thread never wrote the frames";
+      }
       g.poll_once(0);
       if (pred()) return true;
     }
-    // replies produced before the bound may still be on their way through the I/O thread
+    // the last frames written may still be on their way into g's socket
     const auto wall_end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
     while (std::chrono::steady_clock::now() < wall_end) {
       g.poll_once(10);
@@ -243,10 +257,17 @@ class EndpointTest : public ::testing::Test {
     return false;
   }
 
+  // frames queued so far to the clients of every vehicle (telemetry and replies)
+  std::uint64_t frames_queued() const {
+    std::uint64_t n = 0;
+    for (std::size_t v = 0; v < server_->vehicle_count(); ++v) n += server_->stats(v).frames_sent;
+    return n;
+  }
+
   // steps one control period (the loop thread handles what the endpoint has parsed) and then waits,
   // wall clock bounded, until pred() holds over what g received: a request-reply exchange that does
-  // not depend on how fast the I/O thread runs, unlike step_until whose sim time can run ahead of a
-  // slow thread
+  // not depend on how fast the I/O thread runs and, unlike step_until, steps no further while it
+  // waits
   bool step_and_await(TestGcs& g, const std::function<bool()>& pred) {
     for (int k = 0; k < sim_->control_decimation(); ++k) sim_->step();
     return wait_for([&] {
