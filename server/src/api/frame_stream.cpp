@@ -172,11 +172,7 @@ bool FrameStream::parse_keys(const Json& request, const render::FrameCamera& inf
   // what the camera gives (its modalities); JPEG is of its colour image
   const render::Modalities& has = info.modalities;
   for (const render::EncodingKey& k : *keys) {
-    const bool given = k.encoding == render::Encoding::kGrey           ? has.grey
-                       : k.encoding == render::Encoding::kDepth        ? has.depth
-                       : k.encoding == render::Encoding::kSegmentation ? has.segmentation
-                                                                       : has.rgb;
-    if (!given) {
+    if (!render::gives(has, k.encoding)) {
       return fail(ApiError::kBadField, "camera '" + info.name + "' gives no " +
                                            render::encoding_name(k.encoding) + " (it gives " +
                                            modality_list(has).dump() +

@@ -8,24 +8,6 @@
 
 namespace uavsim::server::app {
 
-namespace {
-
-bool gives(const render::Modalities& m, render::Encoding e) {
-  switch (e) {
-    case render::Encoding::kRgb:
-      return m.rgb;
-    case render::Encoding::kGrey:
-      return m.grey;
-    case render::Encoding::kDepth:
-      return m.depth;
-    case render::Encoding::kSegmentation:
-      return m.segmentation;
-    default:
-      return false;
-  }
-}
-}  // namespace
-
 CameraFloor::CameraFloor(const std::vector<render::FrameCamera>& cameras,
                          const std::vector<RenderCamera>& wanted)
     : by_camera_(cameras.size(), nullptr) {
@@ -44,7 +26,7 @@ CameraFloor::CameraFloor(const std::vector<render::FrameCamera>& cameras,
     e->camera = static_cast<int>(c);
     e->name = w.camera;
     e->key.encoding = render::encoding_from_name(w.format).value();  // checked by the options
-    if (!gives(info.modalities, e->key.encoding)) {
+    if (!render::gives(info.modalities, e->key.encoding)) {
       throw std::invalid_argument(entry + ": the camera gives no " + w.format + " images");
     }
     e->fps_hz = w.fps_hz.value_or(info.fps_hz);

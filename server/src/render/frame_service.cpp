@@ -128,6 +128,21 @@ const char* encoding_name(Encoding e) {
 
 bool is_colour(Encoding e) { return e == Encoding::kRgb || e == Encoding::kGrey || e == Encoding::kJpeg; }
 
+bool gives(const Modalities& m, Encoding e) {
+  switch (e) {
+    case Encoding::kGrey:
+      return m.grey;
+    case Encoding::kDepth:
+      return m.depth;
+    case Encoding::kSegmentation:
+      return m.segmentation;
+    case Encoding::kRgb:
+    case Encoding::kJpeg:
+      return m.rgb;
+  }
+  return false;
+}
+
 int bytes_per_pixel(Encoding e) {
   switch (e) {
     case Encoding::kRgb: return 3;

@@ -50,6 +50,8 @@ const char* encoding_name(Encoding e);  // "rgb", "grey", "jpeg", "depth", "segm
 std::optional<Encoding> encoding_from_name(const std::string& name);
 // Whether an encoding is of the colour image (rgb, grey, jpeg), not of the depth and segmentation pass.
 bool is_colour(Encoding e);
+// Whether a camera with modalities m gives images of encoding e (JPEG is of its colour image).
+bool gives(const Modalities& m, Encoding e);
 // Bytes per pixel of an encoding's image (0 for JPEG, whose size varies).
 int bytes_per_pixel(Encoding e);
 
