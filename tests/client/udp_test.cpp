@@ -2,12 +2,12 @@
 // (server udpin:, client udp:) and the vehicle sends to a listening ground station (server udp:, client
 // udpin:). Under lockstep, each flight takes off, flies to a point and is checked against ground truth.
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
-
+#include "../support/loopback_udp.hpp"
 #include "sim_harness.hpp"
 #include "uavsim/client/event_loop.hpp"
 #include "uavsim/client/vehicle.hpp"
@@ -19,15 +19,9 @@ constexpr double kPositionTolM = 0.6;
 
 // a UDP port free now (the kernel's pick for a socket bound to port 0, released again)
 int free_udp_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-  socklen_t len = sizeof(a);
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
+  std::uint16_t port = 0;
+  ::close(uavsim::testing::bind_loopback_udp(&port));
+  return port;
 }
 
 // take off to 6 m, fly 8 m east, and land-free check against the truth; over the given link address

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "../../support/loopback_udp.hpp"
 #include "mavlink/tlog.hpp"
 #include "mavlink_endpoint/test_gcs.hpp"
 
@@ -18,16 +19,7 @@ namespace {
 // a ground station on a UDP socket bound to an ephemeral loopback port
 class UdpGcs {
  public:
-  UdpGcs() {
-    fd_ = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-    socklen_t len = sizeof(a);
-    getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-  }
+  UdpGcs() { fd_ = uavsim::testing::bind_loopback_udp(&port_, SOCK_NONBLOCK); }
   ~UdpGcs() { close(fd_); }
   int port() const { return port_; }
   // reads every waiting datagram; remembers the sender (the vehicle's port) and the frames
@@ -63,7 +55,7 @@ class UdpGcs {
 
  private:
   int fd_ = -1;
-  int port_ = 0;
+  std::uint16_t port_ = 0;
   int vehicle_port_ = 0;
   std::uint8_t seq_ = 0;
   std::size_t datagrams_ = 0;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../../support/loopback_udp.hpp"
 #include "physics/object_bodies.hpp"
 #include "radio/gcs_relay.hpp"
 #include "sim/simulation.hpp"
@@ -31,17 +32,7 @@ constexpr double kMinLatency_s = kControl_s;
 constexpr double kMaxLatency_s = 2 * kControl_s + 0.0023 + 0.001;
 constexpr double kStepTol_s = 1e-12;
 
-int udp_socket(uint16_t* port) {
-  const int fd = socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-  socklen_t len = sizeof(a);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  *port = ntohs(a.sin_port);
-  return fd;
-}
+int udp_socket(uint16_t* port) { return uavsim::testing::bind_loopback_udp(port, SOCK_NONBLOCK); }
 
 void send_to(int fd, uint16_t port, const std::vector<uint8_t>& bytes) {
   sockaddr_in a{};
