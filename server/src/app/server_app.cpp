@@ -203,6 +203,18 @@ std::vector<std::string> option_warnings(const Options& options) {
 
 void stop_server() { g_stop_requested = true; }
 
+namespace {
+
+// Whether anything can ask for a camera frame in this run: a sim API client (cameras are on unless
+// --no-cameras), --record or --render-cameras. If not, no renderer is made and the world's vehicles
+// need no visual-only geoms.
+bool may_render(const Options& options) {
+  return options.cameras &&
+         (options.api_port >= 0 || options.record_path || !options.render_cameras.empty());
+}
+
+}  // namespace
+
 void stop_server(int signal) {
   g_stop_signal = signal;
   g_stop_requested = true;
@@ -250,6 +262,9 @@ int run_server(const Options& given_options) {
     config.physics_hz = options.physics_hz;
     config.control_hz = options.control_hz;
     config.seed = options.seed;
+    // a world nothing can render (no camera client, no recording) carries only the geoms that
+    // collide
+    compose.vehicle_visual_geoms = may_render(options);
     std::unique_ptr<physics::World> world = physics::World::load(
         options.world_path, compose, physics::ShardOptions{options.physics_shards, options.physics_threads});
     // parameters: the world's uavsim:params texts, then --defaults files
@@ -388,8 +403,7 @@ int run_server(const Options& given_options) {
   std::unique_ptr<render::FrameService> frames;
   std::unique_ptr<render::VideoRecorder> recorder;
   size_t recorded = 0;  // the camera --record films
-  if (options.cameras &&
-      (options.api_port >= 0 || options.record_path || !options.render_cameras.empty())) {
+  if (may_render(options)) {
     std::vector<render::CameraSetup> cameras;
     // which cameras and geoms are a vehicle's
     const render::CameraOwners owners = camera_owners(s.world(), world_objects);

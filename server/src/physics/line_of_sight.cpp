@@ -54,7 +54,9 @@ double LineOfSight::blocked_loss_db(const Eigen::Vector3d& a_enu_m, const Eigen:
     const int root = m->body_rootid[m->geom_bodyid[geom]];
     // the receiver's own geoms end the path; the sender's other parts (rotors) do not block
     if (root == root_b && root_b >= 0) break;
-    if (root != root_a || root_a < 0) {
+    // a vehicle blocks with the parts it collides with (hull, gear), not with the ones only drawn
+    // (arms, rotors): the same answer whether or not its world carries them (world_composer.hpp)
+    if ((root != root_a || root_a < 0) && !world_.vehicle_visual_only(geom)) {
       const int g = m->geom_group[geom];
       if (g >= 0 && g < static_cast<int>(kGeomGroupCount)) loss = std::max(loss, loss_db[g]);
     }

@@ -1,7 +1,10 @@
 // Line of sight through the MuJoCo world, for the radio (radio/sim_radio.hpp): which geoms the
 // straight path between two vehicles' antennas crosses (MuJoCo's mj_ray against the static scene
 // and every other body: buildings, poles, trucks, other vehicles), as the extra loss of the path.
-// The antenna is the vehicle body's origin; the two vehicles' own geoms never block their path.
+// The antenna is the vehicle body's origin; the two vehicles' own geoms never block their path, and
+// another vehicle blocks it only with the geoms it collides with (its hull and landing gear, not
+// the arms and rotors that are only drawn), so the answer does not depend on whether the world was
+// loaded with its vehicles' visual-only geoms (ComposeOptions::vehicle_visual_geoms).
 #pragma once
 
 #include <Eigen/Core>

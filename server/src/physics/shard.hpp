@@ -46,6 +46,7 @@ class Shard {
   void reset();
   std::string body_name(int body_id) const;
   std::string geom_name(int geom_id) const;
+  bool vehicle_visual_only(int geom_id) const;
   int body_id(const std::string& name) const;
 
  private:

@@ -61,6 +61,8 @@ void World::sync_parked(size_t k) {
 World::~World() = default;
 
 const mjModel* World::model() const { return shards_[0]->model(); }
+
+bool World::vehicle_visual_only(int geom) const { return shards_[0]->vehicle_visual_only(geom); }
 mjModel* World::mutable_model() { return shards_[0]->model(); }
 mjData* World::data() { return shards_[0]->data(); }
 const mjData* World::data() const { return shards_[0]->data(); }

@@ -83,6 +83,9 @@ class World {
   mjModel_* mutable_model();
   mjData_* data();
   const mjData_* data() const;
+  // Whether geom (of shard 0's model) belongs to a vehicle and touches nothing (contype =
+  // conaffinity = 0 as loaded, whether or not its vehicle is parked): a part that is only drawn.
+  bool vehicle_visual_only(int geom) const;
   int shard_count() const { return static_cast<int>(shards_.size()); }
   int thread_count() const;
   // Runs fn(first, end) for each shard's block of vehicles [first, end) in the world's indices, each block

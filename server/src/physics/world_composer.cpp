@@ -386,6 +386,7 @@ class Composer {
     if (shards == 1) {
       finish(*world_, static_cast<long>(names_.size()));
       convert_meshes(root, world_path_, options_);
+      if (!options_.vehicle_visual_geoms) strip_visual_geoms(root);
       return {print(*world_)};
     }
     if (!why_not.empty()) {
@@ -764,10 +765,11 @@ class Composer {
     return "";
   }
 
-  // A sharded world renders nothing (the server refuses cameras on it), so its shard models need only the
-  // geoms that collide: the vehicles' visual-only geoms (contype = conaffinity = 0; 17 of a lean quad's
-  // 20) go, which MuJoCo would otherwise place every step. Only in bodies whose mass is given by an
-  // <inertial> (and unless the compiler takes inertia from geoms), so that no body's dynamics change.
+  // A world that nothing renders (a sharded one: the server refuses cameras on it; or
+  // ComposeOptions::vehicle_visual_geoms off) needs only the geoms that collide: the vehicles'
+  // visual-only geoms (contype = conaffinity = 0; 17 of a lean quad's 20) go, which MuJoCo would
+  // otherwise place every step. Only in bodies whose mass is given by an <inertial> (and unless the
+  // compiler takes inertia from geoms), so that no body's dynamics change.
   void strip_visual_geoms(XMLElement* root) const {
     if (compiler_attr(root, "inertiafromgeom", "auto") == "true") return;
     std::map<std::string, std::pair<int, int>> bits;  // default class -> (contype, conaffinity)

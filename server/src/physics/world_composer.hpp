@@ -37,6 +37,12 @@ struct ComposeOptions {
   // OBJ files named by the SHA-256 of the source's content (so a second load reuses them). Empty: per
   // user, $XDG_CACHE_HOME/uavsim/meshes, else ~/.cache/uavsim/meshes.
   std::string mesh_cache_dir;
+  // false for a world nothing will render (no camera, no recording): the vehicles' visual-only
+  // geoms (contype = conaffinity = 0, in bodies whose mass an <inertial> gives) are left out, as in
+  // every physics shard. MuJoCo would place each of them at every step for nothing (a lean quad has
+  // 20 geoms, 3 of which collide); no body's mass, inertia or contacts change. (A vehicle's
+  // visual-only geoms never block radio either way: physics/line_of_sight.hpp.)
+  bool vehicle_visual_geoms = true;
 };
 
 // Reads world_path, expands includes, vehicles and objects, and returns standalone MJCF text.
