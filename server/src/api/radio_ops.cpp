@@ -402,7 +402,8 @@ void RadioOps::on_gate(const Send& send, const InLockstep& in_lockstep) {
   // every lockstep client has sent its own (deterministic draws)
   radio_.advance(false);
   std::vector<radio::Delivery> arrived = radio_.take_deliveries();
-  if (!arrived.empty() && !subscriptions_.empty()) queue_deliveries(arrived, send, in_lockstep);
+  if (!arrived.empty() && !subscriptions_.empty())
+    queue_deliveries(std::move(arrived), send, in_lockstep);
   // what is held for a connection that has left lockstep (or never joined) goes now
   for (auto it = held_binary_.begin(); it != held_binary_.end();) {
     const uint64_t conn = (it++)->first;
@@ -448,7 +449,7 @@ void RadioOps::send_held(uint64_t conn, const Send& send) {
        Json{{"event", "radio_batch"}, {"time", sim_.time_s()}, {"frames", std::move(frames)}});
 }
 
-void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,
+void RadioOps::queue_deliveries(std::vector<radio::Delivery>&& arrived, const Send& send,
                                 const InLockstep& in_lockstep) {
   // a broadcast is one delivery per receiver with the same bytes: encoded once per frame
   std::map<std::pair<size_t, uint64_t>, std::string> encoded;  // (from, seq) -> base64
@@ -457,33 +458,63 @@ void RadioOps::queue_deliveries(const std::vector<radio::Delivery>& arrived, con
     if (fresh) it->second = common::base64_encode(d.data);
     return it->second;
   };
-  for (const radio::Delivery& d : arrived) {
+  // how each subscriber takes its frames, decided once a call (hundreds of frames a tick for a
+  // flock), and the subscribers of each receiving vehicle in connection order
+  enum class Mode { kBinary, kBatch, kEvent };
+  struct Target {
+    uint64_t conn;
+    Mode mode;
+  };
+  std::map<size_t, std::vector<Target>> targets;
+  for (const radio::Delivery& d : arrived) targets.try_emplace(d.to);
+  for (const auto& [conn, sub] : subscriptions_) {
+    const Mode mode = !sub.batch ? Mode::kEvent
+                      : (shm_ != nullptr && in_lockstep(conn) && shm_->attached(conn))
+                          ? Mode::kBinary
+                          : Mode::kBatch;
+    for (auto& [vehicle, list] : targets) {
+      if (sub.vehicles.count(vehicle) != 0) list.push_back({conn, mode});
+    }
+  }
+  for (radio::Delivery& d : arrived) {
+    const std::vector<Target>& list = targets[d.to];
     Json event;  // built once, for the first subscriber that hears it
     Json compact;
-    for (const auto& [conn, sub] : subscriptions_) {
-      if (sub.vehicles.count(d.to) == 0) continue;
-      if (sub.batch && shm_ != nullptr && in_lockstep(conn) && shm_->attached(conn)) {
-        held_binary_[conn].push_back(d);  // no base64: the tick record carries the bytes
-        continue;
+    for (size_t k = 0; k < list.size(); ++k) {
+      const uint64_t conn = list[k].conn;
+      switch (list[k].mode) {
+        case Mode::kBinary: {
+          // no base64: the tick record carries the bytes (the last subscriber takes them)
+          std::vector<radio::Delivery>& held = held_binary_[conn];
+          if (k + 1 == list.size()) {
+            held.push_back(std::move(d));
+          } else {
+            held.push_back(d);
+          }
+          break;
+        }
+        case Mode::kBatch: {
+          if (compact.is_null()) compact = compact_frame(d, data_b64(d));
+          Json& batch = held_[conn];
+          if (batch.is_null()) batch = Json::array();
+          batch.push_back(compact);
+          break;
+        }
+        case Mode::kEvent: {
+          if (event.is_null()) {
+            event = {{"event", "radio"},
+                     {"to", d.to},
+                     {"from", d.from},
+                     {"time", d.time_s},
+                     {"seq", d.seq},
+                     {"broadcast", d.broadcast},
+                     {"sent_time", d.queued_s},
+                     {"data_b64", data_b64(d)}};
+          }
+          send(conn, event);
+          break;
+        }
       }
-      if (sub.batch) {
-        if (compact.is_null()) compact = compact_frame(d, data_b64(d));
-        Json& batch = held_[conn];
-        if (batch.is_null()) batch = Json::array();
-        batch.push_back(compact);
-        continue;
-      }
-      if (event.is_null()) {
-        event = {{"event", "radio"},
-                 {"to", d.to},
-                 {"from", d.from},
-                 {"time", d.time_s},
-                 {"seq", d.seq},
-                 {"broadcast", d.broadcast},
-                 {"sent_time", d.queued_s},
-                 {"data_b64", data_b64(d)}};
-      }
-      send(conn, event);
     }
   }
 }

@@ -92,8 +92,9 @@ class RadioOps : public OpGroup {
   std::map<uint64_t, std::vector<radio::Delivery>> held_binary_;
   ShmTransport* shm_ = nullptr;
   void send_held(uint64_t conn, const Send& send);
-  // adds the deliveries to held_ or held_binary_ (batch subscribers) or sends a radio event each
-  void queue_deliveries(const std::vector<radio::Delivery>& arrived, const Send& send,
+  // adds the deliveries to held_ or held_binary_ (batch subscribers) or sends a radio event each;
+  // takes the frames' bytes
+  void queue_deliveries(std::vector<radio::Delivery>&& arrived, const Send& send,
                         const InLockstep& in_lockstep);
 };
 
