@@ -6,6 +6,7 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include <string>
+#include <vector>
 
 #include "loop_services.hpp"
 #include "net.hpp"
@@ -84,6 +86,37 @@ class RawShmClient {
     return false;
   }
   common::shm::RingHeader* header() { return static_cast<common::shm::RingHeader*>(region_); }
+  // Sleeps as a lockstep client does, until its next wake-up (10 s at most); then, as woken, the
+  // wake-up bytes that were in the FIFO (*wakes) and every record there, a tick as "tick N", a
+  // stream message as its JSON. Empty when nothing woke it.
+  std::vector<Json> sleep_until_woken(int* wakes) {
+    *wakes = 0;
+    std::vector<Json> out;
+    pollfd p{stream_->wake_fd(), POLLIN, 0};
+    if (poll(&p, 1, 10000) <= 0) return out;
+    char buf[64];
+    for (ssize_t n; (n = read(stream_->wake_fd(), buf, sizeof(buf))) > 0;)
+      *wakes += static_cast<int>(n);
+    stream_->drain_wakeups();  // nothing left to drain: arms it for the next sleep
+    common::shm::RingReader::Record rec;
+    std::string why;
+    while (stream_->next(&rec, &why) == common::shm::RingReader::Status::kRecord) {
+      if (rec.type == common::shm::RecordType::kTick) {
+        const auto tick = common::shm::decode_tick(rec.payload, &why);
+        out.push_back(tick ? Json{{"event", "tick"}, {"tick", tick->tick}} : Json(why));
+      } else {
+        out.push_back(
+            Json::parse(std::string(rec.payload.begin(), rec.payload.end()), nullptr, false));
+      }
+    }
+    return out;
+  }
+  // several requests in one write (one burst, as a lockstep client sends its tick's work)
+  void send_burst(const std::vector<Json>& requests) {
+    std::string lines;
+    for (const Json& r : requests) lines += r.dump() + "\n";
+    EXPECT_TRUE(net::send_all(fd_, lines, 10.0));
+  }
 
  private:
   int fd_ = -1;
@@ -203,6 +236,130 @@ TEST(SharedMemoryStream, AClientKilledHoldingItsTickIsDroppedAndTheClockGoesOn) 
   EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 0);
   close(to_child[1]);
   close(from_child[0]);
+}
+
+// A raw lockstep client on its ring (period 20 ms) at sim time 0: one wake-up brings its join's
+// reply and its first tick (a paused server announces the tick it is held at), whose number is
+// *tick.
+void join_on_ring(RawShmClient& c, int64_t* tick) {
+  const Json offer = c.tcp_request({{"op", "lockstep_shm"}});
+  ASSERT_EQ(offer["ok"], true) << offer;
+  ASSERT_TRUE(c.take_stream(offer["result"]));
+  c.send({{"op", "lockstep_join"}, {"period_s", 0.02}, {"id", "join"}});
+  int wakes = 0;
+  const std::vector<Json> joined = c.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(joined.size(), 2u) << Json(joined);
+  ASSERT_EQ(joined[0]["id"], "join") << joined[0];
+  ASSERT_EQ(joined[0]["ok"], true) << joined[0];
+  ASSERT_EQ(joined[1]["event"], "tick") << joined[1];
+  *tick = joined[1]["tick"];
+}
+
+Json done(int64_t tick, const std::string& id, bool quiet = true) {
+  return {{"op", "done"}, {"tick", tick}, {"id", id}, {"quiet", quiet}};
+}
+
+// A lockstep client that sends its tick's requests and its quiet done in one burst is woken once
+// per tick, by the tick, which finds the burst's replies before it in the ring, in order.
+TEST(SharedMemoryStream, AQuietDoneWakesTheClientOncePerTickWithItsRepliesBeforeTheTick) {
+  SimServer server;
+  RawShmClient a(server.api_port());
+  int64_t tick = 0;
+  ASSERT_NO_FATAL_FAILURE(join_on_ring(a, &tick));
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  int wakes = 0;
+  std::vector<Json> got;
+  for (int round = 0; round < 5; ++round) {
+    a.send_burst({{{"op", "status"}, {"id", 1}},
+                  {{"op", "status"}, {"id", 2}},
+                  {{"op", "status"}, {"id", 3}},
+                  done(tick, "done")});
+    got = a.sleep_until_woken(&wakes);
+    EXPECT_EQ(wakes, 1) << round;
+    ASSERT_EQ(got.size(), 5u) << Json(got);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(got[k]["id"], k + 1) << Json(got);
+      EXPECT_EQ(got[k]["ok"], true) << Json(got);
+    }
+    EXPECT_EQ(got[3]["id"], "done") << Json(got);
+    EXPECT_EQ(got[3]["ok"], true) << Json(got);
+    ASSERT_EQ(got[4]["event"], "tick") << Json(got);
+    EXPECT_EQ(got[4]["tick"], tick + 1);
+    tick = got[4]["tick"];
+  }
+}
+
+// What may leave a quiet client waiting for something other than its tick wakes it: a request
+// after its done (its reply may be awaited), a done that is refused, a done that is not quiet
+// (SimConnection's, which waits for the reply), the clock idling paused. Client b, on TCP, holds
+// the clock at each tick, so no tick can be what wakes a.
+TEST(SharedMemoryStream, ARequestAfterTheDoneARefusedDoneAndAPauseWakeAQuietClient) {
+  SimServer server;
+  RawShmClient a(server.api_port());
+  int64_t tick = 0;
+  ASSERT_NO_FATAL_FAILURE(join_on_ring(a, &tick));
+  ApiClient b(server.api_port());
+  ASSERT_EQ(b.request({{"op", "lockstep_join"}, {"period_s", 0.02}}).value("ok", false), true);
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  int wakes = 0;
+  std::vector<Json> got;
+
+  // a request after the done: answered and woken for, with the done's reply before it
+  a.send_burst({done(tick, "done")});
+  a.send({{"op", "status"}, {"id", "after"}});
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 2u) << Json(got);
+  EXPECT_EQ(got[0]["id"], "done");
+  EXPECT_EQ(got[0]["ok"], true) << got[0];
+  EXPECT_EQ(got[1]["id"], "after");
+  // a done refused (the tick has its done): its error wakes
+  a.send_burst({done(tick, "again")});
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  EXPECT_EQ(got[0]["id"], "again");
+  EXPECT_EQ(got[0]["error"]["code"], "bad_state") << got[0];
+
+  // b's done: the next tick, for both
+  ASSERT_EQ(b.request({{"op", "done"}}).value("ok", false), true);
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  ASSERT_EQ(got[0]["event"], "tick");
+  EXPECT_EQ(got[0]["tick"], tick + 1);
+  // a done that does not ask for quiet is woken for at once, as before
+  a.send_burst({done(tick + 1, "loud", false)});
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  EXPECT_EQ(got[0]["id"], "loud");
+  EXPECT_EQ(got[0]["ok"], true) << got[0];
+  ASSERT_EQ(b.request({{"op", "done"}}).value("ok", false), true);
+  got = a.sleep_until_woken(&wakes);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  ASSERT_EQ(got[0]["event"], "tick");
+  EXPECT_EQ(got[0]["tick"], tick + 2);
+
+  // paused while a is quiet: once b's done leaves the clock idle, a is woken with its reply (no
+  // tick comes until a resume), and the resume's tick wakes it again
+  ASSERT_EQ(api.request({{"op", "pause"}}).value("ok", false), true);
+  a.send_burst({done(tick + 2, "paused")});
+  ASSERT_EQ(b.request({{"op", "done"}}).value("ok", false), true);
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  EXPECT_EQ(got[0]["id"], "paused");
+  EXPECT_EQ(got[0]["ok"], true) << got[0];
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  got = a.sleep_until_woken(&wakes);
+  EXPECT_EQ(wakes, 1);
+  ASSERT_EQ(got.size(), 1u) << Json(got);
+  ASSERT_EQ(got[0]["event"], "tick");
+  EXPECT_EQ(got[0]["tick"], tick + 3);
 }
 
 }  // namespace

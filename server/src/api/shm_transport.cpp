@@ -73,7 +73,10 @@ class ShmTransport::Ring : public LineServer::Diversion {
     return writer_.waiting_bytes();
   }
 
-  bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts) {
+  // ends_quiet: a tick record, after which the connection may be waiting again
+  bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts,
+                    bool ends_quiet = false) {
+    bool wake_now = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (failed_) return false;
@@ -92,21 +95,20 @@ class ShmTransport::Ring : public LineServer::Diversion {
                      why.c_str());
         return false;
       }
-      if (!writer_.take_wakeup()) return true;  // its reader has a wake-up coming
+      if (ends_quiet) quiet_ = false;
+      owed_ = true;
+      wake_now = settle();
     }
-    // wake it now, or at the end of the gate pass
-    if (held_->load()) {
-      deferred_.store(true);
-      if (held_->load() || !deferred_.exchange(false))
-        return true;  // (released meanwhile: wake here)
-    }
-    wake();
+    if (wake_now) wake();
     return true;
   }
 
-  void wake_if_deferred() {
-    if (deferred_.exchange(false)) wake();
-  }
+  // The end of a gate pass: the wake-up its writes owe, unless the client is quiet.
+  void release() { set_quiet_and_settle(std::nullopt); }
+
+  // Quiet (done accepted): what is written from now on, and what this pass wrote before, is read
+  // with the next tick; not quiet: the reader is woken for it (at the end of the pass if held).
+  void set_quiet(bool quiet) { set_quiet_and_settle(quiet); }
 
   void unlink_names() {
     if (unlinked_) return;
@@ -123,6 +125,27 @@ class ShmTransport::Ring : public LineServer::Diversion {
   std::vector<radio::Delivery> tick_radio;  // loop thread: the frames for the next tick record
 
  private:
+  void set_quiet_and_settle(std::optional<bool> quiet) {
+    bool wake_now = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (quiet) quiet_ = *quiet;
+      wake_now = settle();
+    }
+    if (wake_now) wake();
+  }
+
+  // mutex_ held. Takes the wake-up owed for the records written since the last one, unless the
+  // gate pass holds wake-ups (release() settles it) or the client is quiet (the tick, or the end
+  // of quiet, settles it). The reader's flag is taken only when the FIFO byte follows, so a
+  // wake-up put off is never lost: the reader armed before the records were written still has its
+  // flag clear when the wake-up is finally taken.
+  bool settle() {
+    if (!owed_ || quiet_ || held_->load()) return false;
+    owed_ = false;
+    return writer_.take_wakeup();
+  }
+
   void wake() {
     const char b = 1;
     // the flag allows one byte in flight: a full FIFO means the client wrote its own flag, and its
@@ -136,10 +159,11 @@ class ShmTransport::Ring : public LineServer::Diversion {
   const std::size_t region_size_;
   const int fifo_fd_;
   std::shared_ptr<std::atomic<bool>> held_;
-  mutable std::mutex mutex_;  // guards writer_ and failed_
+  mutable std::mutex mutex_;  // guards writer_, failed_, owed_ and quiet_
   shm::RingWriter writer_;
   bool failed_ = false;
-  std::atomic<bool> deferred_{false};
+  bool owed_ = false;      // records written whose wake-up is not taken yet
+  bool quiet_ = false;     // done accepted, its next tick not written yet (quiet_until_tick)
   bool unlinked_ = false;  // loop thread (and the destructor)
 };
 
@@ -239,7 +263,9 @@ bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
   const std::vector<uint8_t> head =
       shm::encode_tick_head(tick, time_s, static_cast<uint32_t>(frames.size()));
   const std::span<const uint8_t> parts[] = {head, body};
-  if (!ring->write_record(shm::RecordType::kTick, parts)) server_.close_overloaded(conn);
+  // the tick ends the quiet that conn's done began: it wakes, with what was written meanwhile
+  if (!ring->write_record(shm::RecordType::kTick, parts, /*ends_quiet=*/true))
+    server_.close_overloaded(conn);
   return true;
 }
 
@@ -248,13 +274,35 @@ void ShmTransport::hold_wakeups() { held_->store(true); }
 void ShmTransport::release_wakeups() {
   held_->store(false);
   std::lock_guard<std::mutex> lock(mutex_);
-  for (auto& [conn, ring] : rings_) ring->wake_if_deferred();
+  for (auto& [conn, ring] : rings_) ring->release();
+}
+
+std::shared_ptr<ShmTransport::Ring> ShmTransport::ring_of(uint64_t conn) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = rings_.find(conn);
+  return it == rings_.end() ? nullptr : it->second;
+}
+
+void ShmTransport::quiet_until_tick(uint64_t conn) {
+  if (const auto ring = ring_of(conn)) ring->set_quiet(true);
+}
+
+void ShmTransport::end_quiet(uint64_t conn) {
+  if (const auto ring = ring_of(conn)) ring->set_quiet(false);
+}
+
+void ShmTransport::end_quiet_all() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [conn, ring] : rings_) ring->set_quiet(false);
 }
 
 void ShmTransport::on_disconnect(uint64_t conn) {
   offered_.erase(conn);
   std::lock_guard<std::mutex> lock(mutex_);
-  rings_.erase(conn);  // the LineServer lets go of its share when it closes the socket
+  const auto it = rings_.find(conn);
+  if (it == rings_.end()) return;
+  it->second->set_quiet(false);  // what is written until the socket closes reaches the client
+  rings_.erase(it);              // the LineServer lets go of its share when it closes the socket
 }
 
 }  // namespace uavsim::server::api
