@@ -46,13 +46,13 @@ std::optional<std::string> random_token() {
 class ShmTransport::Ring : public LineServer::Diversion {
  public:
   Ring(uint64_t conn, std::string token, void* region, std::size_t region_size,
-       std::size_t capacity, int fifo_fd, std::shared_ptr<std::atomic<bool>> held)
+       std::size_t capacity, int fifo_fd, std::shared_ptr<Shared> shared)
       : conn_(conn),
         token_(std::move(token)),
         region_(region),
         region_size_(region_size),
         fifo_fd_(fifo_fd),
-        held_(std::move(held)),
+        shared_(std::move(shared)),
         writer_(region, capacity) {}
 
   ~Ring() override {
@@ -141,7 +141,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
   // wake-up put off is never lost: the reader armed before the records were written still has its
   // flag clear when the wake-up is finally taken.
   bool settle() {
-    if (!owed_ || quiet_ || held_->load()) return false;
+    if (!owed_ || quiet_ || shared_->held.load()) return false;
     owed_ = false;
     return writer_.take_wakeup();
   }
@@ -150,7 +150,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
     const char b = 1;
     // the flag allows one byte in flight: a full FIFO means the client wrote its own flag, and its
     // wake-up is there anyway
-    [[maybe_unused]] const ssize_t n = ::write(fifo_fd_, &b, 1);
+    if (::write(fifo_fd_, &b, 1) == 1) shared_->wakeups.fetch_add(1);
   }
 
   const uint64_t conn_;
@@ -158,7 +158,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
   void* const region_;
   const std::size_t region_size_;
   const int fifo_fd_;
-  std::shared_ptr<std::atomic<bool>> held_;
+  std::shared_ptr<Shared> shared_;
   mutable std::mutex mutex_;  // guards writer_, failed_, owed_ and quiet_
   shm::RingWriter writer_;
   bool failed_ = false;
@@ -211,7 +211,7 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     return std::nullopt;
   }
   offered_[conn] =
-      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, held_);
+      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, shared_);
   return nlohmann::json{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
 }
 
@@ -269,10 +269,10 @@ bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
   return true;
 }
 
-void ShmTransport::hold_wakeups() { held_->store(true); }
+void ShmTransport::hold_wakeups() { shared_->held.store(true); }
 
 void ShmTransport::release_wakeups() {
-  held_->store(false);
+  shared_->held.store(false);
   std::lock_guard<std::mutex> lock(mutex_);
   for (auto& [conn, ring] : rings_) ring->release();
 }

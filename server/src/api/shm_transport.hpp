@@ -91,12 +91,19 @@ class ShmTransport {
   void on_disconnect(uint64_t conn);
   // Connections that have used a ring since the start (for the server's exit line and tests).
   uint64_t activated_total() const { return activated_total_.load(); }
+  // Wake-up bytes written into the rings' FIFOs since the start, all rings together (for tests).
+  uint64_t wakeups_total() const { return shared_->wakeups.load(); }
 
  private:
   class Ring;
   std::shared_ptr<Ring> ring_of(uint64_t conn) const;
   LineServer& server_;
-  std::shared_ptr<std::atomic<bool>> held_ = std::make_shared<std::atomic<bool>>(false);
+  // what the rings share with the transport (a ring may outlive it in the LineServer's hands)
+  struct Shared {
+    std::atomic<bool> held{false};  // hold_wakeups() .. release_wakeups()
+    std::atomic<uint64_t> wakeups{0};
+  };
+  std::shared_ptr<Shared> shared_ = std::make_shared<Shared>();
   mutable std::mutex mutex_;  // guards rings_ (release_wakeups may race a send on another thread)
   std::map<uint64_t, std::shared_ptr<Ring>> rings_;
   std::map<uint64_t, std::shared_ptr<Ring>> offered_;  // loop thread only

@@ -95,6 +95,19 @@ class RingFixture : public ::testing::Test {
     return out;
   }
 
+  // kWrites records written on another thread while this one runs as many gate passes
+  static constexpr int kWrites = 1000;
+  void write_from_another_thread_during_passes() {
+    std::thread writer([&] {
+      for (int i = 0; i < kWrites; ++i) send("frame");
+    });
+    for (int pass = 0; pass < kWrites; ++pass) {
+      transport_->hold_wakeups();
+      transport_->release_wakeups();
+    }
+    writer.join();
+  }
+
   std::unique_ptr<LineServer> server_;
   std::unique_ptr<ShmTransport> transport_;
   uint64_t conn_ = 0;
@@ -215,15 +228,7 @@ TEST_F(RingFixture, AReaderStillAwakeIsNotWokenAgainAndLosesNoLaterWakeup) {
 // the quiet's end wakes once.
 TEST_F(RingFixture, WritesFromAnotherThreadWhileQuietWakeOnceAtTheEnd) {
   transport_->quiet_until_tick(conn_);
-  constexpr int kWrites = 1000;
-  std::thread writer([&] {
-    for (int i = 0; i < kWrites; ++i) send("frame");
-  });
-  for (int pass = 0; pass < kWrites; ++pass) {
-    transport_->hold_wakeups();
-    transport_->release_wakeups();
-  }
-  writer.join();
+  write_from_another_thread_during_passes();
   EXPECT_EQ(wakes(), 0);
   transport_->end_quiet(conn_);
   EXPECT_EQ(wakes(), 1);
@@ -233,15 +238,7 @@ TEST_F(RingFixture, WritesFromAnotherThreadWhileQuietWakeOnceAtTheEnd) {
 // Without quiet, a write from another thread during a pass is woken for at its end: none is lost
 // whichever side of the release it falls.
 TEST_F(RingFixture, WritesFromAnotherThreadDuringPassesAreAllWokenFor) {
-  constexpr int kWrites = 1000;
-  std::thread writer([&] {
-    for (int i = 0; i < kWrites; ++i) send("frame");
-  });
-  for (int pass = 0; pass < kWrites; ++pass) {
-    transport_->hold_wakeups();
-    transport_->release_wakeups();
-  }
-  writer.join();
+  write_from_another_thread_during_passes();
   EXPECT_EQ(wakes(), 1);  // the reader never armed again: one byte in flight at most
   EXPECT_EQ(read_all().size(), static_cast<size_t>(kWrites));
   send("last");
