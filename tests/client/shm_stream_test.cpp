@@ -290,6 +290,9 @@ TEST(SharedMemoryStream, ARequestAfterTheDoneARefusedDoneAndAPauseWakeAQuietClie
   ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
   auto b_done = [&b] { ASSERT_EQ(b.request({{"op", "done"}}).value("ok", false), true); };
 
+  // a done refused before the op runs (quiet must be true or false): its error wakes
+  a.send_burst({{{"op", "done"}, {"tick", 0}, {"id", "typed"}, {"quiet", 1}}});
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "typed bad_field"}));
   // a request after the done: answered and woken for, with the done's reply before it
   a.send_burst({done(0, "done")});
   a.send({{"op", "status"}, {"id", "after"}});

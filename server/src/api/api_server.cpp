@@ -290,7 +290,8 @@ void ApiServer::on_gate() {
       return;
     } else {
       // the clock idles paused: no tick comes before a resume or a step, so a client quiet since
-      // its done is woken for what it has (it may wait for its done's reply, SimConnection::done)
+      // its done is woken for what it has now (its replies, the events of the pause) rather than
+      // left with them for as long as the pause lasts
       shm_->end_quiet_all();
     }
     hold.release();
