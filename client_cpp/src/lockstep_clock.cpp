@@ -68,6 +68,9 @@ void EventLoop::Impl::send_done() {
   }
   if (!seqs.empty()) done["mavlink_seq"] = seqs;
   if (pending_busy_until) done["busy_until"] = *pending_busy_until;
+  // this loop waits for its next tick, never for this reply: on the shared-memory stream the server
+  // need not wake it before that tick (docs/protocol.md, "Shared-memory stream")
+  if (api.on_ring()) done["quiet"] = true;
   pending_busy_until.reset();
   tick_outstanding = false;
   // straight to the socket: never held with the outputs

@@ -6,6 +6,7 @@
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <poll.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include <string>
+#include <vector>
 
 #include "loop_services.hpp"
 #include "net.hpp"
@@ -84,6 +86,41 @@ class RawShmClient {
     return false;
   }
   common::shm::RingHeader* header() { return static_cast<common::shm::RingHeader*>(region_); }
+  // Sleeps as a lockstep client does, until its next wake-up (10 s at most); then, as woken:
+  // "woken N" (the wake-up bytes that were in the FIFO) and every record there, a reply as "ID ok"
+  // or "ID ERROR_CODE", a tick as "tick N". Empty when nothing woke it.
+  std::vector<std::string> sleep_until_woken() {
+    std::vector<std::string> out;
+    pollfd p{stream_->wake_fd(), POLLIN, 0};
+    if (poll(&p, 1, 10000) <= 0) return out;
+    int wakes = 0;
+    char buf[64];
+    for (ssize_t n; (n = read(stream_->wake_fd(), buf, sizeof(buf))) > 0;)
+      wakes += static_cast<int>(n);
+    out.push_back("woken " + std::to_string(wakes));
+    stream_->drain_wakeups();  // nothing left to drain: arms it for the next sleep
+    common::shm::RingReader::Record rec;
+    std::string why;
+    while (stream_->next(&rec, &why) == common::shm::RingReader::Status::kRecord) {
+      if (rec.type == common::shm::RecordType::kTick) {
+        const auto tick = common::shm::decode_tick(rec.payload, &why);
+        out.push_back(tick ? "tick " + std::to_string(tick->tick) : why);
+        continue;
+      }
+      const Json j =
+          Json::parse(std::string(rec.payload.begin(), rec.payload.end()), nullptr, false);
+      const std::string id = j.value("id", Json()).is_string() ? j["id"].get<std::string>()
+                                                               : j.value("id", Json()).dump();
+      out.push_back(id + " " + (j.value("ok", false) ? "ok" : j["error"].value("code", "?")));
+    }
+    return out;
+  }
+  // several requests in one write (one burst, as a lockstep client sends its tick's work)
+  void send_burst(const std::vector<Json>& requests) {
+    std::string lines;
+    for (const Json& r : requests) lines += r.dump() + "\n";
+    EXPECT_TRUE(net::send_all(fd_, lines, 10.0));
+  }
 
  private:
   int fd_ = -1;
@@ -203,6 +240,99 @@ TEST(SharedMemoryStream, AClientKilledHoldingItsTickIsDroppedAndTheClockGoesOn) 
   EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 0);
   close(to_child[1]);
   close(from_child[0]);
+}
+
+using Lines = std::vector<std::string>;
+
+// A raw lockstep client on its ring (period 20 ms) at sim time 0: one wake-up brings its join's
+// reply and its first tick (a paused server announces the tick it is held at), number 0.
+void join_on_ring(RawShmClient& c) {
+  const Json offer = c.tcp_request({{"op", "lockstep_shm"}});
+  ASSERT_EQ(offer["ok"], true) << offer;
+  ASSERT_TRUE(c.take_stream(offer["result"]));
+  c.send({{"op", "lockstep_join"}, {"period_s", 0.02}, {"id", "join"}});
+  ASSERT_EQ(c.sleep_until_woken(), (Lines{"woken 1", "join ok", "tick 0"}));
+}
+
+Json done(int64_t tick, const std::string& id, bool quiet = true) {
+  return {{"op", "done"}, {"tick", tick}, {"id", id}, {"quiet", quiet}};
+}
+
+// A lockstep client that sends its tick's requests and its quiet done in one burst is woken once
+// per tick, by the tick, which finds the burst's replies before it in the ring, in order.
+TEST(SharedMemoryStream, AQuietDoneWakesTheClientOncePerTickWithItsRepliesBeforeTheTick) {
+  SimServer server;
+  RawShmClient a(server.api_port());
+  ASSERT_NO_FATAL_FAILURE(join_on_ring(a));
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  for (int64_t tick = 0; tick < 5; ++tick) {
+    a.send_burst({{{"op", "status"}, {"id", "1"}},
+                  {{"op", "status"}, {"id", "2"}},
+                  {{"op", "status"}, {"id", "3"}},
+                  done(tick, "done")});
+    EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "1 ok", "2 ok", "3 ok", "done ok",
+                                            "tick " + std::to_string(tick + 1)}));
+  }
+}
+
+// What may leave a quiet client waiting for something other than its tick wakes it: a request
+// after its done (its reply may be awaited), a done that is refused, a done that is not quiet
+// (SimConnection's, which waits for the reply), the clock idling paused. Client b, on TCP, holds
+// the clock at each tick, so no tick can be what wakes a.
+TEST(SharedMemoryStream, ARequestAfterTheDoneARefusedDoneAndAPauseWakeAQuietClient) {
+  SimServer server;
+  RawShmClient a(server.api_port());
+  ASSERT_NO_FATAL_FAILURE(join_on_ring(a));
+  ApiClient b(server.api_port());
+  ASSERT_EQ(b.request({{"op", "lockstep_join"}, {"period_s", 0.02}}).value("ok", false), true);
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  auto b_done = [&b] { ASSERT_EQ(b.request({{"op", "done"}}).value("ok", false), true); };
+
+  // a done refused before the op runs (quiet must be true or false): its error wakes
+  a.send_burst({{{"op", "done"}, {"tick", 0}, {"id", "typed"}, {"quiet", 1}}});
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "typed bad_field"}));
+  // a request after the done: answered and woken for, with the done's reply before it
+  a.send_burst({done(0, "done")});
+  a.send({{"op", "status"}, {"id", "after"}});
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "done ok", "after ok"}));
+  // a done refused (the tick has its done): its error wakes
+  a.send_burst({done(0, "again")});
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "again bad_state"}));
+  // b's done: the next tick, for both
+  b_done();
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "tick 1"}));
+
+  // a done that does not ask for quiet is woken for at once, as before
+  a.send_burst({done(1, "loud", false)});
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "loud ok"}));
+  b_done();
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "tick 2"}));
+
+  // paused while a is quiet: once b's done leaves the clock idle, a is woken with its reply (no
+  // tick comes until a resume), and the resume's tick wakes it again
+  ASSERT_EQ(api.request({{"op", "pause"}}).value("ok", false), true);
+  a.send_burst({done(2, "paused")});
+  b_done();
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "paused ok"}));
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  EXPECT_EQ(a.sleep_until_woken(), (Lines{"woken 1", "tick 3"}));
+}
+
+// client_cpp's lockstep loop asks for quiet in its done on the ring: it is woken by its ticks only
+// (without quiet, the pass that serves each done wakes it too: about two wake-ups a tick).
+TEST(SharedMemoryStream, TheLockstepLoopIsWokenOnlyByItsTicks) {
+  SimServer server;
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  ASSERT_TRUE(l) << l.message();
+  ASSERT_TRUE(LoopServices(**l).sim_channel()->on_ring());
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  const uint64_t before = server.shm_wakeups();
+  ASSERT_TRUE((*l)->run_for(1.0));
+  constexpr uint64_t kTicks = 50;  // 1 s of 20 ms ticks; one more may be written as it returns
+  EXPECT_LE(server.shm_wakeups() - before, kTicks + 2);
 }
 
 }  // namespace

@@ -73,6 +73,8 @@ class SimServer {
     mavlink_.reset();
   }
   int api_port() const { return api_->port(); }
+  // wake-ups the server has written for the shared-memory streams, all of them together
+  uint64_t shm_wakeups() const { return api_->shm_transport().wakeups_total(); }
   std::string mavlink_address(std::size_t vehicle = 0) const {
     return "tcp:127.0.0.1:" + std::to_string(mavlink_->port(vehicle));
   }

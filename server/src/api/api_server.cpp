@@ -84,7 +84,9 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     authenticated_.erase(conn);
     --connections_;
     enqueue({Request::Kind::kDisconnect, conn, {}});
+    flush_staged();
   };
+  cb.on_read_end = [this](uint64_t) { flush_staged(); };
   LineServer::Limits limits;
   limits.max_line_bytes = config_.max_line_bytes;
   limits.max_connections = config_.max_connections;
@@ -167,14 +169,19 @@ void ApiServer::shutdown() {
     shutdown_ = true;
   }
   wake_.notify_all();
+  shm_->end_quiet_all();  // no tick comes any more
   server_->stop();
 }
 
-void ApiServer::enqueue(Request request) {
+void ApiServer::enqueue(Request request) { staged_.push_back(std::move(request)); }
+
+void ApiServer::flush_staged() {
+  if (staged_.empty()) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(request));
+    for (Request& r : staged_) queue_.push_back(std::move(r));
   }
+  staged_.clear();
   wake_.notify_all();
 }
 
@@ -244,6 +251,7 @@ void ApiServer::on_gate() {
       if (shutdown_) return;
     }
     if (stop_check_ && stop_check_()) {
+      shm_->end_quiet_all();  // no tick may come any more
       // a stopping loop (or a caller whose gate must never hold, like the fuzz harness) still
       // counts a paused step down and answers it once done, with the replies held behind it: no
       // reply is lost
@@ -265,6 +273,7 @@ void ApiServer::on_gate() {
       // drop clients that let their tick time out (wall clock), then wait for the others
       for (const LockstepCoordinator::Dropped& d : lockstep_.expire(sim_.time_s())) {
         clock_ops_->lockstep_left(d.last_left_at_s);
+        shm_->end_quiet(d.conn);  // its drop wakes it (a done waiting on MAVLink seqs was quiet)
         send(d.conn,
              Json{{"event", "lockstep_dropped"}, {"reason", "timeout"}, {"time", sim_.time_s()}});
       }
@@ -279,6 +288,11 @@ void ApiServer::on_gate() {
       return;
     } else if (clock_ops_->count_down_step()) {
       return;
+    } else {
+      // the clock idles paused: no tick comes before a resume or a step, so a client quiet since
+      // its done is woken for what it has now (its replies, the events of the pause) rather than
+      // left with them for as long as the pause lasts
+      shm_->end_quiet_all();
     }
     hold.release();
     // wait for a request (or a lockstep deadline, or the next MAVLink seq poll)
@@ -303,6 +317,9 @@ void ApiServer::drain() {
     batch.swap(queue_);
   }
   for (Request& r : batch) {
+    // a request after a done (or its error reply) ends the connection's quiet: its reply may be
+    // awaited (ShmTransport::quiet_until_tick)
+    if (r.kind != Request::Kind::kDisconnect) shm_->end_quiet(r.conn);
     switch (r.kind) {
       case Request::Kind::kDisconnect:
         // the clock's group drops the connection's step first, lockstep stops waiting for it

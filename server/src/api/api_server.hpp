@@ -149,7 +149,11 @@ class ApiServer {
   };
 
   // I/O thread side
+  // Stages a request (or an in-order reply) for the loop; flush_staged() queues what one read of a
+  // connection brought at once, so the gate serves a client's burst (requests and its done) in one
+  // pass.
   void enqueue(Request request);
+  void flush_staged();
   void send(uint64_t conn, const Json& message);
   void reply_error(uint64_t conn, const Json& id, ApiError code, const std::string& message);
   // queues a reply behind the connection's earlier requests (the loop sends it in order)
@@ -195,6 +199,7 @@ class ApiServer {
   // counts the SeqWaiter's progress calls (guarded by mutex_): the gate waits for it to change
   uint64_t seq_progress_ = 0;
   std::deque<Request> queue_;
+  std::vector<Request> staged_;  // I/O thread only: enqueue()'d, not flushed yet
   bool shutdown_ = false;
   std::atomic<size_t> connections_{0};
   std::set<uint64_t> authenticated_;  // connections that sent the token; I/O thread only

@@ -263,6 +263,7 @@ void LineServer::on_events(uint64_t id, std::uint32_t events) {
   bool ok = true;
   if (!c->read_closed && (events & (EPOLLIN | EPOLLHUP | EPOLLERR))) {
     const ReadResult r = read_conn(id, *c);
+    if (callbacks_.on_read_end) callbacks_.on_read_end(id);
     ok = r != ReadResult::kFailed;
     if (r == ReadResult::kEof) {
       // the owner answers what it got, then calls close_when_sent

@@ -37,6 +37,8 @@ class LineServer {
     std::function<void(uint64_t conn, std::string line)> on_line;  // without the newline
     std::function<void(uint64_t conn)> on_line_too_long;
     std::function<void(uint64_t conn)> on_disconnect;
+    // after the lines of one read (what the peer had sent by then), before its on_disconnect
+    std::function<void(uint64_t conn)> on_read_end;
   };
 
   // Binds and listens on bind_address:port (port 0: an ephemeral port). Throws std::runtime_error

@@ -34,6 +34,11 @@ void LockstepOps::register_ops(OpTable& table) {
   add("lockstep_shm", &LockstepOps::op_shm);
 }
 
+void LockstepOps::on_reset() {
+  lockstep_.reset();
+  if (shm_ != nullptr) shm_->end_quiet_all();
+}
+
 void LockstepOps::on_disconnect(uint64_t conn) {
   clock_.lockstep_left(lockstep_.leave(conn, sim_.time_s()));
 }
@@ -99,6 +104,15 @@ void LockstepOps::op_done(uint64_t conn, const Json& request, OpReply* reply) {
     }
   }
   const int64_t done_tick = lockstep_.take_done(conn, busy, std::move(wait));
+  // quiet (a client that waits for nothing but its next tick, like client_cpp's EventLoop): on a
+  // ring it is not woken again before that tick, which brings this reply and what else comes
+  // meanwhile; unless a step of conn is in progress (its reply, awaited, may come first). Asked
+  // for, not assumed: a blocking client (SimConnection::done) waits for this reply, and the tick
+  // may depend on what it does next (another of its connections' done).
+  if (bool_field(request, "quiet").value_or(false) && shm_ != nullptr &&
+      !clock_.step_in_progress(conn)) {
+    shm_->quiet_until_tick(conn);
+  }
   reply->result = {{"tick", done_tick}, {"mavlink_seq_checked", server_.seq_checked()}};
 }
 

@@ -41,8 +41,9 @@ class LockstepOps : public OpGroup {
 
   // lockstep_join, lockstep_leave, done, lockstep_shm.
   void register_ops(OpTable& table) override;
-  // No tick is awaited; every client's next tick starts from sim time 0.
-  void on_reset() override { lockstep_.reset(); }
+  // No tick is awaited; every client's next tick starts from sim time 0 (and a client quiet since
+  // its done is woken: the reset's messages may matter before that tick).
+  void on_reset() override;
   // A connection that closes stops gating the clock.
   void on_disconnect(uint64_t conn) override;
 

@@ -58,6 +58,7 @@ constexpr FieldSpec kCoreOpFields[] = {
     {"tick", FieldType::kNumber, 0, kTwoTo64},
     {"busy_until", FieldType::kNumber},
     {"mavlink_seq", FieldType::kObject},
+    {"quiet", FieldType::kBoolean},
     {"speed_m_s", FieldType::kNumber, 0, 1000},
     {"from_deg", FieldType::kNumber, -360, 360},
     {"turbulence_sd_m_s", FieldType::kNumber, 0, 1000},

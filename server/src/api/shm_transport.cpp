@@ -46,13 +46,13 @@ std::optional<std::string> random_token() {
 class ShmTransport::Ring : public LineServer::Diversion {
  public:
   Ring(uint64_t conn, std::string token, void* region, std::size_t region_size,
-       std::size_t capacity, int fifo_fd, std::shared_ptr<std::atomic<bool>> held)
+       std::size_t capacity, int fifo_fd, std::shared_ptr<Shared> shared)
       : conn_(conn),
         token_(std::move(token)),
         region_(region),
         region_size_(region_size),
         fifo_fd_(fifo_fd),
-        held_(std::move(held)),
+        shared_(std::move(shared)),
         writer_(region, capacity) {}
 
   ~Ring() override {
@@ -73,7 +73,10 @@ class ShmTransport::Ring : public LineServer::Diversion {
     return writer_.waiting_bytes();
   }
 
-  bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts) {
+  // ends_quiet: a tick record, after which the connection may be waiting again
+  bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts,
+                    bool ends_quiet = false) {
+    bool wake_now = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (failed_) return false;
@@ -92,21 +95,20 @@ class ShmTransport::Ring : public LineServer::Diversion {
                      why.c_str());
         return false;
       }
-      if (!writer_.take_wakeup()) return true;  // its reader has a wake-up coming
+      if (ends_quiet) quiet_ = false;
+      owed_ = true;
+      wake_now = settle();
     }
-    // wake it now, or at the end of the gate pass
-    if (held_->load()) {
-      deferred_.store(true);
-      if (held_->load() || !deferred_.exchange(false))
-        return true;  // (released meanwhile: wake here)
-    }
-    wake();
+    if (wake_now) wake();
     return true;
   }
 
-  void wake_if_deferred() {
-    if (deferred_.exchange(false)) wake();
-  }
+  // The end of a gate pass: the wake-up its writes owe, unless the client is quiet.
+  void release() { set_quiet_and_settle(std::nullopt); }
+
+  // Quiet (done accepted): what is written from now on, and what this pass wrote before, is read
+  // with the next tick; not quiet: the reader is woken for it (at the end of the pass if held).
+  void set_quiet(bool quiet) { set_quiet_and_settle(quiet); }
 
   void unlink_names() {
     if (unlinked_) return;
@@ -123,11 +125,32 @@ class ShmTransport::Ring : public LineServer::Diversion {
   std::vector<radio::Delivery> tick_radio;  // loop thread: the frames for the next tick record
 
  private:
+  void set_quiet_and_settle(std::optional<bool> quiet) {
+    bool wake_now = false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (quiet) quiet_ = *quiet;
+      wake_now = settle();
+    }
+    if (wake_now) wake();
+  }
+
+  // mutex_ held. Takes the wake-up owed for the records written since the last one, unless the
+  // gate pass holds wake-ups (release() settles it) or the client is quiet (the tick, or the end
+  // of quiet, settles it). The reader's flag is taken only when the FIFO byte follows, so a
+  // wake-up put off is never lost: the reader armed before the records were written still has its
+  // flag clear when the wake-up is finally taken.
+  bool settle() {
+    if (!owed_ || quiet_ || shared_->held.load()) return false;
+    owed_ = false;
+    return writer_.take_wakeup();
+  }
+
   void wake() {
     const char b = 1;
     // the flag allows one byte in flight: a full FIFO means the client wrote its own flag, and its
     // wake-up is there anyway
-    [[maybe_unused]] const ssize_t n = ::write(fifo_fd_, &b, 1);
+    if (::write(fifo_fd_, &b, 1) == 1) shared_->wakeups.fetch_add(1);
   }
 
   const uint64_t conn_;
@@ -135,11 +158,12 @@ class ShmTransport::Ring : public LineServer::Diversion {
   void* const region_;
   const std::size_t region_size_;
   const int fifo_fd_;
-  std::shared_ptr<std::atomic<bool>> held_;
-  mutable std::mutex mutex_;  // guards writer_ and failed_
+  std::shared_ptr<Shared> shared_;
+  mutable std::mutex mutex_;  // guards writer_, failed_, owed_ and quiet_
   shm::RingWriter writer_;
   bool failed_ = false;
-  std::atomic<bool> deferred_{false};
+  bool owed_ = false;      // records written whose wake-up is not taken yet
+  bool quiet_ = false;     // done accepted, its next tick not written yet (quiet_until_tick)
   bool unlinked_ = false;  // loop thread (and the destructor)
 };
 
@@ -187,7 +211,7 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     return std::nullopt;
   }
   offered_[conn] =
-      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, held_);
+      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, shared_);
   return nlohmann::json{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
 }
 
@@ -239,22 +263,46 @@ bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
   const std::vector<uint8_t> head =
       shm::encode_tick_head(tick, time_s, static_cast<uint32_t>(frames.size()));
   const std::span<const uint8_t> parts[] = {head, body};
-  if (!ring->write_record(shm::RecordType::kTick, parts)) server_.close_overloaded(conn);
+  // the tick ends the quiet that conn's done began: it wakes, with what was written meanwhile
+  if (!ring->write_record(shm::RecordType::kTick, parts, /*ends_quiet=*/true))
+    server_.close_overloaded(conn);
   return true;
 }
 
-void ShmTransport::hold_wakeups() { held_->store(true); }
+void ShmTransport::hold_wakeups() { shared_->held.store(true); }
 
 void ShmTransport::release_wakeups() {
-  held_->store(false);
+  shared_->held.store(false);
   std::lock_guard<std::mutex> lock(mutex_);
-  for (auto& [conn, ring] : rings_) ring->wake_if_deferred();
+  for (auto& [conn, ring] : rings_) ring->release();
+}
+
+std::shared_ptr<ShmTransport::Ring> ShmTransport::ring_of(uint64_t conn) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = rings_.find(conn);
+  return it == rings_.end() ? nullptr : it->second;
+}
+
+void ShmTransport::quiet_until_tick(uint64_t conn) {
+  if (const auto ring = ring_of(conn)) ring->set_quiet(true);
+}
+
+void ShmTransport::end_quiet(uint64_t conn) {
+  if (const auto ring = ring_of(conn)) ring->set_quiet(false);
+}
+
+void ShmTransport::end_quiet_all() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [conn, ring] : rings_) ring->set_quiet(false);
 }
 
 void ShmTransport::on_disconnect(uint64_t conn) {
   offered_.erase(conn);
   std::lock_guard<std::mutex> lock(mutex_);
-  rings_.erase(conn);  // the LineServer lets go of its share when it closes the socket
+  const auto it = rings_.find(conn);
+  if (it == rings_.end()) return;
+  it->second->set_quiet(false);  // what is written until the socket closes reaches the client
+  rings_.erase(it);              // the LineServer lets go of its share when it closes the socket
 }
 
 }  // namespace uavsim::server::api

@@ -18,13 +18,22 @@
 // without a second sequencing scheme; the server's side of TCP is one read per request batch, which
 // the I/O thread does anyway.
 //
+// A lockstep client that waits for nothing but its next tick says so in its `done` ("quiet"): once
+// that done is accepted (quiet_until_tick), what its ring gets wakes nobody until its next tick
+// record, which wakes it once with all of it (the replies to the requests it sent with the done,
+// events, frames). Anything that may leave the client waiting for something other than that tick
+// ends the quiet with a wake-up: a further request of the connection (its reply may be awaited),
+// the clock idling paused, its leaving the lockstep (a drop, a disconnect), a reset, the server
+// stopping (end_quiet, end_quiet_all).
+//
 // A client that stops reading (the ring full), or writes into the ring what the protocol forbids
 // (its read position outside what was written), is dropped: its connection is closed as overloaded
 // with a message on stderr naming it, it leaves lockstep, and the server goes on.
 //
-// Thread contract: offer, activate, attached, set_tick_radio, send_tick, release_wakeups and
-// on_disconnect on the loop thread; the rings' writes (LineServer::Diversion) from any thread that
-// sends, serialised by each ring's mutex.
+// Thread contract: offer, activate, attached, set_tick_radio, send_tick, release_wakeups,
+// quiet_until_tick and on_disconnect on the loop thread; end_quiet and end_quiet_all from any
+// thread; the rings' writes (LineServer::Diversion) from any thread that sends, serialised by each
+// ring's mutex, which also guards its wake-up state (owed, quiet) against release_wakeups.
 #pragma once
 
 #include <atomic>
@@ -71,14 +80,30 @@ class ShmTransport {
   // While held, the rings' wake-ups wait for release_wakeups(): a gate pass wakes each client once.
   void hold_wakeups();
   void release_wakeups();
+  // conn's quiet `done` was accepted: until its next tick record (send_tick) or end_quiet, what its
+  // ring gets is read with that tick, and the wake-up this gate pass owes it (for the replies
+  // before the done) is put off to it as well. Nothing if conn is not on a ring.
+  void quiet_until_tick(uint64_t conn);
+  // conn may be waiting for what comes next: it is woken for what was written while it was quiet
+  // (at the end of the gate pass while wake-ups are held) and for every record from now on.
+  void end_quiet(uint64_t conn);
+  void end_quiet_all();
   void on_disconnect(uint64_t conn);
   // Connections that have used a ring since the start (for the server's exit line and tests).
   uint64_t activated_total() const { return activated_total_.load(); }
+  // Wake-up bytes written into the rings' FIFOs since the start, all rings together (for tests).
+  uint64_t wakeups_total() const { return shared_->wakeups.load(); }
 
  private:
   class Ring;
+  std::shared_ptr<Ring> ring_of(uint64_t conn) const;
   LineServer& server_;
-  std::shared_ptr<std::atomic<bool>> held_ = std::make_shared<std::atomic<bool>>(false);
+  // what the rings share with the transport (a ring may outlive it in the LineServer's hands)
+  struct Shared {
+    std::atomic<bool> held{false};  // hold_wakeups() .. release_wakeups()
+    std::atomic<uint64_t> wakeups{0};
+  };
+  std::shared_ptr<Shared> shared_ = std::make_shared<Shared>();
   mutable std::mutex mutex_;  // guards rings_ (release_wakeups may race a send on another thread)
   std::map<uint64_t, std::shared_ptr<Ring>> rings_;
   std::map<uint64_t, std::shared_ptr<Ring>> offered_;  // loop thread only
