@@ -123,6 +123,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
   }
 
   std::vector<radio::Delivery> tick_radio;  // loop thread: the frames for the next tick record
+  std::vector<uint8_t> tick_body;           // loop thread: those frames encoded (reused)
 
  private:
   void set_quiet_and_settle(std::optional<bool> quiet) {
@@ -255,7 +256,8 @@ bool ShmTransport::send_tick(uint64_t conn, int64_t tick, double time_s) {
   // (tick, time, frame count), then each frame: one record, one wake-up
   std::vector<radio::Delivery> frames;
   frames.swap(ring->tick_radio);
-  std::vector<uint8_t> body;
+  std::vector<uint8_t>& body = ring->tick_body;
+  body.clear();  // (keeps its capacity: a flock's tick carries tens of kilobytes of frames)
   for (const radio::Delivery& d : frames) {
     shm::encode_radio_frame(static_cast<uint32_t>(d.to), static_cast<uint32_t>(d.from), d.seq,
                             d.broadcast, d.time_s, d.queued_s, d.data, &body);
