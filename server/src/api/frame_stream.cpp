@@ -484,7 +484,9 @@ void FrameStream::deliver(const render::ReadyFrame& frame) {
       message += '\n';
       message += *parts[i];
     }
-    if (server_.send(sub.conn, message)) ++sub.delivered;
+    // a frame wakes a lockstep client even after its quiet done: it may run its vision on it while
+    // the simulation steps on to its tick
+    if (server_.send(sub.conn, message, /*work_ahead=*/true)) ++sub.delivered;
   }
 }
 

@@ -80,7 +80,7 @@ void LineServer::mark_overloaded(Conn& c) {
   overloaded_conns_.fetch_add(1);
 }
 
-bool LineServer::send(uint64_t conn, const std::string& data) {
+bool LineServer::send(uint64_t conn, const std::string& data, bool work_ahead) {
   {
     std::lock_guard<std::mutex> lock(out_mutex_);
     auto it = conns_.find(conn);
@@ -90,7 +90,7 @@ bool LineServer::send(uint64_t conn, const std::string& data) {
     // past its own cap or the global budget: the overload line instead, then the connection goes
     if (c.diversion) {
       // the diversion wakes its own reader; the I/O thread only if the connection is to close
-      if (c.diversion->write(data)) return true;
+      if (c.diversion->write(data, work_ahead)) return true;
       mark_overloaded(c);
     } else if (total_pending_ + data.size() > limits_.max_total_pending_bytes ||
                c.out.append(data) != net::WriteBuffer::Append::kQueued) {

@@ -63,7 +63,9 @@ class LineServer {
   class Diversion {
    public:
     virtual ~Diversion() = default;
-    virtual bool write(const std::string& data) = 0;
+    // work_ahead: data the reader may work on before its next tick (a camera frame), which wakes
+    // even a reader that said it waits for nothing but that tick (ShmTransport's quiet done)
+    virtual bool write(const std::string& data, bool work_ahead) = 0;
     virtual size_t pending_bytes() const = 0;  // written and not yet taken by the peer
   };
 
@@ -74,8 +76,8 @@ class LineServer {
   uint16_t port() const { return port_; }
 
   // Queues data for a connection. Thread-safe. False if the connection is gone or overloaded (the
-  // data is dropped and the connection closed after the overload line).
-  bool send(uint64_t conn, const std::string& data);
+  // data is dropped and the connection closed after the overload line). work_ahead: see Diversion.
+  bool send(uint64_t conn, const std::string& data, bool work_ahead = false);
   // Closes a connection once everything queued for it has been written (after its EOF).
   // Thread-safe.
   void close_when_sent(uint64_t conn);

@@ -62,10 +62,11 @@ class ShmTransport::Ring : public LineServer::Diversion {
   }
 
   // LineServer::Diversion: a stream record with these bytes (whole messages)
-  bool write(const std::string& data) override {
+  bool write(const std::string& data, bool work_ahead) override {
     const std::span<const uint8_t> part(reinterpret_cast<const uint8_t*>(data.data()), data.size());
     return write_record(shm::RecordType::kStream,
-                        std::span<const std::span<const uint8_t>>(&part, 1));
+                        std::span<const std::span<const uint8_t>>(&part, 1),
+                        /*ends_quiet=*/false, work_ahead);
   }
 
   std::size_t pending_bytes() const override {
@@ -73,9 +74,10 @@ class ShmTransport::Ring : public LineServer::Diversion {
     return writer_.waiting_bytes();
   }
 
-  // ends_quiet: a tick record, after which the connection may be waiting again
+  // ends_quiet: a tick record, after which the connection may be waiting again; work_ahead: wakes
+  // the reader even while quiet (LineServer::Diversion)
   bool write_record(shm::RecordType type, std::span<const std::span<const uint8_t>> parts,
-                    bool ends_quiet = false) {
+                    bool ends_quiet = false, bool work_ahead = false) {
     bool wake_now = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -97,6 +99,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
       }
       if (ends_quiet) quiet_ = false;
       owed_ = true;
+      owed_work_ = owed_work_ || work_ahead;
       wake_now = settle();
     }
     if (wake_now) wake();
@@ -142,8 +145,9 @@ class ShmTransport::Ring : public LineServer::Diversion {
   // wake-up put off is never lost: the reader armed before the records were written still has its
   // flag clear when the wake-up is finally taken.
   bool settle() {
-    if (!owed_ || quiet_ || shared_->held.load()) return false;
+    if (!owed_ || (quiet_ && !owed_work_) || shared_->held.load()) return false;
     owed_ = false;
+    owed_work_ = false;
     return writer_.take_wakeup();
   }
 
@@ -160,10 +164,11 @@ class ShmTransport::Ring : public LineServer::Diversion {
   const std::size_t region_size_;
   const int fifo_fd_;
   std::shared_ptr<Shared> shared_;
-  mutable std::mutex mutex_;  // guards writer_, failed_, owed_ and quiet_
+  mutable std::mutex mutex_;  // guards writer_, failed_, owed_, owed_work_ and quiet_
   shm::RingWriter writer_;
   bool failed_ = false;
   bool owed_ = false;      // records written whose wake-up is not taken yet
+  bool owed_work_ = false;  // among them one the reader may work on ahead of its tick (a frame)
   bool quiet_ = false;     // done accepted, its next tick not written yet (quiet_until_tick)
   bool unlinked_ = false;  // loop thread (and the destructor)
 };

@@ -21,10 +21,11 @@
 // A lockstep client that waits for nothing but its next tick says so in its `done` ("quiet"): once
 // that done is accepted (quiet_until_tick), what its ring gets wakes nobody until its next tick
 // record, which wakes it once with all of it (the replies to the requests it sent with the done,
-// events, frames). Anything that may leave the client waiting for something other than that tick
-// ends the quiet with a wake-up: a further request of the connection (its reply may be awaited),
-// the clock idling paused, its leaving the lockstep (a drop, a disconnect), a reset, the server
-// stopping (end_quiet, end_quiet_all).
+// events); but a camera frame (LineServer::send's work_ahead) wakes it as it comes, so that its
+// vision runs while the simulation steps on. Anything that may leave the client waiting for
+// something other than that tick ends the quiet with a wake-up: a further request of the connection
+// (its reply may be awaited), the clock idling paused, its leaving the lockstep (a drop, a
+// disconnect), a reset, the server stopping (end_quiet, end_quiet_all).
 //
 // A client that stops reading (the ring full), or writes into the ring what the protocol forbids
 // (its read position outside what was written), is dropped: its connection is closed as overloaded

@@ -99,7 +99,7 @@ class RingFixture : public ::testing::Test {
   static constexpr int kWrites = 1000;
   void write_from_another_thread_during_passes() {
     std::thread writer([&] {
-      for (int i = 0; i < kWrites; ++i) send("frame");
+      for (int i = 0; i < kWrites; ++i) send("record");
     });
     for (int pass = 0; pass < kWrites; ++pass) {
       transport_->hold_wakeups();
@@ -147,7 +147,7 @@ TEST_F(RingFixture, ADoneAcceptedPutsThePassWakeupOffToTheNextTick) {
     EXPECT_EQ(wakes(), 0) << t;
     // events written before the tick, from the loop or another thread, outside a pass
     send("event " + std::to_string(t));
-    std::thread([&] { send("frame " + std::to_string(t)); }).join();
+    std::thread([&] { send("event' " + std::to_string(t)); }).join();
     EXPECT_EQ(wakes(), 0) << t;
     transport_->hold_wakeups();
     tick(t);
@@ -156,8 +156,42 @@ TEST_F(RingFixture, ADoneAcceptedPutsThePassWakeupOffToTheNextTick) {
     EXPECT_EQ(wakes(), 1) << t;
     EXPECT_EQ(read_all(), (Lines{"radio " + std::to_string(t), "radio' " + std::to_string(t),
                                  "done " + std::to_string(t), "event " + std::to_string(t),
-                                 "frame " + std::to_string(t), "tick " + std::to_string(t)}));
+                                 "event' " + std::to_string(t), "tick " + std::to_string(t)}));
   }
+}
+
+// A camera frame (written by the render thread, work_ahead) wakes a quiet reader as it comes, with
+// the replies before it, so that its vision runs while the simulation steps on; what comes after
+// it without work_ahead waits for the tick again.
+TEST_F(RingFixture, ACameraFrameWakesAQuietReaderTheRepliesAndEventsStillWait) {
+  auto frame = [&](const std::string& name) {
+    std::thread([&] {
+      ASSERT_TRUE(server_->send(conn_, name + "\n", /*work_ahead=*/true));
+    }).join();
+  };
+  transport_->hold_wakeups();
+  send("radio 1");
+  transport_->quiet_until_tick(conn_);
+  send("done 1");
+  transport_->release_wakeups();
+  EXPECT_EQ(wakes(), 0);
+  frame("frame 1");
+  EXPECT_EQ(wakes(), 1);
+  EXPECT_EQ(read_all(), (Lines{"radio 1", "done 1", "frame 1"}));
+  send("event 1");  // still quiet
+  EXPECT_EQ(wakes(), 0);
+  // a frame during a gate pass wakes at its end, quiet or not
+  transport_->hold_wakeups();
+  frame("frame 2");
+  EXPECT_EQ(wakes(), 0);
+  transport_->release_wakeups();
+  EXPECT_EQ(wakes(), 1);
+  EXPECT_EQ(read_all(), (Lines{"event 1", "frame 2"}));
+  transport_->hold_wakeups();
+  tick(1);
+  transport_->release_wakeups();
+  EXPECT_EQ(wakes(), 1);
+  EXPECT_EQ(read_all(), (Lines{"tick 1"}));
 }
 
 // A request after the done: its reply may be awaited, so it wakes, with what came before it.
