@@ -12,10 +12,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
+#include "../support/loopback_tcp.hpp"
 #include "api/api_server.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
@@ -53,11 +53,7 @@ struct Harness {
     gate = api->gate();
     api->start();
     fd = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(api->port());
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    check(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0);
+    check(uavsim::testing::connect_loopback_tcp(fd, api->port()));
     read_until_line_with("\"hello\"");
   }
 

@@ -5,26 +5,25 @@
 #pragma once
 
 #include <arpa/inet.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <gtest/gtest.h>
-
 #include <deque>
 #include <limits>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
-#include <nlohmann/json.hpp>
-
+#include "../../support/loopback_tcp.hpp"
 #include "api/api_server.hpp"
-#include "sim_api_client.hpp"
 #include "objects/world_objects.hpp"
 #include "physics/world.hpp"
 #include "sim/runner.hpp"
+#include "sim_api_client.hpp"
 
 namespace uavsim::server::api::testing {
 
@@ -98,11 +97,7 @@ class RawClient {
  public:
   explicit RawClient(uint16_t port) {
     fd_ = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+    EXPECT_TRUE(uavsim::testing::connect_loopback_tcp(fd_, port));
     hello_ = read_message();
   }
   ~RawClient() { close(fd_); }

@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "../../support/loopback_tcp.hpp"
 #include "api/line_server.hpp"
 #include "uavsim/common/shm_ring.hpp"
 
@@ -35,11 +36,7 @@ class RingFixture : public ::testing::Test {
     server_ = std::make_unique<LineServer>("127.0.0.1", 0, LineServer::Limits{}, cb);
     server_->start();
     socket_ = socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(server_->port());
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(connect(socket_, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+    ASSERT_TRUE(uavsim::testing::connect_loopback_tcp(socket_, server_->port()));
     conn_ = connected.get_future().get();
     transport_ = std::make_unique<ShmTransport>(*server_);
     std::string why;

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "../../support/loopback_tcp.hpp"
 #include "uavsim/client/sim_connection.hpp"
 
 namespace uavsim::server::api::testing {
@@ -53,11 +54,7 @@ class SimApiClient {
   explicit SimApiClient(uint16_t port, int rcvbuf = 0, double wait_s = 10.0) : wait_s_(wait_s) {
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
     if (rcvbuf > 0) setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof(rcvbuf));
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    EXPECT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)), 0);
+    EXPECT_TRUE(uavsim::testing::connect_loopback_tcp(fd, port));
     auto c = client::SimConnection::adopt(fd, wait_s_);
     EXPECT_TRUE(c) << c.message();
     if (c) conn_ = std::move(*c);
