@@ -2,43 +2,28 @@
 // the contact rule (vehicles in different shards pass through each other; all of them stand on the
 // ground).
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <string>
 #include <vector>
 
-#include <mujoco/mujoco.h>
-
 #include "physics/world.hpp"
 #include "physics/world_composer.hpp"
+#include "test_worlds.hpp"
 
 namespace uavsim::server::physics {
 namespace {
-
-namespace fs = std::filesystem;
 
 // a quad's body origin stands this high on its gear (models/vehicles/quad.xml)
 constexpr double kGearHeight_m = 0.16;
 constexpr double kRestTol_m = 0.02;
 
 std::string write_world(const std::string& name, const std::string& worldbody) {
-  const fs::path dir = fs::temp_directory_path() / "uavsim_shard_test";
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
-  std::ofstream(p) << "<mujoco>\n  <compiler angle=\"radian\"/>\n  <option timestep=\"0.001\"/>\n"
-                   << "  <include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/>\n"
-                   << "  <worldbody>\n"
-                   << worldbody << "\n  </worldbody>\n</mujoco>\n";
-  return p.string();
+  return testing::write_world("uavsim_shard_test", name, worldbody);
 }
 
-ComposeOptions options() {
-  ComposeOptions o;
-  o.models_dir = UAVSIM_MODELS_DIR;
-  return o;
-}
+ComposeOptions options() { return testing::source_models(); }
 
 const std::string kGrid10 =
     R"(<uavsim_grid type="quad" prefix="uav" rows="2" cols="5" spacing="3" collision="lean"/>)";

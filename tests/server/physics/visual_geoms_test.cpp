@@ -6,8 +6,6 @@
 
 #include <algorithm>
 #include <array>
-#include <filesystem>
-#include <fstream>
 #include <memory>
 #include <string>
 
@@ -15,26 +13,17 @@
 #include "physics/line_of_sight.hpp"
 #include "physics/world.hpp"
 #include "physics/world_composer.hpp"
+#include "test_worlds.hpp"
 
 namespace uavsim::server::physics {
 namespace {
 
-namespace fs = std::filesystem;
-
 std::string write_world(const std::string& name, const std::string& worldbody) {
-  const fs::path dir = fs::temp_directory_path() / "uavsim_visual_geoms_test";
-  fs::create_directories(dir);
-  const fs::path p = dir / name;
-  std::ofstream(p) << "<mujoco>\n  <compiler angle=\"radian\"/>\n  <option timestep=\"0.001\"/>\n"
-                   << "  <include file=\"" << UAVSIM_MODELS_DIR << "/common/ground.xml\"/>\n"
-                   << "  <worldbody>\n"
-                   << worldbody << "\n  </worldbody>\n</mujoco>\n";
-  return p.string();
+  return testing::write_world("uavsim_visual_geoms_test", name, worldbody);
 }
 
 std::unique_ptr<World> load(const std::string& path, bool visual_geoms) {
-  ComposeOptions o;
-  o.models_dir = UAVSIM_MODELS_DIR;
+  ComposeOptions o = testing::source_models();
   o.vehicle_visual_geoms = visual_geoms;
   return World::load(path, o);
 }
