@@ -389,15 +389,15 @@ void Shard::reset() {
 
 std::string Shard::body_name(int body_id) const { return name_of(m_, mjOBJ_BODY, body_id); }
 std::string Shard::geom_name(int geom_id) const { return name_of(m_, mjOBJ_GEOM, geom_id); }
+int Shard::body_id(const std::string& name) const {
+  return mj_name2id(m_, mjOBJ_BODY, name.c_str());
+}
 
 bool Shard::vehicle_visual_only(int geom_id) const {
   if (geom_id < 0 || geom_id >= m_->ngeom) return false;
   const size_t g = static_cast<size_t>(geom_id);
   return body_vehicle_[static_cast<size_t>(m_->geom_bodyid[g])] >= 0 && geom_contype0_[g] == 0 &&
          geom_conaffinity0_[g] == 0;
-}
-int Shard::body_id(const std::string& name) const {
-  return mj_name2id(m_, mjOBJ_BODY, name.c_str());
 }
 
 }  // namespace uavsim::server::physics

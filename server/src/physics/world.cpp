@@ -61,11 +61,10 @@ void World::sync_parked(size_t k) {
 World::~World() = default;
 
 const mjModel* World::model() const { return shards_[0]->model(); }
-
-bool World::vehicle_visual_only(int geom) const { return shards_[0]->vehicle_visual_only(geom); }
 mjModel* World::mutable_model() { return shards_[0]->model(); }
 mjData* World::data() { return shards_[0]->data(); }
 const mjData* World::data() const { return shards_[0]->data(); }
+bool World::vehicle_visual_only(int geom) const { return shards_[0]->vehicle_visual_only(geom); }
 int World::thread_count() const { return pool_->threads(); }
 
 Shard& World::shard_of(size_t vehicle) const { return *shards_[static_cast<size_t>(vehicles_[vehicle].shard)]; }
