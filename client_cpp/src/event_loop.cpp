@@ -49,6 +49,8 @@ double EventLoop::Impl::now() const {
 }
 
 bool EventLoop::Impl::dispatch(int timeout_ms) {
+  // the server is woken for this loop's requests before it sleeps (SimChannel's deferred wake-ups)
+  if (timeout_ms != 0) api.flush_request_wakeup();
   epoll_event evs[64];
   int n;
   do {

@@ -68,6 +68,7 @@ struct EventLoop::Impl {
   std::int64_t tick = -1;
   bool tick_outstanding = false;
   std::optional<double> pending_busy_until;
+  std::vector<std::uint8_t> done_record;  // a binary done's payload (reused)
   // from the server's replies to `done`: does it wait for the MAVLink seqs named there
   // (api::SeqWaiter)?
   std::optional<bool> mavlink_seq_checked;
@@ -109,6 +110,12 @@ struct EventLoop::Impl {
   // what the modules' sinks and reply handlers on the lockstep connection do not take
   void on_unrouted(const nlohmann::json& j);
   void send_done();
+  // done in its binary form on the request ring, or as a line (on TCP, or for vehicles named by
+  // name); seqs: (vehicle key, last MAVLink seq sent)
+  bool send_done_record(const std::vector<std::pair<std::string, int>>& seqs,
+                        std::optional<double> busy_until);
+  bool send_done_line(const std::vector<std::pair<std::string, int>>& seqs,
+                      std::optional<double> busy_until);
   // pipelined lockstep, at a tick: sends the outputs held since the last tick ...
   void release_held_outputs();
   // ... then answers `done` before the tick's work, and holds what the work sends

@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "event_loop_impl.hpp"
 #include "net.hpp"
+#include "uavsim/common/shm_requests.hpp"
 
 namespace uavsim::client {
 
@@ -61,22 +63,57 @@ void EventLoop::Impl::send_done() {
     tick_outstanding = false;
     return;
   }
-  Json done = {{"op", "done"}, {"tick", tick}};
-  Json seqs = Json::object();
+  // the MAVLink seqs the server must have handled before this tick ends (by vehicle key)
+  std::vector<std::pair<std::string, int>> seqs;
   for (const auto& [id, src] : seq_sources) {
-    if (auto s = src()) seqs[s->first] = s->second;
+    if (auto s = src()) seqs.push_back(std::move(*s));
   }
-  if (!seqs.empty()) done["mavlink_seq"] = seqs;
-  if (pending_busy_until) done["busy_until"] = *pending_busy_until;
+  const std::optional<double> busy_until = pending_busy_until;
+  pending_busy_until.reset();
+  tick_outstanding = false;
+  // straight to the server: never held with the outputs
+  const bool sent = api.has_request_ring() ? send_done_record(seqs, busy_until)
+                                           : send_done_line(seqs, busy_until);
+  // the done wakes the server for it and the tick's requests before it, whatever the loop does next
+  // (run_busy works on without sleeping)
+  api.flush_request_wakeup();
+  if (!sent) lose_clock("cannot send done to the simulator");
+}
+
+bool EventLoop::Impl::send_done_record(const std::vector<std::pair<std::string, int>>& seqs,
+                                       std::optional<double> busy_until) {
+  // the binary done (common/shm_requests.hpp): quiet, as this loop waits for its next tick, never
+  // for the reply, which comes only if the server refuses the done. Vehicles named by name rather
+  // than index have no binary form: such a done goes as its line.
+  common::shm::DoneRecord d;
+  d.quiet = true;
+  d.tick = tick;
+  d.busy_until_s = busy_until;
+  for (const auto& [key, seq] : seqs) {
+    char* end = nullptr;
+    const unsigned long vehicle = std::strtoul(key.c_str(), &end, 10);
+    if (key.empty() || *end != '\0' || vehicle >= common::shm::kMaxVehicleIndex || seq < 0 ||
+        seq > 255) {
+      return send_done_line(seqs, busy_until);
+    }
+    d.mavlink_seq.emplace_back(static_cast<std::uint32_t>(vehicle), static_cast<std::uint8_t>(seq));
+  }
+  done_record.clear();
+  common::shm::encode_done(d, &done_record);
+  return api.send_binary(common::shm::RecordType::kDone, done_record);
+}
+
+bool EventLoop::Impl::send_done_line(const std::vector<std::pair<std::string, int>>& seqs,
+                                     std::optional<double> busy_until) {
+  Json done = {{"op", "done"}, {"tick", tick}};
+  Json seq_map = Json::object();
+  for (const auto& [key, seq] : seqs) seq_map[key] = seq;
+  if (!seq_map.empty()) done["mavlink_seq"] = seq_map;
+  if (busy_until) done["busy_until"] = *busy_until;
   // this loop waits for its next tick, never for this reply: on the shared-memory stream the server
   // need not wake it before that tick (docs/protocol.md, "Shared-memory stream")
   if (api.on_ring()) done["quiet"] = true;
-  pending_busy_until.reset();
-  tick_outstanding = false;
-  // straight to the socket: never held with the outputs
-  if (!api.send_now(done.dump())) {
-    lose_clock("cannot send done to the simulator");
-  }
+  return api.send_now(done.dump());
 }
 
 void EventLoop::Impl::lose_clock(const std::string& why) {
@@ -151,6 +188,7 @@ Result<void> EventLoop::Impl::read_api_until(const std::function<bool()>& done,
   const double wall = config.lockstep_wall_timeout_s;
   const int ms = static_cast<int>(std::min(wall, 3600.0) * 1000.0);
   while (!done()) {
+    api.flush_request_wakeup();
     pollfd p{api.fd(), POLLIN, 0};
     int n;
     do {
@@ -216,6 +254,8 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
         return R(ring.error());
       }
       api.use_ring(std::move(*ring));
+      // every wait of this loop wakes the server first (dispatch, read_api_until)
+      api.defer_request_wakeups();
     }
   }
   // the join's reply, then the first tick. The clock before that tick is set while the reply is
@@ -227,6 +267,9 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
     join = j;
     if (j.value("ok", false) != true) return;
     const Json result = j.value("result", Json::object());
+    // (a binary done is not answered: the join says whether the server waits for MAVLink seqs)
+    if (result.contains("mavlink_seq_checked") && result["mavlink_seq_checked"].is_boolean())
+      mavlink_seq_checked = result["mavlink_seq_checked"].get<bool>();
     period_s = result.value("period_s", config.lockstep_period_s);
     sim_now = std::max(0.0, result.value("first_tick_time", 0.0) - period_s);
   };

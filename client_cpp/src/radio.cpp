@@ -7,6 +7,7 @@
 #include "loop_services.hpp"
 #include "sim_channel.hpp"
 #include "uavsim/common/base64.hpp"
+#include "uavsim/common/shm_requests.hpp"
 
 namespace uavsim::client {
 
@@ -24,6 +25,8 @@ struct A2aRadio::Impl {
   std::size_t max_frame_bytes = kRadioMaxFrameBytes;  // the channel's, from the subscription
   std::vector<RadioFrame> inbox;
   RadioCounters counters;
+  std::uint32_t refusal_tag = 0;     // the channel's standing handler of this radio's refusals
+  std::vector<std::uint8_t> record;  // a binary radio_send's payload (reused)
 
   Impl(EventLoop& l, int v) : loop(l), vehicle(v) {}
 
@@ -74,8 +77,10 @@ struct A2aRadio::Impl {
 A2aRadio::A2aRadio(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 A2aRadio::~A2aRadio() {
-  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel())
+  if (SimChannel* channel = LoopServices(impl_->loop).sim_channel()) {
     channel->remove_event_sink(impl_->radio_sink_id);
+    channel->remove_standing_reply(impl_->refusal_tag);
+  }
   unsubscribe_lockstep_events(impl_->loop, impl_->sink_id,
                               {{"op", "radio_unsubscribe"}, {"vehicle", impl_->vehicle}});
 }
@@ -100,19 +105,32 @@ Result<void> A2aRadio::send(const std::vector<std::uint8_t>& data, int to) {
                               "radio: a frame carries 1-" + std::to_string(impl_->max_frame_bytes) +
                                   " bytes, not " + std::to_string(data.size()));
   }
-  Json req = {
-      {"op", "radio_send"}, {"vehicle", impl_->vehicle}, {"data_b64", common::base64_encode(data)}};
-  if (to >= 0) {
-    req["to"] = to;
-  } else {
-    req["to"] = "broadcast";
-  }
   Impl* s = impl_.get();
   SimChannel* channel = LoopServices(impl_->loop).sim_channel();
-  if (channel == nullptr || !channel->request(std::move(req), [s](const Json& j) {
-        if (j.value("ok", false) != true) ++s->counters.refused;
-      })) {
+  if (channel == nullptr || !channel->is_open()) {
     return Result<void>::fail(Error::kConnectionLost, "radio: no simulator connection");
+  }
+  if (channel->has_request_ring() && !channel->outputs_held()) {
+    // the binary form: no JSON, no base64, and a reply only if the server refuses it
+    s->record.clear();
+    common::shm::encode_radio_send(s->refusal_tag, static_cast<std::uint32_t>(s->vehicle),
+                                   to >= 0 ? to : -1, data, &s->record);
+    if (!channel->send_binary(common::shm::RecordType::kRadioSend, s->record)) {
+      return Result<void>::fail(Error::kConnectionLost, "radio: no simulator connection");
+    }
+  } else {
+    Json req = {
+        {"op", "radio_send"}, {"vehicle", s->vehicle}, {"data_b64", common::base64_encode(data)}};
+    if (to >= 0) {
+      req["to"] = to;
+    } else {
+      req["to"] = "broadcast";
+    }
+    if (!channel->request(std::move(req), [s](const Json& j) {
+          if (j.value("ok", false) != true) ++s->counters.refused;
+        })) {
+      return Result<void>::fail(Error::kConnectionLost, "radio: no simulator connection");
+    }
   }
   ++impl_->counters.sent;
   return {};
@@ -151,6 +169,8 @@ Result<std::unique_ptr<A2aRadio>> A2aRadio::open(EventLoop& loop, int vehicle, d
     s->max_frame_bytes = it->get<std::size_t>();
   }
   s->sink_id = *id;
+  // a binary radio_send is answered only when refused (docs/protocol.md, "Shared-memory stream")
+  s->refusal_tag = channel->add_standing_reply([s](const Json&) { ++s->counters.refused; });
   return std::unique_ptr<A2aRadio>(new A2aRadio(std::move(impl)));
 }
 

@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 namespace uavsim::client {
 
@@ -50,10 +52,24 @@ R ShmStream::open(const nlohmann::json& offer) {
     return R::fail(Error::kProtocol,
                    "shared-memory stream: the offer's ring_bytes is out of range");
   }
+  // the request ring after the server's, when the server gives one
+  const auto request_bytes = offer.find("request_ring_bytes");
+  std::size_t request_capacity = 0;
+  if (request_bytes != offer.end()) {
+    if (!request_bytes->is_number_unsigned() ||
+        shm::region_bytes(static_cast<std::size_t>(request_bytes->get<std::uint64_t>())) == 0) {
+      return R::fail(Error::kProtocol,
+                     "shared-memory stream: the offer's request_ring_bytes is out of range");
+    }
+    request_capacity = static_cast<std::size_t>(request_bytes->get<std::uint64_t>());
+  }
   const std::string t = token->get<std::string>();
   const std::string name = shm::object_name(t);
   const std::string fifo = shm::fifo_path(t);
-  const std::size_t size = shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>()));
+  const std::size_t ring_size =
+      shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>()));
+  const std::size_t size =
+      ring_size + (request_capacity == 0 ? 0 : shm::region_bytes(request_capacity));
 
   // the region: this user's, private to it, of the size announced
   const int fd = shm_open(name.c_str(), O_RDWR | O_CLOEXEC, 0);
@@ -89,18 +105,86 @@ R ShmStream::open(const nlohmann::json& offer) {
     return R::fail(Error::kIo, "shared-memory stream: " + fifo + ": " + fifo_error);
   }
   std::string why;
-  auto reader = shm::RingReader::attach(region, size, &why);
+  auto reader = shm::RingReader::attach(region, ring_size, &why);
   if (!reader) {
     close(fifo_fd);
     munmap(region, size);
     return R::fail(Error::kProtocol, "shared-memory stream: " + why);
   }
-  return std::unique_ptr<ShmStream>(new ShmStream(region, size, fifo_fd, *reader));
+  std::optional<Requests> requests;
+  if (request_capacity != 0) {
+    // the server's wake-up FIFO, opened for reading too: a server gone leaves a FIFO with a reader
+    // (this one), so a wake-up written then is lost instead of raising SIGPIPE (the socket's close
+    // says the server is gone)
+    const std::string request_fifo = shm::request_fifo_path(t);
+    const int fd = ::open(request_fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    struct stat rst {};
+    const bool ok =
+        fd >= 0 && fstat(fd, &rst) == 0 && S_ISFIFO(rst.st_mode) && rst.st_uid == geteuid();
+    const std::string error = fd < 0 ? std::strerror(errno) : "not this user's FIFO";
+    unlink(request_fifo.c_str());
+    if (!ok) {
+      if (fd >= 0) close(fd);
+      close(fifo_fd);
+      munmap(region, size);
+      return R::fail(Error::kIo, "shared-memory stream: " + request_fifo + ": " + error);
+    }
+    requests = Requests{
+        shm::RingWriter(static_cast<std::uint8_t*>(region) + ring_size, request_capacity), fd};
+  }
+  return std::unique_ptr<ShmStream>(
+      new ShmStream(region, size, fifo_fd, *reader, std::move(requests)));
 }
 
 ShmStream::~ShmStream() {
   munmap(region_, size_);
   close(fifo_fd_);
+  if (requests_) close(requests_->fifo_fd);
+}
+
+bool ShmStream::write_request(common::shm::RecordType type, std::span<const std::uint8_t> payload,
+                              double timeout_s, std::string* why, bool defer_wakeup) {
+  if (!requests_) {
+    *why = "no request ring";
+    return false;
+  }
+  const std::span<const std::uint8_t> parts[] = {payload};
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(std::clamp(timeout_s, 0.0, 3600.0)));
+  for (;;) {
+    const auto error = requests_->writer.write(type, parts, why);
+    if (!error) break;
+    if (*error == shm::RingError::kTooLarge) {
+      *why = "a request of " + std::to_string(payload.size()) +
+             " bytes is larger than the request ring";
+      return false;
+    }
+    if (*error == shm::RingError::kCorrupt) {
+      *why = "the request ring is broken: " + *why;
+      return false;
+    }
+    // full: the server's I/O thread, woken for what waits, is behind
+    flush_wakeup();
+    if (std::chrono::steady_clock::now() > deadline) {
+      *why = "the request ring stayed full (the server reads no requests)";
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+  requests_->wake_owed = true;
+  if (!defer_wakeup) flush_wakeup();
+  return true;
+}
+
+void ShmStream::flush_wakeup() {
+  if (!requests_ || !requests_->wake_owed) return;
+  requests_->wake_owed = false;
+  if (requests_->writer.take_wakeup()) {
+    const char b = 1;
+    // a full FIFO holds a wake-up already
+    (void)!::write(requests_->fifo_fd, &b, 1);
+  }
 }
 
 bool ShmStream::drain_wakeups() {
@@ -125,7 +209,7 @@ bool ShmStream::offered_by(const nlohmann::json& hello) {
 }
 
 nlohmann::json ShmStream::offer_request() {
-  return {{"op", "lockstep_shm"}, {"ring_bytes", kRingBytes}};
+  return {{"op", "lockstep_shm"}, {"ring_bytes", kRingBytes}, {"requests", true}};
 }
 
 bool ShmStream::peer_is_local(int socket_fd) {

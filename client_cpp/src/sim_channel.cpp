@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <utility>
@@ -81,16 +83,41 @@ bool SimChannel::send(const std::string& line) {
   return send_now(line);
 }
 
-bool SimChannel::send_now(const std::string& line) {
-  return fd_ >= 0 && net::send_all(fd_, line + "\n", send_timeout_s_);
-}
+bool SimChannel::send_now(const std::string& line) { return send_lines(line + "\n"); }
 
 bool SimChannel::release_outputs() {
   outputs_held_ = false;
   if (held_.empty()) return true;
   std::string lines;
   lines.swap(held_);
-  return fd_ >= 0 && net::send_all(fd_, lines, send_timeout_s_);
+  return send_lines(lines);
+}
+
+bool SimChannel::send_lines(const std::string& lines) {
+  if (fd_ < 0) return false;
+  if (!has_request_ring()) return net::send_all(fd_, lines, send_timeout_s_);
+  std::string why;
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(lines.data());
+  if (ring_->write_request(common::shm::RecordType::kStream, {bytes, lines.size()}, send_timeout_s_,
+                           &why, defer_wakeups_)) {
+    return true;
+  }
+  std::fprintf(stderr, "uavsim client: sim API: %s\n", why.c_str());
+  return false;
+}
+
+bool SimChannel::send_binary(common::shm::RecordType type, std::span<const std::uint8_t> payload) {
+  if (fd_ < 0 || !has_request_ring()) return false;
+  std::string why;
+  if (ring_->write_request(type, payload, send_timeout_s_, &why, defer_wakeups_)) return true;
+  std::fprintf(stderr, "uavsim client: sim API: %s\n", why.c_str());
+  return false;
+}
+
+std::uint32_t SimChannel::add_standing_reply(ReplyHandler handler) {
+  const std::uint32_t tag = next_standing_tag_++;
+  standing_replies_[tag] = std::move(handler);
+  return tag;
 }
 
 SimChannel::ReadResult SimChannel::read_available(std::string* why) {
@@ -139,6 +166,10 @@ SimChannel::ReadResult SimChannel::read_ring(std::string* why) {
       return closed ? ReadResult::kClosed : ReadResult::kOk;
     if (status == shm::RingReader::Status::kCorrupt) {
       if (why != nullptr) *why = "shared-memory stream: " + error;
+      return ReadResult::kError;
+    }
+    if (record_.type != shm::RecordType::kStream && record_.type != shm::RecordType::kTick) {
+      if (why != nullptr) *why = "shared-memory stream: a request record from the server";
       return ReadResult::kError;
     }
     if (record_.type == shm::RecordType::kStream) {
@@ -225,7 +256,19 @@ void SimChannel::route(const Json& j, std::string_view payload) {
     return;
   }
   if (j.contains("id") && j["id"].is_string()) {
-    auto it = reply_handlers_.find(j["id"].get<std::string>());
+    const std::string& id = j["id"].get_ref<const std::string&>();
+    // a binary request's refusal: "b<tag>"
+    if (!id.empty() && id[0] == 'b') {
+      char* end = nullptr;
+      const unsigned long tag = std::strtoul(id.c_str() + 1, &end, 10);
+      const auto standing = standing_replies_.find(static_cast<std::uint32_t>(tag));
+      if (*end == '\0' && id.size() > 1 && standing != standing_replies_.end()) {
+        auto fn = standing->second;  // the handler may remove itself
+        fn(j);
+        return;
+      }
+    }
+    auto it = reply_handlers_.find(id);
     if (it != reply_handlers_.end()) {
       auto fn = std::move(it->second);
       reply_handlers_.erase(it);

@@ -26,6 +26,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -67,11 +68,19 @@ class SimChannel {
   bool is_open() const { return fd_ >= 0; }
   // The descriptor to wait on for input: the socket, or the shared-memory stream's wake-up.
   int fd() const { return ring_ ? ring_->wake_fd() : fd_; }
-  // From now on input comes from this shared-memory stream, not the socket (requests still go on
-  // the socket). Call once the reply that offered it has been read: nothing follows it on the
-  // socket.
+  // From now on input comes from this shared-memory stream, not the socket, and requests go into
+  // its request ring if it has one (else on the socket). Call once the reply that offered it has
+  // been read: nothing follows it on the socket.
   void use_ring(std::unique_ptr<ShmStream> ring) { ring_ = std::move(ring); }
   bool on_ring() const { return ring_ != nullptr; }
+  // Whether requests go through a request ring, where radio_send and done have a binary form.
+  bool has_request_ring() const { return ring_ && ring_->has_requests(); }
+  // The owner wakes the server for what it wrote into the request ring only before it sleeps
+  // (flush_request_wakeup): a lockstep loop's requests of a tick and its done wake the server once.
+  void defer_request_wakeups() { defer_wakeups_ = true; }
+  void flush_request_wakeup() {
+    if (ring_) ring_->flush_wakeup();
+  }
 
   // ---- sending
   // Sends request (an object with "op") with the next id; on_reply gets the whole reply when it is
@@ -81,6 +90,16 @@ class SimChannel {
   bool send(const std::string& line);
   // One line, never held (the lockstep `done`).
   bool send_now(const std::string& line);
+  // A binary request into the request ring (common/shm_requests.hpp: its payload), never held: the
+  // server answers it only if it refuses it, to the standing handler of its tag (tag 0: unrouted).
+  // False without a request ring, or when the write fails.
+  bool send_binary(common::shm::RecordType type, std::span<const std::uint8_t> payload);
+  // Whether lines are held now (hold_outputs): a binary request must not overtake them.
+  bool outputs_held() const { return outputs_held_; }
+  // A handler for the refusals of binary requests sent with the returned tag (never 0), until
+  // removed.
+  std::uint32_t add_standing_reply(ReplyHandler handler);
+  void remove_standing_reply(std::uint32_t tag) { standing_replies_.erase(tag); }
   // Lines sent from now on are kept until release_outputs(), which sends them (false if that fails).
   void hold_outputs() { outputs_held_ = true; }
   bool release_outputs();
@@ -125,7 +144,12 @@ class SimChannel {
   ApiStream stream_;
   bool outputs_held_ = false;
   std::string held_;
+  // sends whole lines (each with its newline) on the request ring or the socket
+  bool send_lines(const std::string& lines);
   std::map<std::string, ReplyHandler> reply_handlers_;
+  std::map<std::uint32_t, ReplyHandler> standing_replies_;  // by tag ("b<tag>" ids)
+  std::uint32_t next_standing_tag_ = 1;
+  bool defer_wakeups_ = false;  // defer_request_wakeups()
   std::uint64_t next_request_id_ = 1;
   std::map<std::string, FrameSink> frame_sinks_;
   std::multimap<std::string, std::pair<std::uint64_t, EventSink>> event_sinks_;

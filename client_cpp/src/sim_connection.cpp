@@ -172,6 +172,10 @@ struct SimConnection::Impl {
       if (status == common::shm::RingReader::Status::kEmpty) break;
       if (status == common::shm::RingReader::Status::kCorrupt)
         return fail(Error::kProtocol, "sim API: shared-memory stream: " + why);
+      if (record.type != common::shm::RecordType::kStream &&
+          record.type != common::shm::RecordType::kTick) {
+        return fail(Error::kProtocol, "sim API: shared-memory stream: a request record");
+      }
       if (record.type == common::shm::RecordType::kStream) {
         if (auto e =
                 parse(reinterpret_cast<const char*>(record.payload.data()), record.payload.size()))
@@ -222,6 +226,14 @@ struct SimConnection::Impl {
   }
 
   bool send_line(const std::string& line, SteadyClock::time_point end) {
+    if (ring && ring->has_requests()) {
+      // the request ring: the server's I/O thread reads it without waiting for us
+      std::string why;
+      const auto* bytes = reinterpret_cast<const std::uint8_t*>(line.data());
+      const double left_s = std::chrono::duration<double>(end - SteadyClock::now()).count();
+      return ring->write_request(common::shm::RecordType::kStream, {bytes, line.size()}, left_s,
+                                 &why);
+    }
     std::size_t sent = 0;
     while (sent < line.size()) {
       const ssize_t n =

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <new>
 
+#include "shm_codec.hpp"
+
 namespace uavsim::common::shm {
 
 namespace {
@@ -20,6 +22,9 @@ std::atomic_ref<uint64_t> tail_of(RingHeader* h) { return std::atomic_ref<uint64
 std::atomic_ref<uint32_t> wake_of(RingHeader* h) {
   return std::atomic_ref<uint32_t>(h->wake_pending);
 }
+
+using codec::append;
+using codec::Cursor;
 
 constexpr std::size_t padded(std::size_t n) { return (n + 7) & ~std::size_t{7}; }
 
@@ -44,38 +49,6 @@ void get(const uint8_t* data, std::size_t capacity, uint64_t pos, uint8_t* dst, 
   std::memcpy(dst + first, data, n - first);
 }
 
-template <typename T>
-void append(std::vector<uint8_t>* out, T value) {
-  const std::size_t at = out->size();
-  out->resize(at + sizeof(T));
-  std::memcpy(out->data() + at, &value, sizeof(T));
-}
-
-// a bounds-checked reader of a payload
-class Cursor {
- public:
-  explicit Cursor(std::span<const uint8_t> bytes) : bytes_(bytes) {}
-  template <typename T>
-  bool take(T* out) {
-    if (bytes_.size() - pos_ < sizeof(T)) return false;
-    std::memcpy(out, bytes_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return true;
-  }
-  bool take_bytes(std::size_t n, std::vector<uint8_t>* out) {
-    if (bytes_.size() - pos_ < n) return false;
-    out->assign(bytes_.begin() + static_cast<std::ptrdiff_t>(pos_),
-                bytes_.begin() + static_cast<std::ptrdiff_t>(pos_ + n));
-    pos_ += n;
-    return true;
-  }
-  std::size_t left() const { return bytes_.size() - pos_; }
-
- private:
-  std::span<const uint8_t> bytes_;
-  std::size_t pos_ = 0;
-};
-
 // a frame's fixed part: to, from, seq, broadcast, time, sent_time, length
 constexpr std::size_t kFrameFixedBytes = 4 + 4 + 8 + 1 + 8 + 8 + 2;
 
@@ -92,6 +65,13 @@ std::string fifo_path(const std::string& token) {
   std::string path = "/dev/shm/uavsim-";
   path += token;
   path += ".wake";
+  return path;
+}
+
+std::string request_fifo_path(const std::string& token) {
+  std::string path = "/dev/shm/uavsim-";
+  path += token;
+  path += ".req";
   return path;
 }
 
@@ -215,8 +195,7 @@ RingReader::Status RingReader::next(Record* out, std::string* why) {
     *why = "a record of version " + std::to_string(version);
     return Status::kCorrupt;
   }
-  if (type != static_cast<uint16_t>(RecordType::kStream) &&
-      type != static_cast<uint16_t>(RecordType::kTick)) {
+  if (type == 0 || type > kLastRecordType) {
     *why = "a record of unknown type " + std::to_string(type);
     return Status::kCorrupt;
   }

@@ -4,6 +4,8 @@
 #include <functional>
 
 #include "api/request_fields.hpp"
+#include "uavsim/common/shm_requests.hpp"
+#include "uavsim/common/shm_ring.hpp"
 
 namespace uavsim::server::api {
 
@@ -75,6 +77,9 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
     }
     enqueue({Request::Kind::kLine, conn, std::move(parsed.body)});
   };
+  cb.on_record = [this](uint64_t conn, uint16_t type, std::span<const uint8_t> payload) {
+    on_binary_request(conn, type, payload);
+  };
   cb.on_line_too_long = [this](uint64_t conn) {
     reply_in_order(conn, error_reply(nullptr, ApiError::kLineTooLong,
                                      "request lines are limited to " +
@@ -125,6 +130,55 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
 }
 
 ApiServer::~ApiServer() { shutdown(); }
+
+void ApiServer::on_binary_request(uint64_t conn, uint16_t type, std::span<const uint8_t> payload) {
+  namespace shm = common::shm;
+  // the request the JSON form would have been (a frame's bytes as a binary value, not base64),
+  // answered only if refused, with the id the client's tag gives (docs/protocol.md)
+  std::string why;
+  Json body;
+  uint32_t tag = 0;
+  if (type == static_cast<uint16_t>(shm::RecordType::kRadioSend)) {
+    auto r = shm::decode_radio_send(payload, &why);
+    if (!r) return reply_in_order(conn, error_reply(nullptr, ApiError::kBadRequest, why));
+    tag = r->tag;
+    body = {
+        {"op", "radio_send"}, {"vehicle", r->vehicle}, {"data", Json::binary(std::move(r->data))}};
+    if (r->to < 0) {
+      body["to"] = "broadcast";
+    } else {
+      body["to"] = r->to;
+    }
+  } else {
+    auto d = shm::decode_done(payload, &why);
+    if (!d) return reply_in_order(conn, error_reply(nullptr, ApiError::kBadRequest, why));
+    tag = d->tag;
+    body = {{"op", "done"}, {"quiet", d->quiet}};
+    if (d->tick) body["tick"] = *d->tick;
+    if (d->busy_until_s) body["busy_until"] = *d->busy_until_s;
+    if (!d->mavlink_seq.empty()) {
+      Json seqs = Json::object();
+      for (const auto& [vehicle, seq] : d->mavlink_seq) seqs[std::to_string(vehicle)] = seq;
+      body["mavlink_seq"] = std::move(seqs);
+    }
+  }
+  if (tag != 0) {
+    std::string id = "b";  // (appended, not "b" + ...: a GCC 12 -Wrestrict false positive)
+    id += std::to_string(tag);
+    body["id"] = std::move(id);
+  }
+  const Json id = body.value("id", Json(nullptr));
+  if (config_.token && !authenticated_.count(conn)) {
+    return reply_in_order(conn, error_reply(id, ApiError::kUnauthorized,
+                                            "this server needs a token first: {\"op\":\"auth\","
+                                            "\"token\":...} on the ring or TCP"));
+  }
+  // a server without a radio serves no radio_send
+  const std::string op = body["op"].get<std::string>();
+  if (ops_.find(op) == nullptr)
+    return reply_in_order(conn, error_reply(id, ApiError::kUnknownOp, "unknown op '" + op + "'"));
+  enqueue({Request::Kind::kLine, conn, std::move(body), /*errors_only=*/true});
+}
 
 std::string ApiServer::peer_address(uint64_t conn) const { return server_->peer_address(conn); }
 
@@ -329,7 +383,7 @@ void ApiServer::drain() {
         server_->close_when_sent(r.conn);
         break;
       case Request::Kind::kLine:
-        handle(r.conn, r.body);
+        handle(r.conn, r.body, r.errors_only);
         break;
       case Request::Kind::kReply:
         reply(r.conn, r.body);
@@ -357,7 +411,7 @@ void ApiServer::announce_ticks() {
 // ---------------------------------------------------------------------------------------------------
 // requests
 
-void ApiServer::handle(uint64_t conn, const Json& request) {
+void ApiServer::handle(uint64_t conn, const Json& request, bool errors_only) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);
   const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
   const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
@@ -370,7 +424,7 @@ void ApiServer::handle(uint64_t conn, const Json& request) {
   spec->handler(conn, request, &reply);
   trail.set_detail(nullptr);
   if (reply.failed()) return reply_error(conn, id, *reply.error, reply.message);
-  if (!reply.deferred) this->reply(conn, ok_reply(id, std::move(reply.result)));
+  if (!reply.deferred && !errors_only) this->reply(conn, ok_reply(id, std::move(reply.result)));
 }
 
 }  // namespace uavsim::server::api

@@ -30,6 +30,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -145,7 +146,8 @@ class ApiServer {
     // kReply: an answer made on the I/O thread (a malformed line), sent from the loop in its turn
     enum class Kind { kLine, kDisconnect, kReply } kind = Kind::kLine;
     uint64_t conn = 0;
-    Json body;  // the request, or the reply for kReply
+    Json body;                 // the request, or the reply for kReply
+    bool errors_only = false;  // a binary request from a request ring: answered only if refused
   };
 
   // I/O thread side
@@ -155,6 +157,9 @@ class ApiServer {
   void enqueue(Request request);
   void flush_staged();
   void send(uint64_t conn, const Json& message);
+  // a binary radio_send or done from a connection's request ring (common/shm_requests.hpp), queued
+  // as its JSON form
+  void on_binary_request(uint64_t conn, uint16_t type, std::span<const uint8_t> payload);
   void reply_error(uint64_t conn, const Json& id, ApiError code, const std::string& message);
   // queues a reply behind the connection's earlier requests (the loop sends it in order)
   void reply_in_order(uint64_t conn, Json reply);
@@ -164,7 +169,7 @@ class ApiServer {
   // loop thread side
   void on_gate();
   void drain();
-  void handle(uint64_t conn, const Json& request);
+  void handle(uint64_t conn, const Json& request, bool errors_only);
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
 

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <vector>
 
 #include "uavsim/common/tcp_socket.hpp"
@@ -63,6 +64,7 @@ void LineServer::teardown() {
   }
   std::lock_guard<std::mutex> lock(out_mutex_);
   for (auto& [id, c] : conns_) {
+    drop_intake(c);
     loop_.unwatch(c.fd);
     close(c.fd);
     c.out.close();
@@ -120,6 +122,54 @@ bool LineServer::divert(uint64_t conn, std::shared_ptr<Diversion> diversion) {
   if (it == conns_.end() || it->second.overloaded) return false;
   it->second.diversion = std::move(diversion);
   return true;
+}
+
+bool LineServer::add_intake(uint64_t conn, std::shared_ptr<Intake> intake) {
+  bool added = false;
+  loop_.call([&] {
+    // membership changes on this thread only: no lock to look
+    auto it = conns_.find(conn);
+    if (it == conns_.end() || it->second.read_closed || it->second.intake) return;
+    it->second.intake = std::move(intake);
+    loop_.watch(it->second.intake->fd(), EPOLLIN, [this, conn](std::uint32_t) { on_intake(conn); });
+    added = true;
+  });
+  return added;
+}
+
+void LineServer::on_intake(uint64_t id) {
+  auto it = conns_.find(id);
+  if (it == conns_.end() || !it->second.intake) return;
+  Conn& c = it->second;
+  {
+    // an overloaded connection's requests are not served (as its socket is not read)
+    std::lock_guard<std::mutex> lock(out_mutex_);
+    if (c.overloaded) return drop_intake(c);
+  }
+  const Intake::Sink sink{[this, id](std::string line) {
+                            if (line.size() > max_line_bytes_) {
+                              if (callbacks_.on_line_too_long) callbacks_.on_line_too_long(id);
+                            } else if (callbacks_.on_line) {
+                              callbacks_.on_line(id, std::move(line));
+                            }
+                          },
+                          [this, id](std::uint16_t type, std::span<const std::uint8_t> payload) {
+                            if (callbacks_.on_record) callbacks_.on_record(id, type, payload);
+                          }};
+  std::string why;
+  const bool ok = c.intake->read(sink, &why);
+  if (callbacks_.on_read_end) callbacks_.on_read_end(id);
+  if (ok) return;
+  std::fprintf(stderr, "sim API: connection %llu dropped: %s\n",
+               static_cast<unsigned long long>(id), why.c_str());
+  drop_intake(c);
+  close_overloaded(id);
+}
+
+void LineServer::drop_intake(Conn& c) {
+  if (!c.intake) return;
+  loop_.unwatch(c.intake->fd());
+  c.intake.reset();
 }
 
 void LineServer::close_overloaded(uint64_t conn) {
@@ -268,6 +318,7 @@ void LineServer::on_events(uint64_t id, std::uint32_t events) {
     if (r == ReadResult::kEof) {
       // the owner answers what it got, then calls close_when_sent
       c->read_closed = true;
+      drop_intake(*c);  // nothing is served after the disconnect
       if (callbacks_.on_disconnect) callbacks_.on_disconnect(id);
     }
   }
@@ -301,6 +352,7 @@ void LineServer::close_conn(uint64_t id) {
     if (it == conns_.end()) return;
     fd = it->second.fd;
     reported = it->second.read_closed;
+    drop_intake(it->second);
     total_pending_ -= it->second.out.unwritten();
     if (it->second.overloaded) overloaded_conns_.fetch_sub(1);
     conns_.erase(it);

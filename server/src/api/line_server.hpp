@@ -22,6 +22,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 
 #include "net/event_loop.hpp"
@@ -39,6 +40,9 @@ class LineServer {
     std::function<void(uint64_t conn)> on_disconnect;
     // after the lines of one read (what the peer had sent by then), before its on_disconnect
     std::function<void(uint64_t conn)> on_read_end;
+    // a binary request from a connection's Intake (its type and bytes, valid during the call)
+    std::function<void(uint64_t conn, std::uint16_t type, std::span<const std::uint8_t> payload)>
+        on_record;
   };
 
   // Binds and listens on bind_address:port (port 0: an ephemeral port). Throws std::runtime_error
@@ -69,6 +73,22 @@ class LineServer {
     virtual size_t pending_bytes() const = 0;  // written and not yet taken by the peer
   };
 
+  // A second way in for a connection's requests (the sim API's request ring, api/request_ring.hpp),
+  // read on the I/O thread while its descriptor is readable: its lines go to on_line (or
+  // on_line_too_long) and its binary requests to on_record, in its own order, then on_read_end, as
+  // for a read of the socket.
+  class Intake {
+   public:
+    virtual ~Intake() = default;
+    virtual int fd() const = 0;  // readable when requests may wait
+    struct Sink {
+      std::function<void(std::string line)> line;  // without its newline
+      std::function<void(std::uint16_t type, std::span<const std::uint8_t> payload)> record;
+    };
+    // Reads what waits. False with *why when the peer broke it: the connection is then closed as
+    // overloaded, with *why on stderr.
+    virtual bool read(const Sink& sink, std::string* why) = 0;
+  };
   // Starts accepting (and its own I/O thread, if it has one). Call once.
   void start();
   // Closes every socket; no callback runs after it returns. Thread-safe (not from a callback).
@@ -84,6 +104,10 @@ class LineServer {
   // From now on send() hands conn's output to diversion (what is queued already still goes to the
   // socket); the socket is still read. False if conn is gone. Thread-safe.
   bool divert(uint64_t conn, std::shared_ptr<Diversion> diversion);
+  // From now on conn's requests come through intake too (the peer keeps to one of them: the two
+  // have no order between them). The server lets go of it when conn closes or has sent its EOF.
+  // False if conn is gone. Thread-safe; waits for the I/O thread.
+  bool add_intake(uint64_t conn, std::shared_ptr<Intake> intake);
   // Closes conn as overloaded (the overload line, then the socket), as when its output passes its
   // cap: for a diversion that failed outside send(). Thread-safe.
   void close_overloaded(uint64_t conn);
@@ -108,6 +132,7 @@ class LineServer {
     std::string in;
     std::string peer;                      // the peer's IPv4 address
     std::shared_ptr<Diversion> diversion;  // divert(); guarded by out_mutex_
+    std::shared_ptr<Intake> intake;        // add_intake(); I/O thread only
     bool discarding = false;               // skipping the rest of an over-long line
     net::WriteBuffer out;                  // bounded by max_pending_bytes
     std::uint32_t interest = 0;            // the epoll events watched; I/O thread only
@@ -124,6 +149,8 @@ class LineServer {
   void on_events(uint64_t id, std::uint32_t events);
   void serve_all();  // writes every connection, closes the finished ones
   ReadResult read_conn(uint64_t id, Conn& c);
+  void on_intake(uint64_t id);
+  void drop_intake(Conn& c);  // I/O thread
   bool write_conn(Conn& c);  // false: failed; takes out_mutex_ itself
   void watch_for(Conn& c);   // reading while open, writing while output waits
   void close_conn(uint64_t id);

@@ -64,7 +64,8 @@ void LockstepOps::op_join(uint64_t conn, const Json& request, OpReply* reply) {
   const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, from_s);
   reply->result = {{"period_s", joined.period_s},
                    {"first_tick_time", joined.first_tick_time_s},
-                   {"timeout_s", joined.timeout_s}};
+                   {"timeout_s", joined.timeout_s},
+                   {"mavlink_seq_checked", server_.seq_checked()}};
 }
 
 void LockstepOps::op_leave(uint64_t conn, const Json&, OpReply*) {
@@ -135,15 +136,29 @@ void LockstepOps::op_shm(uint64_t conn, const Json& request, OpReply* reply) {
   if (clock_.step_in_progress(conn)) {
     return reply->fail(ApiError::kBusy, "a step request of this connection is in progress");
   }
-  const auto bytes = number_field(request, "ring_bytes");
-  const auto ring_bytes = bytes ? sim::checked_integer<uint64_t>(*bytes)
-                                : std::optional<uint64_t>(ShmTransport::kDefaultRingBytes);
-  if (!ring_bytes || common::shm::region_bytes(static_cast<size_t>(*ring_bytes)) == 0) {
-    return reply->fail(ApiError::kBadField,
-                       "\"ring_bytes\" must be a power of two in [65536, 268435456]");
+  // a ring's size: absent, the default; otherwise a power of two the ring takes
+  const auto ring_size = [&request](const char* key, size_t fallback) -> std::optional<size_t> {
+    const auto bytes = number_field(request, key);
+    const auto n =
+        bytes ? sim::checked_integer<uint64_t>(*bytes) : std::optional<uint64_t>(fallback);
+    if (!n || common::shm::region_bytes(static_cast<size_t>(*n)) == 0) return std::nullopt;
+    return static_cast<size_t>(*n);
+  };
+  const auto ring_bytes = ring_size("ring_bytes", ShmTransport::kDefaultRingBytes);
+  const auto request_bytes =
+      ring_size("request_ring_bytes", ShmTransport::kDefaultRequestRingBytes);
+  if (!ring_bytes || !request_bytes) {
+    return reply->fail(ApiError::kBadField, std::string("\"") +
+                                                (ring_bytes ? "request_ring_bytes" : "ring_bytes") +
+                                                "\" must be a power of two in [65536, 268435456]");
+  }
+  const auto requests = bool_field(request, "requests");
+  if (has_field(request, "requests") && !requests) {
+    return reply->fail(ApiError::kBadField, "\"requests\" must be a boolean");
   }
   std::string why;
-  const auto offer = shm_->offer(conn, static_cast<size_t>(*ring_bytes), &why);
+  const auto offer =
+      shm_->offer(conn, *ring_bytes, requests.value_or(false) ? *request_bytes : 0, &why);
   if (!offer) return reply->fail(ApiError::kNotAvailable, "no shared-memory stream: " + why);
   // the reply is the last message on TCP; everything after it goes to the ring
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);

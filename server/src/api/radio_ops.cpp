@@ -184,18 +184,27 @@ void RadioOps::op_send(uint64_t, const Json& request, OpReply* reply) {
       return reply->fail(ApiError::kBadField, "a vehicle cannot send a frame to itself");
     to = static_cast<int>(*v);
   }
-  const auto data_b64 = string_field(request, "data_b64");
-  if (!data_b64)
-    return reply->fail(ApiError::kMissingField, "\"data_b64\" (the frame, base64) is required");
-  // a bound before decoding: n bytes are 4 * ceil(n / 3) characters (127: 172; 1500: 2000)
+  // the frame: raw bytes from a request ring's binary form (docs/protocol.md), base64 otherwise
   const size_t max_bytes = radio_.model().max_payload_bytes();
   const char* technology = radio::technology_name(radio_.model().config().technology);
-  if (data_b64->size() > 4 * ((max_bytes + 2) / 3)) {
-    return reply->fail(ApiError::kFrameTooLarge, "a frame is at most " + std::to_string(max_bytes) +
-                                                     " bytes (" + technology + ")");
+  std::optional<std::vector<uint8_t>> decoded;
+  const std::vector<uint8_t>* data = nullptr;
+  if (const auto raw = request.find("data"); raw != request.end() && raw->is_binary()) {
+    data = &raw->get_binary();
+  } else {
+    const auto data_b64 = string_field(request, "data_b64");
+    if (!data_b64)
+      return reply->fail(ApiError::kMissingField, "\"data_b64\" (the frame, base64) is required");
+    // a bound before decoding: n bytes are 4 * ceil(n / 3) characters (127: 172; 1500: 2000)
+    if (data_b64->size() > 4 * ((max_bytes + 2) / 3)) {
+      return reply->fail(
+          ApiError::kFrameTooLarge,
+          "a frame is at most " + std::to_string(max_bytes) + " bytes (" + technology + ")");
+    }
+    decoded = common::base64_decode(*data_b64);
+    if (!decoded) return reply->fail(ApiError::kBadBase64, "\"data_b64\" is not valid base64");
+    data = &*decoded;
   }
-  const auto data = common::base64_decode(*data_b64);
-  if (!data) return reply->fail(ApiError::kBadBase64, "\"data_b64\" is not valid base64");
   if (data->empty()) return reply->fail(ApiError::kBadField, "a frame carries at least one byte");
   if (data->size() > max_bytes) {
     return reply->fail(ApiError::kFrameTooLarge,

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <span>
 
+#include "api/request_ring.hpp"
 #include "uavsim/common/shm_ring.hpp"
 
 namespace uavsim::server::api {
@@ -45,19 +46,18 @@ std::optional<std::string> random_token() {
 // One connection's ring: the mapping, the wake FIFO's write end, the writer.
 class ShmTransport::Ring : public LineServer::Diversion {
  public:
-  Ring(uint64_t conn, std::string token, void* region, std::size_t region_size,
-       std::size_t capacity, int fifo_fd, std::shared_ptr<Shared> shared)
+  // mapping: the region (this ring at its start), unmapped when the last of its users goes
+  Ring(uint64_t conn, std::string token, std::shared_ptr<void> mapping, std::size_t capacity,
+       int fifo_fd, std::shared_ptr<Shared> shared)
       : conn_(conn),
         token_(std::move(token)),
-        region_(region),
-        region_size_(region_size),
+        mapping_(std::move(mapping)),
         fifo_fd_(fifo_fd),
         shared_(std::move(shared)),
-        writer_(region, capacity) {}
+        writer_(mapping_.get(), capacity) {}
 
   ~Ring() override {
     unlink_names();
-    munmap(region_, region_size_);
     close(fifo_fd_);  // the client's FIFO sees the hang-up
   }
 
@@ -118,6 +118,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
     unlinked_ = true;
     shm_unlink(shm::object_name(token_).c_str());
     unlink(shm::fifo_path(token_).c_str());
+    unlink(shm::request_fifo_path(token_).c_str());
   }
 
   bool failed() const {
@@ -125,6 +126,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
     return failed_;
   }
 
+  std::shared_ptr<RequestRing> requests;    // the client's request ring, if it asked for one
   std::vector<radio::Delivery> tick_radio;  // loop thread: the frames for the next tick record
   std::vector<uint8_t> tick_body;           // loop thread: those frames encoded (reused)
 
@@ -160,8 +162,7 @@ class ShmTransport::Ring : public LineServer::Diversion {
 
   const uint64_t conn_;
   const std::string token_;
-  void* const region_;
-  const std::size_t region_size_;
+  const std::shared_ptr<void> mapping_;
   const int fifo_fd_;
   std::shared_ptr<Shared> shared_;
   mutable std::mutex mutex_;  // guards writer_, failed_, owed_, owed_work_ and quiet_
@@ -178,11 +179,16 @@ ShmTransport::ShmTransport(LineServer& server) : server_(server) {}
 ShmTransport::~ShmTransport() = default;
 
 std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t ring_bytes,
+                                                  std::size_t request_ring_bytes,
                                                   std::string* why) {
-  const std::size_t region_size = shm::region_bytes(ring_bytes);
+  // the server's ring, then the client's request ring if it asked for one
+  const std::size_t ring_region = shm::region_bytes(ring_bytes);
+  const std::size_t request_region =
+      request_ring_bytes == 0 ? 0 : shm::region_bytes(request_ring_bytes);
+  const std::size_t region_size = ring_region + request_region;
   const auto token = random_token();
-  if (region_size == 0 || !token) {
-    *why = region_size == 0 ? "bad ring size" : std::string("getrandom: ") + std::strerror(errno);
+  if (ring_region == 0 || (request_ring_bytes != 0 && request_region == 0) || !token) {
+    *why = token ? "bad ring size" : std::string("getrandom: ") + std::strerror(errno);
     return std::nullopt;
   }
   // the region: created here (never an object someone else made), 0600, sized, mapped
@@ -204,6 +210,7 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
            " bytes of shared memory: " + std::strerror(map_errno);
     return std::nullopt;
   }
+  std::shared_ptr<void> mapping(region, [region_size](void* r) { munmap(r, region_size); });
   // the wake-up FIFO: opened read-write, so the open does not wait for the client
   const std::string fifo = shm::fifo_path(*token);
   int fifo_fd = -1;
@@ -212,13 +219,19 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
   if (fifo_fd < 0) {
     *why = "FIFO " + fifo + ": " + std::strerror(errno);
     unlink(fifo.c_str());
-    munmap(region, region_size);
     shm_unlink(name.c_str());
     return std::nullopt;
   }
-  offered_[conn] =
-      std::make_shared<Ring>(conn, *token, region, region_size, ring_bytes, fifo_fd, shared_);
-  return nlohmann::json{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
+  auto ring = std::make_shared<Ring>(conn, *token, mapping, ring_bytes, fifo_fd, shared_);
+  nlohmann::json result{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
+  if (request_ring_bytes != 0) {
+    ring->requests = RequestRing::create(mapping, static_cast<uint8_t*>(region) + ring_region,
+                                         request_ring_bytes, shm::request_fifo_path(*token), why);
+    if (!ring->requests) return std::nullopt;  // (the ring unlinks the names it made)
+    result["request_ring_bytes"] = request_ring_bytes;
+  }
+  offered_[conn] = std::move(ring);
+  return result;
 }
 
 void ShmTransport::activate(uint64_t conn) {
@@ -227,6 +240,8 @@ void ShmTransport::activate(uint64_t conn) {
   std::shared_ptr<Ring> ring = std::move(it->second);
   offered_.erase(it);
   if (!server_.divert(conn, ring)) return;  // it closed meanwhile
+  // its requests from now on (the client writes none there before it has read the offer's reply)
+  if (ring->requests && !server_.add_intake(conn, ring->requests)) return;
   std::lock_guard<std::mutex> lock(mutex_);
   rings_[conn] = std::move(ring);
   activated_total_.fetch_add(1);

@@ -13,10 +13,10 @@
 // be); the server holds its only write end, so the client sees a hang-up when the connection ends
 // or the server dies.
 //
-// The client's requests, `done` included, stay on TCP: a request sent between a tick and its `done`
-// must run before the `done` (the lockstep contract, point 3), and one ordered channel keeps that
-// without a second sequencing scheme; the server's side of TCP is one read per request batch, which
-// the I/O thread does anyway.
+// A client that asks for it also gets a request ring (api/request_ring.hpp) in the same region, and
+// from then on sends every request there, `done` included: a request sent between a tick and its
+// `done` must run before the `done` (the lockstep contract, point 3), and one ordered channel keeps
+// that without a second sequencing scheme. Otherwise its requests stay on TCP.
 //
 // A lockstep client that waits for nothing but its next tick says so in its `done` ("quiet"): once
 // that done is accepted (quiet_until_tick), what its ring gets wakes nobody until its next tick
@@ -63,12 +63,19 @@ class ShmTransport {
   ShmTransport(const ShmTransport&) = delete;
   ShmTransport& operator=(const ShmTransport&) = delete;
 
+  // The request ring a client gets when it asks for one: many ticks of a flock agent's requests,
+  // and a request line of the longest the API takes (ApiConfig::max_line_bytes, 1 MiB).
+  static constexpr std::size_t kDefaultRequestRingBytes = std::size_t{2} << 20;
+
   // Creates conn's ring (ring_bytes: a power of two in [64 KiB, 256 MiB], checked by the caller)
-  // and returns what the client needs to map it ({token, ring_bytes, version}); nullopt with *why
-  // when the system refuses (no /dev/shm, out of memory). Output still goes to TCP until
-  // activate().
-  std::optional<nlohmann::json> offer(uint64_t conn, std::size_t ring_bytes, std::string* why);
-  // From now on conn's output goes to its offered ring. Call right after sending the offer's reply.
+  // and, unless request_ring_bytes is 0, its request ring after it in the same region (likewise;
+  // api/request_ring.hpp), and returns what the client needs to map them ({token, ring_bytes,
+  // version[, request_ring_bytes]}); nullopt with *why when the system refuses (no /dev/shm, out
+  // of memory). Output still goes to TCP until activate().
+  std::optional<nlohmann::json> offer(uint64_t conn, std::size_t ring_bytes,
+                                      std::size_t request_ring_bytes, std::string* why);
+  // From now on conn's output goes to its offered ring, and its requests come through its request
+  // ring as well as TCP. Call right after sending the offer's reply.
   void activate(uint64_t conn);
   // Whether conn's output goes to a ring.
   bool attached(uint64_t conn) const;

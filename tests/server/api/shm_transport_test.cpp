@@ -40,7 +40,7 @@ class RingFixture : public ::testing::Test {
     conn_ = connected.get_future().get();
     transport_ = std::make_unique<ShmTransport>(*server_);
     std::string why;
-    const auto offer = transport_->offer(conn_, shm::kMinCapacity, &why);
+    const auto offer = transport_->offer(conn_, shm::kMinCapacity, 0, &why);
     ASSERT_TRUE(offer) << why;
     const std::string token = (*offer)["token"];
     size_ = shm::region_bytes(shm::kMinCapacity);

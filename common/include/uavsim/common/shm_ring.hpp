@@ -32,11 +32,15 @@ inline constexpr std::size_t kRecordHeaderBytes = 8;
 inline constexpr std::size_t kMinCapacity = std::size_t{1} << 16;  // 64 KiB
 inline constexpr std::size_t kMaxCapacity = std::size_t{1} << 28;  // 256 MiB
 
-// What a record carries.
+// What a record carries. The server's ring carries kStream and kTick, a client's request ring
+// kStream, kRadioSend and kDone (shm_requests.hpp); each reader refuses the others.
 enum class RecordType : std::uint16_t {
   kStream = 1,  // bytes of the API's message stream, as TCP would carry them (whole messages)
   kTick = 2,    // a lockstep tick with the radio frames that arrived for the client since its last
+  kRadioSend = 3,  // a radio_send request, its frame's bytes raw
+  kDone = 4,       // a lockstep done request
 };
+inline constexpr std::uint16_t kLastRecordType = 4;
 
 // The shared header. Only the writer initialises it; afterwards the writer stores head and
 // wake_pending's set, the reader stores tail and wake_pending's clear. head, tail and wake_pending
@@ -59,9 +63,11 @@ static_assert(std::atomic_ref<std::uint32_t>::is_always_lock_free,
               "the ring's wake flag is shared between processes");
 
 // The names a stream's token gives (docs/protocol.md): the shared-memory object "/uavsim-TOKEN"
-// (for shm_open) and its wake-up FIFO "/dev/shm/uavsim-TOKEN.wake".
+// (for shm_open) and its wake-up FIFO "/dev/shm/uavsim-TOKEN.wake"; with a request ring, the FIFO
+// by which the client wakes the server, "/dev/shm/uavsim-TOKEN.req".
 std::string object_name(const std::string& token);
 std::string fifo_path(const std::string& token);
+std::string request_fifo_path(const std::string& token);
 
 // Bytes a region of this capacity takes, or 0 if the capacity is not a power of two in
 // [kMinCapacity, kMaxCapacity].
