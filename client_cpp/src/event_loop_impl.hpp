@@ -109,6 +109,8 @@ struct EventLoop::Impl {
   void notify_watch(int fd, std::uint32_t epoll_events);
   // what the modules' sinks and reply handlers on the lockstep connection do not take
   void on_unrouted(const nlohmann::json& j);
+  // a tick from the server (a tick message, or a tick record's): its work may run
+  void on_tick(std::int64_t n, double time_s);
   void send_done();
   // done in its binary form on the request ring, or as a line (on TCP, or for vehicles named by
   // name); seqs: (vehicle key, last MAVLink seq sent)

@@ -148,21 +148,25 @@ void EventLoop::Impl::after_read(SimChannel::ReadResult r, const std::string& wh
   }
 }
 
+void EventLoop::Impl::on_tick(std::int64_t n, double time_s) {
+  // the server flushed the MAVLink bytes of the steps before this tick before it sent the tick:
+  // they are handled now, at the clock of the tick before, wherever epoll would have put them in
+  // this batch
+  read_links();
+  if (!alive) return;
+  tick = n;
+  sim_now = time_s;
+  tick_outstanding = true;
+  done_sent = false;
+  if (outputs_held) release_held_outputs();  // what the last tick's work sent: it applies now
+  if (pipelined && alive) answer_early();
+}
+
 void EventLoop::Impl::on_unrouted(const Json& j) {
   if (j.contains("event")) {
     const std::string ev = j["event"].is_string() ? j["event"].get<std::string>() : "";
     if (ev == "tick") {
-      // the server flushed the MAVLink bytes of the steps before this tick before it sent the tick:
-      // they are handled now, at the clock of the tick before, wherever epoll would have put them
-      // in this batch
-      read_links();
-      if (!alive) return;
-      tick = j.value("tick", std::int64_t{0});
-      sim_now = j.value("time", sim_now);
-      tick_outstanding = true;
-      done_sent = false;
-      if (outputs_held) release_held_outputs();  // what the last tick's work sent: it applies now
-      if (pipelined && alive) answer_early();
+      on_tick(j.value("tick", std::int64_t{0}), j.value("time", sim_now));
     } else if (ev == "lockstep_dropped") {
       lose_clock("the simulator dropped this client: " + j.value("reason", std::string("?")));
     } else if (ev == "reset") {
@@ -254,6 +258,8 @@ Result<void> EventLoop::Impl::connect_and_join(bool use_shm, bool* shm_unusable)
         return R(ring.error());
       }
       api.use_ring(std::move(*ring));
+      // its tick records' ticks come straight here, not as tick messages
+      api.set_tick_handler([this](std::int64_t n, double time_s) { on_tick(n, time_s); });
       // every wait of this loop wakes the server first (dispatch, read_api_until)
       api.defer_request_wakeups();
     }

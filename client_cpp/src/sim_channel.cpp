@@ -196,7 +196,11 @@ bool SimChannel::route_tick(const std::vector<std::uint8_t>& payload, std::strin
       for (const auto& [id, sink] : sinks) sink(frame);
     }
   }
-  route(Json{{"event", "tick"}, {"tick", tick->tick}, {"time", tick->time_s}}, std::string_view());
+  if (tick_handler_) {
+    tick_handler_(tick->tick, tick->time_s);
+  } else {
+    route(Json{{"event", "tick"}, {"tick", tick->tick}, {"time", tick->time_s}}, std::string_view());
+  }
   return true;
 }
 

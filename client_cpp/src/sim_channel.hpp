@@ -129,6 +129,10 @@ class SimChannel {
   // Radio frames of tick records go to sink. Returns the sink's id (remove_event_sink removes it).
   std::uint64_t add_radio_sink(RadioSink sink);
   void remove_event_sink(std::uint64_t id);  // nothing if there is none (an event or radio sink)
+  // A tick record's tick goes to handler instead of as a tick message to the unrouted handler (the
+  // lockstep loop's, which then parses nothing for it).
+  using TickHandler = std::function<void(std::int64_t tick, double time_s)>;
+  void set_tick_handler(TickHandler handler) { tick_handler_ = std::move(handler); }
 
  private:
   void route(const Json& message, std::string_view payload);
@@ -150,6 +154,7 @@ class SimChannel {
   std::map<std::uint32_t, ReplyHandler> standing_replies_;  // by tag ("b<tag>" ids)
   std::uint32_t next_standing_tag_ = 1;
   bool defer_wakeups_ = false;  // defer_request_wakeups()
+  TickHandler tick_handler_;
   std::uint64_t next_request_id_ = 1;
   std::map<std::string, FrameSink> frame_sinks_;
   std::multimap<std::string, std::pair<std::uint64_t, EventSink>> event_sinks_;
