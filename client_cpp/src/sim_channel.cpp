@@ -187,19 +187,24 @@ SimChannel::ReadResult SimChannel::read_ring(std::string* why) {
 }
 
 bool SimChannel::route_tick(const std::vector<std::uint8_t>& payload, std::string* why) {
-  // the frames that arrived since the last tick, then the tick: as radio_batch and tick on TCP
-  auto tick = common::shm::decode_tick(payload, why);
-  if (!tick) return false;
-  if (!tick->frames.empty()) {
+  // the frames that arrived since the last tick, then the tick: as radio_batch and tick on TCP.
+  // Decoded into the buffers of the last tick's (taken out while in use: a handler may read on)
+  common::shm::TickRecord tick;
+  std::swap(tick, tick_buffer_);
+  if (!common::shm::decode_tick(payload, &tick, why)) return false;
+  if (!tick.frames.empty()) {
     const auto sinks = radio_sinks_;  // a sink may remove itself
-    for (const auto& frame : tick->frames) {
+    for (const auto& frame : tick.frames) {
       for (const auto& [id, sink] : sinks) sink(frame);
     }
   }
+  const std::int64_t number = tick.tick;
+  const double time_s = tick.time_s;
+  std::swap(tick, tick_buffer_);
   if (tick_handler_) {
-    tick_handler_(tick->tick, tick->time_s);
+    tick_handler_(number, time_s);
   } else {
-    route(Json{{"event", "tick"}, {"tick", tick->tick}, {"time", tick->time_s}}, std::string_view());
+    route(Json{{"event", "tick"}, {"tick", number}, {"time", time_s}}, std::string_view());
   }
   return true;
 }

@@ -161,6 +161,7 @@ class SimChannel {
   std::map<std::uint64_t, RadioSink> radio_sinks_;
   std::unique_ptr<ShmStream> ring_;
   common::shm::RingReader::Record record_;  // reused: its buffer keeps its capacity
+  common::shm::TickRecord tick_buffer_;     // reused likewise, by route_tick
   std::uint64_t next_event_sink_ = 1;
 };
 

@@ -240,23 +240,23 @@ std::vector<uint8_t> encode_tick_head(std::int64_t tick, double time_s, uint32_t
   return out;
 }
 
-std::optional<TickRecord> decode_tick(std::span<const uint8_t> payload, std::string* why) {
+bool decode_tick(std::span<const uint8_t> payload, TickRecord* out, std::string* why) {
   Cursor c(payload);
-  TickRecord r;
+  TickRecord& r = *out;
   uint32_t count = 0;
   if (!c.take(&r.tick) || !c.take(&r.time_s) || !c.take(&count)) {
     *why = "a tick record shorter than its head";
-    return std::nullopt;
+    return false;
   }
   if (r.tick < 0 || !std::isfinite(r.time_s) || r.time_s < 0.0) {
     *why = "a tick record with tick " + std::to_string(r.tick) + " at an impossible time";
-    return std::nullopt;
+    return false;
   }
   // each frame takes at least its fixed part and one byte: a count past that is a lie
   if (count > kMaxRadioFramesPerTick || count > c.left() / (kFrameFixedBytes + 1)) {
     *why = "a tick record announcing " + std::to_string(count) + " radio frames in " +
            std::to_string(c.left()) + " bytes";
-    return std::nullopt;
+    return false;
   }
   r.frames.resize(count);
   for (RadioFrame& f : r.frames) {
@@ -265,24 +265,30 @@ std::optional<TickRecord> decode_tick(std::span<const uint8_t> payload, std::str
     if (!c.take(&f.to) || !c.take(&f.from) || !c.take(&f.seq) || !c.take(&broadcast) ||
         !c.take(&f.time_s) || !c.take(&f.sent_time_s) || !c.take(&length)) {
       *why = "a radio frame cut short";
-      return std::nullopt;
+      return false;
     }
     if (f.to >= kMaxVehicleIndex || f.from >= kMaxVehicleIndex || broadcast > 1 ||
         !std::isfinite(f.time_s) || !std::isfinite(f.sent_time_s) || length == 0 ||
         length > kMaxRadioFrameBytes) {
       *why = "a radio frame with a field out of range";
-      return std::nullopt;
+      return false;
     }
     f.broadcast = broadcast == 1;
     if (!c.take_bytes(length, &f.data)) {
       *why = "a radio frame's bytes cut short";
-      return std::nullopt;
+      return false;
     }
   }
   if (c.left() != 0) {
     *why = std::to_string(c.left()) + " bytes after a tick record's last frame";
-    return std::nullopt;
+    return false;
   }
+  return true;
+}
+
+std::optional<TickRecord> decode_tick(std::span<const uint8_t> payload, std::string* why) {
+  TickRecord r;
+  if (!decode_tick(payload, &r, why)) return std::nullopt;
   return r;
 }
 

@@ -184,6 +184,24 @@ TEST(ShmTickRecord, RoundTripsTickTimeAndEveryFrameField) {
   EXPECT_TRUE(decode_tick(tick_record(0), &why)) << why;
 }
 
+// Decoding into a record of an earlier tick leaves nothing of it: fewer frames, shorter ones.
+TEST(ShmTickRecord, DecodingIntoAnEarlierTicksRecordLeavesNothingOfIt) {
+  std::string why;
+  TickRecord reused;
+  ASSERT_TRUE(decode_tick(tick_record(3, 3), &reused, &why)) << why;
+  std::vector<std::uint8_t> later = encode_tick_head(4, 0.08, 1);
+  encode_radio_frame(2, 1, 7, false, 0.07, 0.065, pattern(2, 9), &later);
+  ASSERT_TRUE(decode_tick(later, &reused, &why)) << why;
+  const auto fresh = decode_tick(later, &why);
+  ASSERT_TRUE(fresh) << why;
+  EXPECT_EQ(reused.tick, 4);
+  EXPECT_EQ(reused.time_s, 0.08);
+  ASSERT_EQ(reused.frames.size(), 1u);
+  EXPECT_EQ(reused.frames[0].to, fresh->frames[0].to);
+  EXPECT_EQ(reused.frames[0].seq, 7u);
+  EXPECT_EQ(reused.frames[0].data, pattern(2, 9));
+}
+
 TEST(ShmTickRecord, RefusesEveryTruncationAndEveryFieldOutOfRange) {
   std::string why;
   const auto good = tick_record(2);

@@ -171,5 +171,8 @@ std::vector<std::uint8_t> encode_tick_head(std::int64_t tick, double time_s,
 // past the payload's end or its limits, a time that is not finite, a vehicle index past
 // kMaxVehicleIndex, bytes left over.
 std::optional<TickRecord> decode_tick(std::span<const std::uint8_t> payload, std::string* why);
+// The same into *out, reusing its frames' buffers (a reader of many ticks allocates once); false
+// with *why, and *out unspecified, where the other gives nullopt.
+bool decode_tick(std::span<const std::uint8_t> payload, TickRecord* out, std::string* why);
 
 }  // namespace uavsim::common::shm
