@@ -211,7 +211,8 @@ std::map<std::string, OpProbe> op_probes() {
   p["lockstep_leave"] = {with({}, "lockstep_leave"), {}};
   // (no hostile number is a power of two in the ring's range: each is refused, and the connection
   // stays on TCP for the next probe)
-  p["lockstep_shm"] = {with({}, "lockstep_shm"), {"ring_bytes"}};
+  p["lockstep_shm"] = {with({{"requests", true}}, "lockstep_shm"),
+                       {"ring_bytes", "request_ring_bytes"}};
   p["done"] = {with({{"tick", 0}}, "done"), {"tick", "busy_until"}};
   p["vehicles"] = {with({}, "vehicles"), {}};
   p["truck"] = {with({}, "truck"), {}};
