@@ -3,9 +3,8 @@
 #include <algorithm>
 #include <functional>
 
+#include "api/binary_requests.hpp"
 #include "api/request_fields.hpp"
-#include "uavsim/common/shm_requests.hpp"
-#include "uavsim/common/shm_ring.hpp"
 
 namespace uavsim::server::api {
 
@@ -132,52 +131,21 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
 ApiServer::~ApiServer() { shutdown(); }
 
 void ApiServer::on_binary_request(uint64_t conn, uint16_t type, std::span<const uint8_t> payload) {
-  namespace shm = common::shm;
-  // the request the JSON form would have been (a frame's bytes as a binary value, not base64),
-  // answered only if refused, with the id the client's tag gives (docs/protocol.md)
+  // served as the JSON request it stands for, answered only if refused (docs/protocol.md)
   std::string why;
-  Json body;
-  uint32_t tag = 0;
-  if (type == static_cast<uint16_t>(shm::RecordType::kRadioSend)) {
-    auto r = shm::decode_radio_send(payload, &why);
-    if (!r) return reply_in_order(conn, error_reply(nullptr, ApiError::kBadRequest, why));
-    tag = r->tag;
-    body = {
-        {"op", "radio_send"}, {"vehicle", r->vehicle}, {"data", Json::binary(std::move(r->data))}};
-    if (r->to < 0) {
-      body["to"] = "broadcast";
-    } else {
-      body["to"] = r->to;
-    }
-  } else {
-    auto d = shm::decode_done(payload, &why);
-    if (!d) return reply_in_order(conn, error_reply(nullptr, ApiError::kBadRequest, why));
-    tag = d->tag;
-    body = {{"op", "done"}, {"quiet", d->quiet}};
-    if (d->tick) body["tick"] = *d->tick;
-    if (d->busy_until_s) body["busy_until"] = *d->busy_until_s;
-    if (!d->mavlink_seq.empty()) {
-      Json seqs = Json::object();
-      for (const auto& [vehicle, seq] : d->mavlink_seq) seqs[std::to_string(vehicle)] = seq;
-      body["mavlink_seq"] = std::move(seqs);
-    }
-  }
-  if (tag != 0) {
-    std::string id = "b";  // (appended, not "b" + ...: a GCC 12 -Wrestrict false positive)
-    id += std::to_string(tag);
-    body["id"] = std::move(id);
-  }
-  const Json id = body.value("id", Json(nullptr));
+  auto body = binary_request_json(type, payload, &why);
+  if (!body) return reply_in_order(conn, error_reply(nullptr, ApiError::kBadRequest, why));
+  const Json id = body->value("id", Json(nullptr));
   if (config_.token && !authenticated_.count(conn)) {
     return reply_in_order(conn, error_reply(id, ApiError::kUnauthorized,
                                             "this server needs a token first: {\"op\":\"auth\","
                                             "\"token\":...} on the ring or TCP"));
   }
   // a server without a radio serves no radio_send
-  const std::string op = body["op"].get<std::string>();
+  const std::string op = (*body)["op"].get<std::string>();
   if (ops_.find(op) == nullptr)
     return reply_in_order(conn, error_reply(id, ApiError::kUnknownOp, "unknown op '" + op + "'"));
-  enqueue({Request::Kind::kLine, conn, std::move(body), /*errors_only=*/true});
+  enqueue({Request::Kind::kLine, conn, std::move(*body), /*errors_only=*/true});
 }
 
 std::string ApiServer::peer_address(uint64_t conn) const { return server_->peer_address(conn); }
