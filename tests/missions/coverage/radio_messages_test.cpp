@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace uavsim::missions::coverage {
@@ -393,6 +394,48 @@ TEST(RadioMessages, AStripeOf300IntervalsIsSentAs255In1500ByteFrames) {
   }
   ASSERT_TRUE(d);
   for (int s = 0; s < 2; ++s) EXPECT_EQ(d->apd.stripe(s).size(), 255u);
+}
+
+// FNV-1a over frames, each preceded by its length: pins the bytes the encoders write.
+uint64_t fnv1a(const std::vector<Frame>& frames) {
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](uint8_t b) {
+    h ^= b;
+    h *= 1099511628211ull;
+  };
+  for (const Frame& f : frames) {
+    mix(static_cast<uint8_t>(f.size() & 0xFF));
+    mix(static_cast<uint8_t>(f.size() >> 8));
+    for (uint8_t b : f) mix(b);
+  }
+  return h;
+}
+
+// A map with runs, ragged stripes and a stripe over a fragment's intervals, as the encoders wrote
+// it before they kept their runs in one flat list (the bytes must not change: the flock's frames
+// and the station's map are the same on either side of that change).
+TEST(RadioMessages, TheEncodersWriteTheSameBytesAsBefore) {
+  AggregateMessage m;
+  m.sender = 7;
+  m.origin = 2;
+  m.query_id = 513;
+  m.version = 9;
+  m.responded = 0x1F0F;
+  m.acked = 0x30;
+  m.apd = AreaParts(40);
+  for (int s = 0; s < 40; ++s) m.apd.add(s, {0.0, 187.55});
+  for (int s = 5; s < 25; ++s) m.apd.add(s, {200.0 + 0.37 * s, 230.04 + 0.5 * s});
+  for (int band = 0; band < 30; ++band) m.apd.add(30, {300.0 + 5.0 * band, 302.5 + 5.0 * band});
+  std::vector<uint64_t> got;
+  for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes, kMaxAggregateFrameBytes}) {
+    const auto frames = encode_aggregate(m, *fit_frames(bytes, nullptr));
+    got.push_back(frames.size());
+    got.push_back(fnv1a(frames));
+  }
+  got.push_back(fnv1a({encode_apd(m.apd)}));
+  const std::vector<uint64_t> before{5u, 0x8976759897509cb6ull, 5u, 0x77375bdc4e560ccbull,
+                                     1u, 0xff74585e4d53e0c9ull, 0x3428048b462a2f14ull};
+  EXPECT_EQ(got, before);
 }
 
 }  // namespace
