@@ -154,23 +154,35 @@ void write_run(Writer& w, const ApdRuns& runs, const ApdRuns::Run& run) {
 }
 
 // Reads runs up to the end of the bytes, stripes first .. first+count-1 exactly; false on
-// anything malformed (an inverted interval, too many or too few stripes).
+// anything malformed (cut short, an inverted interval, too many or too few stripes). Each run's
+// length is checked once and its intervals read straight from the bytes (every agent reads every
+// aggregation fragment it hears).
 bool read_runs(Reader& r, int first, int count, DecodedRuns* out) {
+  const uint8_t* bytes = r.f.data();
+  const size_t size = r.f.size();
+  size_t pos = r.pos;
   int s = first;
-  while (r.pos < r.f.size()) {
-    const int repeat = static_cast<int>(r.u8());
-    const unsigned n = r.u8();
+  while (pos < size) {
+    if (size - pos < kRunHeaderBytes) return false;
+    const int repeat = bytes[pos];
+    const size_t n = bytes[pos + 1];
+    pos += kRunHeaderBytes;
+    if (size - pos < n * kIntervalBytes) return false;
     const size_t begin = out->intervals.size();
-    for (unsigned k = 0; k < n; ++k) {
-      const double a = r.u16() / 10.0, b = r.u16() / 10.0;
-      if (!(b > a)) return false;
-      out->intervals.push_back({a, b});
+    out->intervals.resize(begin + n);
+    Interval* iv = out->intervals.data() + begin;
+    for (size_t k = 0; k < n; ++k, pos += kIntervalBytes) {
+      const unsigned a_dm = bytes[pos] | (unsigned{bytes[pos + 1]} << 8);
+      const unsigned b_dm = bytes[pos + 2] | (unsigned{bytes[pos + 3]} << 8);
+      iv[k] = {a_dm / 10.0, b_dm / 10.0};
+      if (!(iv[k].end_m > iv[k].start_m)) return false;
     }
-    if (!r.ok || repeat < 1 || s + repeat > first + count) return false;
+    if (repeat < 1 || s + repeat > first + count) return false;
     out->spans.push_back({s, repeat, begin, n});
     s += repeat;
   }
-  return r.ok && s == first + count;
+  r.pos = pos;
+  return s == first + count;
 }
 
 }  // namespace
@@ -352,6 +364,7 @@ const AggregateMessage* AggregateReassembler::add(const Frame& f) {
     p.version = version;
     p.fragments = fragments;
     p.received.reset();
+    p.received_count = 0;
     p.message.sender = sender;
     p.message.origin = origin;
     p.message.query_id = query_id;
@@ -365,8 +378,11 @@ const AggregateMessage* AggregateReassembler::add(const Frame& f) {
   p.message.responded = responded;
   p.message.acked = acked;
   runs_.apply_to(&p.message.apd);
-  p.received.set(static_cast<size_t>(fragment));
-  if (p.received.count() != static_cast<size_t>(fragments)) return nullptr;
+  if (!p.received.test(static_cast<size_t>(fragment))) {
+    p.received.set(static_cast<size_t>(fragment));
+    ++p.received_count;
+  }
+  if (p.received_count != fragments) return nullptr;
   p.fragments = 0;  // complete: the sender's next fragment starts a new message
   return &p.message;
 }

@@ -145,6 +145,7 @@ class AggregateReassembler {
     uint16_t version = 0;
     int fragments = 0;          // 0: nothing in progress (the next fragment starts a message)
     std::bitset<256> received;  // bit per fragment (<= 255 fragments)
+    int received_count = 0;     // bits set in received
     AggregateMessage message;
   };
   int stripes_;

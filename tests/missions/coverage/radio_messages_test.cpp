@@ -533,6 +533,27 @@ TEST(RadioMessages, ReassemblyKeepsSendersApartAndIgnoresAMalformedFragmentBetwe
   EXPECT_EQ(d9->version, 5);
 }
 
+// Every byte string cut short is refused, wherever the cut falls (in a run's header, between an
+// interval's ends, between intervals), and refusing it leaves the next message whole.
+TEST(RadioMessages, EveryCutOfAFragmentOrStationMapIsRefused) {
+  const AggregateMessage m = fragmented_message(5, 2, 80.0);
+  const std::vector<uint8_t> apd = encode_apd(m.apd);
+  for (size_t len = 0; len < apd.size(); ++len) {
+    EXPECT_FALSE(decode_apd(std::vector<uint8_t>(apd.begin(), apd.begin() + len), 60)) << len;
+  }
+  ASSERT_TRUE(decode_apd(apd, 60));
+  const auto frames = encode_aggregate(m, k127);
+  AggregateReassembler r(60);
+  for (size_t k = 0; k < frames.size(); ++k) {
+    for (size_t len = 0; len < frames[k].size(); ++len)
+      EXPECT_FALSE(r.add(Frame(frames[k].begin(), frames[k].begin() + len))) << k << " " << len;
+  }
+  const AggregateMessage* d = nullptr;
+  for (const Frame& f : frames) d = r.add(f);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->apd, *decode_apd(apd, 60));
+}
+
 // The beacon decoder that fills a caller's Beacon leaves nothing of the last one behind.
 TEST(RadioMessages, ABeaconDecodedIntoAUsedBeaconIsTheSameAsFresh) {
   const RadioFrameOrigin o{10.0, 20.0};
