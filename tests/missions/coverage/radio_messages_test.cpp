@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <random>
 #include <string>
 
 namespace uavsim::missions::coverage {
@@ -531,6 +533,61 @@ TEST(RadioMessages, ReassemblyKeepsSendersApartAndIgnoresAMalformedFragmentBetwe
   ASSERT_TRUE(e9);
   EXPECT_EQ(d9->apd, e9->apd);
   EXPECT_EQ(d9->version, 5);
+}
+
+// The reassembler sets again only the stripes whose bytes changed since the sender's last
+// fragment of the same index: a stream of fragments from several senders, versions interleaved,
+// stripe ranges overlapping within a message (fragments of different maps relabelled into one),
+// fragments repeated. Each message it hands out must be the one a fresh reassembler makes of that
+// message's fragments alone.
+TEST(RadioMessages, ReassemblyDoesNotDependOnEarlierMessagesOfTheSender) {
+  std::vector<Frame> pool;
+  for (double band : {100.0, 50.0, 80.0}) {
+    for (const Frame& f : encode_aggregate(fragmented_message(3, 1, band), k127)) pool.push_back(f);
+  }
+  AreaParts sparse(60);  // one short run: a fragment of few bytes
+  sparse.add(7, {1.0, 2.0});
+  AggregateMessage m = fragmented_message(3, 1, 10.0);
+  m.apd = sparse;
+  for (const Frame& f : encode_aggregate(m, k127)) pool.push_back(f);
+  std::mt19937 rng(17);
+  AggregateReassembler r(60);
+  std::map<int, std::vector<Frame>> since_start;  // per sender: the message's fragments so far
+  std::map<int, Frame> last;                      // per sender: the last fragment (its header)
+  int completed = 0;
+  for (int step = 0; step < 4000; ++step) {
+    Frame f = pool[rng() % pool.size()];
+    const int sender = rng() % 2 == 0 ? 3 : 9;
+    f[1] = static_cast<uint8_t>(sender);
+    f[5] = static_cast<uint8_t>(1 + rng() % 2);  // version 1 or 2
+    f[6] = 0;
+    f[8] = 3;  // fragments
+    f[7] = static_cast<uint8_t>(rng() % 3);
+    // the same message as the last fragment of this sender (origin, query, version, fragments)?
+    auto& frames = since_start[sender];
+    const auto it = last.find(sender);
+    if (it == last.end() || !std::equal(f.begin() + 2, f.begin() + 7, it->second.begin() + 2) ||
+        f[8] != it->second[8]) {
+      frames.clear();
+    }
+    frames.push_back(f);
+    last[sender] = f;
+    const AggregateMessage* d = r.add(f);
+    if (!d) continue;
+    ++completed;
+    AggregateReassembler fresh(60);
+    const AggregateMessage* want = nullptr;
+    for (const Frame& g : frames) want = fresh.add(g);
+    ASSERT_TRUE(want) << step;
+    ASSERT_EQ(d->apd, want->apd) << step;
+    ASSERT_EQ(d->sender, want->sender);
+    ASSERT_EQ(d->version, want->version);
+    ASSERT_EQ(d->responded, want->responded);
+    ASSERT_EQ(d->acked, want->acked);
+    frames.clear();
+    last.erase(sender);  // complete: the next fragment starts a message
+  }
+  EXPECT_GT(completed, 200);
 }
 
 // Every byte string cut short is refused, wherever the cut falls (in a run's header, between an
