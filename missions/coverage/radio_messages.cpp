@@ -10,8 +10,7 @@ namespace {
 constexpr size_t kBeaconHeaderBytes = 14;
 constexpr size_t kRecordBytes = 14;
 constexpr size_t kAggregateHeaderBytes = 29;
-constexpr size_t kStripeRangeOffset = 25;  // an aggregation fragment's first_stripe
-constexpr size_t kRunHeaderBytes = 2;      // a run's repeat and interval count
+constexpr size_t kRunHeaderBytes = 2;  // a run's repeat and interval count
 constexpr size_t kIntervalBytes = 4;
 static_assert(kMinFrameBytes == kAggregateHeaderBytes + kRunHeaderBytes + kIntervalBytes);
 static_assert(kMinFrameBytes >= kBeaconHeaderBytes + kRecordBytes);
@@ -332,19 +331,6 @@ void DecodedRuns::apply_to(AreaParts* apd) const {
     apd->set_stripes(sp.first, sp.repeat, intervals.data() + sp.begin, sp.count);
 }
 
-bool AggregateReassembler::unchanged(const Partial& p, const Frame& f, int fragment, int first,
-                                     int count) {
-  if (static_cast<size_t>(fragment) >= p.applied.size()) return false;
-  const Applied& last = p.applied[static_cast<size_t>(fragment)];
-  if (last.serial == 0 || last.body.size() != f.size() - kStripeRangeOffset ||
-      !std::equal(last.body.begin(), last.body.end(), f.begin() + kStripeRangeOffset)) {
-    return false;
-  }
-  for (int s = first; s < first + count; ++s)
-    if (p.stripe_serial[static_cast<size_t>(s)] != last.serial) return false;
-  return true;
-}
-
 const AggregateMessage* AggregateReassembler::add(const Frame& f) {
   if (f.size() < kAggregateHeaderBytes || f.size() > kMaxAggregateFrameBytes) return nullptr;
   Reader r{f};
@@ -363,64 +349,41 @@ const AggregateMessage* AggregateReassembler::add(const Frame& f) {
       fragment >= fragments || first + count > stripes_) {
     return nullptr;
   }
+  // parse the runs before touching any state
+  runs_.clear();
+  if (!read_runs(r, first, count, &runs_)) return nullptr;
+
   if (partial_.size() <= static_cast<size_t>(sender))
     partial_.resize(static_cast<size_t>(sender) + 1);
   Partial& p = partial_[static_cast<size_t>(sender)];
-  if (p.message.apd.stripe_count() != stripes_) {
-    p.message.apd = AreaParts(stripes_);
-    p.stripe_serial.assign(static_cast<size_t>(stripes_), 0);
-    p.stripe_generation.assign(static_cast<size_t>(stripes_), 0);
-  }
-  // parse the runs before touching any state; bytes that set these stripes before and still
-  // stand were parsed then
-  const bool same = unchanged(p, f, fragment, first, count);
-  if (!same) {
-    runs_.clear();
-    if (!read_runs(r, first, count, &runs_)) return nullptr;
-  }
-
   if (p.fragments != fragments || p.origin != origin || p.query_id != query_id ||
       p.version != version) {
-    // a new message: as a fresh Partial, in the memory of the last one (the stripes it does not
-    // set are emptied when it is complete)
+    // a new message: as a fresh Partial, in the memory of the last one
     p.origin = origin;
     p.query_id = query_id;
     p.version = version;
     p.fragments = fragments;
     p.received.reset();
     p.received_count = 0;
-    ++p.generation;
     p.message.sender = sender;
     p.message.origin = origin;
     p.message.query_id = query_id;
     p.message.version = version;
+    if (p.message.apd.stripe_count() == stripes_) {
+      p.message.apd.clear();
+    } else {
+      p.message.apd = AreaParts(stripes_);
+    }
   }
   p.message.responded = responded;
   p.message.acked = acked;
-  if (!same) {
-    runs_.apply_to(&p.message.apd);
-    if (p.applied.size() <= static_cast<size_t>(fragment))
-      p.applied.resize(static_cast<size_t>(fragment) + 1);
-    Applied& a = p.applied[static_cast<size_t>(fragment)];
-    a.body.assign(f.begin() + kStripeRangeOffset, f.end());
-    a.serial = p.next_serial++;
-    for (int s = first; s < first + count; ++s) p.stripe_serial[static_cast<size_t>(s)] = a.serial;
-  }
-  for (int s = first; s < first + count; ++s)
-    p.stripe_generation[static_cast<size_t>(s)] = p.generation;
+  runs_.apply_to(&p.message.apd);
   if (!p.received.test(static_cast<size_t>(fragment))) {
     p.received.set(static_cast<size_t>(fragment));
     ++p.received_count;
   }
   if (p.received_count != fragments) return nullptr;
   p.fragments = 0;  // complete: the sender's next fragment starts a new message
-  // what a fresh map would hold: nothing where no fragment of this message landed
-  for (int s = 0; s < stripes_; ++s) {
-    if (p.stripe_generation[static_cast<size_t>(s)] == p.generation) continue;
-    if (p.message.apd.stripe(s).empty()) continue;
-    p.message.apd.set_stripe(s, nullptr, 0);
-    p.stripe_serial[static_cast<size_t>(s)] = 0;
-  }
   return &p.message;
 }
 

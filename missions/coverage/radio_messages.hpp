@@ -130,10 +130,7 @@ struct DecodedRuns {
 
 // Collects aggregation fragments; hands out a message when its last missing fragment arrives.
 // Malformed fragments are ignored. Keeps at most one message in progress per sender, each in
-// memory that the next message of that sender reuses. A sender's next message mostly repeats the
-// fragments of its last one byte for byte (the map grows a stripe at a time): a fragment whose
-// bytes are those that last set its stripes, still untouched since, is neither decoded nor set
-// again. The message handed out is the same as if every fragment were decoded into a fresh map.
+// memory that the next message of that sender reuses.
 class AggregateReassembler {
  public:
   explicit AggregateReassembler(int stripes) : stripes_(stripes) {}
@@ -142,11 +139,6 @@ class AggregateReassembler {
   const AggregateMessage* add(const Frame& f);
 
  private:
-  // what one fragment index last set: its bytes from the stripe range on, and the write's serial
-  struct Applied {
-    std::vector<uint8_t> body;
-    uint64_t serial = 0;  // 0: nothing
-  };
   struct Partial {
     int origin = 0;
     uint16_t query_id = 0;
@@ -154,16 +146,8 @@ class AggregateReassembler {
     int fragments = 0;          // 0: nothing in progress (the next fragment starts a message)
     std::bitset<256> received;  // bit per fragment (<= 255 fragments)
     int received_count = 0;     // bits set in received
-    uint64_t generation = 0;    // the message in progress (a new one each time one starts)
-    uint64_t next_serial = 1;
     AggregateMessage message;
-    std::vector<Applied> applied;             // by fragment index
-    std::vector<uint64_t> stripe_serial;      // per stripe: the write that set it last
-    std::vector<uint64_t> stripe_generation;  // per stripe: the message that set it last
   };
-  // True when the fragment's bytes (from the stripe range on) are those that last set stripes
-  // first .. first+count-1, and no other write has touched them since.
-  static bool unchanged(const Partial& p, const Frame& f, int fragment, int first, int count);
   int stripes_;
   std::vector<Partial> partial_;  // by sender id, grown on demand
   DecodedRuns runs_;              // the fragment being read

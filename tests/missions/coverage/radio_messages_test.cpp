@@ -535,11 +535,10 @@ TEST(RadioMessages, ReassemblyKeepsSendersApartAndIgnoresAMalformedFragmentBetwe
   EXPECT_EQ(d9->version, 5);
 }
 
-// The reassembler sets again only the stripes whose bytes changed since the sender's last
-// fragment of the same index: a stream of fragments from several senders, versions interleaved,
-// stripe ranges overlapping within a message (fragments of different maps relabelled into one),
-// fragments repeated. Each message it hands out must be the one a fresh reassembler makes of that
-// message's fragments alone.
+// The reassembler gathers each sender's messages in the same memory: a stream of fragments from
+// several senders, versions interleaved, stripe ranges overlapping within a message (fragments of
+// different maps relabelled into one), fragments repeated. Each message it hands out must be the
+// one a fresh reassembler makes of that message's fragments alone.
 TEST(RadioMessages, ReassemblyDoesNotDependOnEarlierMessagesOfTheSender) {
   std::vector<Frame> pool;
   for (double band : {100.0, 50.0, 80.0}) {
