@@ -181,8 +181,8 @@ void Agent::receive(const AgentInputs& in) {
   for (const Frame& f : in.received) {
     const auto type = message_type(f);
     if (type == MessageType::kBeacon) {
-      auto b = decode_beacon(f, origin_);
-      if (!b) continue;
+      if (!decode_beacon(f, origin_, &heard_)) continue;
+      const Beacon* b = &heard_;
       adb_.on_message(b->self, b->records);
       // a later survey round: a recall after a loss on the way home, or its going home
       const int ahead = (b->round - round_ + kRounds) % kRounds;
@@ -256,8 +256,8 @@ void Agent::broadcast(const AgentInputs& in, AgentOutputs& out) {
   // aggregation messages after the beacon, paced (radio_pacer.hpp): the next copy only once the
   // last one has gone out
   if (aggregate_pacer_.idle()) {
-    if (auto m = aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s))
-      aggregate_pacer_.push(encode_aggregate(*m, frames_));
+    if (aggregation_.poll(in.now_s, adb_.neighbours(), config_.query_retransmit_s, &outgoing_))
+      aggregate_pacer_.push(encode_aggregate(outgoing_, frames_));
   }
   for (Frame& f : aggregate_pacer_.take(dt_s_)) out.broadcast.push_back(std::move(f));
 }

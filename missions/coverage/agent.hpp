@@ -168,6 +168,8 @@ class Agent {
   AreaParts own_;
   AggregationNode aggregation_;
   AggregateReassembler reassembler_;
+  AggregateMessage outgoing_;  // the last message polled (its memory reused by the next)
+  Beacon heard_;               // the last beacon decoded (its memory reused by the next)
   FlockController flock_;
 
   AgentState state_ = AgentState::kTakingOff;

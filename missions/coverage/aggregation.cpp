@@ -79,7 +79,14 @@ bool AggregationNode::acknowledged_by(int neighbour) const {
 std::optional<AggregateMessage> AggregationNode::poll(double now_s,
                                                       const std::vector<int>& neighbours,
                                                       double retransmit_s) {
-  if (!active_) return std::nullopt;
+  AggregateMessage m;
+  if (!poll(now_s, neighbours, retransmit_s, &m)) return std::nullopt;
+  return m;
+}
+
+bool AggregationNode::poll(double now_s, const std::vector<int>& neighbours, double retransmit_s,
+                           AggregateMessage* out) {
+  if (!active_) return false;
   bool due = dirty_;
   if (!due && now_s - last_sent_s_ >= retransmit_s) {
     for (int n : neighbours) {
@@ -89,19 +96,18 @@ std::optional<AggregateMessage> AggregationNode::poll(double now_s,
       }
     }
   }
-  if (!due) return std::nullopt;
+  if (!due) return false;
   dirty_ = false;
   last_sent_s_ = now_s;
   ++sent_;
-  AggregateMessage m;
-  m.sender = local_id_;
-  m.origin = origin_;
-  m.query_id = query_id_;
-  m.version = version_;
-  m.responded = responded_;
-  m.acked = merged_from_;
-  m.apd = apd_;
-  return m;
+  out->sender = local_id_;
+  out->origin = origin_;
+  out->query_id = query_id_;
+  out->version = version_;
+  out->responded = responded_;
+  out->acked = merged_from_;
+  out->apd = apd_;
+  return true;
 }
 
 }  // namespace uavsim::missions::coverage

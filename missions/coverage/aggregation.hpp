@@ -44,6 +44,10 @@ class AggregationNode {
   // every id in `neighbours` has acknowledged it.
   std::optional<AggregateMessage> poll(double now_s, const std::vector<int>& neighbours,
                                        double retransmit_s);
+  // The same, written into *out (false: nothing to send, *out untouched): a caller that keeps
+  // *out between polls reuses its memory (the map is copied into the lists already there).
+  bool poll(double now_s, const std::vector<int>& neighbours, double retransmit_s,
+            AggregateMessage* out);
 
   bool active() const { return active_; }
   int origin() const { return origin_; }

@@ -108,11 +108,21 @@ bool AreaParts::set_stripe(int stripe, const std::vector<Interval>& intervals) {
 }
 
 bool AreaParts::set_stripe(int stripe, const Interval* intervals, size_t count) {
-  if (stripe < 0 || stripe >= stripe_count()) return false;
-  auto& list = stripes_[static_cast<size_t>(stripe)];
-  list.assign(intervals, intervals + count);
-  if (!is_normal(list)) list = normalize_stripe(list);
+  return set_stripes(stripe, 1, intervals, count);
+}
+
+bool AreaParts::set_stripes(int first, int stripes, const Interval* intervals, size_t count) {
+  if (first < 0 || stripes < 1 || stripes > stripe_count() - first) return false;
+  const auto begin = stripes_.begin() + first, end = begin + stripes;
+  // assign() into the lists' own memory: no allocation once a list has held as many intervals
+  begin->assign(intervals, intervals + count);
+  if (!is_normal(*begin)) *begin = normalize_stripe(*begin);
+  for (auto it = begin + 1; it != end; ++it) *it = *begin;
   return true;
+}
+
+void AreaParts::clear() {
+  for (auto& list : stripes_) list.clear();
 }
 
 bool AreaParts::stripe_covers(int stripe, Interval span) const {

@@ -47,6 +47,12 @@ class AreaParts {
   // Replaces a stripe's list (decoders); the list is normalised.
   bool set_stripe(int stripe, const std::vector<Interval>& intervals);
   bool set_stripe(int stripe, const Interval* intervals, size_t count);
+  // Replaces the lists of stripes first .. first+stripes-1 with the same list, normalised (a
+  // decoded run); false if any of them is out of range (nothing changes).
+  bool set_stripes(int first, int stripes, const Interval* intervals, size_t count);
+  // Empties every stripe; the stripe count stays, and so does the memory of the lists (a decoder
+  // that fills the same AreaParts message after message allocates nothing once warm).
+  void clear();
 
   // True when [start_m, end_m) of the stripe is covered (gaps under kCoverageSlack_m ignored).
   bool stripe_covers(int stripe, Interval span) const;

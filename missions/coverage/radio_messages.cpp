@@ -103,78 +103,86 @@ void read_state(Reader& r, AgentRecord& a, const RadioFrameOrigin& o) {
 
 // An APD as runs of stripes with identical interval lists, ends in 0.1 m rounded inwards (a run
 // never claims more than was covered); at most max_intervals intervals a stripe (the rest dropped:
-// less is claimed, never more).
-struct Run {
-  int first = 0;
-  int repeat = 0;
+// less is claimed, never more). Every run's ends in one flat list: an encoder allocates a few
+// times a message, not once a stripe.
+struct ApdRuns {
+  struct Run {
+    int first = 0;
+    int repeat = 0;
+    size_t begin = 0;  // into dm
+    size_t count = 0;
+  };
+  std::vector<Run> runs;
   std::vector<std::pair<unsigned, unsigned>> dm;
 };
 
-std::vector<Run> apd_runs(const AreaParts& apd, size_t max_intervals) {
-  std::vector<Run> runs;
+ApdRuns apd_runs(const AreaParts& apd, size_t max_intervals) {
+  ApdRuns out;
   for (int s = 0; s < apd.stripe_count(); ++s) {
-    std::vector<std::pair<unsigned, unsigned>> dm;
+    const size_t begin = out.dm.size();
     for (const Interval& iv : apd.stripe(s)) {
       const long a = std::clamp(static_cast<long>(std::ceil(iv.start_m * 10.0 - 1e-6)), 0L, 65535L);
       const long b = std::clamp(static_cast<long>(std::floor(iv.end_m * 10.0 + 1e-6)), 0L, 65535L);
-      if (b > a && dm.size() < max_intervals) dm.emplace_back(a, b);
+      if (b > a && out.dm.size() - begin < max_intervals) out.dm.emplace_back(a, b);
     }
-    if (!runs.empty() && runs.back().dm == dm && runs.back().repeat < 255) {
-      ++runs.back().repeat;
-    } else {
-      runs.push_back({s, 1, std::move(dm)});
+    const size_t count = out.dm.size() - begin;
+    if (!out.runs.empty()) {
+      ApdRuns::Run& last = out.runs.back();
+      const auto last_begin = out.dm.begin() + static_cast<long>(last.begin);
+      if (last.count == count && last.repeat < 255 &&
+          std::equal(last_begin, last_begin + static_cast<long>(count),
+                     out.dm.begin() + static_cast<long>(begin))) {
+        ++last.repeat;
+        out.dm.resize(begin);  // the same list as the run's: kept once
+        continue;
+      }
     }
+    out.runs.push_back({s, 1, begin, count});
   }
-  return runs;
+  return out;
 }
 
-void write_run(Writer& w, const Run& run) {
+size_t run_bytes(const ApdRuns::Run& run) { return kRunHeaderBytes + kIntervalBytes * run.count; }
+
+void write_run(Writer& w, const ApdRuns& runs, const ApdRuns::Run& run) {
   w.u8(static_cast<unsigned>(run.repeat));
-  w.u8(static_cast<unsigned>(run.dm.size()));
-  for (const auto& [a, b] : run.dm) {
-    w.u16(a);
-    w.u16(b);
+  w.u8(static_cast<unsigned>(run.count));
+  for (size_t k = run.begin; k < run.begin + run.count; ++k) {
+    w.u16(runs.dm[k].first);
+    w.u16(runs.dm[k].second);
   }
 }
-
-// The runs of one message, decoded: every run's intervals in one flat list, so that decoding a
-// message allocates twice however many stripes it carries (every agent decodes every aggregate
-// frame it hears).
-struct DecodedRuns {
-  struct Span {
-    int first = 0;   // stripe
-    int repeat = 0;  // stripes first .. first+repeat-1 share the intervals
-    size_t begin = 0;
-    size_t count = 0;
-  };
-  std::vector<Span> spans;
-  std::vector<Interval> intervals;
-
-  void apply_to(AreaParts* apd) const {
-    for (const Span& sp : spans)
-      for (int k = 0; k < sp.repeat; ++k)
-        apd->set_stripe(sp.first + k, intervals.data() + sp.begin, sp.count);
-  }
-};
 
 // Reads runs up to the end of the bytes, stripes first .. first+count-1 exactly; false on
-// anything malformed (an inverted interval, too many or too few stripes).
+// anything malformed (cut short, an inverted interval, too many or too few stripes). Each run's
+// length is checked once and its intervals read straight from the bytes (every agent reads every
+// aggregation fragment it hears).
 bool read_runs(Reader& r, int first, int count, DecodedRuns* out) {
+  const uint8_t* bytes = r.f.data();
+  const size_t size = r.f.size();
+  size_t pos = r.pos;
   int s = first;
-  while (r.pos < r.f.size()) {
-    const int repeat = static_cast<int>(r.u8());
-    const unsigned n = r.u8();
+  while (pos < size) {
+    if (size - pos < kRunHeaderBytes) return false;
+    const int repeat = bytes[pos];
+    const size_t n = bytes[pos + 1];
+    pos += kRunHeaderBytes;
+    if (size - pos < n * kIntervalBytes) return false;
     const size_t begin = out->intervals.size();
-    for (unsigned k = 0; k < n; ++k) {
-      const double a = r.u16() / 10.0, b = r.u16() / 10.0;
-      if (!(b > a)) return false;
-      out->intervals.push_back({a, b});
+    out->intervals.resize(begin + n);
+    Interval* iv = out->intervals.data() + begin;
+    for (size_t k = 0; k < n; ++k, pos += kIntervalBytes) {
+      const unsigned a_dm = bytes[pos] | (unsigned{bytes[pos + 1]} << 8);
+      const unsigned b_dm = bytes[pos + 2] | (unsigned{bytes[pos + 3]} << 8);
+      iv[k] = {a_dm / 10.0, b_dm / 10.0};
+      if (!(iv[k].end_m > iv[k].start_m)) return false;
     }
-    if (!r.ok || repeat < 1 || s + repeat > first + count) return false;
+    if (repeat < 1 || s + repeat > first + count) return false;
     out->spans.push_back({s, repeat, begin, n});
     s += repeat;
   }
-  return r.ok && s == first + count;
+  r.pos = pos;
+  return s == first + count;
 }
 
 }  // namespace
@@ -231,10 +239,18 @@ Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin, const Frame
 }
 
 std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& origin) {
-  if (f.size() < kBeaconHeaderBytes || f.size() > kMaxFrameBytes) return std::nullopt;
-  Reader r{f};
-  if (r.u8() != static_cast<unsigned>(MessageType::kBeacon)) return std::nullopt;
   Beacon b;
+  if (!decode_beacon(f, origin, &b)) return std::nullopt;
+  return b;
+}
+
+bool decode_beacon(const Frame& f, const RadioFrameOrigin& origin, Beacon* out) {
+  if (f.size() < kBeaconHeaderBytes || f.size() > kMaxFrameBytes) return false;
+  Reader r{f};
+  if (r.u8() != static_cast<unsigned>(MessageType::kBeacon)) return false;
+  Beacon& b = *out;
+  b.self = AgentRecord{};
+  b.records.clear();
   b.self.id = static_cast<int>(r.u8());
   const unsigned flags = r.u8();
   b.going_home = (flags & kFlagGoingHome) != 0;
@@ -243,9 +259,8 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
   b.homebound = (flags & kFlagHomebound) != 0;
   read_state(r, b.self, origin);
   const unsigned n = r.u8();
-  if (n > kMaxRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes)
-    return std::nullopt;
-  if (b.self.id >= kMaxAgents) return std::nullopt;
+  if (n > kMaxRecordsPerBeacon || f.size() != kBeaconHeaderBytes + n * kRecordBytes) return false;
+  if (b.self.id >= kMaxAgents) return false;
   for (unsigned i = 0; i < n; ++i) {
     AgentRecord a;
     a.id = static_cast<int>(r.u8());
@@ -254,43 +269,46 @@ std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& orig
     a.distance_hops = static_cast<int>(hops & kHopsMask);
     a.landed = (hops & kRecordLanded) != 0;
     a.age_ms = static_cast<int>(r.u16());
-    if (a.id >= kMaxAgents) return std::nullopt;
+    if (a.id >= kMaxAgents) return false;
     b.records.push_back(a);
   }
-  if (!r.ok) return std::nullopt;
-  return b;
+  if (!r.ok) return false;
+  return true;
 }
 
 std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& fit) {
   // frames of [kMinFrameBytes, kMaxAggregateFrameBytes] (fit_frames' range), so one interval
   // always fits; a run's interval count is a byte
   const size_t max_bytes = std::clamp(fit.max_frame_bytes, kMinFrameBytes, kMaxAggregateFrameBytes);
-  const std::vector<Run> runs = apd_runs(
+  const ApdRuns runs = apd_runs(
       m.apd, std::min<size_t>(
                  (max_bytes - kAggregateHeaderBytes - kRunHeaderBytes) / kIntervalBytes, 255));
-  // fragments: as many runs as fit the frame after the header
-  std::vector<Frame> frames;
-  std::vector<std::pair<int, int>> stripe_range;  // first, count of each fragment
+  // fragments: as many runs as fit the frame after the header (first the cut, since every header
+  // carries the number of fragments; then each frame written once)
+  struct Fragment {
+    size_t run_begin = 0, run_end = 0;
+    int first = 0, count = 0;  // stripes
+    size_t bytes = kAggregateHeaderBytes;
+  };
+  std::vector<Fragment> fragments;
   size_t i = 0;
   do {
-    Frame body;
-    Writer w{body};
-    const int first = runs.empty() ? 0 : runs[i].first;
-    int count = 0;
-    while (i < runs.size() && kAggregateHeaderBytes + body.size() + kRunHeaderBytes +
-                                      kIntervalBytes * runs[i].dm.size() <=
-                                  max_bytes) {
-      write_run(w, runs[i]);
-      count += runs[i].repeat;
+    Fragment fr;
+    fr.run_begin = i;
+    fr.first = runs.runs.empty() ? 0 : runs.runs[i].first;
+    while (i < runs.runs.size() && fr.bytes + run_bytes(runs.runs[i]) <= max_bytes) {
+      fr.bytes += run_bytes(runs.runs[i]);
+      fr.count += runs.runs[i].repeat;
       ++i;
     }
-    frames.push_back(std::move(body));
-    stripe_range.emplace_back(first, count);
-  } while (i < runs.size() && frames.size() < static_cast<size_t>(kMaxFragments));
-  // headers
-  std::vector<Frame> out;
-  for (size_t k = 0; k < frames.size(); ++k) {
-    Frame f;
+    fr.run_end = i;
+    fragments.push_back(fr);
+  } while (i < runs.runs.size() && fragments.size() < static_cast<size_t>(kMaxFragments));
+  std::vector<Frame> out(fragments.size());
+  for (size_t k = 0; k < fragments.size(); ++k) {
+    const Fragment& fr = fragments[k];
+    Frame& f = out[k];
+    f.reserve(fr.bytes);
     Writer w{f};
     w.u8(static_cast<unsigned>(MessageType::kAggregate));
     w.u8(static_cast<unsigned>(m.sender));
@@ -298,21 +316,25 @@ std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& f
     w.u16(m.query_id);
     w.u16(m.version);
     w.u8(static_cast<unsigned>(k));
-    w.u8(static_cast<unsigned>(frames.size()));
+    w.u8(static_cast<unsigned>(fragments.size()));
     w.u64(m.responded);
     w.u64(m.acked);
-    w.u16(static_cast<unsigned>(stripe_range[k].first));
-    w.u16(static_cast<unsigned>(stripe_range[k].second));
-    f.insert(f.end(), frames[k].begin(), frames[k].end());
-    out.push_back(std::move(f));
+    w.u16(static_cast<unsigned>(fr.first));
+    w.u16(static_cast<unsigned>(fr.count));
+    for (size_t r = fr.run_begin; r < fr.run_end; ++r) write_run(w, runs, runs.runs[r]);
   }
   return out;
 }
 
-std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
-  if (f.size() < kAggregateHeaderBytes || f.size() > kMaxAggregateFrameBytes) return std::nullopt;
+void DecodedRuns::apply_to(AreaParts* apd) const {
+  for (const Span& sp : spans)
+    apd->set_stripes(sp.first, sp.repeat, intervals.data() + sp.begin, sp.count);
+}
+
+const AggregateMessage* AggregateReassembler::add(const Frame& f) {
+  if (f.size() < kAggregateHeaderBytes || f.size() > kMaxAggregateFrameBytes) return nullptr;
   Reader r{f};
-  if (r.u8() != static_cast<unsigned>(MessageType::kAggregate)) return std::nullopt;
+  if (r.u8() != static_cast<unsigned>(MessageType::kAggregate)) return nullptr;
   const int sender = static_cast<int>(r.u8());
   const int origin = static_cast<int>(r.u8());
   const auto query_id = static_cast<uint16_t>(r.u16());
@@ -325,41 +347,52 @@ std::optional<AggregateMessage> AggregateReassembler::add(const Frame& f) {
   const int count = static_cast<int>(r.u16());
   if (sender >= kMaxAgents || origin >= kMaxAgents || fragments < 1 || fragments > kMaxFragments ||
       fragment >= fragments || first + count > stripes_) {
-    return std::nullopt;
+    return nullptr;
   }
   // parse the runs before touching any state
-  DecodedRuns runs;
-  if (!read_runs(r, first, count, &runs)) return std::nullopt;
+  runs_.clear();
+  if (!read_runs(r, first, count, &runs_)) return nullptr;
 
-  Partial& p = partial_[sender];
+  if (partial_.size() <= static_cast<size_t>(sender))
+    partial_.resize(static_cast<size_t>(sender) + 1);
+  Partial& p = partial_[static_cast<size_t>(sender)];
   if (p.fragments != fragments || p.origin != origin || p.query_id != query_id ||
       p.version != version) {
-    p = Partial{};
+    // a new message: as a fresh Partial, in the memory of the last one
     p.origin = origin;
     p.query_id = query_id;
     p.version = version;
     p.fragments = fragments;
+    p.received.reset();
+    p.received_count = 0;
     p.message.sender = sender;
     p.message.origin = origin;
     p.message.query_id = query_id;
     p.message.version = version;
-    p.message.apd = AreaParts(stripes_);
+    if (p.message.apd.stripe_count() == stripes_) {
+      p.message.apd.clear();
+    } else {
+      p.message.apd = AreaParts(stripes_);
+    }
   }
   p.message.responded = responded;
   p.message.acked = acked;
-  runs.apply_to(&p.message.apd);
-  p.received.set(static_cast<size_t>(fragment));
-  if (p.received.count() != static_cast<size_t>(fragments)) return std::nullopt;
-  AggregateMessage done = std::move(p.message);
-  partial_.erase(sender);
-  return done;
+  runs_.apply_to(&p.message.apd);
+  if (!p.received.test(static_cast<size_t>(fragment))) {
+    p.received.set(static_cast<size_t>(fragment));
+    ++p.received_count;
+  }
+  if (p.received_count != fragments) return nullptr;
+  p.fragments = 0;  // complete: the sender's next fragment starts a new message
+  return &p.message;
 }
 
 std::vector<uint8_t> encode_apd(const AreaParts& apd) {
   std::vector<uint8_t> out;
   Writer w{out};
   w.u16(static_cast<unsigned>(apd.stripe_count()));
-  for (const Run& run : apd_runs(apd, 255)) write_run(w, run);
+  const ApdRuns runs = apd_runs(apd, 255);
+  for (const ApdRuns::Run& run : runs.runs) write_run(w, runs, run);
   return out;
 }
 

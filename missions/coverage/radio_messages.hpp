@@ -34,7 +34,6 @@
 
 #include <bitset>
 #include <cstdint>
-#include <map>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -96,6 +95,9 @@ struct RadioFrameOrigin {
 Frame encode_beacon(const Beacon& b, const RadioFrameOrigin& origin, const FrameFit& fit);
 // A beacon of any fit (up to kMaxFrameBytes); nothing when the frame is malformed.
 std::optional<Beacon> decode_beacon(const Frame& f, const RadioFrameOrigin& origin);
+// The same into *out, reusing its records' memory (every agent decodes every beacon it hears);
+// false when the frame is malformed (*out then holds nothing of use).
+bool decode_beacon(const Frame& f, const RadioFrameOrigin& origin, Beacon* out);
 
 // One message as one or more frames, each at most fit.max_frame_bytes long (at most
 // (fit.max_frame_bytes - 31) / 4 intervals a stripe are sent, at most 255: 24 in 127 bytes, 21 in
@@ -105,24 +107,50 @@ std::vector<Frame> encode_aggregate(const AggregateMessage& m, const FrameFit& f
 // The first byte of a frame, if it is one of ours.
 std::optional<MessageType> message_type(const Frame& f);
 
-// Collects aggregation fragments; returns a message when its last missing fragment arrives.
-// Malformed fragments are ignored. Keeps at most one message in progress per sender.
+// The runs of one aggregation fragment (or of a station map), decoded: every run's intervals in
+// one flat list. The reassembler keeps one between fragments, so that decoding allocates nothing
+// once warm (every agent decodes every aggregation fragment it hears).
+struct DecodedRuns {
+  struct Span {
+    int first = 0;   // stripe
+    int repeat = 0;  // stripes first .. first+repeat-1 share the intervals
+    size_t begin = 0;
+    size_t count = 0;
+  };
+  std::vector<Span> spans;
+  std::vector<Interval> intervals;
+
+  void clear() {
+    spans.clear();
+    intervals.clear();
+  }
+  // Sets the stripes of every run (AreaParts::set_stripes).
+  void apply_to(AreaParts* apd) const;
+};
+
+// Collects aggregation fragments; hands out a message when its last missing fragment arrives.
+// Malformed fragments are ignored. Keeps at most one message in progress per sender, each in
+// memory that the next message of that sender reuses.
 class AggregateReassembler {
  public:
   explicit AggregateReassembler(int stripes) : stripes_(stripes) {}
-  std::optional<AggregateMessage> add(const Frame& f);
+  // The message this fragment completes, if any: valid until the next add() (the fragments of
+  // the sender's next message are gathered into the same memory).
+  const AggregateMessage* add(const Frame& f);
 
  private:
   struct Partial {
     int origin = 0;
     uint16_t query_id = 0;
     uint16_t version = 0;
-    int fragments = 0;
+    int fragments = 0;          // 0: nothing in progress (the next fragment starts a message)
     std::bitset<256> received;  // bit per fragment (<= 255 fragments)
+    int received_count = 0;     // bits set in received
     AggregateMessage message;
   };
   int stripes_;
-  std::map<int, Partial> partial_;  // by sender
+  std::vector<Partial> partial_;  // by sender id, grown on demand
+  DecodedRuns runs_;              // the fragment being read
 };
 
 // An APD as one byte string, for the ground-station link (3.6), where a message is not limited to

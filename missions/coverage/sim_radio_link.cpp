@@ -12,8 +12,10 @@ class SimRadioLink : public RadioLink {
   bool broadcast(const Frame& frame) override { return radio_->send(frame).ok(); }
   size_t max_frame_bytes() const override { return radio_->max_frame_bytes(); }
   std::vector<Frame> take_received() override {
+    std::vector<client::RadioFrame> heard = radio_->take_received();
     std::vector<Frame> out;
-    for (client::RadioFrame& f : radio_->take_received()) out.push_back(std::move(f.data));
+    out.reserve(heard.size());  // tens of frames a step: one allocation, not one per doubling
+    for (client::RadioFrame& f : heard) out.push_back(std::move(f.data));
     return out;
   }
   unsigned long refused() const override { return radio_->counters().refused; }

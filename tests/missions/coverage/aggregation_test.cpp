@@ -123,5 +123,34 @@ TEST(Aggregation, RetransmitsUntilAcknowledged) {
   EXPECT_FALSE(leader.poll(5.0, {1}, 0.5));  // acknowledged: quiet
 }
 
+// poll() into a message the caller keeps: the same message as the one poll() returns, whatever
+// the kept one held before (a larger map, another query).
+TEST(Aggregation, PollIntoAKeptMessageGivesTheSameMessage) {
+  AggregationNode a(2, kStripes), b(2, kStripes);
+  AreaParts own(kStripes);
+  own.add(1, {0, 5});
+  a.start(3, own);
+  b.start(3, own);
+  AggregateMessage kept;
+  kept.apd = AreaParts(kStripes);
+  for (int s = 0; s < kStripes; ++s) kept.apd.add(s, {10.0 * s, 10.0 * s + 3.0});
+  kept.responded = 0xFF;
+  const auto m = a.poll(0.0, {1}, 0.5);
+  ASSERT_TRUE(m);
+  ASSERT_TRUE(b.poll(0.0, {1}, 0.5, &kept));
+  EXPECT_EQ(kept.apd, m->apd);
+  EXPECT_EQ(kept.sender, m->sender);
+  EXPECT_EQ(kept.origin, m->origin);
+  EXPECT_EQ(kept.query_id, m->query_id);
+  EXPECT_EQ(kept.version, m->version);
+  EXPECT_EQ(kept.responded, m->responded);
+  EXPECT_EQ(kept.acked, m->acked);
+  // nothing due: the kept message stays as it was
+  const AggregateMessage before = kept;
+  EXPECT_FALSE(b.poll(0.1, {1}, 0.5, &kept));
+  EXPECT_EQ(kept.apd, before.apd);
+  EXPECT_EQ(kept.version, before.version);
+}
+
 }  // namespace
 }  // namespace uavsim::missions::coverage

@@ -140,6 +140,34 @@ TEST(AreaParts, SetStripeNormalisesAListThatIsNotInNormalForm) {
   EXPECT_EQ(a.stripe(0), (std::vector<Interval>{{0, 1}, {2, 3}}));
 }
 
+TEST(AreaParts, SetStripesSetsARunOfStripesOrNothing) {
+  AreaParts a(5);
+  a.add(0, {1, 2});
+  const std::vector<Interval> run{{5, 8}, {0, 5}, {30, 40}};  // not normal: normalised once
+  ASSERT_TRUE(a.set_stripes(1, 3, run.data(), run.size()));
+  EXPECT_EQ(a.stripe(0), (std::vector<Interval>{{1, 2}}));
+  for (int s = 1; s < 4; ++s) EXPECT_EQ(a.stripe(s), (std::vector<Interval>{{0, 8}, {30, 40}}));
+  EXPECT_TRUE(a.stripe(4).empty());
+  const AreaParts before = a;
+  EXPECT_FALSE(a.set_stripes(3, 3, run.data(), run.size()));  // past the last stripe
+  EXPECT_FALSE(a.set_stripes(-1, 2, run.data(), run.size()));
+  EXPECT_FALSE(a.set_stripes(0, 0, run.data(), run.size()));
+  EXPECT_EQ(a, before);
+  ASSERT_TRUE(a.set_stripes(2, 1, nullptr, 0));  // an empty list empties the stripe
+  EXPECT_TRUE(a.stripe(2).empty());
+}
+
+TEST(AreaParts, ClearEmptiesEveryStripeAndKeepsTheCount) {
+  AreaParts a(3);
+  a.add(0, {0, 10});
+  a.add(2, {4, 5});
+  a.clear();
+  EXPECT_EQ(a, AreaParts(3));
+  EXPECT_EQ(a.stripe_count(), 3);
+  a.add(1, {2, 3});  // usable as before
+  EXPECT_EQ(a.stripe(1), (std::vector<Interval>{{2, 3}}));
+}
+
 CoverageConfig small_area() {
   CoverageConfig c;
   c.length_x_m = 56.0;  // 56 / (0.8 * 7) = 10 stripes of 5.6 m

@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <map>
+#include <random>
 #include <string>
 
 namespace uavsim::missions::coverage {
@@ -130,7 +133,7 @@ TEST(RadioMessages, AFragmentedMapIsReassembledInAnyOrderAndRoundedInwards) {
   ASSERT_GT(frames.size(), 3u);
   for (const Frame& f : frames) EXPECT_LE(f.size(), kMaxFrameBytes);
   AggregateReassembler r(100);
-  std::optional<AggregateMessage> d;
+  const AggregateMessage* d = nullptr;
   for (size_t i = frames.size(); i-- > 0;) {
     auto got = r.add(frames[i]);
     if (i > 0) {
@@ -163,7 +166,7 @@ TEST(RadioMessages, AMapOfOver64FragmentsArrivesWhole) {
   const auto frames = encode_aggregate(m, k127);
   ASSERT_EQ(frames.size(), 108u);
   AggregateReassembler r(108);
-  std::optional<AggregateMessage> d;
+  const AggregateMessage* d = nullptr;
   for (const Frame& f : frames) {
     EXPECT_FALSE(d);
     d = r.add(f);
@@ -279,7 +282,7 @@ TEST(RadioMessages, AggregationFragmentsFitTheChannelsFrameAndNothingIsCut) {
       const auto frames = encode_aggregate(*m, *fit_frames(bytes, nullptr));
       fragments[k] = frames.size();
       AggregateReassembler r(m->apd.stripe_count());
-      std::optional<AggregateMessage> d;
+      const AggregateMessage* d = nullptr;
       for (const Frame& f : frames) {
         EXPECT_LE(f.size(), bytes);
         longest[k] = std::max(longest[k], f.size());
@@ -312,7 +315,7 @@ TEST(RadioMessages, AStripeOverAFragmentsIntervalsIsSentShortNeverOver) {
     SCOPED_TRACE(bytes);
     const auto frames = encode_aggregate(m, *fit_frames(bytes, nullptr));
     AggregateReassembler r(4);
-    std::optional<AggregateMessage> d;
+    const AggregateMessage* d = nullptr;
     for (const Frame& f : frames) {
       EXPECT_LE(f.size(), bytes);
       d = r.add(f);
@@ -386,13 +389,255 @@ TEST(RadioMessages, AStripeOf300IntervalsIsSentAs255In1500ByteFrames) {
     for (int band = 0; band < 300; ++band) m.apd.add(s, {2.0 * band, 2.0 * band + 1.0});
   const auto frames = encode_aggregate(m, *fit_frames(kMaxAggregateFrameBytes, nullptr));
   AggregateReassembler r(2);
-  std::optional<AggregateMessage> d;
+  const AggregateMessage* d = nullptr;
   for (const Frame& f : frames) {
     EXPECT_LE(f.size(), kMaxAggregateFrameBytes);
     d = r.add(f);
   }
   ASSERT_TRUE(d);
   for (int s = 0; s < 2; ++s) EXPECT_EQ(d->apd.stripe(s).size(), 255u);
+}
+
+// FNV-1a over frames, each preceded by its length: pins the bytes the encoders write.
+uint64_t fnv1a(const std::vector<Frame>& frames) {
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](uint8_t b) {
+    h ^= b;
+    h *= 1099511628211ull;
+  };
+  for (const Frame& f : frames) {
+    mix(static_cast<uint8_t>(f.size() & 0xFF));
+    mix(static_cast<uint8_t>(f.size() >> 8));
+    for (uint8_t b : f) mix(b);
+  }
+  return h;
+}
+
+// A map with runs, ragged stripes and a stripe over a fragment's intervals, as the encoders wrote
+// it before they kept their runs in one flat list (the bytes must not change: the flock's frames
+// and the station's map are the same on either side of that change).
+TEST(RadioMessages, TheEncodersWriteTheSameBytesAsBefore) {
+  AggregateMessage m;
+  m.sender = 7;
+  m.origin = 2;
+  m.query_id = 513;
+  m.version = 9;
+  m.responded = 0x1F0F;
+  m.acked = 0x30;
+  m.apd = AreaParts(40);
+  for (int s = 0; s < 40; ++s) m.apd.add(s, {0.0, 187.55});
+  for (int s = 5; s < 25; ++s) m.apd.add(s, {200.0 + 0.37 * s, 230.04 + 0.5 * s});
+  for (int band = 0; band < 30; ++band) m.apd.add(30, {300.0 + 5.0 * band, 302.5 + 5.0 * band});
+  std::vector<uint64_t> got;
+  for (size_t bytes : {kNs3FrameBytes, kMaxFrameBytes, kMaxAggregateFrameBytes}) {
+    const auto frames = encode_aggregate(m, *fit_frames(bytes, nullptr));
+    got.push_back(frames.size());
+    got.push_back(fnv1a(frames));
+  }
+  got.push_back(fnv1a({encode_apd(m.apd)}));
+  const std::vector<uint64_t> before{5u,
+                                     0x8976759897509cb6ull,
+                                     5u,
+                                     0x77375bdc4e560ccbull,
+                                     1u,
+                                     0xff74585e4d53e0c9ull,
+                                     0x3428048b462a2f14ull};
+  EXPECT_EQ(got, before);
+}
+
+// A sender's map as the flock sends it: a band that every stripe shares, and one more band in a
+// few stripes, a different one in each (runs of several stripes and of one).
+AggregateMessage fragmented_message(int sender, uint16_t version, double band_m) {
+  AggregateMessage m;
+  m.sender = sender;
+  m.origin = 1;
+  m.query_id = 4;
+  m.version = version;
+  m.responded = 0b111;
+  m.acked = 0b10;
+  m.apd = AreaParts(60);
+  for (int s = 0; s < 60; ++s) m.apd.add(s, {0.0, band_m});
+  for (int s = 10; s < 40; ++s) m.apd.add(s, {band_m + 10.0 + s, band_m + 30.0 + 2.0 * s});
+  return m;
+}
+
+// The reassembler gathers every message in memory it reuses (one per sender): what it hands out
+// must not depend on what that memory held before.
+TEST(RadioMessages, ReassemblyIsTheSameInAnyOrderWithRepeatsAndAfterEarlierMessages) {
+  const AggregateMessage first = fragmented_message(3, 1, 100.0);
+  const AggregateMessage second = fragmented_message(3, 2, 50.0);  // fewer covered, other stripes
+  const auto a = encode_aggregate(first, k127);
+  const auto b = encode_aggregate(second, k127);
+  ASSERT_GT(a.size(), 3u);
+  ASSERT_GT(b.size(), 3u);
+  AggregateReassembler r(60);
+  // the first message, in reverse with a repeat in between: complete at its last missing fragment
+  const AggregateMessage* d = nullptr;
+  for (size_t i = a.size(); i-- > 0;) {
+    EXPECT_FALSE(d);
+    d = r.add(a[i]);
+    if (i == a.size() - 2) {
+      EXPECT_FALSE(r.add(a[i + 1]));  // a repeat completes nothing
+    }
+  }
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->version, 1);
+  const AreaParts first_map = d->apd;
+  // the same message again (a retransmission): a new message, complete only once whole again
+  EXPECT_FALSE(r.add(a[0]));
+  // half of it, then the next version: the half is dropped, the next version stands alone
+  for (size_t i = 1; i < a.size() / 2; ++i) EXPECT_FALSE(r.add(a[i]));
+  d = nullptr;
+  for (size_t i = 0; i < b.size(); ++i) {
+    EXPECT_FALSE(d);
+    d = r.add(b[i]);
+  }
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->version, 2);
+  EXPECT_EQ(d->responded, 0b111u);
+  EXPECT_EQ(d->acked, 0b10u);
+  // as a reassembler that never held anything gets it
+  AggregateReassembler fresh(60);
+  const AggregateMessage* f = nullptr;
+  for (const Frame& fr : b) f = fresh.add(fr);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(d->apd, f->apd);
+  EXPECT_FALSE(d->apd == first_map);  // the first map's stripes left nothing behind
+  // the first message whole again, after the second: the first map again
+  d = nullptr;
+  for (const Frame& fr : a) d = r.add(fr);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->apd, first_map);
+}
+
+TEST(RadioMessages, ReassemblyKeepsSendersApartAndIgnoresAMalformedFragmentBetween) {
+  const AggregateMessage m3 = fragmented_message(3, 1, 100.0);
+  const AggregateMessage m9 = fragmented_message(9, 5, 40.0);
+  const auto a = encode_aggregate(m3, k127);
+  const auto b = encode_aggregate(m9, k127);
+  AggregateReassembler r(60);
+  const AggregateMessage* d3 = nullptr;
+  const AggregateMessage* d9 = nullptr;
+  for (size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
+    if (i < a.size() && !d3) d3 = r.add(a[i]);
+    Frame bad = a[0];
+    bad.pop_back();  // a run cut short
+    EXPECT_FALSE(r.add(bad));
+    if (i < b.size()) d9 = r.add(b[i]);
+  }
+  ASSERT_TRUE(d9);
+  EXPECT_EQ(d9->sender, 9);
+  AggregateReassembler alone(60);
+  const AggregateMessage* e9 = nullptr;
+  for (const Frame& f : b) e9 = alone.add(f);
+  ASSERT_TRUE(e9);
+  EXPECT_EQ(d9->apd, e9->apd);
+  EXPECT_EQ(d9->version, 5);
+}
+
+// The reassembler gathers each sender's messages in the same memory: a stream of fragments from
+// several senders, versions interleaved, stripe ranges overlapping within a message (fragments of
+// different maps relabelled into one), fragments repeated. Each message it hands out must be the
+// one a fresh reassembler makes of that message's fragments alone.
+TEST(RadioMessages, ReassemblyDoesNotDependOnEarlierMessagesOfTheSender) {
+  std::vector<Frame> pool;
+  for (double band : {100.0, 50.0, 80.0}) {
+    for (const Frame& f : encode_aggregate(fragmented_message(3, 1, band), k127)) pool.push_back(f);
+  }
+  AreaParts sparse(60);  // one short run: a fragment of few bytes
+  sparse.add(7, {1.0, 2.0});
+  AggregateMessage m = fragmented_message(3, 1, 10.0);
+  m.apd = sparse;
+  for (const Frame& f : encode_aggregate(m, k127)) pool.push_back(f);
+  std::mt19937 rng(17);
+  AggregateReassembler r(60);
+  std::map<int, std::vector<Frame>> since_start;  // per sender: the message's fragments so far
+  std::map<int, Frame> last;                      // per sender: the last fragment (its header)
+  int completed = 0;
+  for (int step = 0; step < 4000; ++step) {
+    Frame f = pool[rng() % pool.size()];
+    const int sender = rng() % 2 == 0 ? 3 : 9;
+    f[1] = static_cast<uint8_t>(sender);
+    f[5] = static_cast<uint8_t>(1 + rng() % 2);  // version 1 or 2
+    f[6] = 0;
+    f[8] = 3;  // fragments
+    f[7] = static_cast<uint8_t>(rng() % 3);
+    // the same message as the last fragment of this sender (origin, query, version, fragments)?
+    auto& frames = since_start[sender];
+    const auto it = last.find(sender);
+    if (it == last.end() || !std::equal(f.begin() + 2, f.begin() + 7, it->second.begin() + 2) ||
+        f[8] != it->second[8]) {
+      frames.clear();
+    }
+    frames.push_back(f);
+    last[sender] = f;
+    const AggregateMessage* d = r.add(f);
+    if (!d) continue;
+    ++completed;
+    AggregateReassembler fresh(60);
+    const AggregateMessage* want = nullptr;
+    for (const Frame& g : frames) want = fresh.add(g);
+    ASSERT_TRUE(want) << step;
+    ASSERT_EQ(d->apd, want->apd) << step;
+    ASSERT_EQ(d->sender, want->sender);
+    ASSERT_EQ(d->version, want->version);
+    ASSERT_EQ(d->responded, want->responded);
+    ASSERT_EQ(d->acked, want->acked);
+    frames.clear();
+    last.erase(sender);  // complete: the next fragment starts a message
+  }
+  EXPECT_GT(completed, 200);
+}
+
+// Every byte string cut short is refused, wherever the cut falls (in a run's header, between an
+// interval's ends, between intervals), and refusing it leaves the next message whole.
+TEST(RadioMessages, EveryCutOfAFragmentOrStationMapIsRefused) {
+  const AggregateMessage m = fragmented_message(5, 2, 80.0);
+  const std::vector<uint8_t> apd = encode_apd(m.apd);
+  for (size_t len = 0; len < apd.size(); ++len) {
+    EXPECT_FALSE(decode_apd(std::vector<uint8_t>(apd.begin(), apd.begin() + len), 60)) << len;
+  }
+  ASSERT_TRUE(decode_apd(apd, 60));
+  const auto frames = encode_aggregate(m, k127);
+  AggregateReassembler r(60);
+  for (size_t k = 0; k < frames.size(); ++k) {
+    for (size_t len = 0; len < frames[k].size(); ++len)
+      EXPECT_FALSE(r.add(Frame(frames[k].begin(), frames[k].begin() + len))) << k << " " << len;
+  }
+  const AggregateMessage* d = nullptr;
+  for (const Frame& f : frames) d = r.add(f);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->apd, *decode_apd(apd, 60));
+}
+
+// The beacon decoder that fills a caller's Beacon leaves nothing of the last one behind.
+TEST(RadioMessages, ABeaconDecodedIntoAUsedBeaconIsTheSameAsFresh) {
+  const RadioFrameOrigin o{10.0, 20.0};
+  Beacon many;
+  many.self = {4, 11, 30.0, 40.0, 0.5, 1.0, -1.0, 3, 700, true};
+  many.going_home = true;
+  many.homebound = true;
+  many.round = 3;
+  for (int i = 0; i < 8; ++i) many.records.push_back({10 + i, 7, 1.0 * i, 2.0, 0.1, 0, 0, 2, 100});
+  Beacon few;
+  few.self = {6, 12, 50.0, 60.0, -0.5, 0.0, 0.0, 0, 0, false};
+  few.records.push_back({20, 9, 5.0, 6.0, 0.2, 0, 0, 1, 50});
+  Beacon used;
+  ASSERT_TRUE(decode_beacon(encode_beacon(many, o, k127), o, &used));
+  EXPECT_FALSE(decode_beacon(Frame{1, 2, 3}, o, &used));
+  ASSERT_TRUE(decode_beacon(encode_beacon(few, o, k127), o, &used));
+  const auto fresh = decode_beacon(encode_beacon(few, o, k127), o);
+  ASSERT_TRUE(fresh);
+  EXPECT_EQ(used.self.id, 6);
+  EXPECT_EQ(used.self.distance_hops, fresh->self.distance_hops);
+  EXPECT_EQ(used.self.age_ms, fresh->self.age_ms);
+  EXPECT_EQ(used.self.landed, fresh->self.landed);
+  EXPECT_EQ(used.going_home, fresh->going_home);
+  EXPECT_EQ(used.homebound, fresh->homebound);
+  EXPECT_EQ(used.round, fresh->round);
+  ASSERT_EQ(used.records.size(), 1u);
+  EXPECT_EQ(used.records[0].id, 20);
+  EXPECT_EQ(used.records[0].x_m, fresh->records[0].x_m);
 }
 
 }  // namespace
