@@ -172,9 +172,13 @@ bool EventLoop::Impl::iterate(bool may_block, double wake_at) {
   const bool lockstep = config.clock == LoopConfig::Clock::kLockstep;
   // nothing left to do at this time: the process is waiting, so the tick is complete (seed 6.5)
   if (lockstep && tick_outstanding) send_done();
-  // pipelined: the tick's work is done, so what came after the tick may be handled now
+  // pipelined: the tick's work is done, so what came after the tick may be handled now. If the next
+  // tick is there already, its timers run now too, as when it is waited for below: whether it came
+  // before or after this point is the machine's timing, and the caller may look at the clock next
   if (lockstep && api_held && alive) {
     resume_api();
+    run_posted();
+    run_due_timers();
     return true;
   }
   if (!may_block) return false;

@@ -536,6 +536,32 @@ TEST(ClientDeterminism, SameMissionSameTrajectory) {
               a.telemetry.size());
 }
 
+// Pipelined: a tick that is already there when the loop finishes the last tick's work has its timers
+// run before the loop returns, as one it waits for: how many timer calls a run_for makes depends on
+// sim time alone. Each tick's work here outlasts the simulator's next step (it waits until the
+// server is at the next tick), so every tick is there early; without the rule the last tick's timer
+// was skipped (the race behind a rare failure of the test below under load).
+TEST(ClientDeterminism, PipelinedTimersOfATickThatCameDuringTheWorkRunBeforeRunForReturns) {
+  SimServer server;
+  auto l = EventLoop::create(LoopConfig::lockstep("127.0.0.1", server.api_port(), 0.02));
+  ASSERT_TRUE(l) << l.message();
+  EventLoop& loop = **l;
+  ApiClient api(server.api_port());
+  ASSERT_EQ(api.request({{"op", "resume"}}).value("ok", false), true);
+  loop.set_lockstep_pipelined(true);
+  const double t0 = loop.now();
+  int calls = 0;
+  loop.call_every(0.02, [&] {
+    ++calls;
+    const double next = loop.now() + 0.02;
+    while (api.sim_time() < next - 1e-9) {
+    }
+  });
+  ASSERT_TRUE(loop.run_for(0.2));
+  EXPECT_NEAR(loop.now() - t0, 0.2, kTimeTol_s);
+  EXPECT_EQ(calls, 10);
+}
+
 // Pipelined: the same script twice gives the same run to the bit (what the program saw at every
 // tick, and when each blocking call returned), and every command took effect one tick later than
 // without the latency, so each blocking call returns at or after its unpipelined time.
