@@ -127,5 +127,19 @@ TEST(RequestRing, AClientThatWritesATickIntoItIsDroppedAndTheOthersTickOn) {
   EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 1);
 }
 
+// A client that moves its request ring's write position where nothing was written (not on a record
+// boundary) is dropped when the server reads it.
+TEST(RequestRing, AClientThatBreaksItsWritePositionIsDropped) {
+  SimServer server;
+  RawShmClient hostile(server.api_port());
+  ASSERT_NO_FATAL_FAILURE(join_with_request_ring(hostile));
+  hostile.send_on_ring({{"op", "status"}, {"id", "s"}}, /*deferred=*/true);
+  hostile.request_header()->head += 5;  // (before the server is woken: it reads only this)
+  hostile.flush();
+  EXPECT_TRUE(hostile.hung_up());
+  ApiClient api(server.api_port());
+  EXPECT_EQ(api.request({{"op", "status"}})["result"]["lockstep_clients"], 0);
+}
+
 }  // namespace
 }  // namespace uavsim::client::testing
