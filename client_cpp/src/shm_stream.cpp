@@ -31,6 +31,18 @@ bool is_token(const std::string& t) {
   return true;
 }
 
+// Opens one of the stream's FIFOs with flags, checks it is a FIFO of this user's, and unlinks its
+// name (opened: no one else should find it). -1 with *error otherwise.
+int open_own_fifo(const std::string& path, int flags, std::string* error) {
+  const int fd = ::open(path.c_str(), flags | O_NONBLOCK | O_CLOEXEC);
+  struct stat st {};
+  const bool ok = fd >= 0 && fstat(fd, &st) == 0 && S_ISFIFO(st.st_mode) && st.st_uid == geteuid();
+  if (!ok) *error = "shared-memory stream: " + path + ": " + (fd < 0 ? std::strerror(errno) : "not this user's FIFO");
+  unlink(path.c_str());
+  if (!ok && fd >= 0) close(fd);
+  return ok ? fd : -1;
+}
+
 }  // namespace
 
 R ShmStream::open(const nlohmann::json& offer) {
@@ -65,7 +77,6 @@ R ShmStream::open(const nlohmann::json& offer) {
   }
   const std::string t = token->get<std::string>();
   const std::string name = shm::object_name(t);
-  const std::string fifo = shm::fifo_path(t);
   const std::size_t ring_size =
       shm::region_bytes(static_cast<std::size_t>(bytes->get<std::uint64_t>()));
   const std::size_t size =
@@ -92,17 +103,12 @@ R ShmStream::open(const nlohmann::json& offer) {
     return R::fail(Error::kIo,
                    std::string("shared-memory stream: mmap: ") + std::strerror(map_errno));
 
-  // the wake FIFO: read end, non-blocking (the server holds the only write end)
-  const int fifo_fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  struct stat fst {};
-  const bool fifo_ok =
-      fifo_fd >= 0 && fstat(fifo_fd, &fst) == 0 && S_ISFIFO(fst.st_mode) && fst.st_uid == geteuid();
-  const std::string fifo_error = fifo_fd < 0 ? std::strerror(errno) : "not this user's FIFO";
-  unlink(fifo.c_str());
-  if (!fifo_ok) {
-    if (fifo_fd >= 0) close(fifo_fd);
+  // the wake FIFO: read end (the server holds the only write end)
+  std::string fifo_error;
+  const int fifo_fd = open_own_fifo(shm::fifo_path(t), O_RDONLY, &fifo_error);
+  if (fifo_fd < 0) {
     munmap(region, size);
-    return R::fail(Error::kIo, "shared-memory stream: " + fifo + ": " + fifo_error);
+    return R::fail(Error::kIo, fifo_error);
   }
   std::string why;
   auto reader = shm::RingReader::attach(region, ring_size, &why);
@@ -116,18 +122,12 @@ R ShmStream::open(const nlohmann::json& offer) {
     // the server's wake-up FIFO, opened for reading too: a server gone leaves a FIFO with a reader
     // (this one), so a wake-up written then is lost instead of raising SIGPIPE (the socket's close
     // says the server is gone)
-    const std::string request_fifo = shm::request_fifo_path(t);
-    const int fd = ::open(request_fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-    struct stat rst {};
-    const bool ok =
-        fd >= 0 && fstat(fd, &rst) == 0 && S_ISFIFO(rst.st_mode) && rst.st_uid == geteuid();
-    const std::string error = fd < 0 ? std::strerror(errno) : "not this user's FIFO";
-    unlink(request_fifo.c_str());
-    if (!ok) {
-      if (fd >= 0) close(fd);
+    std::string error;
+    const int fd = open_own_fifo(shm::request_fifo_path(t), O_RDWR, &error);
+    if (fd < 0) {
       close(fifo_fd);
       munmap(region, size);
-      return R::fail(Error::kIo, "shared-memory stream: " + request_fifo + ": " + error);
+      return R::fail(Error::kIo, error);
     }
     requests = Requests{
         shm::RingWriter(static_cast<std::uint8_t*>(region) + ring_size, request_capacity), fd};

@@ -94,19 +94,17 @@ bool SimChannel::release_outputs() {
 }
 
 bool SimChannel::send_lines(const std::string& lines) {
-  if (fd_ < 0) return false;
-  if (!has_request_ring()) return net::send_all(fd_, lines, send_timeout_s_);
-  std::string why;
+  if (fd_ >= 0 && !has_request_ring()) return net::send_all(fd_, lines, send_timeout_s_);
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(lines.data());
-  if (ring_->write_request(common::shm::RecordType::kStream, {bytes, lines.size()}, send_timeout_s_,
-                           &why, defer_wakeups_)) {
-    return true;
-  }
-  std::fprintf(stderr, "uavsim client: sim API: %s\n", why.c_str());
-  return false;
+  return write_request(common::shm::RecordType::kStream, {bytes, lines.size()});
 }
 
 bool SimChannel::send_binary(common::shm::RecordType type, std::span<const std::uint8_t> payload) {
+  return write_request(type, payload);
+}
+
+bool SimChannel::write_request(common::shm::RecordType type,
+                               std::span<const std::uint8_t> payload) {
   if (fd_ < 0 || !has_request_ring()) return false;
   std::string why;
   if (ring_->write_request(type, payload, send_timeout_s_, &why, defer_wakeups_)) return true;

@@ -150,6 +150,8 @@ class SimChannel {
   std::string held_;
   // sends whole lines (each with its newline) on the request ring or the socket
   bool send_lines(const std::string& lines);
+  // one record into the request ring (false, said on stderr, when it cannot be written)
+  bool write_request(common::shm::RecordType type, std::span<const std::uint8_t> payload);
   std::map<std::string, ReplyHandler> reply_handlers_;
   std::map<std::uint32_t, ReplyHandler> standing_replies_;  // by tag ("b<tag>" ids)
   std::uint32_t next_standing_tag_ = 1;

@@ -1,11 +1,7 @@
 #include "api/request_ring.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <cstring>
 #include <string_view>
 
 namespace uavsim::server::api {
@@ -13,28 +9,19 @@ namespace uavsim::server::api {
 namespace shm = common::shm;
 
 std::shared_ptr<RequestRing> RequestRing::create(std::shared_ptr<void> mapping, void* region,
-                                                 std::size_t capacity, std::string fifo_path,
+                                                 std::size_t capacity, int fifo_fd,
                                                  std::string* why) {
   // the header a writer starts from (the client's writer starts from the same: nothing written)
   shm::RingWriter init(region, capacity);
   auto reader = shm::RingReader::attach(region, shm::region_bytes(capacity), why);
-  if (!reader) return nullptr;
-  int fd = -1;
-  if (mkfifo(fifo_path.c_str(), 0600) == 0)
-    fd = open(fifo_path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    *why = "FIFO " + fifo_path + ": " + std::strerror(errno);
-    unlink(fifo_path.c_str());
+  if (!reader) {
+    close(fifo_fd);
     return nullptr;
   }
-  return std::shared_ptr<RequestRing>(
-      new RequestRing(std::move(mapping), *reader, std::move(fifo_path), fd));
+  return std::shared_ptr<RequestRing>(new RequestRing(std::move(mapping), *reader, fifo_fd));
 }
 
-RequestRing::~RequestRing() {
-  unlink(fifo_path_.c_str());  // (gone already once the client has opened it)
-  close(fifo_fd_);
-}
+RequestRing::~RequestRing() { close(fifo_fd_); }
 
 bool RequestRing::read(const Sink& sink, std::string* why) {
   char bytes[64];

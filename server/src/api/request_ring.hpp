@@ -23,14 +23,13 @@ namespace uavsim::server::api {
 
 class RequestRing : public LineServer::Intake {
  public:
-  // Sets up the ring at region (its header, then capacity bytes) for the client to write, and
-  // creates the wake-up FIFO at fifo_path (0600, exclusively; held open for reading and writing, so
-  // that neither side's open waits and a client that goes never makes it readable). mapping keeps
-  // region mapped while the ring is in use. nullptr with *why if the FIFO cannot be made.
+  // Sets up the ring at region (its header, then capacity bytes) for the client to write; fifo_fd is
+  // the client's wake-up FIFO, which it takes (the transport makes and names it, held open for
+  // reading and writing, so that a client that goes never makes it readable). mapping keeps region
+  // mapped while the ring is in use. nullptr with *why (fifo_fd closed) if the ring cannot be read.
   static std::shared_ptr<RequestRing> create(std::shared_ptr<void> mapping, void* region,
-                                             std::size_t capacity, std::string fifo_path,
-                                             std::string* why);
-  ~RequestRing() override;  // closes the FIFO and removes its name if the client has not
+                                             std::size_t capacity, int fifo_fd, std::string* why);
+  ~RequestRing() override;  // closes the FIFO
   RequestRing(const RequestRing&) = delete;
   RequestRing& operator=(const RequestRing&) = delete;
 
@@ -38,16 +37,11 @@ class RequestRing : public LineServer::Intake {
   bool read(const Sink& sink, std::string* why) override;
 
  private:
-  RequestRing(std::shared_ptr<void> mapping, common::shm::RingReader reader, std::string fifo_path,
-              int fifo_fd)
-      : mapping_(std::move(mapping)),
-        reader_(reader),
-        fifo_path_(std::move(fifo_path)),
-        fifo_fd_(fifo_fd) {}
+  RequestRing(std::shared_ptr<void> mapping, common::shm::RingReader reader, int fifo_fd)
+      : mapping_(std::move(mapping)), reader_(reader), fifo_fd_(fifo_fd) {}
   std::shared_ptr<void> mapping_;
   common::shm::RingReader reader_;
   common::shm::RingReader::Record record_;  // reused between records
-  std::string fifo_path_;
   int fifo_fd_;
 };
 

@@ -41,6 +41,18 @@ std::optional<std::string> random_token() {
   return token;
 }
 
+// A wake-up FIFO at path, made here (0600) and opened read-write, so that the open does not wait
+// for the client; -1 with *why (and no name left) if the system refuses.
+int make_fifo(const std::string& path, std::string* why) {
+  int fd = -1;
+  if (mkfifo(path.c_str(), 0600) == 0) fd = open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    *why = "FIFO " + path + ": " + std::strerror(errno);
+    unlink(path.c_str());
+  }
+  return fd;
+}
+
 }  // namespace
 
 // One connection's ring: the mapping, the wake FIFO's write end, the writer.
@@ -211,23 +223,20 @@ std::optional<nlohmann::json> ShmTransport::offer(uint64_t conn, std::size_t rin
     return std::nullopt;
   }
   std::shared_ptr<void> mapping(region, [region_size](void* r) { munmap(r, region_size); });
-  // the wake-up FIFO: opened read-write, so the open does not wait for the client
-  const std::string fifo = shm::fifo_path(*token);
-  int fifo_fd = -1;
-  if (mkfifo(fifo.c_str(), 0600) == 0)
-    fifo_fd = open(fifo.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  const int fifo_fd = make_fifo(shm::fifo_path(*token), why);
   if (fifo_fd < 0) {
-    *why = "FIFO " + fifo + ": " + std::strerror(errno);
-    unlink(fifo.c_str());
     shm_unlink(name.c_str());
     return std::nullopt;
   }
   auto ring = std::make_shared<Ring>(conn, *token, mapping, ring_bytes, fifo_fd, shared_);
   nlohmann::json result{{"token", *token}, {"ring_bytes", ring_bytes}, {"version", shm::kVersion}};
   if (request_ring_bytes != 0) {
+    // (on failure the ring, going, unlinks the names made: the region's, both FIFOs')
+    const int request_fifo_fd = make_fifo(shm::request_fifo_path(*token), why);
+    if (request_fifo_fd < 0) return std::nullopt;
     ring->requests = RequestRing::create(mapping, static_cast<uint8_t*>(region) + ring_region,
-                                         request_ring_bytes, shm::request_fifo_path(*token), why);
-    if (!ring->requests) return std::nullopt;  // (the ring unlinks the names it made)
+                                         request_ring_bytes, request_fifo_fd, why);
+    if (!ring->requests) return std::nullopt;
     result["request_ring_bytes"] = request_ring_bytes;
   }
   offered_[conn] = std::move(ring);
