@@ -20,13 +20,12 @@
 #include "api/api_server.hpp"
 #include "api/overlay_ops.hpp"
 #include "api/radio_ops.hpp"
-#include "radio/gcs_relay.hpp"
 #include "api/sensor_ops.hpp"
+#include "app/camera_floor.hpp"
+#include "app/camera_owners.hpp"
 #include "app/demo_flight.hpp"
 #include "app/endpoint_hooks.hpp"
 #include "app/field_setup.hpp"
-#include "app/camera_floor.hpp"
-#include "app/camera_owners.hpp"
 #include "app/gimbal_bridge.hpp"
 #include "app/hover_all.hpp"
 #include "app/loop_guard.hpp"
@@ -38,9 +37,11 @@
 #include "objects/world_objects.hpp"
 #include "physics/object_bodies.hpp"
 #include "physics/world.hpp"
+#include "radio/gcs_relay.hpp"
 #include "render/camera_director.hpp"
 #include "render/camera_setup.hpp"
 #include "render/frame_service.hpp"
+#include "render/plane_grid.hpp"
 #include "render/video_recorder.hpp"
 #include "sim/runner.hpp"
 #include "sim/simulation.hpp"
@@ -443,6 +444,9 @@ int run_server(const Options& given_options) {
         if (!options.quiet) {
           std::cout << "uavsim-server: " << cameras.size() << " camera(s) rendered by " << frames->render_threads()
                     << " thread(s) with " << frames->gl_summary() << "\n";
+        }
+        for (const std::string& w : render::dense_plane_grid_warnings(s.world().model())) {
+          std::cerr << "uavsim-server: warning: " << w << "\n";
         }
       } catch (const std::exception& e) {
         if (options.record_path || !options.render_cameras.empty()) {

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "render/gl_context.hpp"
+#include "render/view_culling.hpp"
 #include "uavsim/common/angles.hpp"
 
 namespace uavsim::server::render {
@@ -67,6 +68,7 @@ struct CameraRenderer::Impl {
   std::vector<uint8_t> rgb;  // bottom-up scratch image from mjr_readPixels
   std::vector<float> depth;  // bottom-up scratch depth buffer (0 near .. 1 far) from mjr_readPixels
   MjrSlot* geometry_mjr = nullptr;  // the depth and segmentation pass's context: no multisampling
+  bool cull_outside_view = true;
 
   void make_current() const {
     assert(std::this_thread::get_id() == thread && "CameraRenderer used off its renderer thread");
@@ -102,6 +104,7 @@ CameraRenderer::CameraRenderer(const mjModel* m, std::vector<CameraConfig> camer
   Impl& s = *impl_;
   s.m = m;
   s.thread = std::this_thread::get_id();
+  s.cull_outside_view = options.cull_outside_view;
 
   // resolve and check every camera before touching GL
   const int off_w = m->vis.global.offwidth;
@@ -243,6 +246,11 @@ void CameraRenderer::render(mjData* d, int index, const RenderPasses& passes, Ca
   s.scn.flags[mjRND_SHADOW] = cam.config.flags.shadows;
   s.scn.flags[mjRND_REFLECTION] = cam.config.flags.reflections;
   s.scn.flags[mjRND_SKYBOX] = cam.config.flags.skybox;
+  // shadows and reflections draw the scene from elsewhere: what this view cannot see may show in
+  // them
+  if (s.cull_outside_view && !cam.config.flags.shadows && !cam.config.flags.reflections) {
+    remove_geoms_outside_view(s.m, w, h, &s.scn);
+  }
 
   const mjrRect viewport = {0, 0, w, h};
   out->pixels.clear();

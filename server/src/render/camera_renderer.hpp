@@ -104,6 +104,9 @@ OffscreenSize required_offscreen_size(const std::vector<CameraConfig>& cameras);
 
 struct RendererOptions {
   std::string backend = "osmesa";  // "osmesa", "egl" or "auto": see make_gl_context
+  // leave out of a frame the geoms wholly outside its camera's view (render/view_culling.hpp): the
+  // same pixels, less vertex work; off only to compare against MuJoCo drawing everything
+  bool cull_outside_view = true;
 };
 
 class CameraRenderer {
