@@ -38,8 +38,7 @@ std::vector<std::string> dense_plane_grid_warnings(const mjModel* m) {
       const double coarse_m = std::max(size[0], size[1]) / 20.0;
       line << " (its size's third value, " << size[2] << " m, is the render grid's spacing): under "
            << "directional lights a spacing of " << coarse_m
-           << " m draws it the same at a fraction of "
-           << "the cost";
+           << " m draws it the same at a fraction of the cost";
     } else {
       line << " (an infinite plane always is): give it a finite size and a coarse grid spacing";
     }

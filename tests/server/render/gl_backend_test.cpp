@@ -110,24 +110,11 @@ CameraFrame render_with(const Scene& s, const std::string& backend, const Render
 
 void expect_same_scene(const CameraFrame& osmesa, const CameraFrame& egl) {
   ASSERT_EQ(osmesa.pixels.size(), egl.pixels.size());
-  // pixel statistics
-  double abs_sum = 0.0;
-  size_t large = 0;
-  const size_t pixels = osmesa.pixels.size() / 3;
-  for (size_t i = 0; i < pixels; ++i) {
-    int worst = 0;
-    for (int c = 0; c < 3; ++c) {
-      const int diff = std::abs(int{osmesa.pixels[3 * i + c]} - int{egl.pixels[3 * i + c]});
-      abs_sum += diff;
-      worst = std::max(worst, diff);
-    }
-    if (worst > kLargeDiff) ++large;
-  }
-  const double mean_abs_diff = abs_sum / static_cast<double>(osmesa.pixels.size());
-  ::testing::Test::RecordProperty("mean_abs_diff", std::to_string(mean_abs_diff));
-  ::testing::Test::RecordProperty("pixels_off", std::to_string(large));
-  EXPECT_LE(mean_abs_diff, kMeanAbsDiffTol);
-  EXPECT_LE(static_cast<double>(large) / static_cast<double>(pixels), kDifferentPixelsTol);
+  const testing::FrameDifference diff = testing::frame_difference(osmesa, egl, kLargeDiff);
+  ::testing::Test::RecordProperty("mean_abs_diff", std::to_string(diff.mean_abs_diff));
+  ::testing::Test::RecordProperty("pixels_off", std::to_string(diff.large_pixels));
+  EXPECT_LE(diff.mean_abs_diff, kMeanAbsDiffTol);
+  EXPECT_LE(diff.large_fraction, kDifferentPixelsTol);
 
   // the objects where the camera model puts them, in both frames
   for (const auto& [name, find, centre] : {std::tuple{"balloon", &find_balloon, kBalloonCentreEnuM},

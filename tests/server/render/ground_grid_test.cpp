@@ -80,23 +80,11 @@ CameraFrame render(Scene& s, const std::string& camera, int width_px, int height
 
 void expect_same_frame(const CameraFrame& finest, const CameraFrame& shipped) {
   ASSERT_EQ(finest.pixels.size(), shipped.pixels.size());
-  double abs_sum = 0.0;
-  size_t large = 0;
-  const size_t pixels = finest.pixels.size() / 3;
-  for (size_t i = 0; i < pixels; ++i) {
-    int worst = 0;
-    for (int c = 0; c < 3; ++c) {
-      const int diff = std::abs(int{finest.pixels[3 * i + c]} - int{shipped.pixels[3 * i + c]});
-      abs_sum += diff;
-      worst = std::max(worst, diff);
-    }
-    if (worst > kLargeDiff) ++large;
-  }
-  const double mean_abs_diff = abs_sum / static_cast<double>(finest.pixels.size());
-  ::testing::Test::RecordProperty("mean_abs_diff", std::to_string(mean_abs_diff));
-  ::testing::Test::RecordProperty("pixels_off", std::to_string(large));
-  EXPECT_LE(mean_abs_diff, kMeanAbsDiffTol);
-  EXPECT_LE(static_cast<double>(large) / static_cast<double>(pixels), kDifferentPixelsTol);
+  const testing::FrameDifference diff = testing::frame_difference(finest, shipped, kLargeDiff);
+  ::testing::Test::RecordProperty("mean_abs_diff", std::to_string(diff.mean_abs_diff));
+  ::testing::Test::RecordProperty("pixels_off", std::to_string(diff.large_pixels));
+  EXPECT_LE(diff.mean_abs_diff, kMeanAbsDiffTol);
+  EXPECT_LE(diff.large_fraction, kDifferentPixelsTol);
 
   const auto green = [](int r, int g, int b) { return g > 100 && g > 2 * r && g > 2 * b; };
   const testing::Blob a = testing::find_blob(finest, green);

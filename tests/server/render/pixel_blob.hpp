@@ -3,9 +3,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 
 #include "render/camera_renderer.hpp"
 #include "uavsim/common/angles.hpp"
@@ -38,6 +40,35 @@ Blob find_blob(const CameraFrame& f, Pick pick) {
     b.v /= b.area_px;
   }
   return b;
+}
+
+// How far apart two RGB8 frames of one size are: the mean absolute difference over every pixel and
+// channel (grey levels), and the fraction of pixels with some channel off by more than
+// `large_diff`.
+struct FrameDifference {
+  double mean_abs_diff = 0.0;
+  double large_fraction = 0.0;
+  size_t large_pixels = 0;
+};
+inline FrameDifference frame_difference(const CameraFrame& a, const CameraFrame& b,
+                                        int large_diff) {
+  FrameDifference d;
+  double abs_sum = 0.0;
+  const size_t pixels = a.pixels.size() / 3;
+  for (size_t i = 0; i < pixels; ++i) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int diff = std::abs(int{a.pixels[3 * i + c]} - int{b.pixels[3 * i + c]});
+      abs_sum += diff;
+      worst = std::max(worst, diff);
+    }
+    if (worst > large_diff) ++d.large_pixels;
+  }
+  if (pixels > 0) {
+    d.mean_abs_diff = abs_sum / static_cast<double>(a.pixels.size());
+    d.large_fraction = static_cast<double>(d.large_pixels) / static_cast<double>(pixels);
+  }
+  return d;
 }
 
 // the world point in OpenCV pixels, through the frame's pose and intrinsics
