@@ -70,7 +70,7 @@ void FrameStream::register_unavailable(OpTable& table) {
 }
 
 void FrameStream::before_tick(uint64_t conn, const Send& /*send*/) {
-  if (has_subscriptions(conn)) service_.wait_delivered();
+  if (has_subscriptions(conn)) service_.wait_due();
 }
 
 FrameStream::Json FrameStream::camera_json(int index) const {

@@ -90,7 +90,9 @@ class FrameNoise {
   double gauss() {
     constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit
     const uint64_t r = next();
-    const double sum = static_cast<double>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48));
+    // at most 18 bits: through int64, whose conversion is one instruction (uint64 takes a branch)
+    const double sum = static_cast<double>(
+        static_cast<int64_t>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48)));
     return sum * kScale - 2.0 * 65536.0 * kScale;
   }
   // uniform in [0, 1)
@@ -174,9 +176,21 @@ void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, 
                           std::vector<uint8_t>* pixels) {
   FrameNoise noise(seed, kColourStream, camera, index);
   const double gain = std::clamp(1.0 + brightness_sd * noise.gauss(), 0.2, 2.0);
-  for (uint8_t& p : *pixels) {
-    const double v = p * gain + (noise_sd > 0 ? noise_sd * noise.gauss() : 0.0);
-    p = static_cast<uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  if (noise_sd <= 0) {
+    for (uint8_t& p : *pixels) p = round_to_pixel(p * gain);
+    return;
+  }
+  // in blocks: the generator's draws first, then the pixels in a loop without calls or branches that
+  // the compiler can vectorise (the same values as one loop doing both)
+  constexpr size_t kBlock = 256;
+  double draws[kBlock];
+  uint8_t* p = pixels->data();
+  for (size_t left = pixels->size(); left > 0;) {
+    const size_t n = std::min(left, kBlock);
+    for (size_t j = 0; j < n; ++j) draws[j] = noise_sd * noise.gauss();
+    for (size_t j = 0; j < n; ++j) p[j] = round_to_pixel(p[j] * gain + draws[j]);
+    p += n;
+    left -= n;
   }
 }
 
@@ -479,6 +493,12 @@ void FrameService::capture(mjData_* d) {
     }
   }
   if (!snap) snap = std::make_unique<Snapshot>();
+  // the snapshot's earliest delivery: its capture time unless every camera in it has latency
+  int64_t due_us = std::numeric_limits<int64_t>::max();
+  for (const Job& job : jobs) {
+    const double latency_s = cameras_[static_cast<size_t>(job.camera)].latency_s;
+    due_us = std::min<int64_t>(due_us, std::llround((d->time + latency_s) * 1e6));
+  }
   const mjModel* m = m_;
   snap->id = next_id_++;
   snap->time = d->time;
@@ -493,6 +513,7 @@ void FrameService::capture(mjData_* d) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++stats_.snapshots;
+    undone_due_.emplace_back(snap->id, due_us);
     queue_.push_back(std::move(snap));
   }
   cv_.notify_all();
@@ -509,11 +530,32 @@ void FrameService::wait_delivered() {
   cv_.wait(lock, [&] { return (done_id_ >= target && !delayed_due_locked() && releasing_ == 0) || stop_; });
 }
 
+void FrameService::wait_due() {
+  if (!any_latency_) {
+    wait_delivered();  // every frame is due at its capture
+    return;
+  }
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    uint64_t target = 0;  // the last snapshot with a frame due by now (they render in id order)
+    for (const auto& [id, due_us] : undone_due_) {
+      if (due_us <= sim_now_us_) target = id;
+    }
+    cv_.wait(lock, [&] { return done_id_ >= target || stop_; });
+    if (stop_) return;
+  }
+  // the render thread releases held frames between snapshots; it may be rendering a later one now
+  release_due();
+  std::unique_lock<std::mutex> lock(mutex_);
+  cv_.wait(lock, [&] { return releasing_ == 0 || stop_; });
+}
+
 bool FrameService::delayed_due_locked() const {
   return !delayed_.empty() && delayed_.front().release_us <= sim_now_us_;
 }
 
 void FrameService::release_due() {
+  std::lock_guard<std::mutex> releasing(release_mutex_);
   for (;;) {
     Delayed held;
     {
@@ -552,6 +594,7 @@ void FrameService::render_thread_main() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       done_id_ = snap->id;
+      while (!undone_due_.empty() && undone_due_.front().first <= done_id_) undone_due_.pop_front();
       stats_.frames_rendered += snap->jobs.size();
       snap->jobs.clear();
       if (spare_.size() < options_.queue_depth + 1) spare_.push_back(std::move(snap));

@@ -97,6 +97,16 @@ void apply_depth_effects(const FrameCamera& camera, uint64_t seed, int camera_in
 // pixel and channel noise noise_sd * n, both drawn from (seed, camera, index) so a frame's pixels do not
 // depend on thread timing. n is approximately Gaussian (a centred sum of four uniforms, unit variance):
 // a full-size frame takes a few milliseconds, not the tens that std::normal_distribution would.
+// std::clamp(std::lround(v), 0, 255) to the bit (NaN: 0), without libm's lround: per pixel and channel
+// that call took as long as the noise itself, a third of a field-conditions camera's frame. Pure.
+inline uint8_t round_to_pixel(double v) {
+  v = v > 0.0 ? v : 0.0;  // NaN too
+  v = v < 255.0 ? v : 255.0;
+  // truncation, then the fraction v - i (exact below 256) rounds half away from zero as lround does
+  const int i = static_cast<int>(v);
+  return static_cast<uint8_t>(i + (v - i >= 0.5 ? 1 : 0));
+}
+
 void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, int camera, int64_t index,
                           std::vector<uint8_t>* pixels);
 
@@ -189,6 +199,13 @@ class FrameService {
   // Loop thread: waits until every snapshot taken so far has been rendered and delivered (a frame with
   // latency: once sim time has reached its delivery time).
   void wait_delivered();
+  // Loop thread, before a lockstep tick: waits until every frame due by the last capture's sim time
+  // has been delivered: those of cameras without latency, and the held ones whose delivery time has
+  // come. Unlike wait_delivered it does not wait for frames still inside their camera's latency: their
+  // rendering goes on beside the clients' turn and the next steps (a camera with 60 ms of latency
+  // overlaps three 20 ms ticks). The held frames that are due are delivered on this thread if the
+  // render threads are busy with later snapshots; the frames and their order are the same either way.
+  void wait_due();
 
   FrameServiceStats stats() const;
 
@@ -226,7 +243,7 @@ class FrameService {
   void render_snapshot(Snapshot& s);
   void render_share(int k, const Snapshot& s, std::vector<std::optional<ReadyFrame>>* out);
   bool delayed_due_locked() const;  // a held frame is due at sim_now_us_ (mutex_ held)
-  void release_due();               // render thread: delivers the held frames that are due
+  void release_due();               // render thread (or wait_due): delivers the held frames that are due
 
   const mjModel_* m_;
   std::vector<FrameCamera> cameras_;
@@ -247,6 +264,9 @@ class FrameService {
   std::deque<std::unique_ptr<Snapshot>> queue_;  // guarded by mutex_
   std::vector<std::unique_ptr<Snapshot>> spare_; // recycled snapshots, guarded by mutex_
   uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
+  // (id, earliest delivery time in us) of each snapshot not yet rendered, in id order, guarded by mutex_
+  std::deque<std::pair<uint64_t, int64_t>> undone_due_;
+  std::mutex release_mutex_;  // one thread at a time delivers held frames, in their order (release_due)
   std::deque<Delayed> delayed_;                  // frames waiting out their latency, guarded by mutex_
   int64_t sim_now_us_ = 0;                       // the last capture's sim time, guarded by mutex_
   int releasing_ = 0;                            // held frames being delivered now, guarded by mutex_

@@ -2,7 +2,9 @@
 // variation with their configured statistics, drawn from (seed, camera, frame index).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "render/frame_service.hpp"
@@ -42,6 +44,25 @@ TEST(CameraEffects, BrightnessVariesPerFrameWithTheConfiguredDeviation) {
   EXPECT_NEAR(mean, 1.0, 0.01);
   EXPECT_NEAR(std::sqrt(sum2 / kFrames - mean * mean), 0.08,
               0.004 + 0.01 * 0.5);  // + rounding to 1/100
+}
+
+TEST(CameraEffects, PixelRoundingIsLroundClampedToTheBit) {
+  const auto reference = [](double v) {
+    return static_cast<uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  };
+  // every half and its neighbours one ulp away (the ties lround breaks away from zero), and a fine
+  // sweep across and beyond [0, 255]
+  for (int k = -4; k <= 520; ++k) {
+    const double half = 0.5 * k;
+    for (double v : {half, std::nextafter(half, -1e9), std::nextafter(half, 1e9)}) {
+      EXPECT_EQ(round_to_pixel(v), reference(v)) << v;
+    }
+  }
+  for (double v = -3.0; v < 259.0; v += 0.001) ASSERT_EQ(round_to_pixel(v), reference(v)) << v;
+  EXPECT_EQ(round_to_pixel(std::numeric_limits<double>::quiet_NaN()), 0);
+  EXPECT_EQ(round_to_pixel(1e300), 255);
+  EXPECT_EQ(round_to_pixel(-1e300), 0);
+  EXPECT_EQ(round_to_pixel(std::numeric_limits<double>::infinity()), 255);
 }
 
 TEST(CameraEffects, SameSeedCameraAndFrameSameImage) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <functional>
@@ -96,8 +97,13 @@ struct FrameRun {
 };
 
 // runs the world for kControlSteps with `threads` render threads; queue depth 1 so that lockstep
-// capture waits for the renderer at every snapshot
-FrameRun run_with(int threads, const std::string& backend = "osmesa") {
+// capture waits for the renderer at every snapshot. latent_s: the latency of the overview and v0_front
+// cameras (the others have none); before_step: what the loop waits for after each capture (a lockstep
+// tick's FrameService::wait_due, or wait_delivered)
+enum class Wait { kDelivered, kDue };
+constexpr const char* kLatentCameras[] = {"overview", "v0_front"};
+FrameRun run_with(int threads, const std::string& backend = "osmesa", double latent_s = 0.0,
+                  Wait before_step = Wait::kDelivered) {
   const std::string path = ::testing::TempDir() + "parallel_frames.xml";
   std::ofstream(path) << kWorldXml;
   char error[1000] = "";
@@ -114,6 +120,9 @@ FrameRun run_with(int threads, const std::string& backend = "osmesa") {
     c.config.height_px = 120;
     c.config.fps_hz = kCameraFps;
     c.config.noise_sd = 3.0;  // field conditions: seeded per (camera, frame), not per thread
+    for (const char* latent : kLatentCameras) {
+      if (c.config.camera == latent) c.config.latency_s = latent_s;
+    }
     cameras.push_back(c);
   }
   FrameRun run;
@@ -129,7 +138,11 @@ FrameRun run_with(int threads, const std::string& backend = "osmesa") {
     for (int step = 0; step < kControlSteps; ++step) {
       mj_forward(m, d);
       frames.capture(d);
-      frames.wait_delivered();
+      if (before_step == Wait::kDue) {
+        frames.wait_due();
+      } else {
+        frames.wait_delivered();
+      }
       run.seen_at_step.push_back(recorder.seen_.size());
       mj_step(m, d);
     }
@@ -186,6 +199,42 @@ TEST(ParallelFrames, LockstepFramesAreDeliveredBeforeTheNextStepWithAnyThreadCou
   // the same count at every step
   EXPECT_EQ(parallel.seen_at_step, serial.seen_at_step);
   EXPECT_EQ(parallel.seen_at_step.back(), 5u * 9u);
+}
+
+TEST(ParallelFrames, ALockstepTickGetsEachLatentFrameAtTheFirstStepAtOrAfterItsDueTime) {
+  // 50 ms of latency on two of the five cameras: wait_due, which leaves frames not yet due rendering
+  // beside the next steps, delivers every frame at exactly the control step wait_delivered did
+  // (never earlier, never later), with the same content, in the same order, on one thread or three
+  constexpr double kLatencyS = 0.05;
+  const FrameRun all = run_with(1, "osmesa", kLatencyS, Wait::kDelivered);
+  const FrameRun due = run_with(1, "osmesa", kLatencyS, Wait::kDue);
+  const FrameRun due3 = run_with(3, "osmesa", kLatencyS, Wait::kDue);
+  EXPECT_EQ(due.seen_at_step, all.seen_at_step);
+  EXPECT_EQ(due3.seen_at_step, all.seen_at_step);
+  ASSERT_EQ(due.seen.size(), all.seen.size());
+  ASSERT_EQ(due3.seen.size(), all.seen.size());
+  for (size_t i = 0; i < all.seen.size(); ++i) {
+    EXPECT_TRUE(due.seen[i] == all.seen[i]) << "frame " << i;
+    EXPECT_TRUE(due3.seen[i] == all.seen[i]) << "frame " << i;
+  }
+  // and that step is the first one at or after stamp + latency (steps are 10 ms apart, from t = 0)
+  int latent_seen = 0;
+  size_t first = 0;
+  for (size_t step = 0; step < due.seen_at_step.size(); ++step) {
+    const int64_t now_us = static_cast<int64_t>(step) * 10000;
+    for (size_t i = first; i < due.seen_at_step[step]; ++i) {
+      const Seen& f = due.seen[i];
+      const bool latent = f.camera <= 1;  // overview, v0_front: the cameras' order in run_with
+      const int64_t due_us = f.stamp_us + (latent ? std::llround(kLatencyS * 1e6) : 0);
+      EXPECT_LE(due_us, now_us) << "camera " << f.camera << " #" << f.index << " came early";
+      EXPECT_GT(due_us, now_us - 10000) << "camera " << f.camera << " #" << f.index << " came late";
+      latent_seen += latent ? 1 : 0;
+    }
+    first = due.seen_at_step[step];
+  }
+  // all nine frames of each latent camera: the last, exposed at the step of 0.54 s, is due at the
+  // last step, 0.59 s
+  EXPECT_EQ(latent_seen, 2 * 9);
 }
 
 TEST(ParallelFrames, EglThreadsDeliverTheSameFramesAsOsmesaOnOne) {
