@@ -255,6 +255,10 @@ struct SimConnection::Impl {
     }
     return true;
   }
+
+  // Waits until end for the reply to request id (op names it in messages), dropping the replies
+  // before it (of requests that timed out); its result, or the server's error as a Failure.
+  Result<Json> await_reply(int64_t id, const std::string& op, SteadyClock::time_point end);
 };
 
 SimConnection::SimConnection(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -312,27 +316,22 @@ int SimConnection::fd() const {
   return impl_->fd;
 }
 
-Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout_s) {
-  Impl& m = *impl_;
-  m.assert_owner_thread();
-  if (!req.is_object() || !req.contains("op")) {
-    return Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""};
-  }
-  if (m.fd < 0)
-    return m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"};
-  const int64_t id = ++m.next_id;
-  req["id"] = id;
-  const std::string op = req["op"].is_string() ? req["op"].get<std::string>() : req["op"].dump();
-  const auto end = deadline_after(timeout_s);
-  if (!m.send_line(req.dump() + "\n", end)) {
-    if (m.broken) return *m.broken;
-    return m.fail(Error::kConnectionLost, "sim API: cannot send " + op);
-  }
+namespace {
+
+// The op's name for messages (a non-string op as its JSON).
+std::string op_name(const Json& req) {
+  return req["op"].is_string() ? req["op"].get<std::string>() : req["op"].dump();
+}
+
+}  // namespace
+
+Result<nlohmann::json> SimConnection::Impl::await_reply(int64_t id, const std::string& op,
+                                                        SteadyClock::time_point end) {
   for (;;) {
     // replies come in request order: older ones (of requests that timed out) are dropped
-    while (!m.replies.empty()) {
-      Json r = std::move(m.replies.front());
-      m.replies.pop_front();
+    while (!replies.empty()) {
+      Json r = std::move(replies.front());
+      replies.pop_front();
       const auto rid = r.find("id");
       if (rid != r.end() && rid->is_number_integer() && rid->get<int64_t>() == id) {
         if (r.value("ok", false) == true) {
@@ -349,16 +348,55 @@ Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout
         // an error not tied to a request: `overloaded` ends the connection
         const Json err = r.value("error", Json::object());
         if (err.is_object() && err.value("code", std::string()) == "overloaded") {
-          return m.fail(Error::kConnectionLost,
-                        "sim API: overloaded: " + err.value("message", std::string()));
+          return fail(Error::kConnectionLost,
+                      "sim API: overloaded: " + err.value("message", std::string()));
         }
       }
     }
     if (SteadyClock::now() >= end) {
       return Failure{Error::kTimeout, "sim API: no reply to " + op + " in time"};
     }
-    if (auto e = m.read_some(ms_until(end))) return *e;
+    if (auto e = read_some(ms_until(end))) return *e;
   }
+}
+
+Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout_s) {
+  std::vector<Result<Json>> one = request_all({std::move(req)}, timeout_s);
+  return std::move(one.front());
+}
+
+std::vector<Result<nlohmann::json>> SimConnection::request_all(std::vector<nlohmann::json> reqs,
+                                                                double timeout_s) {
+  Impl& m = *impl_;
+  m.assert_owner_thread();
+  const auto all_fail = [&](const Failure& f) { return std::vector<Result<Json>>(reqs.size(), f); };
+  for (const Json& req : reqs) {
+    if (!req.is_object() || !req.contains("op")) {
+      return all_fail(Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""});
+    }
+  }
+  if (m.fd < 0) {
+    return all_fail(m.broken ? *m.broken : Failure{Error::kNotConnected, "sim API: not connected"});
+  }
+  // every line in one write: the server wakes once for all of them and answers them in order
+  std::string lines;
+  const int64_t first_id = m.next_id + 1;
+  for (Json& req : reqs) {
+    req["id"] = ++m.next_id;
+    lines += req.dump();
+    lines += '\n';
+  }
+  const auto end = deadline_after(timeout_s);
+  if (!m.send_line(lines, end)) {
+    if (m.broken) return all_fail(*m.broken);
+    return all_fail(m.fail(Error::kConnectionLost, "sim API: cannot send " + op_name(reqs.front())));
+  }
+  std::vector<Result<Json>> results;
+  results.reserve(reqs.size());
+  for (size_t i = 0; i < reqs.size(); ++i) {
+    results.push_back(m.await_reply(first_id + static_cast<int64_t>(i), op_name(reqs[i]), end));
+  }
+  return results;
 }
 
 void SimConnection::on_message(const std::string& kind,

@@ -296,9 +296,10 @@ void LandingRun::blackout(double tick_s, double duration_s, const std::string& w
 
 // the near misses from the ground truth at the tick (the clock holds until done)
 void LandingRun::track_near_miss(double tick_s) {
-  SimConnection& api = launch_.api();
-  const auto v = api.request({{"op", "vehicles"}});
-  const auto t = api.truck();
+  // both in one round trip: the clock waits for this at every tick
+  const auto truth = launch_.api().request_all({{{"op", "vehicles"}}, {{"op", "truck"}}});
+  const auto& v = truth[0];
+  const auto& t = truth[1];
   if (!v || !t) return;
   for (const Json& veh : v->value("vehicles", Json::array())) {
     if (veh.value("name", "") != "uav0") continue;

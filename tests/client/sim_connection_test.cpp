@@ -7,9 +7,11 @@
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -99,6 +101,48 @@ TEST(SimConnection, LockstepTicksGoToTheirHandlerAndDoneAdvancesTheClock) {
     ASSERT_TRUE(d) << d.message();
   }
   for (const SimMessage& m : api->take_messages()) EXPECT_NE(m.kind(), "tick");
+  EXPECT_TRUE(api->lockstep_leave());
+}
+
+TEST(SimConnection, RequestAllRunsTheRequestsAtTheTickAndReturnsEachResultInOrder) {
+  SimServer server;
+  auto api = connect_to(server);
+  ASSERT_NE(api, nullptr);
+  std::vector<double> tick_times;
+  std::vector<int64_t> ticks;
+  api->on_message("tick", [&](const SimMessage& m) {
+    ticks.push_back(m.json.value("tick", int64_t{-1}));
+    tick_times.push_back(m.json.value("time", -1.0));
+  });
+  ASSERT_TRUE(api->lockstep_join(0.1, 30.0));
+  ASSERT_TRUE(api->resume());
+  for (int i = 0; i < kMaxPolls && ticks.size() < 2; ++i) {
+    ASSERT_TRUE(api->poll(kPollMs));
+    if (ticks.size() == 1) {
+      // between the first tick and its done: every request runs at that tick
+      const auto r = api->request_all(
+          {{{"op", "status"}}, {{"op", "no_such_op"}}, {{"op", "vehicles"}}, {{"op", "status"}}});
+      ASSERT_EQ(r.size(), 4u);
+      ASSERT_TRUE(r[0]) << r[0].message();
+      EXPECT_NEAR(r[0]->value("time_s", -1.0), tick_times[0], kTimeTol_s);
+      ASSERT_FALSE(r[1]);
+      EXPECT_EQ(r[1].code(), Error::kUnsupported);
+      EXPECT_NE(r[1].message().find("no_such_op"), std::string::npos) << r[1].message();
+      ASSERT_TRUE(r[2]) << r[2].message();
+      EXPECT_TRUE(r[2]->contains("vehicles"));
+      ASSERT_TRUE(r[3]) << r[3].message();
+      EXPECT_NEAR(r[3]->value("time_s", -1.0), tick_times[0], kTimeTol_s);
+      ASSERT_TRUE(api->done(ticks[0]));
+    }
+  }
+  ASSERT_EQ(ticks.size(), 2u);
+  EXPECT_NEAR(tick_times[1] - tick_times[0], 0.1, kTimeTol_s);
+  // a malformed request in the list: every result says so
+  const auto bad = api->request_all({{{"op", "status"}}, nlohmann::json::array()});
+  ASSERT_EQ(bad.size(), 2u);
+  EXPECT_EQ(bad[0].code(), Error::kInvalidArgument);
+  EXPECT_EQ(bad[1].code(), Error::kInvalidArgument);
+  EXPECT_TRUE(api->request_all({}).empty());
   EXPECT_TRUE(api->lockstep_leave());
 }
 
@@ -260,6 +304,41 @@ TEST_F(ScriptedPeer, RepliesOfOtherIdsAreSkippedAndTheErrorIsMapped) {
   ASSERT_EQ(msgs.size(), 1u);
   EXPECT_EQ(msgs[0].kind(), "tick");
   EXPECT_TRUE(api->connected());
+}
+
+TEST_F(ScriptedPeer, RequestAllSendsEveryRequestBeforeAnyReplyComes) {
+  auto api = adopt();
+  ASSERT_NE(api, nullptr);
+  // the peer answers only once it has read both requests: a client that waited for the first
+  // reply before sending the second would time out
+  std::string got;
+  std::thread peer([&] {
+    char buf[4096];
+    while (std::count(got.begin(), got.end(), '\n') < 2) {
+      pollfd p{peer_fd_, POLLIN, 0};
+      if (::poll(&p, 1, 10000) <= 0) return;
+      const ssize_t n = ::recv(peer_fd_, buf, sizeof(buf), 0);
+      if (n <= 0) return;
+      got.append(buf, static_cast<size_t>(n));
+    }
+    write_peer(
+        "{\"id\":1,\"ok\":true,\"result\":{\"time_s\":1.5}}\n"
+        "{\"id\":2,\"ok\":false,\"error\":{\"code\":\"not_available\",\"message\":\"no truck\"}}\n");
+  });
+  const auto r = api->request_all({{{"op", "status"}}, {{"op", "truck"}}}, 20.0);
+  peer.join();
+  ASSERT_EQ(r.size(), 2u);
+  ASSERT_TRUE(r[0]) << r[0].message();
+  EXPECT_EQ(r[0]->value("time_s", 0.0), 1.5);
+  ASSERT_FALSE(r[1]);
+  EXPECT_EQ(r[1].code(), Error::kUnsupported);
+  EXPECT_NE(got.find("\"op\":\"status\""), std::string::npos) << got;
+  EXPECT_LT(got.find("\"op\":\"status\""), got.find("\"op\":\"truck\"")) << got;
+  // a malformed request: nothing is sent
+  const auto bad = api->request_all({{{"op", "status"}}, {{"no_op", 1}}});
+  EXPECT_EQ(bad[0].code(), Error::kInvalidArgument);
+  char c;
+  EXPECT_EQ(::recv(peer_fd_, &c, 1, MSG_DONTWAIT), -1);
 }
 
 TEST_F(ScriptedPeer, ClosedConnectionFailsTheWaitingRequest) {

@@ -76,6 +76,13 @@ class SimConnection {
   // discarded when it comes), kNotConnected / kConnectionLost, kProtocol (malformed or oversized
   // message: the connection is closed), kInvalidArgument (req not an object). Owner thread only.
   Result<nlohmann::json> request(nlohmann::json req, double timeout_s = 30.0);
+  // Sends every request at once (one write, so the server wakes once) and waits up to timeout_s in
+  // all for their replies, which it answers in order: one round trip instead of one per request. Sent
+  // between a lockstep tick and its done, they all run at that tick. The results in request order,
+  // each as request() would give it (a request that is not an object with "op": every result is
+  // kInvalidArgument and nothing is sent). Owner thread only.
+  std::vector<Result<nlohmann::json>> request_all(std::vector<nlohmann::json> reqs,
+                                                  double timeout_s = 30.0);
 
   // Streamed messages of this kind go to handler as they are read instead of the queue (one
   // handler per kind; an empty function removes it). A handler must not call this connection.
