@@ -393,8 +393,11 @@ void LandingRun::on_tick(double tick_s) {
   launch_.note_sim_time(sim_s_);
 }
 
-void LandingRun::poll_status() {
-  if (launch_.wall_s() - last_status_wall_s_ <= 0.5) return;
+void LandingRun::poll_status(bool no_tick) {
+  // twice a second while the program flies; once it has exited, the clock holds (below) until this
+  // sees it, so at every pass that brought no tick: at 0.5 s that wait was up to a sixth of a run
+  const double interval_s = launch_.programs_done() && no_tick ? 0.0 : 0.5;
+  if (launch_.wall_s() - last_status_wall_s_ <= interval_s) return;
   last_status_wall_s_ = launch_.wall_s();
   SimConnection& api = launch_.api();
   if (const auto s = api.status(); s) {
@@ -452,7 +455,7 @@ void LandingRun::follow() {
       if (on_deck_long_enough(tick_s)) break;
       if (!api.done(tick)) fail("the fault injector's done was refused");
     }
-    poll_status();
+    poll_status(due.empty());
     if (run_over()) break;
   }
 }

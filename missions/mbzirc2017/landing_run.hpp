@@ -100,7 +100,8 @@ class LandingRun {
   void inject_faults(double tick_s);
   void blackout(double tick_s, double duration_s, const std::string& why);
   // the wall-time status poll: the sim time, and the clock resumed towards the 5 s on the deck
-  void poll_status();
+  // (no_tick: this pass of the loop brought no tick, so the clock may be held)
+  void poll_status(bool no_tick);
   // the loop's end, after a pass
   bool run_over();
   void score();
