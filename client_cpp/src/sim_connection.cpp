@@ -369,6 +369,7 @@ std::vector<Result<nlohmann::json>> SimConnection::request_all(std::vector<nlohm
                                                                 double timeout_s) {
   Impl& m = *impl_;
   m.assert_owner_thread();
+  if (reqs.empty()) return {};
   const auto all_fail = [&](const Failure& f) { return std::vector<Result<Json>>(reqs.size(), f); };
   for (const Json& req : reqs) {
     if (!req.is_object() || !req.contains("op")) {
