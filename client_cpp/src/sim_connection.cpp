@@ -366,14 +366,15 @@ Result<nlohmann::json> SimConnection::request(nlohmann::json req, double timeout
 }
 
 std::vector<Result<nlohmann::json>> SimConnection::request_all(std::vector<nlohmann::json> reqs,
-                                                                double timeout_s) {
+                                                               double timeout_s) {
   Impl& m = *impl_;
   m.assert_owner_thread();
   if (reqs.empty()) return {};
   const auto all_fail = [&](const Failure& f) { return std::vector<Result<Json>>(reqs.size(), f); };
   for (const Json& req : reqs) {
     if (!req.is_object() || !req.contains("op")) {
-      return all_fail(Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""});
+      return all_fail(
+          Failure{Error::kInvalidArgument, "sim API: a request is an object with an \"op\""});
     }
   }
   if (m.fd < 0) {
@@ -390,7 +391,8 @@ std::vector<Result<nlohmann::json>> SimConnection::request_all(std::vector<nlohm
   const auto end = deadline_after(timeout_s);
   if (!m.send_line(lines, end)) {
     if (m.broken) return all_fail(*m.broken);
-    return all_fail(m.fail(Error::kConnectionLost, "sim API: cannot send " + op_name(reqs.front())));
+    return all_fail(
+        m.fail(Error::kConnectionLost, "sim API: cannot send " + op_name(reqs.front())));
   }
   std::vector<Result<Json>> results;
   results.reserve(reqs.size());

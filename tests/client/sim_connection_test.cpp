@@ -323,7 +323,8 @@ TEST_F(ScriptedPeer, RequestAllSendsEveryRequestBeforeAnyReplyComes) {
     }
     write_peer(
         "{\"id\":1,\"ok\":true,\"result\":{\"time_s\":1.5}}\n"
-        "{\"id\":2,\"ok\":false,\"error\":{\"code\":\"not_available\",\"message\":\"no truck\"}}\n");
+        "{\"id\":2,\"ok\":false,\"error\":{\"code\":\"not_available\",\"message\":\"no "
+        "truck\"}}\n");
   });
   const auto r = api->request_all({{{"op", "status"}}, {{"op", "truck"}}}, 20.0);
   peer.join();

@@ -91,8 +91,8 @@ class FrameNoise {
     constexpr double kScale = 1.7320508075688772 / 65536.0;  // sqrt(3) per 16-bit unit
     const uint64_t r = next();
     // at most 18 bits: through int64, whose conversion is one instruction (uint64 takes a branch)
-    const double sum = static_cast<double>(
-        static_cast<int64_t>((r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48)));
+    const double sum = static_cast<double>(static_cast<int64_t>(
+        (r & 0xFFFF) + ((r >> 16) & 0xFFFF) + ((r >> 32) & 0xFFFF) + (r >> 48)));
     return sum * kScale - 2.0 * 65536.0 * kScale;
   }
   // uniform in [0, 1)
@@ -180,8 +180,8 @@ void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, 
     for (uint8_t& p : *pixels) p = round_to_pixel(p * gain);
     return;
   }
-  // in blocks: the generator's draws first, then the pixels in a loop without calls or branches that
-  // the compiler can vectorise (the same values as one loop doing both)
+  // in blocks: the generator's draws first, then the pixels in a loop without calls or branches
+  // that the compiler can vectorise (the same values as one loop doing both)
   constexpr size_t kBlock = 256;
   double draws[kBlock];
   uint8_t* p = pixels->data();

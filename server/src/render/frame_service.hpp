@@ -93,12 +93,13 @@ struct FrameCamera {
 void apply_depth_effects(const FrameCamera& camera, uint64_t seed, int camera_index, int64_t index,
                          std::vector<float>* depth_m);
 
-// Field conditions on one RGB8 or grey image, in place: a per-frame gain 1 + brightness_sd * n0 and per
-// pixel and channel noise noise_sd * n, both drawn from (seed, camera, index) so a frame's pixels do not
-// depend on thread timing. n is approximately Gaussian (a centred sum of four uniforms, unit variance):
-// a full-size frame takes a few milliseconds, not the tens that std::normal_distribution would.
-// std::clamp(std::lround(v), 0, 255) to the bit (NaN: 0), without libm's lround: per pixel and channel
-// that call took as long as the noise itself, a third of a field-conditions camera's frame. Pure.
+// Field conditions on one RGB8 or grey image, in place: a per-frame gain 1 + brightness_sd * n0 and
+// per pixel and channel noise noise_sd * n, both drawn from (seed, camera, index) so a frame's
+// pixels do not depend on thread timing. n is approximately Gaussian (a centred sum of four
+// uniforms, unit variance): a full-size frame takes a few milliseconds, not the tens that
+// std::normal_distribution would. std::clamp(std::lround(v), 0, 255) to the bit (NaN: 0), without
+// libm's lround: per pixel and channel that call took as long as the noise itself, a third of a
+// field-conditions camera's frame. Pure.
 inline uint8_t round_to_pixel(double v) {
   v = v > 0.0 ? v : 0.0;  // NaN too
   v = v < 255.0 ? v : 255.0;
@@ -201,10 +202,11 @@ class FrameService {
   void wait_delivered();
   // Loop thread, before a lockstep tick: waits until every frame due by the last capture's sim time
   // has been delivered: those of cameras without latency, and the held ones whose delivery time has
-  // come. Unlike wait_delivered it does not wait for frames still inside their camera's latency: their
-  // rendering goes on beside the clients' turn and the next steps (a camera with 60 ms of latency
-  // overlaps three 20 ms ticks). The held frames that are due are delivered on this thread if the
-  // render threads are busy with later snapshots; the frames and their order are the same either way.
+  // come. Unlike wait_delivered it does not wait for frames still inside their camera's latency:
+  // their rendering goes on beside the clients' turn and the next steps (a camera with 60 ms of
+  // latency overlaps three 20 ms ticks). The held frames that are due are delivered on this thread
+  // if the render threads are busy with later snapshots; the frames and their order are the same
+  // either way.
   void wait_due();
 
   FrameServiceStats stats() const;
@@ -243,7 +245,7 @@ class FrameService {
   void render_snapshot(Snapshot& s);
   void render_share(int k, const Snapshot& s, std::vector<std::optional<ReadyFrame>>* out);
   bool delayed_due_locked() const;  // a held frame is due at sim_now_us_ (mutex_ held)
-  void release_due();               // render thread (or wait_due): delivers the held frames that are due
+  void release_due();  // render thread (or wait_due): delivers the held frames that are due
 
   const mjModel_* m_;
   std::vector<FrameCamera> cameras_;
@@ -264,9 +266,11 @@ class FrameService {
   std::deque<std::unique_ptr<Snapshot>> queue_;  // guarded by mutex_
   std::vector<std::unique_ptr<Snapshot>> spare_; // recycled snapshots, guarded by mutex_
   uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
-  // (id, earliest delivery time in us) of each snapshot not yet rendered, in id order, guarded by mutex_
+  // (id, earliest delivery time in us) of each snapshot not yet rendered, in id order, guarded by
+  // mutex_
   std::deque<std::pair<uint64_t, int64_t>> undone_due_;
-  std::mutex release_mutex_;  // one thread at a time delivers held frames, in their order (release_due)
+  std::mutex
+      release_mutex_;  // one thread at a time delivers held frames, in their order (release_due)
   std::deque<Delayed> delayed_;                  // frames waiting out their latency, guarded by mutex_
   int64_t sim_now_us_ = 0;                       // the last capture's sim time, guarded by mutex_
   int releasing_ = 0;                            // held frames being delivered now, guarded by mutex_

@@ -97,9 +97,9 @@ struct FrameRun {
 };
 
 // runs the world for kControlSteps with `threads` render threads; queue depth 1 so that lockstep
-// capture waits for the renderer at every snapshot. latent_s: the latency of the overview and v0_front
-// cameras (the others have none); before_step: what the loop waits for after each capture (a lockstep
-// tick's FrameService::wait_due, or wait_delivered)
+// capture waits for the renderer at every snapshot. latent_s: the latency of the overview and
+// v0_front cameras (the others have none); before_step: what the loop waits for after each capture
+// (a lockstep tick's FrameService::wait_due, or wait_delivered)
 enum class Wait { kDelivered, kDue };
 constexpr const char* kLatentCameras[] = {"overview", "v0_front"};
 FrameRun run_with(int threads, const std::string& backend = "osmesa", double latent_s = 0.0,
@@ -202,9 +202,10 @@ TEST(ParallelFrames, LockstepFramesAreDeliveredBeforeTheNextStepWithAnyThreadCou
 }
 
 TEST(ParallelFrames, ALockstepTickGetsEachLatentFrameAtTheFirstStepAtOrAfterItsDueTime) {
-  // 50 ms of latency on two of the five cameras: wait_due, which leaves frames not yet due rendering
-  // beside the next steps, delivers every frame at exactly the control step wait_delivered did
-  // (never earlier, never later), with the same content, in the same order, on one thread or three
+  // 50 ms of latency on two of the five cameras: wait_due, which leaves frames not yet due
+  // rendering beside the next steps, delivers every frame at exactly the control step
+  // wait_delivered did (never earlier, never later), with the same content, in the same order, on
+  // one thread or three
   constexpr double kLatencyS = 0.05;
   const FrameRun all = run_with(1, "osmesa", kLatencyS, Wait::kDelivered);
   const FrameRun due = run_with(1, "osmesa", kLatencyS, Wait::kDue);

@@ -77,10 +77,10 @@ class SimConnection {
   // message: the connection is closed), kInvalidArgument (req not an object). Owner thread only.
   Result<nlohmann::json> request(nlohmann::json req, double timeout_s = 30.0);
   // Sends every request at once (one write, so the server wakes once) and waits up to timeout_s in
-  // all for their replies, which it answers in order: one round trip instead of one per request. Sent
-  // between a lockstep tick and its done, they all run at that tick. The results in request order,
-  // each as request() would give it (a request that is not an object with "op": every result is
-  // kInvalidArgument and nothing is sent). Owner thread only.
+  // all for their replies, which it answers in order: one round trip instead of one per request.
+  // Sent between a lockstep tick and its done, they all run at that tick. The results in request
+  // order, each as request() would give it (a request that is not an object with "op": every result
+  // is kInvalidArgument and nothing is sent). Owner thread only.
   std::vector<Result<nlohmann::json>> request_all(std::vector<nlohmann::json> reqs,
                                                   double timeout_s = 30.0);
 
