@@ -205,7 +205,7 @@ class FrameService {
   // has been delivered: those of cameras without latency, and the held ones whose delivery time has
   // come. Unlike wait_delivered it does not wait for frames still inside their camera's latency:
   // their rendering goes on beside the clients' turns and the steps up to their delivery (60 ms
-  // of latency spans one to three of a mission's 50 ms ticks). The held frames that are due are
+  // of latency spans one or two of a mission's 50 ms ticks). The held frames that are due are
   // delivered on this thread if the render threads are busy with later snapshots; the frames and
   // their order are the same either way.
   void wait_due();
