@@ -105,6 +105,13 @@ class FrameNoise {
 constexpr uint64_t kColourStream = 0xCA3E7A00ull;
 constexpr uint64_t kDepthStream = 0xDE9750000ull;
 
+// When a frame exposed at sim time time_s reaches its consumers (us): once sim time reaches
+// exposure + latency. One rule for a held frame's release and for the tick's wait (wait_due),
+// which must agree to the microsecond.
+int64_t delivery_us(double time_s, double latency_s) {
+  return std::llround((time_s + latency_s) * 1e6);
+}
+
 }  // namespace
 
 std::shared_ptr<const std::string> encode_black_frame(int width_px, int height_px, const EncodingKey& key) {
@@ -176,7 +183,7 @@ void apply_sensor_effects(double noise_sd, double brightness_sd, uint64_t seed, 
                           std::vector<uint8_t>* pixels) {
   FrameNoise noise(seed, kColourStream, camera, index);
   const double gain = std::clamp(1.0 + brightness_sd * noise.gauss(), 0.2, 2.0);
-  if (noise_sd <= 0) {
+  if (!(noise_sd > 0)) {  // NaN too: no noise, as before
     for (uint8_t& p : *pixels) p = round_to_pixel(p * gain);
     return;
   }
@@ -496,8 +503,8 @@ void FrameService::capture(mjData_* d) {
   // the snapshot's earliest delivery: its capture time unless every camera in it has latency
   int64_t due_us = std::numeric_limits<int64_t>::max();
   for (const Job& job : jobs) {
-    const double latency_s = cameras_[static_cast<size_t>(job.camera)].latency_s;
-    due_us = std::min<int64_t>(due_us, std::llround((d->time + latency_s) * 1e6));
+    due_us =
+        std::min(due_us, delivery_us(d->time, cameras_[static_cast<size_t>(job.camera)].latency_s));
   }
   const mjModel* m = m_;
   snap->id = next_id_++;
@@ -544,10 +551,9 @@ void FrameService::wait_due() {
     cv_.wait(lock, [&] { return done_id_ >= target || stop_; });
     if (stop_) return;
   }
-  // the render thread releases held frames between snapshots; it may be rendering a later one now
+  // the render thread releases held frames between snapshots; it may be rendering a later one now.
+  // (A release the render thread has begun ends before this one starts: release_mutex_.)
   release_due();
-  std::unique_lock<std::mutex> lock(mutex_);
-  cv_.wait(lock, [&] { return releasing_ == 0 || stop_; });
 }
 
 bool FrameService::delayed_due_locked() const {
@@ -654,7 +660,7 @@ void FrameService::render_snapshot(Snapshot& s) {
     const FrameCamera& cam = cameras_[static_cast<size_t>(job.camera)];
     if (cam.latency_s > 0) {
       // stamped at exposure, delivered once sim time reaches exposure + latency (release_due)
-      Delayed held{std::llround((s.time + cam.latency_s) * 1e6), std::move(f), job.consumers};
+      Delayed held{delivery_us(s.time, cam.latency_s), std::move(f), job.consumers};
       std::lock_guard<std::mutex> lock(mutex_);
       const auto at = std::upper_bound(delayed_.begin(), delayed_.end(), held.release_us,
                                        [](int64_t t, const Delayed& x) { return t < x.release_us; });

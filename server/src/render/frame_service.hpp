@@ -267,11 +267,10 @@ class FrameService {
   std::deque<std::unique_ptr<Snapshot>> queue_;  // guarded by mutex_
   std::vector<std::unique_ptr<Snapshot>> spare_; // recycled snapshots, guarded by mutex_
   uint64_t done_id_ = 0;                         // last snapshot id rendered and delivered
-  // (id, earliest delivery time in us) of each snapshot not yet rendered, in id order, guarded by
-  // mutex_
+  // (id, earliest delivery time in us) of each snapshot not yet rendered, in id order; mutex_
   std::deque<std::pair<uint64_t, int64_t>> undone_due_;
-  std::mutex
-      release_mutex_;  // one thread at a time delivers held frames, in their order (release_due)
+  // held by release_due: one thread at a time delivers held frames, in their order
+  std::mutex release_mutex_;
   std::deque<Delayed> delayed_;                  // frames waiting out their latency, guarded by mutex_
   int64_t sim_now_us_ = 0;                       // the last capture's sim time, guarded by mutex_
   int releasing_ = 0;                            // held frames being delivered now, guarded by mutex_
