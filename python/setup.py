@@ -45,6 +45,10 @@ class CMakeBuild(build_ext):
         target = self.get_ext_fullpath(ext.name)
         os.makedirs(os.path.dirname(target), exist_ok=True)
         shutil.copyfile(os.path.join(built, module[0]), target)
+        # OpenCV's codecs for JPEG camera frames, loaded by _core from its own folder when first needed
+        codecs = os.path.join(built, "libuavsim_media_io.so")
+        if os.path.exists(codecs):
+            shutil.copyfile(codecs, os.path.join(os.path.dirname(target), "libuavsim_media_io.so"))
 
 
 setup(ext_modules=[CMakeExtension("uavsim._core")], cmdclass={"build_ext": CMakeBuild})

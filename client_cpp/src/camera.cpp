@@ -10,6 +10,7 @@
 
 #include "loop_services.hpp"
 #include "sim_channel.hpp"
+#include "uavsim/media/media_io.hpp"
 
 namespace uavsim::client {
 
@@ -76,7 +77,7 @@ struct CameraSubscriber::Impl {
       f.class_ids = split[1];
     } else if (format == "jpeg") {
       const cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
-      f.image = cv::imdecode(raw, cv::IMREAD_COLOR);
+      f.image = media::decode_image(raw, cv::IMREAD_COLOR);
     } else if (format == "grey" && bytes.size() == pixels) {
       f.image = cv::Mat(ht, w, CV_8UC1, const_cast<char*>(bytes.data())).clone();
     } else if (format == "rgb" && bytes.size() == pixels * 3) {

@@ -12,10 +12,10 @@
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <thread>
 
 #include "uavsim/common/record_file.hpp"
+#include "uavsim/media/media_io.hpp"
 
 namespace uavsim::vision {
 
@@ -117,7 +117,7 @@ bool serialise_plane(uint8_t kind, const cv::Mat& plane, std::string* b) {
                              ? cv::Mat(plane.rows, plane.cols, CV_8UC4, plane.data, plane.step)
                              : plane;
   std::vector<uchar> png;
-  if (!cv::imencode(".png", as_png, png)) return false;
+  if (!media::encode_image(".png", as_png, &png)) return false;
   put_u8(b, kind);
   put_bytes(b, png.data(), png.size());
   return true;
@@ -127,9 +127,9 @@ bool parse_plane(ByteReader* r, VideoLogRecord* rec) {
   const uint8_t kind = r->u8();
   const auto [png, png_bytes] = r->bytes();
   if (r->failed() || kind < kPlaneDepth || kind > kPlaneClasses) return false;
-  const cv::Mat decoded =
-      cv::imdecode(cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)),
-                   cv::IMREAD_UNCHANGED);
+  const cv::Mat decoded = media::decode_image(
+      cv::Mat(1, static_cast<int>(png_bytes), CV_8UC1, const_cast<uint8_t*>(png)),
+      cv::IMREAD_UNCHANGED);
   if (decoded.empty()) return false;
   if (kind == kPlaneDepth) {
     if (decoded.type() != CV_8UC4) return false;
@@ -281,7 +281,7 @@ struct VideoLogWriter::Impl {
       }
       // encode and write outside the lock: this is the slow part the caller must never wait for
       jpeg.clear();
-      if (!cv::imencode(".jpg", frame.image, jpeg, jpeg_params)) {
+      if (!media::encode_image(".jpg", frame.image, &jpeg, jpeg_params)) {
         write_failed = true;
         continue;
       }
@@ -498,9 +498,9 @@ Result<VideoLogRecord, VideoLogError> VideoLogReader::read(size_t index) {
       if (!parse_plane(&r, &rec)) return VideoLogError::kBadFormat;
     }
   }
-  rec.image =
-      cv::imdecode(cv::Mat(1, static_cast<int>(jpeg_bytes), CV_8UC1, const_cast<uint8_t*>(jpeg)),
-                   cv::IMREAD_UNCHANGED);
+  rec.image = media::decode_image(
+      cv::Mat(1, static_cast<int>(jpeg_bytes), CV_8UC1, const_cast<uint8_t*>(jpeg)),
+      cv::IMREAD_UNCHANGED);
   if (rec.image.empty()) return VideoLogError::kDecodeFailed;
   for (const cv::Mat* plane : {&rec.depth_m, &rec.object_ids, &rec.class_ids}) {
     if (!plane->empty() && plane->size() != rec.image.size()) return VideoLogError::kBadFormat;
@@ -615,7 +615,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
     }
   }
 
-  cv::VideoWriter video;
+  media::VideoFileWriter video;
   std::unique_ptr<FILE, PipeCloser> ffmpeg;
   cv::Size video_size;
   size_t exported = 0;
@@ -647,7 +647,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
     if (!options.png_dir.empty()) {
       char name[32];
       std::snprintf(name, sizeof(name), "frame_%06zu.png", i);
-      if (!cv::imwrite((options.png_dir / name).string(), frame)) {
+      if (!media::write_image((options.png_dir / name).string(), frame)) {
         return VideoLogError::kExportFailed;
       }
     }
@@ -660,9 +660,8 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
       if (i == 0) {
         // OpenCV's own MPEG-4 writer first; ffmpeg through a pipe if this OpenCV lacks it
         video_size = frame.size();
-        video.open(options.mp4_path.string(), cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
-                   video_size);
-        if (!video.isOpened()) {
+        video.open(options.mp4_path.string(), media::fourcc('m', 'p', '4', 'v'), fps, video_size);
+        if (!video.is_open()) {
           const std::string cmd = "ffmpeg -y -loglevel error -f rawvideo -pix_fmt bgr24 -s " +
                                   std::to_string(video_size.width) + "x" +
                                   std::to_string(video_size.height) + " -r " + std::to_string(fps) +
@@ -672,7 +671,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
         }
       }
       if (frame.size() != video_size) cv::resize(frame, frame, video_size);
-      if (video.isOpened()) {
+      if (video.is_open()) {
         video.write(frame);
       } else if (ffmpeg) {
         const cv::Mat contiguous = frame.isContinuous() ? frame : frame.clone();
@@ -681,7 +680,7 @@ Result<size_t, VideoLogError> export_video_log(const std::filesystem::path& vlog
     }
     ++exported;
   }
-  if (video.isOpened()) video.release();
+  if (video.is_open()) video.release();
   if (ffmpeg && pclose(ffmpeg.release()) != 0) return VideoLogError::kExportFailed;
   return exported;
 }

@@ -15,6 +15,7 @@
 #include "render/camera_renderer.hpp"
 #include "render/camera_setup.hpp"
 #include "uavsim/common/splitmix.hpp"
+#include "uavsim/media/media_io.hpp"
 
 namespace uavsim::server::render {
 
@@ -42,7 +43,8 @@ std::shared_ptr<const std::string> encode(const std::vector<uint8_t>& rgb, int w
       cv::Mat bgr;
       cv::cvtColor(view, bgr, cv::COLOR_RGB2BGR);
       std::vector<uint8_t> buf;
-      cv::imencode(".jpg", bgr, buf, {cv::IMWRITE_JPEG_QUALITY, std::clamp(key.quality, 1, 100)});
+      media::encode_image(".jpg", bgr, &buf,
+                          {cv::IMWRITE_JPEG_QUALITY, std::clamp(key.quality, 1, 100)});
       out->assign(reinterpret_cast<const char*>(buf.data()), buf.size());
       break;
     }

@@ -10,9 +10,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <optional>
 #include <stdexcept>
+
+#include "uavsim/media/media_io.hpp"
 
 namespace uavsim::server::render {
 
@@ -42,7 +43,7 @@ std::string shell_quote(const std::string& s) {
 }  // namespace
 
 struct VideoRecorder::CvWriter {
-  cv::VideoWriter writer;
+  media::VideoFileWriter writer;
 };
 
 TileLayout tile_layout(int main_width_px, int main_height_px,
@@ -172,7 +173,7 @@ VideoRecorder::VideoRecorder(const FrameService& service, int camera, const std:
   }
   if (pipe_ == nullptr) {
     cv_writer_ = std::make_unique<CvWriter>();
-    if (!cv_writer_->writer.open(path_, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), fps,
+    if (!cv_writer_->writer.open(path_, media::fourcc('m', 'p', '4', 'v'), fps,
                                  cv::Size(width_, height_))) {
       throw std::runtime_error("--record: cannot open a video encoder for " + path_);
     }
@@ -210,7 +211,7 @@ void VideoRecorder::finish() {
   // disk that fills then) may still exit 0, leaving a file no player opens
   const RecorderStats so_far = stats();
   if (!options_.sink && so_far.frames_written > 0 && so_far.write_error.empty() &&
-      !cv::VideoCapture(path_, cv::CAP_FFMPEG).isOpened()) {
+      !media::ffmpeg_can_open(path_)) {
     encoder_failed(path_ +
                    ": the finished video cannot be opened (the encoder could not complete it)");
   }
