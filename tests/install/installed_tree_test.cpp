@@ -115,7 +115,10 @@ TEST_F(InstalledTree, HoldsTheProgramsModelsDocsAndTheClientPackage) {
                         "share/bash-completion/completions/uavsim",
                         "lib/cmake/uavsim/uavsimConfig.cmake",
                         "lib/pkgconfig/uavsim-client.pc",
-                        "include/uavsim/client/vehicle.hpp"}) {
+                        "include/uavsim/client/vehicle.hpp",
+                        "include/uavsim/media/media_io.hpp",
+                        "lib/libuavsim_media.a",
+                        "lib/uavsim/libuavsim_media_io.so"}) {
     EXPECT_TRUE(fs::exists(p / f)) << f;
   }
   for (const std::string& w : source_worlds()) {
@@ -216,6 +219,20 @@ TEST_F(InstalledTree, AWorldOfOnesOwnIncludesTheShippedParts) {
       run("uavsim-server mine.xml --write-world composed.xml && grep -c 'name=\"ground\"' "
           "composed.xml");
   EXPECT_EQ(w.exit_code, 0) << w.output;
+}
+
+// OpenCV's image codecs and video files are a module the programs open on first use
+// (PREFIX/lib/uavsim/libuavsim_media_io.so): the server's recording checks its finished video
+// through it, and a module it could not find would stop the video with the reason
+TEST_F(InstalledTree, TheServerOpensTheCodecsModuleOfTheInstall) {
+  const ShellRun r = run(
+      "uavsim-server mbzirc2017 --fast --duration 1 --mavlink-port -1 --api-port -1 --quiet "
+      "--record rec.mp4 --record-size 160x120");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(has(r, "recorded 15 frames to rec.mp4")) << r.output;
+  EXPECT_FALSE(has(r, "cannot be loaded")) << r.output;
+  EXPECT_FALSE(has(r, "the video stops here")) << r.output;
+  EXPECT_GT(fs::file_size(home() / "rec.mp4"), 0u);
 }
 
 TEST_F(InstalledTree, Mbzirc2017LauncherLandsAndItsRunPlots) {

@@ -53,7 +53,11 @@ std::vector<std::string> candidates() {
     out.push_back((fs::path(dir) / kModuleName).string());
   }
   out.push_back(UAVSIM_MEDIA_IO_BUILT);
+  // a program of one's own, linked against an installed client library: the prefix this build was
+  // configured with, then the system's two (the .deb installs under /usr whatever the build's prefix)
   out.push_back(UAVSIM_MEDIA_IO_INSTALLED);
+  for (const char* prefix : {"/usr", "/usr/local"})
+    out.push_back((fs::path(prefix) / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName).string());
   return out;
 }
 

@@ -13,8 +13,8 @@
 //   - beside the program or shared object holding this code: ../LIBDIR/uavsim/ (an install, moved
 //     or not) and its own folder (the Python package);
 //   - where this build put it (the build tree);
-//   - LIBDIR/uavsim/ under the install prefix this build was configured with (a program of one's
-//     own linked against the installed client library).
+//   - LIBDIR/uavsim/ under the install prefix this build was configured with, then under /usr and
+//     /usr/local (a program of one's own linked against the installed client library).
 //
 // Each function behaves as the OpenCV function it names, exceptions included; when the module
 // cannot be loaded it fails the way that function fails (false, an empty Mat, a writer that is not
