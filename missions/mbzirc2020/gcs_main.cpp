@@ -22,20 +22,28 @@
 using namespace uavsim::client;
 using namespace uavsim::missions::mbzirc2020;
 
+namespace {
+constexpr const char* kUsage = "usage: mbzirc2020-gcs [--uavs N] [--max-time S]\n";
+}  // namespace
+
 int main(int argc, char** argv) {
   int uav_count = 2;
   double max_time_s = 3600.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = 1; i < argc; i += 2) {
     const std::string a = argv[i];
-    bool ok = true;
-    if (a == "--uavs")
+    if (a == "--help" || a == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    bool ok = i + 1 < argc;  // every option takes a value: a lone one is not skipped
+    if (ok && a == "--uavs")
       ok = uavsim::common::parse_integer(argv[i + 1], 1, 254, &uav_count);
-    else if (a == "--max-time")
+    else if (ok && a == "--max-time")
       ok = uavsim::common::parse_double(argv[i + 1], 1.0, 1e6, &max_time_s);
     else
       ok = false;
     if (!ok) {
-      std::fprintf(stderr, "usage: mbzirc2020-gcs [--uavs N] [--max-time S]\n");
+      std::fputs(kUsage, stderr);
       return 2;
     }
   }

@@ -79,7 +79,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
     }
   }
   const size_t colon = gcs.rfind(':');
-  if (o.index < 0 || o.mavlink.empty() || colon == std::string::npos ||
+  // argc even: an option without its value (or a lone --help), which the pairs above skipped
+  if (argc % 2 == 0 || o.index < 0 || o.mavlink.empty() || colon == std::string::npos ||
       !uavsim::common::parse_integer(gcs.c_str() + colon + 1, 1, 65535, &o.gcs_port))
     return std::nullopt;
   o.gcs_host = gcs.substr(0, colon);
