@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "media_io_table.hpp"
+#include "uavsim/common/install_paths.hpp"
 
 namespace uavsim::media {
 
@@ -35,17 +36,11 @@ std::string holder_dir() {
   return ec ? std::string() : p.parent_path().string();
 }
 
-std::string exe_dir() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? std::string() : self.parent_path().string();
-}
-
 std::vector<std::string> candidates() {
   if (const char* env = std::getenv("UAVSIM_MEDIA_IO"); env != nullptr && *env != '\0')
     return {env};
   std::vector<std::string> out;
-  for (const std::string& dir : {holder_dir(), exe_dir()}) {
+  for (const std::string& dir : {holder_dir(), common::executable_dir()}) {
     if (dir.empty()) continue;
     out.push_back((fs::path(dir) / ".." / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName)
                       .lexically_normal()
