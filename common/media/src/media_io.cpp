@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -40,19 +41,21 @@ std::vector<std::string> candidates() {
   if (const char* env = std::getenv("UAVSIM_MEDIA_IO"); env != nullptr && *env != '\0')
     return {env};
   std::vector<std::string> out;
+  // each place once (a program holds this code itself: its folder would come twice)
+  auto add = [&out](const fs::path& p) {
+    const std::string path = p.lexically_normal().string();
+    if (std::find(out.begin(), out.end(), path) == out.end()) out.push_back(path);
+  };
   for (const std::string& dir : {holder_dir(), common::executable_dir()}) {
     if (dir.empty()) continue;
-    out.push_back((fs::path(dir) / ".." / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName)
-                      .lexically_normal()
-                      .string());
-    out.push_back((fs::path(dir) / kModuleName).string());
+    add(fs::path(dir) / ".." / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName);
+    add(fs::path(dir) / kModuleName);
   }
-  out.push_back(UAVSIM_MEDIA_IO_BUILT);
+  add(UAVSIM_MEDIA_IO_BUILT);
   // a program of one's own, linked against an installed client library: the prefix this build was
   // configured with, then the system's two (the .deb installs under /usr whatever the build's prefix)
-  out.push_back(UAVSIM_MEDIA_IO_INSTALLED);
-  for (const char* prefix : {"/usr", "/usr/local"})
-    out.push_back((fs::path(prefix) / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName).string());
+  for (const char* prefix : {UAVSIM_MEDIA_IO_CONFIGURED_PREFIX, "/usr", "/usr/local"})
+    add(fs::path(prefix) / UAVSIM_MEDIA_IO_INSTALL_SUBDIR / kModuleName);
   return out;
 }
 
