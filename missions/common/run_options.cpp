@@ -1,13 +1,41 @@
 #include "uavsim/launch/run_options.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "uavsim/common/install_paths.hpp"
 #include "uavsim/common/parse_number.hpp"
 
 namespace uavsim::launch {
+
+namespace {
+
+// --floor's range: a tenth of a second (a handful of control steps) to the server's own bound on
+// --duration's order of magnitude (11 days of sim time)
+constexpr double kMinFloor_s = 0.1;
+constexpr double kMaxFloor_s = 1e6;
+
+// The server's closing line: "uavsim-server: ran 43.600 s of sim time in 1.5 s of wall time ..."
+constexpr const char* kServerReportPrefix = "uavsim-server: ran ";
+
+}  // namespace
+
+std::string floor_usage(int text_column) {
+  const std::string option = "  --floor S";
+  const std::string indent(static_cast<size_t>(std::max(text_column, 0)), ' ');
+  const std::string first =
+      option + std::string(static_cast<size_t>(std::max<int>(
+                               1, text_column - static_cast<int>(option.size()))),
+                           ' ');
+  return first + "not the mission: its floor for S sim seconds (the same server, no program,\n" +
+         indent + "the vehicles hovering, the mission's cameras rendered; bench/mission_floor.py\n" +
+         indent + "compares the two)\n";
+}
 
 bool resolve_run_files(const std::string& mission, RunOptions* o, bool record) {
   const auto files =
@@ -55,6 +83,8 @@ RunOptionParse parse_run_option(const std::string& name, const char* value, RunO
     ok = common::parse_integer<std::uint64_t>(value, 0, UINT64_MAX, &o->seed);
   else if (name == "--truth-hz")
     ok = common::parse_double(value, 0.01, 1000.0, &o->truth_hz);
+  else if (name == "--floor")
+    ok = common::parse_double(value, kMinFloor_s, kMaxFloor_s, &o->floor_s);
   else
     return RunOptionParse::kNotCommon;
   return ok ? RunOptionParse::kTaken : RunOptionParse::kBad;
@@ -81,6 +111,55 @@ Result<void> start_run_server(Launcher& launch, const RunOptions& o,
                               const std::vector<std::string>& mission_args) {
   if (!o.run_dir.empty()) launch.record_truth(o.run_dir, o.truth_hz);
   return launch.start_server(run_server_spec(o, mission_args));
+}
+
+int run_floor(Launcher& launch, const std::string& mission, const RunOptions& o,
+              const std::vector<std::string>& mission_args, const std::string& render_cameras) {
+  ServerSpec spec = run_server_spec(o, mission_args);
+  char duration[32];
+  std::snprintf(duration, sizeof(duration), "%.3f", o.floor_s);
+  spec.extra_args.insert(spec.extra_args.end(), {"--hover", "10", "--duration", duration});
+  if (!render_cameras.empty())
+    spec.extra_args.insert(spec.extra_args.end(), {"--render-cameras", render_cameras});
+  std::string report;
+  launch.on_line([&](const std::string& child, const std::string& line) {
+    if (child != "server" || line.rfind(kServerReportPrefix, 0) != 0) return;
+    report = line;
+    launch.note_sim_time(o.floor_s);  // its end is then stamped at the span's end
+  });
+  bool harness_failed = false;
+  std::string failure;
+  if (auto started = launch.start_server(spec); !started) {
+    harness_failed = true;
+    failure = "the server did not start: " + started.message();
+  } else {
+    while (!launch.server_exited() && interrupted() == 0) launch.pump(100);
+  }
+  const double wall_s = launch.wall_s();
+  launch.stop_all(30.0);
+  const std::optional<ProgramEnd> end = launch.ended("server");
+  if (!harness_failed && (report.empty() || !end || end->abnormal())) {
+    harness_failed = true;
+    failure = "the server did not run the whole span: " + launch.server_end();
+  }
+  if (harness_failed) std::fprintf(stderr, "floor: %s\n", failure.c_str());
+  std::printf("floor: sim time %.1f s, wall time %.2f s, speed %.1fx real time\n", o.floor_s,
+              wall_s, wall_s > 0.0 ? o.floor_s / wall_s : 0.0);
+  std::fflush(stdout);
+  const bool success = !harness_failed && interrupted() == 0;
+  if (!o.json_path.empty()) {
+    nlohmann::json summary = {{"mission", mission},
+                              {"floor", true},
+                              {"floor_s", o.floor_s},
+                              {"render_cameras", render_cameras},
+                              {"server_report", report},
+                              {"sim_time_s", success ? o.floor_s : -1.0},
+                              {"wall_time_s", wall_s},
+                              {"success", success},
+                              {"seed", o.seed}};
+    if (!launch.write_summary(o.json_path, summary)) harness_failed = true;
+  }
+  return run_exit_code(harness_failed, success);
 }
 
 void keep_run_summary(Launcher& launch, const std::string& mission, const RunOptions& o) {

@@ -169,14 +169,27 @@ void CoverageRun::start(Launcher& launch) {
       on_program_line(child, line);
     }
   });
+  if (auto r = launch::start_run_server(launch, server_options(), server_args()); !r) {
+    fail("the server did not start: " + r.message());
+  }
+}
+
+launch::RunOptions CoverageRun::server_options() const {
+  launch::RunOptions server = o_;
+  server.world = world_path_;
+  return server;
+}
+
+std::vector<std::string> CoverageRun::server_args() const {
   // cameras only for the video: the world's overview camera, which the agents never see
   std::vector<std::string> args{"--models-dir", o_.models_dir, "--radio-backend", o_.radio_backend};
   if (o_.record.empty()) args.push_back("--no-cameras");
-  launch::RunOptions server = o_;
-  server.world = world_path_;
-  if (auto r = launch::start_run_server(launch, server, args); !r) {
-    fail("the server did not start: " + r.message());
-  }
+  return args;
+}
+
+int CoverageRun::run_floor(Launcher& launch) {
+  // the agents see no camera: nothing to render beside the video's, if one is recorded
+  return launch::run_floor(launch, "coverage", server_options(), server_args(), "");
 }
 
 // 4. the optimised variant: the ground station, its link ports, the server's relay in front of

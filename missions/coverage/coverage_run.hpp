@@ -54,6 +54,9 @@ class CoverageRun {
   bool make_world();
   // 2. the server, with every program's lines and ends followed
   void start(Launcher& launch);
+  // instead of 2.-8. (--floor): the run's floor (launch::run_floor) on the world of 1.; the
+  // launcher's exit code
+  int run_floor(Launcher& launch);
   // 3.-6. the clock held at t = 0, the radio, the programs, then the clock let go
   void set_up();
   // 7.-8. the run followed to its end, scored there
@@ -67,6 +70,9 @@ class CoverageRun {
   bool failed() const { return failed_; }
 
  private:
+  // the run's server: the options with the world of 1., and the mission's own arguments
+  launch::RunOptions server_options() const;
+  std::vector<std::string> server_args() const;
   double wall_s() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
   }

@@ -93,6 +93,7 @@ Runs the coverage flock (thesis ch. 3-4) in the simulator: server, agent program
   --server/--agent/--gcs-program PATH, --models-dir DIR  programs and models (default: the build
                       tree)
 )");
+  std::fputs(uavsim::launch::floor_usage(22).c_str(), stderr);
   return 2;
 }
 
@@ -130,6 +131,7 @@ int main(int argc, char** argv) {
   if (!run.make_world()) return 4;
   Launcher launch("coverage-run", /*quiet=*/true);
   uavsim::launch::keep_run_summary(launch, "coverage", o);
+  if (o.floor_s > 0.0) return run.run_floor(launch);
   run.start(launch);
   if (!run.failed()) {
     run.set_up();

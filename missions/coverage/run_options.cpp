@@ -120,6 +120,9 @@ bool parse_run_options(int argc, char** argv, CoverageRunOptions* o) {
       o->gcs_program = val;
     } else if (a == "--models-dir") {
       o->models_dir = val;
+    } else if (a == "--floor") {  // the launchers' shared option (its range is theirs)
+      if (uavsim::launch::parse_run_option(a, val, o) != uavsim::launch::RunOptionParse::kTaken)
+        return false;
     } else {
       return false;
     }

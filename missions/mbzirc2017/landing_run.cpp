@@ -182,10 +182,19 @@ int LandingRun::prepare() {
   return 0;
 }
 
-void LandingRun::start_server() {
+launch::RunOptions LandingRun::server_options() const {
   launch::RunOptions server = o_;
   server.world = world_;  // the truck's speed written into it, if asked
-  if (auto started = launch::start_run_server(launch_, server, {}); !started) {
+  return server;
+}
+
+int LandingRun::run_floor() {
+  // what mbzirc2017-uav subscribes to: its down-looking camera, grey (uav_main.cpp)
+  return launch::run_floor(launch_, "mbzirc2017", server_options(), {}, "uav0_down:grey");
+}
+
+void LandingRun::start_server() {
+  if (auto started = launch::start_run_server(launch_, server_options(), {}); !started) {
     fail(started.message());
   } else if (launch_.mavlink_port("uav0") == 0) {
     fail("the server did not start (no MAVLink port for uav0)");

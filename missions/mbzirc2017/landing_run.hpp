@@ -68,6 +68,9 @@ class LandingRun {
   // the truck's schedule, where on the eight the UAV starts, the faults' times, the near-miss
   // shapes and the world file; 0, or the exit code after saying why
   int prepare();
+  // instead of the mission (--floor): its floor (launch::run_floor), the UAV program's camera
+  // rendered; the launcher's exit code
+  int run_floor();
   // the server, on ephemeral ports
   void start_server();
   // the clock held at t = 0 (the truck alone driven to the start time), the UAV program and the
@@ -86,6 +89,8 @@ class LandingRun {
   Json summary_json(bool success) const;
 
  private:
+  // the run's server: o_ with the world the truck's speed was written into
+  launch::RunOptions server_options() const;
   void fail(const std::string& why) {
     std::fprintf(stderr, "mbzirc2017-run: %s\n", why.c_str());
     failed_ = true;

@@ -81,6 +81,7 @@ Runs the MBZIRC 2017 landing on the moving truck (seed 7.1): server and UAV prog
   --world FILE           default models/worlds/mbzirc2017.xml
   --server/--uav PATH    programs (default: the build tree's server / beside this one)
 )");
+  std::fputs(uavsim::launch::floor_usage(25).c_str(), stderr);
   return 2;
 }
 
@@ -167,6 +168,7 @@ int main(int argc, char** argv) {
   uavsim::launch::keep_run_summary(launch, "mbzirc2017", o);
   LandingRun run(launch, o);
   if (const int code = run.prepare(); code != 0) return code;
+  if (o.floor_s > 0.0) return run.run_floor();
   run.start_server();
   // the launcher always joins the lockstep: it scores the near misses at every tick (and injects
   // the faults there)

@@ -82,6 +82,7 @@ Runs the MBZIRC 2020 balloon mission (seed 7.2): server, ground station, two UAV
   --quiet             only the summary
   --server/--uav/--gcs PATH  programs (default: beside this one / the build tree)
 )");
+  std::fputs(uavsim::launch::floor_usage(22).c_str(), stderr);
   return 2;
 }
 
@@ -489,6 +490,11 @@ int main(int argc, char** argv) {
                                        "uav1_front:" + cam_opts};
   if (o.gcs_link_backend != "simple") {
     server_args.insert(server_args.end(), {"--gcs-link-backend", o.gcs_link_backend});
+  }
+  // instead of the mission: its floor, the two forward cameras the UAV programs subscribe to
+  if (o.floor_s > 0.0) {
+    return uavsim::launch::run_floor(launch, "mbzirc2020", o, server_args,
+                                     "uav0_front,uav1_front");
   }
   if (auto started = uavsim::launch::start_run_server(launch, o, server_args); !started) {
     h.fail("the server did not start: " + started.message());

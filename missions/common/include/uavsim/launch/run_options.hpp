@@ -26,6 +26,8 @@ struct RunOptions {
   std::string realism;           // the server's --realism ("": the world's)
   std::string wind;              // the server's --wind ("": the world's)
   double truth_hz = 10.0;        // ground truth rows per second in the run directory
+  // --floor S: instead of the mission, its floor for S sim seconds (run_floor); 0: the mission
+  double floor_s = 0.0;
   bool quiet = false;
 };
 
@@ -44,7 +46,7 @@ enum class RunOptionParse {
 
 // The option `name` with its `value` into o when it is one the launchers share: --seed (a whole
 // number), --world, --server, --record, --record-camera, --record-layout, --run-dir, --json,
-// --events, --realism, --wind and --truth-hz (0.01 to 1000). The launchers' flags without a value
+// --events, --realism, --wind, --truth-hz (0.01 to 1000) and --floor (sim seconds, 0.1 to 1e6). The launchers' flags without a value
 // (--quiet, --no-run-dir, --no-record) stay theirs. Thread-safe.
 RunOptionParse parse_run_option(const std::string& name, const char* value, RunOptions* o);
 
@@ -62,6 +64,25 @@ ServerSpec run_server_spec(const RunOptions& o, const std::vector<std::string>& 
 // Owner thread only (launch's).
 Result<void> start_run_server(Launcher& launch, const RunOptions& o,
                               const std::vector<std::string>& mission_args);
+
+// The floor of a run (--floor S): the server this mission's run starts (run_server_spec(o,
+// mission_args), with o's video and run directory if any), but with no mission program and no
+// client: its vehicles take off and hover (--hover 10) and the cameras the mission's programs
+// subscribe to (render_cameras, the server's --render-cameras list; "" none) are rendered and
+// discarded, for o.floor_s sim seconds as fast as the server goes. A mission cannot be faster than
+// its floor: mission wall time / floor wall time is what the mission's own programs and their
+// traffic cost (bench/mission_floor.py runs both, alternated). Says "floor: sim time S s, wall
+// time W s, speed Xx real time" (the server's own lines as the launcher prints them), and writes the summary (o.json_path,
+// if any: "mission", "floor": true, floor_s, the server's report line as "server_report", sim_time_s and
+// wall_time_s as a mission's). Returns the launcher's exit code: kExitSuccess once the server ran
+// the whole span, kExitHarness if it did not start or ended otherwise, kExitInterrupted on SIGINT
+// or SIGTERM. Owner thread only (launch's).
+int run_floor(Launcher& launch, const std::string& mission, const RunOptions& o,
+              const std::vector<std::string>& mission_args, const std::string& render_cameras);
+
+// The usage lines of --floor, the same in every launcher's --help, their text from column
+// text_column (the launcher's own option texts' column). Thread-safe.
+std::string floor_usage(int text_column);
 
 // Starts keeping the run's summary at o.json_path (Launcher::keep_summary), begun with the mission,
 // the seed and the run directory. Owner thread only (launch's).
