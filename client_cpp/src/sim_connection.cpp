@@ -466,8 +466,11 @@ Result<nlohmann::json> SimConnection::subscribe_events() {
 }
 Result<nlohmann::json> SimConnection::truck() { return request({{"op", "truck"}}); }
 
-Result<nlohmann::json> SimConnection::lockstep_join(double period_s, double timeout_s) {
-  return request({{"op", "lockstep_join"}, {"period_s", period_s}, {"timeout_s", timeout_s}});
+Result<nlohmann::json> SimConnection::lockstep_join(double period_s, double timeout_s,
+                                                    const std::vector<nlohmann::json>& with_tick) {
+  Json req = {{"op", "lockstep_join"}, {"period_s", period_s}, {"timeout_s", timeout_s}};
+  if (!with_tick.empty()) req["with_tick"] = with_tick;
+  return request(std::move(req));
 }
 Result<nlohmann::json> SimConnection::lockstep_leave() {
   return request({{"op", "lockstep_leave"}});

@@ -245,7 +245,11 @@ void LandingRun::set_up() {
     api.on_message("tick", [this](const SimMessage& m) {
       ticks_.emplace_back(m.json.value("tick", std::int64_t{0}), m.json.value("time", 0.0));
     });
-    if (!api.lockstep_join(kLockstepPeriod_s, 120.0))
+    api.on_message("tick_results", [this](const SimMessage& m) {
+      tick_truth_[m.json.value("time", -1.0)] = m.json.value("results", Json::array());
+    });
+    // the near misses' ground truth comes with each tick: no round trip while the clock waits
+    if (!api.lockstep_join(kLockstepPeriod_s, 120.0, {{{"op", "vehicles"}}, {{"op", "truck"}}}))
       fail("the launcher could not join the lockstep");
   }
   if (!failed_) {
@@ -305,14 +309,25 @@ void LandingRun::blackout(double tick_s, double duration_s, const std::string& w
 
 // the near misses from the ground truth at the tick (the clock holds until done)
 void LandingRun::track_near_miss(double tick_s) {
-  // both in one round trip: the clock waits for this at every tick
-  const auto truth = launch_.api().request_all({{{"op", "vehicles"}}, {{"op", "truck"}}});
-  const auto& v = truth[0];
-  const auto& t = truth[1];
-  if (!v || !t) return;
-  for (const Json& veh : v->value("vehicles", Json::array())) {
+  // the vehicles' and the truck's ground truth at this tick, sent with it (with_tick); asked for
+  // if it did not come (one round trip while the clock waits)
+  Json v, t;
+  const auto at = tick_truth_.find(tick_s);
+  if (at != tick_truth_.end() && at->second.is_array() && at->second.size() == 2) {
+    v = at->second[0].value("result", Json());
+    t = at->second[1].value("result", Json());
+  } else {
+    const auto truth = launch_.api().request_all({{{"op", "vehicles"}}, {{"op", "truck"}}});
+    if (truth[0] && truth[1]) {
+      v = *truth[0];
+      t = *truth[1];
+    }
+  }
+  tick_truth_.erase(tick_truth_.begin(), tick_truth_.upper_bound(tick_s));
+  if (!v.is_object() || !t.is_object()) return;
+  for (const Json& veh : v.value("vehicles", Json::array())) {
     if (veh.value("name", "") != "uav0") continue;
-    for (const Json& k : t->value("trucks", Json::array())) {
+    for (const Json& k : t.value("trucks", Json::array())) {
       const auto p = veh.value("position_enu_m", std::vector<double>{});
       const auto q = veh.value("q_enu_body", std::vector<double>{});
       const auto tp = k.value("position_enu_m", std::vector<double>{});

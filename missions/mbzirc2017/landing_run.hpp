@@ -145,6 +145,9 @@ class LandingRun {
   std::string uav_state_;  // the program's state, as of its output stamped before the latest tick
   double glitch_clear_s_ = -1.0;  // when --lose-low-off-centre's GPS offset ends (-1: none)
   std::vector<std::pair<std::int64_t, double>> ticks_;  // the fault injector's ticks (number, time)
+  // the ground truth the server sent with the ticks (lockstep_join's with_tick: vehicles, truck),
+  // by tick time, until the tick is handled
+  std::map<double, Json> tick_truth_;
   std::vector<std::pair<double, std::string>>
       pending_states_;  // from the UAV's output, not yet acted on
   double sim_s_ = 0.0, last_status_wall_s_ = 0.0;

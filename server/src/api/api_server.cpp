@@ -118,6 +118,9 @@ ApiServer::ApiServer(sim::Simulation& sim, sim::Runner* runner, objects::ObjectS
                        [&](const OpGroup* g) { return g->prepared_before_join(conn); });
   };
   around.seq_checked = [this] { return seq_waiter_ != nullptr; };
+  around.serve_query = [this](uint64_t conn, const Json& request) {
+    return serve_query(conn, request);
+  };
   lockstep_ops_ = std::make_unique<LockstepOps>(
       sim_, lockstep_, *clock_ops_, config_.shm ? shm_.get() : nullptr, std::move(around));
   add_group(clock_ops_.get());
@@ -378,6 +381,19 @@ void ApiServer::announce_ticks() {
 
 // ---------------------------------------------------------------------------------------------------
 // requests
+
+Json ApiServer::serve_query(uint64_t conn, const Json& request) {
+  const OpSpec* spec = ops_.find(request.value("op", std::string()));
+  if (spec == nullptr || spec->handler == nullptr) {
+    return {{"error", error_reply(nullptr, ApiError::kUnknownOp, "unknown op")["error"]}};
+  }
+  if (const auto bad = mistyped_field(request, spec->typed_fields))
+    return {{"error", error_reply(nullptr, ApiError::kBadField, *bad)["error"]}};
+  OpReply reply;
+  spec->handler(conn, request, &reply);
+  if (reply.failed()) return {{"error", error_reply(nullptr, *reply.error, reply.message)["error"]}};
+  return {{"result", std::move(reply.result)}};
+}
 
 void ApiServer::handle(uint64_t conn, const Json& request, bool errors_only) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);

@@ -168,6 +168,9 @@ class ApiServer {
 
   // loop thread side
   void on_gate();
+  // request (a query) served for conn now, outside the request queue: {"result": ...} or
+  // {"error": {"code", "message"}} (lockstep_join's with_tick, before each of conn's ticks)
+  Json serve_query(uint64_t conn, const Json& request);
   void drain();
   void handle(uint64_t conn, const Json& request, bool errors_only);
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)

@@ -1,10 +1,13 @@
 #include "api/lockstep_ops.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <map>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "api/request_fields.hpp"
 #include "api/vehicle_arg.hpp"
@@ -19,6 +22,36 @@ namespace {
 constexpr double kMaxLockstepTimeout_s = 1e6;
 // lockstep_join's period_s: an hour of sim time between ticks at most
 constexpr double kMaxPeriod_s = 3600.0;
+// lockstep_join's with_tick: ops that only read the world (answering them at a tick changes
+// nothing a request at that tick would not), and how many a client may ask for
+constexpr const char* kTickQueries[] = {"vehicles", "truck", "balloons", "status", "wind", "gimbal"};
+constexpr size_t kMaxTickQueries = 8;
+
+// with_tick's list, or why it is not one: an array of at most kMaxTickQueries objects, each with
+// an "op" of kTickQueries (the ops' own fields are checked when they run, at each tick)
+std::optional<std::vector<nlohmann::json>> tick_queries(const nlohmann::json& list,
+                                                        std::string* why) {
+  if (!list.is_array() || list.size() > kMaxTickQueries) {
+    *why = "\"with_tick\" must be an array of at most " + std::to_string(kMaxTickQueries) +
+           " requests";
+    return std::nullopt;
+  }
+  std::vector<nlohmann::json> out;
+  for (const nlohmann::json& q : list) {
+    const auto op = q.is_object() ? q.find("op") : q.end();
+    const bool known =
+        q.is_object() && op != q.end() && op->is_string() &&
+        std::any_of(std::begin(kTickQueries), std::end(kTickQueries),
+                    [&](const char* name) { return op->get<std::string>() == name; });
+    if (!known) {
+      *why = "each of \"with_tick\" is a request {\"op\": ...} of vehicles, truck, balloons, "
+             "status, wind or gimbal";
+      return std::nullopt;
+    }
+    out.push_back(q);
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -40,6 +73,7 @@ void LockstepOps::on_reset() {
 }
 
 void LockstepOps::on_disconnect(uint64_t conn) {
+  with_tick_.erase(conn);
   clock_.lockstep_left(lockstep_.leave(conn, sim_.time_s()));
 }
 
@@ -61,7 +95,19 @@ void LockstepOps::op_join(uint64_t conn, const Json& request, OpReply* reply) {
   // due at a tick must have been captured for a lockstep client)
   const bool after_now = server_.prepared_before_join(conn);
   const double from_s = sim_.time_s() + (after_now ? 0.5 * sim_.control_dt_s() : 0.0);
+  std::vector<Json> with_tick;
+  if (has_field(request, "with_tick")) {
+    std::string why;
+    auto queries = tick_queries(request["with_tick"], &why);
+    if (!queries) return reply->fail(ApiError::kBadField, why);
+    with_tick = std::move(*queries);
+  }
   const LockstepCoordinator::Joined joined = lockstep_.join(conn, *period, timeout, from_s);
+  if (with_tick.empty()) {
+    with_tick_.erase(conn);
+  } else {
+    with_tick_[conn] = std::move(with_tick);
+  }
   reply->result = {{"period_s", joined.period_s},
                    {"first_tick_time", joined.first_tick_time_s},
                    {"timeout_s", joined.timeout_s},
@@ -69,7 +115,16 @@ void LockstepOps::op_join(uint64_t conn, const Json& request, OpReply* reply) {
 }
 
 void LockstepOps::op_leave(uint64_t conn, const Json&, OpReply*) {
+  with_tick_.erase(conn);
   clock_.lockstep_left(lockstep_.leave(conn, sim_.time_s()));
+}
+
+void LockstepOps::before_tick(uint64_t conn, const Send& send) {
+  const auto it = with_tick_.find(conn);
+  if (it == with_tick_.end()) return;
+  Json results = Json::array();
+  for (const Json& q : it->second) results.push_back(server_.serve_query(conn, q));
+  send(conn, Json{{"event", "tick_results"}, {"time", sim_.time_s()}, {"results", std::move(results)}});
 }
 
 void LockstepOps::op_done(uint64_t conn, const Json& request, OpReply* reply) {

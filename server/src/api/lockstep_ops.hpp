@@ -9,8 +9,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "api/clock_ops.hpp"
 #include "api/lockstep_coordinator.hpp"
@@ -32,6 +34,9 @@ class LockstepOps : public OpGroup {
     std::function<bool(uint64_t conn)> prepared_before_join;
     // whether a done's mavlink_seq is waited for (the server has a SeqWaiter)
     std::function<bool()> seq_checked;
+    // serves a query for conn as if it had sent it now: {"result": ...} or {"error": {code,
+    // message}} (lockstep_join's with_tick)
+    std::function<Json(uint64_t conn, const Json& request)> serve_query;
   };
 
   // shm: the shared-memory streams, or null when this server serves none. Everything given must
@@ -46,6 +51,9 @@ class LockstepOps : public OpGroup {
   void on_reset() override;
   // A connection that closes stops gating the clock.
   void on_disconnect(uint64_t conn) override;
+  // Before each tick of a connection that joined with with_tick: its queries answered at the
+  // tick's time, as one tick_results event (docs/protocol.md).
+  void before_tick(uint64_t conn, const Send& send) override;
 
  private:
   void op_join(uint64_t conn, const Json& request, OpReply* reply);
@@ -58,6 +66,7 @@ class LockstepOps : public OpGroup {
   ClockOps& clock_;
   ShmTransport* shm_;
   Server server_;
+  std::map<uint64_t, std::vector<Json>> with_tick_;  // lockstep_join's with_tick, by connection
 };
 
 }  // namespace uavsim::server::api

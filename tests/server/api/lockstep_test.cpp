@@ -269,6 +269,66 @@ TEST_P(LockstepContract, DoneWaitsForTheNamedMavlinkSequenceNumber) {
   EXPECT_EQ(error_code_of(c.request({{"op", "done"}, {"mavlink_seq", {{"uav7", 1}}}})), "unknown_vehicle");
 }
 
+// with_tick: the queries a client joined with come answered just before each of its ticks, at the
+// tick's time, in one tick_results message; a query that fails there says why in its own slot;
+// leaving ends them.
+TEST_P(LockstepContract, QueriesJoinedWithTheTickComeAnsweredJustBeforeEachTick) {
+  ApiConfig config;
+  config.start_paused = false;
+  TestServer server("mbzirc2017.xml", config);
+  TestClient c(server.port());
+  choose_transport(c);
+  // the third fails at every tick: a gimbal query names its gimbal
+  const Json join = c.request(
+      {{"op", "lockstep_join"},
+       {"period_s", 0.02},
+       {"with_tick", {{{"op", "status"}}, {{"op", "vehicles"}}, {{"op", "gimbal"}}}}});
+  ASSERT_TRUE(join["ok"]) << join;
+  for (int i = 0; i < 5; ++i) {
+    const Json results = c.read_message();
+    ASSERT_EQ(results.value("event", ""), "tick_results") << results;
+    const Json tick = c.read_message();  // the tick itself, right behind them
+    ASSERT_EQ(tick.value("event", ""), "tick") << tick;
+    const double t = tick["time"].get<double>();
+    EXPECT_EQ(results["time"].get<double>(), t);
+    ASSERT_EQ(results["results"].size(), 3u) << results;
+    EXPECT_EQ(results["results"][0]["result"]["time_s"].get<double>(), t) << results;
+    EXPECT_EQ(results["results"][1]["result"]["time_s"].get<double>(), t) << results;
+    EXPECT_EQ(results["results"][1]["result"]["vehicles"][0]["name"], "uav0") << results;
+    EXPECT_EQ(results["results"][2]["error"]["code"], "missing_field") << results;
+    ASSERT_TRUE(c.request({{"op", "done"}, {"tick", tick["tick"]}})["ok"]);
+  }
+  // joined again without: plain ticks
+  ASSERT_TRUE(c.request({{"op", "lockstep_leave"}})["ok"]);
+  ASSERT_TRUE(c.request({{"op", "lockstep_join"}, {"period_s", 0.02}})["ok"]);
+  const Json first = c.next_event("tick");  // (a tick_results of before the leave is skipped)
+  ASSERT_FALSE(first.is_null());
+  ASSERT_TRUE(c.request({{"op", "done"}, {"tick", first["tick"]}})["ok"]);
+  const Json second = c.read_message();
+  EXPECT_EQ(second.value("event", ""), "tick") << second;
+}
+
+TEST_P(LockstepContract, WithTickTakesOnlyAFewQueriesThatReadTheWorld) {
+  ApiConfig config;
+  config.start_paused = true;
+  TestServer server("empty.xml", config);
+  TestClient c(server.port());
+  choose_transport(c);
+  const Json status = {{"op", "status"}};
+  for (const Json& bad : {Json("status"), Json::object(), Json::array({Json("status")}),
+                          Json::array({Json{{"op", "pause"}}}), Json::array({Json{{"op", 3}}}),
+                          Json::array({Json{{"op", "kill_vehicle"}, {"vehicle", 0}}}),
+                          Json(std::vector<Json>(9, status))}) {
+    const Json r = c.request({{"op", "lockstep_join"}, {"period_s", 0.02}, {"with_tick", bad}});
+    EXPECT_EQ(error_code_of(r), "bad_field") << bad;
+  }
+  // refused: not joined (a done has no tick)
+  EXPECT_EQ(error_code_of(c.request({{"op", "done"}})), "not_joined");
+  EXPECT_TRUE(c.request({{"op", "lockstep_join"},
+                         {"period_s", 0.02},
+                         {"with_tick", std::vector<Json>(8, status)}})["ok"]);
+}
+
 INSTANTIATE_TEST_SUITE_P(Transports, LockstepContract,
                          ::testing::Values(Transport::kTcp, Transport::kShm),
                          [](const ::testing::TestParamInfo<Transport>& info) {

@@ -114,7 +114,13 @@ class SimConnection {
 
   // Joins the lockstep with this tick period (sim seconds); the server drops the connection's
   // lockstep membership after timeout_s of wall time without a `done`. Ticks stream as `tick`.
-  Result<nlohmann::json> lockstep_join(double period_s, double timeout_s);
+  // with_tick: queries ({"op": "vehicles"}, "truck", "balloons", "status", "wind", "gimbal"; at
+  // most 8) the server answers at each of this connection's ticks, just before it, as one
+  // `tick_results` message ({"time": t, "results": [{"result": ...} or {"error": ...}, ...]} in
+  // their order): what the client would ask at every tick, without a round trip while the clock
+  // waits.
+  Result<nlohmann::json> lockstep_join(double period_s, double timeout_s,
+                                       const std::vector<nlohmann::json>& with_tick = {});
   Result<nlohmann::json> lockstep_leave();
   // Done with tick `tick`: optionally busy until a later sim time (detached timing), and the last
   // MAVLink sequence number sent on each vehicle's link ({"uav0": 17}) before this call.
