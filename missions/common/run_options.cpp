@@ -118,7 +118,10 @@ int run_floor(Launcher& launch, const std::string& mission, const RunOptions& o,
   ServerSpec spec = run_server_spec(o, mission_args);
   char duration[32];
   std::snprintf(duration, sizeof(duration), "%.3f", o.floor_s);
-  spec.extra_args.insert(spec.extra_args.end(), {"--hover", "10", "--duration", duration});
+  // the clock held until the launcher's API connection is in: a short floor would otherwise be
+  // over before start_server() connects
+  spec.extra_args.insert(spec.extra_args.end(),
+                         {"--hover", "10", "--duration", duration, "--wait-for-clients", "1"});
   if (!render_cameras.empty())
     spec.extra_args.insert(spec.extra_args.end(), {"--render-cameras", render_cameras});
   std::string report;
