@@ -90,7 +90,7 @@ struct SimConnection::Impl {
   std::thread::id owner = std::this_thread::get_id();
   Json hello;
   int64_t next_id = 0;
-  ApiStream stream;  // bytes read, cut into whole messages
+  ApiStream stream;              // bytes read, cut into whole messages
   std::deque<SimMessage> queue;  // streamed messages for take_messages()
   std::map<std::string, std::function<void(const SimMessage&)>> handlers;
   std::deque<Json> replies;       // replies read, not yet claimed by request()

@@ -29,11 +29,12 @@ std::string floor_usage(int text_column) {
   const std::string option = "  --floor S";
   const std::string indent(static_cast<size_t>(std::max(text_column, 0)), ' ');
   const std::string first =
-      option + std::string(static_cast<size_t>(std::max<int>(
-                               1, text_column - static_cast<int>(option.size()))),
+      option + std::string(static_cast<size_t>(
+                               std::max<int>(1, text_column - static_cast<int>(option.size()))),
                            ' ');
   return first + "not the mission: its floor for S sim seconds (the same server, no program,\n" +
-         indent + "the vehicles hovering, the mission's cameras rendered; bench/mission_floor.py\n" +
+         indent +
+         "the vehicles hovering, the mission's cameras rendered; bench/mission_floor.py\n" +
          indent + "compares the two)\n";
 }
 
@@ -151,14 +152,10 @@ int run_floor(Launcher& launch, const std::string& mission, const RunOptions& o,
   std::fflush(stdout);
   const bool success = !harness_failed && interrupted() == 0;
   if (!o.json_path.empty()) {
-    nlohmann::json summary = {{"mission", mission},
-                              {"floor", true},
-                              {"floor_s", o.floor_s},
-                              {"render_cameras", render_cameras},
-                              {"server_report", report},
-                              {"sim_time_s", success ? o.floor_s : -1.0},
-                              {"wall_time_s", wall_s},
-                              {"success", success},
+    nlohmann::json summary = {{"mission", mission},      {"floor", true},
+                              {"floor_s", o.floor_s},    {"render_cameras", render_cameras},
+                              {"server_report", report}, {"sim_time_s", success ? o.floor_s : -1.0},
+                              {"wall_time_s", wall_s},   {"success", success},
                               {"seed", o.seed}};
     if (!launch.write_summary(o.json_path, summary)) harness_failed = true;
   }

@@ -119,8 +119,7 @@ bool parse_options(int argc, char** argv, Options* o, bool* record) {
       o->gcs_link_backend = v;
       ok = o->gcs_link_backend == "simple" || o->gcs_link_backend == "ns3";
       if (!ok) std::fprintf(stderr, "mbzirc2020-run: --gcs-link-backend needs simple or ns3\n");
-    }
-    else if (a == "--camera-size")
+    } else if (a == "--camera-size")
       o->camera_size = v;
     else if (a == "--camera-fps")
       ok = parse_double(v, 0.1, 1000.0, &o->camera_fps);
@@ -493,8 +492,7 @@ int main(int argc, char** argv) {
   }
   // instead of the mission: its floor, the two forward cameras the UAV programs subscribe to
   if (o.floor_s > 0.0) {
-    return uavsim::launch::run_floor(launch, "mbzirc2020", o, server_args,
-                                     "uav0_front,uav1_front");
+    return uavsim::launch::run_floor(launch, "mbzirc2020", o, server_args, "uav0_front,uav1_front");
   }
   if (auto started = uavsim::launch::start_run_server(launch, o, server_args); !started) {
     h.fail("the server did not start: " + started.message());

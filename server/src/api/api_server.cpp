@@ -391,7 +391,8 @@ Json ApiServer::serve_query(uint64_t conn, const Json& request) {
     return {{"error", error_reply(nullptr, ApiError::kBadField, *bad)["error"]}};
   OpReply reply;
   spec->handler(conn, request, &reply);
-  if (reply.failed()) return {{"error", error_reply(nullptr, *reply.error, reply.message)["error"]}};
+  if (reply.failed())
+    return {{"error", error_reply(nullptr, *reply.error, reply.message)["error"]}};
   return {{"result", std::move(reply.result)}};
 }
 

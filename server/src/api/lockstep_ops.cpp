@@ -24,7 +24,8 @@ constexpr double kMaxLockstepTimeout_s = 1e6;
 constexpr double kMaxPeriod_s = 3600.0;
 // lockstep_join's with_tick: ops that only read the world (answering them at a tick changes
 // nothing a request at that tick would not), and how many a client may ask for
-constexpr const char* kTickQueries[] = {"vehicles", "truck", "balloons", "status", "wind", "gimbal"};
+constexpr const char* kTickQueries[] = {"vehicles", "truck", "balloons",
+                                        "status",   "wind",  "gimbal"};
 constexpr size_t kMaxTickQueries = 8;
 
 // with_tick's list, or why it is not one: an array of at most kMaxTickQueries objects, each with
@@ -44,8 +45,9 @@ std::optional<std::vector<nlohmann::json>> tick_queries(const nlohmann::json& li
         std::any_of(std::begin(kTickQueries), std::end(kTickQueries),
                     [&](const char* name) { return op->get<std::string>() == name; });
     if (!known) {
-      *why = "each of \"with_tick\" is a request {\"op\": ...} of vehicles, truck, balloons, "
-             "status, wind or gimbal";
+      *why =
+          "each of \"with_tick\" is a request {\"op\": ...} of vehicles, truck, balloons, "
+          "status, wind or gimbal";
       return std::nullopt;
     }
     out.push_back(q);
@@ -124,7 +126,8 @@ void LockstepOps::before_tick(uint64_t conn, const Send& send) {
   if (it == with_tick_.end()) return;
   Json results = Json::array();
   for (const Json& q : it->second) results.push_back(server_.serve_query(conn, q));
-  send(conn, Json{{"event", "tick_results"}, {"time", sim_.time_s()}, {"results", std::move(results)}});
+  send(conn,
+       Json{{"event", "tick_results"}, {"time", sim_.time_s()}, {"results", std::move(results)}});
 }
 
 void LockstepOps::op_done(uint64_t conn, const Json& request, OpReply* reply) {

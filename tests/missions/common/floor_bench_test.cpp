@@ -18,8 +18,10 @@ using uavsim::tests::take_file;
 // mission wall time over its floor's.
 TEST(MissionFloorBench, RunsTheMissionThenItsFloorForTheSameSimTime) {
   const std::string json = ::testing::TempDir() + "mission_floor_bench.json";
-  const auto r = run_command("python3 " UAVSIM_SOURCE_DIR "/bench/mission_floor.py --build " UAVSIM_BUILD_DIR
-                             " --cases mbzirc2017 --runs 1 --json " + json);
+  const auto r =
+      run_command("python3 " UAVSIM_SOURCE_DIR "/bench/mission_floor.py --build " UAVSIM_BUILD_DIR
+                  " --cases mbzirc2017 --runs 1 --json " +
+                  json);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json results = Json::parse(take_file(json), nullptr, false);
   ASSERT_TRUE(results.is_array() && results.size() == 1) << r.output;

@@ -1,6 +1,7 @@
 // A mission's floor (--floor S, launch::run_floor): each launcher runs the server its mission
 // would, for S sim seconds, with no program and no client, its vehicles hovering and the cameras
-// its programs subscribe to rendered. What the server did is read back from its closing report, which the summary keeps.
+// its programs subscribe to rendered. What the server did is read back from its closing report,
+// which the summary keeps.
 #include <gtest/gtest.h>
 
 #include <cctype>
@@ -30,8 +31,8 @@ long report_count(const Json& summary, const std::string& what) {
 }
 
 // A floor that ran its whole span, vehicles hovering (none crashed) and no client connected.
-void expect_a_whole_floor(const Json& s, const std::string& mission, double span_s,
-                          long vehicles, const std::string& output) {
+void expect_a_whole_floor(const Json& s, const std::string& mission, double span_s, long vehicles,
+                          const std::string& output) {
   ASSERT_TRUE(s.is_object()) << output;
   EXPECT_EQ(s.value("mission", ""), mission) << output;
   EXPECT_TRUE(s.value("floor", false)) << output;
@@ -71,7 +72,8 @@ TEST(MissionFloor, Mbzirc2020RendersBothForwardCamerasAtTheMissionsSize) {
 
 TEST(MissionFloor, CoverageFliesItsGeneratedWorldsQuadsWithNoCamera) {
   std::string output;
-  const Json s = run_launcher(COVERAGE_RUN, "--no-record --agents 3 --area 100x60 --floor 2", &output);
+  const Json s =
+      run_launcher(COVERAGE_RUN, "--no-record --agents 3 --area 100x60 --floor 2", &output);
   expect_a_whole_floor(s, "coverage", 2.0, 3, output);
   EXPECT_EQ(report_count(s, "camera frames rendered"), -1) << s.dump(1);
 }

@@ -46,8 +46,9 @@ enum class RunOptionParse {
 
 // The option `name` with its `value` into o when it is one the launchers share: --seed (a whole
 // number), --world, --server, --record, --record-camera, --record-layout, --run-dir, --json,
-// --events, --realism, --wind, --truth-hz (0.01 to 1000) and --floor (sim seconds, 0.1 to 1e6). The launchers' flags without a value
-// (--quiet, --no-run-dir, --no-record) stay theirs. Thread-safe.
+// --events, --realism, --wind, --truth-hz (0.01 to 1000) and --floor (sim seconds, 0.1 to 1e6).
+// The launchers' flags without a value (--quiet, --no-run-dir, --no-record) stay theirs.
+// Thread-safe.
 RunOptionParse parse_run_option(const std::string& name, const char* value, RunOptions* o);
 
 // The run files (resolve_run_files) set into o: run_dir, record (the video) and json_path; false
@@ -72,11 +73,11 @@ Result<void> start_run_server(Launcher& launch, const RunOptions& o,
 // discarded, for o.floor_s sim seconds as fast as the server goes. A mission cannot be faster than
 // its floor: mission wall time / floor wall time is what the mission's own programs and their
 // traffic cost (bench/mission_floor.py runs both, alternated). Says "floor: sim time S s, wall
-// time W s, speed Xx real time" (the server's own lines as the launcher prints them), and writes the summary (o.json_path,
-// if any: "mission", "floor": true, floor_s, the server's report line as "server_report", sim_time_s and
-// wall_time_s as a mission's). Returns the launcher's exit code: kExitSuccess once the server ran
-// the whole span, kExitHarness if it did not start or ended otherwise, kExitInterrupted on SIGINT
-// or SIGTERM. Owner thread only (launch's).
+// time W s, speed Xx real time" (the server's own lines as the launcher prints them), and writes
+// the summary (o.json_path, if any: "mission", "floor": true, floor_s, the server's report line as
+// "server_report", sim_time_s and wall_time_s as a mission's). Returns the launcher's exit code:
+// kExitSuccess once the server ran the whole span, kExitHarness if it did not start or ended
+// otherwise, kExitInterrupted on SIGINT or SIGTERM. Owner thread only (launch's).
 int run_floor(Launcher& launch, const std::string& mission, const RunOptions& o,
               const std::vector<std::string>& mission_args, const std::string& render_cameras);
 
