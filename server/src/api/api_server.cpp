@@ -382,15 +382,26 @@ void ApiServer::announce_ticks() {
 // ---------------------------------------------------------------------------------------------------
 // requests
 
+OpReply ApiServer::run_op(uint64_t conn, const OpSpec& spec, const Json& request) {
+  OpReply reply;
+  if (const auto bad = mistyped_field(request, spec.typed_fields)) {
+    reply.fail(ApiError::kBadField, *bad);
+    return reply;
+  }
+  // the watchdog names the op a stuck loop is in
+  sim::LoopActivity& trail = sim_.schedule().activity();
+  trail.set_detail(spec.name.c_str());
+  spec.handler(conn, request, &reply);
+  trail.set_detail(nullptr);
+  return reply;
+}
+
 Json ApiServer::serve_query(uint64_t conn, const Json& request) {
   const OpSpec* spec = ops_.find(request.value("op", std::string()));
   if (spec == nullptr || spec->handler == nullptr) {
     return {{"error", error_reply(nullptr, ApiError::kUnknownOp, "unknown op")["error"]}};
   }
-  if (const auto bad = mistyped_field(request, spec->typed_fields))
-    return {{"error", error_reply(nullptr, ApiError::kBadField, *bad)["error"]}};
-  OpReply reply;
-  spec->handler(conn, request, &reply);
+  OpReply reply = run_op(conn, *spec, request);
   if (reply.failed())
     return {{"error", error_reply(nullptr, *reply.error, reply.message)["error"]}};
   return {{"result", std::move(reply.result)}};
@@ -400,14 +411,7 @@ void ApiServer::handle(uint64_t conn, const Json& request, bool errors_only) {
   const Json id = request.contains("id") ? request["id"] : Json(nullptr);
   const std::string op = request["op"].get<std::string>();  // checked on the I/O thread
   const OpSpec* spec = ops_.find(op);                       // likewise: the op is in the table
-  if (const auto bad = mistyped_field(request, spec->typed_fields))
-    return reply_error(conn, id, ApiError::kBadField, *bad);
-  OpReply reply;
-  // the watchdog names the op a stuck loop is in
-  sim::LoopActivity& trail = sim_.schedule().activity();
-  trail.set_detail(spec->name.c_str());
-  spec->handler(conn, request, &reply);
-  trail.set_detail(nullptr);
+  OpReply reply = run_op(conn, *spec, request);
   if (reply.failed()) return reply_error(conn, id, *reply.error, reply.message);
   if (!reply.deferred && !errors_only) this->reply(conn, ok_reply(id, std::move(reply.result)));
 }

@@ -173,6 +173,10 @@ class ApiServer {
   Json serve_query(uint64_t conn, const Json& request);
   void drain();
   void handle(uint64_t conn, const Json& request, bool errors_only);
+  // spec's handler run on request for conn, once its typed fields are checked (a mistyped one
+  // fails the reply with bad_field unseen by the handler); the watchdog names the op meanwhile.
+  // What handle() and serve_query() both do.
+  OpReply run_op(uint64_t conn, const OpSpec& spec, const Json& request);
   // sends the lockstep ticks due now, each after what is due before it (MAVLink, frames)
   void announce_ticks();
 
